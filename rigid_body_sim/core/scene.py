@@ -1,0 +1,346 @@
+"""Scenes: load and validate a YAML file or a dict into a model and an initial state.
+
+Schema (every key not listed is an error; see README "Scene files")::
+
+    gravity: [0.0, 0.0, -9.81]            # optional, m/s², world axes; absent = none
+    bodies:
+      crate:                              # a name: letter first, then letters, digits, _
+        mass: 2.0                         # kg
+        inertia: {box: [1.0, 0.6, 0.4]}   # or {sphere: r}, {cylinder: [r, length]} (axis z),
+                                          # {principal: [Ixx, Iyy, Izz]}, {tensor: [[..],[..],[..]]}
+        pose: {position: [0, 0, 1], orientation: [0, 0, 0, 1]}   # optional; x, y, z, w
+        twist: {linear: [0, 0, 0], angular: [0, 0, 0]}          # optional; world axes
+        damping: {linear: 0.0, angular: 0.0}                    # optional; N·s/m, N·m·s/rad
+        sites:                                                  # optional
+          corner: {position: [0.5, 0.3, 0.0]}                   # body frame, from the COM
+          nozzle: {position: [0, 0, -0.2], axes: world}         # axes: body (default) | world
+
+Validation is complete before anything is built: a scene either loads whole or raises one
+:class:`SceneError` naming the source, the key path and what was expected.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+
+from .mass_properties import (
+    box_inertia,
+    check_principal_moments,
+    cylinder_inertia,
+    principal_frame,
+    sphere_inertia,
+)
+from .model import BodyModel, State
+from .quaternion import (
+    quat_conjugate,
+    quat_multiply,
+    quat_rotate,
+    quat_wxyz_from_xyzw,
+)
+
+__all__ = ["Scene", "SceneError", "load_scene", "WORLD_FRAME", "ORIENTATION_TOLERANCE"]
+
+#: Name of the world frame in the core's frame rule.
+WORLD_FRAME = "world"
+#: How far | |q| − 1 | may be in a scene file; within it q is normalised, beyond it rejected.
+ORIENTATION_TOLERANCE = 1e-6
+#: Largest size accepted for a scene file, bytes.
+MAX_SCENE_BYTES = 8 * 1024 * 1024
+
+_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
+_RESERVED_BODY_NAMES = {WORLD_FRAME}
+_RESERVED_SITE_NAMES = {"world_aligned"}
+_INERTIA_KINDS = ("box", "sphere", "cylinder", "principal", "tensor")
+_TOP_KEYS = ("gravity", "bodies")
+_BODY_KEYS = ("mass", "inertia", "pose", "twist", "damping", "sites")
+
+
+class SceneError(ValueError):
+    """A scene that cannot be loaded; the message names the source, key path and expectation."""
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A validated scene: the model, the initial state and where it came from.
+
+    Attributes
+    ----------
+    source : str
+        File path, or ``"<dict>"``.
+    model : BodyModel
+    initial_state : State
+    sites : dict of str to tuple of str
+        Site names per body, in file order.
+    """
+
+    source: str
+    model: BodyModel
+    initial_state: State
+    sites: Mapping[str, tuple[str, ...]]
+
+    @property
+    def body_names(self) -> tuple[str, ...]:
+        return self.model.names
+
+    def frames_of(self, body: str) -> tuple[str, ...]:
+        """Every frame a wrench on ``body`` may be expressed in, e.g. ``("world", "box", ...)``."""
+        if body not in self.sites:
+            raise ValueError(f"unknown body {body!r}; bodies are {list(self.body_names)}")
+        return (WORLD_FRAME, body, f"{body}/world_aligned") + tuple(
+            f"{body}/{s}" for s in self.sites[body]
+        )
+
+
+def load_scene(source: str | Path | Mapping[str, Any]) -> Scene:
+    """Load and validate a scene from a YAML file path or an already-parsed dict.
+
+    Raises
+    ------
+    SceneError
+        Naming the file (or ``<dict>``), the key path (``bodies.crate.inertia.box``) and what
+        was expected. Nothing is half-loaded: the scene is returned whole or not at all.
+    """
+    if isinstance(source, Mapping):
+        return _build(dict(source), "<dict>")
+    path = Path(source)
+    name = str(path)
+    try:
+        size = path.stat().st_size
+    except OSError as exc:
+        raise SceneError(f"{name}: cannot read scene file ({exc.strerror or exc})") from None
+    if size > MAX_SCENE_BYTES:
+        raise SceneError(f"{name}: scene file is {size} bytes; expected at most {MAX_SCENE_BYTES}")
+    import yaml  # deferred: only file loading needs it
+
+    try:
+        text = path.read_text(encoding="utf-8")
+        data = yaml.safe_load(text)
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SceneError(f"{name}: cannot read scene file ({exc})") from None
+    except yaml.YAMLError as exc:
+        raise SceneError(f"{name}: not valid YAML ({exc})") from None
+    if not isinstance(data, Mapping):
+        raise SceneError(f"{name}: expected a mapping with key 'bodies' at the top, got {_kind(data)}")
+    return _build(dict(data), name)
+
+
+# --------------------------------------------------------------------------- validation
+
+
+class _Checker:
+    """Validation helpers that raise SceneError with the source and key path."""
+
+    def __init__(self, source: str):
+        self.source = source
+
+    def fail(self, path: str, expected: str, got: Any = None, *, show_got: bool = True) -> None:
+        where = f"{self.source}: {path}" if path else self.source
+        suffix = f", got {_show(got)}" if show_got else ""
+        raise SceneError(f"{where}: expected {expected}{suffix}")
+
+    def mapping(self, value: Any, path: str, allowed: tuple[str, ...], required: tuple[str, ...] = ()) -> dict:
+        if not isinstance(value, Mapping):
+            self.fail(path, f"a mapping with keys {list(allowed)}", value)
+        for key in value:
+            if key not in allowed:
+                self.fail(f"{path}.{key}" if path else str(key), f"one of the keys {list(allowed)} (unknown key)", show_got=False)
+        for key in required:
+            if key not in value:
+                self.fail(path, f"required key {key!r}", show_got=False)
+        return dict(value)
+
+    def number(self, value: Any, path: str, *, minimum: float | None = None, strict: bool = False, unit: str = "") -> float:
+        unit_text = f" ({unit})" if unit else ""
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            self.fail(path, f"a number{unit_text}", value)
+        x = float(value)
+        if not math.isfinite(x):
+            self.fail(path, f"a finite number{unit_text}", value)
+        if minimum is not None and (x <= minimum if strict else x < minimum):
+            self.fail(path, f"a number {'>' if strict else '≥'} {minimum:g}{unit_text}", value)
+        return x
+
+    def vector(self, value: Any, path: str, length: int, *, positive: bool = False, unit: str = "") -> np.ndarray:
+        what = f"a list of {length} finite numbers" + (" > 0" if positive else "") + (f" ({unit})" if unit else "")
+        if not isinstance(value, (list, tuple)) or len(value) != length:
+            self.fail(path, what, value)
+        out = np.empty(length)
+        for i, item in enumerate(value):
+            if isinstance(item, bool) or not isinstance(item, (int, float)) or not math.isfinite(float(item)):
+                self.fail(path, what, value)
+            out[i] = float(item)
+        if positive and np.any(out <= 0.0):
+            self.fail(path, what, value)
+        return out
+
+    def name(self, value: Any, path: str, reserved: set[str]) -> str:
+        if not isinstance(value, str) or not _NAME.match(value):
+            self.fail(path, "a name of letters, digits and '_' starting with a letter", value)
+        if value in reserved:
+            self.fail(path, f"a name other than the reserved {sorted(reserved)}", value)
+        return value
+
+
+def _build(data: dict, source: str) -> Scene:
+    check = _Checker(source)
+    top = check.mapping(data, "", _TOP_KEYS, required=("bodies",))
+    gravity = np.zeros(3)
+    if top.get("gravity") is not None:
+        gravity = check.vector(top["gravity"], "gravity", 3, unit="m/s²")
+    bodies = top["bodies"]
+    if not isinstance(bodies, Mapping) or not bodies:
+        check.fail("bodies", "a non-empty mapping of body names to bodies", bodies)
+
+    names: list[str] = []
+    masses, moments, q_BPs, damp_lin, damp_ang = [], [], [], [], []
+    p0, q0, v0, w0 = [], [], [], []
+    site_names: list[str] = []
+    site_body: list[int] = []
+    site_p_P: list[np.ndarray] = []
+    site_world: list[bool] = []
+    sites_of: dict[str, tuple[str, ...]] = {}
+
+    for index, (raw_name, raw_body) in enumerate(bodies.items()):
+        name = check.name(raw_name, f"bodies.{raw_name}", _RESERVED_BODY_NAMES)
+        path = f"bodies.{name}"
+        body = check.mapping(raw_body, path, _BODY_KEYS, required=("mass", "inertia"))
+        mass = check.number(body["mass"], f"{path}.mass", minimum=0.0, strict=True, unit="kg")
+        principal, q_BP = _inertia(check, body["inertia"], f"{path}.inertia", mass)
+
+        position = np.zeros(3)
+        q_WB = np.array([1.0, 0.0, 0.0, 0.0])
+        if body.get("pose") is not None:
+            pose = check.mapping(body["pose"], f"{path}.pose", ("position", "orientation"))
+            if "position" in pose:
+                position = check.vector(pose["position"], f"{path}.pose.position", 3, unit="m")
+            if "orientation" in pose:
+                q_xyzw = check.vector(pose["orientation"], f"{path}.pose.orientation", 4)
+                norm = float(np.linalg.norm(q_xyzw))
+                if abs(norm - 1.0) > ORIENTATION_TOLERANCE:
+                    check.fail(
+                        f"{path}.pose.orientation",
+                        f"a unit quaternion [x, y, z, w] (| |q| - 1 | ≤ {ORIENTATION_TOLERANCE:g}; |q| = {norm:.9g})",
+                        pose["orientation"],
+                    )
+                q_WB = quat_wxyz_from_xyzw(q_xyzw / norm)
+
+        v_W = np.zeros(3)
+        w_W = np.zeros(3)
+        if body.get("twist") is not None:
+            twist = check.mapping(body["twist"], f"{path}.twist", ("linear", "angular"))
+            if "linear" in twist:
+                v_W = check.vector(twist["linear"], f"{path}.twist.linear", 3, unit="m/s, world axes")
+            if "angular" in twist:
+                w_W = check.vector(twist["angular"], f"{path}.twist.angular", 3, unit="rad/s, world axes")
+
+        c_lin = c_ang = 0.0
+        if body.get("damping") is not None:
+            damping = check.mapping(body["damping"], f"{path}.damping", ("linear", "angular"))
+            if "linear" in damping:
+                c_lin = check.number(damping["linear"], f"{path}.damping.linear", minimum=0.0, unit="N·s/m")
+            if "angular" in damping:
+                c_ang = check.number(damping["angular"], f"{path}.damping.angular", minimum=0.0, unit="N·m·s/rad")
+
+        q_PB = quat_conjugate(q_BP)
+        body_sites: list[str] = []
+        if body.get("sites") is not None:
+            sites = body["sites"]
+            if not isinstance(sites, Mapping):
+                check.fail(f"{path}.sites", "a mapping of site names to {position: [x, y, z], axes: body|world}", sites)
+            for raw_site, raw_spec in sites.items():
+                site = check.name(raw_site, f"{path}.sites.{raw_site}", _RESERVED_SITE_NAMES)
+                spath = f"{path}.sites.{site}"
+                spec = check.mapping(raw_spec, spath, ("position", "axes"), required=("position",))
+                p_B = check.vector(spec["position"], f"{spath}.position", 3, unit="m, body frame from the COM")
+                axes = spec.get("axes", "body")
+                if axes not in ("body", "world"):
+                    check.fail(f"{spath}.axes", "'body' or 'world'", axes)
+                site_names.append(f"{name}/{site}")
+                site_body.append(index)
+                site_p_P.append(quat_rotate(q_PB, p_B))
+                site_world.append(axes == "world")
+                body_sites.append(site)
+
+        names.append(name)
+        masses.append(mass)
+        moments.append(principal)
+        q_BPs.append(q_BP)
+        damp_lin.append(c_lin)
+        damp_ang.append(c_ang)
+        q_WP = quat_multiply(q_WB, q_BP)
+        p0.append(position)
+        q0.append(q_WP)
+        v0.append(v_W)
+        w0.append(quat_rotate(quat_conjugate(q_WP), w_W))
+        sites_of[name] = tuple(body_sites)
+
+    model = BodyModel(
+        names=tuple(names),
+        mass=np.array(masses),
+        inertia_P=np.array(moments),
+        q_BP=np.array(q_BPs),
+        damping_linear=np.array(damp_lin),
+        damping_angular=np.array(damp_ang),
+        gravity_W=gravity,
+        site_names=tuple(site_names),
+        site_body=np.array(site_body, dtype=int),
+        site_p_P=np.array(site_p_P).reshape(-1, 3),
+        site_world_axes=np.array(site_world, dtype=bool),
+    )
+    state = State(np.array(p0), np.array(q0), np.array(v0), np.array(w0))
+    return Scene(source=source, model=model, initial_state=state, sites=sites_of)
+
+
+def _inertia(check: _Checker, value: Any, path: str, mass: float) -> tuple[np.ndarray, np.ndarray]:
+    """Principal moments and q_BP from one of the inertia forms."""
+    if not isinstance(value, Mapping) or len(value) != 1:
+        check.fail(path, f"a mapping with exactly one of the keys {list(_INERTIA_KINDS)}", value)
+    (kind, arg), = value.items()
+    sub = f"{path}.{kind}"
+    identity = np.array([1.0, 0.0, 0.0, 0.0])
+    if kind == "box":
+        moments = box_inertia(mass, check.vector(arg, sub, 3, positive=True, unit="edge lengths x, y, z in m"))
+        q_BP = identity
+    elif kind == "sphere":
+        moments = sphere_inertia(mass, check.number(arg, sub, minimum=0.0, strict=True, unit="radius in m"))
+        q_BP = identity
+    elif kind == "cylinder":
+        radius, length = check.vector(arg, sub, 2, positive=True, unit="[radius, length] in m, axis along body z")
+        moments = cylinder_inertia(mass, radius, length)
+        q_BP = identity
+    elif kind == "principal":
+        moments = check.vector(arg, sub, 3, positive=True, unit="Ixx, Iyy, Izz in kg·m²")
+        q_BP = identity
+    elif kind == "tensor":
+        what = "a symmetric positive-definite 3×3 list of lists (kg·m², body frame, about the COM)"
+        if not isinstance(arg, (list, tuple)) or len(arg) != 3:
+            check.fail(sub, what, arg)
+        tensor = np.array([check.vector(row, f"{sub}[{i}]", 3, unit="kg·m²") for i, row in enumerate(arg)])
+        scale = float(np.max(np.abs(tensor)))
+        if not np.allclose(tensor, tensor.T, rtol=0.0, atol=1e-9 * max(scale, 1e-300)):
+            check.fail(sub, what + " (it is not symmetric)", arg)
+        if np.any(np.linalg.eigvalsh(0.5 * (tensor + tensor.T)) <= 0.0):
+            check.fail(sub, what + " (it is not positive definite)", arg)
+        moments, q_BP = principal_frame(tensor)
+    else:
+        check.fail(path, f"one of the keys {list(_INERTIA_KINDS)}", kind)
+        raise AssertionError  # unreachable: fail raises
+    problem = check_principal_moments(moments)
+    if problem is not None:
+        check.fail(sub, problem, show_got=False)
+    return np.asarray(moments, dtype=float), np.asarray(q_BP, dtype=float)
+
+
+def _kind(value: Any) -> str:
+    return "nothing (empty file)" if value is None else type(value).__name__
+
+
+def _show(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 120 else text[:117] + "..."
