@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from .model import BodyModel, State
-from .quaternion import quat_conjugate, quat_multiply, quat_rotate, quat_to_matrix
+from .quaternion import cross3, quat_conjugate, quat_multiply, quat_rotate, quat_to_matrix
 
 __all__ = [
     "gyroscopic_torque_P",
@@ -34,7 +34,7 @@ __all__ = [
 
 def gyroscopic_torque_P(inertia_P: np.ndarray, w_WP_P: np.ndarray) -> np.ndarray:
     """The gyroscopic term ``−w × (I w)``, shape (N, 3), P axes, N·m."""
-    return -np.cross(w_WP_P, inertia_P * w_WP_P)
+    return -cross3(w_WP_P, inertia_P * w_WP_P)
 
 
 def linear_acceleration_W(model: BodyModel, v_WC_W: np.ndarray, force_W: np.ndarray) -> np.ndarray:

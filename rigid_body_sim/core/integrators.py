@@ -220,10 +220,18 @@ def step_reference(model: BodyModel, state: State, force_W: np.ndarray, torque_W
 
     y0 = np.concatenate((state.p_WC_W, state.q_WP, state.v_WC_W, state.w_WP_P), axis=1).ravel()
     solution = solve_ivp(rhs, (0.0, dt), y0, method="DOP853", rtol=rtol, atol=atol)
-    if not solution.success:
-        raise RuntimeError(f"reference integrator (DOP853) failed over dt={dt:g} s: {solution.message}")
-    end = unpack(solution.y[:, -1].copy())
-    return State(end.p_WC_W, _normalised(end.q_WP), end.v_WC_W, end.w_WP_P)
+    if solution.success:
+        end = unpack(solution.y[:, -1].copy())
+        return State(end.p_WC_W, _normalised(end.q_WP), end.v_WC_W, end.w_WP_P)
+    if n == 1:
+        # DOP853 gave up (step size underflow on a stiff or exploding body): report the body's
+        # state as non-finite so the simulator raises NonFiniteStateError naming it.
+        nan = np.full((1, 3), np.nan)
+        return State(nan, np.full((1, 4), np.nan), nan, nan)
+    # Find which bodies make the solver fail: integrate each on its own.
+    parts = [step_reference(model.subset([i]), state.take([i]), force_W[i:i + 1], torque_W[i:i + 1], dt, rtol, atol)
+             for i in range(n)]
+    return State(*(np.concatenate([getattr(p, f) for p in parts]) for f in ("p_WC_W", "q_WP", "v_WC_W", "w_WP_P")))
 
 
 #: Every integrator, by name. Add new methods here.

@@ -25,6 +25,7 @@ __all__ = [
     "quat_to_rotation_vector",
     "quat_angle_between",
     "IDENTITY_WXYZ",
+    "cross3",
 ]
 
 IDENTITY_WXYZ = np.array([1.0, 0.0, 0.0, 0.0])
@@ -64,13 +65,28 @@ def quat_xyzw_from_wxyz(q_wxyz: np.ndarray) -> np.ndarray:
     return q[..., [1, 2, 3, 0]]
 
 
+def cross3(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Cross products ``u × v`` of vectors, shapes (..., 3) → (..., 3).
+
+    The same arithmetic as ``np.cross`` (bitwise equal results) without its axis handling,
+    which costs more than the product itself on the small arrays of a step.
+    """
+    u = np.asarray(u, dtype=float)
+    v = np.asarray(v, dtype=float)
+    u0, u1, u2 = u[..., 0], u[..., 1], u[..., 2]
+    v0, v1, v2 = v[..., 0], v[..., 1], v[..., 2]
+    return np.stack((u1 * v2 - u2 * v1, u2 * v0 - u0 * v2, u0 * v1 - u1 * v0), axis=-1)
+
+
 def quat_multiply(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     """Hamilton product ``p ⊗ q`` of (w, x, y, z) quaternions, shapes (..., 4) → (..., 4).
 
     Composition of rotations: ``q_AC = quat_multiply(q_AB, q_BC)``.
     """
-    pw, px, py, pz = np.moveaxis(np.asarray(p, dtype=float), -1, 0)
-    qw, qx, qy, qz = np.moveaxis(np.asarray(q, dtype=float), -1, 0)
+    p = np.asarray(p, dtype=float)
+    q = np.asarray(q, dtype=float)
+    pw, px, py, pz = p[..., 0], p[..., 1], p[..., 2], p[..., 3]
+    qw, qx, qy, qz = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
     return np.stack(
         (
             pw * qw - px * qx - py * qy - pz * qz,
@@ -108,13 +124,14 @@ def quat_rotate(q_AB: np.ndarray, v_B: np.ndarray) -> np.ndarray:
     w = q[..., :1]
     u = q[..., 1:]
     # v' = v + 2 w (u × v) + 2 u × (u × v), valid for unit q.
-    t = 2.0 * np.cross(u, v)
-    return v + w * t + np.cross(u, t)
+    t = 2.0 * cross3(u, v)
+    return v + w * t + cross3(u, t)
 
 
 def quat_to_matrix(q_AB: np.ndarray) -> np.ndarray:
     """Rotation matrices R_AB from unit (w, x, y, z) quaternions, (..., 4) → (..., 3, 3)."""
-    w, x, y, z = np.moveaxis(np.asarray(q_AB, dtype=float), -1, 0)
+    q = np.asarray(q_AB, dtype=float)
+    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
     R = np.empty(np.shape(w) + (3, 3))
     R[..., 0, 0] = 1.0 - 2.0 * (y * y + z * z)
     R[..., 0, 1] = 2.0 * (x * y - w * z)

@@ -120,7 +120,7 @@ def load_scene(source: str | Path | Mapping[str, Any]) -> Scene:
 
     try:
         text = path.read_text(encoding="utf-8")
-        data = yaml.safe_load(text)
+        data = _load_yaml_without_duplicate_keys(text, name)
     except (OSError, UnicodeDecodeError) as exc:
         raise SceneError(f"{name}: cannot read scene file ({exc})") from None
     except yaml.YAMLError as exc:
@@ -128,6 +128,55 @@ def load_scene(source: str | Path | Mapping[str, Any]) -> Scene:
     if not isinstance(data, Mapping):
         raise SceneError(f"{name}: expected a mapping with key 'bodies' at the top, got {_kind(data)}")
     return _build(dict(data), name)
+
+
+def _load_yaml_without_duplicate_keys(text: str, source: str) -> Any:
+    """``yaml.safe_load(text)``, except that a key repeated in one mapping is a SceneError.
+
+    PyYAML silently keeps the last of two equal keys, so a scene with two bodies of the same
+    name would quietly lose one. The document is composed into nodes first, every mapping is
+    checked for repeated keys (with their key path and line numbers), then constructed.
+    """
+    import yaml
+
+    loader = yaml.SafeLoader(text)
+    try:
+        node = loader.get_single_node()
+        if node is None:
+            return None
+        _reject_duplicate_keys(loader, node, "", source, set())
+        return loader.construct_document(node)
+    finally:
+        loader.dispose()
+
+
+def _reject_duplicate_keys(loader: Any, node: Any, path: str, source: str, visited: set[int]) -> None:
+    import yaml
+
+    if id(node) in visited:  # an alias seen before (also guards against recursive anchors)
+        return
+    visited.add(id(node))
+    if isinstance(node, yaml.MappingNode):
+        first_line: dict[Any, int] = {}
+        for key_node, value_node in node.value:
+            if key_node.tag == "tag:yaml.org,2002:merge":
+                _reject_duplicate_keys(loader, value_node, path, source, visited)
+                continue
+            if not isinstance(key_node, yaml.ScalarNode):  # a collection as a key: validation rejects it
+                continue
+            key = loader.construct_object(key_node, deep=True)
+            key_path = f"{path}.{key}" if path else str(key)
+            line = key_node.start_mark.line + 1
+            if key in first_line:
+                raise SceneError(
+                    f"{source}: {key_path}: expected each key once per mapping, got {key!r} again at "
+                    f"line {line} (first at line {first_line[key]}); YAML would silently keep only the last"
+                )
+            first_line[key] = line
+            _reject_duplicate_keys(loader, value_node, key_path, source, visited)
+    elif isinstance(node, yaml.SequenceNode):
+        for i, item in enumerate(node.value):
+            _reject_duplicate_keys(loader, item, f"{path}[{i}]", source, visited)
 
 
 # --------------------------------------------------------------------------- validation

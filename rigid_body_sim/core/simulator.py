@@ -83,6 +83,8 @@ class BodyState:
         Unit quaternion (x, y, z, w) of the body frame B in the world (B → W).
     linear_velocity_world : ndarray, shape (3,)
         Centre-of-mass velocity, m/s, world axes.
+    linear_velocity_body : ndarray, shape (3,)
+        Centre-of-mass velocity, m/s, body axes B.
     angular_velocity_world : ndarray, shape (3,)
         rad/s, world axes.
     angular_velocity_body : ndarray, shape (3,)
@@ -92,6 +94,7 @@ class BodyState:
     position_world: np.ndarray
     orientation_xyzw: np.ndarray
     linear_velocity_world: np.ndarray
+    linear_velocity_body: np.ndarray
     angular_velocity_world: np.ndarray
     angular_velocity_body: np.ndarray
 
@@ -276,9 +279,12 @@ class Simulator:
         self._wrenches.clear()
 
     def _step_once(self) -> None:
-        force_W, torque_W = self._wrenches.resolve(self.state)
         dt = self._dt
+        # Overflow on the way to a non-finite state (in resolving a huge wrench, in the step, or
+        # in |w| of the last finite state) is reported as NonFiniteStateError below, not as a
+        # floating-point warning from wherever it first happened.
         with np.errstate(all="ignore"):
+            force_W, torque_W = self._wrenches.resolve(self.state)
             if not self._stopped.any():
                 new = self._step_function(self.model, self.state, force_W, torque_W, dt)
             else:
@@ -289,9 +295,11 @@ class Simulator:
                                       (sub.p_WC_W, sub.q_WP, sub.v_WC_W, sub.w_WP_P)):
                     full[active] = part
             finite = new.finite_bodies()
+            if not finite.all():
+                bad = tuple(self.model.names[i] for i in np.flatnonzero(~finite))
+                # math.hypot scales internally: |w| of a finite w never overflows (np.linalg.norm can).
+                spin = {name: math.hypot(*self.state.w_WP_P[self.model.names.index(name)]) * dt for name in bad}
         if not finite.all():
-            bad = tuple(self.model.names[i] for i in np.flatnonzero(~finite))
-            spin = {name: float(np.linalg.norm(self.state.w_WP_P[self.model.names.index(name)]) * dt) for name in bad}
             raise NonFiniteStateError(bad, self.step_count, self._integrator_name, dt, spin)
         self.state = new
         self.step_count += 1
@@ -319,6 +327,7 @@ class Simulator:
             position_world=self.state.p_WC_W[b].copy(),
             orientation_xyzw=quat_xyzw_from_wxyz(q_WB),
             linear_velocity_world=self.state.v_WC_W[b].copy(),
+            linear_velocity_body=quat_rotate(quat_conjugate(q_WB), self.state.v_WC_W[b]),
             angular_velocity_world=quat_rotate(q_WP, w_P),
             angular_velocity_body=quat_rotate(self.model.q_BP[b], w_P),
         )

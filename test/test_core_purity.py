@@ -1,0 +1,114 @@
+"""The core stays ROS-free: no module under rigid_body_sim/core imports rclpy or a *_msgs package.
+
+Checked twice. Statically, every file under the core is parsed and every ``import`` and
+``from … import`` (at any depth: functions, ``if TYPE_CHECKING``, ``try``) is inspected, so a
+deferred import inside a function is caught too. Dynamically, the core and each of its modules
+are imported in a fresh interpreter and its ``sys.modules`` is searched, which also catches an
+import smuggled in through a third-party package or ``importlib``.
+"""
+
+from __future__ import annotations
+
+import ast
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+CORE = REPO / "rigid_body_sim" / "core"
+CORE_FILES = sorted(CORE.rglob("*.py"))
+
+#: Third-party top-level packages the core may import (convention 1: numpy and scipy; PyYAML,
+#: deferred, to read scene files). Everything else must be the standard library or the core.
+ALLOWED_THIRD_PARTY = {"numpy", "scipy", "yaml"}
+
+
+def _is_ros(module: str) -> bool:
+    top = module.split(".")[0]
+    return top == "rclpy" or top.endswith("_msgs") or top.startswith("rcl") or top == "rosidl_runtime_py"
+
+
+def _imports(path: Path) -> list[tuple[int, str]]:
+    """(line, absolute module name) of every import in ``path``; relative imports are skipped."""
+    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            found.extend((node.lineno, alias.name) for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            found.append((node.lineno, node.module))
+        elif isinstance(node, ast.Call) and getattr(node.func, "attr", getattr(node.func, "id", None)) in (
+            "import_module", "__import__"
+        ):
+            for arg in node.args[:1]:
+                if isinstance(arg, ast.Constant) and isinstance(arg.value, str):
+                    found.append((node.lineno, arg.value))
+    return found
+
+
+def test_the_core_has_modules_to_check() -> None:
+    names = {p.name for p in CORE_FILES}
+    assert {"__init__.py", "quaternion.py", "dynamics.py", "integrators.py", "simulator.py", "scene.py"} <= names
+
+
+@pytest.mark.parametrize("path", CORE_FILES, ids=[str(p.relative_to(CORE)) for p in CORE_FILES])
+def test_no_ros_import_statically(path: Path) -> None:
+    ros = [f"{path.name}:{line}: {module}" for line, module in _imports(path) if _is_ros(module)]
+    assert not ros, f"the core must not import ROS packages: {ros}"
+
+
+@pytest.mark.parametrize("path", CORE_FILES, ids=[str(p.relative_to(CORE)) for p in CORE_FILES])
+def test_only_numpy_scipy_yaml_and_the_standard_library(path: Path) -> None:
+    foreign = [
+        f"{path.name}:{line}: {module}"
+        for line, module in _imports(path)
+        if module.split(".")[0] not in sys.stdlib_module_names
+        and module.split(".")[0] not in ALLOWED_THIRD_PARTY
+        and module.split(".")[0] != "rigid_body_sim"
+    ]
+    assert not foreign, f"the core imports only {sorted(ALLOWED_THIRD_PARTY)} and the standard library: {foreign}"
+
+
+def test_the_static_check_sees_deferred_and_aliased_imports(tmp_path: Path) -> None:
+    """The checker itself: it must find imports hidden inside functions, try blocks and importlib."""
+    sample = tmp_path / "sample.py"
+    sample.write_text(
+        "import numpy as np\n"
+        "from . import sibling\n"
+        "def f():\n"
+        "    import rclpy.node\n"
+        "    try:\n"
+        "        from geometry_msgs.msg import Pose\n"
+        "    except ImportError:\n"
+        "        pass\n"
+        "    importlib.import_module('std_msgs.msg')\n",
+        encoding="utf-8",
+    )
+    found = [module for _line, module in _imports(sample) if _is_ros(module)]
+    assert found == ["rclpy.node", "geometry_msgs.msg", "std_msgs.msg"]
+
+
+def test_no_ros_module_is_loaded_by_importing_the_core() -> None:
+    modules = ["rigid_body_sim.core"] + [
+        "rigid_body_sim.core." + p.stem for p in CORE_FILES if p.parent == CORE and p.stem != "__init__"
+    ]
+    program = (
+        "import importlib, json, sys\n"
+        f"for name in {modules!r}:\n"
+        "    importlib.import_module(name)\n"
+        "import rigid_body_sim.core as core\n"
+        "core.Simulator(core.load_scene({'bodies': {'b': {'mass': 1.0, 'inertia': {'sphere': 1.0}}}})).step(2)\n"
+        "print(json.dumps(sorted(sys.modules)))\n"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", program], cwd=REPO, capture_output=True, text=True, timeout=60,
+        env={"PATH": "/usr/bin:/bin", "PYTHONPATH": str(REPO)},
+    )
+    assert result.returncode == 0, result.stderr
+    loaded = json.loads(result.stdout.strip().splitlines()[-1])
+    assert set(modules) <= set(loaded)
+    ros = [m for m in loaded if _is_ros(m)]
+    assert not ros, f"importing the core loaded ROS modules: {ros}"

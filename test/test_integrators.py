@@ -1,0 +1,384 @@
+"""Integrators against closed forms and conservation laws.
+
+* Observed order of convergence on the torque-free asymmetric top (Jacobi elliptic functions,
+  closed_form.asymmetric_top): euler, semi_implicit_euler, implicit_gyroscopic 1; splitting 2;
+  rk4 4; the reference below 1e-9 rad.
+* Long torque-free runs at |ω|h = 0.01: unit quaternions for every fixed-step method, |L| and
+  bounded energy for the splitting, small energy drift for rk4.
+* The intermediate-axis flip period.
+* A projectile, which the second-order-and-up methods integrate exactly.
+* Errors: unknown integrator, non-finite state.
+
+Long runs: the default suite runs the issue's 1e5 steps (each step is a few hundred µs of
+Python, so this is the slowest part of the default run, about two minutes); the 1e6-step |q|
+soak is marked ``slow``. Bounds that come from a drift scale with the step count; bounds that
+come from round-off or from a bounded oscillation do not.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import re
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+
+from helpers import (
+    EPS,
+    FIXED_STEP_INTEGRATORS,
+    ORDER,
+    loglog_slope,
+    orientations_wxyz,
+    random_principal_moments,
+    random_tumbling_bodies,
+    random_unit_quaternion,
+    scene_of,
+)
+from rigid_body_sim.core import INTEGRATORS, NonFiniteStateError, Simulator, load_scene
+from rigid_body_sim.core import closed_form
+from rigid_body_sim.core.quaternion import quat_angle_between, quat_rotate, quat_xyzw_from_wxyz
+
+# ----------------------------------------------------------------------------- convergence order
+
+TOP_TIME = 2.0  # s, final time of the convergence study
+TOP_SPIN = 1.0  # rad/s, |ω| of each top
+#: Step sweeps (s) in each method's asymptotic regime: the error is dominated by its leading
+#: term (checked by the fitted slope), and rk4's smallest error stays far above round-off.
+SWEEPS = {
+    "euler": (0.02, 0.01, 0.005, 0.0025),
+    "semi_implicit_euler": (0.02, 0.01, 0.005, 0.0025),
+    "implicit_gyroscopic": (0.02, 0.01, 0.005, 0.0025),
+    "splitting": (0.04, 0.02, 0.01, 0.005),
+    "rk4": (0.4, 0.2, 0.1, 0.05),
+}
+SLOPE_TOLERANCE = 0.3
+ROUND_OFF_FLOOR = 1e-12  # 10× the round-off of these short runs (~1e-13): below it a slope measures noise
+
+
+@dataclass(frozen=True)
+class Tops:
+    """Three asymmetric tops and their exact state at TOP_TIME."""
+
+    bodies: dict
+    q_WB_exact: np.ndarray  # (3, 4)
+    w_B_exact: np.ndarray  # (3, 3)
+
+
+@functools.lru_cache(maxsize=None)
+def _tops() -> Tops:
+    rng = np.random.default_rng(40)
+    bodies, q_exact, w_exact = {}, [], []
+    for i in range(3):
+        inertia = random_principal_moments(rng)
+        q_WB0 = random_unit_quaternion(rng)
+        w_B0 = rng.normal(size=3)
+        w_B0 *= TOP_SPIN / np.linalg.norm(w_B0)
+        bodies[f"top{i}"] = {
+            "mass": 1.0,
+            "inertia": {"principal": inertia.tolist()},
+            "pose": {"orientation": quat_xyzw_from_wxyz(q_WB0).tolist()},
+            "twist": {"angular": quat_rotate(q_WB0, w_B0).tolist()},  # world axes
+        }
+        q, w = closed_form.asymmetric_top(inertia, w_B0, q_WB0, np.array([TOP_TIME]))
+        q_exact.append(q[0])
+        w_exact.append(w[0])
+    return Tops(bodies, np.array(q_exact), np.array(w_exact))
+
+
+def _top_errors(integrator: str, h: float) -> tuple[np.ndarray, np.ndarray]:
+    """Geodesic orientation error (rad) and body-rate error (rad/s) of each top at TOP_TIME."""
+    tops = _tops()
+    sim = Simulator(scene_of(tops.bodies), integrator, h)
+    steps = round(TOP_TIME / h)
+    assert abs(steps * h - TOP_TIME) < 1e-12
+    sim.step(steps)
+    angle = quat_angle_between(orientations_wxyz(sim), tops.q_WB_exact)
+    rate = np.linalg.norm(sim.angular_velocities_body() - tops.w_B_exact, axis=1)
+    return angle, rate
+
+
+@pytest.mark.parametrize("integrator", FIXED_STEP_INTEGRATORS)
+def test_observed_order_of_convergence(integrator: str) -> None:
+    h = np.array(SWEEPS[integrator])
+    errors = [_top_errors(integrator, step) for step in h]
+    angle = np.array([e[0] for e in errors])  # (len(h), 3 tops)
+    rate = np.array([e[1] for e in errors])
+    expected = ORDER[integrator]
+    for top in range(angle.shape[1]):
+        for name, err in (("orientation", angle[:, top]), ("body rate", rate[:, top])):
+            assert np.all(err > ROUND_OFF_FLOOR), f"{integrator}: {name} error {err} reaches round-off"
+            slope = loglog_slope(h, err)
+            assert abs(slope - expected) <= SLOPE_TOLERANCE, (
+                f"{integrator}, top {top}: observed {name} order {slope:.3f}, expected {expected} "
+                f"(h = {h.tolist()}, errors = {err.tolist()})"
+            )
+
+
+def test_reference_integrator_matches_the_elliptic_solution() -> None:
+    angle, rate = _top_errors("reference", 0.5)
+    assert np.all(angle < 1e-9), angle
+    assert np.all(rate < 1e-9), rate
+
+
+def test_closed_form_tops_are_not_trivial() -> None:
+    """The tops do tumble: their rates at TOP_TIME are far from the initial ones."""
+    tops = _tops()
+    sim = Simulator(scene_of(tops.bodies), "rk4", 0.01)
+    assert np.all(np.linalg.norm(sim.angular_velocities_body() - tops.w_B_exact, axis=1) > 0.05)
+
+
+# ----------------------------------------------------------------------------- long torque-free runs
+
+LONG_SPIN = 1.0  # rad/s
+LONG_DT = 0.01  # s: |ω| h = 0.01
+SAMPLE_EVERY = 100  # steps
+
+
+@dataclass(frozen=True)
+class LongRun:
+    """Samples every SAMPLE_EVERY steps of six torque-free bodies."""
+
+    n_steps: int
+    energy: np.ndarray  # (samples + 1, 6), J
+    momentum: np.ndarray  # (samples + 1, 6, 3), kg·m²/s, world axes
+    worst_unit_error: float  # max | |q| − 1 | over every sample and body
+
+
+@functools.lru_cache(maxsize=None)
+def _long_run(integrator: str, n_steps: int) -> LongRun:
+    rng = np.random.default_rng(41)
+    sim = Simulator(scene_of(random_tumbling_bodies(rng, 6, LONG_SPIN)), integrator, LONG_DT)
+    assert np.allclose(np.linalg.norm(sim.angular_velocities_world(), axis=1) * LONG_DT, 0.01)
+    energy, momentum, unit = [sim.kinetic_energy()], [sim.angular_momentum()], 0.0
+    for _ in range(n_steps // SAMPLE_EVERY):
+        sim.step(SAMPLE_EVERY)
+        energy.append(sim.kinetic_energy())
+        momentum.append(sim.angular_momentum())
+        unit = max(unit, float(np.abs(np.linalg.norm(sim.state.q_WP, axis=1) - 1.0).max()))
+        unit = max(unit, float(np.abs(np.linalg.norm(sim.orientations_xyzw(), axis=1) - 1.0).max()))
+    assert sim.step_count == n_steps
+    return LongRun(n_steps, np.array(energy), np.array(momentum), unit)
+
+
+def _steps(*counts: int) -> list:
+    return [pytest.param(n, id=f"{n:.0e}".replace("+0", ""), marks=[pytest.mark.slow] if n > 100_000 else [])
+            for n in counts]
+
+
+@pytest.mark.parametrize("n_steps", _steps(100_000, 1_000_000))
+@pytest.mark.parametrize("integrator", FIXED_STEP_INTEGRATORS)
+def test_quaternion_stays_unit(integrator: str, n_steps: int) -> None:
+    """Renormalising is part of every method: | |q| − 1 | stays at round-off, never accumulates."""
+    assert _long_run(integrator, n_steps).worst_unit_error < 1e-12
+
+
+@pytest.mark.parametrize("n_steps", _steps(100_000))
+def test_splitting_conserves_momentum_and_bounds_energy(n_steps: int) -> None:
+    """Every sub-step of the Lie–Poisson splitting is an exact rotation: L is kept to round-off.
+
+    Its energy error is bounded, not drifting: the method conserves a modified energy
+    E + O((|ω|h)²) for exponentially long times (backward error analysis of a symplectic,
+    Poisson splitting), so |E − E0|/E0 stays below (|ω|h)² = 1e-4 (the constant is of order
+    the inertia ratios, ≤ 4, times the 1/12-ish coefficient of the Strang splitting's error).
+    A drifting second-order method would accumulate n (|ω|h)³ = 0.1 over 1e5 steps.
+    """
+    run = _long_run("splitting", n_steps)
+    L0 = np.linalg.norm(run.momentum[0], axis=1)
+    size_error = np.abs(np.linalg.norm(run.momentum, axis=2) / L0 - 1.0)
+    assert size_error.max() < 1e-12
+    vector_error = np.linalg.norm(run.momentum - run.momentum[0], axis=2) / L0
+    assert vector_error.max() < 1e-12  # the direction too: each sub-flow keeps L_W fixed
+    energy_error = np.abs(run.energy / run.energy[0] - 1.0)
+    assert energy_error.max() < (LONG_SPIN * LONG_DT) ** 2
+    assert energy_error.max() > 100 * EPS  # the bound is met by a real O(h²) error, not trivially
+
+
+@pytest.mark.parametrize("n_steps", _steps(100_000))
+def test_rk4_energy_drift_is_small(n_steps: int) -> None:
+    """rk4's local error is O((|ω|h)⁵) per step and not symplectic: the energy drifts linearly.
+
+    The issue's bound, 1e-8 over 1e5 steps at |ω|h = 0.01, scaled with the number of steps.
+    """
+    run = _long_run("rk4", n_steps)
+    drift = np.abs(run.energy / run.energy[0] - 1.0).max()
+    assert drift < 1e-8 * n_steps / 100_000
+
+
+# ----------------------------------------------------------------------------- intermediate-axis flip
+
+FLIP_INERTIA = [1.0, 2.0, 3.0]  # kg·m²
+FLIP_RATE_B = [1e-3, 1.0, 1e-3]  # rad/s, body axes
+FLIP_PERIOD = 27.53  # s, between successive sign changes of the intermediate-axis rate (issue 2)
+
+
+@pytest.mark.parametrize("integrator", ["rk4", "splitting"])
+def test_intermediate_axis_flip_period(integrator: str) -> None:
+    """ω2 changes sign every 2K(m)/ν = 27.53 s; h = 0.05 s (|ω|h = 0.05) resolves it cheaply.
+
+    The crossing times are interpolated linearly between steps (error O(h²) ω2''/ω2' ≪ 1 ms).
+    rk4's phase error at |ω|h = 0.05 is ~(|ω|h)⁴ and the splitting's ~(|ω|h)² ≈ 3e-3 of the
+    rate, both well inside the 1% of the issue.
+    """
+    h, T = 0.05, 75.0
+    sim = Simulator(scene_of({"racket": {"mass": 1.0, "inertia": {"principal": FLIP_INERTIA},
+                                         "twist": {"angular": FLIP_RATE_B}}}), integrator, h)
+    w2 = [sim.angular_velocities_body()[0, 1]]
+    for _ in range(round(T / h)):
+        sim.step()
+        w2.append(sim.angular_velocities_body()[0, 1])
+    w2 = np.array(w2)
+    assert w2.min() < -0.99  # it really turns over
+    k = np.flatnonzero(np.sign(w2[1:]) != np.sign(w2[:-1]))
+    crossings = (k + w2[k] / (w2[k] - w2[k + 1])) * h
+    assert len(crossings) >= 3, crossings
+    periods = np.diff(crossings)
+    np.testing.assert_allclose(periods, FLIP_PERIOD, rtol=0.01)
+    exact = closed_form.intermediate_axis_flip_period(FLIP_INERTIA, FLIP_RATE_B)
+    np.testing.assert_allclose(exact, FLIP_PERIOD, rtol=1e-3)  # the issue's figure is the closed form's
+    np.testing.assert_allclose(periods, exact, rtol=0.01)
+
+
+# ----------------------------------------------------------------------------- projectile
+
+GRAVITY = np.array([0.0, -1.5, -9.81])  # m/s²
+
+
+@pytest.mark.parametrize("integrator", [*FIXED_STEP_INTEGRATORS, "reference"])
+def test_projectile(integrator: str) -> None:
+    """Uniform gravity, constant acceleration: p = p0 + v0 t + ½ g t², v = v0 + g t.
+
+    rk4 (exact for polynomial solutions up to degree 4), the splitting (kick-drift-kick is the
+    velocity Verlet, exact for constant acceleration) and the reference (order 8) reproduce it
+    to round-off. The first-order methods get v exactly but not p, and their error is itself
+    a closed form: explicit Euler moves with the old velocity, p_n = exact − ½ g h t;
+    semi-implicit Euler and implicit_gyroscopic (semi-implicit translation) with the new one,
+    p_n = exact + ½ g h t. Round-off: ~n ulps of the largest position.
+    """
+    h = 0.5 if integrator == "reference" else 0.01
+    n = 10 if integrator == "reference" else 500
+    p0, v0 = np.array([1.0, -2.0, 3.0]), np.array([4.0, 5.0, 20.0])
+    sim = Simulator(load_scene({"gravity": GRAVITY.tolist(), "bodies": {"stone": {
+        "mass": 0.3, "inertia": {"box": [0.1, 0.2, 0.3]},
+        "pose": {"position": p0.tolist()}, "twist": {"linear": v0.tolist(), "angular": [0.5, -1.0, 2.0]},
+    }}}), integrator, h)
+    sim.step(n)
+    t = n * h
+    p_exact, v_exact = closed_form.projectile(p0, v0, GRAVITY, np.array([t]))
+    shift = {"euler": -0.5, "semi_implicit_euler": 0.5, "implicit_gyroscopic": 0.5}.get(integrator, 0.0)
+    p_expected = p_exact[0] + shift * GRAVITY * h * t
+    state = sim.body_state("stone")
+    tol = 1e-10 if integrator == "reference" else n * 4 * EPS
+    np.testing.assert_allclose(state.position_world, p_expected, rtol=0, atol=tol * np.abs(p_exact).max())
+    np.testing.assert_allclose(state.linear_velocity_world, v_exact[0], rtol=0, atol=tol * np.abs(v_exact).max())
+    np.testing.assert_allclose(sim.time, t, rtol=0, atol=n * EPS * t)
+
+
+# ----------------------------------------------------------------------------- errors
+
+
+def _scene():
+    return scene_of({"box": {"mass": 1.0, "inertia": {"box": [1.0, 0.6, 0.4]}}})
+
+
+@pytest.mark.parametrize("name", ["rk5", "RK4", "", "Euler", None, 4])
+def test_unknown_integrator_lists_the_choices(name: object) -> None:
+    choices = re.escape(str(sorted(INTEGRATORS)))
+    with pytest.raises(ValueError, match=r"`integrator` must be one of " + choices + re.escape(f", got {name!r}")):
+        Simulator(_scene(), name, 0.01)  # type: ignore[arg-type]
+    sim = Simulator(_scene(), "splitting", 0.01)
+    with pytest.raises(ValueError, match=r"`integrator` must be one of " + choices):
+        sim.integrator = name  # type: ignore[assignment]
+    assert sim.integrator == "splitting"  # unchanged by the failed assignment
+
+
+def test_every_integrator_is_covered_by_these_tests() -> None:
+    """A new entry in INTEGRATORS needs its expected order in helpers.ORDER (and so a test)."""
+    untested = sorted(set(INTEGRATORS) - {*FIXED_STEP_INTEGRATORS, "reference"})
+    assert not untested, f"add {untested} to helpers.FIXED_STEP_INTEGRATORS and helpers.ORDER"
+    assert set(ORDER) == set(FIXED_STEP_INTEGRATORS)
+
+
+@pytest.mark.parametrize("dt", [0.0, -0.01, float("nan"), float("inf"), "0.01", True])
+def test_bad_dt_is_rejected(dt: object) -> None:
+    with pytest.raises(ValueError, match=re.escape(f"dt: expected a finite number > 0, got {dt!r}")):
+        Simulator(_scene(), "rk4", dt)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("n", [-1, 1.5, True, "3"])
+def test_bad_step_count_is_rejected(n: object) -> None:
+    sim = Simulator(_scene(), "rk4", 0.01)
+    with pytest.raises(ValueError, match=re.escape(f"n: expected a whole number of steps ≥ 0, got {n!r}")):
+        sim.step(n)  # type: ignore[arg-type]
+    assert sim.step_count == 0
+
+
+def _thin_rod_scene():
+    """A calm ball and a thin rod spun fast about a transverse axis (distinct moments)."""
+    return scene_of({
+        "ball": {"mass": 1.0, "inertia": {"sphere": 0.5}, "twist": {"linear": [1.0, 0.0, 0.0], "angular": [0.0, 0.0, 0.3]}},
+        "rod": {"mass": 0.1, "inertia": {"principal": [0.01, 1.0, 1.005]}, "twist": {"angular": [0.0, 50.0, 5.0]}},
+    })
+
+
+def test_non_finite_state_error_names_body_step_integrator_and_spin_step() -> None:
+    """Explicit Euler at |ω|h = 5 on a thin rod: the gyroscopic term blows up within a few steps."""
+    dt = 0.1
+    sim = Simulator(_thin_rod_scene(), "euler", dt)
+    with pytest.raises(NonFiniteStateError) as info:
+        sim.step(1000)
+    err = info.value
+    k = sim.step_count
+    assert 0 < k < 1000
+    assert err.bodies == ("rod",)
+    assert err.step_index == k
+    assert err.integrator == "euler"
+    assert err.dt == dt
+    # The state is the last finite one, reached after k steps: replaying k steps gives it exactly.
+    assert sim.state.finite_bodies().all()
+    replay = Simulator(_thin_rod_scene(), "euler", dt)
+    replay.step(k)
+    for got, want in zip((sim.state.p_WC_W, sim.state.q_WP, sim.state.v_WC_W, sim.state.w_WP_P),
+                         (replay.state.p_WC_W, replay.state.q_WP, replay.state.v_WC_W, replay.state.w_WP_P)):
+        np.testing.assert_array_equal(got, want)
+    np.testing.assert_allclose(sim.time, k * dt, rtol=1e-15)
+    spin = math.hypot(*sim.angular_velocities_body()[1]) * dt
+    assert math.isfinite(spin)
+    np.testing.assert_allclose(err.spin_step["rod"], spin, rtol=1e-12)
+    message = str(err)
+    assert f"step {k}" in message
+    assert "'euler'" in message
+    assert f"rod (|w|·dt = {spin:.3g} rad)" in message
+    assert "ball" not in message
+    # The caller can freeze the rod and carry on with the rest.
+    frozen = sim.body_state("rod")
+    sim.stop_body("rod")
+    sim.step(10)
+    np.testing.assert_array_equal(sim.body_state("rod").orientation_xyzw, frozen.orientation_xyzw)
+    assert sim.body_state("ball").position_world[0] > replay.body_state("ball").position_world[0]
+
+
+@pytest.mark.parametrize("integrator", FIXED_STEP_INTEGRATORS)
+@pytest.mark.parametrize("push", ["force", "torque"])
+def test_huge_push_on_a_tiny_body_is_a_non_finite_state_error(integrator: str, push: str) -> None:
+    """Finite inputs whose response overflows: reported as NonFiniteStateError, never as a
+    floating-point warning (pytest turns warnings into errors here), state untouched."""
+    scene = scene_of({
+        "ball": {"mass": 1.0, "inertia": {"sphere": 0.5}, "twist": {"linear": [1.0, 0.0, 0.0]}},
+        "mote": {"mass": 1e-300, "inertia": {"principal": [1e-300, 2e-300, 2.5e-300]}, "pose": {"position": [1e200, 0, 0]}},
+    })
+    sim = Simulator(scene, integrator, 0.01)
+    sim.step(2)
+    before = sim.state.copy()
+    if push == "force":
+        sim.apply_wrench("mote", force=[1e300, 1e300, 0.0], frame="world")  # torque about the COM p × F overflows too
+    else:
+        sim.apply_wrench("mote", torque=[1e300, -1e300, 1e300], frame="mote")
+    with pytest.raises(NonFiniteStateError, match=re.escape(f"non-finite state at step 2 with integrator {integrator!r}")
+                       + r".*mote \(\|w\|·dt = 0 rad\)"):
+        sim.step()
+    assert sim.step_count == 2
+    for got, want in zip((sim.state.p_WC_W, sim.state.q_WP, sim.state.v_WC_W, sim.state.w_WP_P),
+                         (before.p_WC_W, before.q_WP, before.v_WC_W, before.w_WP_P)):
+        np.testing.assert_array_equal(got, want)
