@@ -1,0 +1,35 @@
+"""Build script for rigid_body_sim (ament_python): works with colcon and with plain pip."""
+
+import os
+import xml.etree.ElementTree as ET
+from glob import glob
+
+from setuptools import find_packages, setup
+
+package_name = "rigid_body_sim"
+here = os.path.dirname(os.path.abspath(__file__))
+# package.xml is the single source of the version.
+version = ET.parse(os.path.join(here, "package.xml")).getroot().findtext("version")
+
+setup(
+    name=package_name,
+    version=version,
+    packages=find_packages(exclude=["test", "test.*"]),
+    data_files=[
+        ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
+        ("share/" + package_name, ["package.xml"]),
+        ("share/" + package_name + "/config", sorted(p for p in glob("config/*") if os.path.isfile(p))),
+    ],
+    python_requires=">=3.10",
+    install_requires=["numpy", "scipy", "pyyaml"],
+    zip_safe=True,
+    maintainer="rigid_body_sim maintainers",
+    maintainer_email="rigid-body-sim@example.com",
+    description="Rigid-body dynamics simulator with a ROS 2 interface.",
+    license="Apache-2.0",
+    entry_points={
+        "console_scripts": [
+            "rigid_body_sim_node = rigid_body_sim.ros.node:main",
+        ],
+    },
+)
