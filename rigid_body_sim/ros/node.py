@@ -1,0 +1,511 @@
+"""The ``rigid_body_sim`` node: steps the core at a fixed wall-clock rate and talks ROS 2.
+
+Per body B (relative names, so namespaces and remaps apply):
+  out ``B/pose`` (geometry_msgs/PoseStamped, frame ``world_frame``, stamp = sim time),
+  out ``B/twist`` (geometry_msgs/Twist: COM velocity and angular velocity, both world axes),
+  out ``B/odom`` (nav_msgs/Odometry, when ``publish_odometry``: twist in B's axes),
+  in  ``B/wrench`` (geometry_msgs/WrenchStamped: force and torque about the origin of
+      ``header.frame_id``, in its axes; held per (B, frame_id) until replaced, cleared by an
+      all-zero wrench, or older than ``wrench_timeout`` s of sim time; all holds are summed),
+  in  ``B/impulse`` (WrenchStamped read as N·s and N·m·s, applied once at the next step).
+Also ``/clock`` (rosgraph_msgs/Clock) each tick, and services ``~/reset``, ``~/set_paused``,
+``~/step``. Each physics step advances ``real_time_factor / (rate_hz · substeps)`` s.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from collections import Counter
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import rclpy
+from geometry_msgs.msg import PoseStamped, Twist, WrenchStamped
+from nav_msgs.msg import Odometry
+from rcl_interfaces.msg import (
+    FloatingPointRange,
+    IntegerRange,
+    ParameterDescriptor,
+    ParameterType,
+    SetParametersResult,
+)
+from rclpy.clock import Clock, ClockType
+from rclpy.exceptions import ParameterException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile
+from rosgraph_msgs.msg import Clock as ClockMsg
+from std_srvs.srv import SetBool, Trigger
+
+from ..core import INTEGRATORS, NonFiniteStateError, Scene, SceneError, Simulator, load_scene
+from ..paths import default_scene_path
+from .conversions import (
+    RejectedMessage,
+    fill_odometry,
+    fill_pose_stamped,
+    fill_twist,
+    time_msg_from_seconds,
+    wrench_from_msg,
+)
+
+__all__ = ["RigidBodySimNode", "main", "DEFAULT_INTEGRATOR"]
+
+#: Integrator used unless the ``integrator`` parameter says otherwise.
+DEFAULT_INTEGRATOR = "rk4"
+#: History depth of every publisher and subscription (bounded memory under floods).
+QUEUE_DEPTH = 10
+
+
+@dataclass
+class _Hold:
+    """A held wrench: force and torque in the message's frame, and the sim time it arrived."""
+
+    force: np.ndarray
+    torque: np.ndarray
+    received_time: float
+
+
+@dataclass
+class _BodyIO:
+    """Publishers, subscriptions and reusable messages of one body."""
+
+    pose_pub: Any
+    twist_pub: Any
+    odom_pub: Any
+    wrench_sub: Any
+    impulse_sub: Any
+    frames: dict[str, str]  # accepted header.frame_id → core frame name
+    pose_msg: PoseStamped
+    twist_msg: Twist
+    odom_msg: Odometry
+
+
+def _float_range(low: float, high: float) -> list[FloatingPointRange]:
+    return [FloatingPointRange(from_value=low, to_value=high, step=0.0)]
+
+
+class RigidBodySimNode(Node):
+    """Rigid-body simulator node. Keyword arguments go to :class:`rclpy.node.Node` (``context``,
+    ``parameter_overrides``, ``namespace``, ``cli_args``...).
+
+    Raises
+    ------
+    SceneError
+        If the start-up scene cannot be loaded.
+    ValueError
+        If start-up parameters are invalid (the message says which and what was expected).
+    """
+
+    def __init__(self, node_name: str = "rigid_body_sim", **kwargs: Any):
+        super().__init__(node_name, **kwargs)
+        self._declare_parameters()
+        p = {name: self.get_parameter(name).value for name in self._PARAMETER_NAMES}
+        problems = [reason for reason in (self._check(name, value) for name, value in p.items()) if reason]
+        if problems:
+            raise ValueError("; ".join(problems))
+        self._world_frame: str = p["world_frame"]
+        self._rate_hz: float = float(p["rate_hz"])
+        self._substeps: int = int(p["substeps"])
+        self._real_time_factor: float = float(p["real_time_factor"])
+        self._paused: bool = bool(p["paused"])
+        self._publish_clock: bool = bool(p["publish_clock"])
+        self._publish_odometry: bool = bool(p["publish_odometry"])
+        self._wrench_timeout: float = float(p["wrench_timeout"])
+        self._status_period: float = float(p["status_period"])
+
+        scene = load_scene(p["scene"])
+        self._check_scene_names(scene)
+        self._prepared_scenes: dict[str, Scene] = {}
+        self.rejected: Counter[str] = Counter()
+        self.accepted_messages = 0
+        self._holds: dict[tuple[str, str], _Hold] = {}
+        self._pending_impulses: list[tuple[str, str, np.ndarray, np.ndarray]] = []
+        self._bodies: dict[str, _BodyIO] = {}
+        self._qos = QoSProfile(depth=QUEUE_DEPTH)
+
+        self._sim = Simulator(scene, integrator=p["integrator"], dt=self._physics_dt())
+        self._create_body_io()
+        self._clock_pub = self.create_publisher(ClockMsg, "/clock", self._qos)
+        self._clock_msg = ClockMsg()
+        self.create_service(Trigger, "~/reset", self._on_reset)
+        self.create_service(SetBool, "~/set_paused", self._on_set_paused)
+        self.create_service(Trigger, "~/step", self._on_step)
+        self.add_pre_set_parameters_callback(self._coerce_parameters)
+        self.add_on_set_parameters_callback(self._validate_parameters)
+        self.add_post_set_parameters_callback(self._apply_parameters)
+
+        self._steady_clock = Clock(clock_type=ClockType.STEADY_TIME)
+        self._timer = self.create_timer(1.0 / self._rate_hz, self._on_tick, clock=self._steady_clock)
+        self._status_wall = time.monotonic()
+        self._status_sim = 0.0
+        self._log_start_up()
+        self.publish_state()
+
+    # ------------------------------------------------------------------ parameters
+
+    _PARAMETER_NAMES = ("scene", "integrator", "rate_hz", "substeps", "real_time_factor", "world_frame",
+                        "publish_clock", "publish_odometry", "paused", "wrench_timeout", "status_period")
+    _FLOAT_PARAMETERS = ("rate_hz", "real_time_factor", "wrench_timeout", "status_period")
+
+    def _declare_parameters(self) -> None:
+        # A whole number given for a float parameter at start-up (`-p rate_hz:=200`, or
+        # `rate_hz: 200` in a params file) would make declare_parameter raise a type error:
+        # pre-set callbacks do not run for declarations, so coerce the overrides first.
+        overrides = getattr(self, "_parameter_overrides", {})
+        for name in self._FLOAT_PARAMETERS:
+            param = overrides.get(name)
+            if param is not None and param.type_ == Parameter.Type.INTEGER:
+                overrides[name] = Parameter(name, Parameter.Type.DOUBLE, float(param.value))
+
+        def describe(text: str, **extra: Any) -> ParameterDescriptor:
+            return ParameterDescriptor(description=text, **extra)
+
+        self.declare_parameter("scene", str(default_scene_path()),
+                               describe("Path of the scene YAML file (default: the installed config/default_scene.yaml)."))
+        self.declare_parameter("integrator", DEFAULT_INTEGRATOR,
+                               describe("Integrator name.", additional_constraints=f"one of {sorted(INTEGRATORS)}"))
+        self.declare_parameter("rate_hz", 100.0, describe("Ticks per wall-clock second.",
+                                                          floating_point_range=_float_range(0.001, 100000.0)))
+        self.declare_parameter("substeps", 1, describe("Physics steps per tick.",
+                                                       integer_range=[IntegerRange(from_value=1, to_value=100000, step=1)]))
+        self.declare_parameter("real_time_factor", 1.0, describe("Sim seconds per wall-clock second.",
+                                                                 floating_point_range=_float_range(1e-6, 1e6)))
+        self.declare_parameter("world_frame", "world", describe("frame_id of the world (poses, world-frame wrenches).",
+                                                                read_only=True))
+        self.declare_parameter("publish_clock", True, describe("Publish /clock with sim time every tick."))
+        self.declare_parameter("publish_odometry", False, describe("Also publish B/odom (nav_msgs/Odometry)."))
+        self.declare_parameter("paused", False, describe("When true, time only advances through ~/step."))
+        self.declare_parameter("wrench_timeout", 0.5, describe("Sim seconds a received wrench stays applied; 0 = until replaced.",
+                                                               floating_point_range=_float_range(0.0, 1e9)))
+        self.declare_parameter("status_period", 1.0, describe("Wall seconds between status log lines; 0 = none.",
+                                                              floating_point_range=_float_range(0.0, 1e6)))
+
+    def _check(self, name: str, value: Any) -> str | None:
+        """Why ``value`` is not acceptable for parameter ``name``, or None."""
+        if name == "integrator" and value not in INTEGRATORS:
+            return f"integrator must be one of {sorted(INTEGRATORS)}, got {value!r}"
+        if name in ("rate_hz", "real_time_factor") and not (isinstance(value, float) and math.isfinite(value) and value > 0.0):
+            return f"{name} must be a finite number > 0, got {value!r}"
+        if name in ("wrench_timeout", "status_period") and not (isinstance(value, float) and math.isfinite(value) and value >= 0.0):
+            return f"{name} must be a finite number ≥ 0, got {value!r}"
+        if name == "substeps" and not (isinstance(value, int) and value >= 1):
+            return f"substeps must be a whole number ≥ 1, got {value!r}"
+        if name == "world_frame" and not (isinstance(value, str) and value and "/" not in value):
+            return f"world_frame must be a non-empty frame name without '/', got {value!r}"
+        if name == "scene" and not (isinstance(value, str) and value):
+            return f"scene must be the path of a scene YAML file, got {value!r}"
+        return None
+
+    def _coerce_parameters(self, parameters: list[Parameter]) -> list[Parameter]:
+        """Accept whole numbers for float parameters (``rate_hz:=200`` means 200.0)."""
+        out = []
+        for param in parameters:
+            if param.name in self._FLOAT_PARAMETERS and param.type_ == Parameter.Type.INTEGER:
+                param = Parameter(param.name, Parameter.Type.DOUBLE, float(param.value))
+            out.append(param)
+        return out
+
+    def _validate_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
+        """Accept or reject a whole set of changes; nothing is applied here."""
+        for param in parameters:
+            if param.name not in self._PARAMETER_NAMES:
+                continue
+            reason = self._check(param.name, param.value)
+            if reason is None and param.name == "scene":
+                try:
+                    scene = load_scene(param.value)
+                    self._check_scene_names(scene)
+                except (SceneError, ValueError) as exc:
+                    reason = f"scene rejected: {exc}"
+                else:
+                    self._prepared_scenes = {param.value: scene}
+            if reason is not None:
+                return SetParametersResult(successful=False, reason=reason)
+        return SetParametersResult(successful=True)
+
+    def _apply_parameters(self, parameters: list[Parameter]) -> None:
+        """Apply an accepted set of changes; they take effect at the next tick."""
+        retime = False
+        for param in parameters:
+            name, value = param.name, param.value
+            if name == "integrator":
+                self._sim.integrator = value
+            elif name == "rate_hz":
+                self._rate_hz = float(value)
+                retime = True
+            elif name == "substeps":
+                self._substeps = int(value)
+            elif name == "real_time_factor":
+                self._real_time_factor = float(value)
+            elif name == "paused":
+                self._paused = bool(value)
+            elif name == "publish_clock":
+                self._publish_clock = bool(value)
+            elif name == "publish_odometry":
+                self._publish_odometry = bool(value)
+                self._create_body_io()
+            elif name == "wrench_timeout":
+                self._wrench_timeout = float(value)
+            elif name == "status_period":
+                self._status_period = float(value)
+            elif name == "scene":
+                self._swap_scene(self._prepared_scenes.pop(value))
+        self._sim.dt = self._physics_dt()
+        if retime:
+            self._timer.timer_period_ns = int(round(1e9 / self._rate_hz))
+
+    def _physics_dt(self) -> float:
+        return self._real_time_factor / (self._rate_hz * self._substeps)
+
+    def _check_scene_names(self, scene: Scene) -> None:
+        if self._world_frame_name() in scene.body_names:
+            raise ValueError(f"body name {self._world_frame_name()!r} clashes with world_frame; rename the body")
+
+    def _world_frame_name(self) -> str:
+        return getattr(self, "_world_frame", None) or self.get_parameter("world_frame").value
+
+    # ------------------------------------------------------------------ per-body I/O
+
+    def _create_body_io(self) -> None:
+        """(Re)create every body's publishers and subscriptions for the current scene."""
+        self._destroy_body_io()
+        for body in self._sim.body_names:
+            frames = {self._world_frame: "world"}
+            frames.update({f: f for f in self._sim.frames_of(body) if f != "world"})
+            self._bodies[body] = _BodyIO(
+                pose_pub=self.create_publisher(PoseStamped, f"{body}/pose", self._qos),
+                twist_pub=self.create_publisher(Twist, f"{body}/twist", self._qos),
+                odom_pub=self.create_publisher(Odometry, f"{body}/odom", self._qos) if self._publish_odometry else None,
+                wrench_sub=self.create_subscription(WrenchStamped, f"{body}/wrench",
+                                                    lambda msg, b=body: self._on_wrench(b, msg), self._qos),
+                impulse_sub=self.create_subscription(WrenchStamped, f"{body}/impulse",
+                                                     lambda msg, b=body: self._on_impulse(b, msg), self._qos),
+                frames=frames,
+                pose_msg=PoseStamped(),
+                twist_msg=Twist(),
+                odom_msg=Odometry(),
+            )
+
+    def _destroy_body_io(self) -> None:
+        for io in self._bodies.values():
+            for entity in (io.pose_pub, io.twist_pub, io.odom_pub):
+                if entity is not None:
+                    self.destroy_publisher(entity)
+            self.destroy_subscription(io.wrench_sub)
+            self.destroy_subscription(io.impulse_sub)
+        self._bodies = {}
+
+    def _swap_scene(self, scene: Scene) -> None:
+        self._sim = Simulator(scene, integrator=self._sim.integrator, dt=self._physics_dt())
+        self._holds.clear()
+        self._pending_impulses.clear()
+        self._create_body_io()
+        self._log_start_up()
+        self.publish_state()
+
+    # ------------------------------------------------------------------ incoming
+
+    def _parse(self, body: str, msg: WrenchStamped, topic: str) -> tuple[str, np.ndarray, np.ndarray] | None:
+        """(core frame, force, torque) of a valid message, or None after counting and warning."""
+        io = self._bodies.get(body)
+        try:
+            frame = io.frames.get(msg.header.frame_id) if io is not None else None
+            if frame is None:
+                raise RejectedMessage("unknown_frame", f"frame_id {msg.header.frame_id[:80]!r} is not one of {list(io.frames) if io else []}")
+            force, torque = wrench_from_msg(msg)
+        except RejectedMessage as rejection:
+            self.rejected[rejection.reason] += 1
+            self.get_logger().warning(
+                f"dropped a message on {body}/{topic} ({rejection.reason}): {rejection.detail}; "
+                f"valid frame_ids: {list(io.frames) if io else []}",
+                throttle_duration_sec=2.0)
+            return None
+        self.accepted_messages += 1
+        return frame, force, torque
+
+    def _on_wrench(self, body: str, msg: WrenchStamped) -> None:
+        parsed = self._parse(body, msg, "wrench")
+        if parsed is None:
+            return
+        frame, force, torque = parsed
+        if not force.any() and not torque.any():
+            self._holds.pop((body, frame), None)
+        else:
+            self._holds[(body, frame)] = _Hold(force, torque, self._sim.time)
+
+    def _on_impulse(self, body: str, msg: WrenchStamped) -> None:
+        parsed = self._parse(body, msg, "impulse")
+        if parsed is not None:
+            frame, linear, angular = parsed
+            self._pending_impulses.append((body, frame, linear, angular))
+
+    # ------------------------------------------------------------------ stepping
+
+    def _on_tick(self) -> None:
+        if not self._paused:
+            self.advance_one_tick()
+        self._log_status()
+
+    def advance_one_tick(self) -> None:
+        """Advance ``substeps`` physics steps with the held wrenches and pending impulses, then publish."""
+        sim = self._sim
+        if self._wrench_timeout > 0.0:
+            now = sim.time
+            expired = [key for key, hold in self._holds.items() if now - hold.received_time >= self._wrench_timeout]
+            for key in expired:
+                del self._holds[key]
+        stopped = set(sim.stopped_bodies)
+        for body, frame, linear, angular in self._pending_impulses:
+            if body in stopped:
+                continue
+            try:
+                sim.apply_impulse(body, linear, angular, frame)
+            except ValueError as exc:
+                self.rejected["non_finite_result"] += 1
+                self.get_logger().warning(f"dropped an impulse on {body}: {exc}", throttle_duration_sec=2.0)
+        self._pending_impulses.clear()
+        for (body, frame), hold in self._holds.items():
+            sim.apply_wrench(body, hold.force, hold.torque, frame)
+        target = sim.step_count + self._substeps
+        while sim.step_count < target:
+            try:
+                sim.step(target - sim.step_count)
+            except NonFiniteStateError as failure:
+                for body in failure.bodies:
+                    sim.stop_body(body)
+                self.get_logger().error(f"stopped {list(failure.bodies)}: {failure}")
+        self.publish_state()
+
+    # ------------------------------------------------------------------ outgoing
+
+    def publish_state(self) -> None:
+        """Publish every running body's pose and twist (and odometry, /clock) at the current sim time."""
+        sim = self._sim
+        stamp = time_msg_from_seconds(sim.time)
+        stopped = set(sim.stopped_bodies)
+        positions = sim.positions_world()
+        orientations = sim.orientations_xyzw()
+        velocities = sim.linear_velocities_world()
+        rates_world = sim.angular_velocities_world()
+        finite = sim.state.finite_bodies()
+        for index, (body, io) in enumerate(self._bodies.items()):
+            if body in stopped or not finite[index]:
+                continue
+            io.pose_pub.publish(fill_pose_stamped(io.pose_msg, stamp, self._world_frame, positions[index], orientations[index]))
+            io.twist_pub.publish(fill_twist(io.twist_msg, velocities[index], rates_world[index]))
+            if io.odom_pub is not None:
+                state = sim.body_state(body)
+                io.odom_pub.publish(fill_odometry(io.odom_msg, stamp, self._world_frame, body, state.position_world,
+                                                  state.orientation_xyzw, state.linear_velocity_body,
+                                                  state.angular_velocity_body))
+        if self._publish_clock:
+            self._clock_msg.clock = stamp
+            self._clock_pub.publish(self._clock_msg)
+
+    # ------------------------------------------------------------------ services
+
+    def _on_reset(self, _request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
+        self._sim.reset()
+        self._holds.clear()
+        self._pending_impulses.clear()
+        self.publish_state()
+        response.success = True
+        response.message = "reset to the scene's initial state at t = 0 s; held wrenches cleared"
+        return response
+
+    def _on_set_paused(self, request: SetBool.Request, response: SetBool.Response) -> SetBool.Response:
+        result = self.set_parameters([Parameter("paused", Parameter.Type.BOOL, bool(request.data))])[0]
+        response.success = result.successful
+        response.message = ("paused" if request.data else "running") if result.successful else result.reason
+        return response
+
+    def _on_step(self, _request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
+        if not self._paused:
+            response.success = False
+            response.message = "refused: the simulation is running; pause it first (~/set_paused true, or paused:=true)"
+            return response
+        self.advance_one_tick()
+        response.success = True
+        response.message = f"stepped one tick to t = {self._sim.time:.9f} s"
+        return response
+
+    # ------------------------------------------------------------------ logging
+
+    def _log_start_up(self) -> None:
+        sim = self._sim
+        self.get_logger().info(
+            f"scene {sim.scene.source}: {len(sim.body_names)} bodies; integrator {sim.integrator}, "
+            f"dt = {sim.dt:g} s ({self._rate_hz:g} Hz × {self._substeps} substeps, real_time_factor {self._real_time_factor:g})")
+        for body in sim.body_names[:20]:
+            index = sim.body_names.index(body)
+            self.get_logger().info(
+                f"  {body}: mass {sim.model.mass[index]:g} kg, principal moments {np.round(sim.model.inertia_P[index], 9).tolist()} kg·m², "
+                f"wrench frames {list(self._bodies[body].frames)}")
+        if len(sim.body_names) > 20:
+            self.get_logger().info(f"  ... and {len(sim.body_names) - 20} more bodies")
+
+    def _log_status(self) -> None:
+        if self._status_period <= 0.0:
+            return
+        wall = time.monotonic()
+        elapsed = wall - self._status_wall
+        if elapsed < self._status_period:
+            return
+        sim = self._sim
+        rtf = (sim.time - self._status_sim) / elapsed
+        self._status_wall, self._status_sim = wall, sim.time
+        lines = [f"t = {sim.time:.3f} s, real-time factor {rtf:.3f}" + (" (paused)" if self._paused else "")]
+        positions, orientations = sim.positions_world(), sim.orientations_xyzw()
+        for index, body in enumerate(sim.body_names[:10]):
+            lines.append(f"  {body}: position {np.round(positions[index], 4).tolist()} m, "
+                         f"orientation xyzw {np.round(orientations[index], 4).tolist()}")
+        if len(sim.body_names) > 10:
+            lines.append(f"  ... and {len(sim.body_names) - 10} more bodies")
+        self.get_logger().info("\n".join(lines))
+
+    # ------------------------------------------------------------------ read-only access for tools
+
+    def publisher_subscription_counts(self) -> dict[str, int]:
+        """Per body, how many subscriptions its pose and twist publishers have matched (the smaller)."""
+        return {b: min(io.pose_pub.get_subscription_count(), io.twist_pub.get_subscription_count())
+                for b, io in self._bodies.items()}
+
+    @property
+    def simulator(self) -> Simulator:
+        """The core simulator this node steps (read it; drive it through topics and services)."""
+        return self._sim
+
+    @property
+    def held_wrenches(self) -> dict[tuple[str, str], tuple[np.ndarray, np.ndarray]]:
+        """Held wrenches by (body, core frame): (force, torque) in that frame."""
+        return {key: (h.force.copy(), h.torque.copy()) for key, h in self._holds.items()}
+
+
+def main(args: list[str] | None = None) -> int:
+    """Console entry point ``rigid_body_sim_node``: run the node until Ctrl-C or shutdown."""
+    rclpy.init(args=args)
+    try:
+        node = RigidBodySimNode()
+    except (SceneError, ValueError, ParameterException) as exc:
+        print(f"rigid_body_sim_node: {exc}", file=sys.stderr)
+        rclpy.try_shutdown()
+        return 2
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
+    try:
+        executor.spin()
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        executor.shutdown()
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

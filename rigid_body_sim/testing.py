@@ -1,0 +1,260 @@
+"""A launch-free test harness: the simulator node in-process, driven through its real ROS interface.
+
+Use it in your own pytest suites (no launch files, no ros2cli)::
+
+    from rigid_body_sim.testing import SimHarness
+
+    def test_push_moves_box():
+        with SimHarness(parameters={"integrator": "rk4"}) as sim:   # default scene, paused
+            sim.publish_wrench("box", force=(0, 10, 0), frame_id="box/corner")
+            sim.step(10)                                            # exactly 10 ticks
+            assert sim.latest_twist("box").linear.y > 0
+
+The node and a client node live on a private :class:`rclpy.context.Context` (its own DDS
+participant, on ``ROS_DOMAIN_ID`` or the ``domain_id`` given) with their own executor, so a
+harness never touches the global rclpy context and several can run one after another in one
+process. Everything goes through topics, services and the parameter service, as it would from
+another process; ``close()`` (or leaving the ``with`` block, also on failure) destroys it all.
+The node starts paused by default, so time advances only through :meth:`SimHarness.step`:
+runs are bitwise deterministic.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Any, Callable, Sequence
+
+import rclpy
+from geometry_msgs.msg import PoseStamped, Twist, WrenchStamped
+from nav_msgs.msg import Odometry
+from rcl_interfaces.msg import SetParametersResult
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.parameter import Parameter, parameter_value_to_python
+from rclpy.parameter_client import AsyncParameterClient
+from rclpy.qos import QoSProfile
+from std_srvs.srv import SetBool, Trigger
+
+from .ros.node import RigidBodySimNode
+
+__all__ = ["SimHarness", "HarnessTimeout"]
+
+
+class HarnessTimeout(AssertionError):
+    """Something the harness waited for did not happen in time (an assertion failure in tests)."""
+
+
+class SimHarness:
+    """The ``rigid_body_sim`` node in-process, with a client that drives and observes it.
+
+    Parameters
+    ----------
+    scene : str or Path, optional
+        Scene YAML file; default the installed config/default_scene.yaml.
+    parameters : dict, optional
+        Node parameters at start-up (``{"integrator": "splitting", "substeps": 4}``).
+    paused : bool
+        Start paused (default), so only :meth:`step` advances time.
+    domain_id : int, optional
+        ROS domain of the private context; default ``ROS_DOMAIN_ID`` from the environment.
+    node_name, namespace : str
+        Of the simulator node; topics are relative to the namespace.
+    timeout : float
+        Seconds any single wait may take before :class:`HarnessTimeout`.
+    """
+
+    def __init__(self, scene: str | Path | None = None, parameters: dict[str, Any] | None = None, *,
+                 paused: bool = True, domain_id: int | None = None, node_name: str = "rigid_body_sim",
+                 namespace: str | None = None, timeout: float = 10.0):
+        params = dict(parameters or {})
+        if scene is not None:
+            params["scene"] = str(scene)
+        params.setdefault("paused", paused)
+        params.setdefault("status_period", 0.0)
+        self.timeout = timeout
+        self.context = Context()
+        rclpy.init(context=self.context, domain_id=domain_id)
+        self.node: RigidBodySimNode | None = None
+        self.client: Node | None = None
+        self.executor: SingleThreadedExecutor | None = None
+        try:
+            overrides = [Parameter(k, value=v) for k, v in params.items()]
+            self.node = RigidBodySimNode(node_name, context=self.context, namespace=namespace,
+                                         parameter_overrides=overrides)
+            self.client = Node("rigid_body_sim_test_client", context=self.context, namespace=namespace)
+            self.executor = SingleThreadedExecutor(context=self.context)
+            self.executor.add_node(self.node)
+            self.executor.add_node(self.client)
+            self._service_prefix = self.node.get_fully_qualified_name()
+            qos = QoSProfile(depth=100)
+            self._poses: dict[str, PoseStamped] = {}
+            self._twists: dict[str, Twist] = {}
+            self._odoms: dict[str, Odometry] = {}
+            self._publishers: dict[tuple[str, str], Any] = {}
+            for body in self.node.simulator.body_names:
+                self.client.create_subscription(PoseStamped, f"{body}/pose", lambda m, b=body: self._poses.__setitem__(b, m), qos)
+                self.client.create_subscription(Twist, f"{body}/twist", lambda m, b=body: self._twists.__setitem__(b, m), qos)
+                self.client.create_subscription(Odometry, f"{body}/odom", lambda m, b=body: self._odoms.__setitem__(b, m), qos)
+                for topic in ("wrench", "impulse"):
+                    self._publishers[(body, topic)] = self.client.create_publisher(WrenchStamped, f"{body}/{topic}", qos)
+            self._step = self.client.create_client(Trigger, f"{self._service_prefix}/step")
+            self._reset = self.client.create_client(Trigger, f"{self._service_prefix}/reset")
+            self._set_paused = self.client.create_client(SetBool, f"{self._service_prefix}/set_paused")
+            self._parameters = AsyncParameterClient(self.client, self._service_prefix)
+            self._wait_for_connections()
+        except BaseException:
+            self.close()
+            raise
+
+    # ------------------------------------------------------------------ lifecycle
+
+    def __enter__(self) -> "SimHarness":
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Destroy the nodes, the executor and the context. Safe to call twice."""
+        if self.executor is not None:
+            self.executor.shutdown()
+            self.executor = None
+        for attr in ("client", "node"):
+            node = getattr(self, attr, None)
+            if node is not None:
+                node.destroy_node()
+                setattr(self, attr, None)
+        if self.context is not None:
+            rclpy.try_shutdown(context=self.context)
+            self.context = None
+
+    # ------------------------------------------------------------------ waiting
+
+    def spin_until(self, condition: Callable[[], bool], what: str, timeout: float | None = None) -> None:
+        """Spin the executor until ``condition()`` holds; :class:`HarnessTimeout` naming ``what`` otherwise."""
+        deadline = time.monotonic() + (self.timeout if timeout is None else timeout)
+        while not condition():
+            if time.monotonic() > deadline:
+                raise HarnessTimeout(f"timed out after {self.timeout:g} s waiting for {what}")
+            self.executor.spin_once(timeout_sec=0.01)
+
+    def spin_for(self, seconds: float) -> None:
+        """Spin for ``seconds`` of wall time (lets the node's own timer run when not paused)."""
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            self.executor.spin_once(timeout_sec=min(0.01, max(0.0, end - time.monotonic())))
+
+    def _wait_for_connections(self) -> None:
+        for (body, topic), pub in self._publishers.items():
+            self.spin_until(lambda p=pub: p.get_subscription_count() > 0, f"the node's {body}/{topic} subscription")
+        for client in (self._step, self._reset, self._set_paused):
+            self.spin_until(client.service_is_ready, f"service {client.srv_name}")
+        self.spin_until(self._parameters.services_are_ready, "the node's parameter services")
+        self.spin_until(lambda: min(self.node.publisher_subscription_counts().values()) > 0,
+                        "the node's pose and twist publishers to match the harness")
+        self.node.publish_state()
+        self.wait_for_latest_state()
+
+    def _call(self, client: Any, request: Any) -> Any:
+        future = client.call_async(request)
+        self.spin_until(future.done, f"a response from {client.srv_name}")
+        return future.result()
+
+    # ------------------------------------------------------------------ inputs
+
+    def _publish(self, body: str, topic: str, force: Sequence[float], torque: Sequence[float], frame_id: str | None) -> None:
+        msg = WrenchStamped()
+        msg.header.frame_id = body if frame_id is None else frame_id
+        msg.header.stamp = self.client.get_clock().now().to_msg()
+        msg.wrench.force.x, msg.wrench.force.y, msg.wrench.force.z = (float(v) for v in force)
+        msg.wrench.torque.x, msg.wrench.torque.y, msg.wrench.torque.z = (float(v) for v in torque)
+        seen = self.messages_seen()
+        self._publishers[(body, topic)].publish(msg)
+        self.spin_until(lambda: self.messages_seen() > seen, f"the node to take the message on {body}/{topic}")
+
+    def publish_wrench(self, body: str, force: Sequence[float] = (0.0, 0.0, 0.0),
+                       torque: Sequence[float] = (0.0, 0.0, 0.0), frame_id: str | None = None) -> None:
+        """Publish a WrenchStamped on ``body/wrench`` (frame_id default: the body) and wait until the node took it."""
+        self._publish(body, "wrench", force, torque, frame_id)
+
+    def publish_impulse(self, body: str, linear: Sequence[float] = (0.0, 0.0, 0.0),
+                        angular: Sequence[float] = (0.0, 0.0, 0.0), frame_id: str | None = None) -> None:
+        """Publish an impulse (N·s, N·m·s) on ``body/impulse`` and wait until the node took it."""
+        self._publish(body, "impulse", linear, angular, frame_id)
+
+    def messages_seen(self) -> int:
+        """Wrench and impulse messages the node has taken, accepted or rejected."""
+        return self.node.accepted_messages + sum(self.node.rejected.values())
+
+    # ------------------------------------------------------------------ services and parameters
+
+    def step(self, n: int = 1) -> None:
+        """Advance exactly ``n`` ticks through ``~/step`` (the node must be paused) and wait for their poses."""
+        for _ in range(n):
+            response = self._call(self._step, Trigger.Request())
+            if not response.success:
+                raise AssertionError(f"~/step refused: {response.message}")
+        self.wait_for_latest_state()
+
+    def call_step(self) -> Trigger.Response:
+        """Call ``~/step`` once and return the response as is (it may be a refusal)."""
+        return self._call(self._step, Trigger.Request())
+
+    def reset(self) -> Trigger.Response:
+        """Call ``~/reset`` and wait for the republished initial state."""
+        response = self._call(self._reset, Trigger.Request())
+        self.wait_for_latest_state()
+        return response
+
+    def set_paused(self, paused: bool) -> SetBool.Response:
+        """Call ``~/set_paused``."""
+        return self._call(self._set_paused, SetBool.Request(data=paused))
+
+    def set_parameters(self, **values: Any) -> list[SetParametersResult]:
+        """Set node parameters one by one through its parameter service (ROS semantics: each
+        parameter is accepted or rejected on its own); returns one result per parameter."""
+        future = self._parameters.set_parameters([Parameter(k, value=v) for k, v in values.items()])
+        self.spin_until(future.done, "the parameter service")
+        return list(future.result().results)
+
+    def set_parameters_atomically(self, **values: Any) -> SetParametersResult:
+        """Set node parameters all or none through its parameter service; returns the one result."""
+        future = self._parameters.set_parameters_atomically([Parameter(k, value=v) for k, v in values.items()])
+        self.spin_until(future.done, "the parameter service")
+        return future.result().result
+
+    def get_parameter(self, name: str) -> Any:
+        """A node parameter's current value, read through its parameter service."""
+        future = self._parameters.get_parameters([name])
+        self.spin_until(future.done, "the parameter service")
+        return parameter_value_to_python(future.result().values[0])
+
+    # ------------------------------------------------------------------ outputs
+
+    def wait_for_latest_state(self) -> None:
+        """Spin until every running body's latest pose carries the node's current sim time."""
+        sim = self.node.simulator
+        target = int(round(sim.time * 1e9))
+        for body in sim.body_names:
+            if body in sim.stopped_bodies:
+                continue
+            self.spin_until(lambda b=body: b in self._poses and b in self._twists and _stamp_ns(self._poses[b]) == target,
+                            f"{body}/pose at t = {sim.time:.9f} s")
+
+    def latest_pose(self, body: str) -> PoseStamped:
+        """The last PoseStamped received on ``body/pose``."""
+        return self._poses[body]
+
+    def latest_twist(self, body: str) -> Twist:
+        """The last Twist received on ``body/twist``."""
+        return self._twists[body]
+
+    def latest_odometry(self, body: str) -> Odometry:
+        """The last Odometry received on ``body/odom`` (needs ``publish_odometry``)."""
+        return self._odoms[body]
+
+
+def _stamp_ns(msg: PoseStamped) -> int:
+    return msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec

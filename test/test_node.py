@@ -1,0 +1,352 @@
+"""The node through its real ROS interface (in-process, private context, FastDDS on loopback).
+
+Every check compares what arrives over topics with the core stepped directly or with a
+closed form; the harness drives the node paused, tick by tick, through ``~/step``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import yaml
+
+from rigid_body_sim.core import Simulator, load_scene
+from rigid_body_sim.paths import default_scene_path
+from rigid_body_sim.testing import SimHarness
+
+pytestmark = pytest.mark.ros
+
+DT = 0.01  # s: the default 100 Hz, 1 substep, real-time factor 1
+
+RESTING_BOX = {
+    "bodies": {
+        "box": {
+            "mass": 2.0,
+            "inertia": {"box": [1.0, 0.6, 0.4]},
+            "pose": {"position": [0.0, 0.0, 1.0], "orientation": [0.0, 0.0, 0.0, 1.0]},
+            "sites": {
+                "corner": {"position": [0.5, 0.3, 0.0]},
+                "nozzle": {"position": [-0.5, 0.0, 0.2], "axes": "world"},
+            },
+        }
+    }
+}
+
+
+@pytest.fixture
+def resting_box(tmp_path):
+    path = tmp_path / "resting_box.yaml"
+    path.write_text(yaml.safe_dump(RESTING_BOX))
+    return path
+
+
+def pose_arrays(harness: SimHarness, body: str):
+    pose = harness.latest_pose(body).pose
+    twist = harness.latest_twist(body)
+    return (
+        np.array([pose.position.x, pose.position.y, pose.position.z]),
+        np.array([pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w]),
+        np.array([twist.linear.x, twist.linear.y, twist.linear.z]),
+        np.array([twist.angular.x, twist.angular.y, twist.angular.z]),
+    )
+
+
+def core_arrays(sim: Simulator, body: str):
+    s = sim.body_state(body)
+    return s.position_world, s.orientation_xyzw, s.linear_velocity_world, s.angular_velocity_world
+
+
+def assert_same_motion(got, expected, atol=0.0):
+    for name, a, b in zip(("position", "orientation", "linear velocity", "angular velocity"), got, expected):
+        np.testing.assert_allclose(a, b, rtol=0.0, atol=atol, err_msg=name)
+
+
+def test_textbook_push_at_corner_matches_core():
+    """The default (tumbling) box pushed at box/corner: the node's topics equal the core, bitwise.
+
+    The node forwards the held wrench to the same core calls, and float64 survives the
+    messages unchanged, so nothing but identical arithmetic is involved: atol = 0.
+    """
+    core = Simulator(load_scene(default_scene_path()), integrator="rk4", dt=DT)
+    with SimHarness(parameters={"integrator": "rk4", "wrench_timeout": 0.0}) as node:
+        node.publish_wrench("box", force=(0.0, 10.0, 0.0), frame_id="box/corner")
+        node.step(25)
+        for _ in range(25):
+            core.apply_force_at_point("box", force=[0.0, 10.0, 0.0], point=[0.0, 0.0, 0.0], frame="box/corner")
+            core.step()
+        assert_same_motion(pose_arrays(node, "box"), core_arrays(core, "box"))
+        stamp = node.latest_pose("box").header.stamp
+        assert stamp.sec * 1_000_000_000 + stamp.nanosec == round(25 * DT * 1e9)
+        assert node.latest_pose("box").header.frame_id == "world"
+
+
+def test_textbook_acceleration_from_rest(resting_box):
+    """First tick from rest: Δv = (F/m)·dt = (0, 0.05, 0) m/s and I_z·Δω_z = τ·dt = 0.05 N·m·s."""
+    with SimHarness(resting_box, parameters={"integrator": "semi_implicit_euler"}) as node:
+        node.publish_wrench("box", force=(0.0, 10.0, 0.0), frame_id="box/corner")
+        node.step()
+        _, _, v, w = pose_arrays(node, "box")
+        I_z = 2.0 * (1.0**2 + 0.6**2) / 12.0
+        np.testing.assert_allclose(v, [0.0, 0.05, 0.0], atol=1e-15)
+        np.testing.assert_allclose(w * I_z, [0.0, 0.0, 0.05], atol=1e-15)
+
+
+@pytest.mark.parametrize("frame_id", ["world", "box", "box/world_aligned", "box/corner", "box/nozzle"])
+def test_each_frame_of_the_rule_matches_core(resting_box, frame_id):
+    """A wrench held in each frame gives exactly what the core gives for that frame (bitwise)."""
+    force, torque = (1.0, -2.0, 3.0), (0.3, 0.2, -0.1)
+    core = Simulator(load_scene(resting_box), integrator="rk4", dt=DT)
+    core.set_body_state("box", angular_velocity_world=[0.5, -0.4, 1.0], linear_velocity_world=[0.2, 0.0, 0.0])
+    with SimHarness(resting_box, parameters={"integrator": "rk4", "wrench_timeout": 0.0}) as node:
+        node.node.simulator.set_body_state("box", angular_velocity_world=[0.5, -0.4, 1.0],
+                                           linear_velocity_world=[0.2, 0.0, 0.0])
+        node.publish_wrench("box", force=force, torque=torque, frame_id=frame_id)
+        node.step(20)
+        for _ in range(20):
+            core.apply_wrench("box", force, torque, frame_id)
+            core.step()
+        assert_same_motion(pose_arrays(node, "box"), core_arrays(core, "box"))
+
+
+def test_same_physical_wrench_in_every_frame_gives_same_tick(resting_box):
+    """One tick: F at the corner named in four frames (converted by hand) moves the box alike to 1e-12."""
+    F_B = np.array([0.0, 10.0, 0.0])
+    r_B = np.array([0.5, 0.3, 0.0])
+    p = np.array([0.0, 0.0, 1.0])  # resting box: COM at (0, 0, 1), identity orientation
+    representations = {
+        "box/corner": (F_B, np.zeros(3)),
+        "box": (F_B, np.cross(r_B, F_B)),
+        "box/world_aligned": (F_B, np.cross(r_B, F_B)),  # identity orientation: axes coincide
+        "world": (F_B, np.cross(p + r_B, F_B)),
+    }
+    results = {}
+    for frame_id, (force, torque) in representations.items():
+        with SimHarness(resting_box, parameters={"integrator": "rk4"}) as node:
+            node.publish_wrench("box", force=force, torque=torque, frame_id=frame_id)
+            node.step()
+            results[frame_id] = pose_arrays(node, "box")
+    for frame_id, motion in results.items():
+        assert_same_motion(motion, results["box/corner"], atol=1e-12)
+
+
+def test_hold_timeout_replace_sum_and_clear(resting_box):
+    """Forces through the COM on a box at rest: v after k ticks is Σ(F/m)·dt over the ticks each was held."""
+    with SimHarness(resting_box, parameters={"integrator": "semi_implicit_euler", "wrench_timeout": 0.05}) as node:
+        # Held for exactly 5 ticks (0.05 s of sim time), then it times out.
+        node.publish_wrench("box", force=(2.0, 0.0, 0.0), frame_id="box/world_aligned")
+        node.step(8)
+        np.testing.assert_allclose(pose_arrays(node, "box")[2], [(2.0 / 2.0) * 0.05, 0.0, 0.0], atol=1e-14)
+        assert node.node.held_wrenches == {}
+
+        # Sum of two holds in different frames; replacing one in the same frame does not add.
+        node.set_parameters(wrench_timeout=0.0)
+        node.publish_wrench("box", force=(0.0, 4.0, 0.0), frame_id="world")
+        node.publish_wrench("box", force=(0.0, 0.0, 6.0), frame_id="box/world_aligned")
+        node.publish_wrench("box", force=(0.0, 0.0, 2.0), frame_id="box/world_aligned")  # replaces 6 N
+        assert len(node.node.held_wrenches) == 2
+        node.step(10)
+        v = pose_arrays(node, "box")[2]
+        np.testing.assert_allclose(v, [0.05, (4.0 / 2.0) * 0.1, (2.0 / 2.0) * 0.1], atol=1e-14)
+
+        # An all-zero wrench clears its hold: that component stops growing.
+        node.publish_wrench("box", force=(0.0, 0.0, 0.0), frame_id="world")
+        node.step(10)
+        v = pose_arrays(node, "box")[2]
+        np.testing.assert_allclose(v, [0.05, 0.2, 0.2], atol=1e-14)
+        assert list(node.node.held_wrenches) == [("box", "box/world_aligned")]
+
+
+def test_impulse_applied_once_at_next_step(resting_box):
+    """Δv = J/m and Δω = I⁻¹·H, once; the body then coasts (torque-free about a principal axis)."""
+    I_z = 2.0 * (1.0**2 + 0.6**2) / 12.0
+    with SimHarness(resting_box, parameters={"integrator": "rk4"}) as node:
+        node.publish_impulse("box", linear=(1.0, 0.0, 0.0), angular=(0.0, 0.0, 0.5), frame_id="box")
+        node.step(3)
+        p, q, v, w = pose_arrays(node, "box")
+        np.testing.assert_allclose(v, [0.5, 0.0, 0.0], atol=1e-15)
+        np.testing.assert_allclose(w, [0.0, 0.0, 0.5 / I_z], atol=1e-15)
+        # Free translation and steady spin about a principal axis: exact to round-off.
+        np.testing.assert_allclose(p, [0.5 * 3 * DT, 0.0, 1.0], atol=1e-14)
+        angle = 0.5 / I_z * 3 * DT
+        np.testing.assert_allclose(q, [0.0, 0.0, math.sin(angle / 2), math.cos(angle / 2)], atol=1e-14)
+
+
+def test_reset_pause_and_step():
+    with SimHarness(paused=True) as node:
+        start = pose_arrays(node, "box")
+        node.step(5)
+        assert not np.array_equal(pose_arrays(node, "box")[1], start[1])
+        response = node.reset()
+        assert response.success
+        assert_same_motion(pose_arrays(node, "box"), start)
+        assert node.node.simulator.time == 0.0
+
+        assert node.set_paused(False).success
+        assert node.get_parameter("paused") is False
+        refused = node.call_step()
+        assert not refused.success and "running" in refused.message
+        node.spin_for(0.3)  # the node's own timer advances time while running
+        assert node.node.simulator.time > 0.0
+        assert node.set_paused(True).success
+        assert node.get_parameter("paused") is True
+        frozen = node.node.simulator.time
+        node.spin_for(0.2)
+        assert node.node.simulator.time == frozen
+        assert node.call_step().success
+        assert node.node.simulator.time == pytest.approx(frozen + DT, abs=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("changes", "reason"),
+    [
+        ({"rate_hz": -5.0}, "rate_hz"),
+        ({"rate_hz": 0.0}, "rate_hz"),
+        ({"substeps": 0}, "substeps"),
+        ({"integrator": "leapfrog"}, "integrator must be one of"),
+        ({"real_time_factor": 0.0}, "real_time_factor"),
+        ({"wrench_timeout": -1.0}, "wrench_timeout"),
+        ({"scene": "/nonexistent/scene.yaml"}, "cannot read scene file"),
+        ({"rate_hz": "fast"}, "type"),
+        ({"world_frame": "map"}, "read-only"),
+    ],
+)
+def test_rejected_parameter_keeps_old_value(changes, reason):
+    with SimHarness() as node:
+        before = {name: node.get_parameter(name) for name in changes}
+        dt_before = node.node.simulator.dt
+        result = node.set_parameters_atomically(**changes)
+        assert not result.successful
+        assert reason in result.reason
+        for name, value in before.items():
+            assert node.get_parameter(name) == value
+        assert node.node.simulator.dt == dt_before
+        node.step()  # still runs
+
+
+def test_atomic_change_is_all_or_nothing():
+    with SimHarness() as node:
+        result = node.set_parameters_atomically(substeps=4, rate_hz=0.0)
+        assert not result.successful
+        assert node.get_parameter("substeps") == 1
+        assert node.node.simulator.dt == DT
+
+
+def test_runtime_parameter_changes_take_effect_next_tick():
+    with SimHarness() as node:
+        results = node.set_parameters(integrator="splitting", substeps=4, rate_hz=50, real_time_factor=2.0)
+        assert all(r.successful for r in results), results
+        assert node.node.simulator.integrator == "splitting"
+        assert node.node.simulator.dt == pytest.approx(2.0 / (50.0 * 4))
+        assert node.get_parameter("rate_hz") == 50.0  # a whole number is taken as a float
+        node.step()
+        assert node.node.simulator.step_count == 4
+        assert node.node.simulator.time == pytest.approx(2.0 / 50.0)
+
+
+def test_bad_wrenches_dropped_and_counted(resting_box):
+    """Bad messages are counted by reason and leave the motion exactly as without them."""
+    bad = [
+        ({"force": (math.nan, 0.0, 0.0)}, "box", "non_finite"),
+        ({"torque": (0.0, math.inf, 0.0)}, "box", "non_finite"),
+        ({"force": (0.0, -math.inf, 0.0)}, "world", "non_finite"),
+        ({"force": (2e12, 0.0, 0.0)}, "box", "too_large"),
+        ({"force": (1.0, 0.0, 0.0)}, "", "unknown_frame"),
+        ({"force": (1.0, 0.0, 0.0)}, "map", "unknown_frame"),
+        ({"force": (1.0, 0.0, 0.0)}, "box/wheel", "unknown_frame"),
+        ({"force": (1.0, 0.0, 0.0)}, "box/world_aligned/extra", "unknown_frame"),
+    ]
+    with SimHarness(resting_box, parameters={"wrench_timeout": 0.0}) as clean:
+        clean.publish_wrench("box", force=(0.0, 1.0, 0.0), frame_id="box/corner")
+        clean.step(5)
+        expected = pose_arrays(clean, "box")
+    with SimHarness(resting_box, parameters={"wrench_timeout": 0.0}) as node:
+        node.publish_wrench("box", force=(0.0, 1.0, 0.0), frame_id="box/corner")
+        for kwargs, frame_id, _reason in bad:
+            node.publish_wrench("box", frame_id=frame_id, **kwargs)
+            node.publish_impulse("box", linear=kwargs.get("force", (0, 0, 0)), angular=kwargs.get("torque", (0, 0, 0)),
+                                 frame_id=frame_id)
+        node.step(5)
+        assert_same_motion(pose_arrays(node, "box"), expected)
+        expected_counts = {}
+        for _kwargs, _frame, reason in bad:
+            expected_counts[reason] = expected_counts.get(reason, 0) + 2  # the wrench and the impulse
+        assert dict(node.node.rejected) == expected_counts
+        assert node.node.accepted_messages == 1
+
+
+def test_two_identical_runs_are_bitwise_equal():
+    def run():
+        with SimHarness(parameters={"integrator": "splitting", "substeps": 3}) as node:
+            node.publish_wrench("box", force=(0.0, 10.0, 0.0), frame_id="box/corner")
+            node.step(7)
+            node.publish_wrench("box", torque=(0.1, 0.0, 0.0), frame_id="world")
+            node.publish_impulse("box", linear=(0.0, 0.0, 0.3), frame_id="box/world_aligned")
+            node.step(60)
+            return pose_arrays(node, "box")
+
+    first, second = run(), run()
+    for a, b in zip(first, second):
+        assert a.tobytes() == b.tobytes()
+
+
+def test_odometry_twist_is_in_body_axes(resting_box):
+    """nav_msgs/Odometry: pose in the world frame, twist in the body frame, child_frame_id = body."""
+    with SimHarness(resting_box, parameters={"publish_odometry": True}) as node:
+        node.publish_impulse("box", linear=(0.0, 2.0, 0.0), angular=(0.0, 0.0, 0.4), frame_id="box/world_aligned")
+        node.step(30)
+        odom = node.latest_odometry("box")
+        assert odom.header.frame_id == "world" and odom.child_frame_id == "box"
+        state = node.node.simulator.body_state("box")
+        twist = odom.twist.twist
+        np.testing.assert_allclose([twist.linear.x, twist.linear.y, twist.linear.z], state.linear_velocity_body, atol=1e-15)
+        np.testing.assert_allclose([twist.angular.x, twist.angular.y, twist.angular.z], state.angular_velocity_body, atol=1e-15)
+        # The box turned (ω_z t ≈ 0.4/I_z·0.3 rad), so body and world velocity differ.
+        assert abs(twist.linear.x) > 1e-3
+        np.testing.assert_allclose(np.linalg.norm([twist.linear.x, twist.linear.y, twist.linear.z]), 1.0, rtol=1e-12)
+        pose = odom.pose.pose
+        np.testing.assert_allclose([pose.position.x, pose.position.y, pose.position.z], state.position_world, atol=0)
+
+
+def test_clock_carries_sim_time():
+    from rosgraph_msgs.msg import Clock
+
+    with SimHarness() as node:
+        stamps = []
+        node.client.create_subscription(Clock, "/clock", lambda m: stamps.append(m.clock.sec * 10**9 + m.clock.nanosec), 10)
+        node.spin_until(lambda: node.node.count_subscribers("/clock") > 0, "the /clock subscription")
+        node.step(3)
+        node.spin_until(lambda: stamps and stamps[-1] == round(3 * DT * 1e9), "/clock at 3 ticks")
+
+
+def test_non_finite_body_is_stopped_and_never_published(tmp_path):
+    """A body driven to an infinite velocity is stopped and no longer published; the other runs on."""
+    scene = {
+        "bodies": {
+            "feather": {"mass": 1e-300, "inertia": {"sphere": 1.0}},
+            "box": {"mass": 2.0, "inertia": {"box": [1.0, 0.6, 0.4]}},
+        }
+    }
+    path = tmp_path / "two.yaml"
+    path.write_text(yaml.safe_dump(scene))
+    with SimHarness(path, parameters={"integrator": "euler", "wrench_timeout": 0.0}) as node:
+        node.publish_wrench("feather", force=(1e12, 0.0, 0.0), frame_id="world")
+        node.publish_wrench("box", force=(2.0, 0.0, 0.0), frame_id="world")
+        last_feather = node.latest_pose("feather")
+        node.step(4)
+        assert node.node.simulator.stopped_bodies == ("feather",)
+        assert node.latest_pose("feather") is last_feather  # nothing new was published for it
+        for value in pose_arrays(node, "box"):
+            assert np.all(np.isfinite(value))
+        np.testing.assert_allclose(pose_arrays(node, "box")[2], [1.0 * 4 * DT, 0.0, 0.0], atol=1e-14)
+
+
+def test_harness_tears_down_after_a_failing_test():
+    with pytest.raises(ZeroDivisionError):
+        with SimHarness() as node:
+            context = node.context
+            1 / 0
+    assert not context.ok()
+    with SimHarness() as again:  # a fresh harness starts cleanly afterwards
+        again.step()
