@@ -14,10 +14,16 @@ from rigid_body_sim.core import Scene, Simulator, load_scene
 from rigid_body_sim.core.quaternion import quat_wxyz_from_xyzw, quat_xyzw_from_wxyz
 
 #: The fixed-step integrators (``reference`` is adaptive and is tested on its own).
-FIXED_STEP_INTEGRATORS = ("euler", "semi_implicit_euler", "implicit_gyroscopic", "splitting", "rk4")
+FIXED_STEP_INTEGRATORS = ("euler", "semi_implicit_euler", "implicit_gyroscopic", "splitting",
+                          "symmetric_splitting", "exact_rotor_splitting", "rk4")
 
 #: Observed convergence order each fixed-step method must show.
-ORDER = {"euler": 1, "semi_implicit_euler": 1, "implicit_gyroscopic": 1, "splitting": 2, "rk4": 4}
+ORDER = {"euler": 1, "semi_implicit_euler": 1, "implicit_gyroscopic": 1, "splitting": 2,
+         "symmetric_splitting": 2, "exact_rotor_splitting": 2, "rk4": 4}
+
+#: Methods whose free rotor is the exact flow: torque-free, their only error is round-off
+#: (their order shows with applied torques; test_stability.py).
+EXACT_FREE_ROTOR = ("exact_rotor_splitting",)
 
 #: Unit round-off of float64.
 EPS = np.finfo(float).eps

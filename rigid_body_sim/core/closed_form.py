@@ -29,6 +29,7 @@ from .quaternion import (
 
 __all__ = [
     "symmetric_top",
+    "symmetric_top_flow",
     "asymmetric_top_body_rates",
     "asymmetric_top",
     "intermediate_axis_flip_period",
@@ -197,20 +198,62 @@ def symmetric_top(
     I_s = I[s]
     e_s = np.zeros(3)
     e_s[s] = 1.0
-    lam = w0[s] * (1.0 - I_s / I_t)  # rad/s
-    L_W = quat_rotate(q0, I * w0)  # kg·m²/s, constant
-    q_space = quat_from_rotation_vector(t[:, None] * (L_W / I_t))
-    q_body = quat_from_rotation_vector(t[:, None] * (lam * e_s))
-    q_WB = quat_multiply(quat_multiply(q_space, q0), q_body)
-    w_B = quat_rotate(quat_conjugate(q_body), w0)
-    return q_WB, w_B
+    q_WB, L_B = symmetric_top_flow(q0, I * w0, 1.0 / I_t, e_s, 1.0 / I_s - 1.0 / I_t, t)
+    return q_WB, L_B / I
+
+
+def symmetric_top_flow(
+    q_WB0: np.ndarray, L_B0: np.ndarray, inv_inertia_t: np.ndarray, e_s_B: np.ndarray, c_s: np.ndarray,
+    t: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The exact flow of ``H = |L|²/(2 I_t) + ½ c_s (L·e_s)²``, broadcast over any leading shape.
+
+    With ``c_s = 1/I_s − 1/I_t`` this is the torque-free symmetric top of :func:`symmetric_top`
+    (symmetry axis e_s, moment I_s, transverse moment I_t); the two terms commute (|L|² is a
+    Casimir), and each is an exact rotation::
+
+        q_WB(t) = q_WB0 ⊗ exp(t L_B0 / I_t) ⊗ exp(t λ e_s),     λ = c_s (L_B0·e_s) = ω_s (1 − I_s/I_t),
+        L_B(t)  = exp(−t λ e_s) L_B0,
+
+    where ``q_WB0 ⊗ exp(t L_B0 / I_t) = exp(t L_W / I_t) ⊗ q_WB0``: the body cones about the
+    constant L_W at |L|/I_t. With ``inv_inertia_t = 0`` it is the flow of ``½ c_s L_s²`` alone, a
+    rotation about e_s at the rate c_s L_s (the remainder of a splitting, integrators.py).
+    Vectorised and unvalidated: the callers validate.
+
+    Parameters
+    ----------
+    q_WB0 : ndarray, shape (..., 4)
+        Body-to-world unit quaternions (w, x, y, z).
+    L_B0 : ndarray, shape (..., 3)
+        Angular momentum in body axes, kg·m²/s.
+    inv_inertia_t : ndarray, shape (...)
+        1/I_t, 1/(kg·m²); 0 drops the precession about L.
+    e_s_B : ndarray, shape (..., 3)
+        Unit symmetry axis, body axes.
+    c_s : ndarray, shape (...)
+        1/I_s − 1/I_t, 1/(kg·m²).
+    t : ndarray, shape (...)
+        Times, s.
+
+    Returns
+    -------
+    q_WB : ndarray, shape (..., 4)
+    L_B : ndarray, shape (..., 3)
+    """
+    L_s = np.sum(L_B0 * e_s_B, axis=-1)
+    q_precession = quat_from_rotation_vector(np.expand_dims(t * inv_inertia_t, -1) * L_B0)
+    q_spin = quat_from_rotation_vector(np.expand_dims(t * c_s * L_s, -1) * e_s_B)
+    return quat_multiply(quat_multiply(q_WB0, q_precession), q_spin), quat_rotate(quat_conjugate(q_spin), L_B0)
 
 
 # ----------------------------------------------------------------------------- asymmetric top
 
 
-def _jacobi(u: np.ndarray, m: float, m_c: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def _jacobi(u: np.ndarray, m: np.ndarray, m_c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Jacobi sn, cn, dn and am(u | m), given both m and m_c = 1 − m (each to full precision).
+
+    ``u``, ``m`` and ``m_c`` broadcast (one m per body in free_rotor.py): the recurrence runs
+    until every element has converged; extra steps on a converged one change it by round-off only.
 
     The arithmetic-geometric mean and descending Landen recurrence of Abramowitz & Stegun
     16.4 (the algorithm of ``scipy.special.ellipj``), but started from b0 = √m_c rather than
@@ -221,7 +264,7 @@ def _jacobi(u: np.ndarray, m: float, m_c: float) -> tuple[np.ndarray, np.ndarray
     """
     a_seq, c_seq = [1.0], [np.sqrt(m)]
     a, b = 1.0, np.sqrt(m_c)
-    while c_seq[-1] > _EPS * a_seq[-1]:
+    while np.any(c_seq[-1] > _EPS * a_seq[-1]):
         if len(a_seq) > 40:  # quadratic convergence: ~10 steps even for m_c = 1e-30
             raise RuntimeError(f"AGM did not converge for m = {m!r}, m_c = {m_c!r}.")
         a, b, c = 0.5 * (a + b), np.sqrt(a * b), 0.5 * (a - b)
@@ -235,12 +278,12 @@ def _jacobi(u: np.ndarray, m: float, m_c: float) -> tuple[np.ndarray, np.ndarray
     return sn, cn, np.sqrt(cn * cn + m_c * sn * sn), phi
 
 
-def _elliptic_f(phi: float, m_c: float) -> float:
-    """Incomplete elliptic integral F(φ | m), any real φ, from m_c = 1 − m (Carlson R_F)."""
+def _elliptic_f(phi: np.ndarray, m_c: np.ndarray) -> np.ndarray:
+    """Incomplete elliptic integral F(φ | m), any real φ, from m_c = 1 − m (Carlson R_F); broadcasts."""
     j = np.round(phi / np.pi)
     phi_r = phi - j * np.pi  # in [−π/2, π/2]
     s, c = np.sin(phi_r), np.cos(phi_r)
-    return float(2.0 * j * special.ellipkm1(m_c) + s * special.elliprf(c * c, c * c + m_c * s * s, 1.0))
+    return 2.0 * j * special.ellipkm1(m_c) + s * special.elliprf(c * c, c * c + m_c * s * s, 1.0)
 
 
 @dataclass(frozen=True)
@@ -309,7 +352,7 @@ def _euler_poinsot(I: np.ndarray, w0: np.ndarray, caller: str) -> _EulerPoinsot 
         m_c = -(I3 - I1) * D2 / ((I2 - I1) * D3)
         beta0 = np.arctan2(w2 * amp[2], sigma * w3 * amp[1])
         transverse_zero = D1 == 0.0
-    u0 = _elliptic_f(float(beta0), m_c)  # am(u0) = beta0
+    u0 = float(_elliptic_f(float(beta0), m_c))  # am(u0) = beta0
     return _EulerPoinsot(
         P, np.array([I1, I2, I3]), case, sigma, amp, float(nu), float(m), float(m_c), u0, L2, transverse_zero
     )

@@ -6,20 +6,30 @@ mass (world axes, shape (N, 3)) held constant over the step, and returns a new :
 with unit ``q_WP`` (renormalising is part of each method). Gravity and damping come from
 ``model``. None of them modifies its inputs.
 
-=======================  =====  ==============================================================
-name                     order  what it is
-=======================  =====  ==============================================================
-``euler``                1      textbook explicit Euler, additive q update + normalise, with
-                                the gyroscopic term
-``semi_implicit_euler``  1      velocities first, then positions; orientation by exp-map
-``implicit_gyroscopic``  1      one Newton step on the implicit gyroscopic equation (Catto
-                                2015; Bullet's computeGyroscopicImpulseImplicit_Body)
-``splitting``            2      symplectic Lie–Poisson splitting of the free rotor into exact
-                                principal-axis rotations, torques as half kicks (McLachlan
-                                1993; Dullweber, Leimkuhler & McLachlan 1997)
-``rk4``                  4      classic Runge–Kutta on (p, q, v, w), normalise q after
-``reference``            —      scipy DOP853 at tight tolerances (the accuracy end)
-=======================  =====  ==============================================================
+=========================  =====  ==============================================================
+name                       order  what it is
+=========================  =====  ==============================================================
+``euler``                  1      textbook explicit Euler, additive q update + normalise, with
+                                  the gyroscopic term
+``semi_implicit_euler``    1      velocities first, then positions; orientation by exp-map
+``implicit_gyroscopic``    1      one Newton step on the implicit gyroscopic equation (Catto
+                                  2015; Bullet's computeGyroscopicImpulseImplicit_Body)
+``splitting``              2      symplectic Lie–Poisson splitting of the free rotor into exact
+                                  principal-axis rotations, torques as half kicks (McLachlan
+                                  1993; Dullweber, Leimkuhler & McLachlan 1997)
+``symmetric_splitting``    2      the free rotor split around an exact symmetric top (the two
+                                  closest moments) plus an exact one-axis remainder, torques as
+                                  half kicks; exact for symmetric bodies, error ∝ asymmetry
+                                  (free_rotor.py; Fassò 2003)
+``exact_rotor_splitting``  2      the exact free-rotor flow (Jacobi elliptic functions, Carlson
+                                  integrals), torques as half kicks: exact when torque-free, at
+                                  any |ω|h (free_rotor.py; Celledoni, Fassò, Säfström & Zanna
+                                  2008)
+``rk4``                    4      classic Runge–Kutta on (p, q, v, w), normalise q after
+``reference``              —      scipy DOP853 at tight tolerances (the accuracy end)
+=========================  =====  ==============================================================
+
+Where each one holds (|ω|h, thin bodies, long runs) is measured in docs/stability.md.
 """
 
 from __future__ import annotations
@@ -36,6 +46,7 @@ from .dynamics import (
     linear_acceleration_W,
     torque_in_P,
 )
+from .free_rotor import exact_rotor, symmetric_split_rotor
 from .model import BodyModel, State
 from .quaternion import quat_from_rotation_vector, quat_multiply
 
@@ -47,6 +58,8 @@ __all__ = [
     "step_semi_implicit_euler",
     "step_implicit_gyroscopic",
     "step_splitting",
+    "step_symmetric_splitting",
+    "step_exact_rotor_splitting",
     "step_rk4",
     "step_reference",
 ]
@@ -176,6 +189,45 @@ def step_splitting(model: BodyModel, state: State, force_W: np.ndarray, torque_W
     return State(p, q, v, L / inertia)
 
 
+def _kick_rotor_kick(model: BodyModel, state: State, force_W: np.ndarray, torque_W: np.ndarray, dt: float,
+                     rotor: Callable[[np.ndarray, np.ndarray, np.ndarray, float], tuple[np.ndarray, np.ndarray]]) -> State:
+    """kick(dt/2) · free rotor(dt) · kick(dt/2), translation drifting by v·dt, as in step_splitting."""
+    inertia = model.inertia_P
+    if not (force_W.any() or torque_W.any() or model.has_gravity or model.has_damping):
+        # Nothing to kick with: the kicks are the identity, skipped (the same numbers, sooner).
+        q, L = rotor(inertia, state.q_WP, inertia * state.w_WP_P, dt)
+        return State(state.p_WC_W + dt * state.v_WC_W, _normalised(q), state.v_WC_W.copy(), L / inertia)
+    half = 0.5 * dt
+    v, L = _kick(model, state.q_WP, state.v_WC_W, inertia * state.w_WP_P, force_W, torque_W, half)
+    p = state.p_WC_W + dt * v
+    q, L = rotor(inertia, state.q_WP, L, dt)
+    q = _normalised(q)
+    v, L = _kick(model, q, v, L, force_W, torque_W, half)
+    return State(p, q, v, L / inertia)
+
+
+def step_symmetric_splitting(model: BodyModel, state: State, force_W: np.ndarray, torque_W: np.ndarray, dt: float) -> State:
+    """Second-order splitting with the free rotor split around an exact symmetric top.
+
+    Kicks as in :func:`step_splitting`; the free rotor is
+    :func:`~rigid_body_sim.core.free_rotor.symmetric_split_rotor`: remainder(dt/2) ·
+    symmetric top(dt) · remainder(dt/2), all exact rotations. Conserves |L| to round-off when
+    torque-free; exact for a symmetric body; for a thin rod the error is ∝ its asymmetry.
+    """
+    return _kick_rotor_kick(model, state, force_W, torque_W, dt, symmetric_split_rotor)
+
+
+def step_exact_rotor_splitting(model: BodyModel, state: State, force_W: np.ndarray, torque_W: np.ndarray, dt: float) -> State:
+    """Second-order splitting around the exact free-rotor flow: exact when torque-free.
+
+    Kicks as in :func:`step_splitting`; the free rotor is
+    :func:`~rigid_body_sim.core.free_rotor.exact_rotor`, the Euler–Poinsot solution, so a
+    torque-free body keeps its energy and |L| to round-off at any |ω|h; applied torques,
+    gravity and damping enter as second-order half kicks.
+    """
+    return _kick_rotor_kick(model, state, force_W, torque_W, dt, exact_rotor)
+
+
 def step_rk4(model: BodyModel, state: State, force_W: np.ndarray, torque_W: np.ndarray, dt: float) -> State:
     """Classic fourth-order Runge–Kutta on (p, q, v, w); q normalised after the step."""
 
@@ -240,6 +292,8 @@ INTEGRATORS: dict[str, Integrator] = {
     "semi_implicit_euler": step_semi_implicit_euler,
     "implicit_gyroscopic": step_implicit_gyroscopic,
     "splitting": step_splitting,
+    "symmetric_splitting": step_symmetric_splitting,
+    "exact_rotor_splitting": step_exact_rotor_splitting,
     "rk4": step_rk4,
     "reference": step_reference,
 }

@@ -1,0 +1,1 @@
+"""Command-line tools built on the core (no ROS): ``python -m rigid_body_sim.tools.<name>``."""
