@@ -1,0 +1,199 @@
+"""Parameter abuse (issue 7): every bad change is refused whole, with a reason, and the running
+simulation does not notice; a valid ``scene`` swaps the scene whole.
+
+One harness takes every bad change in turn, each time with a wrench held and an impulse
+pending, ticking between attempts; a twin harness gets the same wrenches and ticks and no bad
+change. Refusals must leave the state, time, holds, pending impulses, topics and every
+parameter exactly as they were (compared before and after each attempt), and the two runs
+must end bitwise equal.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+import numpy as np
+import pytest
+import yaml
+from geometry_msgs.msg import PoseStamped
+from rclpy.exceptions import InvalidParameterValueException
+
+from rigid_body_sim.core import Simulator, load_scene
+from rigid_body_sim.core.scene import MAX_SCENE_BYTES
+from rigid_body_sim.ros.node import RigidBodySimNode
+from rigid_body_sim.testing import SimHarness
+
+pytestmark = pytest.mark.ros
+
+PARAMETER_NAMES = RigidBodySimNode._PARAMETER_NAMES
+START = {"integrator": "rk4", "wrench_timeout": 0.0, "substeps": 2}
+
+SCENE_A = {
+    "bodies": {
+        "box": {"mass": 2.0, "inertia": {"box": [1.0, 0.6, 0.4]}, "pose": {"position": [0.0, 0.0, 1.0]},
+                "twist": {"angular": [0.2, 0.1, 0.5]}, "sites": {"corner": {"position": [0.5, 0.3, 0.0]}}},
+        "probe": {"mass": 0.5, "inertia": {"sphere": 0.1}},
+    }
+}
+SCENE_B = {
+    "gravity": [0.0, 0.0, -9.81],
+    "bodies": {
+        "box": {"mass": 3.0, "inertia": {"principal": [0.1, 0.2, 0.25]}, "pose": {"position": [1.0, 2.0, 3.0]}},
+        "rover": {"mass": 10.0, "inertia": {"cylinder": [0.3, 0.2]}, "twist": {"linear": [1.0, 0.0, 0.0]},
+                  "sites": {"wheel": {"position": [0.3, 0.0, -0.1]}}},
+    }
+}
+
+
+def _write(path, data) -> str:
+    path.write_text(data if isinstance(data, str) else yaml.safe_dump(data))
+    return str(path)
+
+
+def bad_changes(tmp_path) -> list[tuple[str, dict, str]]:
+    """(label, changes, a phrase the refusal must contain)."""
+    huge = tmp_path / "huge.yaml"
+    with open(huge, "wb") as handle:  # sparse: costs no disk
+        handle.truncate(MAX_SCENE_BYTES + 1)
+    fifo = tmp_path / "scene.fifo"
+    os.mkfifo(fifo)
+    scene_b = _write(tmp_path / "b.yaml", SCENE_B)
+    return [
+        ("negative rate", {"rate_hz": -5.0}, "rate_hz"),
+        ("zero rate", {"rate_hz": 0.0}, "rate_hz"),
+        ("NaN rate", {"rate_hz": math.nan}, "rate_hz"),
+        ("infinite rate", {"rate_hz": math.inf}, "rate_hz"),
+        ("zero substeps", {"substeps": 0}, "substeps"),
+        ("negative substeps", {"substeps": -3}, "substeps"),
+        ("zero real-time factor", {"real_time_factor": 0.0}, "real_time_factor"),
+        ("negative real-time factor", {"real_time_factor": -1.0}, "real_time_factor"),
+        ("negative wrench timeout", {"wrench_timeout": -1.0}, "wrench_timeout"),
+        ("negative diagnostics period", {"diagnostics_period": -1.0}, "diagnostics_period"),
+        ("NaN diagnostics period", {"diagnostics_period": math.nan}, "diagnostics_period"),
+        ("negative status period", {"status_period": -0.5}, "status_period"),
+        ("unknown integrator", {"integrator": "leapfrog"}, "integrator must be one of"),
+        ("integrator in capitals", {"integrator": "RK4"}, "integrator must be one of"),
+        ("integrator with a space", {"integrator": "rk4 "}, "integrator must be one of"),
+        ("empty integrator", {"integrator": ""}, "integrator must be one of"),
+        ("missing scene", {"scene": str(tmp_path / "nowhere.yaml")}, "cannot read scene file (No such file"),
+        ("scene is a directory", {"scene": str(tmp_path)}, "not a regular file"),
+        ("scene is /dev/zero", {"scene": "/dev/zero"}, "not a regular file"),
+        ("scene is a FIFO", {"scene": str(fifo)}, "not a regular file"),
+        ("empty scene path", {"scene": ""}, "scene must be the path"),
+        ("scene not YAML", {"scene": _write(tmp_path / "bad.yaml", "bodies: [unclosed\n")}, "not valid YAML"),
+        ("scene not UTF-8", {"scene": str(tmp_path / "latin1.yaml")}, "cannot read scene file"),
+        ("scene wrong schema", {"scene": _write(tmp_path / "schema.yaml", {"bodies": {"b": {"mass": 1.0}}})},
+         "bodies.b"),
+        ("scene unknown key", {"scene": _write(tmp_path / "key.yaml", {"bodys": {}})}, "bodys"),
+        ("scene negative mass", {"scene": _write(tmp_path / "mass.yaml",
+                                                  {"bodies": {"b": {"mass": -1.0, "inertia": {"sphere": 1.0}}}})}, "mass"),
+        ("scene empty file", {"scene": _write(tmp_path / "empty.yaml", "")}, "empty file"),
+        ("scene over 8 MiB", {"scene": str(huge)}, f"expected at most {MAX_SCENE_BYTES}"),
+        ("rate as text", {"rate_hz": "fast"}, "type"),
+        ("substeps as float", {"substeps": 2.5}, "type"),
+        ("integrator as number", {"integrator": 3}, "type"),
+        ("paused as text", {"paused": "yes"}, "type"),
+        ("scene as number", {"scene": 42}, "type"),
+        ("clock as integer", {"publish_clock": 1}, "type"),
+        ("read-only world frame", {"world_frame": "map"}, "read-only"),
+        ("undeclared parameter", {"no_such_parameter": 1.0}, "undeclared"),
+        # All or nothing: a valid scene and substeps with one bad value change nothing.
+        ("valid scene with a bad rate", {"scene": scene_b, "substeps": 4, "rate_hz": -1.0}, "rate_hz"),
+        ("valid rate with a bad scene", {"rate_hz": 50.0, "integrator": "splitting", "scene": "/dev/zero"},
+         "not a regular file"),
+    ]
+
+
+def snapshot(harness: SimHarness) -> dict:
+    node = harness.node
+    sim = node.simulator
+    state = sim.state
+    return {
+        "time": sim.time, "steps": sim.step_count, "dt": sim.dt, "integrator": sim.integrator, "bodies": sim.body_names,
+        "state": b"".join(a.tobytes() for a in (state.p_WC_W, state.q_WP, state.v_WC_W, state.w_WP_P)),
+        "held": {k: (f.tobytes(), t.tobytes()) for k, (f, t) in node.held_wrenches.items()},
+        "pending": {k: (j.tobytes(), h.tobytes()) for k, (j, h) in node.pending_impulses.items()},
+        "parameters": {name: harness.get_parameter(name) for name in PARAMETER_NAMES},
+        "publishers": sorted(name for name, _types in node.get_publisher_names_and_types_by_node(node.get_name(), "/")),
+        "subscriptions": sorted(name for name, _types in node.get_subscriber_names_and_types_by_node(node.get_name(), "/")),
+    }
+
+
+def drive(harness: SimHarness, k: int) -> None:
+    """The same inputs for both runs: a held wrench (replaced each time) and a pending impulse."""
+    harness.publish_wrench("box", force=(0.1 * k, 0.0, 0.05), torque=(0.0, 0.01, 0.0), frame_id="box/corner")
+    harness.publish_impulse("probe", linear=(0.0, 0.002 * k, 0.0), angular=(0.0, 0.0, 1e-4), frame_id="world")
+
+
+def test_bad_parameters_are_refused_whole_and_change_nothing(tmp_path):
+    scene_a = _write(tmp_path / "a.yaml", SCENE_A)
+    cases = bad_changes(tmp_path)
+    (tmp_path / "latin1.yaml").write_bytes("bodies:\n  bö: 1\n".encode("latin-1"))
+    refusals = []
+    with SimHarness(scene_a, parameters=START) as node:
+        for k, (label, changes, phrase) in enumerate(cases):
+            drive(node, k)
+            before = snapshot(node)
+            result = node.set_parameters_atomically(**changes)
+            after = snapshot(node)
+            assert not result.successful, f"{label}: accepted"
+            assert phrase in result.reason, f"{label}: reason {result.reason!r} does not mention {phrase!r}"
+            assert after == before, f"{label}: the refusal changed something"
+            refusals.append((label, result.reason))
+            node.step(2)
+        final = snapshot(node)
+    with SimHarness(scene_a, parameters=START) as twin:
+        for k in range(len(cases)):
+            drive(twin, k)
+            twin.step(2)
+        assert snapshot(twin)["state"] == final["state"]
+        assert snapshot(twin)["time"] == final["time"]
+    for label, reason in refusals:  # shown with -s: what an operator reads
+        print(f"{label:32s} {reason[:150]}")
+
+
+def test_bad_start_up_diagnostics_period_is_refused():
+    with pytest.raises(InvalidParameterValueException, match="diagnostics_period"):
+        SimHarness(parameters={"diagnostics_period": -1.0})
+
+
+def test_valid_scene_swaps_atomically(tmp_path):
+    """Changing ``scene`` (with other parameters, atomically) swaps the scene whole: topics of new
+    bodies appear, those of removed bodies go, holds and pending impulses are dropped, the state is
+    the new scene's initial state at t = 0, and the next tick is the core's first step on it."""
+    scene_a = _write(tmp_path / "a.yaml", SCENE_A)
+    scene_b = _write(tmp_path / "b.yaml", SCENE_B)
+    with SimHarness(scene_a, parameters=START) as node:
+        drive(node, 1)
+        node.step(3)
+        drive(node, 2)  # a hold and a pending impulse at the moment of the swap
+        result = node.set_parameters_atomically(scene=scene_b, integrator="splitting", substeps=3)
+        assert result.successful, result.reason
+        sim = node.node.simulator
+        assert sim.body_names == ("box", "rover") and sim.time == 0.0 and sim.step_count == 0
+        assert node.node.held_wrenches == {} and node.node.pending_impulses == {}
+        assert node.get_parameter("scene") == scene_b
+        expected = Simulator(load_scene(scene_b), integrator="splitting", dt=0.01 / 3)
+        for got, want in zip((sim.state.p_WC_W, sim.state.q_WP, sim.state.v_WC_W, sim.state.w_WP_P),
+                             (expected.state.p_WC_W, expected.state.q_WP, expected.state.v_WC_W, expected.state.w_WP_P)):
+            assert got.tobytes() == want.tobytes()
+        topics = snapshot(node)
+        assert "/rover/pose" in topics["publishers"] and "/rover/wrench" in topics["subscriptions"]
+        assert not any(t.startswith("/probe/") for t in topics["publishers"] + topics["subscriptions"])
+        # The harness sees the new body once it subscribes to it, and the old topics go quiet.
+        node.watch_body("rover")
+        node.spin_until(lambda: node.client.count_publishers("/probe/pose") == 0, "/probe/pose to disappear")
+        node.publish_wrench("rover", force=(0.0, 5.0, 0.0), frame_id="rover/wheel")
+        node.step()
+        expected.apply_wrench("rover", force=[0.0, 5.0, 0.0], frame="rover/wheel")
+        expected.step(3)
+        for body in ("box", "rover"):
+            pose = node.latest_pose(body).pose
+            got = [pose.position.x, pose.position.y, pose.position.z]
+            assert np.array_equal(got, expected.body_state(body).position_world), body
+        # Back to the first scene: probe returns, rover goes.
+        assert node.set_parameters_atomically(scene=scene_a).successful
+        node.watch_body("probe")
+        assert node.node.simulator.body_names == ("box", "probe")
+        assert isinstance(node.latest_pose("probe"), PoseStamped)
