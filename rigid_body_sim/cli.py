@@ -1,0 +1,369 @@
+"""The ``rigid-body-sim`` command: offline runs, plots, scene descriptions and checks, without ROS.
+
+Subcommands (``rigid-body-sim SUBCOMMAND --help`` for each)::
+
+    run SCENE --duration T [--integrator NAME] [--dt H] [--rate HZ] [--csv OUT.csv] [--record OUT.mcap] [-q]
+    plot RUN [-o OUT.png] [--scene SCENE] [--body NAME]
+    describe SCENE [--json]
+    check SCENE
+
+Exit codes: 0 success; 1 a scene or input file that cannot be used (the message names the
+file, key path and expectation) or a run that failed; 2 bad command-line arguments
+(argparse's convention); 130 interrupted (Ctrl-C; files written so far are closed properly).
+This module only parses arguments and prints: the work is in :mod:`rigid_body_sim.offline`
+and :mod:`rigid_body_sim.core`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from contextlib import ExitStack
+from pathlib import Path
+from typing import Any, Sequence
+
+from .core import INTEGRATORS, NonFiniteStateError, Scene, SceneError, Simulator, describe_scene, load_scene
+
+__all__ = ["main", "build_parser", "DEFAULT_DT", "DEFAULT_RATE_HZ"]
+
+PROG = "rigid-body-sim"
+#: Physics step of ``run`` unless --dt says otherwise, s (the node's default: 100 Hz, 1 substep).
+DEFAULT_DT = 0.01
+#: Samples per sim second written to --csv and --record unless --rate says otherwise.
+DEFAULT_RATE_HZ = 100.0
+#: Runs expected to take longer than this (wall s) show a progress bar on a terminal.
+PROGRESS_DELAY_S = 0.5
+_MCAP_MAGIC = b"\x89MCAP"
+
+
+class _Failure(Exception):
+    """A failure to report as ``rigid-body-sim <command>: <message>`` with exit code 1."""
+
+
+# ------------------------------------------------------------------------------ arguments
+
+
+def _positive_float(unit: str):
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a number ({unit}), got {text!r}") from None
+        if not (math.isfinite(value) and value > 0.0):
+            raise argparse.ArgumentTypeError(f"expected a finite number > 0 ({unit}), got {text!r}")
+        return value
+
+    parse.__name__ = f"number ({unit})"
+    return parse
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of ``rigid-body-sim`` (all subcommands)."""
+    parser = argparse.ArgumentParser(
+        prog=PROG, description="Offline runs, plots and scene checks for rigid_body_sim (no ROS needed).")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="{run,plot,describe,check}")
+
+    run = sub.add_parser("run", help="run a scene as fast as possible", description=(
+        "Step SCENE for --duration seconds of sim time as fast as possible, optionally writing a CSV "
+        "file and an MCAP recording, and print a summary (steps, wall time, real-time factor, energy and "
+        "|L| drift). Scripted wrenches in the scene act as they would in the node."))
+    run.add_argument("scene", metavar="SCENE", help="scene YAML file")
+    run.add_argument("--duration", "-T", required=True, type=_positive_float("s of sim time"),
+                     help="sim time to run, s (rounded up to whole steps)")
+    run.add_argument("--integrator", default="rk4", choices=sorted(INTEGRATORS), metavar="NAME",
+                     help=f"one of {', '.join(sorted(INTEGRATORS))} (default rk4)")
+    run.add_argument("--dt", type=_positive_float("s"), default=DEFAULT_DT, help=f"physics step, s (default {DEFAULT_DT:g})")
+    run.add_argument("--rate", type=_positive_float("samples per sim second"), default=DEFAULT_RATE_HZ,
+                     help=f"samples per sim second in --csv and --record (default {DEFAULT_RATE_HZ:g}; "
+                          "every step if the step is longer)")
+    run.add_argument("--csv", metavar="OUT.csv", help="write the samples to this CSV file (read by 'plot')")
+    run.add_argument("--record", metavar="OUT.mcap",
+                     help="write an MCAP recording (ROS 2 messages: /B/pose, /B/twist, /B/wrench, /clock)")
+    run.add_argument("--quiet", "-q", action="store_true", help="no progress bar and no summary")
+
+    plot = sub.add_parser("plot", help="plot a run (CSV or MCAP) to PNG", description=(
+        "Plot a run written by 'run --csv' or an MCAP recording (from 'run --record' or the node's "
+        "record_path): position, orientation, velocities, energy and |L| drift, and the error against "
+        "the closed form where the scene has one. One PNG per body."))
+    plot.add_argument("run", metavar="RUN", help="a CSV file from 'run --csv', or an .mcap recording")
+    plot.add_argument("--output", "-o", metavar="OUT.png",
+                      help="PNG to write (default: RUN with .png; with several bodies, one OUT_<body>.png each)")
+    plot.add_argument("--scene", metavar="SCENE",
+                      help="the run's scene (default: the one named in the CSV, or attached to the recording)")
+    plot.add_argument("--body", metavar="NAME", help="plot only this body")
+
+    describe = sub.add_parser("describe", help="describe a scene's bodies", description=(
+        "Bodies, mass properties, principal axes and moments, initial state, sites, wrench frames, scripted "
+        "wrenches, and the model each body gets."))
+    describe.add_argument("scene", metavar="SCENE", help="scene YAML file")
+    describe.add_argument("--json", action="store_true", help="print JSON (one object per body) instead of text")
+
+    check = sub.add_parser("check", help="validate a scene", description=(
+        "Validate SCENE only: print a one-line summary and exit 0, or print the loader's error "
+        "(file, key path, what was expected) and exit 1."))
+    check.add_argument("scene", metavar="SCENE", help="scene YAML file")
+    for subparser in (run, plot, describe, check):
+        subparser.set_defaults(command_parser=subparser)  # so each command reports usage errors as itself
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``rigid-body-sim`` console script; returns the exit code."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    command = {"run": _run, "plot": _plot, "describe": _describe, "check": _check}[args.command]
+    try:
+        return command(args, args.command_parser)
+    except (SceneError, _Failure) as exc:
+        print(f"{PROG} {args.command}: {exc}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print(f"{PROG} {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+def _output_path(parser: argparse.ArgumentParser, option: str, value: str | None) -> Path | None:
+    """``value`` as a path whose directory exists (else a usage error naming ``option``)."""
+    if value is None:
+        return None
+    from .offline.recording import check_record_path
+
+    problem = check_record_path(value)
+    if problem is not None:
+        parser.error(f"argument {option}: {problem}")
+    return Path(value)
+
+
+# ------------------------------------------------------------------------------ run
+
+
+def _run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    csv_path = _output_path(parser, "--csv", args.csv)
+    record_path = _output_path(parser, "--record", args.record)
+    scene = load_scene(args.scene)
+    sim = Simulator(scene, integrator=args.integrator, dt=args.dt)
+
+    from .offline.run import run_offline, sample_interval, steps_for
+
+    total = steps_for(args.duration, args.dt)
+    every = sample_interval(args.rate, args.dt)
+    meta = {"scene": str(Path(args.scene).resolve()), "integrator": args.integrator, "dt": repr(args.dt),
+            "duration": repr(args.duration), "sample_every_steps": str(every), "version": _version()}
+    callbacks = []
+    with ExitStack() as stack:
+        csv_writer = recorder = None
+        if csv_path is not None:
+            from .offline.csv_io import CsvWriter
+
+            csv_writer = stack.enter_context(CsvWriter(csv_path, sim.body_names, meta))
+            callbacks.append(csv_writer.write)
+        if record_path is not None:
+            from .offline.recording import McapRecorder
+
+            recorder = stack.enter_context(McapRecorder(record_path, metadata=meta, scene_text=_text_of(args.scene)))
+
+            def record(s: Simulator) -> None:
+                recorder.write_wrenches(s.time, s.active_scripted_wrenches())
+                recorder.write_simulator(s)
+
+            callbacks.append(record)
+        bar = _progress_bar(total, args.quiet)
+        if bar is not None:
+            stack.callback(bar.close)
+        try:
+            summary = run_offline(sim, args.duration, sample_every=every, on_sample=callbacks,
+                                  progress=bar.update if bar is not None else None)
+        except NonFiniteStateError as exc:
+            raise _Failure(f"{exc} (t = {sim.time:.9g} s; files written up to there are closed)") from None
+    if not args.quiet:
+        _print_summary(args, summary, csv_writer, recorder)
+    return 0
+
+
+def _progress_bar(total: int, quiet: bool) -> Any:
+    """A tqdm bar on stderr, or None when quiet or stderr is not a terminal."""
+    if quiet or not sys.stderr.isatty():
+        return None
+    from tqdm import tqdm
+
+    return tqdm(total=total, unit="step", unit_scale=True, file=sys.stderr, delay=PROGRESS_DELAY_S,
+                dynamic_ncols=True, leave=False, desc="simulating")
+
+
+def _print_summary(args: argparse.Namespace, summary: Any, csv_writer: Any, recorder: Any) -> None:
+    lines = [
+        f"{args.scene}: integrator {args.integrator}, dt = {args.dt:g} s",
+        f"  steps               {summary.steps} (sim time {summary.sim_time:.9g} s)",
+        f"  wall time           {summary.wall_time:.3f} s",
+        f"  real-time factor    {summary.real_time_factor:.3g}",
+    ]
+    for body in list(summary.energy_drift)[:20]:
+        lines.append(
+            f"  {body}: energy {summary.energy_initial[body]:.6g} J, drift max |E-E0|/|E0| = "
+            f"{summary.energy_drift[body]:.3g}; |L| {summary.momentum_initial[body]:.6g} kg·m²/s, "
+            f"drift max ||L|-|L0||/|L0| = {summary.momentum_drift[body]:.3g}")
+    if len(summary.energy_drift) > 20:
+        lines.append(f"  ... and {len(summary.energy_drift) - 20} more bodies")
+    if csv_writer is not None:
+        lines.append(f"  wrote {csv_writer.path} ({csv_writer.rows} samples)")
+    if recorder is not None:
+        lines.append(f"  wrote {recorder.path} ({recorder.message_count} messages)")
+    print("\n".join(lines))
+
+
+def _text_of(path: str) -> str | None:
+    try:
+        return Path(path).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return None
+
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("rigid_body_sim")
+    except PackageNotFoundError:
+        return "unknown"
+
+
+# ------------------------------------------------------------------------------ plot
+
+
+def _plot(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    run_path = Path(args.run)
+    try:
+        with open(run_path, "rb") as f:
+            head = f.read(len(_MCAP_MAGIC))
+    except OSError as exc:
+        raise _Failure(f"{run_path}: cannot read the run ({exc.strerror or exc})") from None
+    if args.output is not None:
+        out = Path(args.output)
+        if not out.parent.is_dir() and str(out.parent):
+            parser.error(f"argument --output: directory {str(out.parent)!r} does not exist")
+    else:
+        out = run_path.with_suffix(".png")
+
+    from .offline.rundata import with_derived_quantities
+
+    scene_text = None
+    try:
+        if head == _MCAP_MAGIC:
+            from .offline.recording import read_recording
+
+            data, scene_text = read_recording(run_path)
+        else:
+            from .offline.csv_io import read_csv
+
+            data = read_csv(run_path)
+    except (ValueError, OSError, UnicodeDecodeError) as exc:
+        raise _Failure(str(exc)) from None
+
+    scene = _plot_scene(args, data, scene_text)
+    if scene is not None:
+        missing = [b for b in data.bodies if b not in scene.body_names]
+        if missing:
+            print(f"{PROG} plot: warning: the scene {scene.source} has no body {missing}; "
+                  "no closed form or energy for them", file=sys.stderr)
+        if any(track.energy is None for track in data.bodies.values()):
+            data = with_derived_quantities(data, scene)
+
+    bodies = list(data.bodies)
+    if args.body is not None:
+        if args.body not in data.bodies:
+            raise _Failure(f"{run_path}: no body {args.body!r}; the run has {bodies}")
+        bodies = [args.body]
+    from .offline.plotting import plot_body
+
+    for body in bodies:
+        target = out if len(bodies) == 1 else out.with_name(f"{out.stem}_{body}{out.suffix or '.png'}")
+        plot_body(data, body, target, scene=scene)
+        print(f"wrote {target}")
+    return 0
+
+
+def _plot_scene(args: argparse.Namespace, data: Any, scene_text: str | None) -> Scene | None:
+    """The run's scene: --scene (its errors are fatal), else the attached or named one (warn on failure)."""
+    if args.scene is not None:
+        return load_scene(args.scene)
+    try:
+        if scene_text is not None:
+            import yaml
+
+            parsed = yaml.safe_load(scene_text)
+            if isinstance(parsed, dict):
+                return load_scene(parsed)
+        named = data.meta.get("scene")
+        if named and Path(named).is_file():
+            return load_scene(named)
+    except (SceneError, ValueError) as exc:
+        print(f"{PROG} plot: warning: the run's scene cannot be loaded ({exc}); plotting without it",
+              file=sys.stderr)
+        return None
+    print(f"{PROG} plot: warning: the run names no readable scene; pass --scene for energy and the closed form",
+          file=sys.stderr)
+    return None
+
+
+# ------------------------------------------------------------------------------ describe, check
+
+
+def _describe(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    scene = load_scene(args.scene)
+    bodies = describe_scene(scene)
+    if args.json:
+        print(json.dumps({"scene": scene.source, "gravity": _floats(scene.model.gravity_W), "bodies": bodies}, indent=2))
+        return 0
+    gravity = scene.model.gravity_W
+    lines = [f"scene {scene.source}: {len(bodies)} bod{'y' if len(bodies) == 1 else 'ies'}, "
+             f"gravity {_vec(gravity) + ' m/s²' if scene.model.has_gravity else 'none'}, "
+             f"{len(scene.wrenches)} scripted wrench{'' if len(scene.wrenches) == 1 else 'es'}"]
+    for d in bodies:
+        lines += [
+            "",
+            f"{d['name']}: {d['model']}",
+            f"  mass               {d['mass']:.6g} kg",
+            f"  principal moments  {_vec(d['principal_moments'])} kg·m² (about the centre of mass)",
+            "  principal axes     " + ", ".join(f"e{k + 1} = {_vec(a)}" for k, a in enumerate(d["principal_axes_B"]))
+            + " (in body axes)",
+            "  inertia tensor     " + ", ".join(_vec(row) for row in d["inertia_B"]) + " kg·m² (body axes)",
+            f"  initial pose       position {_vec(d['position_world'])} m, orientation xyzw {_vec(d['orientation_xyzw'])}",
+            f"  initial twist      linear {_vec(d['linear_velocity_world'])} m/s, angular {_vec(d['angular_velocity_world'])} "
+            f"rad/s (world axes) = {_vec(d['angular_velocity_body'])} rad/s (body axes)",
+            f"  initial energy     {d['kinetic_energy']:.6g} J kinetic, |L| = {d['angular_momentum_norm']:.6g} kg·m²/s",
+            f"  damping            linear {d['damping']['linear']:g} N·s/m, angular {d['damping']['angular']:g} N·m·s/rad",
+        ]
+        if d["sites"]:
+            lines.append("  sites              " + "; ".join(
+                f"{s['name']} at {_vec(s['position_B'])} m ({s['axes']} axes)" for s in d["sites"]))
+        else:
+            lines.append("  sites              none")
+        lines.append("  wrench frames      " + ", ".join(d["frames"]))
+        for w in d["scripted_wrenches"]:
+            until = "on" if w["duration"] is None else f"{w['start'] + w['duration']:g}"
+            lines.append(f"  scripted wrench    in {w['frame']}: force {_vec(w['force'])} N, torque {_vec(w['torque'])} N·m, "
+                         f"t in [{w['start']:g}, {until}) s")
+    print("\n".join(lines))
+    return 0
+
+
+def _check(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    scene = load_scene(args.scene)
+    count = len(scene.body_names)
+    print(f"{scene.source}: ok ({count} bod{'y' if count == 1 else 'ies'}: {', '.join(scene.body_names)}; "
+          f"{len(scene.wrenches)} scripted wrench{'' if len(scene.wrenches) == 1 else 'es'})")
+    return 0
+
+
+def _floats(values: Any) -> list[float]:
+    return [float(v) for v in values]
+
+
+def _vec(values: Any) -> str:
+    return "[" + ", ".join(f"{float(v):.6g}" for v in values) + "]"
+
+
+if __name__ == "__main__":
+    sys.exit(main())

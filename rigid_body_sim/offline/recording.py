@@ -1,0 +1,276 @@
+"""Recordings: MCAP files with ROS 2 messages (CDR), openable in Foxglove, written without ROS.
+
+A recording holds, per body B (topics under ``namespace``, "/" by default):
+
+=================  ============================  =============================================
+topic              type                          content
+=================  ============================  =============================================
+``/B/pose``        geometry_msgs/PoseStamped     pose of B in ``world_frame``; stamp = sim time
+``/B/twist``       geometry_msgs/Twist           COM velocity and angular velocity, world axes
+``/B/wrench``      geometry_msgs/WrenchStamped   one per (B, frame) that has acted: the wrench
+                                                 acting from the stamp on, in that frame (frame
+                                                 rule: force N, torque N·m about the frame's
+                                                 origin, its axes); zeros once it stopped
+``/clock``         rosgraph_msgs/Clock           sim time
+=================  ============================  =============================================
+
+Every message's log and publish time is its sim time in nanoseconds (as rosbag2 records a
+``use_sim_time`` system), so a player's timeline is sim time from t = 0. The file is written
+with ``mcap`` and ``mcap-ros2-support`` (profile ``ros2``, schemas in the ``ros2msg``
+encoding of :mod:`~rigid_body_sim.offline.msgdefs`, zstd chunks) and finished, with its
+summary and index, by :meth:`McapRecorder.close`. The scene file (when it is one) is attached
+as ``scene.yaml`` and the run's settings are in the metadata record ``rigid_body_sim``, so
+``rigid-body-sim plot`` can recompute energy and the closed form from a recording alone.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import IO, Any, Iterable, Mapping
+
+import numpy as np
+from mcap_ros2.writer import Writer
+
+from ..core import Simulator
+from .msgdefs import complete_definition
+from .rundata import BodyTrack, RunData, angular_velocity_body
+
+__all__ = ["McapRecorder", "read_recording", "stamp_ns", "check_record_path", "METADATA_NAME", "SCENE_ATTACHMENT"]
+
+#: Name of the MCAP metadata record that holds the run's settings.
+METADATA_NAME = "rigid_body_sim"
+#: Name of the attachment holding the scene file's text.
+SCENE_ATTACHMENT = "scene.yaml"
+#: Chunk size, bytes: a chunk is written (and safe from a crash) each time this much has gathered.
+CHUNK_SIZE = 256 * 1024
+
+
+def stamp_ns(seconds: float) -> int:
+    """Sim time in seconds as whole nanoseconds (the stamp the node puts on its messages)."""
+    return int(round(seconds * 1e9))
+
+
+def _time_dict(ns: int) -> dict[str, int]:
+    return {"sec": ns // 1_000_000_000, "nanosec": ns % 1_000_000_000}
+
+
+def _xyz(v: np.ndarray) -> dict[str, float]:
+    return {"x": float(v[0]), "y": float(v[1]), "z": float(v[2])}
+
+
+def check_record_path(path: str | os.PathLike[str]) -> str | None:
+    """Why ``path`` cannot be recorded to, or None: its directory must exist and be writable,
+    and the path must not be a directory."""
+    p = Path(path)
+    directory = p.parent if str(p.parent) else Path(".")
+    if p.is_dir():
+        return f"{str(p)!r} is a directory; expected the path of an .mcap file to write"
+    if not directory.is_dir():
+        return f"directory {str(directory)!r} of {str(p)!r} does not exist"
+    if not os.access(directory, os.W_OK | os.X_OK):
+        return f"directory {str(directory)!r} of {str(p)!r} is not writable"
+    if p.exists() and not os.access(p, os.W_OK):
+        return f"{str(p)!r} exists and is not writable"
+    return None
+
+
+class McapRecorder:
+    """Writes a simulation's state as ROS 2 messages into one MCAP file.
+
+    Parameters
+    ----------
+    path : str or Path
+        The .mcap file; created or overwritten. Its directory must exist.
+    world_frame : str
+        ``frame_id`` of poses and of world-frame wrenches.
+    namespace : str
+        Prefix of the body topics ("/" gives ``/B/pose``; "/robot" gives ``/robot/B/pose``).
+    metadata : mapping of str to str, optional
+        Written as the metadata record ``rigid_body_sim`` (e.g. scene, integrator, dt).
+    scene_text : str, optional
+        The scene file's text, attached as ``scene.yaml``.
+
+    Raises
+    ------
+    OSError
+        If the file cannot be created.
+    """
+
+    def __init__(self, path: str | os.PathLike[str], *, world_frame: str = "world", namespace: str = "/",
+                 metadata: Mapping[str, str] | None = None, scene_text: str | None = None):
+        self.path = Path(path)
+        self.world_frame = world_frame
+        self._prefix = namespace.rstrip("/") + "/"
+        self._file: IO[bytes] | None = open(self.path, "wb")  # noqa: SIM115 - closed in close()
+        try:
+            self._writer = Writer(self._file, chunk_size=CHUNK_SIZE)
+            self._schemas = {name: self._writer.register_msgdef(name, complete_definition(name)) for name in (
+                "geometry_msgs/msg/PoseStamped", "geometry_msgs/msg/Twist",
+                "geometry_msgs/msg/WrenchStamped", "rosgraph_msgs/msg/Clock")}
+            if metadata:
+                self._writer.add_metadata(METADATA_NAME, {str(k): str(v) for k, v in metadata.items()})
+            if scene_text is not None:
+                self._writer.add_attachment(0, 0, SCENE_ATTACHMENT, "application/yaml", scene_text.encode("utf-8"))
+        except BaseException:
+            self._file.close()
+            self._file = None
+            raise
+        self._wrench_keys: list[tuple[str, str]] = []  # (body, frame_id) in order of first appearance
+        self.message_count = 0
+
+    @property
+    def closed(self) -> bool:
+        return self._file is None
+
+    def _write(self, topic: str, schema: str, message: dict[str, Any], ns: int) -> None:
+        if self._file is None:
+            raise ValueError(f"recording {self.path} is closed")
+        self._writer.write_message(topic, self._schemas[schema], message, log_time=ns, publish_time=ns,
+                                   sequence=self.message_count)
+        self.message_count += 1
+
+    def write_state(self, time: float, bodies: Iterable[str], positions_world: np.ndarray,
+                    orientations_xyzw: np.ndarray, linear_velocities_world: np.ndarray,
+                    angular_velocities_world: np.ndarray) -> None:
+        """Write ``/B/pose`` and ``/B/twist`` of each body at sim ``time`` (s); arrays (N, 3) or (N, 4)
+        in the order of ``bodies``, world frame and axes, quaternions (x, y, z, w)."""
+        ns = stamp_ns(time)
+        stamp = _time_dict(ns)
+        for i, body in enumerate(bodies):
+            q = orientations_xyzw[i]
+            self._write(f"{self._prefix}{body}/pose", "geometry_msgs/msg/PoseStamped", {
+                "header": {"stamp": stamp, "frame_id": self.world_frame},
+                "pose": {"position": _xyz(positions_world[i]),
+                         "orientation": {"x": float(q[0]), "y": float(q[1]), "z": float(q[2]), "w": float(q[3])}},
+            }, ns)
+            self._write(f"{self._prefix}{body}/twist", "geometry_msgs/msg/Twist", {
+                "linear": _xyz(linear_velocities_world[i]), "angular": _xyz(angular_velocities_world[i]),
+            }, ns)
+
+    def write_clock(self, time: float) -> None:
+        """Write ``/clock`` at sim ``time`` (s)."""
+        ns = stamp_ns(time)
+        self._write("/clock", "rosgraph_msgs/msg/Clock", {"clock": _time_dict(ns)}, ns)
+
+    def write_wrenches(self, time: float, wrenches: Iterable[tuple[str, str, np.ndarray, np.ndarray]]) -> None:
+        """Write the wrenches acting from sim ``time`` on: (body, frame_id, force N, torque N·m).
+
+        Wrenches on one (body, frame_id) are summed. Every (body, frame_id) that has acted
+        before but not now gets an all-zero message, so a plot of ``/B/wrench`` drops to zero.
+        The core's frame name ``"world"`` is written as ``world_frame``.
+        """
+        totals: dict[tuple[str, str], tuple[np.ndarray, np.ndarray]] = {}
+        for body, frame, force, torque in wrenches:
+            frame = self.world_frame if frame == "world" else frame
+            f0, t0 = totals.get((body, frame), (np.zeros(3), np.zeros(3)))
+            totals[(body, frame)] = (f0 + np.asarray(force, dtype=float), t0 + np.asarray(torque, dtype=float))
+        for key in totals:
+            if key not in self._wrench_keys:
+                self._wrench_keys.append(key)
+        if not self._wrench_keys:
+            return
+        ns = stamp_ns(time)
+        stamp = _time_dict(ns)
+        zero = (np.zeros(3), np.zeros(3))
+        for body, frame in self._wrench_keys:
+            force, torque = totals.get((body, frame), zero)
+            self._write(f"{self._prefix}{body}/wrench", "geometry_msgs/msg/WrenchStamped", {
+                "header": {"stamp": stamp, "frame_id": frame},
+                "wrench": {"force": _xyz(force), "torque": _xyz(torque)},
+            }, ns)
+
+    def write_simulator(self, sim: Simulator, *, skip: Iterable[str] = (), clock: bool = True) -> None:
+        """Write every body's pose and twist at ``sim.time`` (except ``skip``), then ``/clock``."""
+        skipped = set(skip) | set(sim.stopped_bodies)
+        keep = [i for i, body in enumerate(sim.body_names) if body not in skipped]
+        self.write_state(sim.time, [sim.body_names[i] for i in keep], sim.positions_world()[keep],
+                         sim.orientations_xyzw()[keep], sim.linear_velocities_world()[keep],
+                         sim.angular_velocities_world()[keep])
+        if clock:
+            self.write_clock(sim.time)
+
+    def close(self) -> None:
+        """Finish the file (summary, index, footer) and close it. Safe to call twice."""
+        if self._file is None:
+            return
+        try:
+            self._writer.finish()
+        finally:
+            self._file.close()
+            self._file = None
+
+    def __enter__(self) -> "McapRecorder":
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+
+def read_recording(path: str | os.PathLike[str]) -> tuple[RunData, str | None]:
+    """Read the poses and twists of a recording back into a :class:`RunData`, with the scene text.
+
+    Uses mcap's reader and mcap-ros2-support's decoder (built from the schemas in the file),
+    so any MCAP file with ``<ns>/B/pose`` (PoseStamped) and ``<ns>/B/twist`` (Twist) topics
+    works. Samples are the log times at which a body has both; at a time written twice (a
+    republish) the last message counts. Energy and |L| are left unknown
+    (:func:`~rigid_body_sim.offline.rundata.with_derived_quantities` fills them in).
+
+    Returns
+    -------
+    data : RunData
+        ``meta`` is the ``rigid_body_sim`` metadata record, if any.
+    scene_text : str or None
+        The attached ``scene.yaml``, if any.
+
+    Raises
+    ------
+    ValueError
+        If the file is not an MCAP file or has no pose and twist topics.
+    """
+    from mcap.exceptions import McapError
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    path = Path(path)
+    poses: dict[str, dict[int, tuple[list[float], list[float]]]] = {}
+    twists: dict[str, dict[int, tuple[list[float], list[float]]]] = {}
+    meta: dict[str, str] = {}
+    scene_text = None
+    try:
+        with open(path, "rb") as f:
+            reader = make_reader(f, decoder_factories=[DecoderFactory()])
+            for record in reader.iter_metadata():
+                if record.name == METADATA_NAME:
+                    meta.update(record.metadata)
+            for attachment in reader.iter_attachments():
+                if attachment.name == SCENE_ATTACHMENT:
+                    scene_text = bytes(attachment.data).decode("utf-8")
+            for schema, channel, message, decoded in reader.iter_decoded_messages(log_time_order=True):
+                topic = channel.topic
+                body = topic.rstrip("/").split("/")[-2] if topic.count("/") >= 2 else ""
+                if not body:
+                    continue
+                if topic.endswith("/pose") and schema.name.endswith("PoseStamped"):
+                    p, q = decoded.pose.position, decoded.pose.orientation
+                    poses.setdefault(body, {})[message.log_time] = ([p.x, p.y, p.z], [q.x, q.y, q.z, q.w])
+                elif topic.endswith("/twist") and schema.name.endswith("/Twist"):
+                    v, w = decoded.linear, decoded.angular
+                    twists.setdefault(body, {})[message.log_time] = ([v.x, v.y, v.z], [w.x, w.y, w.z])
+    except (McapError, OSError, UnicodeDecodeError) as exc:
+        raise ValueError(f"{path}: cannot read it as an MCAP recording ({exc})") from None
+    bodies = [b for b in poses if b in twists]
+    if not bodies:
+        raise ValueError(f"{path}: expected <body>/pose (PoseStamped) and <body>/twist (Twist) topics, found none")
+    times = sorted(set.intersection(*(set(poses[b]) & set(twists[b]) for b in bodies)))
+    if not times:
+        raise ValueError(f"{path}: no time at which every body {bodies} has both a pose and a twist")
+    tracks = {}
+    for body in bodies:
+        p = np.array([poses[body][t][0] for t in times])
+        q = np.array([poses[body][t][1] for t in times])
+        v = np.array([twists[body][t][0] for t in times])
+        w = np.array([twists[body][t][1] for t in times])
+        tracks[body] = BodyTrack(position_world=p, orientation_xyzw=q, linear_velocity_world=v,
+                                 angular_velocity_world=w, angular_velocity_body=angular_velocity_body(q, w))
+    return RunData(time=np.array(times, dtype=float) * 1e-9, bodies=tracks, meta=meta, source=str(path)), scene_text
