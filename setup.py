@@ -21,7 +21,10 @@ setup(
         ("share/" + package_name + "/config", sorted(p for p in glob("config/*") if os.path.isfile(p))),
     ],
     python_requires=">=3.10",
-    install_requires=["numpy", "scipy", "pyyaml"],
+    # Exact pins are in requirements.txt; these name what the package imports.
+    install_requires=["numpy", "scipy", "pyyaml", "matplotlib", "mcap", "mcap-ros2-support", "tqdm"],
+    # Optional: benchmarks/ compares with MuJoCo (pip install -e .[bench]); pin in requirements-bench.txt.
+    extras_require={"bench": ["mujoco==4.0.0"]},
     zip_safe=True,
     maintainer="rigid_body_sim maintainers",
     maintainer_email="rigid-body-sim@example.com",
@@ -30,6 +33,7 @@ setup(
     entry_points={
         "console_scripts": [
             "rigid_body_sim_node = rigid_body_sim.ros.node:main",
+            "rigid-body-sim = rigid_body_sim.cli:main",
         ],
     },
 )

@@ -3,6 +3,7 @@
 Schema (every key not listed is an error; see README "Scene files")::
 
     gravity: [0.0, 0.0, -9.81]            # optional, m/s², world axes; absent = none
+    energy_growth_limit: 1.0e6            # optional, > 1: the loud-failure factor (simulator.py)
     bodies:
       crate:                              # a name: letter first, then letters, digits, _
         mass: 2.0                         # kg
@@ -14,6 +15,13 @@ Schema (every key not listed is an error; see README "Scene files")::
         sites:                                                  # optional
           corner: {position: [0.5, 0.3, 0.0]}                   # body frame, from the COM
           nozzle: {position: [0, 0, -0.2], axes: world}         # axes: body (default) | world
+    wrenches:                             # optional: scripted wrenches over sim time
+      - {body: crate, frame: crate/corner, force: [0, 10, 0], torque: [0, 0, 0], start: 0.5, duration: 0.2}
+
+A scripted wrench follows the frame rule (forces.py): force (N) and torque (N·m) about the
+origin of ``frame``, in its axes; ``frame`` is one of the body's frames. It acts on every
+step whose start time t satisfies ``start ≤ t < start + duration`` (``duration`` absent =
+forever); force and torque default to zero, ``start`` to 0.
 
 Validation is complete before anything is built: a scene either loads whole or raises one
 :class:`SceneError` naming the source, the key path and what was expected.
@@ -23,8 +31,9 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
+from stat import S_ISREG
 from typing import Any, Mapping
 
 import numpy as np
@@ -44,12 +53,17 @@ from .quaternion import (
     quat_wxyz_from_xyzw,
 )
 
-__all__ = ["Scene", "SceneError", "load_scene", "WORLD_FRAME", "ORIENTATION_TOLERANCE"]
+__all__ = ["Scene", "SceneError", "ScriptedWrench", "load_scene", "WORLD_FRAME", "ORIENTATION_TOLERANCE",
+           "DEFAULT_ENERGY_GROWTH_LIMIT"]
 
 #: Name of the world frame in the core's frame rule.
 WORLD_FRAME = "world"
 #: How far | |q| − 1 | may be in a scene file; within it q is normalised, beyond it rejected.
 ORIENTATION_TOLERANCE = 1e-6
+#: Default ``energy_growth_limit``: a body whose kinetic energy exceeds this factor times the
+#: most its initial energy and the work of the applied wrenches and gravity could give it
+#: stops the simulator with a DivergenceError (simulator.py).
+DEFAULT_ENERGY_GROWTH_LIMIT = 1e6
 #: Largest size accepted for a scene file, bytes.
 MAX_SCENE_BYTES = 8 * 1024 * 1024
 
@@ -57,12 +71,45 @@ _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
 _RESERVED_BODY_NAMES = {WORLD_FRAME}
 _RESERVED_SITE_NAMES = {"world_aligned"}
 _INERTIA_KINDS = ("box", "sphere", "cylinder", "principal", "tensor")
-_TOP_KEYS = ("gravity", "bodies")
+_TOP_KEYS = ("gravity", "bodies", "wrenches", "energy_growth_limit")
+_WRENCH_KEYS = ("body", "frame", "force", "torque", "start", "duration")
 _BODY_KEYS = ("mass", "inertia", "pose", "twist", "damping", "sites")
 
 
 class SceneError(ValueError):
     """A scene that cannot be loaded; the message names the source, key path and expectation."""
+
+
+@dataclass(frozen=True)
+class ScriptedWrench:
+    """A wrench the scene applies over a window of sim time (the ``wrenches`` list of a scene).
+
+    Attributes
+    ----------
+    body : str
+    frame : str
+        One of ``Scene.frames_of(body)``; force and torque follow the frame rule (forces.py).
+    force : ndarray, shape (3,)
+        N, in ``frame``'s axes.
+    torque : ndarray, shape (3,)
+        N·m about ``frame``'s origin, in its axes.
+    start : float
+        s of sim time, ≥ 0.
+    duration : float
+        s, > 0; ``math.inf`` for "until the end of the run".
+    """
+
+    body: str
+    frame: str
+    force: np.ndarray
+    torque: np.ndarray
+    start: float
+    duration: float
+
+    @property
+    def end(self) -> float:
+        """``start + duration``, s (``inf`` when it never ends): the window is [start, end)."""
+        return self.start + self.duration
 
 
 @dataclass(frozen=True)
@@ -77,12 +124,19 @@ class Scene:
     initial_state : State
     sites : dict of str to tuple of str
         Site names per body, in file order.
+    wrenches : tuple of ScriptedWrench
+        The scripted wrenches, in file order (empty when the scene has none).
+    energy_growth_limit : float
+        Factor (> 1) past which a body's kinetic energy growth is a DivergenceError
+        (default :data:`DEFAULT_ENERGY_GROWTH_LIMIT`).
     """
 
     source: str
     model: BodyModel
     initial_state: State
     sites: Mapping[str, tuple[str, ...]]
+    wrenches: tuple[ScriptedWrench, ...] = ()
+    energy_growth_limit: float = DEFAULT_ENERGY_GROWTH_LIMIT
 
     @property
     def body_names(self) -> tuple[str, ...]:
@@ -111,15 +165,23 @@ def load_scene(source: str | Path | Mapping[str, Any]) -> Scene:
     path = Path(source)
     name = str(path)
     try:
-        size = path.stat().st_size
+        info = path.stat()
     except OSError as exc:
         raise SceneError(f"{name}: cannot read scene file ({exc.strerror or exc})") from None
-    if size > MAX_SCENE_BYTES:
-        raise SceneError(f"{name}: scene file is {size} bytes; expected at most {MAX_SCENE_BYTES}")
+    # Not a regular file (a directory, /dev/zero, a FIFO): reading it would fail, never end, or
+    # block until a writer comes, so it is refused before it is opened.
+    if not S_ISREG(info.st_mode):
+        raise SceneError(f"{name}: cannot read scene file (not a regular file; expected a YAML file)")
+    if info.st_size > MAX_SCENE_BYTES:
+        raise SceneError(f"{name}: scene file is {info.st_size} bytes; expected at most {MAX_SCENE_BYTES}")
     import yaml  # deferred: only file loading needs it
 
     try:
-        text = path.read_text(encoding="utf-8")
+        with open(path, "rb") as handle:  # at most one byte past the limit, in case the file grew since stat
+            raw = handle.read(MAX_SCENE_BYTES + 1)
+        if len(raw) > MAX_SCENE_BYTES:
+            raise SceneError(f"{name}: scene file is over {MAX_SCENE_BYTES} bytes; expected at most {MAX_SCENE_BYTES}")
+        text = raw.decode("utf-8")
         data = _load_yaml_without_duplicate_keys(text, name)
     except (OSError, UnicodeDecodeError) as exc:
         raise SceneError(f"{name}: cannot read scene file ({exc})") from None
@@ -242,6 +304,10 @@ def _build(data: dict, source: str) -> Scene:
     gravity = np.zeros(3)
     if top.get("gravity") is not None:
         gravity = check.vector(top["gravity"], "gravity", 3, unit="m/s²")
+    energy_growth_limit = DEFAULT_ENERGY_GROWTH_LIMIT
+    if top.get("energy_growth_limit") is not None:
+        energy_growth_limit = check.number(top["energy_growth_limit"], "energy_growth_limit", minimum=1.0, strict=True,
+                                           unit="a factor on the kinetic energy")
     bodies = top["bodies"]
     if not isinstance(bodies, Mapping) or not bodies:
         check.fail("bodies", "a non-empty mapping of body names to bodies", bodies)
@@ -343,7 +409,42 @@ def _build(data: dict, source: str) -> Scene:
         site_world_axes=np.array(site_world, dtype=bool),
     )
     state = State(np.array(p0), np.array(q0), np.array(v0), np.array(w0))
-    return Scene(source=source, model=model, initial_state=state, sites=sites_of)
+    scene = Scene(source=source, model=model, initial_state=state, sites=sites_of,
+                  energy_growth_limit=energy_growth_limit)
+    if top.get("wrenches") is not None:
+        scene = replace(scene, wrenches=_wrenches(check, top["wrenches"], scene))
+    return scene
+
+
+def _wrenches(check: _Checker, value: Any, scene: Scene) -> tuple[ScriptedWrench, ...]:
+    """The ``wrenches`` list: each entry's body, frame (of that body), force, torque and window."""
+    if not isinstance(value, (list, tuple)):
+        check.fail("wrenches", "a list of {body, frame, force, torque, start, duration} mappings", value)
+    out = []
+    for i, raw in enumerate(value):
+        path = f"wrenches[{i}]"
+        entry = check.mapping(raw, path, _WRENCH_KEYS, required=("body", "frame"))
+        body = entry["body"]
+        if not isinstance(body, str) or body not in scene.sites:
+            check.fail(f"{path}.body", f"one of the bodies {list(scene.body_names)}", body)
+        frames = scene.frames_of(body)
+        if entry["frame"] not in frames:
+            check.fail(f"{path}.frame", f"one of the frames of {body!r} {list(frames)}", entry["frame"])
+        force = np.zeros(3)
+        torque = np.zeros(3)
+        if entry.get("force") is not None:
+            force = check.vector(entry["force"], f"{path}.force", 3, unit="N, in the frame's axes")
+        if entry.get("torque") is not None:
+            torque = check.vector(entry["torque"], f"{path}.torque", 3, unit="N·m about the frame's origin, in its axes")
+        start = 0.0
+        if entry.get("start") is not None:
+            start = check.number(entry["start"], f"{path}.start", minimum=0.0, unit="s of sim time")
+        duration = math.inf
+        if entry.get("duration") is not None:
+            duration = check.number(entry["duration"], f"{path}.duration", minimum=0.0, strict=True,
+                                    unit="s; leave it out for 'forever'")
+        out.append(ScriptedWrench(body, entry["frame"], force, torque, start, duration))
+    return tuple(out)
 
 
 def _inertia(check: _Checker, value: Any, path: str, mass: float) -> tuple[np.ndarray, np.ndarray]:

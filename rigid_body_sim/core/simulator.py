@@ -7,6 +7,7 @@ Typical use::
     sim = Simulator(load_scene("config/default_scene.yaml"), integrator="rk4", dt=0.01)
     sim.apply_force_at_point("box", force=[0, 10, 0], point=[0.5, 0.3, 0], frame="box")
     sim.step()                       # wrenches hold for this call's steps, then clear
+                                     # (the scene's scripted wrenches act by themselves)
     state = sim.body_state("box")    # position_world, orientation_xyzw, ...
 
 Orientation read-outs are (x, y, z, w), as in ROS messages and scene files, of the user's body
@@ -40,7 +41,12 @@ from .quaternion import (
 )
 from .scene import ORIENTATION_TOLERANCE, Scene
 
-__all__ = ["Simulator", "BodyState", "NonFiniteStateError"]
+__all__ = ["Simulator", "BodyState", "NonFiniteStateError", "DivergenceError", "SCRIPT_TIME_TOLERANCE"]
+
+#: A step whose start time is within this fraction of ``dt`` of a scripted wrench's window edge
+#: counts as on the edge, so a window given in multiples of ``dt`` covers exactly
+#: ``duration / dt`` steps despite round-off in ``time``.
+SCRIPT_TIME_TOLERANCE = 1e-6
 
 
 class NonFiniteStateError(RuntimeError):
@@ -68,6 +74,63 @@ class NonFiniteStateError(RuntimeError):
         super().__init__(
             f"non-finite state at step {step_index} with integrator {integrator!r}, dt = {dt:g} s: {rates}. "
             "Try a smaller dt, more substeps, or another integrator; the state was left at the last finite step."
+        )
+
+
+class DivergenceError(NonFiniteStateError):
+    """A step made a body's kinetic energy grow past what its inputs can explain: a blow-up.
+
+    The rule (checked after every step, for every body not stopped): with K the kinetic
+    energy, the exact motion obeys ``d√K/dt ≤ |F + m g| / √(2m) + |τ| / √(2 I_min)`` (power
+    ``F·v + τ·ω`` with ``|v| ≤ √(2K/m)``, ``|ω| ≤ √(2K/I_min)``; damping only removes energy), so
+
+        √K(t) ≤ B(t) = √K(t0) + Σ_steps (|F + m g| / √(2m) + |τ| / √(2 I_min)) dt
+                       + Σ_impulses (|J| / √m + |H| / √I_min) / √2,
+
+    F and τ being the force and torque about the centre of mass each step applied (user and
+    scripted wrenches), t0 the last reset or :meth:`Simulator.set_body_state` of the body.
+    B² is the most energy the body can physically have; a step that leaves
+    ``K > energy_growth_limit · B²`` (scene key ``energy_growth_limit``, default 1e6) is a
+    numerical blow-up. A body pushed from rest, or falling, never trips it. Like a
+    non-finite state, the step is not applied and the state stays at the last good step; it
+    subclasses :class:`NonFiniteStateError` so that code stopping bodies on one stops them on
+    both (the node does).
+
+    Attributes
+    ----------
+    bodies, step_index, integrator, dt, spin_step
+        As :class:`NonFiniteStateError`.
+    kinetic_energy : dict of str to float
+        J, of each failing body after the rejected step.
+    energy_bound : dict of str to float
+        B², J: the most kinetic energy its initial energy and inputs could give it.
+    limit : float
+        The energy_growth_limit in force.
+    """
+
+    def __init__(self, bodies: tuple[str, ...], step_index: int, integrator: str, dt: float,
+                 spin_step: dict[str, float], kinetic_energy: dict[str, float], energy_bound: dict[str, float],
+                 limit: float):
+        self.bodies = bodies
+        self.step_index = step_index
+        self.integrator = integrator
+        self.dt = dt
+        self.spin_step = spin_step
+        self.kinetic_energy = kinetic_energy
+        self.energy_bound = energy_bound
+        self.limit = limit
+        details = "; ".join(
+            f"{b} (|w|·dt = {spin_step[b]:.3g} rad) has kinetic energy {kinetic_energy[b]:.3g} J, more than "
+            f"{limit:g} × {energy_bound[b]:.3g} J, the most its initial energy and the applied wrenches and gravity "
+            "could give it"
+            for b in bodies
+        )
+        RuntimeError.__init__(
+            self,
+            f"energy blow-up at step {step_index} with integrator {integrator!r}, dt = {dt:g} s: {details}. "
+            "The integrator is unstable at this |w|·dt: try a smaller dt, more substeps, or another integrator "
+            "(exact_rotor_splitting keeps a torque-free body's energy at any |w|·dt; see docs/stability.md); "
+            "the state was left at the last step before it.",
         )
 
 
@@ -112,12 +175,25 @@ class Simulator:
         Step, s (finite, > 0).
     reference_rtol, reference_atol : float
         Tolerances of the ``reference`` integrator.
+    energy_growth_limit : float, optional
+        Factor (> 1) of the blow-up check (:class:`DivergenceError`); default the scene's.
     """
 
     def __init__(self, scene: Scene, integrator: str = "rk4", dt: float = 0.01, *,
-                 reference_rtol: float = 1e-12, reference_atol: float = 1e-12):
+                 reference_rtol: float = 1e-12, reference_atol: float = 1e-12,
+                 energy_growth_limit: float | None = None):
         self.scene = scene
         self.model = scene.model
+        limit = scene.energy_growth_limit if energy_growth_limit is None else energy_growth_limit
+        if (isinstance(limit, bool) or not isinstance(limit, (int, float, np.floating, np.integer))
+                or not math.isfinite(limit) or limit <= 1.0):
+            raise ValueError(f"energy_growth_limit: expected a finite number > 1, got {limit!r}")
+        self.energy_growth_limit = float(limit)
+        # Per-body constants of the energy bound (DivergenceError): 1/√(2m), 1/√(2 I_min), m g.
+        self._budget_per_force = 1.0 / np.sqrt(2.0 * self.model.mass)
+        self._budget_per_torque = 1.0 / np.sqrt(2.0 * self.model.inertia_P.min(axis=1))
+        self._weight_W = self.model.mass[:, None] * self.model.gravity_W
+        self._gravity_budget_rate = np.linalg.norm(self._weight_W, axis=1) * self._budget_per_force
         self._reference_options = {"rtol": _positive(reference_rtol, "reference_rtol"),
                                    "atol": _positive(reference_atol, "reference_atol")}
         self._integrator_name = ""
@@ -125,6 +201,12 @@ class Simulator:
         self.integrator = integrator
         self._dt = _positive(dt, "dt")
         self._wrenches = WrenchAccumulator(self.model)
+        # The scene's scripted wrenches: (frame, force, torque, start, end) per entry, applied at
+        # the start of every step from their own accumulator, which user wrenches never touch.
+        self._script = tuple((parse_frame(scene, w.body, w.frame), w.force, w.torque, w.start, w.end)
+                             for w in scene.wrenches)
+        self._script_wrenches = WrenchAccumulator(self.model)
+        self._script_active: tuple[int, ...] = ()
         self._stopped = np.zeros(self.model.count, dtype=bool)
         self._active_cache: tuple[np.ndarray, Any] | None = None
         self.reset()
@@ -170,6 +252,7 @@ class Simulator:
     def reset(self) -> None:
         """Back to the scene's initial state: t = 0, no applied wrench, no stopped body."""
         self.state: State = self.scene.initial_state.copy()
+        self._energy_budget = np.sqrt(kinetic_energy(self.model, self.state))  # √J, see DivergenceError
         self.step_count = 0
         self._time_origin = 0.0
         self._step_origin = 0
@@ -232,6 +315,24 @@ class Simulator:
         if not state.finite_bodies()[b]:
             raise ValueError(f"impulse on {body!r} would make its velocity non-finite; not applied")
         self.state = state
+        self._energy_budget[b] += (math.hypot(*J_W[b]) * self._budget_per_force[b]
+                                   + math.hypot(*H_W[b]) * self._budget_per_torque[b])
+
+    def active_scripted_wrenches(self, time: float | None = None) -> list[tuple[str, str, np.ndarray, np.ndarray]]:
+        """The scene's scripted wrenches that act on a step starting at ``time`` (default: now).
+
+        A wrench acts on every step whose start time t satisfies ``start ≤ t < start + duration``
+        (edges compared within ``SCRIPT_TIME_TOLERANCE · dt``). Returns (body, frame, force N,
+        torque N·m) per active entry, in scene order, as given in the scene (frame rule).
+        """
+        t = self.time if time is None else float(time)
+        return [(w.body, w.frame, w.force.copy(), w.torque.copy())
+                for i, w in enumerate(self.scene.wrenches) if i in self._script_indices_at(t)]
+
+    def _script_indices_at(self, t: float) -> tuple[int, ...]:
+        tol = SCRIPT_TIME_TOLERANCE * self._dt
+        return tuple(i for i, (_ref, _f, _tau, start, end) in enumerate(self._script)
+                     if start - tol <= t < end - tol)
 
     def clear_wrenches(self) -> None:
         """Drop every applied wrench before the next step."""
@@ -258,11 +359,16 @@ class Simulator:
             w_W = _vector3(angular_velocity_world, "angular_velocity_world")
             state.w_WP_P[b] = quat_rotate(quat_conjugate(state.q_WP[b]), w_W)
         self.state = state
+        self._energy_budget[b] = np.sqrt(kinetic_energy(self.model, state)[b])  # a new start for the bound
 
     # ----------------------------------------------------------------- stepping
 
     def step(self, n: int = 1) -> None:
         """Advance ``n`` steps of ``dt``; applied wrenches hold for all of them, then clear.
+
+        The scene's scripted wrenches (``Scene.wrenches``) are added at the start of each step
+        whose start time lies in their window (see :meth:`active_scripted_wrenches`), on top of
+        the applied wrenches; they are part of the scene, so no call is needed for them.
 
         Raises
         ------
@@ -271,6 +377,10 @@ class Simulator:
             state stays at the last finite step, ``time`` and ``step_count`` count only the
             steps done, and the applied wrenches are kept so the caller can stop the body
             (:meth:`stop_body`) and step again.
+        DivergenceError
+            (a NonFiniteStateError) If a step makes a body's kinetic energy exceed
+            ``energy_growth_limit`` times the most its initial energy and inputs could give
+            it (the rule is in :class:`DivergenceError`); handled the same way.
         """
         if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
             raise ValueError(f"n: expected a whole number of steps ≥ 0, got {n!r}")
@@ -285,6 +395,8 @@ class Simulator:
         # floating-point warning from wherever it first happened.
         with np.errstate(all="ignore"):
             force_W, torque_W = self._wrenches.resolve(self.state)
+            if self._script:
+                force_W, torque_W = self._add_scripted(force_W, torque_W)
             if not self._stopped.any():
                 new = self._step_function(self.model, self.state, force_W, torque_W, dt)
             else:
@@ -301,8 +413,53 @@ class Simulator:
                 spin = {name: math.hypot(*self.state.w_WP_P[self.model.names.index(name)]) * dt for name in bad}
         if not finite.all():
             raise NonFiniteStateError(bad, self.step_count, self._integrator_name, dt, spin)
+        budget = self._check_energy_growth(new, force_W, torque_W, dt)
         self.state = new
+        self._energy_budget = budget
         self.step_count += 1
+
+    def _check_energy_growth(self, new: State, force_W: np.ndarray, torque_W: np.ndarray, dt: float) -> np.ndarray:
+        """The energy bound after this step (√J per body); DivergenceError if a body exceeds it."""
+        with np.errstate(all="ignore"):  # an overflowing bound is +inf: it never trips
+            if self._wrenches.empty and self._script_wrenches.empty:  # zero wrenches: skip their norms
+                budget = self._energy_budget + dt * self._gravity_budget_rate if self.model.has_gravity \
+                    else self._energy_budget
+            else:
+                total_force = force_W + self._weight_W
+                budget = self._energy_budget + dt * (
+                    np.sqrt(np.einsum("ij,ij->i", total_force, total_force)) * self._budget_per_force
+                    + np.sqrt(np.einsum("ij,ij->i", torque_W, torque_W)) * self._budget_per_torque)
+            v, w = new.v_WC_W, new.w_WP_P
+            energy = 0.5 * (self.model.mass * np.einsum("ij,ij->i", v, v)
+                            + np.einsum("ij,ij,ij->i", self.model.inertia_P, w, w))  # kinetic_energy()
+            over = energy > self.energy_growth_limit * budget * budget
+        if over.any():
+            over &= ~self._stopped
+            if over.any():
+                index = np.flatnonzero(over)
+                bad = tuple(self.model.names[i] for i in index)
+                raise DivergenceError(
+                    bad, self.step_count, self._integrator_name, dt,
+                    {self.model.names[i]: math.hypot(*self.state.w_WP_P[i]) * dt for i in index},
+                    {self.model.names[i]: float(energy[i]) for i in index},
+                    {self.model.names[i]: float(budget[i] ** 2) for i in index},
+                    self.energy_growth_limit,
+                )
+        return budget
+
+    def _add_scripted(self, force_W: np.ndarray, torque_W: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Add the scripted wrenches active at the start of this step (resolved at the current state)."""
+        active = self._script_indices_at(self.time)
+        if active != self._script_active:
+            self._script_wrenches.clear()
+            for i in active:
+                ref, force, torque, _start, _end = self._script[i]
+                self._script_wrenches.add(ref, force, torque)
+            self._script_active = active
+        if self._script_wrenches.empty:
+            return force_W, torque_W
+        f_W, t_W = self._script_wrenches.resolve(self.state)
+        return force_W + f_W, torque_W + t_W
 
     @property
     def time(self) -> float:

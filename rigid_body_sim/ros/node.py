@@ -8,8 +8,15 @@ Per body B (relative names, so namespaces and remaps apply):
       ``header.frame_id``, in its axes; held per (B, frame_id) until replaced, cleared by an
       all-zero wrench, or older than ``wrench_timeout`` s of sim time; all holds are summed),
   in  ``B/impulse`` (WrenchStamped read as N·s and N·m·s, applied once at the next step).
-Also ``/clock`` (rosgraph_msgs/Clock) each tick, and services ``~/reset``, ``~/set_paused``,
-``~/step``. Each physics step advances ``real_time_factor / (rate_hz · substeps)`` s.
+Also ``/clock`` (rosgraph_msgs/Clock) each tick, ``/diagnostics`` (diagnostic_msgs/DiagnosticArray,
+every ``diagnostics_period`` wall seconds; see diagnostics.py), and services ``~/reset``,
+``~/set_paused``, ``~/step``. Each physics step advances ``real_time_factor / (rate_hz · substeps)`` s.
+
+Incoming header stamps are not used: a hold is timed in sim time from its receipt, so a stamp
+in the far past or future (or a nanosec field ≥ 1e9) changes nothing. Messages are checked in
+this order and the first failure is the reason counted: frame_id, then non-finite, then too large.
+Impulses due at the same step in the same (body, frame) are summed (impulses add), so a flood of
+them while paused holds one entry per frame, not one per message.
 """
 
 from __future__ import annotations
@@ -19,10 +26,12 @@ import sys
 import time
 from collections import Counter
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import rclpy
+from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped, Twist, WrenchStamped
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import (
@@ -42,6 +51,7 @@ from rosgraph_msgs.msg import Clock as ClockMsg
 from std_srvs.srv import SetBool, Trigger
 
 from ..core import INTEGRATORS, NonFiniteStateError, Scene, SceneError, Simulator, load_scene
+from ..offline.recording import McapRecorder, check_record_path
 from ..paths import default_scene_path
 from .conversions import (
     RejectedMessage,
@@ -51,6 +61,7 @@ from .conversions import (
     time_msg_from_seconds,
     wrench_from_msg,
 )
+from .diagnostics import TickWindow, diagnostic_statuses, timer_callback_with_info
 
 __all__ = ["RigidBodySimNode", "main", "DEFAULT_INTEGRATOR"]
 
@@ -58,6 +69,8 @@ __all__ = ["RigidBodySimNode", "main", "DEFAULT_INTEGRATOR"]
 DEFAULT_INTEGRATOR = "rk4"
 #: History depth of every publisher and subscription (bounded memory under floods).
 QUEUE_DEPTH = 10
+#: Wall seconds between two warnings about dropped messages (the counts go on regardless).
+REJECTION_WARNING_PERIOD = 2.0
 
 
 @dataclass
@@ -116,6 +129,7 @@ class RigidBodySimNode(Node):
         self._publish_odometry: bool = bool(p["publish_odometry"])
         self._wrench_timeout: float = float(p["wrench_timeout"])
         self._status_period: float = float(p["status_period"])
+        self._diagnostics_period: float = float(p["diagnostics_period"])
 
         scene = load_scene(p["scene"])
         self._check_scene_names(scene)
@@ -123,12 +137,16 @@ class RigidBodySimNode(Node):
         self.rejected: Counter[str] = Counter()
         self.accepted_messages = 0
         self._holds: dict[tuple[str, str], _Hold] = {}
-        self._pending_impulses: list[tuple[str, str, np.ndarray, np.ndarray]] = []
+        self._pending_impulses: dict[tuple[str, str], tuple[np.ndarray, np.ndarray]] = {}
+        self._rejection_warning_wall = -math.inf
+        self._rejections_since_warning = 0
         self._bodies: dict[str, _BodyIO] = {}
         self._qos = QoSProfile(depth=QUEUE_DEPTH)
 
         self._sim = Simulator(scene, integrator=p["integrator"], dt=self._physics_dt())
         self._create_body_io()
+        self._recorder: McapRecorder | None = None
+        self._open_recording(p["record_path"])
         self._clock_pub = self.create_publisher(ClockMsg, "/clock", self._qos)
         self._clock_msg = ClockMsg()
         self.create_service(Trigger, "~/reset", self._on_reset)
@@ -139,7 +157,12 @@ class RigidBodySimNode(Node):
         self.add_post_set_parameters_callback(self._apply_parameters)
 
         self._steady_clock = Clock(clock_type=ClockType.STEADY_TIME)
-        self._timer = self.create_timer(1.0 / self._rate_hz, self._on_tick, clock=self._steady_clock)
+        self._tick_window = TickWindow(self._sim.time)
+        self._timer = self.create_timer(1.0 / self._rate_hz, timer_callback_with_info(self._on_tick),
+                                        clock=self._steady_clock)
+        self._diagnostics_pub = self.create_publisher(DiagnosticArray, "/diagnostics", self._qos)
+        self._diagnostics_timer = None
+        self._set_diagnostics_period(self._diagnostics_period)
         self._status_wall = time.monotonic()
         self._status_sim = 0.0
         self._log_start_up()
@@ -148,8 +171,9 @@ class RigidBodySimNode(Node):
     # ------------------------------------------------------------------ parameters
 
     _PARAMETER_NAMES = ("scene", "integrator", "rate_hz", "substeps", "real_time_factor", "world_frame",
-                        "publish_clock", "publish_odometry", "paused", "wrench_timeout", "status_period")
-    _FLOAT_PARAMETERS = ("rate_hz", "real_time_factor", "wrench_timeout", "status_period")
+                        "publish_clock", "publish_odometry", "paused", "wrench_timeout", "status_period",
+                        "diagnostics_period", "record_path")
+    _FLOAT_PARAMETERS = ("rate_hz", "real_time_factor", "wrench_timeout", "status_period", "diagnostics_period")
 
     def _declare_parameters(self) -> None:
         # A whole number given for a float parameter at start-up (`-p rate_hz:=200`, or
@@ -183,6 +207,13 @@ class RigidBodySimNode(Node):
                                                                floating_point_range=_float_range(0.0, 1e9)))
         self.declare_parameter("status_period", 1.0, describe("Wall seconds between status log lines; 0 = none.",
                                                               floating_point_range=_float_range(0.0, 1e6)))
+        self.declare_parameter("diagnostics_period", 1.0,
+                               describe("Wall seconds between DiagnosticArray messages on /diagnostics; 0 = none.",
+                                        floating_point_range=_float_range(0.0, 1e6)))
+        self.declare_parameter("record_path", "", describe(
+            "MCAP file to record to (B/pose, B/twist, B/wrench, /clock as ROS 2 messages, stamps = sim time); "
+            "'' = no recording. A change closes the current file and starts the new one.",
+            additional_constraints="'' or a file path whose directory exists and is writable"))
 
     def _check(self, name: str, value: Any) -> str | None:
         """Why ``value`` is not acceptable for parameter ``name``, or None."""
@@ -190,7 +221,7 @@ class RigidBodySimNode(Node):
             return f"integrator must be one of {sorted(INTEGRATORS)}, got {value!r}"
         if name in ("rate_hz", "real_time_factor") and not (isinstance(value, float) and math.isfinite(value) and value > 0.0):
             return f"{name} must be a finite number > 0, got {value!r}"
-        if name in ("wrench_timeout", "status_period") and not (isinstance(value, float) and math.isfinite(value) and value >= 0.0):
+        if name in ("wrench_timeout", "status_period", "diagnostics_period") and not (isinstance(value, float) and math.isfinite(value) and value >= 0.0):
             return f"{name} must be a finite number ≥ 0, got {value!r}"
         if name == "substeps" and not (isinstance(value, int) and value >= 1):
             return f"substeps must be a whole number ≥ 1, got {value!r}"
@@ -198,6 +229,12 @@ class RigidBodySimNode(Node):
             return f"world_frame must be a non-empty frame name without '/', got {value!r}"
         if name == "scene" and not (isinstance(value, str) and value):
             return f"scene must be the path of a scene YAML file, got {value!r}"
+        if name == "record_path":
+            if not isinstance(value, str):
+                return f"record_path must be the path of an .mcap file or '' (no recording), got {value!r}"
+            problem = check_record_path(value) if value else None
+            if problem is not None:
+                return f"record_path rejected: {problem}"
         return None
 
     def _coerce_parameters(self, parameters: list[Parameter]) -> list[Parameter]:
@@ -252,11 +289,17 @@ class RigidBodySimNode(Node):
                 self._wrench_timeout = float(value)
             elif name == "status_period":
                 self._status_period = float(value)
+            elif name == "diagnostics_period":
+                self._set_diagnostics_period(float(value))
             elif name == "scene":
                 self._swap_scene(self._prepared_scenes.pop(value))
+            elif name == "record_path":
+                self._open_recording(value)
+                self._record(lambda recorder: recorder.write_simulator(self._sim))
         self._sim.dt = self._physics_dt()
         if retime:
             self._timer.timer_period_ns = int(round(1e9 / self._rate_hz))
+            self._open_diagnostics_window()
 
     def _physics_dt(self) -> float:
         return self._real_time_factor / (self._rate_hz * self._substeps)
@@ -301,6 +344,7 @@ class RigidBodySimNode(Node):
 
     def _swap_scene(self, scene: Scene) -> None:
         self._sim = Simulator(scene, integrator=self._sim.integrator, dt=self._physics_dt())
+        self._open_diagnostics_window()
         self._holds.clear()
         self._pending_impulses.clear()
         self._create_body_io()
@@ -315,17 +359,31 @@ class RigidBodySimNode(Node):
         try:
             frame = io.frames.get(msg.header.frame_id) if io is not None else None
             if frame is None:
-                raise RejectedMessage("unknown_frame", f"frame_id {msg.header.frame_id[:80]!r} is not one of {list(io.frames) if io else []}")
+                raise RejectedMessage("unknown_frame", "")  # detail built only if it is logged
             force, torque = wrench_from_msg(msg)
         except RejectedMessage as rejection:
             self.rejected[rejection.reason] += 1
-            self.get_logger().warning(
-                f"dropped a message on {body}/{topic} ({rejection.reason}): {rejection.detail}; "
-                f"valid frame_ids: {list(io.frames) if io else []}",
-                throttle_duration_sec=2.0)
+            self._warn_rejection(body, topic, msg, rejection, list(io.frames) if io else [])
             return None
         self.accepted_messages += 1
         return frame, force, torque
+
+    def _warn_rejection(self, body: str, topic: str, msg: WrenchStamped | None, rejection: RejectedMessage,
+                        valid_frames: list[str]) -> None:
+        """Warn at most once per REJECTION_WARNING_PERIOD wall seconds (rclpy's own throttle
+        inspects the caller's source on every call: ~0.4 ms, which a flood of bad messages
+        would turn into a denial of service)."""
+        self._rejections_since_warning += 1
+        wall = time.monotonic()
+        if wall - self._rejection_warning_wall < REJECTION_WARNING_PERIOD:
+            return
+        detail = rejection.detail or f"frame_id {msg.header.frame_id[:80]!r} is not one of {valid_frames}"
+        more = self._rejections_since_warning - 1
+        self.get_logger().warning(
+            f"dropped a message on {body}/{topic} ({rejection.reason}): {detail}; valid frame_ids: {valid_frames}"
+            + (f" ({more} more dropped since the last warning; counts by reason on /diagnostics)" if more else ""))
+        self._rejection_warning_wall = wall
+        self._rejections_since_warning = 0
 
     def _on_wrench(self, body: str, msg: WrenchStamped) -> None:
         parsed = self._parse(body, msg, "wrench")
@@ -341,11 +399,17 @@ class RigidBodySimNode(Node):
         parsed = self._parse(body, msg, "impulse")
         if parsed is not None:
             frame, linear, angular = parsed
-            self._pending_impulses.append((body, frame, linear, angular))
+            pending = self._pending_impulses.get((body, frame))
+            if pending is not None:  # impulses due at the same step add
+                linear, angular = pending[0] + linear, pending[1] + angular
+            self._pending_impulses[(body, frame)] = (linear, angular)
 
     # ------------------------------------------------------------------ stepping
 
-    def _on_tick(self) -> None:
+    def _on_tick(self, expected_ns: int | None = None) -> None:
+        """Timer callback; ``expected_ns`` is when rcl's schedule had it due (steady clock, ns)."""
+        if expected_ns is not None:
+            self._tick_window.record(expected_ns, self._timer.timer_period_ns)
         if not self._paused:
             self.advance_one_tick()
         self._log_status()
@@ -359,17 +423,20 @@ class RigidBodySimNode(Node):
             for key in expired:
                 del self._holds[key]
         stopped = set(sim.stopped_bodies)
-        for body, frame, linear, angular in self._pending_impulses:
+        for (body, frame), (linear, angular) in self._pending_impulses.items():
             if body in stopped:
                 continue
             try:
                 sim.apply_impulse(body, linear, angular, frame)
             except ValueError as exc:
                 self.rejected["non_finite_result"] += 1
-                self.get_logger().warning(f"dropped an impulse on {body}: {exc}", throttle_duration_sec=2.0)
+                self._warn_rejection(body, "impulse", None, RejectedMessage("non_finite_result", str(exc)), [])
         self._pending_impulses.clear()
         for (body, frame), hold in self._holds.items():
             sim.apply_wrench(body, hold.force, hold.torque, frame)
+        self._record(lambda recorder: recorder.write_wrenches(sim.time, [
+            (body, frame, hold.force, hold.torque) for (body, frame), hold in self._holds.items()
+        ] + sim.active_scripted_wrenches()))
         target = sim.step_count + self._substeps
         while sim.step_count < target:
             try:
@@ -405,11 +472,48 @@ class RigidBodySimNode(Node):
         if self._publish_clock:
             self._clock_msg.clock = stamp
             self._clock_pub.publish(self._clock_msg)
+        skip = [body for index, body in enumerate(sim.body_names) if not finite[index]]
+        self._record(lambda recorder: recorder.write_simulator(sim, skip=skip))
+
+    def _set_diagnostics_period(self, period: float) -> None:
+        """(Re)start the /diagnostics timer at ``period`` wall seconds; 0 stops it."""
+        self._diagnostics_period = period
+        if self._diagnostics_timer is not None:
+            self.destroy_timer(self._diagnostics_timer)
+            self._diagnostics_timer = None
+        if period > 0.0:
+            self._diagnostics_timer = self.create_timer(period, self.publish_diagnostics, clock=self._steady_clock)
+        self._open_diagnostics_window()
+
+    def _open_diagnostics_window(self) -> None:
+        self._tick_window.reopen(self._sim.time)
+        self._accepted_at_open = self.accepted_messages
+        self._rejected_at_open = Counter(self.rejected)
+
+    def diagnostics(self) -> DiagnosticArray:
+        """The DiagnosticArray for the window since the last one (see diagnostics.py); opens a new window."""
+        sim = self._sim
+        array = DiagnosticArray()
+        array.header.stamp = self.get_clock().now().to_msg()
+        array.status = diagnostic_statuses(
+            node_name=self.get_name(), window=self._tick_window, sim_time=sim.time, paused=self._paused,
+            integrator=sim.integrator, dt=sim.dt, substeps=self._substeps, rate_hz=self._rate_hz,
+            real_time_factor=self._real_time_factor, bodies=sim.body_names, stopped=sim.stopped_bodies,
+            held_wrenches=len(self._holds), pending_impulses=len(self._pending_impulses),
+            accepted_total=self.accepted_messages, accepted_at_open=self._accepted_at_open,
+            rejected_total=self.rejected, rejected_at_open=self._rejected_at_open)
+        self._open_diagnostics_window()
+        return array
+
+    def publish_diagnostics(self) -> None:
+        """Publish :meth:`diagnostics` on /diagnostics (the diagnostics timer calls this)."""
+        self._diagnostics_pub.publish(self.diagnostics())
 
     # ------------------------------------------------------------------ services
 
     def _on_reset(self, _request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
         self._sim.reset()
+        self._open_diagnostics_window()
         self._holds.clear()
         self._pending_impulses.clear()
         self.publish_state()
@@ -467,6 +571,55 @@ class RigidBodySimNode(Node):
             lines.append(f"  ... and {len(sim.body_names) - 10} more bodies")
         self.get_logger().info("\n".join(lines))
 
+    # ------------------------------------------------------------------ recording (record_path)
+
+    def _open_recording(self, path: str) -> None:
+        """Finish the current recording, if any, and start one at ``path`` ('' = none)."""
+        self._close_recording()
+        if not path:
+            return
+        sim = self._sim
+        source = Path(sim.scene.source)
+        try:
+            scene_text = source.read_text(encoding="utf-8") if source.is_file() else None
+        except (OSError, UnicodeDecodeError):
+            scene_text = None
+        try:
+            self._recorder = McapRecorder(
+                path, world_frame=self._world_frame, namespace=self.get_namespace(), scene_text=scene_text,
+                metadata={"scene": str(sim.scene.source), "integrator": sim.integrator, "dt": repr(sim.dt),
+                          "node": self.get_fully_qualified_name()})
+        except OSError as exc:
+            self.get_logger().error(f"cannot record to {path!r} ({exc}); not recording")
+            return
+        self.get_logger().info(f"recording to {path}")
+
+    def _record(self, write: Any) -> None:
+        """Call ``write(recorder)`` if recording; a failed write (disk full...) ends the recording."""
+        if self._recorder is None:
+            return
+        try:
+            write(self._recorder)
+        except OSError as exc:
+            self.get_logger().error(f"recording to {self._recorder.path} failed ({exc}); not recording")
+            self._close_recording()
+
+    def _close_recording(self) -> None:
+        recorder, self._recorder = getattr(self, "_recorder", None), None
+        if recorder is None:
+            return
+        try:
+            recorder.close()
+        except OSError as exc:
+            self.get_logger().error(f"could not finish the recording {recorder.path} ({exc})")
+        else:
+            self.get_logger().info(f"recording finished: {recorder.path} ({recorder.message_count} messages)")
+
+    def destroy_node(self) -> None:
+        """Finish the recording (a complete, indexed MCAP file), then destroy the node."""
+        self._close_recording()
+        super().destroy_node()
+
     # ------------------------------------------------------------------ read-only access for tools
 
     def publisher_subscription_counts(self) -> dict[str, int]:
@@ -484,6 +637,11 @@ class RigidBodySimNode(Node):
         """Held wrenches by (body, core frame): (force, torque) in that frame."""
         return {key: (h.force.copy(), h.torque.copy()) for key, h in self._holds.items()}
 
+    @property
+    def pending_impulses(self) -> dict[tuple[str, str], tuple[np.ndarray, np.ndarray]]:
+        """Impulses due at the next step by (body, core frame): summed (linear N·s, angular N·m·s) in that frame."""
+        return {key: (linear.copy(), angular.copy()) for key, (linear, angular) in self._pending_impulses.items()}
+
 
 def main(args: list[str] | None = None) -> int:
     """Console entry point ``rigid_body_sim_node``: run the node until Ctrl-C or shutdown."""
@@ -494,6 +652,9 @@ def main(args: list[str] | None = None) -> int:
         print(f"rigid_body_sim_node: {exc}", file=sys.stderr)
         rclpy.try_shutdown()
         return 2
+    except KeyboardInterrupt:  # Ctrl-C (or SIGINT from a supervisor) during start-up: a clean exit
+        rclpy.try_shutdown()
+        return 0
     executor = SingleThreadedExecutor()
     executor.add_node(node)
     try:
