@@ -97,3 +97,24 @@ clean:
 
 distclean: clean
 	rm -rf "$(VENV)"
+
+# The stability envelope of every integrator, measured into docs/stability.md (tens of minutes:
+# it runs 1e6 steps per integrator; ENVELOPE_ARGS="--no-long" for the quick columns only).
+# test/test_stability.py checks the file against fresh measurements.
+ENVELOPE_ARGS ?=
+.PHONY: envelope
+envelope: $(STAMP)
+	$(VENV_PY) -m rigid_body_sim.tools.envelope --out docs/stability.md $(ENVELOPE_ARGS)
+
+# Speed and accuracy benchmarks (benchmarks/; not part of `make test`): work-precision, throughput
+# and node timing, beside MuJoCo when the bench extra is installed (requirements-bench.txt).
+# bench: quick mode (a few minutes); bench-full: longer sweeps, N up to 1e5, 20 s node windows.
+BENCH_OUT ?= benchmarks/results
+BENCH_ARGS ?=
+.PHONY: bench bench-full bench-deps
+bench-deps: $(STAMP)
+	$(PIP) install -r requirements-bench.txt
+bench: bench-deps
+	$(VENV_PY) -m benchmarks.run --quick --out $(BENCH_OUT) $(BENCH_ARGS)
+bench-full: bench-deps
+	$(VENV_PY) -m benchmarks.run --full --out $(BENCH_OUT) $(BENCH_ARGS)
