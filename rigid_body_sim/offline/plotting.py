@@ -132,15 +132,17 @@ def _mark_flips(ax, t: np.ndarray, scene: Scene, body: str, reference) -> None:
     intermediate = int(np.argsort(scene.model.inertia_P[b])[1])
     axis_B = quat_to_matrix(scene.model.q_BP[b])[:, intermediate]
     named = [k for k in range(3) if abs(abs(axis_B[k]) - 1.0) < 1e-12]
-    what = rf"$\omega_{_XYZ[named[0]]}$" if named else "the rate about the intermediate axis"
+    what = rf"$\omega_{_XYZ[named[0]]}$ (intermediate axis)" if named else "the rate about the intermediate axis"
     rate = reference.angular_velocity_body @ axis_B
     crossings = np.flatnonzero(np.sign(rate[1:]) * np.sign(rate[:-1]) < 0)
     for i in crossings:
         t_cross = t[i] + (t[i + 1] - t[i]) * rate[i] / (rate[i] - rate[i + 1])
         ax.axvline(t_cross, color="0.5", lw=0.8, ls=":")
-    ax.text(0.01, 0.98, f"intermediate-axis flips: {what} changes sign every {reference.flip_period:.3g} s\n"
-            "(dotted: the closed form's sign changes)", transform=ax.transAxes, ha="left", va="top",
-            fontsize="small", color="0.25")
+    low, high = ax.get_ylim()
+    ax.set_ylim(low - 0.18 * (high - low), high)  # room for the note below the curves
+    ax.text(0.01, 0.02, f"{what} changes sign every {reference.flip_period:.3g} s\n"
+            "(closed form; dotted lines: its sign changes)", transform=ax.transAxes, ha="left", va="bottom",
+            fontsize="small", color="0.25", bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.8})
 
 
 def _drift(ax, t: np.ndarray, values: np.ndarray, label: str, colour: str) -> bool:
