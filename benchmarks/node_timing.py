@@ -36,6 +36,8 @@ from pathlib import Path
 
 import numpy as np
 
+from rigid_body_sim.testing import stop_process
+
 DOMAIN_ID = 77
 REPO = Path(__file__).resolve().parent.parent
 NODE = REPO / ".venv" / "bin" / "rigid_body_sim_node"
@@ -188,12 +190,7 @@ def measure(rate_hz: float, bodies: int, seconds: float, latency_trials: int = 5
         result["latency_max_ms"] = 1e3 * max(latencies) if latencies else float("nan")
         result["latency_trials"] = len(latencies)
     finally:
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
+        stop_process(proc, timeout=10)
         executor.shutdown()
         node.destroy_node()
         rclpy.try_shutdown(context=context)

@@ -39,7 +39,7 @@ from std_srvs.srv import SetBool, Trigger
 
 from .ros.node import RigidBodySimNode
 
-__all__ = ["SimHarness", "HarnessTimeout"]
+__all__ = ["SimHarness", "HarnessTimeout", "stop_process"]
 
 
 class HarnessTimeout(AssertionError):
@@ -278,3 +278,18 @@ class SimHarness:
 
 def _stamp_ns(msg: PoseStamped) -> int:
     return msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+
+
+def stop_process(process: "subprocess.Popen", timeout: float = 10.0) -> int:
+    """Stop a node subprocess as Ctrl-C would (SIGINT), killing it after ``timeout`` s; returns its exit code."""
+    import signal
+    import subprocess
+
+    if process.poll() is None:
+        process.send_signal(signal.SIGINT)
+        try:
+            process.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait()
+    return process.returncode

@@ -43,7 +43,7 @@ from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 
 from rigid_body_sim.ros.diagnostics import level_name, status_values
-from rigid_body_sim.testing import SimHarness
+from rigid_body_sim.testing import SimHarness, stop_process
 
 pytestmark = pytest.mark.ros
 
@@ -193,13 +193,7 @@ def test_flood_keeps_rate_memory_and_holds(tmp_path):
                 process.wait()
             process.stdout.close()
         observer.close()
-        if node.poll() is None:
-            node.send_signal(signal.SIGINT)
-            try:
-                node.wait(timeout=15)
-            except subprocess.TimeoutExpired:
-                node.kill()
-                node.wait()
+        stop_process(node, timeout=15)
     assert node.returncode == 0, log_path.read_text()[-3000:]
 
     # Rate: /clock stamps, before and during the flood (first and last second left out).

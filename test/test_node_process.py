@@ -27,6 +27,7 @@ from rclpy.node import Node
 from std_srvs.srv import SetBool
 
 from rigid_body_sim.core import Simulator, load_scene
+from rigid_body_sim.testing import stop_process
 
 pytestmark = pytest.mark.ros
 
@@ -120,13 +121,7 @@ def test_node_process_over_dds(tmp_path):
         executor.shutdown()
         peer.destroy_node()
         rclpy.try_shutdown(context=context)
-        if process.poll() is None:
-            process.send_signal(signal.SIGINT)
-            try:
-                process.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                process.kill()
-                process.wait()
+        stop_process(process, timeout=10)
     assert process.returncode == 0, f"node did not shut down cleanly:\n{log_path.read_text()}"
     assert "scene " in log_path.read_text()
 
