@@ -22,7 +22,7 @@ setup(
     ],
     python_requires=">=3.10",
     # Exact pins are in requirements.txt; these name what the package imports.
-    install_requires=["numpy", "scipy", "pyyaml", "matplotlib", "mcap", "mcap-ros2-support", "tqdm"],
+    install_requires=["numpy", "scipy", "numba", "pyyaml", "matplotlib", "mcap", "mcap-ros2-support", "tqdm"],
     # Optional: benchmarks/ compares with MuJoCo (pip install -e .[bench]); pin in requirements-bench.txt.
     extras_require={"bench": ["mujoco==4.0.0"]},
     zip_safe=True,

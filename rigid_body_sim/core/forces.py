@@ -28,8 +28,9 @@ from enum import Enum
 
 import numpy as np
 
+from . import kernels
 from .model import BodyModel, State
-from .quaternion import quat_conjugate, quat_rotate, quat_to_matrix
+from .quaternion import quat_conjugate, quat_rotate
 from .scene import WORLD_FRAME, Scene
 
 __all__ = ["FrameKind", "FrameRef", "parse_frame", "WrenchAccumulator"]
@@ -96,21 +97,27 @@ class WrenchAccumulator:
     def __init__(self, model: BodyModel):
         self._model = model
         n, s = model.count, len(model.site_names)
-        self.force_W = np.zeros((n, 3))
-        self.torque_O_W = np.zeros((n, 3))
-        self.force_A = np.zeros((n, 3))
-        self.torque_A = np.zeros((n, 3))
-        self.force_P = np.zeros((n, 3))
-        self.torque_P = np.zeros((n, 3))
-        self.site_force_W = np.zeros((s, 3))
+        #: (N, 18) all six buckets side by side, the layout of kernels.resolve_wrenches.
+        self.buckets = np.zeros((n, 18))
+        self.force_W = self.buckets[:, 0:3]
+        self.torque_O_W = self.buckets[:, 3:6]
+        self.force_A = self.buckets[:, 6:9]
+        self.torque_A = self.buckets[:, 9:12]
+        self.force_P = self.buckets[:, 12:15]
+        self.torque_P = self.buckets[:, 15:18]
+        #: (S, 7) world-axes sites for the kernels: owning body, p_P (m), the force there (N, world).
+        self.sites = np.zeros((s, 7))
+        if s:
+            self.sites[:, 0] = model.site_body
+            self.sites[:, 1:4] = model.site_p_P
+        self.site_force_W = self.sites[:, 4:7]
         self.empty = True
 
     def clear(self) -> None:
         """Drop every applied wrench."""
         if not self.empty:
-            for bucket in (self.force_W, self.torque_O_W, self.force_A, self.torque_A,
-                           self.force_P, self.torque_P, self.site_force_W):
-                bucket.fill(0.0)
+            self.buckets.fill(0.0)
+            self.site_force_W.fill(0.0)
             self.empty = True
 
     def add(self, ref: FrameRef, force: np.ndarray, torque: np.ndarray) -> None:
@@ -146,19 +153,7 @@ class WrenchAccumulator:
             Fresh arrays (zeros when nothing is applied).
         """
         n = self._model.count
-        if self.empty:
-            return np.zeros((n, 3)), np.zeros((n, 3))
-        R_WP = quat_to_matrix(state.q_WP)
-        force = self.force_W + self.force_A + np.einsum("nij,nj->ni", R_WP, self.force_P)
-        torque = (
-            self.torque_O_W
-            - np.cross(state.p_WC_W, self.force_W)
-            + self.torque_A
-            + np.einsum("nij,nj->ni", R_WP, self.torque_P)
-        )
-        if len(self.site_force_W):
-            owner = self._model.site_body
-            arm_W = np.einsum("sij,sj->si", R_WP[owner], self._model.site_p_P)
-            np.add.at(force, owner, self.site_force_W)
-            np.add.at(torque, owner, np.cross(arm_W, self.site_force_W))
-        return force, torque
+        wrench = np.zeros((n, 6))
+        if not self.empty:
+            kernels.resolve_wrenches(state.rows(), self.buckets, self.sites, wrench)
+        return wrench[:, 0:3], wrench[:, 3:6]

@@ -4,7 +4,9 @@ Every integrator has the signature ``step(model, state, force_W, torque_W, dt) -
 it advances ``state`` by ``dt`` seconds with the applied force and torque about the centre of
 mass (world axes, shape (N, 3)) held constant over the step, and returns a new :class:`State`
 with unit ``q_WP`` (renormalising is part of each method). Gravity and damping come from
-``model``. None of them modifies its inputs.
+``model``. None of them modifies its inputs. The fixed-formula methods (all but
+``exact_rotor_splitting`` and ``reference``) are compiled per body with numba, in kernels.py,
+which is their one implementation.
 
 =========================  =====  ==============================================================
 name                       order  what it is
@@ -39,16 +41,10 @@ from typing import Callable
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from .dynamics import (
-    angular_acceleration_P,
-    derivatives,
-    gyroscopic_torque_P,
-    linear_acceleration_W,
-    torque_in_P,
-)
-from .free_rotor import exact_rotor, symmetric_split_rotor
+from . import kernels
+from .dynamics import derivatives, torque_in_P
+from .free_rotor import exact_rotor
 from .model import BodyModel, State
-from .quaternion import quat_from_rotation_vector, quat_multiply
 
 __all__ = [
     "INTEGRATORS",
@@ -62,6 +58,8 @@ __all__ = [
     "step_exact_rotor_splitting",
     "step_rk4",
     "step_reference",
+    "COMPILED",
+    "parameters_of",
 ]
 
 Integrator = Callable[[BodyModel, State, np.ndarray, np.ndarray, float], State]
@@ -71,33 +69,50 @@ def _normalised(q: np.ndarray) -> np.ndarray:
     return q / np.linalg.norm(q, axis=-1, keepdims=True)
 
 
-def _rotate_by_body_rate(q_WP: np.ndarray, w_WP_P: np.ndarray, dt: float) -> np.ndarray:
-    """Exact orientation update for a body rate held constant over ``dt``: q ⊗ exp(w dt)."""
-    return _normalised(quat_multiply(q_WP, quat_from_rotation_vector(w_WP_P * dt)))
+# ----------------------------------------------------------------------------- compiled methods
+# The fixed-formula methods are implemented once, per body, in kernels.py (numba); these
+# functions give them the table's signature. Simulator calls the kernels directly.
+
+_PARAMETER_CACHE: dict[int, tuple[BodyModel, np.ndarray]] = {}
+_PARAMETER_CACHE_SIZE = 32
+
+
+def parameters_of(model: BodyModel) -> np.ndarray:
+    """The kernels' per-body constants of ``model`` (kernels.pack_parameters), cached per model object."""
+    found = _PARAMETER_CACHE.get(id(model))
+    if found is not None and found[0] is model:
+        return found[1]
+    if len(_PARAMETER_CACHE) >= _PARAMETER_CACHE_SIZE:
+        _PARAMETER_CACHE.pop(next(iter(_PARAMETER_CACHE)))
+    prm = kernels.pack_parameters(model)
+    _PARAMETER_CACHE[id(model)] = (model, prm)  # holding the model keeps its id from being reused
+    return prm
+
+
+def _compiled_step(name: str, model: BodyModel, state: State, force_W: np.ndarray, torque_W: np.ndarray,
+                   dt: float) -> State:
+    n = model.count
+    Ys = np.empty((2, n, kernels.STATE_WIDTH))
+    Ys[0] = state.rows()
+    # The force and torque about the COM, world axes, are the world-aligned bucket (forces.py).
+    buckets = np.zeros((n, kernels.BUCKET_WIDTH))
+    buckets[:, 6:9] = force_W
+    buckets[:, 9:12] = torque_W
+    aux = np.zeros((3, n))
+    # One unchecked step (limit = inf; a non-finite result is returned as it is): Ys[1] holds it.
+    kernels.advance(kernels.METHODS[name], Ys, parameters_of(model), buckets, np.zeros((0, 7)), aux, True, 1,
+                    float(dt), np.inf, -1, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    return State.of_rows(Ys[1])
 
 
 def step_euler(model: BodyModel, state: State, force_W: np.ndarray, torque_W: np.ndarray, dt: float) -> State:
     """Textbook explicit Euler (all rates at the start of the step), q += dq·dt then normalise."""
-    d = derivatives(model, state, force_W, torque_W)
-    return State(
-        state.p_WC_W + dt * d.p_WC_W,
-        _normalised(state.q_WP + dt * d.q_WP),
-        state.v_WC_W + dt * d.v_WC_W,
-        state.w_WP_P + dt * d.w_WP_P,
-    )
+    return _compiled_step("euler", model, state, force_W, torque_W, dt)
 
 
 def step_semi_implicit_euler(model: BodyModel, state: State, force_W: np.ndarray, torque_W: np.ndarray, dt: float) -> State:
     """Symplectic Euler: v, w from the start-of-step forces; then p, q with the new v, w (exp-map)."""
-    torque_P = torque_in_P(state.q_WP, torque_W)
-    v_new = state.v_WC_W + dt * linear_acceleration_W(model, state.v_WC_W, force_W)
-    w_new = state.w_WP_P + dt * angular_acceleration_P(model, state.w_WP_P, torque_P)
-    return State(
-        state.p_WC_W + dt * v_new,
-        _rotate_by_body_rate(state.q_WP, w_new, dt),
-        v_new,
-        w_new,
-    )
+    return _compiled_step("semi_implicit_euler", model, state, force_W, torque_W, dt)
 
 
 def step_implicit_gyroscopic(model: BodyModel, state: State, force_W: np.ndarray, torque_W: np.ndarray, dt: float) -> State:
@@ -107,28 +122,7 @@ def step_implicit_gyroscopic(model: BodyModel, state: State, force_W: np.ndarray
     ``J = I + dt([w*]× I − [I w*]×)`` gives ``w₁ = w* + J⁻¹(dt·(−w* × I w*))``. Orientation by
     the exp-map of ``w₁``; translation by semi-implicit Euler.
     """
-    inertia = model.inertia_P
-    torque_P = torque_in_P(state.q_WP, torque_W)
-    w_star = state.w_WP_P + dt * (torque_P - model.damping_angular[:, None] * state.w_WP_P) / inertia
-    Iw = inertia * w_star
-    jacobian = np.empty(w_star.shape[:-1] + (3, 3))
-    jacobian[:] = 0.0
-    idx = np.arange(3)
-    jacobian[..., idx, idx] = inertia
-    jacobian += dt * (_skew(w_star) * inertia[:, None, :] - _skew(Iw))
-    correction = np.linalg.solve(jacobian, (dt * gyroscopic_torque_P(inertia, w_star))[..., None])[..., 0]
-    w_new = w_star + correction
-    v_new = state.v_WC_W + dt * linear_acceleration_W(model, state.v_WC_W, force_W)
-    return State(state.p_WC_W + dt * v_new, _rotate_by_body_rate(state.q_WP, w_new, dt), v_new, w_new)
-
-
-def _skew(u: np.ndarray) -> np.ndarray:
-    """Cross-product matrices [u]×, shape (N, 3) → (N, 3, 3)."""
-    S = np.zeros(u.shape[:-1] + (3, 3))
-    S[..., 0, 1], S[..., 0, 2] = -u[..., 2], u[..., 1]
-    S[..., 1, 0], S[..., 1, 2] = u[..., 2], -u[..., 0]
-    S[..., 2, 0], S[..., 2, 1] = -u[..., 1], u[..., 0]
-    return S
+    return _compiled_step("implicit_gyroscopic", model, state, force_W, torque_W, dt)
 
 
 def _decay_kick(x: np.ndarray, rate: np.ndarray, drive: np.ndarray, t: float) -> np.ndarray:
@@ -150,25 +144,6 @@ def _kick(model: BodyModel, q_WP: np.ndarray, v: np.ndarray, L_P: np.ndarray,
     return v, L_P
 
 
-def _free_rotation_about_axis(q_WP: np.ndarray, L_P: np.ndarray, inertia: np.ndarray, axis: int, t: float):
-    """Exact flow of H_axis = L_axis²/(2 I_axis) over time t: rotate about principal ``axis``.
-
-    The body turns by θ = t·L_axis/I_axis about the axis (q ← q ⊗ exp(θ e_axis)) and the
-    body-frame angular momentum turns by −θ about it.
-    """
-    theta = t * L_P[:, axis] / inertia[:, axis]
-    c, s = np.cos(theta), np.sin(theta)
-    i, j = (axis + 1) % 3, (axis + 2) % 3
-    L_new = L_P.copy()
-    L_new[:, i] = c * L_P[:, i] + s * L_P[:, j]
-    L_new[:, j] = -s * L_P[:, i] + c * L_P[:, j]
-    half = 0.5 * theta
-    dq = np.zeros(q_WP.shape)
-    dq[:, 0] = np.cos(half)
-    dq[:, 1 + axis] = np.sin(half)
-    return quat_multiply(q_WP, dq), L_new
-
-
 def step_splitting(model: BodyModel, state: State, force_W: np.ndarray, torque_W: np.ndarray, dt: float) -> State:
     """Second-order Lie–Poisson splitting: kick(dt/2) · free rotor(dt) · kick(dt/2).
 
@@ -177,79 +152,47 @@ def step_splitting(model: BodyModel, state: State, force_W: np.ndarray, torque_W
     R1(dt/2) of exact rotations about the principal axes (in P's axis order), and translation
     drifts by v·dt. It conserves |L| exactly when torque-free and keeps energy bounded.
     """
-    inertia = model.inertia_P
-    half = 0.5 * dt
-    v, L = _kick(model, state.q_WP, state.v_WC_W, inertia * state.w_WP_P, force_W, torque_W, half)
-    p = state.p_WC_W + dt * v
-    q = state.q_WP
-    for axis, t in ((0, half), (1, half), (2, dt), (1, half), (0, half)):
-        q, L = _free_rotation_about_axis(q, L, inertia, axis, t)
-    q = _normalised(q)
-    v, L = _kick(model, q, v, L, force_W, torque_W, half)
-    return State(p, q, v, L / inertia)
-
-
-def _kick_rotor_kick(model: BodyModel, state: State, force_W: np.ndarray, torque_W: np.ndarray, dt: float,
-                     rotor: Callable[[np.ndarray, np.ndarray, np.ndarray, float], tuple[np.ndarray, np.ndarray]]) -> State:
-    """kick(dt/2) · free rotor(dt) · kick(dt/2), translation drifting by v·dt, as in step_splitting."""
-    inertia = model.inertia_P
-    if not (force_W.any() or torque_W.any() or model.has_gravity or model.has_damping):
-        # Nothing to kick with: the kicks are the identity, skipped (the same numbers, sooner).
-        q, L = rotor(inertia, state.q_WP, inertia * state.w_WP_P, dt)
-        return State(state.p_WC_W + dt * state.v_WC_W, _normalised(q), state.v_WC_W.copy(), L / inertia)
-    half = 0.5 * dt
-    v, L = _kick(model, state.q_WP, state.v_WC_W, inertia * state.w_WP_P, force_W, torque_W, half)
-    p = state.p_WC_W + dt * v
-    q, L = rotor(inertia, state.q_WP, L, dt)
-    q = _normalised(q)
-    v, L = _kick(model, q, v, L, force_W, torque_W, half)
-    return State(p, q, v, L / inertia)
+    return _compiled_step("splitting", model, state, force_W, torque_W, dt)
 
 
 def step_symmetric_splitting(model: BodyModel, state: State, force_W: np.ndarray, torque_W: np.ndarray, dt: float) -> State:
     """Second-order splitting with the free rotor split around an exact symmetric top.
 
-    Kicks as in :func:`step_splitting`; the free rotor is
-    :func:`~rigid_body_sim.core.free_rotor.symmetric_split_rotor`: remainder(dt/2) ·
-    symmetric top(dt) · remainder(dt/2), all exact rotations. Conserves |L| to round-off when
-    torque-free; exact for a symmetric body; for a thin rod the error is ∝ its asymmetry.
+    Kicks as in :func:`step_splitting`; the free rotor is remainder(dt/2) · symmetric top(dt) ·
+    remainder(dt/2), all exact rotations, the composition of
+    :func:`~rigid_body_sim.core.free_rotor.symmetric_split_rotor` (compiled per body in
+    kernels.py). Conserves |L| to round-off when torque-free; exact for a symmetric body; for
+    a thin rod the error is ∝ its asymmetry.
     """
-    return _kick_rotor_kick(model, state, force_W, torque_W, dt, symmetric_split_rotor)
+    return _compiled_step("symmetric_splitting", model, state, force_W, torque_W, dt)
 
 
 def step_exact_rotor_splitting(model: BodyModel, state: State, force_W: np.ndarray, torque_W: np.ndarray, dt: float) -> State:
     """Second-order splitting around the exact free-rotor flow: exact when torque-free.
 
-    Kicks as in :func:`step_splitting`; the free rotor is
-    :func:`~rigid_body_sim.core.free_rotor.exact_rotor`, the Euler–Poinsot solution, so a
-    torque-free body keeps its energy and |L| to round-off at any |ω|h; applied torques,
-    gravity and damping enter as second-order half kicks.
+    kick(dt/2) · exact free rotor(dt) · kick(dt/2), translation drifting by v·dt, as in
+    :func:`step_splitting`; the free rotor is :func:`~rigid_body_sim.core.free_rotor.exact_rotor`,
+    the Euler–Poinsot solution, so a torque-free body keeps its energy and |L| to round-off at
+    any |ω|h; applied torques, gravity and damping enter as second-order half kicks. numpy and
+    scipy (elliptic functions), vectorised over bodies.
     """
-    return _kick_rotor_kick(model, state, force_W, torque_W, dt, exact_rotor)
+    inertia = model.inertia_P
+    if not (force_W.any() or torque_W.any() or model.has_gravity or model.has_damping):
+        # Nothing to kick with: the kicks are the identity, skipped (the same numbers, sooner).
+        q, L = exact_rotor(inertia, state.q_WP, inertia * state.w_WP_P, dt)
+        return State(state.p_WC_W + dt * state.v_WC_W, _normalised(q), state.v_WC_W.copy(), L / inertia)
+    half = 0.5 * dt
+    v, L = _kick(model, state.q_WP, state.v_WC_W, inertia * state.w_WP_P, force_W, torque_W, half)
+    p = state.p_WC_W + dt * v
+    q, L = exact_rotor(inertia, state.q_WP, L, dt)
+    q = _normalised(q)
+    v, L = _kick(model, q, v, L, force_W, torque_W, half)
+    return State(p, q, v, L / inertia)
 
 
 def step_rk4(model: BodyModel, state: State, force_W: np.ndarray, torque_W: np.ndarray, dt: float) -> State:
     """Classic fourth-order Runge–Kutta on (p, q, v, w); q normalised after the step."""
-
-    def shifted(k: State, h: float) -> State:
-        return State(
-            state.p_WC_W + h * k.p_WC_W,
-            state.q_WP + h * k.q_WP,
-            state.v_WC_W + h * k.v_WC_W,
-            state.w_WP_P + h * k.w_WP_P,
-        )
-
-    k1 = derivatives(model, state, force_W, torque_W)
-    k2 = derivatives(model, shifted(k1, 0.5 * dt), force_W, torque_W)
-    k3 = derivatives(model, shifted(k2, 0.5 * dt), force_W, torque_W)
-    k4 = derivatives(model, shifted(k3, dt), force_W, torque_W)
-    w6 = dt / 6.0
-    return State(
-        state.p_WC_W + w6 * (k1.p_WC_W + 2.0 * (k2.p_WC_W + k3.p_WC_W) + k4.p_WC_W),
-        _normalised(state.q_WP + w6 * (k1.q_WP + 2.0 * (k2.q_WP + k3.q_WP) + k4.q_WP)),
-        state.v_WC_W + w6 * (k1.v_WC_W + 2.0 * (k2.v_WC_W + k3.v_WC_W) + k4.v_WC_W),
-        state.w_WP_P + w6 * (k1.w_WP_P + 2.0 * (k2.w_WP_P + k3.w_WP_P) + k4.w_WP_P),
-    )
+    return _compiled_step("rk4", model, state, force_W, torque_W, dt)
 
 
 #: Default tolerances of the ``reference`` integrator (relative, absolute).
@@ -297,6 +240,10 @@ INTEGRATORS: dict[str, Integrator] = {
     "rk4": step_rk4,
     "reference": step_reference,
 }
+
+
+#: The integrators compiled per body in kernels.py (Simulator runs these without leaving the kernel).
+COMPILED = frozenset(kernels.METHODS)
 
 
 def get_integrator(name: str) -> Integrator:

@@ -111,6 +111,15 @@ class State:
     v_WC_W: np.ndarray
     w_WP_P: np.ndarray
 
+    @staticmethod
+    def of_rows(rows: np.ndarray) -> "State":
+        """The State viewing an (N, 13) array of rows (p, q, v, w), as the kernels store it (no copy)."""
+        return State(rows[:, 0:3], rows[:, 3:7], rows[:, 7:10], rows[:, 10:13])
+
+    def rows(self) -> np.ndarray:
+        """A new (N, 13) C-ordered array of rows (p, q, v, w): the kernels' layout (kernels.py)."""
+        return np.concatenate((self.p_WC_W, self.q_WP, self.v_WC_W, self.w_WP_P), axis=-1)
+
     def take(self, indices: np.ndarray) -> "State":
         """The state of the bodies at ``indices``."""
         idx = np.asarray(indices, dtype=int)

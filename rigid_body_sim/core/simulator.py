@@ -29,7 +29,8 @@ from .dynamics import (
     linear_momentum_W,
     potential_energy,
 )
-from .forces import WrenchAccumulator, parse_frame
+from . import kernels
+from .forces import FrameKind, FrameRef, WrenchAccumulator, parse_frame
 from .integrators import INTEGRATORS, Integrator, get_integrator, step_reference
 from .model import State
 from .quaternion import (
@@ -189,18 +190,37 @@ class Simulator:
                 or not math.isfinite(limit) or limit <= 1.0):
             raise ValueError(f"energy_growth_limit: expected a finite number > 1, got {limit!r}")
         self.energy_growth_limit = float(limit)
-        # Per-body constants of the energy bound (DivergenceError): 1/√(2m), 1/√(2 I_min), m g.
-        self._budget_per_force = 1.0 / np.sqrt(2.0 * self.model.mass)
-        self._budget_per_torque = 1.0 / np.sqrt(2.0 * self.model.inertia_P.min(axis=1))
-        self._weight_W = self.model.mass[:, None] * self.model.gravity_W
-        self._gravity_budget_rate = np.linalg.norm(self._weight_W, axis=1) * self._budget_per_force
+        # Per-body constants of the kernels (kernels.py): mass properties, gravity, damping, the
+        # energy bound's 1/√(2m) and 1/√(2 I_min) (DivergenceError), the active flag (stop_body).
+        self._prm = kernels.pack_parameters(self.model)
+        self._budget_per_force = self._prm[:, kernels.BUDGET_FORCE]
+        self._budget_per_torque = self._prm[:, kernels.BUDGET_TORQUE]
+        n = self.model.count
+        # The state lives in one (N, 13) array of rows (p, q, v, w), stepped in place; ``state``
+        # views it. Scratch of the kernels: the next step, the resolved wrench, the bound, status.
+        self._Ys = np.zeros((2, n, kernels.STATE_WIDTH))  # state, next step
+        self._Y, self._Y_next = self._Ys[0], self._Ys[1]
+        self._state_view = State.of_rows(self._Y)
+        self._wrench_W = np.zeros((n, 6))
+        self._aux = np.zeros((3, n))  # energy bound √J (see DivergenceError), its next value, status
+        self._budget, self._budget_next, self._status = self._aux[0], self._aux[1], self._aux[2]
+        self._wrenches = WrenchAccumulator(self.model)
+        self._frame_refs: dict[tuple[str, str], FrameRef] = {}
+        # (body, force column, torque column) of the buckets, per frame whose wrench can be pending.
+        self._pending_columns: dict[FrameRef, tuple[int, int, int]] = {}
+        # One applied wrench waits here, (body, force column, torque column, fx, fy, fz, tx, ty, tz)
+        # of the buckets, until the next step hands it to the kernel or another wrench arrives.
+        self._pending: tuple | None = None
+        # q_PB per body as floats, None where P = B (the usual case): body-frame wrenches.
+        self._q_PB = [None if np.array_equal(q, (1.0, 0.0, 0.0, 0.0)) else tuple(quat_conjugate(q).tolist())
+                      for q in self.model.q_BP]
         self._reference_options = {"rtol": _positive(reference_rtol, "reference_rtol"),
                                    "atol": _positive(reference_atol, "reference_atol")}
         self._integrator_name = ""
         self._step_function: Integrator = INTEGRATORS["rk4"]
+        self._method: int | None = kernels.METHODS["rk4"]  # kernel method number; None: numpy/scipy path
         self.integrator = integrator
         self._dt = _positive(dt, "dt")
-        self._wrenches = WrenchAccumulator(self.model)
         # The scene's scripted wrenches: (frame, force, torque, start, end) per entry, applied at
         # the start of every step from their own accumulator, which user wrenches never touch.
         self._script = tuple((parse_frame(scene, w.body, w.frame), w.force, w.torque, w.start, w.end)
@@ -224,6 +244,13 @@ class Simulator:
         if function is step_reference:
             function = functools.partial(step_reference, **self._reference_options)
         self._step_function = function
+        self._method = kernels.METHODS.get(name)
+        if self._method is not None:
+            # kernels.advance compiled for this method and exactly these arrays, called without
+            # numba's per-call type dispatch.
+            self._advance = kernels.entry_point(
+                kernels.advance, self._method, self._Ys, self._prm, self._wrenches.buckets,
+                self._wrenches.sites, self._aux, False, 0, 1.0, 2.0, -1, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         self._integrator_name = name
 
     @property
@@ -251,19 +278,37 @@ class Simulator:
 
     def reset(self) -> None:
         """Back to the scene's initial state: t = 0, no applied wrench, no stopped body."""
-        self.state: State = self.scene.initial_state.copy()
-        self._energy_budget = np.sqrt(kinetic_energy(self.model, self.state))  # √J, see DivergenceError
+        self.state = self.scene.initial_state
+        self._budget[:] = np.sqrt(kinetic_energy(self.model, self.state))  # √J, see DivergenceError
         self.step_count = 0
         self._time_origin = 0.0
         self._step_origin = 0
-        self._wrenches.clear()
+        self.clear_wrenches()
         self._stopped[:] = False
+        self._prm[:, kernels.ACTIVE] = 1.0
         self._active_cache = None
 
     def stop_body(self, body: str) -> None:
         """Freeze ``body`` at its current state; it is no longer integrated until :meth:`reset`."""
-        self._stopped[self._index(body)] = True
+        b = self._index(body)
+        self._stopped[b] = True
+        self._prm[b, kernels.ACTIVE] = 0.0
         self._active_cache = None
+
+    @property
+    def state(self) -> State:
+        """The current state of every body (P frames, (w, x, y, z)): a live view, ``copy()`` to keep one.
+
+        Assigning a :class:`State` copies it in (every array (N, 3) or (N, 4) as the fields say).
+        """
+        return self._state_view
+
+    @state.setter
+    def state(self, value: State) -> None:
+        rows = value.rows()
+        if rows.shape != self._Y.shape:
+            raise ValueError(f"state: expected {self._Y.shape[0]} bodies of 13 numbers, got shape {rows.shape}")
+        self._Y[:] = rows
 
     @property
     def stopped_bodies(self) -> tuple[str, ...]:
@@ -285,16 +330,65 @@ class Simulator:
             Unknown body or frame (the valid ones are listed), or a force/torque that is not 3
             finite numbers. Nothing is applied then.
         """
-        ref = parse_frame(self.scene, body, frame)
-        f = _vector3(force, "force")
-        t = _vector3(torque, "torque")
-        self._wrenches.add(ref, f, t)
+        ref = self._frame_ref(body, frame)
+        fx, fy, fz = _floats3(force, "force")
+        tx, ty, tz = _floats3(torque, "torque")
+        self._add_wrench(ref, fx, fy, fz, tx, ty, tz)
 
     def apply_force_at_point(self, body: str, force: Any, point: Any, frame: str = "world") -> None:
-        """Apply force F (N) at point r (m) of ``frame``, both in ``frame``'s axes: the wrench (F, r × F)."""
-        f = _vector3(force, "force")
-        r = _vector3(point, "point")
-        self.apply_wrench(body, f, np.cross(r, f), frame)
+        """Apply force F (N) at point r (m) of ``frame``, both in ``frame``'s axes: the wrench (F, r × F).
+
+        Same rule and errors as :meth:`apply_wrench` (a moment r × F that overflows is refused).
+        """
+        # The hot path of a controller: kept flat (see _add_wrench for what it does).
+        try:
+            ref = self._frame_refs[body, frame]
+        except (KeyError, TypeError):
+            ref = self._frame_ref(body, frame)
+        fx, fy, fz = _floats3(force, "force")
+        rx, ry, rz = _floats3(point, "point")
+        tx, ty, tz = ry * fz - rz * fy, rz * fx - rx * fz, rx * fy - ry * fx
+        if not (math.isfinite(tx) and math.isfinite(ty) and math.isfinite(tz)):
+            raise ValueError(f"torque: expected 3 finite numbers, got {[tx, ty, tz]!r} (the moment r × F of "
+                             f"force {[fx, fy, fz]!r} at point {[rx, ry, rz]!r})")
+        columns = self._pending_columns.get(ref)
+        if columns is None or self._pending is not None:
+            self._add_wrench(ref, fx, fy, fz, tx, ty, tz)
+        else:
+            self._pending = (columns[0], columns[1], columns[2], fx, fy, fz, tx, ty, tz)
+
+    def _frame_ref(self, body: str, frame: str) -> FrameRef:
+        """parse_frame, remembered per (body, frame) (only valid pairs are remembered)."""
+        try:
+            return self._frame_refs[body, frame]
+        except (KeyError, TypeError):
+            ref = parse_frame(self.scene, body, frame)  # raises, listing the valid choices
+            self._frame_refs[body, frame] = ref
+            kind, b = ref.kind, ref.body_index
+            if kind is FrameKind.BODY and self._q_PB[b] is None:
+                self._pending_columns[ref] = (b, 12, 15)
+            elif kind is FrameKind.WORLD:
+                self._pending_columns[ref] = (b, 0, 3)
+            elif kind is FrameKind.WORLD_ALIGNED:
+                self._pending_columns[ref] = (b, 6, 9)
+            return ref
+
+    def _add_wrench(self, ref: FrameRef, fx: float, fy: float, fz: float, tx: float, ty: float, tz: float) -> None:
+        """Accumulate a validated wrench: world, world-aligned and body frames (P = B) wait as
+        the pending wrench of the next step; other frames go through WrenchAccumulator.add."""
+        self._flush_pending()
+        columns = self._pending_columns.get(ref)
+        if columns is None:
+            self._wrenches.add(ref, np.array((fx, fy, fz)), np.array((tx, ty, tz)))
+        else:
+            self._pending = (columns[0], columns[1], columns[2], fx, fy, fz, tx, ty, tz)
+
+    def _flush_pending(self) -> None:
+        """Move the pending wrench into the accumulator."""
+        if self._pending is not None:
+            kernels.add_wrench(self._wrenches.buckets, *self._pending)
+            self._wrenches.empty = False
+            self._pending = None
 
     def apply_impulse(self, body: str, linear: Any = (0.0, 0.0, 0.0), angular: Any = (0.0, 0.0, 0.0),
                       frame: str = "world") -> None:
@@ -302,7 +396,7 @@ class Simulator:
 
         Same frame rule as :meth:`apply_wrench`: the angular impulse is about ``frame``'s origin.
         """
-        ref = parse_frame(self.scene, body, frame)
+        ref = self._frame_ref(body, frame)
         J = _vector3(linear, "linear impulse")
         H = _vector3(angular, "angular impulse")
         single = WrenchAccumulator(self.model)
@@ -315,7 +409,7 @@ class Simulator:
         if not state.finite_bodies()[b]:
             raise ValueError(f"impulse on {body!r} would make its velocity non-finite; not applied")
         self.state = state
-        self._energy_budget[b] += (math.hypot(*J_W[b]) * self._budget_per_force[b]
+        self._budget[b] += (math.hypot(*J_W[b]) * self._budget_per_force[b]
                                    + math.hypot(*H_W[b]) * self._budget_per_torque[b])
 
     def active_scripted_wrenches(self, time: float | None = None) -> list[tuple[str, str, np.ndarray, np.ndarray]]:
@@ -336,6 +430,7 @@ class Simulator:
 
     def clear_wrenches(self) -> None:
         """Drop every applied wrench before the next step."""
+        self._pending = None
         self._wrenches.clear()
 
     def set_body_state(self, body: str, position_world: Any = None, orientation_xyzw: Any = None,
@@ -359,7 +454,7 @@ class Simulator:
             w_W = _vector3(angular_velocity_world, "angular_velocity_world")
             state.w_WP_P[b] = quat_rotate(quat_conjugate(state.q_WP[b]), w_W)
         self.state = state
-        self._energy_budget[b] = np.sqrt(kinetic_energy(self.model, state)[b])  # a new start for the bound
+        self._budget[b] = np.sqrt(kinetic_energy(self.model, state)[b])  # a new start for the bound
 
     # ----------------------------------------------------------------- stepping
 
@@ -382,84 +477,116 @@ class Simulator:
             ``energy_growth_limit`` times the most its initial energy and inputs could give
             it (the rule is in :class:`DivergenceError`); handled the same way.
         """
-        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
+        if type(n) is not int:
+            if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
+                raise ValueError(f"n: expected a whole number of steps ≥ 0, got {n!r}")
+            n = int(n)
+        elif n < 0:
             raise ValueError(f"n: expected a whole number of steps ≥ 0, got {n!r}")
-        for _ in range(int(n)):
-            self._step_once()
-        self._wrenches.clear()
+        if self._script or self._method is None:
+            for _ in range(n):
+                self._step_once()
+            self.clear_wrenches()
+            return
+        if not n:
+            self.clear_wrenches()
+            return
+        wrenches = self._wrenches
+        pending = self._pending
+        if pending is None:
+            done, outcome = self._advance(self._method, self._Ys, self._prm, wrenches.buckets, wrenches.sites,
+                                          self._aux, not wrenches.empty, n, self._dt, self.energy_growth_limit,
+                                          -1, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        else:
+            self._pending = None
+            done, outcome = self._advance(self._method, self._Ys, self._prm, wrenches.buckets, wrenches.sites,
+                                          self._aux, not wrenches.empty, n, self._dt, self.energy_growth_limit,
+                                          pending[0], pending[1], pending[2], pending[3], pending[4], pending[5],
+                                          pending[6], pending[7], pending[8])
+        self.step_count += done
+        if outcome:
+            wrenches.empty = wrenches.empty and pending is None  # the kernel kept them, pending one included
+            self._raise_step_failure(outcome)
+        wrenches.empty = True  # the kernel cleared them
 
     def _step_once(self) -> None:
+        """One step with the scene's scripted wrenches added, or with a numpy/scipy integrator."""
+        self._flush_pending()
+        buckets, sites, has_wrench = self._wrenches_of_this_step()
+        if self._method is not None:
+            if buckets is self._wrenches.buckets or buckets is self._script_wrenches.buckets:
+                # advance clears the buckets it is given: these must last all n steps (the script, its window)
+                buckets, sites = buckets.copy(), sites.copy()
+            done, outcome = self._advance(self._method, self._Ys, self._prm, buckets, sites, self._aux, has_wrench,
+                                          1, self._dt, self.energy_growth_limit, -1, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            self.step_count += done
+            if outcome:
+                self._raise_step_failure(outcome)
+            return
+        wrench = self._wrench_W
+        if has_wrench:
+            kernels.resolve_wrenches(self._Y, buckets, sites, wrench)
+        else:
+            wrench.fill(0.0)
+        force_W, torque_W = wrench[:, 0:3], wrench[:, 3:6]
         dt = self._dt
-        # Overflow on the way to a non-finite state (in resolving a huge wrench, in the step, or
-        # in |w| of the last finite state) is reported as NonFiniteStateError below, not as a
-        # floating-point warning from wherever it first happened.
+        # Overflow on the way to a non-finite state is reported as NonFiniteStateError below,
+        # not as a floating-point warning from wherever it first happened.
         with np.errstate(all="ignore"):
-            force_W, torque_W = self._wrenches.resolve(self.state)
-            if self._script:
-                force_W, torque_W = self._add_scripted(force_W, torque_W)
             if not self._stopped.any():
-                new = self._step_function(self.model, self.state, force_W, torque_W, dt)
+                self._Y_next[:] = self._step_function(self.model, self.state, force_W, torque_W, dt).rows()
             else:
                 active, sub_model = self._active()
                 sub = self._step_function(sub_model, self.state.take(active), force_W[active], torque_W[active], dt)
-                new = self.state.copy()
-                for full, part in zip((new.p_WC_W, new.q_WP, new.v_WC_W, new.w_WP_P),
-                                      (sub.p_WC_W, sub.q_WP, sub.v_WC_W, sub.w_WP_P)):
-                    full[active] = part
-            finite = new.finite_bodies()
-            if not finite.all():
-                bad = tuple(self.model.names[i] for i in np.flatnonzero(~finite))
-                # math.hypot scales internally: |w| of a finite w never overflows (np.linalg.norm can).
-                spin = {name: math.hypot(*self.state.w_WP_P[self.model.names.index(name)]) * dt for name in bad}
-        if not finite.all():
-            raise NonFiniteStateError(bad, self.step_count, self._integrator_name, dt, spin)
-        budget = self._check_energy_growth(new, force_W, torque_W, dt)
-        self.state = new
-        self._energy_budget = budget
+                self._Y_next[:] = self._Y
+                self._Y_next[active] = sub.rows()
+        outcome = kernels.check_step(self._Y_next, self._prm, wrench, has_wrench, self._aux, dt,
+                                     self.energy_growth_limit)
+        if outcome:
+            self._raise_step_failure(outcome)
+        self._Y[:] = self._Y_next
+        self._budget[:] = self._budget_next
         self.step_count += 1
 
-    def _check_energy_growth(self, new: State, force_W: np.ndarray, torque_W: np.ndarray, dt: float) -> np.ndarray:
-        """The energy bound after this step (√J per body); DivergenceError if a body exceeds it."""
-        with np.errstate(all="ignore"):  # an overflowing bound is +inf: it never trips
-            if self._wrenches.empty and self._script_wrenches.empty:  # zero wrenches: skip their norms
-                budget = self._energy_budget + dt * self._gravity_budget_rate if self.model.has_gravity \
-                    else self._energy_budget
-            else:
-                total_force = force_W + self._weight_W
-                budget = self._energy_budget + dt * (
-                    np.sqrt(np.einsum("ij,ij->i", total_force, total_force)) * self._budget_per_force
-                    + np.sqrt(np.einsum("ij,ij->i", torque_W, torque_W)) * self._budget_per_torque)
-            v, w = new.v_WC_W, new.w_WP_P
-            energy = 0.5 * (self.model.mass * np.einsum("ij,ij->i", v, v)
-                            + np.einsum("ij,ij,ij->i", self.model.inertia_P, w, w))  # kinetic_energy()
-            over = energy > self.energy_growth_limit * budget * budget
-        if over.any():
-            over &= ~self._stopped
-            if over.any():
-                index = np.flatnonzero(over)
-                bad = tuple(self.model.names[i] for i in index)
-                raise DivergenceError(
-                    bad, self.step_count, self._integrator_name, dt,
-                    {self.model.names[i]: math.hypot(*self.state.w_WP_P[i]) * dt for i in index},
-                    {self.model.names[i]: float(energy[i]) for i in index},
-                    {self.model.names[i]: float(budget[i] ** 2) for i in index},
-                    self.energy_growth_limit,
-                )
-        return budget
+    def _raise_step_failure(self, outcome: int) -> None:
+        """Raise NonFiniteStateError / DivergenceError for the failed step left in the kernels' scratch."""
+        dt = self._dt
+        names = self.model.names
+        index = np.flatnonzero(self._status == outcome)
+        bad = tuple(names[i] for i in index)
+        # math.hypot scales internally: |w| of a finite w never overflows (np.linalg.norm can).
+        spin = {names[i]: math.hypot(*self._Y[i, 10:13]) * dt for i in index}
+        if outcome == kernels.NON_FINITE:
+            raise NonFiniteStateError(bad, self.step_count, self._integrator_name, dt, spin)
+        failed = State.of_rows(self._Y_next)
+        with np.errstate(all="ignore"):
+            energy = kinetic_energy(self.model, failed)
+        raise DivergenceError(
+            bad, self.step_count, self._integrator_name, dt, spin,
+            {names[i]: float(energy[i]) for i in index},
+            {names[i]: float(self._budget_next[i] ** 2) for i in index},
+            self.energy_growth_limit,
+        )
 
-    def _add_scripted(self, force_W: np.ndarray, torque_W: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Add the scripted wrenches active at the start of this step (resolved at the current state)."""
-        active = self._script_indices_at(self.time)
-        if active != self._script_active:
-            self._script_wrenches.clear()
-            for i in active:
-                ref, force, torque, _start, _end = self._script[i]
-                self._script_wrenches.add(ref, force, torque)
-            self._script_active = active
-        if self._script_wrenches.empty:
-            return force_W, torque_W
-        f_W, t_W = self._script_wrenches.resolve(self.state)
-        return force_W + f_W, torque_W + t_W
+    def _wrenches_of_this_step(self) -> tuple[np.ndarray, np.ndarray, bool]:
+        """(buckets, sites, any) of the applied plus the scripted wrenches active at the start of this step."""
+        user = self._wrenches
+        if self._script:
+            active = self._script_indices_at(self.time)
+            if active != self._script_active:
+                self._script_wrenches.clear()
+                for i in active:
+                    ref, force, torque, _start, _end = self._script[i]
+                    self._script_wrenches.add(ref, force, torque)
+                self._script_active = active
+            script = self._script_wrenches
+            if not script.empty:
+                if user.empty:
+                    return script.buckets, script.sites, True
+                sites = user.sites.copy()
+                sites[:, 4:7] += script.site_force_W
+                return user.buckets + script.buckets, sites, True
+        return user.buckets, user.sites, not user.empty
 
     @property
     def time(self) -> float:
@@ -539,6 +666,23 @@ def _positive(value: Any, name: str) -> float:
     if not math.isfinite(x) or x <= 0.0:
         raise ValueError(f"{name}: expected a finite number > 0, got {value!r}")
     return x
+
+
+_PLAIN_NUMBERS = (float, int)
+
+
+def _floats3(value: Any, name: str) -> tuple[float, float, float]:
+    """Three finite floats (the fast path of :func:`_vector3`); ValueError naming ``name`` otherwise."""
+    if type(value) is np.ndarray and value.dtype == np.float64 and value.shape == (3,):
+        x, y, z = value.tolist()
+    elif (type(value) in (list, tuple) and len(value) == 3 and type(value[0]) in _PLAIN_NUMBERS
+          and type(value[1]) in _PLAIN_NUMBERS and type(value[2]) in _PLAIN_NUMBERS):
+        x, y, z = float(value[0]), float(value[1]), float(value[2])
+    else:
+        return tuple(_vector3(value, name).tolist())
+    if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):
+        raise ValueError(f"{name}: expected 3 finite numbers, got {value!r}")
+    return x, y, z
 
 
 def _vector3(value: Any, name: str) -> np.ndarray:
