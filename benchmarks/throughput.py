@@ -24,13 +24,16 @@ from rigid_body_sim.core import INTEGRATORS, Simulator, load_scene
 from . import mujoco_models as mjm
 
 DT = 1e-3                                    # s
+ANGULAR_VELOCITY = (0.3, 1.0, 0.2)           # rad/s, every body's initial spin
+#: The one-body wrench benchmark restarts from the initial state every this many calls.
+RESET_EVERY = 2000
 INERTIA_BOX = np.array([0.0866666667, 0.1933333333, 0.2266666667])  # kg·m², 2 kg 1.0 × 0.6 × 0.4 m box
 
 
 def _scene(count: int):
     bodies = {f"b{i}": {"mass": 2.0, "inertia": {"box": [1.0, 0.6, 0.4]},
                         "pose": {"position": [10.0 * i, 0.0, 0.0], "orientation": [0, 0, 0, 1]},
-                        "twist": {"linear": [0.0, 0.0, 0.0], "angular": [0.3, 1.0, 0.2]}}
+                        "twist": {"linear": [0.0, 0.0, 0.0], "angular": list(ANGULAR_VELOCITY)}}
               for i in range(count)}
     return load_scene({"bodies": bodies})
 
@@ -54,7 +57,7 @@ def bodies_sweep(counts: list[int], min_seconds: float, repeats: int, log=print)
         mj = None
         if mjm.available():
             mj = mjm.make(n, INERTIA_BOX, 2.0, DT, "Euler")  # compiled once (slow for 1e4 bodies)
-            mj[1].qvel.reshape(n, 6)[:, 3:] = [0.3, 1.0, 0.2]
+            mj[1].qvel.reshape(n, 6)[:, 3:] = ANGULAR_VELOCITY
         samples: dict[tuple[str, str], list[float]] = {}
         for _ in range(repeats):  # interleave systems within each repeat
             for name in INTEGRATORS:
@@ -88,11 +91,19 @@ def wrench_step(min_seconds: float, repeats: int) -> list[dict]:
     if mjm.available():
         for name in mjm.MJ_INTEGRATORS:
             mj[name] = mjm.make(1, INERTIA_BOX, 2.0, DT, name)
+            mj[name][1].qvel[3:6] = ANGULAR_VELOCITY  # as ours (free joint: body axes, identity pose)
     for _ in range(repeats):
         for name in INTEGRATORS:
             sim = Simulator(scene, integrator=name, dt=DT)
+            calls_since_reset = [0]
 
             def ours():
+                # The body-fixed force spins the box up without bound: back to the start every
+                # RESET_EVERY calls (both systems), before the explicit methods blow up.
+                calls_since_reset[0] += 1
+                if calls_since_reset[0] == RESET_EVERY:
+                    calls_since_reset[0] = 0
+                    sim.reset()
                 sim.apply_force_at_point("b0", force, point, frame="b0")
                 sim.step(1)
             calls, sec = _timed(ours, min_seconds)
@@ -101,7 +112,14 @@ def wrench_step(min_seconds: float, repeats: int) -> list[dict]:
             mujoco = mjm.mujoco
             zero3 = np.zeros(3)
 
+            mj_calls = [0]
+
             def theirs():
+                mj_calls[0] += 1
+                if mj_calls[0] == RESET_EVERY:
+                    mj_calls[0] = 0
+                    mujoco.mj_resetData(m, d)
+                    d.qvel[3:6] = ANGULAR_VELOCITY
                 # force at a world point of the body (d.xipos/xmat: kinematics of the last step's start)
                 R = d.xmat[1].reshape(3, 3)
                 d.qfrc_applied[:] = 0.0

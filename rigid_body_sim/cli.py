@@ -82,6 +82,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--record", metavar="OUT.mcap",
                      help="write an MCAP recording (ROS 2 messages: /B/pose, /B/twist, /B/wrench, /clock)")
     run.add_argument("--quiet", "-q", action="store_true", help="no progress bar and no summary")
+    run.add_argument("--no-reduction", action="store_true",
+                     help="step every body with the integrator (no model reduction; for comparisons)")
 
     plot = sub.add_parser("plot", help="plot a run (CSV or MCAP) to PNG", description=(
         "Plot a run written by 'run --csv' or an MCAP recording (from 'run --record' or the node's "
@@ -99,6 +101,7 @@ def build_parser() -> argparse.ArgumentParser:
         "wrenches, and the model each body gets."))
     describe.add_argument("scene", metavar="SCENE", help="scene YAML file")
     describe.add_argument("--json", action="store_true", help="print JSON (one object per body) instead of text")
+    describe.add_argument("--no-reduction", action="store_true", help="the models with model reduction off")
 
     check = sub.add_parser("check", help="validate a scene", description=(
         "Validate SCENE only: print a one-line summary and exit 0, or print the loader's error "
@@ -143,14 +146,15 @@ def _run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     csv_path = _output_path(parser, "--csv", args.csv)
     record_path = _output_path(parser, "--record", args.record)
     scene = load_scene(args.scene)
-    sim = Simulator(scene, integrator=args.integrator, dt=args.dt)
+    sim = Simulator(scene, integrator=args.integrator, dt=args.dt, model_reduction=not args.no_reduction)
 
     from .offline.run import run_offline, sample_interval, steps_for
 
     total = steps_for(args.duration, args.dt)
     every = sample_interval(args.rate, args.dt)
     meta = {"scene": str(Path(args.scene).resolve()), "integrator": args.integrator, "dt": repr(args.dt),
-            "duration": repr(args.duration), "sample_every_steps": str(every), "version": _version()}
+            "duration": repr(args.duration), "sample_every_steps": str(every), "version": _version(),
+            "model_reduction": str(not args.no_reduction)}
     callbacks = []
     with ExitStack() as stack:
         csv_writer = recorder = None
@@ -312,7 +316,7 @@ def _plot_scene(args: argparse.Namespace, data: Any, scene_text: str | None) -> 
 
 def _describe(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     scene = load_scene(args.scene)
-    bodies = describe_scene(scene)
+    bodies = describe_scene(scene, model_reduction=not args.no_reduction)
     if args.json:
         print(json.dumps({"scene": scene.source, "gravity": _floats(scene.model.gravity_W), "bodies": bodies}, indent=2))
         return 0
@@ -323,7 +327,8 @@ def _describe(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     for d in bodies:
         lines += [
             "",
-            f"{d['name']}: {d['model']}",
+            f"{d['name']}: {d['model']} model (motion: {d['motion']})",
+            f"  why                {d['model_reason']}",
             f"  mass               {d['mass']:.6g} kg",
             f"  principal moments  {_vec(d['principal_moments'])} kg·m² (about the centre of mass)",
             "  principal axes     " + ", ".join(f"e{k + 1} = {_vec(a)}" for k, a in enumerate(d["principal_axes_B"]))

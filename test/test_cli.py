@@ -97,7 +97,8 @@ def test_describe_text(capsys: pytest.CaptureFixture[str], two_bodies: Path) -> 
     assert main(["describe", str(two_bodies)]) == 0
     out = capsys.readouterr().out
     assert out.startswith(f"scene {two_bodies}: 2 bodies, gravity [0, 0, -9.81] m/s², 1 scripted wrench\n")
-    assert "\nbox: full rigid body (free)\n" in out and "\nball: full rigid body (free)\n" in out
+    assert "\nbox: full model (motion: free)\n  why                the integrator (asymmetric inertia" in out
+    assert "\nball: isotropic model (motion: free)\n  why                isotropic inertia" in out
     assert "  mass               2 kg\n" in out
     assert f"  principal moments  [{2 * (0.36 + 0.16) / 12:.6g}, {2 * (1 + 0.16) / 12:.6g}, {2 * (1 + 0.36) / 12:.6g}] kg·m²" in out
     assert "  principal axes     e1 = [1, 0, 0], e2 = [0, 1, 0], e3 = [0, 0, 1] (in body axes)" in out
@@ -112,6 +113,15 @@ def test_describe_json_is_describe_scene(capsys: pytest.CaptureFixture[str], two
     data = json.loads(capsys.readouterr().out)
     assert data["scene"] == str(two_bodies) and data["gravity"] == [0.0, 0.0, -9.81]
     assert data["bodies"] == describe_scene(load_scene(two_bodies))
+    assert [(b["name"], b["model"]) for b in data["bodies"]] == [("box", "full"), ("ball", "isotropic")]
+
+
+def test_describe_without_reduction_gives_every_free_body_the_full_model(
+        capsys: pytest.CaptureFixture[str], two_bodies: Path) -> None:
+    assert main(["describe", "--json", "--no-reduction", str(two_bodies)]) == 0
+    bodies = json.loads(capsys.readouterr().out)["bodies"]
+    assert [b["model"] for b in bodies] == ["full", "full"]
+    assert all("reduction off" in b["model_reason"] for b in bodies)
 
 
 def test_describe_rotated_tensor_reports_principal_axes(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:

@@ -176,7 +176,7 @@ C = "bodies.crate"
 BAD_SCENES: list[tuple[str, Callable[[dict[str, Any]], None], str, str]] = [
     # unknown keys, at every level
     ("unknown-top-key", _set("gravty", [0, 0, -9.81]), "gravty", r"one of the keys \['gravity', 'bodies', 'wrenches'.*\] \(unknown key\)"),
-    ("unknown-body-key", _set(f"{C}.colour", "red"), f"{C}.colour", r"one of the keys \['mass', 'inertia', 'pose', 'twist', 'damping', 'sites'\] \(unknown key\)"),
+    ("unknown-body-key", _set(f"{C}.colour", "red"), f"{C}.colour", r"one of the keys \['mass', 'inertia', 'pose', 'twist', 'damping', 'sites', 'motion'\] \(unknown key\)"),
     ("unknown-pose-key", _set(f"{C}.pose.rotation", [0, 0, 0, 1]), f"{C}.pose.rotation", r"\['position', 'orientation'\] \(unknown key\)"),
     ("unknown-twist-key", _set(f"{C}.twist.omega", [0, 0, 1]), f"{C}.twist.omega", r"\['linear', 'angular'\] \(unknown key\)"),
     ("unknown-damping-key", _set(f"{C}.damping.quadratic", 0.1), f"{C}.damping.quadratic", r"\['linear', 'angular'\] \(unknown key\)"),

@@ -1,11 +1,10 @@
 """What a scene holds, per body, in plain numbers: for ``rigid-body-sim describe`` and for tools.
 
 :func:`describe_scene` turns a loaded :class:`~rigid_body_sim.core.scene.Scene` into one dict
-per body (mass properties, principal axes and moments, initial state, sites, wrench frames,
-scripted wrenches), all SI, and names the dynamical model each body gets through
-:func:`body_model_kind`, the one place a later model reduction (e.g. a body that stays a free
-particle or a spinning top) will extend. Quaternions in the output are (x, y, z, w); "B" is the
-body frame the scene declared, "P" the principal frame.
+per body (mass properties, principal axes and moments, initial state, motion, sites, wrench
+frames, scripted wrenches), all SI, and names the model each body gets (model reduction,
+reduction.py) and why, through :func:`body_model_kind`. Quaternions in the output are
+(x, y, z, w); "B" is the body frame the scene declared, "P" the principal frame.
 """
 
 from __future__ import annotations
@@ -17,19 +16,17 @@ import numpy as np
 
 from .dynamics import angular_momentum_W, kinetic_energy
 from .quaternion import quat_conjugate, quat_multiply, quat_rotate, quat_to_matrix, quat_xyzw_from_wxyz
+from .reduction import plan_models
 from .scene import Scene
 
-__all__ = ["FULL_RIGID_BODY", "body_model_kind", "describe_scene"]
-
-#: The model every body gets today: six degrees of freedom, Newton–Euler with the gyroscopic term.
-FULL_RIGID_BODY = "full rigid body (free)"
+__all__ = ["body_model_kind", "describe_scene"]
 
 
-def body_model_kind(scene: Scene, body: str) -> str:
-    """The dynamical model the simulator uses for ``body`` in ``scene``, as a short phrase.
+def body_model_kind(scene: Scene, body: str, model_reduction: bool = True) -> str:
+    """The model the simulator gives ``body`` in ``scene`` at the start, and why: ``"<model>: <reason>"``.
 
-    Every body is a full, free rigid body today; this is the single function that model
-    reduction will change, so that ``describe`` and tools report what the simulator does.
+    The models are reduction.MODEL_NAMES' (full, static, kinematic, translation, planar,
+    isotropic, symmetric); ``model_reduction=False`` is the switch of the Simulator.
 
     Raises
     ------
@@ -38,15 +35,17 @@ def body_model_kind(scene: Scene, body: str) -> str:
     """
     if body not in scene.sites:
         raise ValueError(f"unknown body {body!r}; bodies are {list(scene.body_names)}")
-    return FULL_RIGID_BODY
+    plan = plan_models(scene.model, model_reduction)[scene.body_names.index(body)]
+    return f"{plan.model}: {plan.reason}"
 
 
-def describe_scene(scene: Scene) -> list[dict[str, Any]]:
+def describe_scene(scene: Scene, model_reduction: bool = True) -> list[dict[str, Any]]:
     """One dict per body, in scene order: what the scene declares and what the simulator derives.
 
     Keys (all SI; lists, floats and strings only, so the result serialises to JSON as is):
 
-    - ``name``, ``model`` (:func:`body_model_kind`), ``mass`` (kg)
+    - ``name``, ``motion`` (the declared one), ``model`` (the model it gets: reduction.py),
+      ``model_reason`` (why), ``mass`` (kg)
     - ``principal_moments`` (kg·m², [I1, I2, I3]), ``principal_axes_B`` (3 unit vectors, the
       principal axes expressed in B axes, one per moment), ``inertia_B`` (3×3 tensor about the
       centre of mass in B axes, kg·m²)
@@ -61,6 +60,7 @@ def describe_scene(scene: Scene) -> list[dict[str, Any]]:
       ``None`` = forever)
     """
     model, state = scene.model, scene.initial_state
+    plans = plan_models(model, model_reduction)
     energy = kinetic_energy(model, state)
     momentum = angular_momentum_W(model, state)
     out = []
@@ -80,7 +80,9 @@ def describe_scene(scene: Scene) -> list[dict[str, Any]]:
             })
         out.append({
             "name": name,
-            "model": body_model_kind(scene, name),
+            "motion": plans[b].motion,
+            "model": plans[b].model,
+            "model_reason": plans[b].reason,
             "mass": float(model.mass[b]),
             "principal_moments": _floats(model.inertia_P[b]),
             "principal_axes_B": [_floats(R_BP[:, k]) for k in range(3)],

@@ -155,5 +155,6 @@ class WrenchAccumulator:
         n = self._model.count
         wrench = np.zeros((n, 6))
         if not self.empty:
-            kernels.resolve_wrenches(state.rows(), self.buckets, self.sites, wrench)
+            unconstrained = np.zeros((n, kernels.PRM_WIDTH))  # PROJECT_NONE: nothing projected out
+            kernels.resolve_wrenches(state.rows(), unconstrained, self.buckets, self.sites, wrench)
         return wrench[:, 0:3], wrench[:, 3:6]

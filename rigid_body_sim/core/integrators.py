@@ -100,7 +100,8 @@ def _compiled_step(name: str, model: BodyModel, state: State, force_W: np.ndarra
     buckets[:, 9:12] = torque_W
     aux = np.zeros((3, n))
     # One unchecked step (limit = inf; a non-finite result is returned as it is): Ys[1] holds it.
-    kernels.advance(kernels.METHODS[name], Ys, parameters_of(model), buckets, np.zeros((0, 7)), aux, True, 1,
+    kernels.advance(kernels.METHODS[name], Ys, 0, parameters_of(model), np.arange(n, dtype=np.int64), n, buckets,
+                    np.zeros((0, 7)), aux, True, 1,
                     float(dt), np.inf, -1, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     return State.of_rows(Ys[1])
 

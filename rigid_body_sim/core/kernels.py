@@ -47,7 +47,9 @@ __all__ = [
     "advance",
     "check_step",
     "pack_parameters",
+    "project_wrench",
     "resolve_wrenches",
+    "step_reduced",
 ]
 
 def entry_point(dispatcher, *example):
@@ -70,19 +72,47 @@ def entry_point(dispatcher, *example):
 STATE_WIDTH = 13
 P0, Q0, V0, W0 = 0, 3, 7, 10
 
+# Columns read by every step first (two cache lines), then those of some models only.
 MASS, INV_MASS = 0, 1
 INERTIA = 2  # 3 columns: I1, I2, I3 (kg·m²)
-INV_INERTIA = 5  # 3 columns
-DAMP_LIN, DAMP_ANG = 8, 9
-GRAVITY = 10  # 3 columns, m/s²
-BUDGET_FORCE, BUDGET_TORQUE = 13, 14  # 1/√(2m), 1/√(2 I_min)
-ACTIVE = 15  # 1.0 integrates the body, 0.0 freezes it (Simulator.stop_body)
-AXIS_S, AXIS_K = 16, 17  # symmetric splitting: symmetry and remainder axes (0, 1, 2)
-INV_I_T, C_S, C_K = 18, 19, 20  # 1/I_t, 1/I_s − 1/I_t, 1/I_k − 1/I_t
-GRAVITY_BUDGET_RATE = 21  # |m g| / √(2m): the energy bound's growth rate under gravity alone
-PRM_WIDTH = 22
+DAMP_LIN, DAMP_ANG = 5, 6
+GRAVITY = 7  # 3 columns, m/s² (projected on the body's motion)
+GRAVITY_BUDGET_RATE = 10  # |m g| / √(2m): the energy bound's growth rate under gravity alone
+BUDGET_FORCE, BUDGET_TORQUE = 11, 12  # 1/√(2m), 1/√(2 I_min)
+MODEL = 13  # MODEL_* below: which per-body model steps the body (reduction.py)
+PROJECT = 14  # PROJECT_* below: the wrench components its motion allows
+# column 15: unused
+# The rotation increment of a constant-rate step, kept for the next step with the same rate and
+# dt (kinematic bodies, undamped isotropic ones): the same numbers without the sin and cos.
+CACHE_RATE = 16  # 3 columns: the rate it was computed for (w_P, or ω_W of a kinematic body)
+CACHE_DT = 19  # the dt it was computed for (NaN: none)
+CACHE_Q = 20  # 4 columns: exp(rate·dt)
+AXIS_S, AXIS_K = 24, 25  # symmetric splitting: symmetry and remainder axes (0, 1, 2)
+INV_I_T, C_S, C_K = 26, 27, 28  # 1/I_t, 1/I_s − 1/I_t, 1/I_k − 1/I_t
+INV_INERTIA = 29  # 3 columns
+NORMAL = 32  # 3 columns: unit plane normal, world axes (planar)
+PLANE_OFFSET = 35  # n·p of the plane (planar), m
+INERTIA_NORMAL = 36  # nᵀ I_W n, the moment about the plane normal (planar), kg·m²
+KINEMATIC_W = 37  # 3 columns: the constant angular velocity of a kinematic body, world axes, rad/s
+PRM_WIDTH = 40
 
 BUCKET_WIDTH = 18
+
+# Per-body models (reduction.py says which body gets which, and why).
+MODEL_FULL = 0  # the integrator
+MODEL_STATIC = 1  # never stepped
+MODEL_KINEMATIC = 2  # constant twist, exact
+MODEL_TRANSLATION = 3  # exact constant-force flow of the COM; orientation fixed
+MODEL_PLANAR = 4  # exact constant-wrench flow of x, y, yaw in a plane
+MODEL_ISOTROPIC = 5  # exact translation; exact exp-map rotation while torque-free (else the integrator)
+MODEL_SYMMETRIC = 6  # exact translation; exact symmetric-top flow while torque-free (else the integrator)
+
+# Wrench components a motion lets through (the rest is projected out, also of impulses).
+PROJECT_NONE = 0  # free
+PROJECT_FORCE = 1  # rotation_only: no force
+PROJECT_TORQUE = 2  # translation_only: no torque
+PROJECT_PLANE = 3  # planar: force in the plane, torque along its normal
+PROJECT_ALL = 4  # static, kinematic: nothing
 
 #: Integrator name → method number of the kernels.
 METHODS = {
@@ -114,7 +144,9 @@ def pack_parameters(model) -> np.ndarray:
     prm[:, GRAVITY:GRAVITY + 3] = model.gravity_W
     prm[:, BUDGET_FORCE] = 1.0 / np.sqrt(2.0 * model.mass)
     prm[:, BUDGET_TORQUE] = 1.0 / np.sqrt(2.0 * inertia.min(axis=1)) if n else 0.0
-    prm[:, ACTIVE] = 1.0
+    prm[:, MODEL] = MODEL_FULL
+    prm[:, CACHE_DT] = np.nan
+    prm[:, PROJECT] = PROJECT_NONE
     prm[:, GRAVITY_BUDGET_RATE] = np.linalg.norm(model.mass[:, None] * model.gravity_W, axis=1) * prm[:, BUDGET_FORCE]
     if n:
         rows = np.arange(n)
@@ -445,8 +477,34 @@ def _step_rk4(y, out, prm, F, T, dt, scratch):
 
 
 @njit(cache=True)
-def resolve_wrenches(Y, buckets, sites, FT):
-    """FT ← total applied (force, torque about the COM), world axes, per body, at state Y."""
+def project_wrench(p, ft):
+    """Project the wrench ft (6,: force, torque, world axes) of a body with parameters p onto its motion."""
+    kind = p[PROJECT]
+    if kind == PROJECT_NONE:
+        return
+    if kind == PROJECT_ALL:
+        for j in range(6):
+            ft[j] = 0.0
+    elif kind == PROJECT_FORCE:
+        ft[0] = ft[1] = ft[2] = 0.0
+    elif kind == PROJECT_TORQUE:
+        ft[3] = ft[4] = ft[5] = 0.0
+    else:  # PROJECT_PLANE
+        nx, ny, nz = p[NORMAL], p[NORMAL + 1], p[NORMAL + 2]
+        f_n = ft[0] * nx + ft[1] * ny + ft[2] * nz
+        t_n = ft[3] * nx + ft[4] * ny + ft[5] * nz
+        ft[0] -= f_n * nx
+        ft[1] -= f_n * ny
+        ft[2] -= f_n * nz
+        ft[3], ft[4], ft[5] = t_n * nx, t_n * ny, t_n * nz
+
+
+@njit(cache=True)
+def resolve_wrenches(Y, prm, buckets, sites, FT):
+    """FT ← total applied (force, torque about the COM), world axes, per body, at state Y.
+
+    Projected onto each body's motion (project_wrench).
+    """
     n = Y.shape[0]
     for i in range(n):
         b = buckets[i]
@@ -474,6 +532,9 @@ def resolve_wrenches(Y, buckets, sites, FT):
         FT[i, 3] += arm[1] * fz - arm[2] * fy
         FT[i, 4] += arm[2] * fx - arm[0] * fz
         FT[i, 5] += arm[0] * fy - arm[1] * fx
+    for i in range(n):
+        if prm[i, PROJECT] != PROJECT_NONE:
+            project_wrench(prm[i], FT[i])
 
 
 @njit(cache=True)
@@ -519,20 +580,17 @@ def _check_body(i, Ynew, prm, FT, has_wrench, budget, budget_new, dt, limit, sta
 
 
 @njit(cache=True)
-def check_step(Ynew, prm, FT, has_wrench, aux, dt, limit):
-    """Check every active body of a step computed elsewhere (the numpy/scipy integrators).
+def check_step(Ynew, prm, FT, has_wrench, budget, budget_new, status, members, dt, limit):
+    """Check the bodies in ``members`` after a step computed elsewhere (the numpy/scipy integrators).
 
-    ``aux`` as in :func:`advance`. Returns the worst outcome: NON_FINITE if any body is
-    non-finite, else DIVERGED if any exceeds its energy bound, else OK; aux[2] holds each body's.
+    Returns the worst outcome: NON_FINITE if any body is non-finite, else DIVERGED if any
+    exceeds its energy bound (budget → budget_new, as in :func:`advance`), else OK; ``status``
+    holds each body's.
     """
-    budget, budget_new, status = aux[0], aux[1], aux[2]
     worst_non_finite = False
     worst_diverged = False
-    for i in range(Ynew.shape[0]):
-        if prm[i, ACTIVE] == 0.0:
-            status[i] = OK
-            budget_new[i] = budget[i]
-            continue
+    for m in range(members.shape[0]):
+        i = members[m]
         outcome = _check_body(i, Ynew, prm[i], FT, has_wrench, budget, budget_new, dt, limit, status)
         worst_non_finite |= outcome == NON_FINITE
         worst_diverged |= outcome == DIVERGED
@@ -542,23 +600,234 @@ def check_step(Ynew, prm, FT, has_wrench, aux, dt, limit):
 # ----------------------------------------------------------------------------- drivers
 
 
+# ----------------------------------------------------------------------------- reduced models, one body each
+
+
 @njit(cache=True, inline="always")
-def _step_bodies(step_body, Y, Ynew, prm, FT, has_wrench, budget, budget_new, status, dt, limit, scratch):
-    """One checked step of every active body from Y into Ynew; the worst outcome (see advance).
+def _phis(k, t):
+    """(φ1, φ2, e^{−kt}) of dx/dt = a − k x over t: x(t) = x0 e^{−kt} + a φ1, ∫x = x0 φ1 + a φ2.
+
+    φ1 = (1 − e^{−kt})/k and φ2 = (t − φ1)/k, by their series where kt < 0.01 (no
+    cancellation; truncation < 1e-18 relative); t and t²/2 exactly when k = 0.
+    """
+    x = k * t
+    if x < 1e-2:
+        phi1 = t * (1.0 - x / 2.0 * (1.0 - x / 3.0 * (1.0 - x / 4.0 * (1.0 - x / 5.0 * (1.0 - x / 6.0 * (1.0 - x / 7.0))))))
+        phi2 = 0.5 * t * t * (1.0 - x / 3.0 * (1.0 - x / 4.0 * (1.0 - x / 5.0 * (1.0 - x / 6.0 * (1.0 - x / 7.0
+                                                                                                  * (1.0 - x / 8.0))))))
+        return phi1, phi2, math.exp(-x)
+    phi1 = -math.expm1(-x) / k
+    return phi1, (t - phi1) / k, math.exp(-x)
+
+
+@njit(cache=True, inline="always")
+def _constant_rate_increment(p, rx, ry, rz, dt):
+    """exp((rx, ry, rz)·dt), from the body's cache when the rate and dt are those of its last step."""
+    if p[CACHE_DT] == dt and p[CACHE_RATE] == rx and p[CACHE_RATE + 1] == ry and p[CACHE_RATE + 2] == rz:
+        return p[CACHE_Q], p[CACHE_Q + 1], p[CACHE_Q + 2], p[CACHE_Q + 3]
+    e = _exp(rx * dt, ry * dt, rz * dt)
+    p[CACHE_RATE], p[CACHE_RATE + 1], p[CACHE_RATE + 2], p[CACHE_DT] = rx, ry, rz, dt
+    p[CACHE_Q], p[CACHE_Q + 1], p[CACHE_Q + 2], p[CACHE_Q + 3] = e[0], e[1], e[2], e[3]
+    return e
+
+
+@njit(cache=True, inline="always")
+def _translate_exact(y, out, p, F, dt):
+    """Exact flow of the COM under a constant force (and gravity, linear damping) over dt."""
+    inv_m = p[INV_MASS]
+    k = p[DAMP_LIN] * inv_m
+    if k == 0.0:  # the common case, and exactly the same numbers as _phis gives
+        for a in range(3):
+            acc = F[a] * inv_m + p[GRAVITY + a]
+            v0 = y[7 + a]
+            out[7 + a] = v0 + acc * dt
+            out[a] = y[a] + v0 * dt + acc * (0.5 * dt * dt)
+        return
+    phi1, phi2, decay = _phis(k, dt)
+    for a in range(3):
+        acc = F[a] * inv_m + p[GRAVITY + a]
+        v0 = y[7 + a]
+        out[7 + a] = v0 * decay + acc * phi1
+        out[a] = y[a] + v0 * phi1 + acc * phi2
+
+
+@njit(cache=True, inline="always")
+def _step_translation(y, out, p, F, dt):
+    """translation_only: exact translation; orientation and (zero) angular velocity kept."""
+    _translate_exact(y, out, p, F, dt)
+    for j in range(3, 7):
+        out[j] = y[j]
+    for j in range(10, 13):
+        out[j] = y[j]
+
+
+@njit(cache=True, inline="always")
+def _step_kinematic(y, out, p, dt):
+    """Constant twist: p += v dt; q ← exp(ω_W dt) ⊗ q; w_P = R(q)ᵀ ω_W."""
+    for a in range(3):
+        out[a] = y[a] + dt * y[7 + a]
+        out[7 + a] = y[7 + a]
+    wx, wy, wz = p[KINEMATIC_W], p[KINEMATIC_W + 1], p[KINEMATIC_W + 2]
+    e = _constant_rate_increment(p, wx, wy, wz, dt)
+    q = _qmul(e[0], e[1], e[2], e[3], y[3], y[4], y[5], y[6])
+    qw, qx, qy, qz = _normalise(q[0], q[1], q[2], q[3])
+    out[3], out[4], out[5], out[6] = qw, qx, qy, qz
+    out[10], out[11], out[12] = _rotate(qw, -qx, -qy, -qz, wx, wy, wz)
+
+
+@njit(cache=True, inline="always")
+def _step_planar(y, out, p, F, T, dt):
+    """Exact flow of x, y and yaw in the plane under the step's (projected) wrench."""
+    nx, ny, nz = p[NORMAL], p[NORMAL + 1], p[NORMAL + 2]
+    _translate_exact(y, out, p, F, dt)
+    # back onto the plane and into it, against round-off
+    off = out[0] * nx + out[1] * ny + out[2] * nz - p[PLANE_OFFSET]
+    v_n = out[7] * nx + out[8] * ny + out[9] * nz
+    out[0] -= off * nx
+    out[1] -= off * ny
+    out[2] -= off * nz
+    out[7] -= v_n * nx
+    out[8] -= v_n * ny
+    out[9] -= v_n * nz
+    qw, qx, qy, qz = y[3], y[4], y[5], y[6]
+    w_W = _rotate(qw, qx, qy, qz, y[10], y[11], y[12])
+    w_n = w_W[0] * nx + w_W[1] * ny + w_W[2] * nz
+    I_n = p[INERTIA_NORMAL]
+    alpha = (T[0] * nx + T[1] * ny + T[2] * nz) / I_n
+    phi1, phi2, decay = _phis(p[DAMP_ANG] / I_n, dt)
+    theta = w_n * phi1 + alpha * phi2
+    w_n = w_n * decay + alpha * phi1
+    e = _exp(theta * nx, theta * ny, theta * nz)
+    q = _qmul(e[0], e[1], e[2], e[3], qw, qx, qy, qz)
+    qw, qx, qy, qz = _normalise(q[0], q[1], q[2], q[3])
+    out[3], out[4], out[5], out[6] = qw, qx, qy, qz
+    out[10], out[11], out[12] = _rotate(qw, -qx, -qy, -qz, w_n * nx, w_n * ny, w_n * nz)
+
+
+@njit(cache=True, inline="always")
+def _step_isotropic_free(y, out, p, F, dt):
+    """Isotropic and torque-free: exact translation; w_P decays (angular damping), q ← q ⊗ exp(w_P φ1)."""
+    _translate_exact(y, out, p, F, dt)
+    wx, wy, wz = y[10], y[11], y[12]
+    if p[DAMP_ANG] == 0.0:
+        decay = 1.0
+        e = _constant_rate_increment(p, wx, wy, wz, dt)
+    else:
+        phi1, _phi2, decay = _phis(p[DAMP_ANG] / p[INERTIA], dt)
+        e = _exp(wx * phi1, wy * phi1, wz * phi1)
+    q = _qmul(y[3], y[4], y[5], y[6], e[0], e[1], e[2], e[3])
+    out[3], out[4], out[5], out[6] = _normalise(q[0], q[1], q[2], q[3])
+    out[10], out[11], out[12] = wx * decay, wy * decay, wz * decay
+
+
+@njit(cache=True, inline="always")
+def _step_symmetric_free(y, out, p, F, dt):
+    """Axisymmetric, torque-free, no angular damping: exact translation; the exact symmetric-top flow."""
+    _translate_exact(y, out, p, F, dt)
+    out[3], out[4], out[5], out[6] = y[3], y[4], y[5], y[6]
+    for a in range(3):
+        out[10 + a] = p[INERTIA + a] * y[10 + a]
+    _top_flow(out, p[INV_I_T], int(p[AXIS_S]), p[C_S], dt)
+    out[3], out[4], out[5], out[6] = _normalise(out[3], out[4], out[5], out[6])
+    for a in range(3):
+        out[10 + a] = out[10 + a] / p[INERTIA + a]
+
+
+@njit(cache=True, inline="always")
+def _torque_free(T):
+    return T[0] == 0.0 and T[1] == 0.0 and T[2] == 0.0
+
+
+@njit(cache=True, inline="always")
+def _group_end(prm, members, start):
+    """End of the group of members starting at ``start`` (members are sorted by model)."""
+    code = prm[members[start], MODEL]
+    end = start + 1
+    while end < members.shape[0] and prm[members[end], MODEL] == code:
+        end += 1
+    return end
+
+
+@njit(cache=True)
+def _step_reduced_bodies(Y, Ynew, prm, FT, members, first, fallback, check, budget, budget_new, status, dt, limit,
+                         has_wrench):
+    """Step members[first:] (the reduced models) from Y into Ynew, one homogeneous loop per model.
+
+    Isotropic and symmetric bodies under a torque this step are not stepped here: their
+    indices go to ``fallback`` for the integrator. With ``check``, each stepped body is
+    checked (_check_body). Returns (worst outcome, number of fallback bodies).
+    """
+    n_fallback = 0
+    worst_non_finite = False
+    worst_diverged = False
+    zero = np.zeros(6)  # the wrench of every body when none is applied (FT is then not read)
+    start = first
+    while start < members.shape[0]:
+        end = _group_end(prm, members, start)
+        code = int(prm[members[start], MODEL])
+        for m in range(start, end):
+            i = members[m]
+            p = prm[i]
+            ft = FT[i] if has_wrench else zero
+            if code == MODEL_ISOTROPIC or code == MODEL_SYMMETRIC:
+                if not _torque_free(ft[3:6]):
+                    fallback[n_fallback] = i
+                    n_fallback += 1
+                    continue
+                if code == MODEL_ISOTROPIC:
+                    _step_isotropic_free(Y[i], Ynew[i], p, ft[0:3], dt)
+                else:
+                    _step_symmetric_free(Y[i], Ynew[i], p, ft[0:3], dt)
+            elif code == MODEL_KINEMATIC:
+                _step_kinematic(Y[i], Ynew[i], p, dt)
+            elif code == MODEL_TRANSLATION:
+                _step_translation(Y[i], Ynew[i], p, ft[0:3], dt)
+            elif code == MODEL_PLANAR:
+                _step_planar(Y[i], Ynew[i], p, ft[0:3], ft[3:6], dt)
+            else:  # MODEL_STATIC is never a member; MODEL_FULL never past ``first``
+                for j in range(13):
+                    Ynew[i, j] = Y[i, j]
+            if check:
+                outcome = _check_body(i, Ynew, p, FT, has_wrench, budget, budget_new, dt, limit, status)
+                worst_non_finite |= outcome == NON_FINITE
+                worst_diverged |= outcome == DIVERGED
+        start = end
+    return (NON_FINITE if worst_non_finite else (DIVERGED if worst_diverged else OK)), n_fallback
+
+
+@njit(cache=True)
+def step_reduced(Y, Ynew, prm, FT, members, first, dt):
+    """The numpy/scipy path: Ynew ← the reduced bodies' step (members[first:]); returns the fallback indices."""
+    fallback = np.empty(members.shape[0], dtype=np.int64)
+    dummy = np.zeros(Y.shape[0])
+    status = np.zeros(Y.shape[0])
+    _outcome, n_fallback = _step_reduced_bodies(Y, Ynew, prm, FT, members, first, fallback, False, dummy, dummy,
+                                                status, dt, np.inf, True)
+    return fallback[:n_fallback].copy()
+
+
+@njit(cache=True, inline="always")
+def _step_bodies(step_body, Y, Ynew, prm, FT, members, first, fallback, n_fallback, has_wrench, budget, budget_new,
+                 status, dt, limit, scratch):
+    """The integrator's bodies: members[:first] (model full) and fallback[:n_fallback]; the worst outcome.
 
     Inlined into one function per integrator below, each compiled with only its own
     ``step_body`` (measured: ~1.5–2× faster than one loop branching on the method per body).
     """
     worst_non_finite = False
     worst_diverged = False
-    for i in range(Y.shape[0]):
+    zero = np.zeros(6)  # the wrench of every body when none is applied (FT is then not read)
+    for m in range(first):
+        i = members[m]
         p = prm[i]
-        if p[ACTIVE] == 0.0:
-            for j in range(13):
-                Ynew[i, j] = Y[i, j]
-            budget_new[i] = budget[i]
-            status[i] = OK
-            continue
+        ft = FT[i] if has_wrench else zero
+        step_body(Y[i], Ynew[i], p, ft[0:3], ft[3:6], dt, scratch)
+        outcome = _check_body(i, Ynew, p, FT, has_wrench, budget, budget_new, dt, limit, status)
+        worst_non_finite |= outcome == NON_FINITE
+        worst_diverged |= outcome == DIVERGED
+    for m in range(n_fallback):
+        i = fallback[m]
+        p = prm[i]
         step_body(Y[i], Ynew[i], p, FT[i, 0:3], FT[i, 3:6], dt, scratch)
         outcome = _check_body(i, Ynew, p, FT, has_wrench, budget, budget_new, dt, limit, status)
         worst_non_finite |= outcome == NON_FINITE
@@ -567,85 +836,110 @@ def _step_bodies(step_body, Y, Ynew, prm, FT, has_wrench, budget, budget_new, st
 
 
 @njit(cache=True)
-def _step_bodies_0(Y, Ynew, prm, FT, has_wrench, budget, budget_new, status, dt, limit, scratch):
-    return _step_bodies(_step_euler, Y, Ynew, prm, FT, has_wrench, budget, budget_new, status, dt, limit, scratch)
+def _step_bodies_0(Y, Ynew, prm, FT, members, first, fallback, n_fallback, has_wrench, budget, budget_new, status, dt,
+                   limit, scratch):
+    return _step_bodies(_step_euler, Y, Ynew, prm, FT, members, first, fallback, n_fallback, has_wrench, budget, budget_new,
+                        status, dt, limit, scratch)
 
 
 @njit(cache=True)
-def _step_bodies_1(Y, Ynew, prm, FT, has_wrench, budget, budget_new, status, dt, limit, scratch):
-    return _step_bodies(_step_semi_implicit_euler, Y, Ynew, prm, FT, has_wrench, budget, budget_new, status, dt, limit, scratch)
+def _step_bodies_1(Y, Ynew, prm, FT, members, first, fallback, n_fallback, has_wrench, budget, budget_new, status, dt,
+                   limit, scratch):
+    return _step_bodies(_step_semi_implicit_euler, Y, Ynew, prm, FT, members, first, fallback, n_fallback, has_wrench, budget, budget_new,
+                        status, dt, limit, scratch)
 
 
 @njit(cache=True)
-def _step_bodies_2(Y, Ynew, prm, FT, has_wrench, budget, budget_new, status, dt, limit, scratch):
-    return _step_bodies(_step_implicit_gyroscopic, Y, Ynew, prm, FT, has_wrench, budget, budget_new, status, dt, limit, scratch)
+def _step_bodies_2(Y, Ynew, prm, FT, members, first, fallback, n_fallback, has_wrench, budget, budget_new, status, dt,
+                   limit, scratch):
+    return _step_bodies(_step_implicit_gyroscopic, Y, Ynew, prm, FT, members, first, fallback, n_fallback, has_wrench, budget, budget_new,
+                        status, dt, limit, scratch)
 
 
 @njit(cache=True)
-def _step_bodies_3(Y, Ynew, prm, FT, has_wrench, budget, budget_new, status, dt, limit, scratch):
-    return _step_bodies(_step_splitting, Y, Ynew, prm, FT, has_wrench, budget, budget_new, status, dt, limit, scratch)
+def _step_bodies_3(Y, Ynew, prm, FT, members, first, fallback, n_fallback, has_wrench, budget, budget_new, status, dt,
+                   limit, scratch):
+    return _step_bodies(_step_splitting, Y, Ynew, prm, FT, members, first, fallback, n_fallback, has_wrench, budget, budget_new,
+                        status, dt, limit, scratch)
 
 
 @njit(cache=True)
-def _step_bodies_4(Y, Ynew, prm, FT, has_wrench, budget, budget_new, status, dt, limit, scratch):
-    return _step_bodies(_step_symmetric_splitting, Y, Ynew, prm, FT, has_wrench, budget, budget_new, status, dt, limit, scratch)
+def _step_bodies_4(Y, Ynew, prm, FT, members, first, fallback, n_fallback, has_wrench, budget, budget_new, status, dt,
+                   limit, scratch):
+    return _step_bodies(_step_symmetric_splitting, Y, Ynew, prm, FT, members, first, fallback, n_fallback, has_wrench, budget, budget_new,
+                        status, dt, limit, scratch)
 
 
 @njit(cache=True)
-def _step_bodies_5(Y, Ynew, prm, FT, has_wrench, budget, budget_new, status, dt, limit, scratch):
-    return _step_bodies(_step_rk4, Y, Ynew, prm, FT, has_wrench, budget, budget_new, status, dt, limit, scratch)
+def _step_bodies_5(Y, Ynew, prm, FT, members, first, fallback, n_fallback, has_wrench, budget, budget_new, status, dt,
+                   limit, scratch):
+    return _step_bodies(_step_rk4, Y, Ynew, prm, FT, members, first, fallback, n_fallback, has_wrench, budget, budget_new,
+                        status, dt, limit, scratch)
 
 
 @njit(cache=True)
-def advance(method, Ys, prm, buckets, sites, aux, has_wrench, n_steps, dt, limit,
+def advance(method, Ys, cur, prm, members, first, buckets, sites, aux, has_wrench, n_steps, dt, limit,
             pending_body, force_column, torque_column, fx, fy, fz, tx, ty, tz):
-    """Up to ``n_steps`` checked steps of every active body, in place in Ys[0]; stops at the first bad step.
+    """Up to ``n_steps`` checked steps of the moving bodies, in place in Ys[0]; stops at the first bad step.
 
-    ``Ys`` (2, N, 13) holds the state (Ys[0]) and the next step's scratch (Ys[1]); ``aux``
-    (3, N) the energy bound B (√J), its next value and each body's status (OK, NON_FINITE,
-    DIVERGED). If ``pending_body`` ≥ 0, the wrench (fx, fy, fz, tx, ty, tz) is first added to
-    ``buckets[pending_body]`` at the given columns (add_wrench; the one-call path of a
-    single applied wrench).
+    ``Ys`` (2, N, 13) holds the state (Ys[cur]) and the next step (Ys[1 − cur]): each step
+    writes the other buffer and, if it passes, makes it the current one (no copy). ``aux``
+    (3, N): the energy bound B (√J) in the same two buffers, and each body's status (OK,
+    NON_FINITE, DIVERGED). ``members`` (int64) lists the moving bodies, grouped by model, the
+    ``first`` of them of model full; the others are static: never touched, and the caller
+    keeps their rows equal in both buffers. If ``pending_body`` ≥ 0, the wrench (fx, fy, fz, tx, ty, tz) is
+    first added to ``buckets[pending_body]`` at the given columns (add_wrench; the one-call
+    path of a single applied wrench).
 
-    Each step: resolve the applied wrenches at the step's start (if any), step every active
-    body from Ys[0] into Ys[1], check each (finite; kinetic energy ≤ limit·B², B advanced by
-    the step's inputs); if all pass, Ys[1] and the new B become the state and bound. A failed
-    step is not applied: Ys[0] and B stay at the last good step, Ys[1] holds the failed step,
-    aux[2] says which bodies failed how, and the applied wrenches are kept. After the last
-    step the applied wrenches (buckets, site forces) are cleared.
+    Each step: resolve the applied wrenches at the step's start (if any) and project them on
+    each body's motion, step every member from Ys[0] into Ys[1] (its reduced model, or the
+    integrator ``method``), check each (finite; kinetic energy ≤ limit·B², B advanced by the
+    step's inputs); if all pass, the members' rows of Ys[1] and their new B are committed. A
+    failed step is not applied: Ys[0] and B stay at the last good step, Ys[1] holds the failed
+    step, aux[2] says which bodies failed how, and the applied wrenches are kept. After the
+    last step the applied wrenches (buckets, site forces) are cleared.
 
     Returns
     -------
-    (steps_done, outcome) : (int, int)
-        outcome OK, NON_FINITE (some body non-finite) or DIVERGED (else some body over its bound).
+    (steps_done, outcome, cur) : (int, int, int)
+        outcome OK, NON_FINITE (some body non-finite) or DIVERGED (else some body over its
+        bound); cur the buffer of the state now.
     """
-    Y, Ynew = Ys[0], Ys[1]
-    budget, budget_new, status = aux[0], aux[1], aux[2]
+    status = aux[2]
     if pending_body >= 0:
         add_wrench(buckets, pending_body, force_column, torque_column, fx, fy, fz, tx, ty, tz)
         has_wrench = True
     scratch = np.empty((8, 13))
-    FT = np.zeros((Y.shape[0], 6))
+    FT = np.zeros((Ys.shape[1], 6))
+    fallback = np.empty(members.shape[0], dtype=np.int64)
     for k in range(n_steps):
+        Y, Ynew = Ys[cur], Ys[1 - cur]
+        budget, budget_new = aux[cur], aux[1 - cur]
         if has_wrench:
-            resolve_wrenches(Y, buckets, sites, FT)
+            resolve_wrenches(Y, prm, buckets, sites, FT)
+        reduced_outcome, n_fallback = _step_reduced_bodies(Y, Ynew, prm, FT, members, first, fallback, True, budget,
+                                                           budget_new, status, dt, limit, has_wrench)
+        args = (Y, Ynew, prm, FT, members, first, fallback, n_fallback, has_wrench, budget, budget_new, status, dt,
+                limit, scratch)
         if method == 0:
-            outcome = _step_bodies_0(Y, Ynew, prm, FT, has_wrench, budget, budget_new, status, dt, limit, scratch)
+            outcome = _step_bodies_0(*args)
         elif method == 1:
-            outcome = _step_bodies_1(Y, Ynew, prm, FT, has_wrench, budget, budget_new, status, dt, limit, scratch)
+            outcome = _step_bodies_1(*args)
         elif method == 2:
-            outcome = _step_bodies_2(Y, Ynew, prm, FT, has_wrench, budget, budget_new, status, dt, limit, scratch)
+            outcome = _step_bodies_2(*args)
         elif method == 3:
-            outcome = _step_bodies_3(Y, Ynew, prm, FT, has_wrench, budget, budget_new, status, dt, limit, scratch)
+            outcome = _step_bodies_3(*args)
         elif method == 4:
-            outcome = _step_bodies_4(Y, Ynew, prm, FT, has_wrench, budget, budget_new, status, dt, limit, scratch)
+            outcome = _step_bodies_4(*args)
         else:
-            outcome = _step_bodies_5(Y, Ynew, prm, FT, has_wrench, budget, budget_new, status, dt, limit, scratch)
+            outcome = _step_bodies_5(*args)
+        if reduced_outcome == NON_FINITE or outcome == NON_FINITE:
+            return k, NON_FINITE, cur
+        outcome = max(outcome, reduced_outcome)  # DIVERGED or OK
         if outcome != OK:
-            return k, outcome
-        Y[:, :] = Ynew
-        budget[:] = budget_new
+            return k, outcome, cur
+        cur = 1 - cur
     if has_wrench:
         buckets[:, :] = 0.0
         sites[:, 4:7] = 0.0
-    return n_steps, OK
+    return n_steps, OK, cur

@@ -15,7 +15,13 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-__all__ = ["BodyModel", "State"]
+__all__ = ["BodyModel", "State", "MOTIONS"]
+
+#: The motions a body may be given (scene key ``motion``; reduction.py):
+#: ``free`` (six degrees of freedom), ``static`` (never moves), ``kinematic`` (moves at its
+#: constant initial twist, deaf to wrenches), ``planar`` (x, y and yaw in a plane),
+#: ``rotation_only`` (the centre of mass stays put), ``translation_only`` (orientation fixed).
+MOTIONS = ("free", "static", "kinematic", "planar", "rotation_only", "translation_only")
 
 
 @dataclass(frozen=True)
@@ -45,6 +51,10 @@ class BodyModel:
         Site position from the centre of mass, P axes (m).
     site_world_axes : ndarray of bool, shape (S,)
         True where the site's axes are world-aligned rather than body-fixed.
+    motion : tuple of str, length N (or empty: every body ``free``)
+        The motion each body is allowed (:data:`MOTIONS`; scene key ``motion``).
+    plane_normal_W : ndarray, shape (N, 3) (or empty)
+        Unit normal of the plane of a ``planar`` body, world axes (zeros for the others).
     """
 
     names: tuple[str, ...]
@@ -58,6 +68,18 @@ class BodyModel:
     site_body: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
     site_p_P: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     site_world_axes: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    motion: tuple[str, ...] = ()
+    plane_normal_W: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+
+    @property
+    def motions(self) -> tuple[str, ...]:
+        """The motion of every body (``free`` where the model declares none), length N."""
+        return self.motion if self.motion else ("free",) * self.count
+
+    @property
+    def plane_normals_W(self) -> np.ndarray:
+        """(N, 3) plane normals (zeros for bodies that are not planar)."""
+        return self.plane_normal_W if len(self.plane_normal_W) else np.zeros((self.count, 3))
 
     @property
     def count(self) -> int:
@@ -83,6 +105,8 @@ class BodyModel:
             q_BP=self.q_BP[idx],
             damping_linear=self.damping_linear[idx],
             damping_angular=self.damping_angular[idx],
+            motion=tuple(self.motions[i] for i in idx),
+            plane_normal_W=self.plane_normals_W[idx],
             site_names=(),
             site_body=np.zeros(0, dtype=int),
             site_p_P=np.zeros((0, 3)),

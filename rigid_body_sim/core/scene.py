@@ -12,6 +12,10 @@ Schema (every key not listed is an error; see README "Scene files")::
         pose: {position: [0, 0, 1], orientation: [0, 0, 0, 1]}   # optional; x, y, z, w
         twist: {linear: [0, 0, 0], angular: [0, 0, 0]}          # optional; world axes
         damping: {linear: 0.0, angular: 0.0}                    # optional; N·s/m, N·m·s/rad
+        motion: free                      # optional: free | static | kinematic | rotation_only |
+                                          # translation_only | planar, or
+                                          # {kind: planar, normal: [0, 0, 1]} (plane through the
+                                          # initial position; default normal world z)
         sites:                                                  # optional
           corner: {position: [0.5, 0.3, 0.0]}                   # body frame, from the COM
           nozzle: {position: [0, 0, -0.2], axes: world}         # axes: body (default) | world
@@ -45,7 +49,7 @@ from .mass_properties import (
     principal_frame,
     sphere_inertia,
 )
-from .model import BodyModel, State
+from .model import MOTIONS, BodyModel, State
 from .quaternion import (
     quat_conjugate,
     quat_multiply,
@@ -73,7 +77,9 @@ _RESERVED_SITE_NAMES = {"world_aligned"}
 _INERTIA_KINDS = ("box", "sphere", "cylinder", "principal", "tensor")
 _TOP_KEYS = ("gravity", "bodies", "wrenches", "energy_growth_limit")
 _WRENCH_KEYS = ("body", "frame", "force", "torque", "start", "duration")
-_BODY_KEYS = ("mass", "inertia", "pose", "twist", "damping", "sites")
+_BODY_KEYS = ("mass", "inertia", "pose", "twist", "damping", "sites", "motion")
+#: Relative tolerance of the initial twist's consistency with a planar motion (then projected).
+PLANAR_TWIST_RTOL = 1e-9
 
 
 class SceneError(ValueError):
@@ -313,6 +319,8 @@ def _build(data: dict, source: str) -> Scene:
         check.fail("bodies", "a non-empty mapping of body names to bodies", bodies)
 
     names: list[str] = []
+    motions: list[str] = []
+    normals: list[np.ndarray] = []
     masses, moments, q_BPs, damp_lin, damp_ang = [], [], [], [], []
     p0, q0, v0, w0 = [], [], [], []
     site_names: list[str] = []
@@ -354,6 +362,10 @@ def _build(data: dict, source: str) -> Scene:
             if "angular" in twist:
                 w_W = check.vector(twist["angular"], f"{path}.twist.angular", 3, unit="rad/s, world axes")
 
+        motion, normal = "free", np.zeros(3)
+        if body.get("motion") is not None:
+            motion, normal, v_W, w_W = _motion(check, body["motion"], f"{path}", v_W, w_W)
+
         c_lin = c_ang = 0.0
         if body.get("damping") is not None:
             damping = check.mapping(body["damping"], f"{path}.damping", ("linear", "angular"))
@@ -383,6 +395,8 @@ def _build(data: dict, source: str) -> Scene:
                 body_sites.append(site)
 
         names.append(name)
+        motions.append(motion)
+        normals.append(normal)
         masses.append(mass)
         moments.append(principal)
         q_BPs.append(q_BP)
@@ -407,6 +421,8 @@ def _build(data: dict, source: str) -> Scene:
         site_body=np.array(site_body, dtype=int),
         site_p_P=np.array(site_p_P).reshape(-1, 3),
         site_world_axes=np.array(site_world, dtype=bool),
+        motion=tuple(motions),
+        plane_normal_W=np.array(normals).reshape(-1, 3),
     )
     state = State(np.array(p0), np.array(q0), np.array(v0), np.array(w0))
     scene = Scene(source=source, model=model, initial_state=state, sites=sites_of,
@@ -414,6 +430,63 @@ def _build(data: dict, source: str) -> Scene:
     if top.get("wrenches") is not None:
         scene = replace(scene, wrenches=_wrenches(check, top["wrenches"], scene))
     return scene
+
+
+def _motion(check: _Checker, value: Any, path: str, v_W: np.ndarray, w_W: np.ndarray
+            ) -> tuple[str, np.ndarray, np.ndarray, np.ndarray]:
+    """The ``motion`` of a body: (kind, unit plane normal or zeros, initial v_W, initial w_W).
+
+    The initial twist must be one the motion allows: none for ``static``; no linear part for
+    ``rotation_only``; no angular part for ``translation_only``; for ``planar``, linear
+    velocity in the plane and angular velocity along its normal (within PLANAR_TWIST_RTOL,
+    then projected exactly).
+    """
+    where = f"{path}.motion"
+    expected = f"one of {list(MOTIONS)}, or {{kind: planar, normal: [x, y, z]}}"
+    normal = np.zeros(3)
+    if isinstance(value, str):
+        kind, spec = value, {}
+    elif isinstance(value, Mapping):
+        spec = check.mapping(value, where, ("kind", "normal"), required=("kind",))
+        kind = spec["kind"]
+        where = f"{where}.kind"
+    else:
+        check.fail(where, expected, value)
+        raise AssertionError  # unreachable
+    if kind not in MOTIONS:
+        check.fail(where, expected, kind)
+    if "normal" in spec:
+        if kind != "planar":
+            check.fail(f"{path}.motion.normal", "no normal unless kind is planar", spec["normal"])
+        normal = check.vector(spec["normal"], f"{path}.motion.normal", 3, unit="plane normal, world axes")
+        length = float(np.linalg.norm(normal))
+        if not length > 0.0:
+            check.fail(f"{path}.motion.normal", "a non-zero vector (the plane's normal, world axes)", spec["normal"])
+        normal = normal / length
+    elif kind == "planar":
+        normal = np.array([0.0, 0.0, 1.0])
+    twist = f"{path}.twist"
+    if kind == "static" and (v_W.any() or w_W.any()):
+        check.fail(twist, "no twist for a static body (motion: static)", {"linear": v_W.tolist(), "angular": w_W.tolist()})
+    if kind == "rotation_only" and v_W.any():
+        check.fail(f"{twist}.linear", "zero linear velocity for motion: rotation_only (the centre of mass stays put)",
+                   v_W.tolist())
+    if kind == "translation_only" and w_W.any():
+        check.fail(f"{twist}.angular", "zero angular velocity for motion: translation_only (the orientation is fixed)",
+                   w_W.tolist())
+    if kind == "planar":
+        off_plane = float(v_W @ normal)
+        if abs(off_plane) > PLANAR_TWIST_RTOL * max(float(np.linalg.norm(v_W)), 1e-300):
+            check.fail(f"{twist}.linear", f"a velocity in the plane of normal {normal.tolist()} (motion: planar; "
+                       f"its normal component is {off_plane:.3g} m/s)", v_W.tolist())
+        about_normal = float(w_W @ normal)
+        tilt = float(np.linalg.norm(w_W - about_normal * normal))
+        if tilt > PLANAR_TWIST_RTOL * max(float(np.linalg.norm(w_W)), 1e-300):
+            check.fail(f"{twist}.angular", f"an angular velocity along the plane normal {normal.tolist()} (motion: "
+                       f"planar: only yaw; its tilting part is {tilt:.3g} rad/s)", w_W.tolist())
+        v_W = v_W - off_plane * normal
+        w_W = about_normal * normal
+    return kind, normal, v_W, w_W
 
 
 def _wrenches(check: _Checker, value: Any, scene: Scene) -> tuple[ScriptedWrench, ...]:

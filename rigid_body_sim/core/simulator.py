@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -29,7 +29,7 @@ from .dynamics import (
     linear_momentum_W,
     potential_energy,
 )
-from . import kernels
+from . import kernels, reduction
 from .forces import FrameKind, FrameRef, WrenchAccumulator, parse_frame
 from .integrators import INTEGRATORS, Integrator, get_integrator, step_reference
 from .model import State
@@ -178,11 +178,16 @@ class Simulator:
         Tolerances of the ``reference`` integrator.
     energy_growth_limit : float, optional
         Factor (> 1) of the blow-up check (:class:`DivergenceError`); default the scene's.
+    model_reduction : bool
+        Give each body the cheapest exact model for what it is and what the scene declares
+        (reduction.py; :meth:`body_models` says which and why). False steps every body with the
+        integrator, except the declared constraints the full equations cannot make (kinematic,
+        planar): the switch for comparing.
     """
 
     def __init__(self, scene: Scene, integrator: str = "rk4", dt: float = 0.01, *,
                  reference_rtol: float = 1e-12, reference_atol: float = 1e-12,
-                 energy_growth_limit: float | None = None):
+                 energy_growth_limit: float | None = None, model_reduction: bool = True):
         self.scene = scene
         self.model = scene.model
         limit = scene.energy_growth_limit if energy_growth_limit is None else energy_growth_limit
@@ -191,19 +196,23 @@ class Simulator:
             raise ValueError(f"energy_growth_limit: expected a finite number > 1, got {limit!r}")
         self.energy_growth_limit = float(limit)
         # Per-body constants of the kernels (kernels.py): mass properties, gravity, damping, the
-        # energy bound's 1/√(2m) and 1/√(2 I_min) (DivergenceError), the active flag (stop_body).
+        # energy bound's 1/√(2m) and 1/√(2 I_min) (DivergenceError), each body's reduced model.
         self._prm = kernels.pack_parameters(self.model)
         self._budget_per_force = self._prm[:, kernels.BUDGET_FORCE]
         self._budget_per_torque = self._prm[:, kernels.BUDGET_TORQUE]
         n = self.model.count
         # The state lives in one (N, 13) array of rows (p, q, v, w), stepped in place; ``state``
         # views it. Scratch of the kernels: the next step, the resolved wrench, the bound, status.
-        self._Ys = np.zeros((2, n, kernels.STATE_WIDTH))  # state, next step
-        self._Y, self._Y_next = self._Ys[0], self._Ys[1]
-        self._state_view = State.of_rows(self._Y)
+        # Two buffers: the state is Ys[cur]; a step writes Ys[1 - cur] and, if it passes, flips cur.
+        self._Ys = np.zeros((2, n, kernels.STATE_WIDTH))
+        self._cur = 0
+        self._views = (State.of_rows(self._Ys[0]), State.of_rows(self._Ys[1]))
+        self._members = np.zeros(0, dtype=np.int64)  # the moving bodies, grouped by model (_replan)
+        self._first = 0  # how many of them, first, the integrator steps (model full)
         self._wrench_W = np.zeros((n, 6))
-        self._aux = np.zeros((3, n))  # energy bound √J (see DivergenceError), its next value, status
-        self._budget, self._budget_next, self._status = self._aux[0], self._aux[1], self._aux[2]
+        # The energy bound √J (see DivergenceError) in two buffers like the state, and each body's status.
+        self._aux = np.zeros((3, n))
+        self._status = self._aux[2]
         self._wrenches = WrenchAccumulator(self.model)
         self._frame_refs: dict[tuple[str, str], FrameRef] = {}
         # (body, force column, torque column) of the buckets, per frame whose wrench can be pending.
@@ -228,7 +237,10 @@ class Simulator:
         self._script_wrenches = WrenchAccumulator(self.model)
         self._script_active: tuple[int, ...] = ()
         self._stopped = np.zeros(self.model.count, dtype=bool)
-        self._active_cache: tuple[np.ndarray, Any] | None = None
+        if not isinstance(model_reduction, (bool, np.bool_)):
+            raise ValueError(f"model_reduction: expected True or False, got {model_reduction!r}")
+        self._reduce = bool(model_reduction)
+        self._plans: list[reduction.BodyPlan] = []
         self.reset()
 
     # ----------------------------------------------------------------- configuration
@@ -249,7 +261,7 @@ class Simulator:
             # kernels.advance compiled for this method and exactly these arrays, called without
             # numba's per-call type dispatch.
             self._advance = kernels.entry_point(
-                kernels.advance, self._method, self._Ys, self._prm, self._wrenches.buckets,
+                kernels.advance, self._method, self._Ys, 0, self._prm, self._members, 0, self._wrenches.buckets,
                 self._wrenches.sites, self._aux, False, 0, 1.0, 2.0, -1, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         self._integrator_name = name
 
@@ -279,36 +291,61 @@ class Simulator:
     def reset(self) -> None:
         """Back to the scene's initial state: t = 0, no applied wrench, no stopped body."""
         self.state = self.scene.initial_state
-        self._budget[:] = np.sqrt(kinetic_energy(self.model, self.state))  # √J, see DivergenceError
+        self._aux[0:2] = np.sqrt(kinetic_energy(self.model, self.state))  # √J, see DivergenceError
         self.step_count = 0
         self._time_origin = 0.0
         self._step_origin = 0
         self.clear_wrenches()
         self._stopped[:] = False
-        self._prm[:, kernels.ACTIVE] = 1.0
-        self._active_cache = None
+        self._replan()
 
     def stop_body(self, body: str) -> None:
         """Freeze ``body`` at its current state; it is no longer integrated until :meth:`reset`."""
         b = self._index(body)
         self._stopped[b] = True
-        self._prm[b, kernels.ACTIVE] = 0.0
-        self._active_cache = None
+        self._replan()
+
+    @property
+    def model_reduction(self) -> bool:
+        """Whether bodies get reduced models (see the constructor); setting it re-derives them."""
+        return self._reduce
+
+    @model_reduction.setter
+    def model_reduction(self, value: bool) -> None:
+        if not isinstance(value, (bool, np.bool_)):
+            raise ValueError(f"model_reduction: expected True or False, got {value!r}")
+        self._reduce = bool(value)
+        self._replan()
+
+    def body_models(self) -> list[reduction.BodyPlan]:
+        """The model each body gets now and why (reduction.BodyPlan: body, motion, model, code, reason)."""
+        return list(self._plans)
+
+    def _replan(self) -> None:
+        """Derive each body's model from the scene, the switch, the stopped bodies and the current state."""
+        self._plans = reduction.plan_models(self.model, self._reduce, self._stopped)
+        self._members, self._first = reduction.apply_plan(self._prm, self.model, self.scene.initial_state, self.state,
+                                                          self._plans)
+        # Bodies that no longer move keep their row in both buffers (the kernels never write it).
+        cur = self._cur
+        self._Ys[1 - cur] = self._Ys[cur]
+        self._aux[1 - cur] = self._aux[cur]
 
     @property
     def state(self) -> State:
-        """The current state of every body (P frames, (w, x, y, z)): a live view, ``copy()`` to keep one.
+        """The current state of every body (P frames, (w, x, y, z)).
 
-        Assigning a :class:`State` copies it in (every array (N, 3) or (N, 4) as the fields say).
+        A view into the simulator's buffers, valid until the next step: ``copy()`` it to keep
+        it. Assigning a :class:`State` copies it in (arrays (N, 3) and (N, 4) as its fields say).
         """
-        return self._state_view
+        return self._views[self._cur]
 
     @state.setter
     def state(self, value: State) -> None:
         rows = value.rows()
-        if rows.shape != self._Y.shape:
-            raise ValueError(f"state: expected {self._Y.shape[0]} bodies of 13 numbers, got shape {rows.shape}")
-        self._Y[:] = rows
+        if rows.shape != self._Ys.shape[1:]:
+            raise ValueError(f"state: expected {self._Ys.shape[1]} bodies of 13 numbers, got shape {rows.shape}")
+        self._Ys[:] = rows  # both buffers: bodies that do not move are never rewritten
 
     @property
     def stopped_bodies(self) -> tuple[str, ...]:
@@ -403,13 +440,16 @@ class Simulator:
         single.add(ref, J, H)
         J_W, H_W = single.resolve(self.state)
         b = ref.body_index
+        impulse = np.concatenate((J_W[b], H_W[b]))
+        kernels.project_wrench(self._prm[b], impulse)  # onto the body's motion
+        J_W[b], H_W[b] = impulse[:3], impulse[3:]
         state = self.state.copy()
         state.v_WC_W[b] += J_W[b] / self.model.mass[b]
         state.w_WP_P[b] += quat_rotate(quat_conjugate(state.q_WP[b]), H_W[b]) / self.model.inertia_P[b]
         if not state.finite_bodies()[b]:
             raise ValueError(f"impulse on {body!r} would make its velocity non-finite; not applied")
         self.state = state
-        self._budget[b] += (math.hypot(*J_W[b]) * self._budget_per_force[b]
+        self._aux[0:2, b] += (math.hypot(*J_W[b]) * self._budget_per_force[b]
                                    + math.hypot(*H_W[b]) * self._budget_per_torque[b])
 
     def active_scripted_wrenches(self, time: float | None = None) -> list[tuple[str, str, np.ndarray, np.ndarray]]:
@@ -453,8 +493,19 @@ class Simulator:
         if angular_velocity_world is not None:
             w_W = _vector3(angular_velocity_world, "angular_velocity_world")
             state.w_WP_P[b] = quat_rotate(quat_conjugate(state.q_WP[b]), w_W)
+        # Keep the body's motion: velocities projected as wrenches are (a kinematic body takes
+        # the new twist as its constant one), a planar body's position onto its plane.
+        twist = np.concatenate((state.v_WC_W[b], quat_rotate(state.q_WP[b], state.w_WP_P[b])))
+        if self.model.motions[b] != "kinematic":
+            kernels.project_wrench(self._prm[b], twist)
+        state.v_WC_W[b] = twist[:3]
+        state.w_WP_P[b] = quat_rotate(quat_conjugate(state.q_WP[b]), twist[3:])
+        if self.model.motions[b] == "planar":
+            n = self._prm[b, kernels.NORMAL:kernels.NORMAL + 3]
+            state.p_WC_W[b] -= (state.p_WC_W[b] @ n - self._prm[b, kernels.PLANE_OFFSET]) * n
         self.state = state
-        self._budget[b] = np.sqrt(kinetic_energy(self.model, state)[b])  # a new start for the bound
+        self._aux[0:2, b] = np.sqrt(kinetic_energy(self.model, state)[b])  # a new start for the bound
+        self._replan()
 
     # ----------------------------------------------------------------- stepping
 
@@ -494,15 +545,17 @@ class Simulator:
         wrenches = self._wrenches
         pending = self._pending
         if pending is None:
-            done, outcome = self._advance(self._method, self._Ys, self._prm, wrenches.buckets, wrenches.sites,
-                                          self._aux, not wrenches.empty, n, self._dt, self.energy_growth_limit,
-                                          -1, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            done, outcome, self._cur = self._advance(
+                self._method, self._Ys, self._cur, self._prm, self._members, self._first, wrenches.buckets,
+                wrenches.sites, self._aux, not wrenches.empty, n, self._dt, self.energy_growth_limit,
+                -1, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         else:
             self._pending = None
-            done, outcome = self._advance(self._method, self._Ys, self._prm, wrenches.buckets, wrenches.sites,
-                                          self._aux, not wrenches.empty, n, self._dt, self.energy_growth_limit,
-                                          pending[0], pending[1], pending[2], pending[3], pending[4], pending[5],
-                                          pending[6], pending[7], pending[8])
+            done, outcome, self._cur = self._advance(
+                self._method, self._Ys, self._cur, self._prm, self._members, self._first, wrenches.buckets,
+                wrenches.sites, self._aux, not wrenches.empty, n, self._dt, self.energy_growth_limit,
+                pending[0], pending[1], pending[2], pending[3], pending[4], pending[5], pending[6], pending[7],
+                pending[8])
         self.step_count += done
         if outcome:
             wrenches.empty = wrenches.empty and pending is None  # the kernel kept them, pending one included
@@ -517,35 +570,41 @@ class Simulator:
             if buckets is self._wrenches.buckets or buckets is self._script_wrenches.buckets:
                 # advance clears the buckets it is given: these must last all n steps (the script, its window)
                 buckets, sites = buckets.copy(), sites.copy()
-            done, outcome = self._advance(self._method, self._Ys, self._prm, buckets, sites, self._aux, has_wrench,
-                                          1, self._dt, self.energy_growth_limit, -1, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            done, outcome, self._cur = self._advance(
+                self._method, self._Ys, self._cur, self._prm, self._members, self._first, buckets, sites, self._aux,
+                has_wrench, 1, self._dt, self.energy_growth_limit, -1, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
             self.step_count += done
             if outcome:
                 self._raise_step_failure(outcome)
             return
         wrench = self._wrench_W
+        cur, nxt = self._cur, 1 - self._cur
+        Y, Y_next = self._Ys[cur], self._Ys[nxt]
         if has_wrench:
-            kernels.resolve_wrenches(self._Y, buckets, sites, wrench)
+            kernels.resolve_wrenches(Y, self._prm, buckets, sites, wrench)
         else:
             wrench.fill(0.0)
         force_W, torque_W = wrench[:, 0:3], wrench[:, 3:6]
         dt = self._dt
+        members = self._members
+        # The reduced models step in the kernels; the integrator takes the rest (model full,
+        # and isotropic/symmetric bodies under a torque this step).
+        fallback = kernels.step_reduced(Y, Y_next, self._prm, wrench, members, self._first, dt)
+        full = np.concatenate((members[:self._first], fallback))
         # Overflow on the way to a non-finite state is reported as NonFiniteStateError below,
         # not as a floating-point warning from wherever it first happened.
         with np.errstate(all="ignore"):
-            if not self._stopped.any():
-                self._Y_next[:] = self._step_function(self.model, self.state, force_W, torque_W, dt).rows()
-            else:
-                active, sub_model = self._active()
-                sub = self._step_function(sub_model, self.state.take(active), force_W[active], torque_W[active], dt)
-                self._Y_next[:] = self._Y
-                self._Y_next[active] = sub.rows()
-        outcome = kernels.check_step(self._Y_next, self._prm, wrench, has_wrench, self._aux, dt,
-                                     self.energy_growth_limit)
+            if len(full):
+                # Each body's gravity as its motion allows (projected, in the kernels' parameters).
+                sub_model = replace(self.model.subset(full),
+                                    gravity_W=self._prm[full, kernels.GRAVITY:kernels.GRAVITY + 3].copy())
+                sub = self._step_function(sub_model, self.state.take(full), force_W[full], torque_W[full], dt)
+                Y_next[full] = sub.rows()
+        outcome = kernels.check_step(Y_next, self._prm, wrench, has_wrench, self._aux[cur], self._aux[nxt],
+                                     self._status, members, dt, self.energy_growth_limit)
         if outcome:
             self._raise_step_failure(outcome)
-        self._Y[:] = self._Y_next
-        self._budget[:] = self._budget_next
+        self._cur = nxt
         self.step_count += 1
 
     def _raise_step_failure(self, outcome: int) -> None:
@@ -555,16 +614,16 @@ class Simulator:
         index = np.flatnonzero(self._status == outcome)
         bad = tuple(names[i] for i in index)
         # math.hypot scales internally: |w| of a finite w never overflows (np.linalg.norm can).
-        spin = {names[i]: math.hypot(*self._Y[i, 10:13]) * dt for i in index}
+        spin = {names[i]: math.hypot(*self._Ys[self._cur, i, 10:13]) * dt for i in index}
         if outcome == kernels.NON_FINITE:
             raise NonFiniteStateError(bad, self.step_count, self._integrator_name, dt, spin)
-        failed = State.of_rows(self._Y_next)
+        failed = self._views[1 - self._cur]
         with np.errstate(all="ignore"):
             energy = kinetic_energy(self.model, failed)
         raise DivergenceError(
             bad, self.step_count, self._integrator_name, dt, spin,
             {names[i]: float(energy[i]) for i in index},
-            {names[i]: float(self._budget_next[i] ** 2) for i in index},
+            {names[i]: float(self._aux[1 - self._cur, i] ** 2) for i in index},
             self.energy_growth_limit,
         )
 
@@ -592,12 +651,6 @@ class Simulator:
     def time(self) -> float:
         """Simulated time, s, since the last reset: exact multiples of ``dt`` since ``dt`` last changed."""
         return self._time_origin + (self.step_count - self._step_origin) * self._dt
-
-    def _active(self):
-        if self._active_cache is None:
-            active = np.flatnonzero(~self._stopped)
-            self._active_cache = (active, self.model.subset(active))
-        return self._active_cache
 
     # ----------------------------------------------------------------- read-outs
 

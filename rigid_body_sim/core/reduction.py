@@ -1,0 +1,165 @@
+"""Model reduction: per body, the cheapest model that is exact for what the scene declares and what the body is.
+
+A scene compiler over a :class:`~rigid_body_sim.core.model.BodyModel` and its current state.
+Each body gets one of the kernels' models (kernels.MODEL_*) and the wrench projection its
+declared motion allows (kernels.PROJECT_*); the moving bodies are listed grouped by model, so
+each kernel pass runs over a homogeneous group and static bodies are never touched.
+
+=====================  ==========================================================================
+model                  when, and what the step does
+=====================  ==========================================================================
+static                 ``motion: static`` (or a body stopped by Simulator.stop_body): nothing
+kinematic              ``motion: kinematic``: p += v dt, q ← exp(ω_W dt) ⊗ q; deaf to wrenches
+planar                 ``motion: planar``: exact flow of x, y, yaw under the step's wrench
+                       (force in the plane, torque along its normal; the rest projected out)
+translation            ``motion: translation_only``: exact constant-force flow; q fixed
+isotropic              I1 = I2 = I3 (free or rotation_only): no gyroscopic term; exact
+                       translation and exact exp-map rotation while torque-free
+symmetric              two equal moments and no angular damping (free or rotation_only): exact
+                       translation and the exact symmetric-top flow while torque-free
+full                   everything else: the integrator (also isotropic/symmetric bodies in a
+                       step where a torque acts on them: re-derived every step)
+=====================  ==========================================================================
+
+``rotation_only`` bodies keep the centre of mass put by projection (no force, no gravity, zero
+velocity); ``translation_only`` bodies keep their orientation. With ``reduce=False`` (the
+switch) only the declared constraints keep their exact models (kinematic, planar: they are
+not motions the full equations can make); static and translation-only bodies, isotropic and
+symmetric ones are all stepped by the integrator, with the same projections.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import kernels
+from .closed_form import EQUAL_MOMENTS_RTOL
+from .model import BodyModel, State
+from .quaternion import quat_rotate, quat_to_matrix
+
+__all__ = ["BodyPlan", "MODEL_NAMES", "plan_models", "apply_plan"]
+
+#: kernels.MODEL_* → the name used in describe output and logs.
+MODEL_NAMES = {
+    kernels.MODEL_FULL: "full",
+    kernels.MODEL_STATIC: "static",
+    kernels.MODEL_KINEMATIC: "kinematic",
+    kernels.MODEL_TRANSLATION: "translation",
+    kernels.MODEL_PLANAR: "planar",
+    kernels.MODEL_ISOTROPIC: "isotropic",
+    kernels.MODEL_SYMMETRIC: "symmetric",
+}
+
+_PROJECTION = {
+    "free": kernels.PROJECT_NONE,
+    "static": kernels.PROJECT_ALL,
+    "kinematic": kernels.PROJECT_ALL,
+    "planar": kernels.PROJECT_PLANE,
+    "rotation_only": kernels.PROJECT_FORCE,
+    "translation_only": kernels.PROJECT_TORQUE,
+}
+
+
+@dataclass(frozen=True)
+class BodyPlan:
+    """The model one body gets. ``model`` is a key of MODEL_NAMES' values; ``reason`` says why."""
+
+    body: str
+    motion: str
+    model: str
+    code: int
+    reason: str
+
+
+def _equal(a: float, b: float) -> bool:
+    return abs(a - b) <= EQUAL_MOMENTS_RTOL * max(abs(a), abs(b))
+
+
+def plan_models(model: BodyModel, reduce: bool = True, stopped: np.ndarray | None = None) -> list[BodyPlan]:
+    """Which model each body of ``model`` gets, and why (one :class:`BodyPlan` per body, in order)."""
+    plans = []
+    motions = model.motions
+    normals = model.plane_normals_W
+    for b, name in enumerate(model.names):
+        motion = motions[b]
+        I = model.inertia_P[b]
+        moments = f"I = ({I[0]:.6g}, {I[1]:.6g}, {I[2]:.6g}) kg·m²"
+        isotropic = _equal(I[0], I[1]) and _equal(I[1], I[2])
+        pair = _equal(I[0], I[1]) or _equal(I[1], I[2]) or _equal(I[0], I[2])
+        symmetric = pair and model.damping_angular[b] == 0.0
+        if stopped is not None and stopped[b]:
+            code, reason = kernels.MODEL_STATIC, "stopped by Simulator.stop_body: no longer integrated"
+        elif motion == "static":
+            code, reason = ((kernels.MODEL_STATIC, "motion: static: never integrated") if reduce else
+                            (kernels.MODEL_FULL, "motion: static, stepped by the integrator with every wrench "
+                                                 "projected out (reduction off)"))
+        elif motion == "kinematic":
+            code, reason = kernels.MODEL_KINEMATIC, ("motion: kinematic: moves at its constant initial twist "
+                                                     "(exact), deaf to wrenches")
+        elif motion == "planar":
+            n = normals[b]
+            code, reason = kernels.MODEL_PLANAR, (
+                f"motion: planar (normal [{n[0]:.6g}, {n[1]:.6g}, {n[2]:.6g}]): exact flow of the in-plane "
+                "position and yaw under each step's wrench; force out of the plane and tilting torque projected out")
+        elif motion == "translation_only" and reduce:
+            code, reason = kernels.MODEL_TRANSLATION, ("motion: translation_only: exact constant-force flow of the "
+                                                       "centre of mass; orientation fixed, torques projected out")
+        elif motion == "translation_only":
+            code, reason = kernels.MODEL_FULL, ("motion: translation_only, stepped by the integrator with torques "
+                                                "projected out (reduction off)")
+        elif reduce and isotropic:
+            code, reason = kernels.MODEL_ISOTROPIC, (
+                f"isotropic inertia ({moments}): no gyroscopic term; exact translation and exact exp-map "
+                "rotation while torque-free, the integrator in steps with a torque")
+        elif reduce and symmetric:
+            code, reason = kernels.MODEL_SYMMETRIC, (
+                f"axisymmetric inertia ({moments}), no angular damping: exact translation and exact "
+                "symmetric-top flow while torque-free, the integrator in steps with a torque")
+        else:
+            why = "reduction off" if not reduce else (
+                "asymmetric inertia" if not pair else "axisymmetric but with angular damping")
+            code, reason = kernels.MODEL_FULL, f"the integrator ({why}, {moments})"
+        if motion == "rotation_only":
+            reason += "; motion: rotation_only: the centre of mass stays put (forces and gravity projected out)"
+        plans.append(BodyPlan(name, motion, MODEL_NAMES[code], code, reason))
+    return plans
+
+
+def apply_plan(prm: np.ndarray, model: BodyModel, initial: State, state: State, plans: list[BodyPlan]
+               ) -> tuple[np.ndarray, int]:
+    """Write the plans into the kernels' parameters ``prm`` (in place); return the moving bodies grouped by model.
+
+    Per body: MODEL, PROJECT, the projected gravity (and its energy-bound rate), and for planar
+    bodies the plane (normal, offset n·p of the ``initial`` position: the plane the scene put
+    it in) and the moment about its normal nᵀ R I Rᵀ n at ``state`` (constant under yaw), for
+    kinematic bodies the world angular velocity of ``state``. Returns ``members`` (int64): the indices of every non-static body, sorted by
+    model code (stable within a model).
+    """
+    gravity = np.asarray(model.gravity_W, dtype=float)
+    normals = model.plane_normals_W
+    codes = np.empty(model.count, dtype=np.int64)
+    for b, plan in enumerate(plans):
+        p = prm[b]
+        codes[b] = plan.code
+        p[kernels.MODEL] = plan.code
+        p[kernels.PROJECT] = _PROJECTION[plan.motion]
+        g = gravity.copy()
+        if plan.motion in ("static", "kinematic", "rotation_only"):
+            g[:] = 0.0
+        elif plan.motion == "planar":
+            n = normals[b]
+            g = g - (g @ n) * n
+            p[kernels.NORMAL:kernels.NORMAL + 3] = n
+            p[kernels.PLANE_OFFSET] = float(initial.p_WC_W[b] @ n)
+            R = quat_to_matrix(state.q_WP[b])
+            p[kernels.INERTIA_NORMAL] = float(n @ (R @ (model.inertia_P[b] * (R.T @ n))))
+        if plan.motion == "kinematic":
+            p[kernels.KINEMATIC_W:kernels.KINEMATIC_W + 3] = quat_rotate(state.q_WP[b], state.w_WP_P[b])
+        p[kernels.GRAVITY:kernels.GRAVITY + 3] = g
+        p[kernels.CACHE_DT] = np.nan  # no cached rotation increment
+        p[kernels.GRAVITY_BUDGET_RATE] = float(np.linalg.norm(model.mass[b] * g)) * p[kernels.BUDGET_FORCE]
+    moving = np.flatnonzero(codes != kernels.MODEL_STATIC)
+    members = moving[np.argsort(codes[moving], kind="stable")].astype(np.int64)
+    return members, int(np.count_nonzero(codes == kernels.MODEL_FULL))
