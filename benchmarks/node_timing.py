@@ -19,7 +19,17 @@ subscribes to it. Over a window of ``seconds``:
   b0's pose and twist in the same tick, pose first). A zero wrench then clears the hold.
 
 Both processes share a loaded 2-core machine: the subscriber's own CPU (about 2·N·rate
-messages/s) competes with the node, and a lost message may be the subscriber's.
+messages/s) competes with the node, and a lost message may be the subscriber's. To keep that
+share small, the subscriber takes every message serialized (``raw=True``) and reads only what
+it needs from the CDR bytes (stamp, or b0's linear x velocity): a deserialized message costs
+it several times more, and at 100 bodies × 100 Hz it fell behind the node it was measuring.
+It takes messages with one wait set held for the whole run rather than an executor (see
+:func:`_take_loop`; rclpy's EventsExecutor, tried here with raw subscriptions, never
+delivered). When the subscriber still falls behind, the arrival-based figures measure it, not
+the node; so the node's own account is recorded too, from its /diagnostics
+windows that closed inside the measurement window (``node_*``: sim/wall over those windows;
+the lowest window tick rate; tick lateness as the median of the window medians, the median
+and the largest of the window p99s, and the largest maximum; ticks missed).
 """
 
 from __future__ import annotations
@@ -27,6 +37,7 @@ from __future__ import annotations
 import os
 import signal
 import statistics
+import struct
 import subprocess
 import sys
 import tempfile
@@ -67,10 +78,41 @@ def _percentiles(x: list[float]) -> tuple[float, float, float]:
     return float(np.median(a)), float(np.percentile(a, 99)), float(a.max())
 
 
+def _take_loop(node, context, stop: threading.Event) -> None:
+    """Take every message of ``node``'s subscriptions and call their callbacks until ``stop``.
+
+    Instead of an executor: rclpy's SingleThreadedExecutor rebuilds its wait set in Python over
+    all of a node's entities each time it wakes (milliseconds with 201 subscriptions), and wakes
+    once per batch of ready messages; at 100 bodies × 100 Hz on a loaded machine it fell behind
+    the node it was measuring. Here the handles are held for the whole loop, and each ready
+    subscription is drained on each wake.
+    """
+    from contextlib import ExitStack
+
+    from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+
+    subscriptions = list(node.subscriptions)
+    by_pointer = {sub.handle.pointer: sub for sub in subscriptions}
+    with ExitStack() as held:
+        for sub in subscriptions:
+            held.enter_context(sub.handle)
+        held.enter_context(context.handle)
+        wait_set = _rclpy.WaitSet(len(subscriptions), 0, 0, 0, 0, 0, context.handle)
+        while not stop.is_set() and context.ok():
+            wait_set.clear_entities()
+            for sub in subscriptions:
+                wait_set.add_subscription(sub.handle)
+            wait_set.wait(50_000_000)  # ns
+            for pointer in wait_set.get_ready_entities("subscription"):
+                sub = by_pointer[pointer]
+                while (taken := sub.handle.take_message(sub.msg_type, sub.raw)) is not None:
+                    sub.callback(taken[0])
+
+
 def measure(rate_hz: float, bodies: int, seconds: float, latency_trials: int = 5, log=print) -> dict:
     import rclpy
     from rclpy.context import Context
-    from rclpy.executors import SingleThreadedExecutor
+    from diagnostic_msgs.msg import DiagnosticArray
     from rclpy.qos import QoSProfile
     from geometry_msgs.msg import PoseStamped, Twist, WrenchStamped
     from rosgraph_msgs.msg import Clock
@@ -82,8 +124,6 @@ def measure(rate_hz: float, bodies: int, seconds: float, latency_trials: int = 5
     context = Context()
     rclpy.init(context=context, domain_id=DOMAIN_ID)
     node = rclpy.create_node("bench_listener", context=context)
-    executor = SingleThreadedExecutor(context=context)
-    executor.add_node(node)
     qos = QoSProfile(depth=1000)
     lock = threading.Lock()
     clock: list[tuple[float, int]] = []                         # (arrival s, stamp ns)
@@ -93,38 +133,56 @@ def measure(rate_hz: float, bodies: int, seconds: float, latency_trials: int = 5
     recording = [False]
     watched = [f"b{i}" for i in range(bodies)] if bodies * rate_hz <= 10000 else ["b0", f"b{bodies - 1}"]
 
-    def on_clock(msg):
+    # Raw CDR: a 4-byte encapsulation header, then Clock = (sec, nanosec); PoseStamped starts
+    # with header.stamp = (sec, nanosec); Twist starts with linear.x (float64). Byte order from
+    # the header's representation identifier (0x0001: little endian).
+    def stamp_ns(data: bytes) -> int:
+        sec, nanosec = struct.unpack_from("<iI" if data[1] == 1 else ">iI", data, 4)
+        return sec * 1_000_000_000 + nanosec
+
+    def on_clock(data):
         now = time.monotonic()
         if recording[0]:
-            clock.append((now, msg.clock.sec * 1_000_000_000 + msg.clock.nanosec))
+            clock.append((now, stamp_ns(data)))
 
     def on_pose(name):
-        def cb(msg):
+        def cb(data):
             if recording[0]:
-                poses[name].add(msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec)
+                poses[name].add(stamp_ns(data))
         return cb
 
     def on_twist(name):
-        def cb(msg):
+        def cb(data):
             now = time.monotonic()
             if recording[0]:
                 twists[name] += 1
             if name == "b0":
+                (vx,) = struct.unpack_from("<d" if data[1] == 1 else ">d", data, 4)
                 with lock:
-                    b0_vx.append((now, msg.linear.x))
+                    b0_vx.append((now, vx))
         return cb
 
-    node.create_subscription(Clock, "/clock", on_clock, qos)
+    diagnostics: list[dict[str, str]] = []
+
+    def on_diagnostics(msg):
+        if recording[0]:
+            for status in msg.status:
+                if status.name.endswith(": simulation"):
+                    diagnostics.append({kv.key: kv.value for kv in status.values})
+
+    node.create_subscription(DiagnosticArray, "/diagnostics", on_diagnostics, qos)
+    node.create_subscription(Clock, "/clock", on_clock, qos, raw=True)
     for name in watched:
         poses[name], twists[name] = set(), 0
-        node.create_subscription(PoseStamped, f"{name}/pose", on_pose(name), qos)
-        node.create_subscription(Twist, f"{name}/twist", on_twist(name), qos)
+        node.create_subscription(PoseStamped, f"{name}/pose", on_pose(name), qos, raw=True)
+        node.create_subscription(Twist, f"{name}/twist", on_twist(name), qos, raw=True)
     wrench_pub = node.create_publisher(WrenchStamped, "b0/wrench", qos)
 
     proc = subprocess.Popen([str(NODE), "--ros-args", "-p", f"scene:={scene}", "-p", f"rate_hz:={float(rate_hz)}",
                              "-p", "status_period:=0.0", "-p", "wrench_timeout:=0.0"],
                             env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-    spin = threading.Thread(target=executor.spin, daemon=True)
+    stop = threading.Event()
+    spin = threading.Thread(target=_take_loop, args=(node, context, stop), daemon=True)
     spin.start()
     result = {"rate_hz": rate_hz, "bodies": bodies, "seconds": seconds, "watched_bodies": len(watched)}
     try:
@@ -142,6 +200,18 @@ def measure(rate_hz: float, bodies: int, seconds: float, latency_trials: int = 5
         recording[0] = False
         cpu1, w1 = _cpu_seconds(proc.pid), time.monotonic()
         result["cpu_share"] = (cpu1 - cpu0) / (w1 - w0)
+        windows = diagnostics[1:]  # the first opened before the measurement window
+        if windows:
+            result["node_windows"] = len(windows)
+            result["node_sim_wall"] = ((float(windows[-1]["sim time [s]"]) - float(diagnostics[0]["sim time [s]"]))
+                                       / sum(float(d["window [s]"]) for d in windows))
+            result["node_tick_rate_min"] = min(float(d["tick rate [1/s]"]) for d in windows)
+            result["node_late_med_ms"] = float(statistics.median(float(d["tick lateness median [ms]"]) for d in windows))
+            if all("tick lateness p99 [ms]" in d for d in windows):
+                p99s = [float(d["tick lateness p99 [ms]"]) for d in windows]
+                result["node_late_p99_ms_med"], result["node_late_p99_ms_max"] = float(statistics.median(p99s)), max(p99s)
+            result["node_late_max_ms"] = max(float(d["tick lateness max [ms]"]) for d in windows)
+            result["node_ticks_missed"] = sum(int(d["ticks missed"]) for d in windows)
         arrivals = np.array([a for a, _ in clock])
         stamps = np.array([s for _, s in clock], dtype=np.int64)
         period = 1.0 / rate_hz
@@ -191,10 +261,10 @@ def measure(rate_hz: float, bodies: int, seconds: float, latency_trials: int = 5
         result["latency_trials"] = len(latencies)
     finally:
         stop_process(proc, timeout=10)
-        executor.shutdown()
+        stop.set()
+        spin.join(timeout=2)  # it holds the subscriptions' handles until it returns
         node.destroy_node()
         rclpy.try_shutdown(context=context)
-        spin.join(timeout=2)
     log(f"  node rate={rate_hz} bodies={bodies}: " + ", ".join(
         f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}" for k, v in result.items()))
     return result

@@ -53,7 +53,12 @@ def profile(bodies: int = 100, ticks: int = 200, top: int = 20) -> str:
 
 
 def profile_spin(bodies: int = 100, rate_hz: float = 100.0, seconds: float = 4.0, top: int = 22) -> str:
-    """cProfile of the node spinning in-process (its own executor, no subscribers) for ``seconds``."""
+    """cProfile of the node spinning in-process (its own executor, no subscribers) for ``seconds``.
+
+    This is the executor-timer mode (the in-process default, and the harness's); the
+    ``rigid_body_sim_node`` executable ticks from its own thread instead (``tick_thread=True``),
+    which cProfile, attached to this thread only, would not see.
+    """
     import rclpy
     from rclpy.context import Context
     from rclpy.executors import SingleThreadedExecutor

@@ -67,11 +67,16 @@ class SimHarness:
         Executor class to spin both nodes with; default :class:`~rclpy.executors.SingleThreadedExecutor`
         (what ``rigid_body_sim_node`` spins). ``rclpy.experimental.EventsExecutor`` takes a message
         in about a fifth of the time, which suits high-volume tests.
+    tick_thread : bool
+        Tick the node from its own thread on a deadline schedule, as ``rigid_body_sim_node``
+        does, instead of from a timer in the harness's executor (default). Only matters while
+        running; :meth:`step` and everything paused behave the same either way.
     """
 
     def __init__(self, scene: str | Path | None = None, parameters: dict[str, Any] | None = None, *,
                  paused: bool = True, domain_id: int | None = None, node_name: str = "rigid_body_sim",
-                 namespace: str | None = None, timeout: float = 10.0, executor: type | None = None):
+                 namespace: str | None = None, timeout: float = 10.0, executor: type | None = None,
+                 tick_thread: bool = False):
         params = dict(parameters or {})
         if scene is not None:
             params["scene"] = str(scene)
@@ -86,7 +91,7 @@ class SimHarness:
         try:
             overrides = [Parameter(k, value=v) for k, v in params.items()]
             self.node = RigidBodySimNode(node_name, context=self.context, namespace=namespace,
-                                         parameter_overrides=overrides)
+                                         parameter_overrides=overrides, tick_thread=tick_thread)
             self.client = Node("rigid_body_sim_test_client", context=self.context, namespace=namespace)
             self.executor = (executor or SingleThreadedExecutor)(context=self.context)
             self.executor.add_node(self.node)

@@ -350,3 +350,25 @@ def test_harness_tears_down_after_a_failing_test():
     assert not context.ok()
     with SimHarness() as again:  # a fresh harness starts cleanly afterwards
         again.step()
+
+
+def test_model_reduction_parameter_switches_the_models_and_keeps_the_motion(tmp_path):
+    """A sphere gets the exact isotropic model; model_reduction:=false puts it on the integrator; the
+    published pose is the core's either way (bitwise)."""
+    scene = tmp_path / "ball.yaml"
+    scene.write_text(yaml.safe_dump({"bodies": {
+        "ball": {"mass": 1.0, "inertia": {"sphere": 0.1}, "twist": {"angular": [1.0, 2.0, 3.0]}},
+        "wall": {"mass": 1.0, "inertia": {"box": [1, 1, 1]}, "motion": "static"}}}))
+    with SimHarness(scene) as node:
+        sim = node.node.simulator
+        assert {p.body: p.model for p in sim.body_models()} == {"ball": "isotropic", "wall": "static"}
+        node.step(10)
+        core = Simulator(load_scene(scene), integrator="rk4", dt=DT)
+        core.step(10)
+        np.testing.assert_array_equal(pose_arrays(node, "ball")[1], core_arrays(core, "ball")[1])
+        results = node.set_parameters(model_reduction=False)
+        assert all(r.successful for r in results), results
+        assert {p.body: p.model for p in sim.body_models()} == {"ball": "full", "wall": "full"}
+        assert not node.get_parameter("model_reduction")
+        rejected = node.set_parameters(model_reduction="yes")
+        assert not rejected[0].successful and not node.get_parameter("model_reduction")

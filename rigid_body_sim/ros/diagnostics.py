@@ -83,17 +83,21 @@ class TickWindow:
         self.max_lateness_ns = 0
         self._lateness_ns.clear()
 
-    def record(self, expected_ns: int, period_ns: int) -> None:
+    def record(self, expected_ns: int, period_ns: int, missed: int | None = None) -> None:
         """One timer tick that was due at ``expected_ns`` (steady clock) and is running now.
 
-        ``missed_ticks`` counts the periods rcl skipped because the tick was that late.
+        ``missed_ticks`` counts the periods skipped because the tick was that late: ``missed``
+        when the caller knows it (the node's tick thread catches short delays up and skips
+        only beyond a limit), otherwise as rcl's timer does, every whole period of lateness.
         """
         lateness = max(0, time.monotonic_ns() - expected_ns)
         self.ticks += 1
         self._lateness_ns.append(lateness)
         if lateness > self.max_lateness_ns:
             self.max_lateness_ns = lateness
-        if period_ns > 0:
+        if missed is not None:
+            self.missed_ticks += missed
+        elif period_ns > 0:
             self.missed_ticks += lateness // period_ns
 
     def elapsed_s(self) -> float:
@@ -107,6 +111,14 @@ class TickWindow:
         ordered = sorted(self._lateness_ns)
         mid = len(ordered) // 2
         return float(ordered[mid]) if len(ordered) % 2 else 0.5 * (ordered[mid - 1] + ordered[mid])
+
+    def p99_lateness_ns(self) -> float:
+        """99th percentile (nearest rank) of the lateness of the last :data:`LATENESS_SAMPLES`
+        ticks of the window, ns (NaN if none)."""
+        if not self._lateness_ns:
+            return math.nan
+        ordered = sorted(self._lateness_ns)
+        return float(ordered[max(0, math.ceil(0.99 * len(ordered)) - 1)])
 
 
 def _kv(key: str, value: object) -> KeyValue:
@@ -148,6 +160,7 @@ def diagnostic_statuses(*, node_name: str, window: TickWindow, sim_time: float, 
         _kv("rate_hz", f"{rate_hz:g}"),
         _kv("tick rate [1/s]", f"{tick_rate:.3f}"),
         _kv("tick lateness median [ms]", _ms(window.median_lateness_ns())),
+        _kv("tick lateness p99 [ms]", _ms(window.p99_lateness_ns())),
         _kv("tick lateness max [ms]", _ms(float(window.max_lateness_ns) if window.ticks else math.nan)),
         _kv("ticks missed", window.missed_ticks),
         _kv("real_time_factor", f"{real_time_factor:g}"),
