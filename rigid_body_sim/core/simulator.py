@@ -746,3 +746,30 @@ def _vector3(value: Any, name: str) -> np.ndarray:
     if v.shape != (3,) or not np.all(np.isfinite(v)):
         raise ValueError(f"{name}: expected 3 finite numbers, got {value!r}")
     return v
+
+
+def compile_kernels() -> None:
+    """Compile (or load from numba's cache) every kernel a Simulator uses: ~1 min once per checkout.
+
+    ``make venv`` runs it, so that neither the first node start nor the first test pays it.
+    Steps a scene with a body of every model, with and without a wrench, with every integrator.
+    """
+    from .scene import load_scene
+
+    def spec(inertia: dict, motion: str = "free", **twist: list) -> dict:
+        return {"mass": 1.0, "inertia": inertia, "motion": motion, "twist": twist,
+                "sites": {"s": {"position": [0.1, 0.0, 0.0], "axes": "world"}}}
+
+    box = {"box": [1.0, 0.6, 0.4]}
+    scene = load_scene({"gravity": [0.0, 0.0, -9.81], "bodies": {
+        "full": spec(box, angular=[0.3, 1.0, 0.2]), "ball": spec({"sphere": 0.1}, angular=[1.0, 0.0, 0.0]),
+        "can": spec({"cylinder": [0.1, 0.5]}, angular=[1.0, 0.0, 3.0]), "wall": spec(box, "static"),
+        "belt": spec(box, "kinematic", linear=[1.0, 0.0, 0.0]), "puck": spec(box, "planar"),
+        "sat": spec(box, "rotation_only"), "cart": spec(box, "translation_only")}})
+    for name in INTEGRATORS:
+        sim = Simulator(scene, integrator=name, dt=0.01)
+        sim.step(1)
+        sim.apply_force_at_point("full", [0.0, 1.0, 0.0], [0.5, 0.3, 0.0], frame="full")
+        sim.apply_wrench("ball", torque=[0.0, 0.0, 0.1], frame="ball/s")
+        sim.step(2)
+        sim.apply_impulse("can", linear=[0.1, 0.0, 0.0])
