@@ -163,7 +163,7 @@ def pack_parameters(model) -> np.ndarray:
 # ----------------------------------------------------------------------------- quaternion algebra
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _qmul(aw, ax, ay, az, bw, bx, by, bz):
     """Hamilton product a ⊗ b of (w, x, y, z) quaternions."""
     return (aw * bw - ax * bx - ay * by - az * bz,
@@ -172,7 +172,7 @@ def _qmul(aw, ax, ay, az, bw, bx, by, bz):
             aw * bz + ax * by - ay * bx + az * bw)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _rotate(qw, qx, qy, qz, vx, vy, vz):
     """R(q) v for unit q: v + 2w (u × v) + 2 u × (u × v)."""
     tx = 2.0 * (qy * vz - qz * vy)
@@ -183,7 +183,7 @@ def _rotate(qw, qx, qy, qz, vx, vy, vz):
             vz + qw * tz + (qx * ty - qy * tx))
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _exp(rx, ry, rz):
     """Exponential map of a rotation vector (rad) to a unit quaternion, series for small angles."""
     theta = math.sqrt(rx * rx + ry * ry + rz * rz)
@@ -195,13 +195,13 @@ def _exp(rx, ry, rz):
     return math.cos(half), rx * scale, ry * scale, rz * scale
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _normalise(qw, qx, qy, qz):
     n = math.sqrt(qw * qw + qx * qx + qy * qy + qz * qz)
     return qw / n, qx / n, qy / n, qz / n
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _torque_P(qw, qx, qy, qz, tx, ty, tz):
     """World torque in P axes, R(q̂)ᵀ τ with q̂ = q/|q|."""
     if tx == 0.0 and ty == 0.0 and tz == 0.0:
@@ -250,7 +250,7 @@ def _angular_acceleration(prm, wx, wy, wz, tau):
     return ((tau[0] - c * wx + gx) / I1, (tau[1] - c * wy + gy) / I2, (tau[2] - c * wz + gz) / I3)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _decay_kick(x, rate, drive, t):
     """Exact flow of dx/dt = drive − rate·x over t (rate ≥ 0)."""
     kt = rate * t
@@ -369,7 +369,7 @@ def _solve3(A):
     return x0, x1, x2
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _on_axis(axis, value):
     """The vector value·e_axis as a tuple."""
     if axis == 0:
@@ -603,7 +603,7 @@ def check_step(Ynew, prm, FT, has_wrench, budget, budget_new, status, members, d
 # ----------------------------------------------------------------------------- reduced models, one body each
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _phis(k, t):
     """(φ1, φ2, e^{−kt}) of dx/dt = a − k x over t: x(t) = x0 e^{−kt} + a φ1, ∫x = x0 φ1 + a φ2.
 
