@@ -11,12 +11,15 @@ import io
 import pstats
 import tempfile
 import time
+from contextlib import contextmanager
 from pathlib import Path
 
 from .node_timing import DOMAIN_ID, _write_scene
 
 
-def profile(bodies: int = 100, ticks: int = 200, top: int = 20) -> str:
+@contextmanager
+def _node_in_process(bodies: int, rate_hz: float, domain_offset: int):
+    """A RigidBodySimNode with ``bodies`` boxes on a private Context and domain; shut down after."""
     import rclpy
     from rclpy.context import Context
     from rclpy.parameter import Parameter
@@ -25,11 +28,21 @@ def profile(bodies: int = 100, ticks: int = 200, top: int = 20) -> str:
 
     scene = _write_scene(Path(tempfile.mkdtemp(prefix="rbs_prof_")), bodies)
     context = Context()
-    rclpy.init(context=context, domain_id=DOMAIN_ID + 1)
+    rclpy.init(context=context, domain_id=DOMAIN_ID + domain_offset)
     try:
         node = RigidBodySimNode(context=context, parameter_overrides=[
             Parameter("scene", value=str(scene)), Parameter("status_period", value=0.0),
-            Parameter("rate_hz", value=1.0)])
+            Parameter("rate_hz", value=float(rate_hz))])
+        try:
+            yield node
+        finally:
+            node.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=context)
+
+
+def profile(bodies: int = 100, ticks: int = 200, top: int = 20) -> str:
+    with _node_in_process(bodies, 1.0, 1) as node:
         node.advance_one_tick()
         t0 = time.perf_counter()
         for _ in range(20):
@@ -40,16 +53,12 @@ def profile(bodies: int = 100, ticks: int = 200, top: int = 20) -> str:
         for _ in range(ticks):
             node.advance_one_tick()
         profiler.disable()
-        node.destroy_node()
-    finally:
-        rclpy.try_shutdown(context=context)
     out = io.StringIO()
     out.write(f"advance_one_tick with {bodies} bodies: {plain_ms:.3g} ms per tick without the profiler\n")
     stats = pstats.Stats(profiler, stream=out)
     stats.sort_stats("cumulative").print_stats(top)
     stats.sort_stats("tottime").print_stats(top)
     return out.getvalue()
-
 
 
 def profile_spin(bodies: int = 100, rate_hz: float = 100.0, seconds: float = 4.0, top: int = 22) -> str:
@@ -59,21 +68,10 @@ def profile_spin(bodies: int = 100, rate_hz: float = 100.0, seconds: float = 4.0
     ``rigid_body_sim_node`` executable ticks from its own thread instead (``tick_thread=True``),
     which cProfile, attached to this thread only, would not see.
     """
-    import rclpy
-    from rclpy.context import Context
     from rclpy.executors import SingleThreadedExecutor
-    from rclpy.parameter import Parameter
 
-    from rigid_body_sim.ros.node import RigidBodySimNode
-
-    scene = _write_scene(Path(tempfile.mkdtemp(prefix="rbs_prof_")), bodies)
-    context = Context()
-    rclpy.init(context=context, domain_id=DOMAIN_ID + 2)
-    try:
-        node = RigidBodySimNode(context=context, parameter_overrides=[
-            Parameter("scene", value=str(scene)), Parameter("status_period", value=0.0),
-            Parameter("rate_hz", value=float(rate_hz))])
-        executor = SingleThreadedExecutor(context=context)
+    with _node_in_process(bodies, rate_hz, 2) as node:
+        executor = SingleThreadedExecutor(context=node.context)
         executor.add_node(node)
         profiler = cProfile.Profile()
         t0, s0 = time.monotonic(), node._sim.step_count
@@ -83,9 +81,6 @@ def profile_spin(bodies: int = 100, rate_hz: float = 100.0, seconds: float = 4.0
         profiler.disable()
         rate = (node._sim.step_count - s0) / seconds
         executor.shutdown()
-        node.destroy_node()
-    finally:
-        rclpy.try_shutdown(context=context)
     out = io.StringIO()
     out.write(f"{bodies} bodies at rate_hz {rate_hz}, in-process, no subscribers: {rate:.1f} ticks/s under cProfile\n")
     pstats.Stats(profiler, stream=out).sort_stats("cumulative").print_stats(top)

@@ -298,3 +298,31 @@ def stop_process(process: "subprocess.Popen", timeout: float = 10.0) -> int:
             process.kill()
             process.wait()
     return process.returncode
+
+
+def node_command() -> list[str]:
+    """The command that runs the node: the console script next to this interpreter, else the one on PATH."""
+    import shutil
+    import sys
+
+    script = Path(sys.executable).parent / "rigid_body_sim_node"
+    if not script.exists():
+        found = shutil.which("rigid_body_sim_node")
+        if not found:
+            raise FileNotFoundError("console script rigid_body_sim_node is not installed (pip install the package)")
+        script = Path(found)
+    return [str(script)]
+
+
+def start_process(ros_arguments: Sequence[str], log_path: str | Path) -> "subprocess.Popen":
+    """Start the node (:func:`node_command`) with ``--ros-args *ros_arguments``, its output in ``log_path``.
+
+    The environment is this process's (so ROS_DOMAIN_ID and the discovery range carry over).
+    Stop it with :func:`stop_process`.
+    """
+    import os
+    import subprocess
+
+    with open(log_path, "w") as log:
+        return subprocess.Popen([*node_command(), "--ros-args", *ros_arguments], stdout=log, stderr=subprocess.STDOUT,
+                                env=os.environ.copy())

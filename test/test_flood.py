@@ -24,7 +24,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import shutil
 import signal
 import subprocess
 import sys
@@ -43,7 +42,7 @@ from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 
 from rigid_body_sim.ros.diagnostics import level_name, status_values
-from rigid_body_sim.testing import SimHarness, stop_process
+from rigid_body_sim.testing import SimHarness, start_process, stop_process
 
 pytestmark = pytest.mark.ros
 
@@ -59,11 +58,6 @@ FORCES = {"b0": (2.0, 0.0, 0.0), "b1": (0.0, -3.0, 0.0)}
 SCENE = {"bodies": {b: {"mass": MASS, "inertia": {"sphere": 0.2}} for b in ("b0", "b1", "b2", "b3")}}
 PUBLISHER = Path(__file__).with_name("flood_publisher.py")
 RSS_FLAT_KIB = 2048  # growth allowed between 2 s into the flood and its end
-
-
-def node_command() -> list[str]:
-    script = Path(sys.executable).parent / "rigid_body_sim_node"
-    return [str(script if script.exists() else shutil.which("rigid_body_sim_node"))]
 
 
 def cpu_seconds(pid: int) -> float:
@@ -137,12 +131,9 @@ def test_flood_keeps_rate_memory_and_holds(tmp_path):
     scene_path = tmp_path / "flood.yaml"
     scene_path.write_text(yaml.safe_dump(SCENE))
     log_path = tmp_path / "node.log"
-    with open(log_path, "w") as log:
-        node = subprocess.Popen(
-            node_command() + ["--ros-args", "-p", f"scene:={scene_path}", "-p", "integrator:=semi_implicit_euler",
-                              "-p", f"rate_hz:={RATE_HZ}", "-p", f"wrench_timeout:={WRENCH_TIMEOUT}",
-                              "-p", "status_period:=0.0", "-p", "diagnostics_period:=1.0"],
-            stdout=log, stderr=subprocess.STDOUT, env=os.environ.copy())
+    node = start_process(["-p", f"scene:={scene_path}", "-p", "integrator:=semi_implicit_euler",
+                          "-p", f"rate_hz:={RATE_HZ}", "-p", f"wrench_timeout:={WRENCH_TIMEOUT}",
+                          "-p", "status_period:=0.0", "-p", "diagnostics_period:=1.0"], log_path)
     observer = Observer()
     flooders: list[tuple[subprocess.Popen, list[str]]] = []
     rss: list[tuple[float, int]] = []

@@ -151,15 +151,10 @@ def _values(rng: random.Random, body: str, topic: str) -> tuple[float, ...]:
         if body == "crash":  # valid extremes only where a blow-up harms no other check
             for i in idx:
                 v[i] = rng.choice(EDGE_VALID)
-    elif kind == "nan":
+    elif kind in ("nan", "inf", "huge"):
+        pool = {"nan": NANS, "inf": INFS, "huge": HUGE}[kind]
         for i in idx:
-            v[i] = rng.choice(NANS)
-    elif kind == "inf":
-        for i in idx:
-            v[i] = rng.choice(INFS)
-    elif kind == "huge":
-        for i in idx:
-            v[i] = rng.choice(HUGE)
+            v[i] = rng.choice(pool)
     elif kind == "nan_huge":
         v[idx[0]] = QUIET_NAN
         v[(idx[0] + 1) % 6] = 1e300

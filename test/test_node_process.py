@@ -8,11 +8,8 @@ steps and must land on the same pose bitwise (same arithmetic, float64 end to en
 
 from __future__ import annotations
 
-import os
-import shutil
 import signal
 import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -27,7 +24,7 @@ from rclpy.node import Node
 from std_srvs.srv import SetBool
 
 from rigid_body_sim.core import Simulator, load_scene
-from rigid_body_sim.testing import stop_process
+from rigid_body_sim.testing import node_command, start_process, stop_process
 
 pytestmark = pytest.mark.ros
 
@@ -35,15 +32,6 @@ DT = 0.01  # s: 100 Hz, 1 substep
 SCENE = {"bodies": {"box": {"mass": 2.0, "inertia": {"box": [1.0, 0.6, 0.4]},
                             "pose": {"position": [0.0, 0.0, 1.0]},
                             "sites": {"corner": {"position": [0.5, 0.3, 0.0]}}}}}
-
-
-def node_command() -> list[str]:
-    script = Path(sys.executable).parent / "rigid_body_sim_node"
-    if not script.exists():
-        found = shutil.which("rigid_body_sim_node")
-        assert found, "console script rigid_body_sim_node is not installed (pip install the package)"
-        script = Path(found)
-    return [str(script)]
 
 
 def stamp_ns(msg: PoseStamped) -> int:
@@ -54,10 +42,7 @@ def test_node_process_over_dds(tmp_path):
     scene_path = tmp_path / "box.yaml"
     scene_path.write_text(yaml.safe_dump(SCENE))
     log_path = tmp_path / "node.log"
-    with open(log_path, "w") as log:
-        process = subprocess.Popen(
-            node_command() + ["--ros-args", "-p", f"scene:={scene_path}", "-p", "wrench_timeout:=0.0"],
-            stdout=log, stderr=subprocess.STDOUT, env=os.environ.copy())
+    process = start_process(["-p", f"scene:={scene_path}", "-p", "wrench_timeout:=0.0"], log_path)
     context = Context()
     rclpy.init(context=context)
     executor = SingleThreadedExecutor(context=context)
@@ -152,8 +137,7 @@ def test_bad_start_up_parameters_exit_2_with_the_reason(arguments, message):
 def test_node_starts_with_params_file_and_whole_numbers(arguments, tmp_path):
     """The README's params file and integer values for float parameters start the node."""
     log_path = tmp_path / "node.log"
-    with open(log_path, "w") as log:
-        process = subprocess.Popen(node_command() + ["--ros-args", *arguments], stdout=log, stderr=subprocess.STDOUT)
+    process = start_process(arguments, log_path)
     try:
         deadline = time.monotonic() + 20.0
         while "scene " not in log_path.read_text():
