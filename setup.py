@@ -32,7 +32,7 @@ setup(
     license="Apache-2.0",
     entry_points={
         "console_scripts": [
-            "rigid_body_sim_node = rigid_body_sim.ros.node:main",
+            "rigid_body_sim_node = rigid_body_sim.ros.main:main",
             "rigid-body-sim = rigid_body_sim.cli:main",
         ],
     },

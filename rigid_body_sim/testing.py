@@ -16,7 +16,8 @@ harness never touches the global rclpy context and several can run one after ano
 process. Everything goes through topics, services and the parameter service, as it would from
 another process; ``close()`` (or leaving the ``with`` block, also on failure) destroys it all.
 The node starts paused by default, so time advances only through :meth:`SimHarness.step`:
-runs are bitwise deterministic.
+runs are bitwise deterministic. The node ticks exactly as ``rigid_body_sim_node`` does, from
+its own tick thread (there is no other tick path); paused, that thread advances nothing.
 """
 
 from __future__ import annotations
@@ -67,16 +68,11 @@ class SimHarness:
         Executor class to spin both nodes with; default :class:`~rclpy.executors.SingleThreadedExecutor`
         (what ``rigid_body_sim_node`` spins). ``rclpy.experimental.EventsExecutor`` takes a message
         in about a fifth of the time, which suits high-volume tests.
-    tick_thread : bool
-        Tick the node from its own thread on a deadline schedule, as ``rigid_body_sim_node``
-        does, instead of from a timer in the harness's executor (default). Only matters while
-        running; :meth:`step` and everything paused behave the same either way.
     """
 
     def __init__(self, scene: str | Path | None = None, parameters: dict[str, Any] | None = None, *,
                  paused: bool = True, domain_id: int | None = None, node_name: str = "rigid_body_sim",
-                 namespace: str | None = None, timeout: float = 10.0, executor: type | None = None,
-                 tick_thread: bool = False):
+                 namespace: str | None = None, timeout: float = 10.0, executor: type | None = None):
         params = dict(parameters or {})
         if scene is not None:
             params["scene"] = str(scene)
@@ -91,7 +87,7 @@ class SimHarness:
         try:
             overrides = [Parameter(k, value=v) for k, v in params.items()]
             self.node = RigidBodySimNode(node_name, context=self.context, namespace=namespace,
-                                         parameter_overrides=overrides, tick_thread=tick_thread)
+                                         parameter_overrides=overrides)
             self.client = Node("rigid_body_sim_test_client", context=self.context, namespace=namespace)
             self.executor = (executor or SingleThreadedExecutor)(context=self.context)
             self.executor.add_node(self.node)
@@ -260,13 +256,13 @@ class SimHarness:
 
     def wait_for_latest_state(self) -> None:
         """Spin until every running body's latest pose carries the node's current sim time."""
-        sim = self.node.simulator
-        target = int(round(sim.time * 1e9))
-        for body in sim.body_names:
-            if body in sim.stopped_bodies:
-                continue
+        with self.node.locked_simulator() as sim:
+            time_s = sim.time
+            running = [body for body in sim.body_names if body not in sim.stopped_bodies]
+        target = int(round(time_s * 1e9))
+        for body in running:
             self.spin_until(lambda b=body: b in self._poses and b in self._twists and _stamp_ns(self._poses[b]) == target,
-                            f"{body}/pose at t = {sim.time:.9f} s")
+                            f"{body}/pose at t = {time_s:.9f} s")
 
     def latest_pose(self, body: str) -> PoseStamped:
         """The last PoseStamped received on ``body/pose``."""

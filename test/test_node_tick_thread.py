@@ -1,5 +1,5 @@
-"""The node ticking from its own thread (``tick_thread=True``, what ``rigid_body_sim_node`` runs),
-and the direct CDR serialization of its pose, twist and /clock messages.
+"""The node ticking from its own thread (its only tick path: ``rigid_body_sim_node`` and the
+harness alike), and the direct CDR serialization of its pose, twist and /clock messages.
 
 The thread must keep every behaviour of the executor's timer: paused means no time passes,
 ``~/step`` gives exactly one tick while paused and is refused while running, ``rate_hz`` and
@@ -57,11 +57,11 @@ def test_cdr_reads_back_bitwise():
 
 
 def test_tick_thread_pause_step_rate_reset_and_stop():
-    with SimHarness(paused=True, tick_thread=True) as sim:
+    with SimHarness(paused=True) as sim:
         node = sim.node
-        thread = node._tick_thread
-        assert thread is not None and thread.is_alive()
-        assert node._timer is None  # no tick timer in the executor
+        loop = node._tick_loop
+        assert loop.alive
+        assert not any(timer.timer_period_ns < 10**9 for timer in node.timers)  # no tick timer in the executor
 
         sim.spin_for(0.2)
         assert node.simulator.time == 0.0  # paused: no time passes
@@ -95,13 +95,13 @@ def test_tick_thread_pause_step_rate_reset_and_stop():
         assert sim.reset().success
         assert node.simulator.time == 0.0
         assert stamp_ns(sim.latest_pose("box")) == 0
-    assert not thread.is_alive()  # close() destroyed the node, which stopped and joined the thread
+    assert not loop.alive  # close() destroyed the node, which stopped and joined the thread
 
 
 def test_tick_thread_counts_only_skipped_ticks_as_missed():
     """Short delays are caught up (no tick missed, sim time keeps up); a stall longer than the
     catch-up limit skips the periods it missed, counted in the diagnostics."""
-    with SimHarness(paused=False, tick_thread=True, parameters={"diagnostics_period": 0.0}) as sim:
+    with SimHarness(paused=False, parameters={"diagnostics_period": 0.0}) as sim:
         node = sim.node
         sim.spin_for(0.2)
         node.diagnostics()  # a fresh window
@@ -114,11 +114,12 @@ def test_tick_thread_counts_only_skipped_ticks_as_missed():
 
 
 def test_an_error_in_the_tick_thread_reaches_the_executor():
-    with SimHarness(paused=False, tick_thread=True) as sim:
+    with SimHarness(paused=False) as sim:
         def broken() -> None:
             raise RuntimeError("broken tick")
 
         sim.node._advance_one_tick_locked = broken
         with pytest.raises(RuntimeError, match="broken tick"):
             sim.spin_for(1.0)
-        assert not sim.node._tick_thread.is_alive()
+        assert not sim.node._tick_loop.alive
+        assert isinstance(sim.node.tick_failure, RuntimeError)

@@ -287,7 +287,7 @@ def test_node_process_finishes_its_recording_on_ctrl_c(tmp_path: Path) -> None:
     log_path = tmp_path / "node.log"
     with open(log_path, "w") as log:
         process = subprocess.Popen(
-            [sys.executable, "-m", "rigid_body_sim.ros.node", "--ros-args", "-p", f"record_path:={out}",
+            [sys.executable, "-m", "rigid_body_sim.ros.main", "--ros-args", "-p", f"record_path:={out}",
              "-p", "status_period:=0.0", "-p", "diagnostics_period:=0.0"],
             stdout=log, stderr=subprocess.STDOUT, env=os.environ.copy())
     try:

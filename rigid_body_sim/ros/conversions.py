@@ -16,6 +16,7 @@ from geometry_msgs.msg import Pose, PoseStamped, Twist, WrenchStamped
 from nav_msgs.msg import Odometry
 
 __all__ = [
+    "MAX_ROS_TIME_S",
     "MAX_WRENCH_COMPONENT",
     "RejectedMessage",
     "time_msg_from_seconds",
@@ -27,6 +28,8 @@ __all__ = [
 
 #: Any incoming force, torque or impulse component larger than this (in magnitude) is absurd.
 MAX_WRENCH_COMPONENT = 1e12
+#: The last second builtin_interfaces/Time can hold (``sec`` is an int32): about 68 years.
+MAX_ROS_TIME_S = 2**31 - 1
 
 
 @dataclass

@@ -9,24 +9,22 @@ diagnostic_msgs/DiagnosticStatus entries, named as ``diagnostic_updater`` names 
 software without hardware to use):
 
 ``<node>: simulation``
-    ERROR when a body is stopped for blow-up, WARN when the timer ticked at less than
+    ERROR when the simulation cannot go on (the tick thread failed, or sim time reached the
+    end of ROS time) or a body is stopped for blow-up, WARN when the timer ticked at less than
     :data:`BEHIND_FRACTION` of ``rate_hz`` over the window while running, OK otherwise.
 ``<node>: input``
     WARN when messages were rejected during the window, OK otherwise; counts by reason, for
     the window and since start.
-
-This module deliberately has no ``from __future__ import annotations``: rclpy hands a
-:class:`~rclpy.timer.TimerInfo` to a timer callback only if the parameter's annotation *is*
-that class (it compares the annotation object), which :func:`timer_callback_with_info` needs.
 """
+
+from __future__ import annotations
 
 import math
 import time
 from collections import Counter, deque
-from typing import Callable, Mapping, Sequence
+from typing import Mapping, Sequence
 
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
-from rclpy.timer import TimerInfo
 
 __all__ = [
     "BEHIND_FRACTION",
@@ -36,7 +34,6 @@ __all__ = [
     "diagnostic_statuses",
     "level_name",
     "status_values",
-    "timer_callback_with_info",
 ]
 
 #: Every reason an incoming wrench or impulse can be dropped for (``node.rejected`` keys):
@@ -50,15 +47,6 @@ REJECTION_REASONS = ("unknown_frame", "non_finite", "too_large", "non_finite_res
 BEHIND_FRACTION = 0.9
 #: Lateness samples kept per window for the median (the maximum is exact over the window).
 LATENESS_SAMPLES = 10_000
-
-
-def timer_callback_with_info(on_tick: Callable[[int], None]) -> Callable[[TimerInfo], None]:
-    """A timer callback that passes rcl's expected call time (ns, timer clock) to ``on_tick``."""
-
-    def callback(info: TimerInfo) -> None:
-        on_tick(info.expected_call_time.nanoseconds)
-
-    return callback
 
 
 class TickWindow:
@@ -133,7 +121,7 @@ def diagnostic_statuses(*, node_name: str, window: TickWindow, sim_time: float, 
                         dt: float, substeps: int, rate_hz: float, real_time_factor: float, bodies: Sequence[str],
                         stopped: Sequence[str], held_wrenches: int, pending_impulses: int,
                         accepted_total: int, accepted_at_open: int, rejected_total: Mapping[str, int],
-                        rejected_at_open: Mapping[str, int]) -> list[DiagnosticStatus]:
+                        rejected_at_open: Mapping[str, int], fault: str | None = None) -> list[DiagnosticStatus]:
     """The node's two DiagnosticStatus entries for the window that is closing (see the module doc)."""
     elapsed = window.elapsed_s()
     tick_rate = window.ticks / elapsed if elapsed > 0.0 else math.nan
@@ -142,7 +130,10 @@ def diagnostic_statuses(*, node_name: str, window: TickWindow, sim_time: float, 
     behind = (not paused and expected_ticks >= 2.0 and window.ticks < BEHIND_FRACTION * expected_ticks)
 
     sim = DiagnosticStatus(name=f"{node_name}: simulation", hardware_id="none")
-    if stopped:
+    if fault:
+        sim.level = DiagnosticStatus.ERROR
+        sim.message = fault
+    elif stopped:
         sim.level = DiagnosticStatus.ERROR
         sim.message = f"stopped for blow-up: {', '.join(stopped)}"
     elif behind:

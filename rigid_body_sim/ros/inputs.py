@@ -1,0 +1,221 @@
+"""What the node takes in: per body ``B/wrench`` (held) and ``B/impulse`` (applied once), validated.
+
+A wrench is geometry_msgs/WrenchStamped: force and torque about the origin of
+``header.frame_id``, in its axes. It is held per (B, frame_id) until replaced, cleared by an
+all-zero wrench, or older than ``wrench_timeout`` s of sim time; all holds are summed. An
+impulse (the same message read as N·s and N·m·s) is applied once at the next step; impulses due
+at the same step in the same (body, frame) are summed, so a flood of them while paused holds
+one entry per frame, not one per message.
+
+Incoming header stamps are not used: a hold is timed in sim time from its receipt, so a stamp
+in the far past or future (or a nanosec field ≥ 1e9) changes nothing. Messages are checked in
+this order and the first failure is the reason counted: frame_id, then non-finite, then too
+large (:mod:`.conversions`). Rejections are counted by reason (``/diagnostics``) and warned
+about at most once per :data:`REJECTION_WARNING_PERIOD`.
+
+Subscriptions change in the three steps :mod:`.publishers` describes (prepare, commit under
+the lock, release).
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections import Counter
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from geometry_msgs.msg import WrenchStamped
+from rclpy.node import Node
+from rclpy.qos import QoSProfile
+
+from ..core import Simulator
+from .conversions import RejectedMessage, wrench_from_msg
+
+__all__ = ["REJECTION_WARNING_PERIOD", "BodyInputs", "InputChange", "WrenchInputs"]
+
+#: Wall seconds between two warnings about dropped messages (the counts go on regardless).
+REJECTION_WARNING_PERIOD = 2.0
+
+
+@dataclass
+class _Hold:
+    """A held wrench: force and torque in the message's frame, and the sim time it arrived."""
+
+    force: np.ndarray
+    torque: np.ndarray
+    received_time: float
+
+
+@dataclass
+class BodyInputs:
+    """One body's subscriptions and the header.frame_id values it accepts (→ core frame name)."""
+
+    wrench: Any
+    impulse: Any
+    frames: dict[str, str]
+
+
+@dataclass
+class InputChange:
+    """Prepared subscriptions: ``bodies`` to swap in, ``stale`` subscriptions to destroy after."""
+
+    bodies: dict[str, BodyInputs]
+    stale: list[Any]
+
+
+class WrenchInputs:
+    """Held wrenches and pending impulses from ``B/wrench`` and ``B/impulse``.
+
+    Parameters
+    ----------
+    node : rclpy.node.Node
+        Owner of the subscriptions (its logger warns about rejections).
+    qos : QoSProfile
+        Of every subscription.
+    world_frame : str
+        The header.frame_id that means the world.
+    lock : lock
+        The node's lock: held by the callbacks while they touch the holds and counters.
+    sim_time : callable
+        Returns the current sim time (s), read with the lock held.
+    """
+
+    def __init__(self, node: Node, qos: QoSProfile, world_frame: str, lock: threading.RLock, sim_time: Any):
+        self._node = node
+        self._qos = qos
+        self._world_frame = world_frame
+        self._lock = lock
+        self._sim_time = sim_time
+        self.bodies: dict[str, BodyInputs] = {}
+        self.holds: dict[tuple[str, str], _Hold] = {}
+        self.pending_impulses: dict[tuple[str, str], tuple[np.ndarray, np.ndarray]] = {}
+        self.rejected: Counter[str] = Counter()
+        self.accepted = 0
+        self._warned_wall = -math.inf
+        self._rejections_since_warning = 0
+
+    # ------------------------------------------------------------------ endpoints
+
+    def prepare(self, sim: Simulator) -> InputChange:
+        """Subscriptions for ``sim``'s bodies: existing ones kept (frames updated), new ones created."""
+        bodies: dict[str, BodyInputs] = {}
+        for body in sim.body_names:
+            frames = {self._world_frame: "world"}
+            frames.update({f: f for f in sim.frames_of(body) if f != "world"})
+            old = self.bodies.get(body)
+            if old is not None:
+                bodies[body] = BodyInputs(old.wrench, old.impulse, frames)
+            else:
+                bodies[body] = BodyInputs(
+                    wrench=self._node.create_subscription(WrenchStamped, f"{body}/wrench",
+                                                          lambda msg, b=body: self.on_wrench(b, msg), self._qos),
+                    impulse=self._node.create_subscription(WrenchStamped, f"{body}/impulse",
+                                                           lambda msg, b=body: self.on_impulse(b, msg), self._qos),
+                    frames=frames)
+        stale = [s for name, old in self.bodies.items() if name not in bodies for s in (old.wrench, old.impulse)]
+        return InputChange(bodies, stale)
+
+    def commit(self, change: InputChange) -> None:
+        """Swap in prepared subscriptions and drop every hold and pending impulse (hold the node's lock)."""
+        self.bodies = change.bodies
+        self.clear()
+
+    def release(self, change: InputChange) -> None:
+        """Destroy the subscriptions ``change`` replaced (after :meth:`commit`, without the lock)."""
+        for subscription in change.stale:
+            self._node.destroy_subscription(subscription)
+        change.stale = []
+
+    def clear(self) -> None:
+        """Drop every hold and pending impulse (hold the node's lock)."""
+        self.holds.clear()
+        self.pending_impulses.clear()
+
+    # ------------------------------------------------------------------ callbacks
+
+    def _parse(self, body: str, msg: WrenchStamped, topic: str) -> tuple[str, np.ndarray, np.ndarray] | None:
+        """(core frame, force, torque) of a valid message, or None after counting and warning."""
+        inputs = self.bodies.get(body)
+        try:
+            frame = inputs.frames.get(msg.header.frame_id) if inputs is not None else None
+            if frame is None:
+                raise RejectedMessage("unknown_frame", "")  # detail built only if it is logged
+            force, torque = wrench_from_msg(msg)
+        except RejectedMessage as rejection:
+            self.reject(body, topic, msg, rejection)
+            return None
+        self.accepted += 1
+        return frame, force, torque
+
+    def reject(self, body: str, topic: str, msg: WrenchStamped | None, rejection: RejectedMessage) -> None:
+        """Count a dropped message by reason; warn at most once per REJECTION_WARNING_PERIOD wall
+        seconds (rclpy's own throttle inspects the caller's source on every call: ~0.4 ms, which a
+        flood of bad messages would turn into a denial of service)."""
+        self.rejected[rejection.reason] += 1
+        self._rejections_since_warning += 1
+        wall = time.monotonic()
+        if wall - self._warned_wall < REJECTION_WARNING_PERIOD:
+            return
+        inputs = self.bodies.get(body)
+        valid_frames = list(inputs.frames) if inputs is not None else []
+        detail = rejection.detail or f"frame_id {msg.header.frame_id[:80]!r} is not one of {valid_frames}"
+        more = self._rejections_since_warning - 1
+        self._node.get_logger().warning(
+            f"dropped a message on {body}/{topic} ({rejection.reason}): {detail}; valid frame_ids: {valid_frames}"
+            + (f" ({more} more dropped since the last warning; counts by reason on /diagnostics)" if more else ""))
+        self._warned_wall = wall
+        self._rejections_since_warning = 0
+
+    def on_wrench(self, body: str, msg: WrenchStamped) -> None:
+        """``B/wrench``: hold it per (body, frame), or clear the hold if all-zero."""
+        with self._lock:
+            parsed = self._parse(body, msg, "wrench")
+            if parsed is None:
+                return
+            frame, force, torque = parsed
+            if not force.any() and not torque.any():
+                self.holds.pop((body, frame), None)
+            else:
+                self.holds[(body, frame)] = _Hold(force, torque, self._sim_time())
+
+    def on_impulse(self, body: str, msg: WrenchStamped) -> None:
+        """``B/impulse``: add it to what is due at the next step in its (body, frame)."""
+        with self._lock:
+            parsed = self._parse(body, msg, "impulse")
+            if parsed is None:
+                return
+            frame, linear, angular = parsed
+            pending = self.pending_impulses.get((body, frame))
+            if pending is not None:  # impulses due at the same step add
+                linear, angular = pending[0] + linear, pending[1] + angular
+            self.pending_impulses[(body, frame)] = (linear, angular)
+
+    # ------------------------------------------------------------------ per tick
+
+    def apply(self, sim: Simulator, wrench_timeout: float) -> None:
+        """Expire old holds, then hand the pending impulses and the held wrenches to ``sim`` for
+        its next step. An impulse that would make a body's velocity non-finite is dropped and
+        counted as ``non_finite_result``. Hold the node's lock."""
+        if wrench_timeout > 0.0:
+            now = sim.time
+            expired = [key for key, hold in self.holds.items() if now - hold.received_time >= wrench_timeout]
+            for key in expired:
+                del self.holds[key]
+        stopped = set(sim.stopped_bodies)
+        for (body, frame), (linear, angular) in self.pending_impulses.items():
+            if body in stopped:
+                continue
+            try:
+                sim.apply_impulse(body, linear, angular, frame)
+            except ValueError as exc:
+                self.reject(body, "impulse", None, RejectedMessage("non_finite_result", str(exc)))
+        self.pending_impulses.clear()
+        for (body, frame), hold in self.holds.items():
+            sim.apply_wrench(body, hold.force, hold.torque, frame)
+
+    def held(self) -> list[tuple[str, str, np.ndarray, np.ndarray]]:
+        """(body, core frame, force, torque) of every hold (for recordings)."""
+        return [(body, frame, hold.force, hold.torque) for (body, frame), hold in self.holds.items()]

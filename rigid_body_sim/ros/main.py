@@ -1,0 +1,129 @@
+"""Console entry point ``rigid_body_sim_node``: start the node, spin it, stop it cleanly on a signal.
+
+Exit status: 0 after SIGINT or SIGTERM at any moment (also during start-up: imports, a cold
+numba compile, loading the scene), 2 for bad start-up parameters or scene (the reason on
+stderr), 1 if the tick thread fails (after saying so on the log and /diagnostics).
+
+Signals are the node's own business here, not rclpy's: ``rclpy.init`` is told to install no
+handler (its handlers shut the context down underneath a spinning executor, which then fails
+in the middle of building a wait set or taking a message). Until the node is built and
+spinning, SIGINT and SIGTERM raise :class:`KeyboardInterrupt`, so start-up stops at once, and
+whatever was built is torn down quietly. Once spinning, a signal only sets a flag; the spin
+loop (``spin_once`` with a timeout) sees it within :data:`SPIN_TIMEOUT_S` and stops the tick
+thread, finishes the recording, destroys the node and shuts the context down, in that order.
+
+This module imports only the standard library at module level, so that the console script
+reaches :func:`main`, and its signal handlers, before the heavy imports begin.
+"""
+
+from __future__ import annotations
+
+import signal
+import sys
+from types import FrameType
+
+__all__ = ["main", "SPIN_TIMEOUT_S"]
+
+#: Longest wait of one ``spin_once``: how soon a stop request is seen while spinning.
+SPIN_TIMEOUT_S = 0.1
+
+_STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
+class _Signals:
+    """SIGINT/SIGTERM: raise KeyboardInterrupt during start-up, only set a flag once running."""
+
+    def __init__(self) -> None:
+        self.requested: int | None = None
+        self.raising = True
+        for signum in _STOP_SIGNALS:
+            signal.signal(signum, self._handle)
+
+    def _handle(self, signum: int, _frame: FrameType | None) -> None:
+        first = self.requested is None
+        if first:
+            self.requested = signum
+        if self.raising and first:
+            raise KeyboardInterrupt
+
+    def ignore(self) -> None:
+        """From now on a signal changes nothing (tear-down is under way)."""
+        self.raising = False
+        for signum in _STOP_SIGNALS:
+            signal.signal(signum, lambda *_: None)
+
+
+def _say(message: str) -> None:
+    print(f"rigid_body_sim_node: {message}", file=sys.stderr, flush=True)
+
+
+def main(args: list[str] | None = None) -> int:
+    """Run the node until SIGINT or SIGTERM; return the exit status (see the module docstring)."""
+    signals = _Signals()
+    context = node = executor = None
+    try:
+        import rclpy
+        from rclpy.exceptions import ParameterException
+        from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+        from rclpy.signals import SignalHandlerOptions
+
+        from ..core import SceneError
+        from .node import RigidBodySimNode
+
+        rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+        context = rclpy.get_default_context()
+        try:
+            node = RigidBodySimNode(start_ticking=False)
+        except (SceneError, ValueError, ParameterException) as exc:
+            _say(str(exc))
+            return 2
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        _freeze_start_up_objects()
+        signals.raising = False
+        if signals.requested is not None:
+            return 0
+        node.start_ticking()
+        try:
+            while signals.requested is None and context.ok():
+                executor.spin_once(timeout_sec=SPIN_TIMEOUT_S)
+        except ExternalShutdownException:
+            pass
+        except Exception as exc:  # noqa: BLE001  (a failure of the tick thread, re-raised by the executor)
+            if node.tick_failure is None:
+                raise
+            _say(f"exiting with status 1: the tick thread failed ({exc!r})")
+            return 1
+        return 0
+    except KeyboardInterrupt:  # a signal during start-up
+        return 0
+    finally:
+        signals.ignore()
+        _tear_down(executor, node, context)
+
+
+def _tear_down(executor, node, context) -> None:
+    """Stop in order: executor, node (tick thread, recording), context; quietly for what was never built."""
+    if executor is not None:
+        executor.shutdown(timeout_sec=1.0)
+    if node is not None:
+        node.destroy_node()
+    if context is not None:
+        context.try_shutdown()
+
+
+def _freeze_start_up_objects() -> None:
+    """Move everything allocated so far out of the garbage collector's reach.
+
+    What start-up made (rclpy, numpy, numba, the node: hundreds of thousands of objects) stays
+    for good; left to the collector, one full collection of it stalled the tick thread for
+    about 90 ms (at 100 bodies × 100 Hz: 8 ticks skipped).
+    """
+    import gc
+
+    gc.collect()
+    gc.freeze()
+
+
+if __name__ == "__main__":
+    sys.exit(main())

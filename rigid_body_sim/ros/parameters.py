@@ -1,0 +1,346 @@
+"""The node's parameters, all in one table: name, type, default, range, description, and whether
+a change is allowed while running.
+
+:data:`PARAMETERS` drives everything else: the declarations (a full
+rcl_interfaces/ParameterDescriptor per parameter, with its FloatingPointRange or IntegerRange,
+so ``ros2 param describe`` and ``describe_parameters`` show the valid values), the one
+validation :func:`problem` used at start-up and for every change, the coercion of whole
+numbers for float parameters, ``config/params.yaml`` (:func:`params_yaml`) and the README's
+parameter table (:func:`markdown_table`); ``python -m rigid_body_sim.ros.parameters`` prints
+both, and a test checks that the files in the repository equal them.
+
+What a change *does* is the node's business (``node.py``); this module only says whether a
+value is acceptable.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import stat
+import sys
+from dataclasses import dataclass
+from typing import Any, Callable, Mapping
+
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, ParameterType
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+
+from ..core import INTEGRATORS
+from ..offline.recording import check_record_path
+from ..paths import default_scene_path
+
+__all__ = [
+    "ParameterSpec",
+    "PARAMETERS",
+    "BY_NAME",
+    "NODE_NAME",
+    "coerce",
+    "declare_parameters",
+    "problem",
+    "problems",
+    "params_yaml",
+    "markdown_table",
+]
+
+#: Default node name (the key of ``config/params.yaml``).
+NODE_NAME = "rigid_body_sim"
+
+_TYPE_NAMES = {
+    Parameter.Type.BOOL: "bool",
+    Parameter.Type.INTEGER: "integer",
+    Parameter.Type.DOUBLE: "double",
+    Parameter.Type.STRING: "string",
+}
+
+
+@dataclass(frozen=True)
+class ParameterSpec:
+    """One node parameter.
+
+    Attributes
+    ----------
+    name : str
+        Parameter name.
+    type : rclpy.parameter.Parameter.Type
+        BOOL, INTEGER, DOUBLE or STRING (a DOUBLE also takes a whole number, converted).
+    default : Any
+        Value when not overridden; None for ``scene`` (the installed default scene, found at run time).
+    description : str
+        One sentence with units; shown by ``describe_parameters`` and in the README.
+    range : (low, high), optional
+        Inclusive bounds of an INTEGER or DOUBLE (FloatingPointRange / IntegerRange).
+    read_only : bool
+        True: only settable at start-up.
+    choices : tuple of str
+        The only accepted values of a STRING, if not empty.
+    constraints : str
+        Further constraints in words (``additional_constraints``), beyond range and choices.
+    check : callable, optional
+        ``check(value) -> reason or None``: a constraint that needs code (paths, frame names).
+    takes_effect : str
+        When an accepted change takes effect (README).
+    """
+
+    name: str
+    type: Parameter.Type
+    default: Any
+    description: str
+    range: tuple[float, float] | None = None
+    read_only: bool = False
+    choices: tuple[str, ...] = ()
+    constraints: str = ""
+    check: Callable[[Any], str | None] | None = None
+    takes_effect: str = "at the next tick"
+
+    def default_value(self) -> Any:
+        """The default, with ``scene``'s computed from the installation."""
+        if self.name == "scene":
+            return str(default_scene_path())
+        return self.default
+
+    def additional_constraints(self) -> str:
+        """The constraints in words: choices, range and :attr:`constraints`."""
+        parts = []
+        if self.choices:
+            parts.append(f"one of {list(self.choices)}")
+        if self.range is not None:
+            parts.append(f"from {_fmt(self.range[0])} to {_fmt(self.range[1])}, inclusive")
+        if self.constraints:
+            parts.append(self.constraints)
+        if self.read_only:
+            parts.append("read-only: set at start-up only")
+        return "; ".join(parts)
+
+    def descriptor(self) -> ParameterDescriptor:
+        """The full ParameterDescriptor: type, description, constraints, range, read_only."""
+        descriptor = ParameterDescriptor(name=self.name, type=self.type.value, description=self.description,
+                                         additional_constraints=self.additional_constraints(),
+                                         read_only=self.read_only, dynamic_typing=False)
+        if self.range is not None and self.type is Parameter.Type.DOUBLE:
+            descriptor.floating_point_range = [FloatingPointRange(from_value=float(self.range[0]),
+                                                                  to_value=float(self.range[1]), step=0.0)]
+        elif self.range is not None and self.type is Parameter.Type.INTEGER:
+            descriptor.integer_range = [IntegerRange(from_value=int(self.range[0]), to_value=int(self.range[1]),
+                                                     step=1)]
+        return descriptor
+
+    def expected(self) -> str:
+        """What a valid value is, in words (for error messages)."""
+        kind = {Parameter.Type.BOOL: "a bool (true or false)", Parameter.Type.INTEGER: "a whole number",
+                Parameter.Type.DOUBLE: "a finite number (double)", Parameter.Type.STRING: "a string"}[self.type]
+        extra = self.additional_constraints()
+        return f"{kind}, {extra}" if extra else kind
+
+
+def _fmt(value: float) -> str:
+    return f"{value:g}"
+
+
+def _check_scene_path(value: str) -> str | None:
+    if not value:
+        return "scene must be the path of a scene YAML file, got ''"
+    return None
+
+
+def _check_world_frame(value: str) -> str | None:
+    if not value or "/" in value or any(c.isspace() for c in value):
+        return f"world_frame must be a non-empty frame name without '/' or spaces, got {value!r}"
+    return None
+
+
+def _check_record_path(value: str) -> str | None:
+    if not value:
+        return None
+    problem_ = check_record_path(value)
+    if problem_ is None:
+        try:
+            mode = os.stat(value).st_mode
+        except FileNotFoundError:
+            mode = None
+        except OSError as exc:
+            problem_ = f"cannot inspect {value!r} ({exc.strerror})"
+            mode = None
+        if mode is not None and not stat.S_ISREG(mode):
+            # A FIFO or device would block (or never end) an open for writing.
+            problem_ = f"{value!r} exists and is not a regular file; expected the path of an .mcap file to write"
+    return f"record_path rejected: {problem_}" if problem_ else None
+
+
+_T = Parameter.Type
+
+#: Every parameter of the node, in the order of the README and config/params.yaml.
+PARAMETERS: tuple[ParameterSpec, ...] = (
+    ParameterSpec("scene", _T.STRING, None,
+                  "Path of the scene YAML file (default: the installed config/default_scene.yaml). A change "
+                  "loads and checks the new file, then swaps the whole scene (its initial state at t = 0, "
+                  "holds and pending impulses dropped), or is refused with the loader's message.",
+                  constraints="a regular file holding a valid scene", check=_check_scene_path,
+                  takes_effect="at once (t = 0)"),
+    ParameterSpec("integrator", _T.STRING, "rk4",
+                  "Integrator of free bodies (docs/choosing_an_integrator.md).",
+                  choices=tuple(sorted(INTEGRATORS))),
+    ParameterSpec("model_reduction", _T.BOOL, True,
+                  "Give each body the cheapest exact model for what it is and what the scene declares "
+                  "(README 'Motions and model reduction'); false steps every free body with the integrator."),
+    ParameterSpec("rate_hz", _T.DOUBLE, 100.0, "Ticks per wall-clock second (Hz).", range=(0.001, 100000.0)),
+    ParameterSpec("substeps", _T.INTEGER, 1,
+                  "Physics steps per tick; dt = real_time_factor / (rate_hz * substeps) seconds.",
+                  range=(1, 100000)),
+    ParameterSpec("real_time_factor", _T.DOUBLE, 1.0, "Sim seconds per wall-clock second.", range=(1e-6, 1e6)),
+    ParameterSpec("world_frame", _T.STRING, "world",
+                  "frame_id of the world: header.frame_id of poses, and of wrenches given in world axes.",
+                  read_only=True, constraints="no '/' or spaces", check=_check_world_frame,
+                  takes_effect="start-up only"),
+    ParameterSpec("publish_clock", _T.BOOL, True, "Publish /clock (rosgraph_msgs/Clock) with sim time every tick."),
+    ParameterSpec("publish_odometry", _T.BOOL, False,
+                  "Also publish B/odom (nav_msgs/Odometry, twist in B's body axes) for every body B."),
+    ParameterSpec("paused", _T.BOOL, False, "When true, sim time advances only through ~/step."),
+    ParameterSpec("wrench_timeout", _T.DOUBLE, 0.5,
+                  "Sim seconds a received wrench stays applied; 0 = until replaced or cleared.",
+                  range=(0.0, 1e9)),
+    ParameterSpec("status_period", _T.DOUBLE, 1.0, "Wall seconds between status log lines; 0 = none.",
+                  range=(0.0, 1e6), takes_effect="at once"),
+    ParameterSpec("diagnostics_period", _T.DOUBLE, 1.0,
+                  "Wall seconds between DiagnosticArray messages on /diagnostics; 0 = none.",
+                  range=(0.0, 1e6), takes_effect="at once"),
+    ParameterSpec("record_path", _T.STRING, "",
+                  "MCAP file to record to (B/pose, B/twist, B/wrench, /clock as ROS 2 messages, stamps = sim "
+                  "time); '' = no recording. A change finishes the current file and starts the new one.",
+                  constraints="'' or the path of a regular file (or a new one) in a writable directory",
+                  check=_check_record_path, takes_effect="at once"),
+)
+
+#: :data:`PARAMETERS` by name.
+BY_NAME: dict[str, ParameterSpec] = {spec.name: spec for spec in PARAMETERS}
+
+
+def coerce(spec: ParameterSpec, value: Any) -> Any:
+    """``value`` as the parameter's type where that is lossless: a whole number for a DOUBLE is a float."""
+    if spec.type is Parameter.Type.DOUBLE and isinstance(value, int) and not isinstance(value, bool):
+        return float(value)
+    return value
+
+
+def problem(name: str, value: Any) -> str | None:
+    """Why ``value`` is not acceptable for parameter ``name`` (type, finiteness, range, choices,
+    constraints), or None. Call it with coerced values (:func:`coerce`)."""
+    spec = BY_NAME.get(name)
+    if spec is None:
+        return f"{name!r} is not a parameter of this node; expected one of {list(BY_NAME)}"
+    ok_type = {
+        Parameter.Type.BOOL: isinstance(value, bool),
+        Parameter.Type.INTEGER: isinstance(value, int) and not isinstance(value, bool),
+        Parameter.Type.DOUBLE: isinstance(value, float) and math.isfinite(value),
+        Parameter.Type.STRING: isinstance(value, str),
+    }[spec.type]
+    if not ok_type:
+        return f"{name} must be {spec.expected()}; got {value!r} ({type(value).__name__})"
+    if spec.range is not None and not spec.range[0] <= value <= spec.range[1]:
+        return f"{name} out of range: must be {spec.expected()}; got {value!r}"
+    if spec.choices and value not in spec.choices:
+        return f"{name} must be one of {list(spec.choices)}, got {value!r}"
+    if spec.check is not None:
+        return spec.check(value)
+    return None
+
+
+def problems(values: Mapping[str, Any]) -> list[str]:
+    """:func:`problem` of every (name, value), in table order; empty if all are acceptable."""
+    order = {spec.name: k for k, spec in enumerate(PARAMETERS)}
+    reasons = (problem(name, values[name]) for name in sorted(values, key=lambda n: order.get(n, len(order))))
+    return [reason for reason in reasons if reason]
+
+
+def declare_parameters(node: Node) -> dict[str, Any]:
+    """Declare every parameter of :data:`PARAMETERS` on ``node`` with its full descriptor; return
+    the start-up values (overrides from ``--ros-args``, params files or ``parameter_overrides``).
+
+    Each parameter is first declared dynamically typed, so that a whole number given for a
+    float parameter (``-p rate_hz:=200``, or ``rate_hz: 200`` in a params file) is accepted and
+    converted, and so that every bad start-up value is reported at once in this module's words;
+    then :meth:`rclpy.node.Node.set_descriptor` gives it its full, statically typed descriptor.
+
+    Raises
+    ------
+    ValueError
+        Naming every start-up value that is not acceptable and what was expected.
+    """
+    values = {}
+    for spec in PARAMETERS:
+        declared = node.declare_parameter(spec.name, spec.default_value(),
+                                          ParameterDescriptor(description=spec.description, dynamic_typing=True))
+        values[spec.name] = coerce(spec, declared.value)
+    reasons = problems(values)
+    if reasons:
+        raise ValueError("; ".join(reasons))
+    for spec in PARAMETERS:
+        value = Parameter(spec.name, spec.type, values[spec.name]).get_parameter_value()
+        node.set_descriptor(spec.name, spec.descriptor(), alternative_value=value)
+    return values
+
+
+# ---------------------------------------------------------------------- generated documents
+
+def _yaml_value(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float):
+        return repr(value)
+    return json.dumps(value) if isinstance(value, str) else str(value)
+
+
+def params_yaml(node_name: str = NODE_NAME) -> str:
+    """The text of ``config/params.yaml``: every parameter but ``scene`` at its default, with its
+    description and constraints as comments."""
+    lines = [
+        "# Parameters of the rigid_body_sim node, generated from rigid_body_sim/ros/parameters.py",
+        "# (python -m rigid_body_sim.ros.parameters --yaml > config/params.yaml; a test checks it). Use:",
+        "#   rigid_body_sim_node --ros-args --params-file config/params.yaml",
+        "# `scene` is left out: it defaults to the installed config/default_scene.yaml.",
+        f"{node_name}:",
+        "  ros__parameters:",
+    ]
+    for spec in PARAMETERS:
+        if spec.default is None:
+            continue
+        lines.append(f"    # {spec.description}")
+        constraints = spec.additional_constraints()
+        if constraints:
+            lines.append(f"    #   ({constraints})")
+        lines.append(f"    {spec.name}: {_yaml_value(spec.default)}")
+    return "\n".join(lines) + "\n"
+
+
+def markdown_table() -> str:
+    """The README's parameter table (between the ``parameters`` markers)."""
+    rows = ["| parameter | type | default | valid values | changes | meaning |", "|---|---|---|---|---|---|"]
+    for spec in PARAMETERS:
+        default = "installed `config/default_scene.yaml`" if spec.default is None else f"`{_yaml_value(spec.default)}`"
+        valid = []
+        if spec.choices:
+            valid.append(", ".join(f"`{c}`" for c in spec.choices))
+        if spec.range is not None:
+            valid.append(f"{_fmt(spec.range[0])} to {_fmt(spec.range[1])}")
+        if spec.constraints:
+            valid.append(spec.constraints)
+        changes = "read-only" if spec.read_only else spec.takes_effect
+        rows.append(f"| `{spec.name}` | {_TYPE_NAMES[spec.type]} | {default} | {'; '.join(valid) or 'any'} "
+                    f"| {changes} | {spec.description} |")
+    return "\n".join(rows) + "\n"
+
+
+def _main(argv: list[str]) -> int:
+    if argv == ["--yaml"]:
+        sys.stdout.write(params_yaml())
+        return 0
+    if argv == ["--markdown"]:
+        sys.stdout.write(markdown_table())
+        return 0
+    print("usage: python -m rigid_body_sim.ros.parameters --yaml | --markdown", file=sys.stderr)
+    return 2
+
+
+if __name__ == "__main__":
+    sys.exit(_main(sys.argv[1:]))
