@@ -255,14 +255,23 @@ class SimHarness:
     # ------------------------------------------------------------------ outputs
 
     def wait_for_latest_state(self) -> None:
-        """Spin until every running body's latest pose carries the node's current sim time."""
+        """Spin until every running body's pose at the node's current sim time has arrived (paused:
+        the latest pose carries exactly that time; running: a pose received since this call carries
+        that time or a later one)."""
         with self.node.locked_simulator() as sim:
             time_s = sim.time
             running = [body for body in sim.body_names if body not in sim.stopped_bodies]
         target = int(round(time_s * 1e9))
+        seen = {body: self._poses.get(body) for body in running}
+
+        def arrived(body: str) -> bool:
+            pose = self._poses.get(body)
+            if pose is None or body not in self._twists:
+                return False
+            return _stamp_ns(pose) == target or (pose is not seen[body] and _stamp_ns(pose) >= target)
+
         for body in running:
-            self.spin_until(lambda b=body: b in self._poses and b in self._twists and _stamp_ns(self._poses[b]) == target,
-                            f"{body}/pose at t = {time_s:.9f} s")
+            self.spin_until(lambda b=body: arrived(b), f"{body}/pose at t = {time_s:.9f} s")
 
     def latest_pose(self, body: str) -> PoseStamped:
         """The last PoseStamped received on ``body/pose``."""

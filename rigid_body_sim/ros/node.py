@@ -53,6 +53,8 @@ QUEUE_DEPTH = 10
 #: and their creation (~2 ms each); above this a scene change would stall the parameter
 #: service for many seconds. A larger scene is refused with this number in the reason.
 MAX_BODIES = 1000
+#: Longest wait (s) of a parameter change for the one before it to finish.
+CHANGE_WAIT_S = 30.0
 
 
 def physics_dt(settings: dict[str, Any]) -> float:
@@ -103,6 +105,7 @@ class RigidBodySimNode(Node):
         super().__init__(node_name, **kwargs)
         self._lock = threading.RLock()
         self._pending = threading.local()  # the prepared change of the request being set, per thread
+        self._change_lock = threading.Lock()  # one parameter change at a time, from on-set to post-set
         self._tick_loop: TickLoop | None = None
         self._recorder: McapRecorder | None = None
         self._fault: str | None = None  # why the simulation cannot go on (ERROR on /diagnostics)
@@ -182,15 +185,32 @@ class RigidBodySimNode(Node):
     def _prepare_change(self, parameters: list[Parameter]) -> SetParametersResult:
         """On-set: accept or refuse a whole request with the parameter table, and prepare what is
         costly (the new scene's simulator, a new recording file) without touching the running
-        simulation. The prepared change waits, keyed to this request, for :meth:`_apply_change`."""
-        previous = getattr(self._pending, "change", None)
-        if previous is not None:  # prepared, then refused by a later callback: never applied
-            previous.discard()
+        simulation. The prepared change waits, keyed to this request and thread, for
+        :meth:`_apply_change`; changes are serialized from here to there, so two clients (or
+        the threads of a multi-threaded executor) never interleave theirs."""
+        stale = getattr(self._pending, "change", None)
         self._pending.change = None
+        if stale is not None:  # prepared on this thread, then refused by a later callback: never applied
+            stale.discard()
+            self._change_lock.release()
+        if not self._change_lock.acquire(timeout=CHANGE_WAIT_S):
+            return SetParametersResult(successful=False, reason=(
+                f"another parameter change has been under way for more than {CHANGE_WAIT_S:g} s; try again"))
+        try:
+            result, change = self._prepare(parameters)
+        except BaseException:
+            self._change_lock.release()
+            raise
+        if change is None:
+            self._change_lock.release()
+        self._pending.change = change
+        return result
+
+    def _prepare(self, parameters: list[Parameter]) -> tuple[SetParametersResult, _Change | None]:
         values = {p.name: p.value for p in parameters if p.name in BY_NAME}  # the last of a name wins, as in rclpy
         reasons = problems(values)
         if reasons:
-            return SetParametersResult(successful=False, reason="; ".join(reasons))
+            return SetParametersResult(successful=False, reason="; ".join(reasons)), None
         with self._lock:
             settings = {**self._settings, **values}
             current = self._sim
@@ -199,25 +219,32 @@ class RigidBodySimNode(Node):
             try:
                 change.simulator = self._build_simulator(values["scene"], settings)
             except (SceneError, ValueError) as exc:
-                return SetParametersResult(successful=False, reason=f"scene rejected: {exc}")
+                return SetParametersResult(successful=False, reason=f"scene rejected: {exc}"), None
         if values.get("record_path"):
             sim = change.simulator or current
             try:
                 change.recorder = self._open_recorder(values["record_path"], sim, dt=physics_dt(settings),
                                                       integrator=settings["integrator"])
             except OSError as exc:
-                return SetParametersResult(successful=False,
-                                           reason=f"record_path rejected: cannot record to {values['record_path']!r} ({exc})")
-        self._pending.change = change
-        return SetParametersResult(successful=True)
+                return SetParametersResult(successful=False, reason=(
+                    f"record_path rejected: cannot record to {values['record_path']!r} ({exc})")), None
+        return SetParametersResult(successful=True), change
 
     def _apply_change(self, parameters: list[Parameter]) -> None:
         """Post-set: apply the change :meth:`_prepare_change` prepared for this request, whole."""
         change = getattr(self._pending, "change", None)
         self._pending.change = None
-        if change is None or change.parameters is not parameters:
+        if change is None:
             # rclpy calls on-set and post-set with the same list, on the same thread.
             raise RuntimeError("parameter change applied without its prepared change; refusing to guess")
+        try:
+            if change.parameters is not parameters:
+                raise RuntimeError("parameter change applied with another request's prepared change; refusing to guess")
+            self._apply(change)
+        finally:
+            self._change_lock.release()
+
+    def _apply(self, change: _Change) -> None:
         old, new = self._settings, change.settings
         changed = {name for name in change.values if old.get(name) != new[name]}
         changed |= set(change.values) & {"scene", "record_path"}  # the same path again reloads / restarts
@@ -314,16 +341,17 @@ class RigidBodySimNode(Node):
         with self._lock:
             self._advance_one_tick_locked()
 
-    def _advance_one_tick_locked(self) -> None:
+    def _advance_one_tick_locked(self) -> bool:
+        """One tick (the lock held); False if the simulation cannot go on (see ``_fault``)."""
         sim, settings = self._sim, self._settings
         if self._fault is not None:
-            return
+            return False
         tick_s = settings["real_time_factor"] / settings["rate_hz"]
         if sim.time + tick_s > MAX_ROS_TIME_S:
             self._fault = (f"sim time {sim.time:.9g} s cannot advance past {MAX_ROS_TIME_S} s, the end of ROS time "
                            "(int32 seconds in builtin_interfaces/Time); ~/reset or a new scene starts again")
             self.get_logger().error(self._fault)
-            return
+            return False
         self._inputs.apply(sim, settings["wrench_timeout"])
         self._record(lambda recorder: recorder.write_wrenches(sim.time, self._inputs.held() + sim.active_scripted_wrenches()))
         target = sim.step_count + settings["substeps"]
@@ -337,15 +365,15 @@ class RigidBodySimNode(Node):
                     sim.stop_body(body)
                 self.get_logger().error(f"stopped {list(failure.bodies)}: {failure}")
         self._publish_state_locked()
+        return True
 
     def step_paused(self) -> tuple[bool, str]:
         """``~/step``: one tick if paused; (success, message)."""
         with self._lock:
             if not self._settings["paused"]:
                 return False, "refused: the simulation is running; pause it first (~/set_paused true, or paused:=true)"
-            if self._fault is not None:
+            if not self._advance_one_tick_locked():
                 return False, f"refused: {self._fault}"
-            self._advance_one_tick_locked()
             return True, f"stepped one tick to t = {self._sim.time:.9f} s"
 
     def reset_simulation(self) -> None:
