@@ -1,0 +1,75 @@
+"""No private API of rclpy, numba or any other library in rigid_body_sim/ (issue 14).
+
+Statically, over every module of the package: no attribute with a leading underscore read from
+anything but ``self``/``cls`` (``node._parameter_overrides``...), no import of a module whose
+path has a private part (``rclpy.impl.implementation_singleton``'s ``_rclpy``...), and none of
+the known undocumented entry points (numba's ``Dispatcher.overloads`` / ``entry_point``)
+outside the one place allowed to isolate a measured need, ``core/kernels.py``, which has its
+own test that fails loudly when numba changes.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parents[1] / "rigid_body_sim"
+MODULES = sorted(PACKAGE.rglob("*.py"))
+
+#: Public-looking names that are undocumented internals of a library we use (numba's compiled
+#: overloads, through which its entry points are reached; rclpy's C binding).
+UNDOCUMENTED = {"overloads", "implementation_singleton", "rclpy_implementation"}
+#: The one module allowed to isolate an undocumented entry point (numba's, for the kernels' speed).
+ISOLATED = PACKAGE / "core" / "kernels.py"
+
+
+def private_uses(path: Path) -> list[str]:
+    """'line: expression' of every private or undocumented use in ``path``."""
+    found = []
+    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute):
+            own = isinstance(node.value, ast.Name) and node.value.id in ("self", "cls")
+            if node.attr.startswith("_") and not node.attr.startswith("__") and not own:
+                found.append(f"{node.lineno}: {ast.unparse(node)}")
+            elif node.attr in UNDOCUMENTED and not own and path != ISOLATED:
+                found.append(f"{node.lineno}: {ast.unparse(node)}")
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            if isinstance(node, ast.ImportFrom) and (node.level > 0 or (node.module or "").startswith("rigid_body_sim")):
+                continue  # our own modules' helpers are ours to use
+            modules = [alias.name for alias in node.names] if isinstance(node, ast.Import) else [node.module or ""]
+            names = [alias.name for alias in node.names] if isinstance(node, ast.ImportFrom) else []
+            for module in modules:
+                if any(part.startswith("_") and part != "__future__" for part in module.split(".")):
+                    found.append(f"{node.lineno}: import {module}")
+                if any(part in UNDOCUMENTED for part in module.split(".")):
+                    found.append(f"{node.lineno}: import {module}")
+            for name in names:
+                if name.startswith("_") or name in UNDOCUMENTED:
+                    found.append(f"{node.lineno}: from {modules[0]} import {name}")
+    return found
+
+
+def test_the_package_has_modules_to_check():
+    assert len(MODULES) > 20 and PACKAGE / "ros" / "node.py" in MODULES
+
+
+@pytest.mark.parametrize("path", MODULES, ids=[str(p.relative_to(PACKAGE)) for p in MODULES])
+def test_no_private_api(path: Path):
+    assert private_uses(path) == []
+
+
+def test_the_check_sees_what_it_must(tmp_path: Path):
+    sample = tmp_path / "sample.py"
+    sample.write_text(
+        "from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy\n"
+        "import numba._helperlib\n"
+        "overrides = node._parameter_overrides\n"
+        "fast = dispatcher.overloads[sig].entry_point\n"
+        "from .closed_form import _jacobi\n"
+        "own = self._lock\n"
+    )
+    found = private_uses(sample)
+    assert [line.split(":")[0] for line in found] == ["1", "1", "2", "3", "4"]
