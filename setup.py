@@ -14,17 +14,21 @@ version = ET.parse(os.path.join(here, "package.xml")).getroot().findtext("versio
 setup(
     name=package_name,
     version=version,
-    packages=find_packages(exclude=["test", "test.*"]),
+    # Only the package itself: benchmarks/, test/ and tools of this repository stay out of the
+    # user's environment (a test checks what a colcon install contains).
+    packages=find_packages(include=[package_name, package_name + ".*"]),
+    # Its data: the manifest, the ament index marker, and config/ (scenes, params.yaml).
     data_files=[
         ("share/ament_index/resource_index/packages", ["resource/" + package_name]),
         ("share/" + package_name, ["package.xml"]),
-        ("share/" + package_name + "/config", sorted(p for p in glob("config/*") if os.path.isfile(p))),
+        ("share/" + package_name + "/config", sorted(glob("config/*.yaml"))),
     ],
     python_requires=">=3.10",
     # Exact pins are in requirements.txt; these name what the package imports.
     install_requires=["numpy", "scipy", "numba", "pyyaml", "matplotlib", "mcap", "mcap-ros2-support", "tqdm"],
-    # Optional: benchmarks/ compares with MuJoCo (pip install -e .[bench]); pin in requirements-bench.txt.
-    extras_require={"bench": ["mujoco==4.0.0"]},
+    # test: what `colcon test` looks for to run pytest (pins in requirements-test.txt);
+    # bench: benchmarks/ compares with MuJoCo (pip install -e .[bench]; pin in requirements-bench.txt).
+    extras_require={"test": ["pytest", "hypothesis"], "bench": ["mujoco==4.0.0"]},
     zip_safe=True,
     maintainer="rigid_body_sim maintainers",
     maintainer_email="rigid-body-sim@example.com",
