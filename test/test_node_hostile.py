@@ -35,7 +35,7 @@ from rosgraph_msgs.msg import Clock
 from rigid_body_sim.ros.conversions import MAX_ROS_TIME_S
 from rigid_body_sim.ros.diagnostics import level_name, status_values
 from rigid_body_sim.ros.node import MAX_BODIES
-from rigid_body_sim.testing import SimHarness, node_command, start_process, stop_process
+from rigid_body_sim.testing import SimHarness, start_process, stop_process
 
 pytestmark = pytest.mark.ros
 

@@ -19,10 +19,8 @@ from __future__ import annotations
 
 import contextlib
 import threading
-import time
 import traceback
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any, Iterator
 
 import numpy as np
@@ -35,6 +33,8 @@ from rclpy.qos import QoSProfile
 
 from ..core import NonFiniteStateError, Scene, SceneError, Simulator, load_scene
 from ..offline.recording import McapRecorder
+from .node_log import StatusLog, log_models, log_scene
+from .node_recording import NodeRecording
 from .conversions import MAX_ROS_TIME_S
 from .diagnostics import TickWindow, diagnostic_statuses
 from .inputs import WrenchInputs
@@ -107,7 +107,6 @@ class RigidBodySimNode(Node):
         self._pending = threading.local()  # the prepared change of the request being set, per thread
         self._change_lock = threading.Lock()  # one parameter change at a time, from on-set to post-set
         self._tick_loop: TickLoop | None = None
-        self._recorder: McapRecorder | None = None
         self._fault: str | None = None  # why the simulation cannot go on (ERROR on /diagnostics)
         self._settings: dict[str, Any] = declare_parameters(self)
         settings = self._settings
@@ -119,9 +118,11 @@ class RigidBodySimNode(Node):
         publishers, inputs = self._outputs.prepare(self._sim.body_names, settings["publish_odometry"]), self._inputs.prepare(self._sim)
         self._outputs.commit(publishers)
         self._inputs.commit(inputs)
+        self._recording = NodeRecording(self.get_logger(), self._world_frame, self.get_namespace(),
+                                        self.get_fully_qualified_name())
         if settings["record_path"]:
             try:
-                self._recorder = self._open_recorder(settings["record_path"], self._sim)
+                self._recording.replace(self._recording.open(settings["record_path"], self._sim))
             except OSError as exc:
                 raise ValueError(f"record_path rejected: cannot record to {settings['record_path']!r} ({exc})") from exc
         self._service_handles = create_services(self)
@@ -134,8 +135,7 @@ class RigidBodySimNode(Node):
         self._diagnostics_pub = self.create_publisher(DiagnosticArray, "/diagnostics", qos)
         self._diagnostics_timer = None
         self._set_diagnostics_period(settings["diagnostics_period"])
-        self._status_wall = time.monotonic()
-        self._status_sim = 0.0
+        self._status_log = StatusLog()
         self._log_start_up()
         self.publish_state()
         self._tick_loop = TickLoop(f"{self.get_name()} ticks", lambda: round(1e9 / self._settings["rate_hz"]),
@@ -223,8 +223,8 @@ class RigidBodySimNode(Node):
         if values.get("record_path"):
             sim = change.simulator or current
             try:
-                change.recorder = self._open_recorder(values["record_path"], sim, dt=physics_dt(settings),
-                                                      integrator=settings["integrator"])
+                change.recorder = self._recording.open(values["record_path"], sim, dt=physics_dt(settings),
+                                                       integrator=settings["integrator"])
             except OSError as exc:
                 return SetParametersResult(successful=False, reason=(
                     f"record_path rejected: cannot record to {values['record_path']!r} ({exc})")), None
@@ -274,9 +274,9 @@ class RigidBodySimNode(Node):
                 self._outputs.commit(publishers)
             old_recorder = None
             if "record_path" in changed:
-                old_recorder, self._recorder = self._recorder, change.recorder
+                old_recorder = self._recording.replace(change.recorder)
                 change.recorder = None
-                self._record(lambda recorder: recorder.write_simulator(sim))
+                self._recording.write(lambda recorder: recorder.write_simulator(sim))
             if change.simulator is not None or "rate_hz" in changed:
                 self._open_diagnostics_window()
             if "rate_hz" in changed and self._tick_loop is not None:
@@ -289,9 +289,10 @@ class RigidBodySimNode(Node):
         if inputs is not None:
             self._inputs.release(inputs)
         if old_recorder is not None:
-            self._finish_recording(old_recorder)
+            self._recording.finish(old_recorder)
         if "model_reduction" in changed and change.simulator is None:
-            self._log_models()
+            with self._lock:
+                log_models(self.get_logger(), self._sim)
         if "diagnostics_period" in changed:
             self._set_diagnostics_period(new["diagnostics_period"])
 
@@ -307,7 +308,7 @@ class RigidBodySimNode(Node):
         self._tick_window.record(due_ns, period_ns, missed=missed)
         if not self._settings["paused"]:
             self._advance_one_tick_locked()
-        self._log_status()
+        self._status_log.maybe_log(self.get_logger(), self._sim, self._settings["status_period"], self._settings["paused"])
 
     def _on_tick_failure(self, exc: BaseException) -> None:
         """The tick thread died: say so everywhere at once, then hand the error to the executor.
@@ -353,7 +354,7 @@ class RigidBodySimNode(Node):
             self.get_logger().error(self._fault)
             return False
         self._inputs.apply(sim, settings["wrench_timeout"])
-        self._record(lambda recorder: recorder.write_wrenches(sim.time, self._inputs.held() + sim.active_scripted_wrenches()))
+        self._recording.write(lambda recorder: recorder.write_wrenches(sim.time, self._inputs.held() + sim.active_scripted_wrenches()))
         target = sim.step_count + settings["substeps"]
         while sim.step_count < target:
             try:
@@ -395,10 +396,10 @@ class RigidBodySimNode(Node):
     def _publish_state_locked(self) -> None:
         sim = self._sim
         self._outputs.publish(sim, self._settings["publish_clock"])
-        if self._recorder is not None:
+        if self._recording.recorder is not None:
             finite = sim.state.finite_bodies().tolist()
             skip = [body for index, body in enumerate(sim.body_names) if not finite[index]]
-            self._record(lambda recorder: recorder.write_simulator(sim, skip=skip))
+            self._recording.write(lambda recorder: recorder.write_simulator(sim, skip=skip))
 
     def _set_diagnostics_period(self, period: float) -> None:
         """(Re)start the /diagnostics timer at ``period`` wall seconds; 0 stops it."""
@@ -435,101 +436,20 @@ class RigidBodySimNode(Node):
         """Publish :meth:`diagnostics` on /diagnostics (the diagnostics timer calls this)."""
         self._diagnostics_pub.publish(self.diagnostics())
 
-    # ------------------------------------------------------------------ logging
-
     def _log_start_up(self) -> None:
-        sim, settings = self._sim, self._settings
-        self.get_logger().info(
-            f"scene {sim.scene.source}: {len(sim.body_names)} bodies; integrator {sim.integrator}, "
-            f"dt = {sim.dt:g} s ({settings['rate_hz']:g} Hz × {settings['substeps']} substeps, "
-            f"real_time_factor {settings['real_time_factor']:g})")
-        for index, body in enumerate(sim.body_names[:20]):
-            frames = list(self._inputs.bodies[body].frames) if body in self._inputs.bodies else []
-            self.get_logger().info(
-                f"  {body}: mass {sim.model.mass[index]:g} kg, principal moments "
-                f"{np.round(sim.model.inertia_P[index], 9).tolist()} kg·m², wrench frames {frames}")
-        if len(sim.body_names) > 20:
-            self.get_logger().info(f"  ... and {len(sim.body_names) - 20} more bodies")
-        self._log_models()
-
-    def _log_models(self) -> None:
-        """Which model each body gets and why (model reduction): one line per body, the first 20."""
-        with self._lock:
-            plans = self._sim.body_models()
-            reduction = self._sim.model_reduction
-        counts: dict[str, int] = {}
-        for plan in plans:
-            counts[plan.model] = counts.get(plan.model, 0) + 1
-        self.get_logger().info(f"models (model_reduction {'on' if reduction else 'off'}): "
-                               + ", ".join(f"{count} {model}" for model, count in sorted(counts.items())))
-        for plan in plans[:20]:
-            self.get_logger().info(f"  {plan.body}: {plan.model} model: {plan.reason}")
-
-    def _log_status(self) -> None:
-        period = self._settings["status_period"]
-        if period <= 0.0:
-            return
-        wall = time.monotonic()
-        elapsed = wall - self._status_wall
-        if elapsed < period:
-            return
-        sim = self._sim
-        rtf = (sim.time - self._status_sim) / elapsed
-        self._status_wall, self._status_sim = wall, sim.time
-        lines = [f"t = {sim.time:.3f} s, real-time factor {rtf:.3f}" + (" (paused)" if self._settings["paused"] else "")]
-        positions, orientations = sim.positions_world(), sim.orientations_xyzw()
-        for index, body in enumerate(sim.body_names[:10]):
-            lines.append(f"  {body}: position {np.round(positions[index], 4).tolist()} m, "
-                         f"orientation xyzw {np.round(orientations[index], 4).tolist()}")
-        if len(sim.body_names) > 10:
-            lines.append(f"  ... and {len(sim.body_names) - 10} more bodies")
-        self.get_logger().info("\n".join(lines))
-
-    # ------------------------------------------------------------------ recording (record_path)
-
-    def _open_recorder(self, path: str, sim: Simulator, *, dt: float | None = None,
-                       integrator: str | None = None) -> McapRecorder:
-        """A new recording at ``path`` for ``sim`` (raises OSError); not yet the node's."""
-        source = Path(sim.scene.source)
-        try:
-            scene_text = source.read_text(encoding="utf-8") if source.is_file() else None
-        except (OSError, UnicodeDecodeError):
-            scene_text = None
-        recorder = McapRecorder(
-            path, world_frame=self._world_frame, namespace=self.get_namespace(), scene_text=scene_text,
-            metadata={"scene": str(sim.scene.source), "integrator": integrator or sim.integrator,
-                      "dt": repr(sim.dt if dt is None else dt), "node": self.get_fully_qualified_name()})
-        self.get_logger().info(f"recording to {path}")
-        return recorder
-
-    def _record(self, write: Any) -> None:
-        """Call ``write(recorder)`` if recording; a failed write (disk full...) ends the recording."""
-        recorder = self._recorder
-        if recorder is None:
-            return
-        try:
-            write(recorder)
-        except OSError as exc:
-            self.get_logger().error(f"recording to {recorder.path} failed ({exc}); not recording")
-            self._recorder = None
-            self._finish_recording(recorder)
-
-    def _finish_recording(self, recorder: McapRecorder) -> None:
-        try:
-            recorder.close()
-        except OSError as exc:
-            self.get_logger().error(f"could not finish the recording {recorder.path} ({exc})")
-        else:
-            self.get_logger().info(f"recording finished: {recorder.path} ({recorder.message_count} messages)")
+        frames = {body: list(inputs.frames) for body, inputs in self._inputs.bodies.items()}
+        log_scene(self.get_logger(), self._sim, self._settings, frames)
 
     def destroy_node(self) -> None:
         """Stop the tick thread, finish the recording (a complete, indexed MCAP file), then destroy the node."""
         if self._tick_loop is not None:
             self._tick_loop.stop()
-        with self._lock:
-            recorder, self._recorder = self._recorder, None
-        if recorder is not None:
-            self._finish_recording(recorder)
+        recording = getattr(self, "_recording", None)  # None if the constructor failed before it
+        if recording is not None:
+            with self._lock:
+                recorder = recording.replace(None)
+            if recorder is not None:
+                recording.finish(recorder)
         super().destroy_node()
 
     # ------------------------------------------------------------------ read-only access for tools and tests
