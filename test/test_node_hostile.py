@@ -418,3 +418,68 @@ def test_a_failing_tick_thread_is_loud_and_the_process_exits_1(tmp_path):
     assert errors and "tick thread failed" in errors[0].message
     # Nothing else failed: after the injected error, no second traceback.
     assert len(re.findall("Traceback", text)) == 1, text
+
+
+STUCK_TICK = textwrap.dedent("""
+    import sys
+    import time
+    from rigid_body_sim.ros.node import RigidBodySimNode
+    from rigid_body_sim.ros.main import main
+
+    original = RigidBodySimNode._advance_one_tick_locked
+    ticks = [0]
+
+    def stuck(self):
+        ticks[0] += 1
+        if ticks[0] == 100:
+            print("tick 100: stuck", flush=True)
+            time.sleep(3600)  # as a step of days would (the reference integrator, dt = 1e9 s)
+        return original(self)
+
+    RigidBodySimNode._advance_one_tick_locked = stuck
+    sys.exit(main(sys.argv[1:]))
+""")
+
+
+def test_a_stuck_tick_keeps_the_node_answering_and_sigterm_still_ends_it(tmp_path):
+    """A tick that does not end (found with integrator reference and real_time_factor 1e6: one
+    step of 1e9 s takes weeks; or 1000 bodies × 100,000 substeps): before, every callback that
+    needed the simulator waited for it, so the node answered nothing, /diagnostics went silent,
+    and SIGINT/SIGTERM waited forever for the tick thread. Now messages are still taken,
+    ~/reset is refused as busy within a second, /diagnostics reports the running tick, and a
+    signal ends the process after STOP_GRACE_S with a complete recording (exit 1: forced)."""
+    from mcap.reader import make_reader
+    from std_srvs.srv import Trigger
+
+    from rigid_body_sim.ros.main import STOP_GRACE_S
+
+    script = tmp_path / "stuck_node.py"
+    script.write_text(STUCK_TICK)
+    log = tmp_path / "node.log"
+    record = tmp_path / "run.mcap"
+    with open(log, "w") as out:
+        process = subprocess.Popen([sys.executable, str(script), "--ros-args", "-p", "status_period:=0.0",
+                                    "-p", "diagnostics_period:=0.2", "-p", f"record_path:={record}"],
+                                   stdout=out, stderr=subprocess.STDOUT, env=os.environ.copy())
+    observer = Observer()
+    try:
+        observer.spin_until(lambda: "tick 100: stuck" in log.read_text(), "the stuck tick", process, log)
+        observer.spin_until(lambda: any(s.name == SIM and "busy" in s.message for a in observer.diagnostics
+                                        for s in a.status), "/diagnostics to report the running tick", process, log)
+        reset = observer.node.create_client(Trigger, "/rigid_body_sim/reset")
+        observer.spin_until(reset.service_is_ready, "~/reset", process, log)
+        future = reset.call_async(Trigger.Request())
+        start = time.monotonic()
+        observer.spin_until(future.done, "the ~/reset answer", process, log)
+        assert time.monotonic() - start < 5.0
+        assert not future.result().success and "busy" in future.result().message
+        code, took = signal_and_wait(process, signal.SIGTERM, timeout=STOP_GRACE_S + 15.0)
+    finally:
+        observer.close()
+        stop_process(process)
+    text = log.read_text()
+    assert code == 1 and f"did not stop within {STOP_GRACE_S:g} s" in text, text
+    assert STOP_GRACE_S - 0.5 < took < STOP_GRACE_S + 10.0
+    with open(record, "rb") as handle:
+        summary = make_reader(handle).get_summary()
+    assert summary is not None and summary.statistics.message_count > 0

@@ -31,6 +31,7 @@ __all__ = [
     "LATENESS_SAMPLES",
     "REJECTION_REASONS",
     "TickWindow",
+    "busy_status",
     "diagnostic_statuses",
     "level_name",
     "status_values",
@@ -181,6 +182,16 @@ def diagnostic_statuses(*, node_name: str, window: TickWindow, sim_time: float, 
     for reason in REJECTION_REASONS:
         inputs.values.append(_kv(f"rejected {reason} (total)", rejected_total.get(reason, 0)))
     return [sim, inputs]
+
+
+def busy_status(*, node_name: str, message: str, busy_for_s: float | None, error: bool) -> DiagnosticStatus:
+    """The simulation status while a tick keeps the simulator (its figures wait for the next
+    report): WARN, or ERROR when ``error`` (the tick has run far longer than a period)."""
+    status = DiagnosticStatus(name=f"{node_name}: simulation", hardware_id="none")
+    status.level = DiagnosticStatus.ERROR if error else DiagnosticStatus.WARN
+    status.message = message
+    status.values = [_kv("tick running [s]", "n/a" if busy_for_s is None else f"{busy_for_s:.3f}")]
+    return status
 
 
 def status_values(status: DiagnosticStatus) -> dict[str, str]:

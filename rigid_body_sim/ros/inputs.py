@@ -7,14 +7,17 @@ impulse (the same message read as N·s and N·m·s) is applied once at the next 
 at the same step in the same (body, frame) are summed, so a flood of them while paused holds
 one entry per frame, not one per message.
 
-Incoming header stamps are not used: a hold is timed in sim time from its receipt, so a stamp
-in the far past or future (or a nanosec field ≥ 1e9) changes nothing. Messages are checked in
+Incoming header stamps are not used: a hold is timed in sim time from the first tick it acts
+on (the tick after its receipt), so a stamp in the far past or future (or a nanosec field
+≥ 1e9) changes nothing. Messages are checked in
 this order and the first failure is the reason counted: frame_id, then non-finite, then too
 large (:mod:`.conversions`). Rejections are counted by reason (``/diagnostics``) and warned
 about at most once per :data:`REJECTION_WARNING_PERIOD`.
 
-Subscriptions change in the three steps :mod:`.publishers` describes (prepare, commit under
-the lock, release).
+The callbacks take only this module's own lock, never the node's: a long tick (a heavy
+scene, many substeps) delays no message, and the executor that runs them stays free for the
+node's other callbacks. Subscriptions change in the three steps :mod:`.publishers` describes
+(prepare, commit, release).
 """
 
 from __future__ import annotations
@@ -42,11 +45,12 @@ REJECTION_WARNING_PERIOD = 2.0
 
 @dataclass
 class _Hold:
-    """A held wrench: force and torque in the message's frame, and the sim time it arrived."""
+    """A held wrench: force and torque in the message's frame, and the sim time of the first tick
+    it acted on (None until then)."""
 
     force: np.ndarray
     torque: np.ndarray
-    received_time: float
+    first_time: float | None = None
 
 
 @dataclass
@@ -77,18 +81,13 @@ class WrenchInputs:
         Of every subscription.
     world_frame : str
         The header.frame_id that means the world.
-    lock : lock
-        The node's lock: held by the callbacks while they touch the holds and counters.
-    sim_time : callable
-        Returns the current sim time (s), read with the lock held.
     """
 
-    def __init__(self, node: Node, qos: QoSProfile, world_frame: str, lock: threading.RLock, sim_time: Any):
+    def __init__(self, node: Node, qos: QoSProfile, world_frame: str):
         self._node = node
         self._qos = qos
         self._world_frame = world_frame
-        self._lock = lock
-        self._sim_time = sim_time
+        self._lock = threading.Lock()  # guards bodies' frames in use, holds, pending impulses, counters
         self.bodies: dict[str, BodyInputs] = {}
         self.holds: dict[tuple[str, str], _Hold] = {}
         self.pending_impulses: dict[tuple[str, str], tuple[np.ndarray, np.ndarray]] = {}
@@ -119,9 +118,11 @@ class WrenchInputs:
         return InputChange(bodies, stale)
 
     def commit(self, change: InputChange) -> None:
-        """Swap in prepared subscriptions and drop every hold and pending impulse (hold the node's lock)."""
-        self.bodies = change.bodies
-        self.clear()
+        """Swap in prepared subscriptions and drop every hold and pending impulse."""
+        with self._lock:
+            self.bodies = change.bodies
+            self.holds.clear()
+            self.pending_impulses.clear()
 
     def release(self, change: InputChange) -> None:
         """Destroy the subscriptions ``change`` replaced (after :meth:`commit`, without the lock)."""
@@ -130,9 +131,17 @@ class WrenchInputs:
         change.stale = []
 
     def clear(self) -> None:
-        """Drop every hold and pending impulse (hold the node's lock)."""
-        self.holds.clear()
-        self.pending_impulses.clear()
+        """Drop every hold and pending impulse."""
+        with self._lock:
+            self.holds.clear()
+            self.pending_impulses.clear()
+
+    def snapshot(self) -> tuple[dict, dict, int, Counter]:
+        """Copies of (holds as (force, torque), pending impulses, accepted count, rejected counts)."""
+        with self._lock:
+            holds = {key: (h.force.copy(), h.torque.copy()) for key, h in self.holds.items()}
+            pending = {key: (j.copy(), h.copy()) for key, (j, h) in self.pending_impulses.items()}
+            return holds, pending, self.accepted, Counter(self.rejected)
 
     # ------------------------------------------------------------------ callbacks
 
@@ -145,13 +154,13 @@ class WrenchInputs:
                 raise RejectedMessage("unknown_frame", "")  # detail built only if it is logged
             force, torque = wrench_from_msg(msg)
         except RejectedMessage as rejection:
-            self.reject(body, topic, msg, rejection)
+            self._reject(body, topic, msg, rejection)
             return None
         self.accepted += 1
         return frame, force, torque
 
-    def reject(self, body: str, topic: str, msg: WrenchStamped | None, rejection: RejectedMessage) -> None:
-        """Count a dropped message by reason; warn at most once per REJECTION_WARNING_PERIOD wall
+    def _reject(self, body: str, topic: str, msg: WrenchStamped | None, rejection: RejectedMessage) -> None:
+        """Count a dropped message by reason (the lock held); warn at most once per REJECTION_WARNING_PERIOD wall
         seconds (rclpy's own throttle inspects the caller's source on every call: ~0.4 ms, which a
         flood of bad messages would turn into a denial of service)."""
         self.rejected[rejection.reason] += 1
@@ -179,7 +188,7 @@ class WrenchInputs:
             if not force.any() and not torque.any():
                 self.holds.pop((body, frame), None)
             else:
-                self.holds[(body, frame)] = _Hold(force, torque, self._sim_time())
+                self.holds[(body, frame)] = _Hold(force, torque)
 
     def on_impulse(self, body: str, msg: WrenchStamped) -> None:
         """``B/impulse``: add it to what is due at the next step in its (body, frame)."""
@@ -195,13 +204,20 @@ class WrenchInputs:
 
     # ------------------------------------------------------------------ per tick
 
-    def apply(self, sim: Simulator, wrench_timeout: float) -> None:
+    def apply(self, sim: Simulator, wrench_timeout: float) -> list[tuple[str, str, np.ndarray, np.ndarray]]:
         """Expire old holds, then hand the pending impulses and the held wrenches to ``sim`` for
-        its next step. An impulse that would make a body's velocity non-finite is dropped and
-        counted as ``non_finite_result``. Hold the node's lock."""
+        its next step; returns the holds applied as (body, core frame, force, torque). An impulse
+        that would make a body's velocity non-finite is dropped and counted as ``non_finite_result``."""
+        with self._lock:
+            return self._apply(sim, wrench_timeout)
+
+    def _apply(self, sim: Simulator, wrench_timeout: float) -> list[tuple[str, str, np.ndarray, np.ndarray]]:
+        now = sim.time
+        for hold in self.holds.values():
+            if hold.first_time is None:
+                hold.first_time = now
         if wrench_timeout > 0.0:
-            now = sim.time
-            expired = [key for key, hold in self.holds.items() if now - hold.received_time >= wrench_timeout]
+            expired = [key for key, hold in self.holds.items() if now - hold.first_time >= wrench_timeout]
             for key in expired:
                 del self.holds[key]
         stopped = set(sim.stopped_bodies)
@@ -211,11 +227,8 @@ class WrenchInputs:
             try:
                 sim.apply_impulse(body, linear, angular, frame)
             except ValueError as exc:
-                self.reject(body, "impulse", None, RejectedMessage("non_finite_result", str(exc)))
+                self._reject(body, "impulse", None, RejectedMessage("non_finite_result", str(exc)))
         self.pending_impulses.clear()
         for (body, frame), hold in self.holds.items():
             sim.apply_wrench(body, hold.force, hold.torque, frame)
-
-    def held(self) -> list[tuple[str, str, np.ndarray, np.ndarray]]:
-        """(body, core frame, force, torque) of every hold (for recordings)."""
         return [(body, frame, hold.force, hold.torque) for (body, frame), hold in self.holds.items()]

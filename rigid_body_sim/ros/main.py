@@ -2,7 +2,9 @@
 
 Exit status: 0 after SIGINT or SIGTERM at any moment (also during start-up: imports, a cold
 numba compile, loading the scene), 2 for bad start-up parameters or scene (the reason on
-stderr), 1 if the tick thread fails (after saying so on the log and /diagnostics).
+stderr), 1 if the tick thread fails (after saying so on the log and /diagnostics), and 1 if
+the orderly stop takes longer than :data:`STOP_GRACE_S` (a tick stuck in a step that will not
+end soon): then the recording is finished without waiting for the tick and the process exits.
 
 Signals are the node's own business here, not rclpy's: ``rclpy.init`` is told to install no
 handler (its handlers shut the context down underneath a spinning executor, which then fails
@@ -18,14 +20,19 @@ reaches :func:`main`, and its signal handlers, before the heavy imports begin.
 
 from __future__ import annotations
 
+import os
 import signal
 import sys
+import threading
 from types import FrameType
+from typing import Any, Callable
 
 __all__ = ["main", "SPIN_TIMEOUT_S"]
 
 #: Longest wait of one ``spin_once``: how soon a stop request is seen while spinning.
 SPIN_TIMEOUT_S = 0.1
+#: Longest wait (s) for the orderly stop after a stop request, before exiting without it.
+STOP_GRACE_S = 5.0
 
 _STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
@@ -36,6 +43,7 @@ class _Signals:
     def __init__(self) -> None:
         self.requested: int | None = None
         self.raising = True
+        self.on_stop: Callable[[], None] | None = None  # called at the first signal once running
         for signum in _STOP_SIGNALS:
             signal.signal(signum, self._handle)
 
@@ -45,12 +53,47 @@ class _Signals:
             self.requested = signum
         if self.raising and first:
             raise KeyboardInterrupt
+        if first and self.on_stop is not None:
+            self.on_stop()
 
     def ignore(self) -> None:
         """From now on a signal changes nothing (tear-down is under way)."""
         self.raising = False
         for signum in _STOP_SIGNALS:
             signal.signal(signum, lambda *_: None)
+
+
+class _StopWatchdog:
+    """Ends the process if the orderly stop has not finished :data:`STOP_GRACE_S` after it began.
+
+    The main thread may be the one that waits (joining a tick thread stuck in a long step), so
+    a timer thread does it: it says why, finishes the recording without the node's lock, and
+    exits with status 1.
+    """
+
+    def __init__(self, node: Any) -> None:
+        self._node = node
+        self._timer: threading.Timer | None = None
+
+    def start(self) -> None:
+        if self._timer is None:
+            self._timer = threading.Timer(STOP_GRACE_S, self._expire)
+            self._timer.daemon = True
+            self._timer.start()
+
+    def cancel(self) -> None:
+        if self._timer is not None:
+            self._timer.cancel()
+
+    def _expire(self) -> None:
+        running = self._node.tick_running_for()
+        _say(f"did not stop within {STOP_GRACE_S:g} s"
+             + (f": a tick has been running for {running:.1f} s" if running is not None else "")
+             + "; finishing the recording and exiting with status 1")
+        try:
+            self._node.finish_recording_now()
+        finally:
+            os._exit(1)
 
 
 def _say(message: str) -> None:
@@ -60,7 +103,7 @@ def _say(message: str) -> None:
 def main(args: list[str] | None = None) -> int:
     """Run the node until SIGINT or SIGTERM; return the exit status (see the module docstring)."""
     signals = _Signals()
-    context = node = executor = None
+    context = node = executor = watchdog = None
     try:
         import rclpy
         from rclpy.exceptions import ParameterException
@@ -80,6 +123,8 @@ def main(args: list[str] | None = None) -> int:
         executor = SingleThreadedExecutor()
         executor.add_node(node)
         _freeze_start_up_objects()
+        watchdog = _StopWatchdog(node)
+        signals.on_stop = watchdog.start
         signals.raising = False
         if signals.requested is not None:
             return 0
@@ -99,7 +144,11 @@ def main(args: list[str] | None = None) -> int:
         return 0
     finally:
         signals.ignore()
+        if watchdog is not None:
+            watchdog.start()
         _tear_down(executor, node, context)
+        if watchdog is not None:
+            watchdog.cancel()
 
 
 def _tear_down(executor, node, context) -> None:

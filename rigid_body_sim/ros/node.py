@@ -36,7 +36,7 @@ from ..offline.recording import McapRecorder
 from .node_log import StatusLog, log_models, log_scene
 from .node_recording import NodeRecording
 from .conversions import MAX_ROS_TIME_S
-from .diagnostics import TickWindow, diagnostic_statuses
+from .diagnostics import TickWindow, busy_status, diagnostic_statuses
 from .inputs import WrenchInputs
 from .parameters import BY_NAME, coerce, declare_parameters, problems
 from .publishers import StatePublishers
@@ -55,6 +55,16 @@ QUEUE_DEPTH = 10
 MAX_BODIES = 1000
 #: Longest wait (s) of a parameter change for the one before it to finish.
 CHANGE_WAIT_S = 30.0
+#: Longest wait (s) of a service or parameter change for a tick under way; then it is refused as busy.
+BUSY_WAIT_S = 1.0
+#: Longest wait (s) of a /diagnostics report for a tick under way; then it reports the tick instead.
+DIAGNOSTICS_WAIT_S = 0.1
+#: A tick running longer than this (s) is reported as ERROR on /diagnostics (else WARN).
+STUCK_TICK_S = 5.0
+
+
+class NodeBusy(RuntimeError):
+    """A tick has kept the simulator longer than a caller would wait; the message says for how long."""
 
 
 def physics_dt(settings: dict[str, Any]) -> float:
@@ -114,7 +124,7 @@ class RigidBodySimNode(Node):
         self._sim = self._build_simulator(settings["scene"], settings)
         qos = QoSProfile(depth=QUEUE_DEPTH)
         self._outputs = StatePublishers(self, qos, self._world_frame)
-        self._inputs = WrenchInputs(self, qos, self._world_frame, self._lock, lambda: self._sim.time)
+        self._inputs = WrenchInputs(self, qos, self._world_frame)
         publishers, inputs = self._outputs.prepare(self._sim.body_names, settings["publish_odometry"]), self._inputs.prepare(self._sim)
         self._outputs.commit(publishers)
         self._inputs.commit(inputs)
@@ -211,9 +221,12 @@ class RigidBodySimNode(Node):
         reasons = problems(values)
         if reasons:
             return SetParametersResult(successful=False, reason="; ".join(reasons)), None
-        with self._lock:
-            settings = {**self._settings, **values}
-            current = self._sim
+        try:
+            with self._lock_or_busy():
+                settings = {**self._settings, **values}
+                current = self._sim
+        except NodeBusy as busy:
+            return SetParametersResult(successful=False, reason=str(busy)), None
         change = _Change(parameters, values, settings)
         if "scene" in values:
             try:
@@ -353,8 +366,8 @@ class RigidBodySimNode(Node):
                            "(int32 seconds in builtin_interfaces/Time); ~/reset or a new scene starts again")
             self.get_logger().error(self._fault)
             return False
-        self._inputs.apply(sim, settings["wrench_timeout"])
-        self._recording.write(lambda recorder: recorder.write_wrenches(sim.time, self._inputs.held() + sim.active_scripted_wrenches()))
+        held = self._inputs.apply(sim, settings["wrench_timeout"])
+        self._recording.write(lambda recorder: recorder.write_wrenches(sim.time, held + sim.active_scripted_wrenches()))
         target = sim.step_count + settings["substeps"]
         while sim.step_count < target:
             try:
@@ -370,21 +383,29 @@ class RigidBodySimNode(Node):
 
     def step_paused(self) -> tuple[bool, str]:
         """``~/step``: one tick if paused; (success, message)."""
-        with self._lock:
-            if not self._settings["paused"]:
-                return False, "refused: the simulation is running; pause it first (~/set_paused true, or paused:=true)"
-            if not self._advance_one_tick_locked():
-                return False, f"refused: {self._fault}"
-            return True, f"stepped one tick to t = {self._sim.time:.9f} s"
+        try:
+            with self._lock_or_busy():
+                if not self._settings["paused"]:
+                    return False, "refused: the simulation is running; pause it first (~/set_paused true, or paused:=true)"
+                if not self._advance_one_tick_locked():
+                    return False, f"refused: {self._fault}"
+                return True, f"stepped one tick to t = {self._sim.time:.9f} s"
+        except NodeBusy as busy:
+            return False, f"refused: {busy}"
 
-    def reset_simulation(self) -> None:
-        """``~/reset``: the scene's initial state at t = 0, holds and pending impulses dropped, published."""
-        with self._lock:
-            self._sim.reset()
-            self._fault = None if self.tick_failure is None else self._fault
-            self._open_diagnostics_window()
-            self._inputs.clear()
-            self._publish_state_locked()
+    def reset_simulation(self) -> tuple[bool, str]:
+        """``~/reset``: the scene's initial state at t = 0, holds and pending impulses dropped,
+        published; (success, message)."""
+        try:
+            with self._lock_or_busy():
+                self._sim.reset()
+                self._fault = None if self.tick_failure is None else self._fault
+                self._open_diagnostics_window()
+                self._inputs.clear()
+                self._publish_state_locked()
+        except NodeBusy as busy:
+            return False, f"refused: {busy}"
+        return True, "reset to the scene's initial state at t = 0 s; held wrenches cleared"
 
     # ------------------------------------------------------------------ outgoing
 
@@ -413,28 +434,51 @@ class RigidBodySimNode(Node):
 
     def _open_diagnostics_window(self) -> None:
         self._tick_window.reopen(self._sim.time)
-        self._accepted_at_open = self._inputs.accepted
-        self._rejected_at_open = dict(self._inputs.rejected)
+        _, _, self._accepted_at_open, self._rejected_at_open = self._inputs.snapshot()
 
-    def diagnostics(self) -> DiagnosticArray:
-        """The DiagnosticArray for the window since the last one (see diagnostics.py); opens a new window."""
-        with self._lock:
-            sim, settings, inputs = self._sim, self._settings, self._inputs
-            array = DiagnosticArray()
-            array.header.stamp = self.get_clock().now().to_msg()
-            array.status = diagnostic_statuses(
-                node_name=self.get_name(), window=self._tick_window, sim_time=sim.time, paused=settings["paused"],
-                integrator=sim.integrator, dt=sim.dt, substeps=settings["substeps"], rate_hz=settings["rate_hz"],
-                real_time_factor=settings["real_time_factor"], bodies=sim.body_names, stopped=sim.stopped_bodies,
-                held_wrenches=len(inputs.holds), pending_impulses=len(inputs.pending_impulses),
-                accepted_total=inputs.accepted, accepted_at_open=self._accepted_at_open,
-                rejected_total=inputs.rejected, rejected_at_open=self._rejected_at_open, fault=self._fault)
-            self._open_diagnostics_window()
-            return array
+    def diagnostics(self, wait_s: float | None = None) -> DiagnosticArray:
+        """The DiagnosticArray for the window since the last one (see diagnostics.py); opens a new window.
+
+        With ``wait_s``, a tick that keeps the simulator longer than that gives a report that says
+        so (WARN; ERROR after :data:`STUCK_TICK_S`) instead of waiting for it.
+        """
+        array = DiagnosticArray()
+        array.header.stamp = self.get_clock().now().to_msg()
+        try:
+            with self._lock_or_busy(wait_s):
+                sim, settings = self._sim, self._settings
+                holds, pending, accepted, rejected = self._inputs.snapshot()
+                array.status = diagnostic_statuses(
+                    node_name=self.get_name(), window=self._tick_window, sim_time=sim.time, paused=settings["paused"],
+                    integrator=sim.integrator, dt=sim.dt, substeps=settings["substeps"], rate_hz=settings["rate_hz"],
+                    real_time_factor=settings["real_time_factor"], bodies=sim.body_names, stopped=sim.stopped_bodies,
+                    held_wrenches=len(holds), pending_impulses=len(pending), accepted_total=accepted,
+                    accepted_at_open=self._accepted_at_open, rejected_total=rejected,
+                    rejected_at_open=self._rejected_at_open, fault=self._fault)
+                self._open_diagnostics_window()
+        except NodeBusy as busy:
+            running = self.tick_running_for()
+            array.status = [busy_status(node_name=self.get_name(), message=str(busy), busy_for_s=running,
+                                        error=running is not None and running > STUCK_TICK_S)]
+        return array
 
     def publish_diagnostics(self) -> None:
-        """Publish :meth:`diagnostics` on /diagnostics (the diagnostics timer calls this)."""
-        self._diagnostics_pub.publish(self.diagnostics())
+        """Publish :meth:`diagnostics` on /diagnostics (the diagnostics timer calls this); never waits
+        long for a tick."""
+        self._diagnostics_pub.publish(self.diagnostics(wait_s=DIAGNOSTICS_WAIT_S))
+
+    @contextlib.contextmanager
+    def _lock_or_busy(self, wait_s: float | None = BUSY_WAIT_S) -> Iterator[None]:
+        """The node's lock; :class:`NodeBusy` if a tick keeps it longer than ``wait_s`` (None: wait)."""
+        if not self._lock.acquire(timeout=-1 if wait_s is None else wait_s):
+            running = self.tick_running_for()
+            raise NodeBusy("busy: a tick has been running for "
+                           + (f"{running:.1f} s" if running is not None else "a while")
+                           + " (a heavy scene, many substeps, or the reference integrator with a long step); try again")
+        try:
+            yield
+        finally:
+            self._lock.release()
 
     def _log_start_up(self) -> None:
         frames = {body: list(inputs.frames) for body, inputs in self._inputs.bodies.items()}
@@ -451,6 +495,18 @@ class RigidBodySimNode(Node):
             if recorder is not None:
                 recording.finish(recorder)
         super().destroy_node()
+
+    def finish_recording_now(self) -> None:
+        """Finish the recording without waiting for the lock: for an exit that cannot wait for a
+        tick stuck in a step (which writes nothing while it steps)."""
+        recording = getattr(self, "_recording", None)
+        recorder = recording.replace(None) if recording is not None else None
+        if recorder is not None:
+            recording.finish(recorder)
+
+    def tick_running_for(self) -> float | None:
+        """Seconds the tick under way has been running, or None between ticks."""
+        return self._tick_loop.busy_for() if self._tick_loop is not None else None
 
     # ------------------------------------------------------------------ read-only access for tools and tests
 
@@ -474,22 +530,19 @@ class RigidBodySimNode(Node):
     @property
     def rejected(self) -> dict[str, int]:
         """Dropped wrench and impulse messages by reason (see diagnostics.REJECTION_REASONS)."""
-        with self._lock:
-            return dict(self._inputs.rejected)
+        return dict(self._inputs.snapshot()[3])
 
     @property
     def accepted_messages(self) -> int:
         """Wrench and impulse messages accepted so far."""
-        return self._inputs.accepted
+        return self._inputs.snapshot()[2]
 
     @property
     def held_wrenches(self) -> dict[tuple[str, str], tuple[np.ndarray, np.ndarray]]:
         """Held wrenches by (body, core frame): (force, torque) in that frame."""
-        with self._lock:
-            return {key: (h.force.copy(), h.torque.copy()) for key, h in self._inputs.holds.items()}
+        return self._inputs.snapshot()[0]
 
     @property
     def pending_impulses(self) -> dict[tuple[str, str], tuple[np.ndarray, np.ndarray]]:
         """Impulses due at the next step by (body, core frame): summed (linear N·s, angular N·m·s) in that frame."""
-        with self._lock:
-            return {key: (j.copy(), h.copy()) for key, (j, h) in self._inputs.pending_impulses.items()}
+        return self._inputs.snapshot()[1]

@@ -8,7 +8,9 @@
 ``~/step`` (std_srvs/Trigger)
     Exactly one tick while paused; refused with a reason while running.
 
-Each handler is a few lines over a public method of the node, which does the work under its lock.
+Each handler is a few lines over a public method of the node, which does the work under its
+lock; a tick that keeps the simulator longer than ``BUSY_WAIT_S`` (node.py) makes ``~/reset``
+and ``~/step`` refuse with a reason rather than wait.
 """
 
 from __future__ import annotations
@@ -28,9 +30,7 @@ def create_services(node: "RigidBodySimNode") -> list:
     """Create the services on ``node``; returns them."""
 
     def on_reset(_request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
-        node.reset_simulation()
-        response.success = True
-        response.message = "reset to the scene's initial state at t = 0 s; held wrenches cleared"
+        response.success, response.message = node.reset_simulation()
         return response
 
     def on_set_paused(request: SetBool.Request, response: SetBool.Response) -> SetBool.Response:
