@@ -33,6 +33,8 @@ __all__ = ["main", "SPIN_TIMEOUT_S"]
 SPIN_TIMEOUT_S = 0.1
 #: Longest wait (s) for the orderly stop after a stop request, before exiting without it.
 STOP_GRACE_S = 5.0
+#: Delay (s) before a start-up signal that arrived in a C callback is sent again.
+RETRY_SIGNAL_S = 0.02
 
 _STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
@@ -47,11 +49,20 @@ class _Signals:
         for signum in _STOP_SIGNALS:
             signal.signal(signum, self._handle)
 
-    def _handle(self, signum: int, _frame: FrameType | None) -> None:
+    def _handle(self, signum: int, frame: FrameType | None) -> None:
         first = self.requested is None
         if first:
             self.requested = signum
-        if self.raising and first:
+        if self.raising:
+            if _swallows_exceptions(frame):
+                # An exception raised here would be printed and ignored (a ctypes callback of
+                # llvmlite while numba loads its cache, a finalizer): send the signal again
+                # shortly, so that it lands in ordinary code.
+                timer = threading.Timer(RETRY_SIGNAL_S, os.kill, (os.getpid(), signum))
+                timer.daemon = True
+                timer.start()
+                return
+            self.raising = False
             raise KeyboardInterrupt
         if first and self.on_stop is not None:
             self.on_stop()
@@ -94,6 +105,14 @@ class _StopWatchdog:
             self._node.finish_recording_now()
         finally:
             os._exit(1)
+
+
+def _swallows_exceptions(frame: FrameType | None) -> bool:
+    """True if an exception raised in ``frame`` would be printed and dropped, not propagated: a
+    Python callback called from C through ctypes (llvmlite's), or a finalizer."""
+    if frame is None:
+        return False
+    return "llvmlite" in frame.f_code.co_filename or frame.f_code.co_name in ("__del__", "_raw_object_cache_notify")
 
 
 def _say(message: str) -> None:

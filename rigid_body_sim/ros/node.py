@@ -8,11 +8,14 @@ parameters.py. Each physics step advances ``real_time_factor / (rate_hz · subst
 
 This module wires those parts together and owns what they share: the simulator, the lock,
 the tick (tick_loop.py calls :meth:`RigidBodySimNode._tick` from its thread), parameter changes
-and the recording. One re-entrant lock guards the simulator and the node's state between the
-tick thread and the executor's callbacks. A parameter change is validated and prepared
-(a new scene is loaded and its simulator built; a recording file opened) without the lock,
-then applied whole under it; endpoints of a new scene are created before and destroyed after,
-so a scene change never stops the ticks for longer than the swap.
+and the recording (node_recording.py; its log lines are node_log.py's). One re-entrant lock
+guards the simulator and the node's state between the tick thread and the executor's
+callbacks; incoming messages take only their own lock (inputs.py), and services, parameter
+changes and /diagnostics wait for a tick at most a bounded time (``BUSY_WAIT_S``,
+``DIAGNOSTICS_WAIT_S``), so a long tick never silences the node. A parameter change is
+validated and prepared (a new scene is loaded and its simulator built; a recording file
+opened) without the lock, then applied whole under it; endpoints of a new scene are created
+before and destroyed after, so a scene change never stops the ticks for longer than the swap.
 """
 
 from __future__ import annotations
@@ -20,7 +23,7 @@ from __future__ import annotations
 import contextlib
 import threading
 import traceback
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Iterator
 
 import numpy as np
@@ -33,11 +36,11 @@ from rclpy.qos import QoSProfile
 
 from ..core import NonFiniteStateError, Scene, SceneError, Simulator, load_scene
 from ..offline.recording import McapRecorder
-from .node_log import StatusLog, log_models, log_scene
-from .node_recording import NodeRecording
 from .conversions import MAX_ROS_TIME_S
 from .diagnostics import TickWindow, busy_status, diagnostic_statuses
 from .inputs import WrenchInputs
+from .node_log import StatusLog, log_models, log_scene
+from .node_recording import NodeRecording
 from .parameters import BY_NAME, coerce, declare_parameters, problems
 from .publishers import StatePublishers
 from .services import create_services
@@ -81,7 +84,6 @@ class _Change:
     settings: dict[str, Any]
     simulator: Simulator | None = None
     recorder: McapRecorder | None = None
-    notes: list[str] = field(default_factory=list)
 
     def discard(self) -> None:
         """Undo what preparing did (a recording file opened for it)."""
@@ -125,9 +127,8 @@ class RigidBodySimNode(Node):
         qos = QoSProfile(depth=QUEUE_DEPTH)
         self._outputs = StatePublishers(self, qos, self._world_frame)
         self._inputs = WrenchInputs(self, qos, self._world_frame)
-        publishers, inputs = self._outputs.prepare(self._sim.body_names, settings["publish_odometry"]), self._inputs.prepare(self._sim)
-        self._outputs.commit(publishers)
-        self._inputs.commit(inputs)
+        self._outputs.commit(self._outputs.prepare(self._sim.body_names, settings["publish_odometry"]))
+        self._inputs.commit(self._inputs.prepare(self._sim))
         self._recording = NodeRecording(self.get_logger(), self._world_frame, self.get_namespace(),
                                         self.get_fully_qualified_name())
         if settings["record_path"]:
@@ -336,9 +337,9 @@ class RigidBodySimNode(Node):
         self.get_logger().fatal(f"tick thread failed, the simulation has stopped: {exc!r}\n{detail}")
         with contextlib.suppress(Exception):
             self.publish_diagnostics()
-            # A timer due at once in the executor raises the failure there, at every spin (a guard
-            # condition would do, but rclpy's EventsExecutor does not support them).
-            self.create_timer(0.0, self._raise_tick_failure, clock=self._steady_clock)
+        # A timer due at once in the executor raises the failure there, at every spin (a guard
+        # condition would do, but rclpy's EventsExecutor does not support them).
+        self.create_timer(0.0, self._raise_tick_failure, clock=self._steady_clock)
 
     def _raise_tick_failure(self) -> None:
         failure = self.tick_failure
