@@ -37,6 +37,10 @@ _MIN_M_C = 1e-300
 #: A transverse amplitude below this fraction of |L| is treated as zero (a uniform spin about
 #: the axis): what it would add is ~1e-150 relative, and its square would underflow.
 _TINY_AMPLITUDE = 1e-150
+#: Gauss–Legendre rule for the precession increment of a short step, and its reach: used when
+#: |ν h| ≤ _GL_REACH · (half-width of the strip where the integrand is analytic).
+_GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(8)
+_GL_REACH = 0.25
 #: How many sets of moments keep their constants cached.
 _CACHE_SIZE = 16
 
@@ -297,6 +301,12 @@ def _elliptic_flow(c: _Elliptic, inertia: np.ndarray, q: np.ndarray, L: np.ndarr
         large = np.abs(n) > 1.0
         dG = (_third_kind(sr1, cr1, dr1, n, m, large) - _third_kind(sr0, cr0, dn0, n, m, large)
               + 2.0 * dj * _third_kind_complete(n, m, m_c, large))
+        # A short step: the increment itself, ∫ dG/du du over [u0, u1] by Gauss–Legendre, so its
+        # error is relative to the increment rather than ulp(G) (G ~ ln(1/dn) near the saddle).
+        tau = nu * h
+        short = np.abs(tau) <= _GL_REACH * np.arctan(1.0 / np.sqrt(np.abs(n)))
+        if short.any():
+            dG[short] = _third_kind_increment(r0[short], tau[short], n[short], m_c[short], large[short])
         K = d31 / (I1 * I3 * nu_l) * size_l
         I_base = np.where(case1 ^ large, I1, I3)
         dphi = size * h / I_base + np.where(case1, K, -K) * dG
@@ -317,6 +327,7 @@ def _elliptic_flow(c: _Elliptic, inertia: np.ndarray, q: np.ndarray, L: np.ndarr
         turn_abc = quat_multiply(quat_multiply(quat_conjugate(B0), _z_quat(dphi)), B1)
         turn = quat_multiply(quat_multiply(quat_conjugate(q_Q), turn_abc), q_Q)
         q_out = quat_multiply(q, turn)
+        l_S1 = l_S1 * (size_l / np.sqrt(np.sum(l_S1 * l_S1, axis=1)))[:, None]
         L_out = np.ldexp(np.einsum("nji,nj->ni", c.P, l_S1), scale_exp[:, None])
 
     if uniform.any():
@@ -337,6 +348,23 @@ def _third_kind(s: np.ndarray, c: np.ndarray, delta: np.ndarray, n: np.ndarray, 
     part = elliptic.third_kind_minus_f(s, c, delta, n_used)
     root = np.sqrt(np.where(large, (1.0 - n) * (1.0 - n_used), 1.0))
     return np.where(large, np.arctan2(root * s, c * delta) / root - part, part)
+
+
+def _third_kind_increment(r0: np.ndarray, tau: np.ndarray, n: np.ndarray, m_c: np.ndarray, large: np.ndarray
+                          ) -> np.ndarray:
+    """:func:`_third_kind` at u0 + τ minus at u0 (r0 ≡ u0 mod 2K), by 8-point Gauss–Legendre in u.
+
+    The integrand, d(Π − F)/du = n sn²/(1 − n sn²) or dΠ/du = 1/(1 − n sn²) (``large``), is
+    analytic in a strip |Im u| < atan(1/√|n|) (where 1 − n sn² = 0 nearest the real axis, and
+    ≤ K' for the poles of sn); for |τ| ≤ ``_GL_REACH`` · that width the 8-point rule's error is
+    ≲ (_GL_REACH/2)^16 ≈ 1e-16 of the increment.
+    """
+    u = r0[:, None] + tau[:, None] * (0.5 * (_GL_NODES + 1.0))
+    sn, _, _ = elliptic.jacobi(u, m_c[:, None])
+    s2 = sn * sn
+    n = n[:, None]
+    rate = np.where(large[:, None], 1.0, n * s2) / (1.0 - n * s2)
+    return 0.5 * tau * (rate @ _GL_WEIGHTS)
 
 
 def _third_kind_complete(n: np.ndarray, m: np.ndarray, m_c: np.ndarray, large: np.ndarray) -> np.ndarray:
