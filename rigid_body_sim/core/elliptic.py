@@ -78,7 +78,7 @@ def two_product(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def difference_of_products(c: np.ndarray, x: np.ndarray, d: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """``c x² − d y²`` to a relative error of a few ulp, however much the two terms cancel.
+    """``c x² − d y²`` to a few ulp of itself plus a few ulp² of the terms, however they cancel.
 
     The squares and their products with the coefficients are formed exactly as double-doubles
     (:func:`two_product`), subtracted with :func:`two_sum` and rounded once at the end. ``c``,
