@@ -287,9 +287,18 @@ def _elliptic_flow(c: _Elliptic, inertia: np.ndarray, q: np.ndarray, L: np.ndarr
         j0 = np.where(cn0 < 0.0, 1.0, 0.0)
         sr0, cr0 = np.where(cn0 < 0.0, -sn0, sn0), np.abs(cn0)
         r0 = elliptic.elliptic_f(sr0, cr0, dn0)
-        dj, r1 = elliptic.reduce_phase(r0 + nu * h, two_K)
+        tau = nu * h
+        dj, r1 = elliptic.reduce_phase(r0 + tau, two_K)
         j1 = j0 + dj
-        sr1, cr1, dr1 = elliptic.jacobi_reduced(r1, m_c)
+        # A short step also needs sn at the Gauss–Legendre nodes of [u0, u1] (below): one call.
+        n = np.where(case1, c.n_char[:, 0], c.n_char[:, 1])
+        short = np.abs(tau) <= _GL_REACH * np.arctan(1.0 / np.sqrt(np.abs(n)))
+        if short.any():
+            _, nodes = elliptic.reduce_phase(r0[:, None] + tau[:, None] * (0.5 * (_GL_NODES + 1.0)), two_K[:, None])
+            sn_all, cn_all, dn_all = elliptic.jacobi_reduced(np.column_stack((r1, nodes)), m_c[:, None])
+            sr1, cr1, dr1, sn_nodes = sn_all[:, 0], cn_all[:, 0], dn_all[:, 0], sn_all[:, 1:]
+        else:
+            sr1, cr1, dr1 = elliptic.jacobi_reduced(r1, m_c)
         parity = 1.0 - 2.0 * np.mod(j1, 2.0)  # sn, cn change sign every 2K; dn does not
         sn1, cn1 = parity * sr1, parity * cr1
         l_S1 = np.where(case1[:, None],
@@ -297,16 +306,13 @@ def _elliptic_flow(c: _Elliptic, inertia: np.ndarray, q: np.ndarray, L: np.ndarr
                         np.stack((sigma * dr1 * R3 / g1, sn1 * R1 / g3, sigma * cn1 * R1 / g4), axis=1))
 
         # Precession angle about L_W: G = Π − F (or Π, `large`) at both ends, plus whole periods.
-        n = np.where(case1, c.n_char[:, 0], c.n_char[:, 1])
         large = np.abs(n) > 1.0
         dG = (_third_kind(sr1, cr1, dr1, n, m, large) - _third_kind(sr0, cr0, dn0, n, m, large)
               + 2.0 * dj * _third_kind_complete(n, m, m_c, large))
         # A short step: the increment itself, ∫ dG/du du over [u0, u1] by Gauss–Legendre, so its
         # error is relative to the increment rather than ulp(G) (G ~ ln(1/dn) near the saddle).
-        tau = nu * h
-        short = np.abs(tau) <= _GL_REACH * np.arctan(1.0 / np.sqrt(np.abs(n)))
         if short.any():
-            dG[short] = _third_kind_increment(r0[short], tau[short], n[short], m_c[short], large[short])
+            dG[short] = _third_kind_increment(sn_nodes[short], tau[short], n[short], large[short])
         K = d31 / (I1 * I3 * nu_l) * size_l
         I_base = np.where(case1 ^ large, I1, I3)
         dphi = size * h / I_base + np.where(case1, K, -K) * dG
@@ -350,18 +356,16 @@ def _third_kind(s: np.ndarray, c: np.ndarray, delta: np.ndarray, n: np.ndarray, 
     return np.where(large, np.arctan2(root * s, c * delta) / root - part, part)
 
 
-def _third_kind_increment(r0: np.ndarray, tau: np.ndarray, n: np.ndarray, m_c: np.ndarray, large: np.ndarray
-                          ) -> np.ndarray:
-    """:func:`_third_kind` at u0 + τ minus at u0 (r0 ≡ u0 mod 2K), by 8-point Gauss–Legendre in u.
+def _third_kind_increment(sn_nodes: np.ndarray, tau: np.ndarray, n: np.ndarray, large: np.ndarray) -> np.ndarray:
+    """:func:`_third_kind` at u0 + τ minus at u0, by 8-point Gauss–Legendre in u (``sn_nodes``
+    (N, 8) the values of sn at u0 + τ (1 + x_i)/2).
 
     The integrand, d(Π − F)/du = n sn²/(1 − n sn²) or dΠ/du = 1/(1 − n sn²) (``large``), is
     analytic in a strip |Im u| < atan(1/√|n|) (where 1 − n sn² = 0 nearest the real axis, and
     ≤ K' for the poles of sn); for |τ| ≤ ``_GL_REACH`` · that width the 8-point rule's error is
-    ≲ (_GL_REACH/2)^16 ≈ 1e-16 of the increment.
+    ≲ ρ^-16 ≈ 3e-15 of the increment (ρ ≈ 4/_GL_REACH, the Bernstein ellipse that fits).
     """
-    u = r0[:, None] + tau[:, None] * (0.5 * (_GL_NODES + 1.0))
-    sn, _, _ = elliptic.jacobi(u, m_c[:, None])
-    s2 = sn * sn
+    s2 = sn_nodes * sn_nodes
     n = n[:, None]
     rate = np.where(large[:, None], 1.0, n * s2) / (1.0 - n * s2)
     return 0.5 * tau * (rate @ _GL_WEIGHTS)
