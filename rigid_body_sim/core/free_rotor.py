@@ -197,7 +197,12 @@ def exact_rotor(inertia_P: np.ndarray, q_WP: np.ndarray, L_P: np.ndarray, h: flo
     vectorised, on L/|L| so that no intermediate overflows):
 
     * ``L_P(h)``: Jacobi sn, cn, dn at ``u0 + ν h``, with ``u0 = F(am u0 | m)`` from the
-      current state.
+      current state. The state's own sn, cn, dn are read off L (each to full relative
+      precision, however close to an axis or to the separatrix), u0 is Carlson's R_F of them,
+      m_c = 1 − m comes from L² − 2E·I2 formed with error-free products, and sn, cn, dn at the
+      end come from Bulirsch's recurrence (:mod:`~rigid_body_sim.core.elliptic`), which keeps
+      cn and dn to full relative precision where they are small. L is scaled by a power of two
+      first (exact), so any |L| works; the result is rescaled to the input |L|.
     * Orientation: with (a, b, c) the sorted axes relabelled cyclically so that c is the axis
       the polhode encircles, and ``B(L)`` the rotation ``Rx(θ) Rz(ψ)`` taking ``L_abc`` to
       ``|L| e_z`` (z–x–z Euler angles, Landau & Lifshitz §37), the body turns by
@@ -213,7 +218,11 @@ def exact_rotor(inertia_P: np.ndarray, q_WP: np.ndarray, L_P: np.ndarray, h: flo
       near-symmetric body tumbling about its odd axis) the second, with
       ``Π(n) = F − Π(m/n) + ρ^{-1/2} atan(√ρ tan β / Δ)``, ``ρ = (1 − n)(1 − m/n)``, so that
       ``Π = −(n'/3) sin³β R_J(…, 1 − n' sin²β) + ρ^{-1/2} atan(…)`` with ``n' = m/n``: neither
-      form cancels. Both are extended beyond |β| ≤ π/2 by their quasi-periodicity.
+      form cancels. Both are extended beyond |β| ≤ π/2 by their quasi-periodicity, and
+      evaluated from (sn, cn, dn) of the reduced phases, never from β itself. For a short step
+      (|ν h| ≤ a quarter of the strip where the integrand is analytic) the increment is instead
+      integrated over [u0, u1] by 8-point Gauss–Legendre, so that its error is relative to the
+      increment and not to G, which grows like ln(1/dn) near the intermediate axis.
 
     Special cases, all exact: L = 0 (nothing moves); L along a principal axis (a uniform
     rotation ``q ⊗ exp(h ω)``); a body whose closest pair of moments is equal within
