@@ -231,10 +231,10 @@ def exact_rotor(inertia_P: np.ndarray, q_WP: np.ndarray, L_P: np.ndarray, h: flo
 
     Parameters and returns as :func:`symmetric_split_rotor`.
     """
-    pairing, elliptic = _constants(inertia_P)
+    pairing, constants = _constants(inertia_P)
     symmetric = pairing.symmetric
     if not symmetric.any():
-        return _elliptic_flow(elliptic, inertia_P, q_WP, L_P, h)
+        return _elliptic_flow(constants, inertia_P, q_WP, L_P, h)
     if symmetric.all():
         return _symmetric_split(pairing, q_WP, L_P, h)
     q_new = np.empty(np.broadcast_shapes(q_WP.shape, (len(inertia_P), 4)))
@@ -243,7 +243,7 @@ def exact_rotor(inertia_P: np.ndarray, q_WP: np.ndarray, L_P: np.ndarray, h: flo
     sub = _Pairing(*(getattr(pairing, f)[idx] for f in ("inv_inertia_t", "e_s", "c_s", "e_k", "c_k", "symmetric")))
     q_new[idx], L_new[idx] = _symmetric_split(sub, q_WP[idx], L_P[idx], h)
     idx = np.flatnonzero(~symmetric)
-    sub = _Elliptic(*(getattr(elliptic, f)[idx] for f in ("P", "I_S", "n_char", "q_Q")))
+    sub = _Elliptic(*(getattr(constants, f)[idx] for f in ("P", "I_S", "n_char", "q_Q")))
     q_new[idx], L_new[idx] = _elliptic_flow(sub, inertia_P[idx], q_WP[idx], L_P[idx], h)
     return q_new, L_new
 
