@@ -302,12 +302,17 @@ def _elliptic_flow(c: _Elliptic, inertia: np.ndarray, q: np.ndarray, L: np.ndarr
         # A short step also needs sn at the Gauss–Legendre nodes of [u0, u1] (below): one call.
         n = np.where(case1, c.n_char[:, 0], c.n_char[:, 1])
         short = np.abs(tau) <= _GL_REACH * np.arctan(1.0 / np.sqrt(np.abs(n)))
-        if short.any():
+        if short.all():
             _, nodes = elliptic.reduce_phase(r0[:, None] + tau[:, None] * (0.5 * (_GL_NODES + 1.0)), two_K[:, None])
             sn_all, cn_all, dn_all = elliptic.jacobi_reduced(np.column_stack((r1, nodes)), m_c[:, None])
             sr1, cr1, dr1, sn_nodes = sn_all[:, 0], cn_all[:, 0], dn_all[:, 0], sn_all[:, 1:]
         else:
             sr1, cr1, dr1 = elliptic.jacobi_reduced(r1, m_c)
+            if short.any():
+                sn_nodes = np.empty((len(r1), _GL_NODES.size))
+                _, nodes = elliptic.reduce_phase(r0[short, None] + tau[short, None] * (0.5 * (_GL_NODES + 1.0)),
+                                                 two_K[short, None])
+                sn_nodes[short] = elliptic.jacobi_reduced(nodes, m_c[short, None])[0]
         parity = 1.0 - 2.0 * np.mod(j1, 2.0)  # sn, cn change sign every 2K; dn does not
         sn1, cn1 = parity * sr1, parity * cr1
         l_S1 = np.where(case1[:, None],
