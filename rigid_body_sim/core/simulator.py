@@ -206,13 +206,13 @@ class Simulator:
         self._any_wrench = False  # something is in _wrenches (or pending)
         self._reference_options = {"rtol": _positive(reference_rtol, "reference_rtol"),
                                    "atol": _positive(reference_atol, "reference_atol")}
-        self._method: Method = INTEGRATORS["rk4"]
-        self.integrator = integrator
-        self.dt = dt
         # The scene's scripted wrenches: (frame, force, torque, start, end) per entry, summed into
         # their own rows, which user wrenches never touch, whenever the active set changes.
         self._script = tuple((parse_frame(scene, w.body, w.frame), w.force, w.torque, w.start, w.end)
                              for w in scene.wrenches)
+        self._method: Method = INTEGRATORS["rk4"]
+        self.integrator = integrator
+        self.dt = dt
         self._script_wrenches = new_wrench_rows(n)
         self._script_active: tuple[int, ...] = ()
         self._stopped = np.zeros(n, dtype=bool)
@@ -234,6 +234,8 @@ class Simulator:
         method = get_integrator(name)
         self._method = method
         self._control[L.METHOD] = -1 if method.code is None else method.code
+        # Scripted wrenches and the numpy/scipy integrators step one step per call (_step_once).
+        self._step_by_step = bool(self._script) or method.code is None
 
     @property
     def energy_growth_limit(self) -> float:
@@ -303,6 +305,9 @@ class Simulator:
         self._members, groups = reduction.apply_plan(self._prm, self.model, self.scene.initial_state, self.state,
                                                      self._plans)
         self._control[L.GROUPS:L.GROUPS + groups.size] = groups.ravel()
+        # The buffers of stepping.advance, in its order: one tuple, so a step(1) builds no arguments.
+        self._buffers = (self._Ys, self._prm, self._wrenches, self._members, self._status, self._control,
+                         self._inputs)
         # Bodies that no longer move keep their row in both buffers (the step never writes it).
         cur = self._control[L.CUR]
         self._Ys[1 - cur] = self._Ys[cur]
@@ -351,7 +356,10 @@ class Simulator:
             ref = self._frame_ref(body, frame)
         fx, fy, fz = _floats3(force, "force")
         tx, ty, tz = _floats3(torque, "torque")
-        self._add(ref, fx, fy, fz, tx, ty, tz)
+        if self._pending:
+            self._flush_pending()
+        self._inputs[L.PENDING:L.INPUT_WIDTH] = (1.0, ref.body_index, ref.kind, *ref.arm_P, fx, fy, fz, tx, ty, tz)
+        self._pending = self._any_wrench = True
 
     def apply_force_at_point(self, body: str, force: Any, point: Any, frame: str = "world") -> None:
         """Apply force F (N) at point r (m) of ``frame``, both in ``frame``'s axes: the wrench (F, r × F).
@@ -367,23 +375,18 @@ class Simulator:
         if not (math.isfinite(tx) and math.isfinite(ty) and math.isfinite(tz)):
             raise ValueError(f"torque: expected 3 finite numbers, got {[tx, ty, tz]!r} (the moment r × F of "
                              f"force {[fx, fy, fz]!r} at point {[rx, ry, rz]!r})")
-        self._add(ref, fx, fy, fz, tx, ty, tz)
+        # The hot path of a controller: the wrench waits as the pending one (inputs[PENDING...])
+        # and the next step's single compiled call adds it; an earlier pending one goes in now.
+        if self._pending:
+            self._flush_pending()
+        self._inputs[L.PENDING:L.INPUT_WIDTH] = (1.0, ref.body_index, ref.kind, *ref.arm_P, fx, fy, fz, tx, ty, tz)
+        self._pending = self._any_wrench = True
 
     def _frame_ref(self, body: str, frame: str) -> FrameRef:
         """parse_frame, remembered per (body, frame) (only valid pairs are remembered)."""
         ref = parse_frame(self.scene, body, frame)  # raises, listing the valid choices
         self._frame_refs[body, frame] = ref
         return ref
-
-    def _add(self, ref: FrameRef, fx: float, fy: float, fz: float, tx: float, ty: float, tz: float) -> None:
-        """Accumulate a validated wrench: it waits as the pending wrench of the next step (the
-        first one; one compiled call then adds it and steps), the others go to the rows now."""
-        if self._pending:
-            self._flush_pending()
-        ax, ay, az = ref.arm_P
-        self._inputs[L.PENDING:L.INPUT_WIDTH] = (1.0, ref.body_index, ref.kind, ax, ay, az, fx, fy, fz, tx, ty, tz)
-        self._pending = True
-        self._any_wrench = True
 
     def _flush_pending(self) -> None:
         """Move the pending wrench into the wrench rows."""
@@ -502,22 +505,23 @@ class Simulator:
             n = int(n)
         elif n < 0:
             raise ValueError(f"n: expected a whole number of steps ≥ 0, got {n!r}")
-        if self._script or self._method.code is None:
+        if self._step_by_step:
             self._flush_pending()
             for _ in range(n):
                 self._step_once()
             self.clear_wrenches()
             return
-        if n:
-            control = self._control
-            stepping.advance(self._Ys, self._prm, self._wrenches, self._members, self._status, control,
-                             self._inputs, n)
-            self._pending = False
-            self.step_count += int(control[L.DONE])
-            if control[L.OUTCOME]:
-                self._raise_step_failure(int(control[L.OUTCOME]))
-        self._any_wrench = False  # the step cleared them
-        self.clear_wrenches()
+        if not n:
+            self.clear_wrenches()
+            return
+        outcome = stepping.advance(*self._buffers, n)
+        self._pending = False  # advance took the pending wrench
+        if outcome:
+            self.step_count += int(self._control[L.DONE])
+            self._any_wrench = True  # kept, for the caller to stop the body and step again
+            self._raise_step_failure(outcome)
+        self.step_count += n
+        self._any_wrench = False  # advance cleared them
 
     def _step_once(self) -> None:
         """One step with the scene's scripted wrenches added, or with a numpy/scipy integrator."""

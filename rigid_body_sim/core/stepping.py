@@ -386,7 +386,7 @@ def advance(Ys, prm, wrenches, members, status, control, inputs, n_steps):
     fails: that step is not applied (the state and its bounds stay in Ys[control[CUR]]),
     ``status`` says which bodies failed how, and the wrenches are kept. Otherwise, after the
     last step, the wrenches are cleared. Reports control[DONE] (steps done) and
-    control[OUTCOME] (OK, NON_FINITE, DIVERGED).
+    control[OUTCOME] (OK, NON_FINITE, DIVERGED), and returns the outcome.
     """
     add_pending(wrenches, prm, inputs)
     k = np.empty((SCRATCH_ROWS, ROW_WIDTH))
@@ -398,12 +398,13 @@ def advance(Ys, prm, wrenches, members, status, control, inputs, n_steps):
         if worst != OK:
             control[DONE] = step
             control[OUTCOME] = worst
-            return
+            return worst
         cur = 1 - cur
         control[CUR] = cur
     clear_wrenches(wrenches)
     control[DONE] = n_steps
     control[OUTCOME] = OK
+    return OK
 
 
 @njit(**JIT)
