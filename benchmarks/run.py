@@ -8,8 +8,8 @@ to ``--docs``: choosing_an_integrator.md and its claims (benchmarks/choosing.py)
 ``<!-- bench:begin -->`` and ``<!-- bench:end -->``), the same text as results.md's headline.
 
 Quick and full modes differ in the sizes swept and the seconds per sample, not in the number
-of repeats (≥ 5 everywhere). ``--parts`` runs a subset (while developing; the results then
-say which parts are missing).
+of repeats (≥ 5 everywhere). ``--parts`` runs a subset (while developing): it writes results_partial.md,
+which says which parts are missing, and never touches results.md or the README.
 """
 
 from __future__ import annotations
@@ -562,19 +562,20 @@ def main(argv=None) -> int:
 
     machine_text = machine.text()
     prov = provenance(mode)
-    if wp and sites and tp and red:
-        for path in choosing.write(Path(args.docs), wp, sites, tp, red, machine_text, mode.name == "quick", prov):
+    missing = [p for p in PARTS if p not in parts]
+    if not set(missing) & {"throughput", "apply", "work", "reduction"}:  # the page's data, all from this run
+        for path in choosing.write(Path(args.docs), wp, sites, tp, red, machine_text, mode.name, prov):
             log(f"  wrote {path}")
     _write_csv(out / "targets.csv", targets)
     head = headline(targets, prov, machine_text, per_integrator(wp, sites, tp))
-    missing = [p for p in PARTS if p not in parts]
     elapsed = time.perf_counter() - started
     md = (f"# rigid_body_sim benchmarks ({mode.name} mode)\n\n"
           + (f"Parts not run in this run: {', '.join(missing)}.\n\n" if missing else "")
           + "## Headline: every target, each row one comparison\n\n" + head + "\n" + "\n".join(sections)
           + f"\nRun time: {elapsed:.0f} s.\n")
-    (out / "results.md").write_text(md)
-    if args.readme:
+    # A partial run (--parts) never overwrites the complete results.md the README is checked against.
+    (out / ("results_partial.md" if missing else "results.md")).write_text(md)
+    if args.readme and not missing:
         update_readme(Path(args.readme), head)
         log(f"  updated {args.readme}")
     log(f"done in {elapsed:.0f} s: {out}")

@@ -79,11 +79,11 @@ def test_bench_smoke_run_writes_every_file(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "benchmarks.run", "--smoke", "--out", str(out), "--docs", str(docs),
                            "--parts", parts], cwd=REPO, capture_output=True, text=True, timeout=540)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
-    for name in ("results.md", "throughput.csv", "apply_cost.csv", "site_force.csv", "work_precision.csv",
+    for name in ("results_partial.md", "throughput.csv", "apply_cost.csv", "site_force.csv", "work_precision.csv",
                  "reduction.csv", "targets.csv", "throughput.png", "work_precision_top.png", "work_precision_box.png",
                  "profile_kernels.txt"):
         assert (out / name).stat().st_size > 0, name
-    results = (out / "results.md").read_text()
+    results = (out / "results_partial.md").read_text()
     assert "Parts not run in this run: node" in results
     assert "plain numba loop" in results and "site motor" in results
     claims = json.loads((docs / "choosing_an_integrator.claims.json").read_text())
@@ -97,3 +97,11 @@ def test_the_package_never_imports_benchmarks():
                  and any(line.lstrip().startswith(("import benchmarks", "from benchmarks"))
                          for line in p.read_text().splitlines())]
     assert offenders == []
+
+
+def test_readme_speed_table_is_the_one_in_results_md():
+    """The README's generated block is results.md's headline, from the same run (make bench writes both)."""
+    readme = (REPO / "README.md").read_text()
+    block = readme.split("<!-- bench:begin -->", 1)[1].split("<!-- bench:end -->", 1)[0].strip()
+    assert block, "the README's benchmark block is empty: run `make bench`"
+    assert block in (REPO / "benchmarks" / "results" / "results.md").read_text()
