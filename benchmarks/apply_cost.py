@@ -2,9 +2,10 @@
 
 The body: the 2 kg 1.0 × 0.6 × 0.4 m box ``b``, spinning at ω = (0.3, 1.0, 0.2) rad/s, no
 gravity, h = 1 ms, with two sites at the corner (0.5, 0.3, 0) m: ``corner`` (body axes) and
-``corner_w`` (world axes). Each call gets a new force: (0, ±10, 0) N alternating, given as a
-(3,) numpy array as a controller computing with numpy hands it over (alternating, so the body
-never spins up however many steps a sample takes).
+``corner_w`` (world axes). Each call gets a new force: (0, ±10, 0) N alternating (and for
+``apply_wrench`` a torque (0, 0, ±1) N·m), given as (3,) numpy arrays as a controller computing
+with numpy hands them over (alternating, so the body never spins up however many steps a
+sample takes).
 
 (i) **Per-frame cost** of ``apply_force_at_point`` and ``apply_wrench`` (integrator ``rk4``), in
 the frames of the frame rule: ``world`` (the corner as a world point), ``b/world_aligned``
@@ -67,7 +68,7 @@ def _forces() -> tuple[np.ndarray, np.ndarray]:
 def _our_cases(sim: Simulator, function: str, frame: str, point, tag=()) -> list[Case]:
     """Cases ``tag + (function, frame, "call")`` and ``tag + (function, frame, "apply + step(1)")``."""
     forces = _forces()
-    torque = np.array([0.0, 0.0, 1.0])
+    torques = (np.array([0.0, 0.0, 1.0]), np.array([0.0, 0.0, -1.0]))
     label = tag + (function, frame)
     if function == "apply_force_at_point":
         apply = sim.apply_force_at_point
@@ -78,7 +79,7 @@ def _our_cases(sim: Simulator, function: str, frame: str, point, tag=()) -> list
         apply_w = sim.apply_wrench
 
         def call(i: int) -> None:
-            apply_w("b", forces[i & 1], torque, frame)
+            apply_w("b", forces[i & 1], torques[i & 1], frame)
 
     def calls(k: int) -> None:
         for i in range(k):

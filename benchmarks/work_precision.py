@@ -100,8 +100,16 @@ class MujocoRun:
             q.append(d.qpos[3:7].copy())
             w.append(d.qvel[3:6].copy())
             p.append(d.qpos[0:3].copy())
+        if any(d.warning[int(w)].number for w in (mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADQVEL,
+                                                     mujoco.mjtWarning.mjWARN_BADQPOS)):
+            # MuJoCo resets the state when it meets a non-finite or huge value: a blow-up
+            raise MujocoDiverged(f"MuJoCo {self.integrator} reset after a non-finite or huge value at h = {self.h:g}")
         times = np.arange(1, P.CHECKPOINTS + 1) * n * self.h
         return elapsed, P.errors(self.problem, times, np.array(q), np.array(w), np.array(p))
+
+
+class MujocoDiverged(RuntimeError):
+    """MuJoCo met a non-finite or huge value and reset its state (its warning counters say so)."""
 
 
 def series(problems=P.PROBLEMS) -> list[tuple[str, str, str]]:
@@ -136,7 +144,7 @@ def sweep(steps_per_checkpoint=QUICK_STEPS_PER_CHECKPOINT, repeats: int = MIN_RE
                         continue
                     try:
                         elapsed, err = run()
-                    except NonFiniteStateError as exc:  # a blow-up is a result, not a crash
+                    except (NonFiniteStateError, MujocoDiverged) as exc:  # a blow-up is a result, not a crash
                         result[i] = {"note": type(exc).__name__}
                         continue
                     times[i].append(elapsed)
