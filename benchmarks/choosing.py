@@ -29,6 +29,7 @@ from rigid_body_sim.core import INTEGRATORS
 
 from . import mujoco_models as mjm
 from . import problems as P
+from . import throughput
 from . import work_precision as wp_mod
 
 #: The observed order under a body-fixed force is taken between these two steps of the box sweep.
@@ -105,7 +106,7 @@ def page(wp: list[dict], sites: list[dict], tp: list[dict], red: list[dict], mac
     cost = {(g, n): wp_mod.cost_at_error(wp, "top", "rigid_body_sim", n, g) for g in TOP_GOALS for n in ours}
     site_us = {r["integrator"]: r["ours_us"] for r in sites}
     step_us = {r["integrator"]: r["ours_step_only_us"] for r in sites}
-    n_max = max((r["bodies"] for r in tp), default=0)
+    n_max = throughput.headline_bodies(tp)
     many = {r["integrator"]: r["body_steps_per_s"] for r in tp
             if r["system"] == "rigid_body_sim" and r["mode"] == "batched" and r["bodies"] == n_max}
     gain = {r["integrator"]: r.get("gain", math.nan) for r in red if r["scene"] == "mixed"}

@@ -187,7 +187,7 @@ def plot_throughput(rows: list[dict], out: Path) -> Path:
 
 
 def section_throughput(tp: list[dict], targets: list[dict], compare: list[dict]) -> str:
-    n_max = max(r["bodies"] for r in tp)
+    n_max = throughput.headline_bodies(tp)
     at = {(r["system"], r["integrator"], r["mode"]): r for r in tp if r["bodies"] == n_max}
     floor = {name: at.get(("floor", name, "batched")) for name in ("euler", "rk4")}
 
@@ -427,7 +427,7 @@ def per_integrator(wp: list[dict], sites: list[dict], tp: list[dict]) -> str:
     """One row per integrator (ours, then MuJoCo's): accuracy on both problems and cost, from this run."""
     if not (wp and sites and tp):
         return ""
-    n_max = max(r["bodies"] for r in tp)
+    n_max = throughput.headline_bodies(tp)
     rate = {(r["system"], r["integrator"]): r for r in tp if r["bodies"] == n_max and r["mode"] == "batched"}
     floor = {name: rate.get(("floor", name)) for name in ("euler", "rk4")}
     site = {r["integrator"]: r for r in sites}
@@ -534,7 +534,8 @@ def main(argv=None) -> int:
         plot_throughput(tp, out)
         if args.baseline_core:
             from .core_compare import compare_throughput
-            compare = compare_throughput(args.baseline_core, max(mode.counts), mode.repeats, mode.min_seconds, log)
+            compare = compare_throughput(args.baseline_core, throughput.headline_bodies(tp), mode.repeats,
+                                         mode.min_seconds, log)
             _write_csv(out / "core_compare.csv", compare)
         sections.append(section_throughput(tp, targets, compare))
     if "apply" in parts:
