@@ -124,3 +124,29 @@ def test_numba_only_in_the_compiled_modules() -> None:
     users = sorted(path.name for path in CORE_FILES
                    if any(module.split(".")[0] == "numba" for _line, module in _imports(path)))
     assert users == COMPILED_MODULES, f"numba is imported outside {COMPILED_MODULES}: {users}"
+
+
+def test_numba_cache_is_dropped_when_any_core_source_changes(tmp_path: Path) -> None:
+    """numba checks a cached function against its own file only; the core's guard checks them all."""
+    from rigid_body_sim.core.jit import STAMP_NAME, invalidate_stale_cache
+
+    sources, cache = tmp_path / "core", tmp_path / "core" / "__pycache__"
+    sources.mkdir()
+    (sources / "integrators.py").write_text("A = 1\n")
+    (sources / "stepping.py").write_text("B = 2\n")
+    cache.mkdir()
+    cached = [cache / "stepping.advance-1.py311.nbi", cache / "stepping.advance-1.py311.1.nbc"]
+
+    def fill() -> None:
+        for path in cached:
+            path.write_bytes(b"machine code")
+
+    fill()
+    assert invalidate_stale_cache(sources, cache)  # no stamp yet: dropped, stamped
+    assert not any(p.exists() for p in cached) and (cache / STAMP_NAME).exists()
+    fill()
+    assert not invalidate_stale_cache(sources, cache)  # nothing changed: kept
+    assert all(p.exists() for p in cached)
+    (sources / "integrators.py").write_text("A = 3\n")  # a module stepping.advance inlines
+    assert invalidate_stale_cache(sources, cache)
+    assert not any(p.exists() for p in cached)

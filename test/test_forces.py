@@ -23,7 +23,7 @@ from rigid_body_sim.core.dynamics import derivatives
 from rigid_body_sim.core.forces import add_wrench, new_wrench_rows, parse_frame
 from rigid_body_sim.core.stepping import pack_parameters
 from rigid_body_sim.core.mass_properties import box_inertia
-from rigid_body_sim.core.quaternion import quat_angle_between, quat_to_matrix, quat_wxyz_from_xyzw, quat_xyzw_from_wxyz
+from rigid_body_sim.core.quaternion import quat_to_matrix, quat_wxyz_from_xyzw, quat_xyzw_from_wxyz
 
 ALL_INTEGRATORS = tuple(INTEGRATORS)
 

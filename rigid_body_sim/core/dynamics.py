@@ -27,7 +27,7 @@ from .layout import (DAMP_ANG, DAMP_LIN, INERTIA, INERTIA_NORMAL, INV_INERTIA, I
 from .model import BodyModel, State
 from .quaternion import quat_to_matrix
 from .jit import INLINE, JIT
-from .rotation import normalise, rotate, rotate_back
+from .rotation import normalise, rotate_back
 
 __all__ = [
     "gyroscopic_torque",

@@ -48,7 +48,6 @@ from .layout import (
     PROJECT,
     PROJECT_ALL,
     PROJECT_FORCE,
-    PROJECT_NONE,
     PROJECT_PLANE,
     PROJECT_TORQUE,
     Q,

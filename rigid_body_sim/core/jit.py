@@ -33,34 +33,37 @@ JIT = {"cache": True, "error_model": "numpy"}
 INLINE = {**JIT, "inline": "always"}
 
 #: Where numba caches the core's compiled functions (next to the sources, when writable).
-CACHE_DIR = Path(__file__).resolve().parent / "__pycache__"
-_STAMP = CACHE_DIR / "numba-sources.sha256"
+SOURCE_DIR = Path(__file__).resolve().parent
+CACHE_DIR = SOURCE_DIR / "__pycache__"
+STAMP_NAME = "numba-sources.sha256"
 
 
-def invalidate_stale_cache() -> bool:
+def invalidate_stale_cache(source_dir: Path = SOURCE_DIR, cache_dir: Path = CACHE_DIR) -> bool:
     """Drop numba's cached machine code of the core if any core source changed since it was compiled.
 
     numba checks a cached function against its own file only, but a compiled function here
     contains the functions it inlines from other modules (stepping.advance holds the
     integrators, the forces, the dynamics): editing integrators.py would leave advance's
-    cache stale, silently. So the cache is kept only for the exact set of core sources it was
-    compiled from (a hash, stamped in CACHE_DIR). Returns True when it was dropped. Runs once,
-    at import, before anything is compiled or loaded; a read-only install is left alone.
+    cache stale, silently. So the cache is kept only for the exact set of sources in
+    ``source_dir`` it was compiled from (a hash, stamped in ``cache_dir``). Returns True when
+    it was dropped. Runs once, at import, before anything is compiled or loaded; a read-only
+    install is left alone.
     """
-    sources = sorted(Path(__file__).resolve().parent.glob("*.py"))
+    sources = sorted(source_dir.glob("*.py"))
     digest = hashlib.sha256(b"".join(p.name.encode() + p.read_bytes() for p in sources)).hexdigest()
+    stamp = cache_dir / STAMP_NAME
     try:
-        if _STAMP.read_text() == digest:
+        if stamp.read_text() == digest:
             return False
     except OSError:
         pass
     try:
-        for stale in (*CACHE_DIR.glob("*.nbi"), *CACHE_DIR.glob("*.nbc")):
+        for stale in (*cache_dir.glob("*.nbi"), *cache_dir.glob("*.nbc")):
             stale.unlink(missing_ok=True)
-        CACHE_DIR.mkdir(exist_ok=True)
-        partial = _STAMP.with_name(f"{_STAMP.name}.{os.getpid()}")
+        cache_dir.mkdir(exist_ok=True)
+        partial = stamp.with_name(f"{STAMP_NAME}.{os.getpid()}")
         partial.write_text(digest)
-        os.replace(partial, _STAMP)
+        os.replace(partial, stamp)
     except OSError:  # not writable: numba caches elsewhere (NUMBA_CACHE_DIR), per file, as it does
         return False
     return True

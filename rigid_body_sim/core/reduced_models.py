@@ -42,7 +42,6 @@ from .layout import (
     INERTIA,
     INERTIA_NORMAL,
     INV_I_T,
-    INV_INERTIA,
     INV_MASS,
     KINEMATIC_W,
     MASS,

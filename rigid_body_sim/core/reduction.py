@@ -1,7 +1,7 @@
 """Model reduction: per body, the cheapest model that is exact for what the scene declares and what the body is.
 
 A scene compiler over a :class:`~rigid_body_sim.core.model.BodyModel` and its current state.
-Each body gets one of the kernels' models (L.MODEL_*) and the wrench projection its
+Each body gets one of the models of layout.py (MODEL_*) and the wrench projection its
 declared motion allows (L.PROJECT_*); the moving bodies are listed grouped by model, so
 each kernel pass runs over a homogeneous group and static bodies are never touched.
 

@@ -685,7 +685,7 @@ def _vector3(value: Any, name: str) -> np.ndarray:
 
 
 def compile_kernels() -> None:
-    """Compile (or load from numba's cache) every kernel a Simulator uses: ~1 min once per checkout.
+    """Compile (or load from numba's cache) every compiled function the core uses: ~2 CPU-minutes once per checkout.
 
     ``make venv`` runs it, so that neither the first node start nor the first test pays it.
     Steps a scene with a body of every model, with and without a wrench, with every integrator.
@@ -709,3 +709,10 @@ def compile_kernels() -> None:
         sim.apply_wrench("ball", torque=[0.0, 0.0, 0.1], frame="ball/s")
         sim.step(2)
         sim.apply_impulse("can", linear=[0.1, 0.0, 0.0])
+        sim.set_body_state("puck", linear_velocity_world=[0.1, 0.2, 0.0])
+        sim.apply_wrench("puck", force=[0.0, 1.0, 0.0], frame="puck/s")  # a planar body under a turning force
+        sim.step(1)
+    from .stepping import unchecked_steps
+
+    for name in INTEGRATORS:  # tools/envelope.py and the tests step bodies without the checks too
+        unchecked_steps(name, scene.model, scene.initial_state, 0.01, 1)
