@@ -117,7 +117,8 @@ def test_no_ros_module_is_loaded_by_importing_the_core() -> None:
 
 #: The modules whose per-body functions are compiled with numba: the rows' algebra, the
 #: forces, the dynamics, the integrators, the reduced models and the step driver.
-COMPILED_MODULES = ["dynamics.py", "forces.py", "integrators.py", "reduced_models.py", "rotation.py", "stepping.py"]
+COMPILED_MODULES = ["dynamics.py", "forces.py", "integrators.py", "reduced_models.py", "rotation.py", "sensors.py",
+                    "stepping.py"]
 
 
 def test_numba_only_in_the_compiled_modules() -> None:

@@ -121,13 +121,14 @@ CONTROL_WIDTH = GROUPS + 2 * MODEL_COUNT
 
 DT = 0  # s
 LIMIT = 1  # energy_growth_limit
-PENDING = 2  # 1.0 when a pending wrench waits in the next columns
-PENDING_BODY = 3
-PENDING_FRAME = 4  # FRAME_*
-PENDING_ARM = 5  # 3 columns: the site's position from the COM, P axes (site frames)
-PENDING_FORCE = 8  # 3 columns, N, the frame's axes
-PENDING_TORQUE = 11  # 3 columns, N·m about the frame's origin, the frame's axes
-INPUT_WIDTH = 14
+SPENT = 2  # 1.0: the wrench rows hold the last step's wrenches, dropped before anything is added or stepped
+PENDING = 3  # 1.0 when a pending wrench waits in the next columns
+PENDING_BODY = 4
+PENDING_FRAME = 5  # FRAME_*
+PENDING_ARM = 6  # 3 columns: the site's position from the COM, P axes (site frames)
+PENDING_FORCE = 9  # 3 columns, N, the frame's axes
+PENDING_TORQUE = 12  # 3 columns, N·m about the frame's origin, the frame's axes
+INPUT_WIDTH = 15
 
 #: Step outcomes (and per-body status).
 OK, NON_FINITE, DIVERGED = 0, 1, 2

@@ -18,12 +18,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 
 from . import layout as L
-from . import reduction, stepping
+from . import reduction, sensors, stepping
 from .dynamics import angular_momentum_W, impulse_response, kinetic_energy, linear_momentum_W, potential_energy
 from .forces import FrameRef, add_wrench, new_wrench_rows, parse_frame, project_twist
 from .integrators import INTEGRATORS, Method, get_integrator, step_exact_rotor_splitting, step_reference
@@ -37,7 +37,8 @@ from .quaternion import (
 )
 from .scene import ORIENTATION_TOLERANCE, Scene
 
-__all__ = ["Simulator", "BodyState", "NonFiniteStateError", "DivergenceError", "SCRIPT_TIME_TOLERANCE"]
+__all__ = ["Simulator", "BodyState", "SiteReadings", "NonFiniteStateError", "DivergenceError",
+           "SCRIPT_TIME_TOLERANCE"]
 
 #: A step whose start time is within this fraction of ``dt`` of a scripted wrench's window edge
 #: counts as on the edge, so a window given in multiples of ``dt`` covers exactly
@@ -131,6 +132,28 @@ class DivergenceError(NonFiniteStateError):
 
 
 @dataclass(frozen=True)
+class SiteReadings:
+    """Ideal IMU readings at sites (:meth:`Simulator.site_readings`), one row per site.
+
+    Attributes
+    ----------
+    sites : tuple of str
+        ``"<body>/<site>"``.
+    specific_force : ndarray, shape (k, 3)
+        Acceleration minus gravity, m/s², in the site's axes (the body's axes B, or world).
+    angular_velocity : ndarray, shape (k, 3)
+        rad/s, in the site's axes.
+    orientation_xyzw : ndarray, shape (k, 4)
+        Unit quaternion (x, y, z, w) of the site's axes in the world.
+    """
+
+    sites: tuple[str, ...]
+    specific_force: np.ndarray
+    angular_velocity: np.ndarray
+    orientation_xyzw: np.ndarray
+
+
+@dataclass(frozen=True)
 class BodyState:
     """One body's state, in the user's conventions.
 
@@ -204,6 +227,7 @@ class Simulator:
         # into _wrenches at once. True while one waits.
         self._pending = False
         self._any_wrench = False  # something is in _wrenches (or pending)
+        self._last_wrenches = self._wrenches  # the rows the last step ran with (site_readings)
         self._reference_options = {"rtol": _positive(reference_rtol, "reference_rtol"),
                                    "atol": _positive(reference_atol, "reference_atol")}
         # The scene's scripted wrenches: (frame, force, torque, start, end) per entry, summed into
@@ -389,10 +413,9 @@ class Simulator:
         return ref
 
     def _flush_pending(self) -> None:
-        """Move the pending wrench into the wrench rows."""
-        if self._pending:
-            stepping.add_pending(self._wrenches, self._prm, self._inputs)
-            self._pending = False
+        """Move the pending wrench into the wrench rows (dropping the last step's spent ones first)."""
+        stepping.add_pending(self._wrenches, self._prm, self._inputs)
+        self._pending = False
 
     def apply_impulse(self, body: str, linear: Any = (0.0, 0.0, 0.0), angular: Any = (0.0, 0.0, 0.0),
                       frame: str = "world") -> None:
@@ -437,7 +460,7 @@ class Simulator:
     def clear_wrenches(self) -> None:
         """Drop every applied wrench before the next step."""
         self._pending = False
-        self._inputs[L.PENDING] = 0.0
+        self._inputs[L.PENDING] = self._inputs[L.SPENT] = 0.0
         if self._any_wrench:
             stepping.clear_wrenches(self._wrenches)
             self._any_wrench = False
@@ -462,8 +485,16 @@ class Simulator:
         if angular_velocity_world is not None:
             w_W = _vector3(angular_velocity_world, "angular_velocity_world")
             state.w_WP_P[b] = quat_rotate(quat_conjugate(state.q_WP[b]), w_W)
-        # Keep the body's motion: velocities projected as wrenches are (a kinematic body takes
-        # the new twist as its constant one), a planar body's position onto its plane.
+        self._constrain(b, state)
+        if not state.finite_bodies()[b]:
+            raise ValueError(f"set_body_state of {body!r}: the new state is not finite; nothing was changed")
+        self.state = state
+        self._Ys[:, b, L.BOUND] = np.sqrt(kinetic_energy(self.model, state)[b])  # a new start for the bound
+        self._replan()
+
+    def _constrain(self, b: int, state: State) -> None:
+        """Keep body b's motion in ``state`` (in place): velocities projected as wrenches are (a
+        kinematic body takes its twist as its constant one), a planar body put back on its plane."""
         twist = np.concatenate((state.v_WC_W[b], quat_rotate(state.q_WP[b], state.w_WP_P[b])))
         if self.model.motions[b] != "kinematic":
             project_twist(self._prm[b], twist)
@@ -472,11 +503,42 @@ class Simulator:
         if self.model.motions[b] == "planar":
             n = self._prm[b, L.NORMAL:L.NORMAL + 3]
             state.p_WC_W[b] -= (state.p_WC_W[b] @ n - self._prm[b, L.PLANE_OFFSET]) * n
-        if not state.finite_bodies()[b]:
-            raise ValueError(f"set_body_state of {body!r}: the new state is not finite; nothing was changed")
-        self.state = state
-        self._Ys[:, b, L.BOUND] = np.sqrt(kinetic_energy(self.model, state)[b])  # a new start for the bound
-        self._replan()
+
+    def with_scene(self, scene: Scene) -> "Simulator":
+        """A simulator of ``scene`` that goes on from this one, for adding and removing bodies at run time.
+
+        The time, step count, integrator, dt, blow-up limit and reduction switch carry over;
+        every body in both scenes (by name) keeps its current pose and twist (in its own frame
+        B and world axes, so a redefined body keeps where it is), its energy bound and whether
+        it is stopped; bodies new to ``scene`` start at their initial state; bodies not in it
+        are gone. The applied wrenches do not carry over. This simulator is unchanged.
+        """
+        new = Simulator(scene, self.integrator, self.dt, **self._reference_options,
+                        energy_growth_limit=self.energy_growth_limit, model_reduction=self._reduce)
+        state = new.state.copy()
+        old_state = self.state
+        for b, name in enumerate(scene.body_names):
+            if name not in self.scene.sites:  # new to the scene: its initial state
+                continue
+            a = self._index(name)
+            q_WB = quat_multiply(old_state.q_WP[a], quat_conjugate(self.model.q_BP[a]))
+            state.q_WP[b] = quat_multiply(q_WB, scene.model.q_BP[b])
+            state.p_WC_W[b] = old_state.p_WC_W[a]
+            state.v_WC_W[b] = old_state.v_WC_W[a]
+            state.w_WP_P[b] = quat_rotate(quat_conjugate(state.q_WP[b]), quat_rotate(old_state.q_WP[a],
+                                                                                      old_state.w_WP_P[a]))
+            new._constrain(b, state)
+            new._stopped[b] = self._stopped[a]
+        new.state = state
+        bound = np.sqrt(kinetic_energy(new.model, state))
+        for b, name in enumerate(scene.body_names):
+            if name in self.scene.sites:
+                bound[b] = max(bound[b], self._Ys[self._control[L.CUR], self._index(name), L.BOUND])
+        new._Ys[:, :, L.BOUND] = bound
+        new.step_count = self.step_count
+        new._time_origin, new._step_origin = self.time, self.step_count
+        new._replan()
+        return new
 
     # ----------------------------------------------------------------- stepping
 
@@ -508,7 +570,7 @@ class Simulator:
         if self._step_by_step:
             self._flush_pending()
             for _ in range(n):
-                self._step_once()
+                self._last_wrenches = self._step_once()
             self.clear_wrenches()
             return
         if not n:
@@ -518,13 +580,12 @@ class Simulator:
         self._pending = False  # advance took the pending wrench
         if outcome:
             self.step_count += int(self._control[L.DONE])
-            self._any_wrench = True  # kept, for the caller to stop the body and step again
-            self._raise_step_failure(outcome)
+            self._raise_step_failure(outcome)  # the wrenches are kept, for the caller to stop the body and step again
         self.step_count += n
-        self._any_wrench = False  # advance cleared them
+        self._last_wrenches = self._wrenches  # spent: they stay for the sensors until something new is applied
 
-    def _step_once(self) -> None:
-        """One step with the scene's scripted wrenches added, or with a numpy/scipy integrator."""
+    def _step_once(self) -> np.ndarray:
+        """One step with the scene's scripted wrenches added, or with a numpy/scipy integrator; its wrench rows."""
         wrenches = self._wrenches_of_this_step()
         if self._method.code is not None:
             stepping.advance(self._Ys, self._prm, wrenches, self._members, self._status, self._control,
@@ -546,6 +607,7 @@ class Simulator:
         self.step_count += int(self._control[L.DONE])
         if self._control[L.OUTCOME]:
             self._raise_step_failure(int(self._control[L.OUTCOME]))
+        return wrenches
 
     def _wrenches_of_this_step(self) -> np.ndarray:
         """The applied plus the scripted wrenches active at the start of this step: a fresh array of rows."""
@@ -589,6 +651,35 @@ class Simulator:
         return self._time_origin + (self.step_count - self._step_origin) * self._dt
 
     # ----------------------------------------------------------------- read-outs
+
+    def site_readings(self, sites: Sequence[str] | None = None) -> SiteReadings:
+        """What an ideal IMU at each site reads now: specific force and angular velocity, in the site's axes.
+
+        ``sites`` are names ``"<body>/<site>"`` (default: every site of the scene, in scene
+        order). The specific force is the site's acceleration minus gravity (REP-145: zero in
+        free fall, +g upward at rest), the acceleration that of the body's model at the current
+        state under the wrenches of the last :meth:`step` (read right after stepping: applying
+        a second wrench, or :meth:`clear_wrenches`, replaces them). See sensors.py.
+        """
+        model = self.model
+        if sites is None:
+            index = np.arange(len(model.site_names))
+        else:
+            names = list(model.site_names)
+            try:
+                index = np.array([names.index(s) for s in sites], dtype=np.int64)
+            except ValueError:
+                unknown = [s for s in sites if s not in names]
+                raise ValueError(f"unknown site(s) {unknown}; sites are {names}") from None
+        out = np.empty((len(index), 10))
+        with np.errstate(all="ignore"):
+            sensors.site_readings(self._Ys[self._control[L.CUR]], self._prm, self._last_wrenches,
+                                  np.asarray(model.gravity_W, dtype=float), np.asarray(model.site_body, np.int64)[index],
+                                  np.ascontiguousarray(model.site_p_P[index], dtype=float),
+                                  np.asarray(model.site_world_axes, dtype=np.bool_)[index], out)
+        return SiteReadings(tuple(model.site_names[i] for i in index), out[:, 0:3], out[:, 3:6],
+                            quat_xyzw_from_wxyz(out[:, 6:10]))
+
 
     def body_state(self, body: str) -> BodyState:
         """The state of ``body`` in the user's conventions (see :class:`BodyState`)."""

@@ -103,6 +103,7 @@ from .layout import (
     INV_I_T,
     ROW_WIDTH,
     SITE_MOMENT,
+    SPENT,
     STATE_WIDTH,
     T_COM_P,
     T_COM_W,
@@ -360,7 +361,15 @@ def _step_all(method, Y, Ynew, prm, wrenches, members, control, status, dt, limi
 
 @njit(**JIT)
 def add_pending(wrenches, prm, inputs):
-    """Move the pending wrench of ``inputs`` (Simulator.apply_*'s fast path) into its body's wrench row."""
+    """Move the pending wrench of ``inputs`` (Simulator.apply_*'s fast path) into its body's wrench row.
+
+    First, if the rows hold the last step's wrenches (inputs[SPENT]), they are dropped: a step's
+    wrenches stay in the rows after it, for the sensors to read (sensors.py), until something
+    new is applied or stepped.
+    """
+    if inputs[SPENT] != 0.0:
+        clear_wrenches(wrenches)
+        inputs[SPENT] = 0.0
     if inputs[PENDING] != 0.0:
         b = int(inputs[PENDING_BODY])
         add_wrench(wrenches[b], prm[b], int(inputs[PENDING_FRAME]), inputs[PENDING_ARM], inputs[PENDING_ARM + 1],
@@ -385,7 +394,8 @@ def advance(Ys, prm, wrenches, members, status, control, inputs, n_steps):
     Adds the pending wrench first (:func:`add_pending`). Stops at the first step some body
     fails: that step is not applied (the state and its bounds stay in Ys[control[CUR]]),
     ``status`` says which bodies failed how, and the wrenches are kept. Otherwise, after the
-    last step, the wrenches are cleared. Reports control[DONE] (steps done) and
+    last step, the wrenches are spent (inputs[SPENT]): they stay in the rows for the sensors
+    and are dropped before the next step or the next wrench. Reports control[DONE] (steps done) and
     control[OUTCOME] (OK, NON_FINITE, DIVERGED), and returns the outcome.
     """
     add_pending(wrenches, prm, inputs)
@@ -401,7 +411,7 @@ def advance(Ys, prm, wrenches, members, status, control, inputs, n_steps):
             return worst
         cur = 1 - cur
         control[CUR] = cur
-    clear_wrenches(wrenches)
+    inputs[SPENT] = 1.0
     control[DONE] = n_steps
     control[OUTCOME] = OK
     return OK
