@@ -187,7 +187,8 @@ def test_run_csv_header_names_every_column(two_bodies: Path, tmp_path: Path) -> 
     lines = out.read_text().splitlines()
     comments = [line for line in lines if line.startswith("#")]
     assert any(line.startswith("# columns: t [s]; per body B: B.px B.py B.pz [m, world]") for line in comments)
-    header = lines[len(comments)].split(",")
+    assert lines[-1] == "# status: complete: 2 steps, t = 0.02 s"  # how the run ended, after the rows
+    header = next(line for line in lines if not line.startswith("#")).split(",")
     assert header == ["t"] + [f"{b}.{c}" for b in ("box", "ball") for c in COLUMNS]
     with open(out, encoding="utf-8") as f:  # as the module docstring tells numpy users
         table = np.genfromtxt((line for line in f if not line.startswith("#")), delimiter=",", names=True,
@@ -299,7 +300,7 @@ def test_plot_errors(capsys: pytest.CaptureFixture[str], tmp_path: Path, bad_sce
     err = usage_error(capsys, ["plot"])
     assert "the following arguments are required: RUN" in err
     err = usage_error(capsys, ["plot", str(garbage), "-o", "/nonexistent_dir_rbs/x.png"])
-    assert "argument --output: directory '/nonexistent_dir_rbs' does not exist" in err
+    assert "argument --output: directory '/nonexistent_dir_rbs' of '/nonexistent_dir_rbs/x.png' does not exist" in err
     csv_path = tmp_path / "ok.csv"
     assert main(["run", str(default_scene_path()), "-T", "0.02", "--csv", str(csv_path), "-q"]) == 0
     assert main(["plot", str(csv_path), "--scene", str(bad_scene)]) == 1

@@ -545,3 +545,272 @@ def test_a_path_swapped_to_a_fifo_after_the_check_never_blocks(tmp_path: Path) -
     assert result.stdout.startswith(("loaded", "refused: ")), result.stdout
     if result.stdout.startswith("refused"):
         assert "not a regular file" in result.stdout
+
+
+# --------------------------------------------------------------------------- the rigid-body-sim command
+
+SPINNER = ("bodies:\n  plate:\n    mass: 1.0\n    inertia: {principal: [1.0, 2.0, 2.5]}\n"
+           "    twist: {angular: [0.1, 2.0, 0.05]}\n")
+
+
+@pytest.fixture
+def spinner(tmp_path: Path) -> Path:
+    return write(tmp_path, SPINNER, "spinner.yaml")
+
+
+def usage_error(capsys: pytest.CaptureFixture[str], argv: list[str]) -> str:
+    """Run the command in-process expecting argparse's exit code 2; return stderr."""
+    from rigid_body_sim.cli import main
+
+    with pytest.raises(SystemExit) as info:
+        main(argv)
+    assert info.value.code == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    return err
+
+
+@pytest.mark.parametrize(("extra", "message"), [
+    (["--dt", "1e-320"], "argument --dt: expected a step giving at most 2^53 steps over the duration"),
+    (["--dt", "1e-300"], "argument --dt: expected a step giving at most 2^53 steps over the duration"),
+    (["-T", "1e308"], "argument --dt: expected a step giving at most 2^53 steps over the duration"),
+    (["--rate", "1e-320"], "argument --rate: expected a rate giving at least one sample per"),
+    (["--rate", "1e-200", "--dt", "1e-200", "-T", "1e-190"], "argument --rate: expected a rate giving at least one"),
+], ids=["subnormal-dt", "tiny-dt", "huge-duration", "subnormal-rate", "underflowing-rate"])
+def test_steps_and_samples_that_overflow_are_usage_errors(capsys: pytest.CaptureFixture[str], spinner: Path,
+                                                          extra: list[str], message: str) -> None:
+    """Issue 18: ``--dt 1e-320`` ended in an OverflowError traceback."""
+    argv = ["run", str(spinner), "-T", "1", *extra] if "-T" not in extra else ["run", str(spinner), *extra]
+    err = usage_error(capsys, argv)
+    assert message in err, err
+
+
+@pytest.mark.parametrize("option", ["--csv", "--record"])
+@pytest.mark.parametrize("target", ["/dev/full", "/dev/null", "fifo", "directory", "/proc/rbs_hostile_test.out"])
+def test_unusable_outputs_are_usage_errors_without_a_traceback(tmp_path: Path, spinner: Path, option: str,
+                                                               target: str) -> None:
+    """Issue 18: ``--csv /dev/full`` and unwritable paths ended in OSError tracebacks (also as root)."""
+    if target == "fifo":
+        target = str(tmp_path / "out.fifo")
+        os.mkfifo(target)
+    elif target == "directory":
+        target = str(tmp_path)
+    result = run_measured(cli("run", str(spinner), "-T", "0.05", option, target), timeout_s=60)
+    assert result.code == 2, (result.code, result.stderr[-2000:])
+    assert "Traceback" not in result.stderr
+    assert f"rigid-body-sim run: error: argument {option}: " in result.stderr, result.stderr
+
+
+_FSIZE_PROGRAM = textwrap.dedent("""\
+    import resource, signal, sys
+    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit then fails with EFBIG, as on a full disk
+    resource.setrlimit(resource.RLIMIT_FSIZE, (20_000, 20_000))
+    from rigid_body_sim.cli import main
+    sys.exit(main(sys.argv[1:]))
+""")
+
+
+@pytest.mark.parametrize("option", ["--csv", "--record"])
+def test_a_write_failing_midway_is_a_clear_error(tmp_path: Path, spinner: Path, option: str) -> None:
+    """A full disk in the middle of a run: exit 1 naming the file, no traceback, the other files closed."""
+    out = tmp_path / ("out.csv" if option == "--csv" else "out.mcap")
+    other = ["--record", str(tmp_path / "other.mcap")] if option == "--csv" else ["--csv", str(tmp_path / "other.csv")]
+    result = run_measured([sys.executable, "-c", _FSIZE_PROGRAM, "run", str(spinner), "-T", "20", "--dt", "0.001",
+                           "--rate", "1000", option, str(out)], timeout_s=120)
+    assert result.code == 1, (result.code, result.stderr[-2000:])
+    assert "Traceback" not in result.stderr
+    assert f"cannot write {out}" in result.stderr, result.stderr
+    del other
+
+
+@pytest.mark.parametrize("how", ["same-path", "symlink", "hard-link", "scene"])
+def test_outputs_that_are_one_file_are_refused(capsys: pytest.CaptureFixture[str], tmp_path: Path, spinner: Path,
+                                               how: str) -> None:
+    """Issue 18: ``--csv`` and ``--record`` on one file exited 0 with a corrupt file."""
+    csv = tmp_path / "out.csv"
+    record = csv
+    if how == "symlink":
+        record = tmp_path / "link.mcap"
+        record.symlink_to(csv)
+    elif how == "hard-link":
+        csv.write_text("old\n")
+        record = tmp_path / "hard.mcap"
+        os.link(csv, record)
+    elif how == "scene":
+        record = spinner
+    before = spinner.read_bytes()
+    err = usage_error(capsys, ["run", str(spinner), "-T", "0.05", "--csv", str(csv), "--record", str(record)])
+    assert "argument --record: " in err and ("the same file as --csv" in err or "the scene file" in err), err
+    assert spinner.read_bytes() == before
+
+
+def test_plot_output_that_is_the_run_is_refused(capsys: pytest.CaptureFixture[str], tmp_path: Path,
+                                                spinner: Path) -> None:
+    from rigid_body_sim.cli import main
+
+    run = tmp_path / "run.csv"
+    assert main(["run", str(spinner), "-T", "0.05", "--csv", str(run), "-q"]) == 0
+    before = run.read_bytes()
+    err = usage_error(capsys, ["plot", str(run), "-o", str(run)])
+    assert "argument --output: " in err and "the run file itself" in err
+    assert run.read_bytes() == before
+
+
+@pytest.mark.parametrize(("sig", "code"), [(signal.SIGTERM, 143), (signal.SIGINT, 130)], ids=["SIGTERM", "SIGINT"])
+def test_a_signal_during_run_closes_and_marks_the_files(tmp_path: Path, spinner: Path, sig: int, code: int) -> None:
+    """Issue 18: SIGTERM during ``run`` left an MCAP file without a summary that ``plot`` could not read,
+    and nothing said the run was cut short."""
+    from rigid_body_sim.cli import main
+    from rigid_body_sim.offline.csv_io import read_csv
+    from rigid_body_sim.offline.recording import read_recording
+
+    csv, record = tmp_path / "run.csv", tmp_path / "run.mcap"
+    proc = subprocess.Popen(cli("run", str(spinner), "-T", "100000", "--dt", "1e-4", "--csv", str(csv), "--record",
+                                str(record)), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 60
+        while not (csv.exists() and csv.stat().st_size > 20_000):
+            assert proc.poll() is None and time.monotonic() < deadline, "the run did not start writing"
+            time.sleep(0.05)
+        proc.send_signal(sig)
+        out, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == code, err
+    assert "Traceback" not in err
+    assert f"rigid-body-sim run: interrupted by {signal.Signals(sig).name}" in err
+    data = read_csv(csv)
+    assert data.meta["status"].startswith(f"interrupted by {signal.Signals(sig).name} at t = ")
+    recording, _ = read_recording(record)
+    assert recording.meta["status"] == data.meta["status"]
+    assert len(recording.time) >= 1 and len(data.time) >= 1
+    assert main(["plot", str(record), "-o", str(tmp_path / "from_mcap.png")]) == 0
+    assert main(["plot", str(csv), "-o", str(tmp_path / "from_csv.png")]) == 0
+
+
+def test_a_complete_run_says_so(tmp_path: Path, spinner: Path) -> None:
+    from rigid_body_sim.cli import main
+    from rigid_body_sim.offline.csv_io import read_csv
+    from rigid_body_sim.offline.recording import read_recording
+
+    csv, record = tmp_path / "run.csv", tmp_path / "run.mcap"
+    assert main(["run", str(spinner), "-T", "0.1", "--csv", str(csv), "--record", str(record), "-q"]) == 0
+    assert read_csv(csv).meta["status"] == "complete: 10 steps, t = 0.1 s"
+    assert read_recording(record)[0].meta["status"] == "complete: 10 steps, t = 0.1 s"
+
+
+@pytest.mark.parametrize("target", ["/dev/zero", "/dev/urandom", "fifo", "sparse", "long-line"])
+def test_plot_of_special_and_huge_files_is_refused_in_bounded_memory(tmp_path: Path, target: str) -> None:
+    """Issue 18: ``rigid-body-sim plot /dev/zero`` grew memory without limit."""
+    if target == "fifo":
+        target = str(tmp_path / "run.fifo")
+        os.mkfifo(target)
+    elif target == "sparse":  # 4 GiB of nothing on disk
+        target = str(tmp_path / "sparse.csv")
+        with open(target, "wb") as f:
+            f.truncate(4 << 30)
+    elif target == "long-line":  # 100 MiB without a newline, under the size limit
+        target = str(tmp_path / "long.csv")
+        with open(target, "wb") as f:
+            f.truncate(100 << 20)
+    result = run_measured(cli("plot", target), timeout_s=60)
+    print(f"plot {target}: exit {result.code}, wall {result.wall_s:.2f} s, peak RSS {result.peak_rss_mb:.0f} MB")
+    assert result.code == 1, (result.code, result.stderr[-2000:])
+    assert "Traceback" not in result.stderr
+    assert result.peak_rss_mb < 400
+
+
+def test_plot_reads_a_recording_cut_short(tmp_path: Path, spinner: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A recording whose writer was killed (no summary, a chunk cut in half) still plots what it holds."""
+    from rigid_body_sim.cli import main
+    from rigid_body_sim.offline.recording import read_recording
+
+    record = tmp_path / "run.mcap"
+    assert main(["run", str(spinner), "-T", "20", "--dt", "0.001", "--rate", "1000", "--record", str(record), "-q"]) == 0
+    whole, _ = read_recording(record)
+    data = record.read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(data[: len(data) * 2 // 3])
+    part, scene_text = read_recording(cut)
+    assert scene_text == SPINNER
+    assert 0 < len(part.time) < len(whole.time)
+    np.testing.assert_array_equal(part.time, whole.time[: len(part.time)])
+    assert part.meta["status"].startswith("cut short")
+    capsys.readouterr()
+    assert main(["plot", str(cut)]) == 0
+    assert "cut short" in capsys.readouterr().err
+
+
+def test_check_imports_only_the_loader(tmp_path: Path, spinner: Path) -> None:
+    """``check`` needs the loader only: no numba, no simulator (fast, small: the alias-bomb bound)."""
+    program = ("import json, sys\nfrom rigid_body_sim.cli import main\ncode = main(['check', sys.argv[1]])\n"
+               "print(json.dumps([code, sorted(m for m in ('numba', 'scipy', 'rigid_body_sim.core.simulator', "
+               "'matplotlib', 'mcap') if m in sys.modules)]))")
+    result = run_measured([sys.executable, "-c", program, str(spinner)], timeout_s=60)
+    assert result.code == 0, result.stderr[-2000:]
+    code, loaded = json.loads(result.stdout.strip().splitlines()[-1])
+    print(f"check: wall {result.wall_s:.2f} s, cpu {result.cpu_s:.2f} s, peak RSS {result.peak_rss_mb:.0f} MB")
+    assert code == 0 and loaded == []
+    assert result.peak_rss_mb < 100
+
+
+# --------------------------------------------------------------------------- what the node's record_path gets
+
+
+@pytest.mark.parametrize("target", ["fifo", "fifo-with-reader", "/dev/full", "directory"])
+def test_the_recorder_never_blocks_on_a_special_file(tmp_path: Path, target: str) -> None:
+    """Issue 18: ``record_path:=`` a FIFO deadlocked the node (its open blocked under the tick lock).
+    McapRecorder, which the node uses, refuses at once and writes nothing into it."""
+    from rigid_body_sim.offline.recording import McapRecorder, check_record_path
+    from rigid_body_sim.paths import NotRegularFileError
+
+    reader = None
+    if target.startswith("fifo"):
+        path = tmp_path / "rec.fifo"
+        os.mkfifo(path)
+        if target == "fifo-with-reader":
+            reader = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
+    elif target == "directory":
+        path = tmp_path
+    else:
+        path = Path(target)
+    try:
+        assert check_record_path(path) is not None
+        start = time.monotonic()
+        with pytest.raises(NotRegularFileError, match="not a regular file"):
+            McapRecorder(path)
+        assert time.monotonic() - start < 5.0
+        if reader is not None:
+            assert os.read(reader, 100) == b""  # nothing was written into the FIFO
+    finally:
+        if reader is not None:
+            os.close(reader)
+
+
+def test_a_path_swapped_to_a_fifo_after_the_check_never_blocks_the_recorder(tmp_path: Path) -> None:
+    """check_record_path passes, then the path becomes a FIFO: the open itself refuses it at once."""
+    from rigid_body_sim.offline.recording import McapRecorder, check_record_path
+    from rigid_body_sim.paths import NotRegularFileError
+
+    path = tmp_path / "rec.mcap"
+    assert check_record_path(path) is None
+    os.mkfifo(path)  # after the check, before the open
+    program = textwrap.dedent(f"""\
+        from rigid_body_sim.offline.recording import McapRecorder
+        from rigid_body_sim.paths import NotRegularFileError
+        import rigid_body_sim.paths as paths, os
+        real_stat = os.stat
+        def stat_says_missing(p, *a, **k):  # the race at its worst: the pre-open check saw no file
+            if os.fspath(p) == {str(path)!r}:
+                raise FileNotFoundError(2, "No such file or directory", p)
+            return real_stat(p, *a, **k)
+        os.stat = stat_says_missing
+        try:
+            McapRecorder({str(path)!r})
+        except NotRegularFileError as exc:
+            print("refused:", exc)
+    """)
+    result = run_measured([sys.executable, "-c", program], timeout_s=30)
+    assert result.code == 0 and result.stdout.startswith("refused:"), (result.code, result.stdout, result.stderr[-2000:])
+    del McapRecorder, NotRegularFileError
