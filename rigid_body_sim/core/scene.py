@@ -92,9 +92,10 @@ DEFAULT_ENERGY_GROWTH_LIMIT = 1e6
 #: Largest size accepted for a scene file, bytes.
 MAX_SCENE_BYTES = 8 * 1024 * 1024
 #: Most bodies a scene may have. 10⁵ is what the benchmarks step (benchmarks/throughput.py) and
-#: about what an 8 MiB file holds written out (~80 bytes per body at the least); a file of
-#: 10⁵ bodies loads in ~3 s (measured: see README "Scene files"). A node creates ~5 topics per
-#: body, so it may refuse fewer (the node's own limit); offline runs take the whole 10⁵.
+#: about what an 8 MiB file holds written out (~80 bytes a body with a mass, a box and a
+#: position). Such a file loads in ~7 s of CPU on the 2-core test machine (PyYAML's pure-Python
+#: loader and the old per-body checks took ~90 s; test_hostile measures it, marked slow). A
+#: node creates ~5 topics per body, so it may set a lower limit of its own; offline runs take 10⁵.
 MAX_BODIES = 100_000
 #: Most scripted wrenches a scene may list (each is looked at every step).
 MAX_SCRIPTED_WRENCHES = 100_000
@@ -121,6 +122,8 @@ _TOP_KEYS = ("gravity", "bodies", "wrenches", "energy_growth_limit")
 _WRENCH_KEYS = ("body", "frame", "force", "torque", "start", "duration")
 _BODY_KEYS = ("mass", "inertia", "pose", "twist", "damping", "sites", "motion")
 _IDENTITY = (1.0, 0.0, 0.0, 0.0)
+_PLAIN_NUMBERS = frozenset((float, int))
+_NO_KEY = object()  # _show: an item of a list, not of a mapping
 #: Relative tolerance of the initial twist's consistency with a planar motion (then projected).
 PLANAR_TWIST_RTOL = 1e-9
 
@@ -229,6 +232,8 @@ def load_scene(source: str | Path | Mapping[str, Any]) -> Scene:
         raise SceneError(f"{name}: cannot read scene file ({exc.strerror})") from None
     except OSError as exc:
         raise SceneError(f"{name}: cannot read scene file ({exc.strerror or exc})") from None
+    except ValueError:  # os.open: "embedded null byte"
+        raise SceneError(f"{key_text(name)}: cannot read scene file (the path contains a NUL character)") from None
     return load_scene_text(_decode(raw, name), name)
 
 
@@ -301,7 +306,7 @@ class _Checker:
         raise SceneError(f"{where}: expected {expected}{suffix}")
 
     def mapping(self, value: Any, path: str, allowed: tuple[str, ...], required: tuple[str, ...] = ()) -> Mapping:
-        if not isinstance(value, Mapping):
+        if type(value) is not dict and not isinstance(value, Mapping):
             self.fail(path, f"a mapping with keys {list(allowed)}", value)
         for key in value:
             if key not in allowed:
@@ -320,7 +325,8 @@ class _Checker:
         if x is None:
             self.fail(path, f"a number{unit_text}", value)
         if x != x or x in (math.inf, -math.inf):
-            self.fail(path, f"a finite number{unit_text}", value)
+            self.fail(path, f"a finite number{unit_text}" if not isinstance(value, int)
+                      else f"a number within float64's range (±1.8e308){unit_text}", value)
         if minimum is not None and (x <= minimum if strict else x < minimum):
             self.fail(path, f"a number {'>' if strict else '≥'} {minimum:g}{unit_text}", value)
         if scale and x < MIN_POSITIVE:
@@ -330,6 +336,15 @@ class _Checker:
     def vector(self, value: Any, path: str, length: int, *, positive: bool = False, scale: bool = False,
                unit: str = "") -> list[float]:
         """``length`` finite numbers (> 0 with ``positive``; also ≥ MIN_POSITIVE with ``scale``), as floats."""
+        if type(value) is list and len(value) == length and set(map(type, value)) <= _PLAIN_NUMBERS:
+            try:  # the common case, quickly (anything unusual goes the careful way below)
+                out = list(map(float, value))
+            except OverflowError:
+                pass
+            else:
+                if (math.isfinite(sum(out)) and (not positive or min(out) > 0.0)
+                        and (not scale or min(out) >= MIN_POSITIVE)):
+                    return out
         unit_text = f" ({unit})" if unit else ""
         what = f"a list of {length} finite numbers" + (" > 0" if positive else "") + unit_text
         if not isinstance(value, (list, tuple)) or len(value) != length:
@@ -343,7 +358,11 @@ class _Checker:
                             "overflow)", value)
         return out
 
-    def name(self, value: Any, path: str, reserved: set[str]) -> str:
+    def name(self, value: Any, parent: str, reserved: set[str]) -> str:
+        """``value`` as a body or site name under the key path ``parent`` (``bodies``, ``bodies.b.sites``)."""
+        if type(value) is str and len(value) <= MAX_NAME_LENGTH and _NAME.fullmatch(value) and value not in reserved:
+            return value
+        path = f"{parent}.{key_text(value)}"
         if not isinstance(value, str):
             self.fail(path, _NAME_RULE, value)
         if len(value) > MAX_NAME_LENGTH:
@@ -356,10 +375,38 @@ class _Checker:
         return value
 
 
+class _Bodies:
+    """What the bodies of a scene declare, gathered body by body (plain lists), in file order."""
+
+    def __init__(self) -> None:
+        self.names: list[str] = []
+        self.motions: list[str] = []
+        self.normals: list[Any] = []
+        self.any_motion = False
+        self.masses: list[float] = []
+        self.moments: list[Any] = []
+        self.inertia_paths: list[str] = []
+        self.q_BP: list[Any] = []
+        self.damping_linear: list[float] = []
+        self.damping_angular: list[float] = []
+        self.positions: list[list[float]] = []
+        self.q_WB: list[tuple[float, float, float, float]] = []
+        self.v_W: list[Any] = []
+        self.w_W: list[Any] = []
+        self.site_names: list[str] = []
+        self.site_body: list[int] = []
+        self.site_p_B: list[list[float]] = []
+        self.site_world: list[bool] = []
+        self.sites_of: dict[str, tuple[str, ...]] = {}
+
+
+_ZERO3 = [0.0, 0.0, 0.0]
+
+
 def _build(data: Mapping, source: str) -> Scene:
     check = _Checker(source)
     top = check.mapping(data, "", _TOP_KEYS, required=("bodies",))
-    gravity = [0.0, 0.0, 0.0]
+    gravity = _ZERO3
     if top.get("gravity") is not None:
         gravity = check.vector(top["gravity"], "gravity", 3, unit="m/s²")
     energy_growth_limit = DEFAULT_ENERGY_GROWTH_LIMIT
@@ -372,140 +419,125 @@ def _build(data: Mapping, source: str) -> Scene:
     if len(bodies) > MAX_BODIES:
         check.fail("bodies", f"at most {MAX_BODIES:,} bodies, got {len(bodies):,}", show_got=False)
 
-    names: list[str] = []
-    motions: list[str] = []
-    normals: list[Any] = []
-    masses: list[float] = []
-    moments: list[Any] = []
-    inertia_paths: list[str] = []
-    q_BPs: list[Any] = []
-    damp_lin: list[float] = []
-    damp_ang: list[float] = []
-    p0: list[list[float]] = []
-    q0_WB: list[tuple[float, float, float, float]] = []
-    v0: list[Any] = []
-    w0_W: list[Any] = []
-    site_names: list[str] = []
-    site_body: list[int] = []
-    site_p_B: list[list[float]] = []
-    site_world: list[bool] = []
-    sites_of: dict[str, tuple[str, ...]] = {}
-    any_motion = False
-    zero3 = [0.0, 0.0, 0.0]
+    out = _Bodies()
+    with np.errstate(over="ignore", under="ignore"):  # _check_moments reports what over- or underflowed
+        for index, (raw_name, raw_body) in enumerate(bodies.items()):
+            _read_body(check, index, raw_name, raw_body, out)
 
-    for index, (raw_name, raw_body) in enumerate(bodies.items()):
-        name = check.name(raw_name, f"bodies.{key_text(raw_name)}", _RESERVED_BODY_NAMES)
-        path = f"bodies.{name}"
-        body = check.mapping(raw_body, path, _BODY_KEYS, required=("mass", "inertia"))
-        mass = check.number(body["mass"], f"{path}.mass", minimum=0.0, strict=True, scale=True, unit="kg")
-        with np.errstate(over="ignore", under="ignore"):  # _check_moments reports what over- or underflowed
-            principal, q_BP, inertia_path = _inertia(check, body["inertia"], f"{path}.inertia", mass)
-
-        position = zero3
-        q_WB = _IDENTITY
-        pose = body.get("pose")
-        if pose is not None:
-            pose = check.mapping(pose, f"{path}.pose", ("position", "orientation"))
-            if "position" in pose:
-                position = check.vector(pose["position"], f"{path}.pose.position", 3, unit="m")
-            if "orientation" in pose:
-                x, y, z, w = check.vector(pose["orientation"], f"{path}.pose.orientation", 4)
-                norm = math.hypot(x, y, z, w)
-                if abs(norm - 1.0) > ORIENTATION_TOLERANCE:
-                    check.fail(
-                        f"{path}.pose.orientation",
-                        f"a unit quaternion [x, y, z, w] (| |q| - 1 | ≤ {ORIENTATION_TOLERANCE:g}; |q| = {norm:.9g})",
-                        pose["orientation"],
-                    )
-                q_WB = (w, x, y, z) if norm == 1.0 else (w / norm, x / norm, y / norm, z / norm)
-
-        v_W: Any = zero3
-        w_W: Any = zero3
-        twist = body.get("twist")
-        if twist is not None:
-            twist = check.mapping(twist, f"{path}.twist", ("linear", "angular"))
-            if "linear" in twist:
-                v_W = check.vector(twist["linear"], f"{path}.twist.linear", 3, unit="m/s, world axes")
-            if "angular" in twist:
-                w_W = check.vector(twist["angular"], f"{path}.twist.angular", 3, unit="rad/s, world axes")
-
-        motion: str = "free"
-        normal: Any = zero3
-        if body.get("motion") is not None:
-            any_motion = True
-            motion, normal, v_W, w_W = _motion(check, body["motion"], f"{path}", np.array(v_W), np.array(w_W))
-
-        c_lin = c_ang = 0.0
-        damping = body.get("damping")
-        if damping is not None:
-            damping = check.mapping(damping, f"{path}.damping", ("linear", "angular"))
-            if "linear" in damping:
-                c_lin = check.number(damping["linear"], f"{path}.damping.linear", minimum=0.0, unit="N·s/m")
-            if "angular" in damping:
-                c_ang = check.number(damping["angular"], f"{path}.damping.angular", minimum=0.0, unit="N·m·s/rad")
-
-        body_sites: list[str] = []
-        sites = body.get("sites")
-        if sites is not None:
-            if not isinstance(sites, Mapping):
-                check.fail(f"{path}.sites", "a mapping of site names to {position: [x, y, z], axes: body|world}", sites)
-            for raw_site, raw_spec in sites.items():
-                site = check.name(raw_site, f"{path}.sites.{key_text(raw_site)}", _RESERVED_SITE_NAMES)
-                spath = f"{path}.sites.{site}"
-                spec = check.mapping(raw_spec, spath, ("position", "axes"), required=("position",))
-                site_p_B.append(check.vector(spec["position"], f"{spath}.position", 3, unit="m, body frame from the COM"))
-                axes = spec.get("axes", "body")
-                if axes != "body" and axes != "world":
-                    check.fail(f"{spath}.axes", "'body' or 'world'", axes)
-                site_names.append(f"{name}/{site}")
-                site_body.append(index)
-                site_world.append(axes == "world")
-                body_sites.append(site)
-
-        names.append(name)
-        motions.append(motion)
-        normals.append(normal)
-        masses.append(mass)
-        moments.append(principal)
-        inertia_paths.append(inertia_path)
-        q_BPs.append(q_BP)
-        damp_lin.append(c_lin)
-        damp_ang.append(c_ang)
-        p0.append(position)
-        q0_WB.append(q_WB)
-        v0.append(v_W)
-        w0_W.append(w_W)
-        sites_of[name] = tuple(body_sites)
-
-    inertia_P = np.array(moments, dtype=float).reshape(-1, 3)
-    _check_moments(check, inertia_P, inertia_paths)
-    q_BP_all = np.array(q_BPs, dtype=float).reshape(-1, 4)
-    q_WP = quat_multiply(np.array(q0_WB, dtype=float), q_BP_all)
-    w_WP_P = quat_rotate(quat_conjugate(q_WP), np.array(w0_W, dtype=float).reshape(-1, 3))
-    site_index = np.array(site_body, dtype=int)
-    site_p_P = quat_rotate(quat_conjugate(q_BP_all[site_index]), np.array(site_p_B, dtype=float).reshape(-1, 3))
+    inertia_P = np.array(out.moments, dtype=float).reshape(-1, 3)
+    _check_moments(check, inertia_P, out.inertia_paths)
+    q_BP = np.array(out.q_BP, dtype=float).reshape(-1, 4)
+    q_WP = quat_multiply(np.array(out.q_WB, dtype=float), q_BP)
+    w_WP_P = quat_rotate(quat_conjugate(q_WP), np.array(out.w_W, dtype=float).reshape(-1, 3))
+    site_index = np.array(out.site_body, dtype=int)
+    site_p_P = quat_rotate(quat_conjugate(q_BP[site_index]), np.array(out.site_p_B, dtype=float).reshape(-1, 3))
     model = BodyModel(
-        names=tuple(names),
-        mass=np.array(masses, dtype=float),
+        names=tuple(out.names),
+        mass=np.array(out.masses, dtype=float),
         inertia_P=inertia_P,
-        q_BP=q_BP_all,
-        damping_linear=np.array(damp_lin, dtype=float),
-        damping_angular=np.array(damp_ang, dtype=float),
+        q_BP=q_BP,
+        damping_linear=np.array(out.damping_linear, dtype=float),
+        damping_angular=np.array(out.damping_angular, dtype=float),
         gravity_W=np.array(gravity, dtype=float),
-        site_names=tuple(site_names),
+        site_names=tuple(out.site_names),
         site_body=site_index,
         site_p_P=site_p_P,
-        site_world_axes=np.array(site_world, dtype=bool),
-        motion=tuple(motions),
-        plane_normal_W=np.array(normals, dtype=float).reshape(-1, 3) if any_motion else np.zeros((len(names), 3)),
+        site_world_axes=np.array(out.site_world, dtype=bool),
+        motion=tuple(out.motions),
+        plane_normal_W=(np.array(out.normals, dtype=float).reshape(-1, 3) if out.any_motion
+                        else np.zeros((len(out.names), 3))),
     )
-    state = State(np.array(p0, dtype=float).reshape(-1, 3), q_WP, np.array(v0, dtype=float).reshape(-1, 3), w_WP_P)
-    scene = Scene(source=source, model=model, initial_state=state, sites=sites_of,
+    state = State(np.array(out.positions, dtype=float).reshape(-1, 3), q_WP,
+                  np.array(out.v_W, dtype=float).reshape(-1, 3), w_WP_P)
+    scene = Scene(source=source, model=model, initial_state=state, sites=out.sites_of,
                   energy_growth_limit=energy_growth_limit)
     if top.get("wrenches") is not None:
         scene = replace(scene, wrenches=_wrenches(check, top["wrenches"], scene))
     _check_derived(check, scene)
     return scene
+
+
+def _read_body(check: _Checker, index: int, raw_name: Any, raw_body: Any, out: _Bodies) -> None:
+    """Check one body of the ``bodies`` mapping and append what it declares to ``out``."""
+    name = check.name(raw_name, "bodies", _RESERVED_BODY_NAMES)
+    path = f"bodies.{name}"
+    body = check.mapping(raw_body, path, _BODY_KEYS, required=("mass", "inertia"))
+    mass = check.number(body["mass"], f"{path}.mass", minimum=0.0, strict=True, scale=True, unit="kg")
+    principal, q_BP, inertia_path = _inertia(check, body["inertia"], f"{path}.inertia", mass)
+
+    position = _ZERO3
+    q_WB = _IDENTITY
+    pose = body.get("pose")
+    if pose is not None:
+        pose = check.mapping(pose, f"{path}.pose", ("position", "orientation"))
+        if "position" in pose:
+            position = check.vector(pose["position"], f"{path}.pose.position", 3, unit="m")
+        if "orientation" in pose:
+            x, y, z, w = check.vector(pose["orientation"], f"{path}.pose.orientation", 4)
+            norm = math.hypot(x, y, z, w)
+            if abs(norm - 1.0) > ORIENTATION_TOLERANCE:
+                check.fail(f"{path}.pose.orientation",
+                           f"a unit quaternion [x, y, z, w] (| |q| - 1 | ≤ {ORIENTATION_TOLERANCE:g}; |q| = {norm:.9g})",
+                           pose["orientation"])
+            q_WB = (w, x, y, z) if norm == 1.0 else (w / norm, x / norm, y / norm, z / norm)
+
+    v_W: Any = _ZERO3
+    w_W: Any = _ZERO3
+    twist = body.get("twist")
+    if twist is not None:
+        twist = check.mapping(twist, f"{path}.twist", ("linear", "angular"))
+        if "linear" in twist:
+            v_W = check.vector(twist["linear"], f"{path}.twist.linear", 3, unit="m/s, world axes")
+        if "angular" in twist:
+            w_W = check.vector(twist["angular"], f"{path}.twist.angular", 3, unit="rad/s, world axes")
+
+    motion: str = "free"
+    normal: Any = _ZERO3
+    if body.get("motion") is not None:
+        out.any_motion = True
+        motion, normal, v_W, w_W = _motion(check, body["motion"], path, np.array(v_W), np.array(w_W))
+
+    c_lin = c_ang = 0.0
+    damping = body.get("damping")
+    if damping is not None:
+        damping = check.mapping(damping, f"{path}.damping", ("linear", "angular"))
+        if "linear" in damping:
+            c_lin = check.number(damping["linear"], f"{path}.damping.linear", minimum=0.0, unit="N·s/m")
+        if "angular" in damping:
+            c_ang = check.number(damping["angular"], f"{path}.damping.angular", minimum=0.0, unit="N·m·s/rad")
+
+    body_sites: list[str] = []
+    sites = body.get("sites")
+    if sites is not None:
+        if not isinstance(sites, Mapping):
+            check.fail(f"{path}.sites", "a mapping of site names to {position: [x, y, z], axes: body|world}", sites)
+        for raw_site, raw_spec in sites.items():
+            site = check.name(raw_site, f"{path}.sites", _RESERVED_SITE_NAMES)
+            spath = f"{path}.sites.{site}"
+            spec = check.mapping(raw_spec, spath, ("position", "axes"), required=("position",))
+            out.site_p_B.append(check.vector(spec["position"], f"{spath}.position", 3, unit="m, body frame from the COM"))
+            axes = spec.get("axes", "body")
+            if axes != "body" and axes != "world":
+                check.fail(f"{spath}.axes", "'body' or 'world'", axes)
+            out.site_names.append(f"{name}/{site}")
+            out.site_body.append(index)
+            out.site_world.append(axes == "world")
+            body_sites.append(site)
+
+    out.names.append(name)
+    out.motions.append(motion)
+    out.normals.append(normal)
+    out.masses.append(mass)
+    out.moments.append(principal)
+    out.inertia_paths.append(inertia_path)
+    out.q_BP.append(q_BP)
+    out.damping_linear.append(c_lin)
+    out.damping_angular.append(c_ang)
+    out.positions.append(position)
+    out.q_WB.append(q_WB)
+    out.v_W.append(v_W)
+    out.w_W.append(w_W)
+    out.sites_of[name] = tuple(body_sites)
 
 
 def _check_moments(check: _Checker, inertia_P: np.ndarray, paths: list[str]) -> None:
@@ -747,43 +779,36 @@ def _show_into(value: Any, parts: list[str], budget: list[int], depth: int) -> N
     elif isinstance(value, (list, tuple, Mapping)) and depth >= 3:
         text = "[...]" if not isinstance(value, Mapping) else "{...}"
     elif isinstance(value, (list, tuple)):
-        parts.append("[")
-        budget[0] -= 1
-        for i, item in enumerate(value):
-            if budget[0] <= 0:
-                return
-            if i:
-                parts.append(", ")
-                budget[0] -= 2
-            if i == 8:
-                parts.append(f"...({len(value)} items)")
-                budget[0] -= 12
-                break
-            _show_into(item, parts, budget, depth + 1)
-        parts.append("]")
-        budget[0] -= 1
+        _show_items(((_NO_KEY, item) for item in value), len(value), "[]", "items", parts, budget, depth, 8)
         return
     elif isinstance(value, Mapping):
-        parts.append("{")
-        budget[0] -= 1
-        for i, (key, item) in enumerate(value.items()):
-            if budget[0] <= 0:
-                return
-            if i:
-                parts.append(", ")
-                budget[0] -= 2
-            if i == 6:
-                parts.append(f"...({len(value)} keys)")
-                budget[0] -= 11
-                break
-            _show_into(key, parts, budget, depth + 1)
-            parts.append(": ")
-            budget[0] -= 2
-            _show_into(item, parts, budget, depth + 1)
-        parts.append("}")
-        budget[0] -= 1
+        _show_items(iter(value.items()), len(value), "{}", "keys", parts, budget, depth, 6)
         return
     else:
         text = f"<{type(value).__name__}>"
     parts.append(text)
     budget[0] -= len(text)
+
+
+def _show_items(pairs: Any, count: int, brackets: str, noun: str, parts: list[str], budget: list[int], depth: int,
+                most: int) -> None:
+    """The first ``most`` of (key or _NO_KEY, item) ``pairs`` inside ``brackets``, within the budget."""
+    parts.append(brackets[0])
+    budget[0] -= 1
+    for i, (key, item) in enumerate(pairs):
+        if budget[0] <= 0:
+            return
+        if i:
+            parts.append(", ")
+            budget[0] -= 2
+        if i == most:
+            parts.append(f"...({count} {noun})")
+            budget[0] -= 12
+            break
+        if key is not _NO_KEY:
+            _show_into(key, parts, budget, depth + 1)
+            parts.append(": ")
+            budget[0] -= 2
+        _show_into(item, parts, budget, depth + 1)
+    parts.append(brackets[1])
+    budget[0] -= 1

@@ -109,7 +109,6 @@ class _Reader:
         self.stack: list[_Frame] = []
         self.anchors: dict[str, tuple[Any, int, int]] = {}  # name → (value, expanded size, depth)
         self.open_anchors: set[str] = set()
-        self.total = 0
         self.result: Any = None
 
     # -------------------------------------------------------------- errors
@@ -150,16 +149,24 @@ class _Reader:
         anchors = self.anchors
         add = self.add
         scalar = self.scalar
+        resolve = self.resolve
+        non_string = _NON_STRING_START
         documents = 0
+        total = 0  # nodes so far, aliases expanded
         while True:
             event = get_event()
             if event is None:
                 return self.result
             kind = type(event)
             if kind is ScalarEvent:
-                value = scalar(event)
-                self.total += 1
-                if self.total > MAX_NODES:
+                if event.tag is None and event.implicit[0]:  # plain: YAML 1.2 core schema
+                    value = event.value
+                    if not value or value[0] in non_string:
+                        value = resolve(value, event)
+                else:
+                    value = scalar(event)
+                total += 1
+                if total > MAX_NODES:
                     self.too_many(event)
                 if event.anchor is not None:
                     anchors[event.anchor] = (value, 1, 0)
@@ -168,17 +175,19 @@ class _Reader:
                     parent.size += 1
                     if not parent.is_map:
                         parent.items.append(value)
-                        continue
-                    merge = value == "<<" and event.tag is None and event.implicit[0]
-                    add(parent, value, event, merge)
+                    elif parent.key is _NO_KEY:  # a key: the common case inline (see add)
+                        parent.key = _MERGE if value == "<<" and event.tag is None and event.implicit[0] else value
+                        parent.key_mark = event.start_mark
+                    else:
+                        add(parent, value, event, False)
                 else:
                     self.result = value
             elif kind is MappingStartEvent or kind is SequenceStartEvent:
                 is_map = kind is MappingStartEvent
                 if event.tag is not None:
                     self.check_collection_tag(event, is_map)
-                self.total += 1
-                if self.total > MAX_NODES:
+                total += 1
+                if total > MAX_NODES:
                     self.too_many(event)
                 if len(stack) >= MAX_DEPTH:
                     self.too_deep(event)
@@ -191,17 +200,7 @@ class _Reader:
                 if frame.anchor is not None:
                     self.open_anchors.discard(frame.anchor)
                     anchors[frame.anchor] = (value, frame.size, frame.depth)
-                if stack:
-                    parent = stack[-1]
-                    parent.size += frame.size
-                    if frame.depth >= parent.depth:
-                        parent.depth = frame.depth + 1
-                    if parent.is_map:
-                        add(parent, value, event, False)
-                    else:
-                        parent.items.append(value)
-                else:
-                    self.result = value
+                self.place(value, frame.size, frame.depth, event)
             elif kind is AliasEvent:
                 name = event.anchor
                 if name in self.open_anchors:
@@ -210,22 +209,12 @@ class _Reader:
                 if name not in anchors:
                     self.fail(event.start_mark, f"expected an alias to an anchor defined above, got *{key_text(name)}")
                 value, size, depth = anchors[name]
-                self.total += size
-                if self.total > MAX_NODES:
+                total += size
+                if total > MAX_NODES:
                     self.too_many(event)
                 if len(stack) + depth > MAX_DEPTH:
                     self.too_deep(event)
-                if stack:
-                    parent = stack[-1]
-                    parent.size += size
-                    if depth >= parent.depth:
-                        parent.depth = depth + 1
-                    if parent.is_map:
-                        add(parent, value, event, False)
-                    else:
-                        parent.items.append(value)
-                else:
-                    self.result = value
+                self.place(value, size, depth, event)
             elif kind is DocumentStartEvent:
                 documents += 1
                 if documents > 1:
@@ -239,6 +228,21 @@ class _Reader:
     def too_deep(self, event: Any) -> None:
         self.fail(event.start_mark, f"expected nesting at most {MAX_DEPTH} levels deep with aliases expanded, got "
                                     "deeper (a scene needs 6)")
+
+    def place(self, value: Any, size: int, depth: int, event: Any) -> None:
+        """Put a finished collection or an alias's value (``size`` nodes, ``depth`` levels expanded)
+        into the collection that holds it, or make it the document."""
+        if not self.stack:
+            self.result = value
+            return
+        parent = self.stack[-1]
+        parent.size += size
+        if depth >= parent.depth:
+            parent.depth = depth + 1
+        if parent.is_map:
+            self.add(parent, value, event, False)
+        else:
+            parent.items.append(value)
 
     def add(self, parent: _Frame, value: Any, event: Any, is_merge_key: bool) -> None:
         """Put a finished node into the mapping ``parent``: as its next key, or as the value of its key."""
