@@ -217,6 +217,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             closed = "; files written so far are closed and say where the run stopped" if args.command == "run" else ""
             print(f"{PROG} {args.command}: interrupted by {signal.Signals(signum).name}{closed}", file=sys.stderr)
             return 128 + signum
+        except BrokenPipeError:  # stdout's reader went away (| head): stop quietly, as a writer killed by SIGPIPE
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())  # so that flushing stdout at exit fails no more
+            os.close(devnull)
+            return 128 + signal.SIGPIPE
 
 
 def _output_path(parser: argparse.ArgumentParser, option: str, value: str | None, expected: str) -> Path | None:

@@ -847,3 +847,23 @@ def test_any_line_ending(tmp_path: Path, newline: str) -> None:
     path = tmp_path / "scene.yaml"
     path.write_bytes(text.encode())
     assert load_scene(path).body_names == ("b",)
+
+
+def test_output_into_a_closed_pipe_is_not_a_traceback(tmp_path: Path) -> None:
+    """``rigid-body-sim describe big.yaml | head -1``: the reader goes away; no BrokenPipeError traceback."""
+    path = write(tmp_path, _compact_bodies_yaml(3000), "many.yaml")
+    with subprocess.Popen(cli("describe", str(path)), stdout=subprocess.PIPE, stderr=subprocess.PIPE) as proc:
+        assert proc.stdout is not None and proc.stderr is not None
+        proc.stdout.readline()
+        proc.stdout.close()  # like head -1
+        err = proc.stderr.read().decode()
+        proc.wait(timeout=120)
+    assert "Traceback" not in err and "BrokenPipeError" not in err, err
+    assert proc.returncode == 141  # 128 + SIGPIPE, what a shell reports for a writer cut off by head
+
+
+def test_control_characters_in_a_path_are_escaped_in_messages(tmp_path: Path) -> None:
+    path = tmp_path / "red\x1b[31m.yaml"
+    with pytest.raises(SceneError) as info:
+        load_scene(path)
+    assert "\x1b" not in str(info.value) and "red\\x1b[31m.yaml: cannot read scene file" in str(info.value)

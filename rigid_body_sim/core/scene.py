@@ -223,7 +223,7 @@ def load_scene(source: str | Path | Mapping[str, Any]) -> Scene:
     if isinstance(source, Mapping):
         return _build(source, "<dict>")
     path = Path(source)
-    name = str(path)
+    name = str(path) if str(path).isprintable() else repr(str(path))[1:-1]  # no control characters in messages
     try:
         raw = read_regular_file(path, MAX_SCENE_BYTES, expected="a YAML file")
     except FileTooLargeError as exc:
@@ -233,7 +233,7 @@ def load_scene(source: str | Path | Mapping[str, Any]) -> Scene:
     except OSError as exc:
         raise SceneError(f"{name}: cannot read scene file ({exc.strerror or exc})") from None
     except ValueError:  # os.open: "embedded null byte"
-        raise SceneError(f"{key_text(name)}: cannot read scene file (the path contains a NUL character)") from None
+        raise SceneError(f"{name}: cannot read scene file (the path contains a NUL character)") from None
     return load_scene_text(_decode(raw, name), name)
 
 
