@@ -12,7 +12,8 @@ file, key path and expectation), a run that failed, or an output that could not 
 to the end (a full disk); 2 bad command-line arguments (argparse's convention), including a
 step or rate no run can take and outputs that cannot be written (a FIFO, a device, a
 directory, a path that cannot be created, two outputs or an output and the scene on one
-file); 128 + the signal's number when interrupted: 130 for Ctrl-C (SIGINT), 143 for SIGTERM.
+file); 128 + the signal's number when interrupted: 130 for Ctrl-C (SIGINT), 143 for SIGTERM,
+and 141 (as for SIGPIPE) when the reader of stdout goes away (``describe ... | head``).
 An interrupted ``run`` closes its files properly and ends them with a status saying where it
 stopped (``interrupted by SIGTERM at t = ... s``); a complete run's status says ``complete``.
 No error ends in a traceback. This module only parses arguments and prints: the work is in
