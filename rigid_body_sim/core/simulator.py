@@ -513,7 +513,8 @@ class Simulator:
         it is stopped; bodies new to ``scene`` start at their initial state; bodies not in it
         are gone. The applied wrenches do not carry over. This simulator is unchanged.
         """
-        new = Simulator(scene, self.integrator, self.dt, **self._reference_options,
+        options = self._reference_options
+        new = Simulator(scene, self.integrator, self.dt, reference_rtol=options["rtol"], reference_atol=options["atol"],
                         energy_growth_limit=self.energy_growth_limit, model_reduction=self._reduce)
         state = new.state.copy()
         old_state = self.state
