@@ -12,10 +12,11 @@ file, key path and expectation), a run that failed, or an output that could not 
 to the end (a full disk); 2 bad command-line arguments (argparse's convention), including a
 step or rate no run can take and outputs that cannot be written (a FIFO, a device, a
 directory, a path that cannot be created, two outputs or an output and the scene on one
-file); 128 + the signal's number when interrupted: 130 for Ctrl-C (SIGINT), 143 for SIGTERM,
-and 141 (as for SIGPIPE) when the reader of stdout goes away (``describe ... | head``).
-An interrupted ``run`` closes its files properly and ends them with a status saying where it
-stopped (``interrupted by SIGTERM at t = ... s``); a complete run's status says ``complete``.
+file); 0 when stopped by a signal, Ctrl-C (SIGINT) or SIGTERM, or when the reader of stdout
+goes away (``describe ... | head``): a stop asked for is not a failure. An interrupted ``run``
+closes its files properly and ends them with a status saying where it stopped (``interrupted
+by SIGTERM at t = ... s``; a complete run's status says ``complete``), and says so on stderr:
+the files, not the exit code, tell a cut-short run from a whole one.
 No error ends in a traceback. This module only parses arguments and prints: the work is in
 :mod:`rigid_body_sim.offline` and :mod:`rigid_body_sim.core`. ``check`` imports the scene
 loader only (not the compiled simulator), so it is quick and small.
@@ -217,12 +218,12 @@ def main(argv: Sequence[str] | None = None) -> int:
             signum = getattr(exc, "signum", signal.SIGINT)
             closed = "; files written so far are closed and say where the run stopped" if args.command == "run" else ""
             print(f"{PROG} {args.command}: interrupted by {signal.Signals(signum).name}{closed}", file=sys.stderr)
-            return 128 + signum
-        except BrokenPipeError:  # stdout's reader went away (| head): stop quietly, as a writer killed by SIGPIPE
+            return 0
+        except BrokenPipeError:  # stdout's reader went away (| head): stop quietly
             devnull = os.open(os.devnull, os.O_WRONLY)
             os.dup2(devnull, sys.stdout.fileno())  # so that flushing stdout at exit fails no more
             os.close(devnull)
-            return 128 + signal.SIGPIPE
+            return 0
 
 
 def _output_path(parser: argparse.ArgumentParser, option: str, value: str | None, expected: str) -> Path | None:

@@ -665,7 +665,7 @@ def test_plot_output_that_is_the_run_is_refused(capsys: pytest.CaptureFixture[st
     assert run.read_bytes() == before
 
 
-@pytest.mark.parametrize(("sig", "code"), [(signal.SIGTERM, 143), (signal.SIGINT, 130)], ids=["SIGTERM", "SIGINT"])
+@pytest.mark.parametrize(("sig", "code"), [(signal.SIGTERM, 0), (signal.SIGINT, 0)], ids=["SIGTERM", "SIGINT"])
 def test_a_signal_during_run_closes_and_marks_the_files(tmp_path: Path, spinner: Path, sig: int, code: int) -> None:
     """Issue 18: SIGTERM during ``run`` left an MCAP file without a summary that ``plot`` could not read,
     and nothing said the run was cut short."""
@@ -859,7 +859,7 @@ def test_output_into_a_closed_pipe_is_not_a_traceback(tmp_path: Path) -> None:
         err = proc.stderr.read().decode()
         proc.wait(timeout=120)
     assert "Traceback" not in err and "BrokenPipeError" not in err, err
-    assert proc.returncode == 141  # 128 + SIGPIPE, what a shell reports for a writer cut off by head
+    assert proc.returncode == 0  # the reader went away: a stop, not a failure
 
 
 def test_control_characters_in_a_path_are_escaped_in_messages(tmp_path: Path) -> None:
