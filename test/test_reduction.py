@@ -415,7 +415,7 @@ def test_describe_names_each_bodys_model_and_why() -> None:
     assert {k: v[1] for k, v in described.items()} == {
         "ball": "isotropic", "can": "symmetric", "crate": "full", "wall": "static", "belt": "kinematic",
         "puck": "planar", "sat": "full", "cart": "translation"}
-    assert "isotropic inertia" in described["ball"][2] and "the integrator in steps with a torque" in described["ball"][2]
+    assert "isotropic inertia" in described["ball"][2] and "the integrator otherwise" in described["ball"][2]
     assert "centre of mass stays put" in described["sat"][2]
     assert described["puck"][0] == "planar" and "normal [0, 0, 1]" in described["puck"][2]
     off = {d["name"]: d["model"] for d in describe_scene(scene, model_reduction=False)}

@@ -39,7 +39,7 @@ from .closed_form import EQUAL_MOMENTS_RTOL
 from .model import BodyModel, State
 from .quaternion import quat_rotate, quat_to_matrix
 
-__all__ = ["BodyPlan", "MODEL_NAMES", "plan_models", "apply_plan"]
+__all__ = ["BodyPlan", "MODEL_NAMES", "model_codes", "plan_models", "apply_plan"]
 
 #: L.MODEL_* → the name used in describe output and logs.
 MODEL_NAMES = {
@@ -73,63 +73,92 @@ class BodyPlan:
     reason: str
 
 
-def _equal(a: float, b: float) -> bool:
-    return abs(a - b) <= EQUAL_MOMENTS_RTOL * max(abs(a), abs(b))
+def model_codes(model: BodyModel, reduce: bool = True, stopped: np.ndarray | None = None) -> np.ndarray:
+    """The model (layout.MODEL_*) each body of ``model`` gets, shape (N,) int64: arrays only, no per-body Python.
+
+    What :func:`plan_models` explains; this is what the simulator re-derives whenever a body is
+    stopped, set or reset, so it must stay cheap at 1e5 bodies.
+    """
+    inertia = np.asarray(model.inertia_P, dtype=float).reshape(-1, 3)
+    motions = np.asarray(model.motions, dtype=object)
+
+    def equal(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        return np.abs(a - b) <= EQUAL_MOMENTS_RTOL * np.maximum(np.abs(a), np.abs(b))
+
+    I1, I2, I3 = inertia[:, 0], inertia[:, 1], inertia[:, 2]
+    isotropic = equal(I1, I2) & equal(I2, I3)
+    pair = equal(I1, I2) | equal(I2, I3) | equal(I1, I3)
+    symmetric = pair & (np.asarray(model.damping_angular) == 0.0)
+    free_to_turn = (motions == "free") | (motions == "rotation_only")
+    codes = np.full(model.count, L.MODEL_FULL, dtype=np.int64)
+    if reduce:
+        codes[free_to_turn & symmetric] = L.MODEL_SYMMETRIC
+        codes[free_to_turn & isotropic] = L.MODEL_ISOTROPIC
+        codes[motions == "translation_only"] = L.MODEL_TRANSLATION
+        codes[motions == "static"] = L.MODEL_STATIC
+    codes[motions == "planar"] = L.MODEL_PLANAR
+    codes[motions == "kinematic"] = L.MODEL_KINEMATIC
+    if stopped is not None:
+        codes[np.asarray(stopped, dtype=bool)] = L.MODEL_STATIC
+    return codes
 
 
-def plan_models(model: BodyModel, reduce: bool = True, stopped: np.ndarray | None = None) -> list[BodyPlan]:
-    """Which model each body of ``model`` gets, and why (one :class:`BodyPlan` per body, in order)."""
+def plan_models(model: BodyModel, reduce: bool = True, stopped: np.ndarray | None = None,
+                codes: np.ndarray | None = None) -> list[BodyPlan]:
+    """Which model each body of ``model`` gets, and why (one :class:`BodyPlan` per body, in order).
+
+    ``codes`` are :func:`model_codes`' (computed here when not given); this adds the reasons.
+    """
+    if codes is None:
+        codes = model_codes(model, reduce, stopped)
     plans = []
     motions = model.motions
     normals = model.plane_normals_W
     for b, name in enumerate(model.names):
-        motion = motions[b]
+        motion, code = motions[b], int(codes[b])
         I = model.inertia_P[b]
         moments = f"I = ({I[0]:.6g}, {I[1]:.6g}, {I[2]:.6g}) kg·m²"
-        isotropic = _equal(I[0], I[1]) and _equal(I[1], I[2])
-        pair = _equal(I[0], I[1]) or _equal(I[1], I[2]) or _equal(I[0], I[2])
-        symmetric = pair and model.damping_angular[b] == 0.0
         if stopped is not None and stopped[b]:
-            code, reason = L.MODEL_STATIC, "stopped by Simulator.stop_body: no longer integrated"
-        elif motion == "static":
-            code, reason = ((L.MODEL_STATIC, "motion: static: never integrated") if reduce else
-                            (L.MODEL_FULL, "motion: static, stepped by the integrator with every wrench "
-                                                 "projected out (reduction off)"))
-        elif motion == "kinematic":
-            code, reason = L.MODEL_KINEMATIC, ("motion: kinematic: moves at its constant initial twist "
-                                                     "(exact), deaf to wrenches")
-        elif motion == "planar":
+            reason = "stopped by Simulator.stop_body: no longer integrated"
+        elif code == L.MODEL_STATIC:
+            reason = "motion: static: never integrated"
+        elif code == L.MODEL_KINEMATIC:
+            reason = "motion: kinematic: moves at its constant initial twist (exact), deaf to wrenches"
+        elif code == L.MODEL_PLANAR:
             n = normals[b]
-            code, reason = L.MODEL_PLANAR, (
-                f"motion: planar (normal [{n[0]:.6g}, {n[1]:.6g}, {n[2]:.6g}]): exact flow of the in-plane "
-                "position and yaw under each step's wrench; force out of the plane and tilting torque projected out")
-        elif motion == "translation_only" and reduce:
-            code, reason = L.MODEL_TRANSLATION, ("motion: translation_only: exact constant-force flow of the "
-                                                       "centre of mass; orientation fixed, torques projected out")
+            reason = (f"motion: planar (normal [{n[0]:.6g}, {n[1]:.6g}, {n[2]:.6g}]): in-plane position and yaw, "
+                      "exact under an in-plane wrench fixed in world axes, RK4 on the planar equations under one "
+                      "that turns or moves with the body; force out of the plane and tilting torque projected out")
+        elif code == L.MODEL_TRANSLATION:
+            reason = ("motion: translation_only: exact flow of the centre of mass under its forces; orientation "
+                      "fixed, torques projected out")
+        elif code == L.MODEL_ISOTROPIC:
+            reason = (f"isotropic inertia ({moments}): no gyroscopic term; exact translation and exact exp-map "
+                      "rotation while no torque acts and the force is fixed in world axes, the integrator otherwise")
+        elif code == L.MODEL_SYMMETRIC:
+            reason = (f"axisymmetric inertia ({moments}), no angular damping: exact translation and exact "
+                      "symmetric-top flow while no torque acts and the force is fixed in world axes, the "
+                      "integrator otherwise")
+        elif motion == "static":
+            reason = "motion: static, stepped by the integrator with every wrench projected out (reduction off)"
         elif motion == "translation_only":
-            code, reason = L.MODEL_FULL, ("motion: translation_only, stepped by the integrator with torques "
-                                                "projected out (reduction off)")
-        elif reduce and isotropic:
-            code, reason = L.MODEL_ISOTROPIC, (
-                f"isotropic inertia ({moments}): no gyroscopic term; exact translation and exact exp-map "
-                "rotation while torque-free, the integrator in steps with a torque")
-        elif reduce and symmetric:
-            code, reason = L.MODEL_SYMMETRIC, (
-                f"axisymmetric inertia ({moments}), no angular damping: exact translation and exact "
-                "symmetric-top flow while torque-free, the integrator in steps with a torque")
+            reason = "motion: translation_only, stepped by the integrator with torques projected out (reduction off)"
         else:
+            pair = any(abs(I[i] - I[j]) <= EQUAL_MOMENTS_RTOL * max(abs(I[i]), abs(I[j]))
+                       for i, j in ((0, 1), (1, 2), (0, 2)))
             why = "reduction off" if not reduce else (
                 "asymmetric inertia" if not pair else "axisymmetric but with angular damping")
-            code, reason = L.MODEL_FULL, f"the integrator ({why}, {moments})"
+            reason = f"the integrator ({why}, {moments})"
         if motion == "rotation_only":
             reason += "; motion: rotation_only: the centre of mass stays put (forces and gravity projected out)"
         plans.append(BodyPlan(name, motion, MODEL_NAMES[code], code, reason))
     return plans
 
 
-def apply_plan(prm: np.ndarray, model: BodyModel, initial: State, state: State, plans: list[BodyPlan]
+def apply_plan(prm: np.ndarray, model: BodyModel, initial: State, state: State, codes: np.ndarray
                ) -> tuple[np.ndarray, np.ndarray]:
-    """Write the plans into the parameter rows ``prm`` (in place); return the moving bodies grouped by model.
+    """Write the models ``codes`` (:func:`model_codes`) into the parameter rows ``prm`` (in place); return the
+    moving bodies grouped by model.
 
     Per body: MODEL, PROJECT, the projected gravity (and its energy-bound rate), and for planar
     bodies the plane (normal, offset n·p of the ``initial`` position: the plane the scene put
@@ -145,8 +174,7 @@ def apply_plan(prm: np.ndarray, model: BodyModel, initial: State, state: State, 
     """
     gravity = np.asarray(model.gravity_W, dtype=float)
     normals = model.plane_normals_W
-    codes = np.fromiter((plan.code for plan in plans), dtype=np.int64, count=len(plans))
-    motions = [plan.motion for plan in plans]
+    motions = model.motions
     prm[:, L.MODEL] = codes
     prm[:, L.PROJECT] = [_PROJECTION[m] for m in motions]
     g = np.tile(gravity, (model.count, 1))
@@ -162,7 +190,8 @@ def apply_plan(prm: np.ndarray, model: BodyModel, initial: State, state: State, 
         prm[b, L.KINEMATIC_W:L.KINEMATIC_W + 3] = quat_rotate(state.q_WP[b], state.w_WP_P[b])
     prm[:, L.GRAVITY:L.GRAVITY + 3] = g
     prm[:, L.CACHE_DT] = np.nan  # no cached rotation increment
-    prm[:, L.GRAVITY_BUDGET_RATE] = np.linalg.norm(model.mass[:, None] * g, axis=1) * prm[:, L.BUDGET_FORCE]
+    # |m g| as m |g| with a hypot-style norm: no sum of squares to overflow
+    prm[:, L.GRAVITY_BUDGET_RATE] = model.mass * np.hypot(np.hypot(g[:, 0], g[:, 1]), g[:, 2]) * prm[:, L.BUDGET_FORCE]
     moving = np.flatnonzero(codes != L.MODEL_STATIC)
     members = moving[np.argsort(codes[moving], kind="stable")].astype(np.int64)
     counts = np.bincount(codes[members], minlength=L.MODEL_COUNT)

@@ -243,7 +243,7 @@ class Simulator:
         if not isinstance(model_reduction, (bool, np.bool_)):
             raise ValueError(f"model_reduction: expected True or False, got {model_reduction!r}")
         self._reduce = bool(model_reduction)
-        self._plans: list[reduction.BodyPlan] = []
+        self._plans: list[reduction.BodyPlan] | None = None
         self.reset()
 
     # ----------------------------------------------------------------- configuration
@@ -321,13 +321,17 @@ class Simulator:
 
     def body_models(self) -> list[reduction.BodyPlan]:
         """The model each body gets now and why (reduction.BodyPlan: body, motion, model, code, reason)."""
+        if self._plans is None:
+            self._plans = reduction.plan_models(self.model, self._reduce, self._stopped,
+                                                self._prm[:, L.MODEL].astype(np.int64))
         return list(self._plans)
 
     def _replan(self) -> None:
         """Derive each body's model from the scene, the switch, the stopped bodies and the current state."""
-        self._plans = reduction.plan_models(self.model, self._reduce, self._stopped)
+        codes = reduction.model_codes(self.model, self._reduce, self._stopped)
+        self._plans = None  # body_models() explains the codes when asked
         self._members, groups = reduction.apply_plan(self._prm, self.model, self.scene.initial_state, self.state,
-                                                     self._plans)
+                                                     codes)
         self._control[L.GROUPS:L.GROUPS + groups.size] = groups.ravel()
         # The buffers of stepping.advance, in its order: one tuple, so a step(1) builds no arguments.
         self._buffers = (self._Ys, self._prm, self._wrenches, self._members, self._status, self._control,

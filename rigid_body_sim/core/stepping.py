@@ -139,7 +139,8 @@ def pack_parameters(model) -> np.ndarray:
     prm[:, GRAVITY:GRAVITY + 3] = model.gravity_W
     prm[:, BUDGET_FORCE] = 1.0 / np.sqrt(2.0 * model.mass)
     prm[:, BUDGET_TORQUE] = 1.0 / np.sqrt(2.0 * inertia.min(axis=1)) if n else 0.0
-    prm[:, GRAVITY_BUDGET_RATE] = np.linalg.norm(model.mass[:, None] * model.gravity_W, axis=1) * prm[:, BUDGET_FORCE]
+    g = np.asarray(model.gravity_W, dtype=float)
+    prm[:, GRAVITY_BUDGET_RATE] = model.mass * float(np.hypot(np.hypot(g[0], g[1]), g[2])) * prm[:, BUDGET_FORCE]
     prm[:, MODEL] = MODEL_FULL
     prm[:, PROJECT] = PROJECT_NONE
     prm[:, CACHE_DT] = np.nan
