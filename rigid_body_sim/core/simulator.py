@@ -595,6 +595,7 @@ class Simulator:
         if self._method.code is not None:
             stepping.advance(self._Ys, self._prm, wrenches, self._members, self._status, self._control,
                              self._inputs, 1)
+            self._inputs[L.SPENT] = 0.0  # ``wrenches`` is this step's own array: nothing to drop before the next
         else:
             bodies = stepping.step_reduced(self._Ys, self._prm, wrenches, self._members, self._status,
                                            self._control, self._inputs)
