@@ -108,15 +108,24 @@ ENVELOPE_ARGS ?=
 envelope: $(STAMP)
 	$(VENV_PY) -m rigid_body_sim.tools.envelope --out docs/stability.md $(ENVELOPE_ARGS)
 
-# Speed and accuracy benchmarks (benchmarks/; not part of `make test`): work-precision, throughput
-# and node timing, beside MuJoCo when the bench extra is installed (requirements-bench.txt).
-# bench: quick mode (a few minutes); bench-full: longer sweeps, N up to 1e5, 20 s node windows.
+# Speed and accuracy benchmarks (benchmarks/; not part of `make test`), beside MuJoCo (requirements-bench.txt):
+# throughput against N with the plain-loop floor and a numpy loop, the per-frame cost of a force and
+# one body driven per step, work-precision on the top and the forced box, model reduction, a kernel
+# profile and node timing. Every figure is a median of >= 5 samples with its min-max.
+# bench: quick mode (fewer sizes, a few minutes); bench-full: every size up to 1e5, 20 s node windows.
+# Into the default BENCH_OUT they also write docs/choosing_an_integrator.md (+ .claims.json) and the
+# README's generated "Speed and accuracy" table, so README, docs and results.md come from one run.
+# BENCH_BASELINE=<git rev>: also time that revision's core beside this one at N = 1e4 (core_compare.py).
 BENCH_OUT ?= benchmarks/results
 BENCH_ARGS ?=
+BENCH_BASELINE ?=
+BENCH_DEFAULT_OUT := $(filter benchmarks/results,$(BENCH_OUT))
+BENCH_FLAGS = --out $(BENCH_OUT) --docs $(if $(BENCH_DEFAULT_OUT),docs,$(BENCH_OUT)) \
+	$(if $(BENCH_DEFAULT_OUT),--readme README.md) $(if $(BENCH_BASELINE),--baseline-core $(BENCH_BASELINE)) $(BENCH_ARGS)
 .PHONY: bench bench-full bench-deps
 bench-deps: $(STAMP)
 	$(PIP) install -r requirements-bench.txt
 bench: bench-deps
-	$(VENV_PY) -m benchmarks.run --quick --out $(BENCH_OUT) $(BENCH_ARGS)
+	$(VENV_PY) -m benchmarks.run --quick $(BENCH_FLAGS)
 bench-full: bench-deps
-	$(VENV_PY) -m benchmarks.run --full --out $(BENCH_OUT) $(BENCH_ARGS)
+	$(VENV_PY) -m benchmarks.run --full $(BENCH_FLAGS)

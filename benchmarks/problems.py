@@ -1,55 +1,44 @@
-"""The three work-precision problems, their references and the error measures.
+"""The two work-precision problems, their exact references and the error measures.
 
-(a) ``top``: torque-free asymmetric top against the elliptic closed form
-    (``closed_form.asymmetric_top``).
-(b) ``forced``: Euler's equations ω' = (−2 ω2ω3, 1.25 ω3ω1, −0.5 ω1ω2) + (0, 0, 0.25 sin²t),
-    ω0 = (1, 0, 0.9), t ∈ [0, 10] (Hairer, Nørsett & Wanner's rigid-body test). The
-    coefficients (I2−I3)/I1 = −2, (I3−I1)/I2 = 1.25, (I1−I2)/I3 = −0.5 give I ∝ (1, 4, 6),
-    which breaks the triangle inequality (1 + 4 < 6): no physical body has them, so the
-    scene loader rejects them. The benchmark loads a valid body and swaps the moments into
-    the model (``dataclasses.replace``) — a benchmark-only bypass of the loader's check.
-    The forcing is a body-axes torque τ3 = I3·0.25 sin²t that the benchmark applies before
-    every step; the simulator holds wrenches constant over a step (zero-order hold), so the
-    benchmark samples the forcing at the step's midpoint t + h/2 (second-order accurate;
-    a start-of-step sample would make every method first order). The reference is the
-    continuous problem solved by scipy's DOP853 at rtol = atol = 1e-12 — the solver the
-    ``reference`` integrator wraps — so the ZOH error is part of every method's error.
-(c) ``box``: the 2 kg, 1.0 × 0.6 × 0.4 m box at rest, pushed by a body-fixed force
-    F_B = (0, 10, 0) N at r_B = (0.5, 0.3, 0) m, against ``closed_form.box_body_fixed_force``
-    over t ∈ [0, 1] s. The torque is constant in body axes, so the spin is reproduced
-    exactly, but the force's world direction is held constant over each step (ZOH): the
-    COM velocity error is first order in h for every integrator, by construction.
+``top``: the torque-free asymmetric top, I = (1, 2, 2.5) kg·m², ω0 = (1, 0.3, 2) rad/s (body
+    axes; not near the separatrix), t ∈ [0, 10] s, against the elliptic closed form
+    (``closed_form.asymmetric_top``). Error: orientation (geodesic angle, rad).
+``box``: the 2 kg, 1.0 × 0.6 × 0.4 m box at rest, pushed by 10 N along its own y at the corner
+    site (0.5, 0.3, 0) m — a force fixed in the body — t ∈ [0, 1] s, against the Fresnel
+    closed form (``closed_form.box_body_fixed_force``). Error: centre-of-mass position (m).
+    Ours: the site ``b/corner`` and ``apply_force_at_point(..., frame="b/corner")`` held over
+    each ``step(n)``; MuJoCo: a motor on a site at the same corner, ``d.ctrl[0] = 10``.
 
-Orientation error is the geodesic angle 2·atan2(|vec(q_ref* ⊗ q)|, |w(q_ref* ⊗ q)|), rad.
+Errors are maxima over 10 equally spaced times (the checkpoints). The orientation error is the
+geodesic angle 2·atan2(|vec(q_ref* ⊗ q)|, |w(q_ref* ⊗ q)|).
+
+(The earlier third problem, Hairer–Nørsett–Wanner's forced rigid body, had a torque given as
+a function of time, sampled from Python once per step: it measured the zero-order hold of that
+sampling, the same for every method, not the integrators; it is gone.)
 """
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from rigid_body_sim.core import closed_form, load_scene
 from rigid_body_sim.core.quaternion import quat_conjugate, quat_multiply
 
-# (a) torque-free asymmetric top
+# top
 TOP_INERTIA = np.array([1.0, 2.0, 2.5])       # kg·m², principal, distinct, triangle-valid
-TOP_W0_B = np.array([1.0, 0.3, 2.0])          # rad/s, body axes (not near the separatrix)
+TOP_W0_B = np.array([1.0, 0.3, 2.0])          # rad/s, body axes
 TOP_T = 10.0                                   # s
-# (b) forced rigid body (HNW)
-FORCED_INERTIA = np.array([1.0, 4.0, 6.0])    # kg·m², gives coefficients (−2, 1.25, −0.5)
-FORCED_W0_B = np.array([1.0, 0.0, 0.9])       # rad/s
-FORCED_T = 10.0                                # s
-# (c) box with a body-fixed force
+# box with a body-fixed force at a site
 BOX_MASS = 2.0                                 # kg
 BOX_SIDES = (1.0, 0.6, 0.4)                    # m
-BOX_FORCE_B = np.array([0.0, 10.0, 0.0])       # N, body axes
-BOX_POINT_B = np.array([0.5, 0.3, 0.0])        # m, body axes from the COM
+BOX_FORCE_S = np.array([0.0, 10.0, 0.0])       # N, site axes = body axes
+BOX_SITE_B = np.array([0.5, 0.3, 0.0])         # m, body axes from the COM
 BOX_T = 1.0                                    # s
-CHECKPOINTS = 10                               # error = max over this many equally spaced times
+CHECKPOINTS = 10
 
-PROBLEMS = ("top", "forced", "box")
+PROBLEMS = ("top", "box")
+#: The error each problem is judged by: (row key, label with unit).
+ERROR_KEY = {"top": ("err_angle", "max orientation error (rad)"), "box": ("err_p", "max COM position error (m)")}
 
 
 def geodesic_angle(q_ref: np.ndarray, q: np.ndarray) -> np.ndarray:
@@ -63,66 +52,51 @@ def box_inertia() -> np.ndarray:
     return BOX_MASS / 12.0 * np.array([b * b + c * c, a * a + c * c, a * a + b * b])
 
 
-def scene_dict(problem: str) -> dict:
-    """The scene (as a dict for ``load_scene``) of a problem, body named ``b``."""
-    if problem == "top":
-        return {"bodies": {"b": {"mass": 1.0, "inertia": {"principal": TOP_INERTIA.tolist()},
-                                 "twist": {"angular": TOP_W0_B.tolist()}}}}
-    if problem == "forced":  # moments swapped in by scene() below
-        return {"bodies": {"b": {"mass": 1.0, "inertia": {"principal": [4.0, 5.0, 6.0]},
-                                 "twist": {"angular": FORCED_W0_B.tolist()}}}}
-    if problem == "box":
-        return {"bodies": {"b": {"mass": BOX_MASS, "inertia": {"box": list(BOX_SIDES)}}}}
-    raise ValueError(f"`problem` must be one of {PROBLEMS}, got {problem!r}")
+def inertia(problem: str) -> np.ndarray:
+    return {"top": TOP_INERTIA, "box": box_inertia()}[problem]
 
 
-def scene(problem: str):
-    s = load_scene(scene_dict(problem))
-    if problem == "forced":
-        model = dataclasses.replace(s.model, inertia_P=FORCED_INERTIA[None, :].copy())
-        s = dataclasses.replace(s, model=model)
-    return s
+def mass(problem: str) -> float:
+    return {"top": 1.0, "box": BOX_MASS}[problem]
 
 
 def horizon(problem: str) -> float:
-    return {"top": TOP_T, "forced": FORCED_T, "box": BOX_T}[problem]
+    return {"top": TOP_T, "box": BOX_T}[problem]
 
 
-def forced_torque_B(t: float) -> np.ndarray:
-    """Body-axes torque (N·m) of problem (b) at time t: (0, 0, I3·0.25 sin²t)."""
-    return np.array([0.0, 0.0, FORCED_INERTIA[2] * 0.25 * np.sin(t) ** 2])
+def scene(problem: str):
+    """The problem's scene, one body ``b`` (``box``: with the site ``corner``)."""
+    if problem == "top":
+        return load_scene({"bodies": {"b": {"mass": 1.0, "inertia": {"principal": TOP_INERTIA.tolist()},
+                                            "twist": {"angular": TOP_W0_B.tolist()}}}})
+    if problem == "box":
+        return load_scene({"bodies": {"b": {"mass": BOX_MASS, "inertia": {"box": list(BOX_SIDES)},
+                                            "sites": {"corner": {"position": BOX_SITE_B.tolist()}}}}})
+    raise ValueError(f"`problem` must be one of {PROBLEMS}, got {problem!r}")
 
 
-def _forced_rhs(t, y):
-    w1, w2, w3 = y[4:]
-    qw, qx, qy, qz = y[:4]
-    dq = 0.5 * np.array([-qx * w1 - qy * w2 - qz * w3, qw * w1 + qy * w3 - qz * w2,
-                         qw * w2 + qz * w1 - qx * w3, qw * w3 + qx * w2 - qy * w1])
-    dw = np.array([-2.0 * w2 * w3, 1.25 * w3 * w1, -0.5 * w1 * w2 + 0.25 * np.sin(t) ** 2])
-    return np.concatenate([dq, dw])
-
-
-def reference(problem: str, times: np.ndarray) -> dict:
-    """Reference orientation q_WB (T, 4) wxyz, w_B (T, 3) and, for ``box``, v_W (T, 3)."""
+def reference(problem: str, times: np.ndarray) -> dict[str, np.ndarray]:
+    """Exact q_WB (T, 4) (w, x, y, z), w_B (T, 3) and, for ``box``, v_W and p_W (T, 3)."""
     times = np.asarray(times, float)
     if problem == "top":
         q, w = closed_form.asymmetric_top(TOP_INERTIA, TOP_W0_B, np.array([1.0, 0, 0, 0]), times)
         return {"q": q, "w": w}
-    if problem == "forced":
-        y0 = np.concatenate([[1.0, 0, 0, 0], FORCED_W0_B])
-        sol = solve_ivp(_forced_rhs, (0.0, times[-1]), y0, method="DOP853", t_eval=times,
-                        rtol=1e-12, atol=1e-12)
-        q = sol.y[:4].T
-        return {"q": q / np.linalg.norm(q, axis=1, keepdims=True), "w": sol.y[4:].T}
     if problem == "box":
-        q, w, v, _p = closed_form.box_body_fixed_force(BOX_MASS, box_inertia()[2], BOX_FORCE_B,
-                                                       BOX_POINT_B, times)
-        return {"q": q, "w": w, "v": v}
+        q, w, v, p = closed_form.box_body_fixed_force(BOX_MASS, box_inertia()[2], BOX_FORCE_S, BOX_SITE_B, times)
+        return {"q": q, "w": w, "v": v, "p": p}
     raise ValueError(f"`problem` must be one of {PROBLEMS}, got {problem!r}")
 
 
-def invariants(problem: str, w_B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Kinetic energy and |L| of the rotation, shape (T,), for body rates w_B (T, 3)."""
-    inertia = {"top": TOP_INERTIA, "forced": FORCED_INERTIA, "box": box_inertia()}[problem]
-    energy = 0.5 * np.einsum("j,ij,ij->i", inertia, w_B, w_B)
-    return energy, np.linalg.norm(inertia * w_B, axis=1)
+def errors(problem: str, times: np.ndarray, q: np.ndarray, w_B: np.ndarray, p_W: np.ndarray) -> dict[str, float]:
+    """Max over the checkpoints: orientation (rad), relative ω, energy and |L| errors; COM position (m)."""
+    ref = reference(problem, times)
+    I = inertia(problem)
+    energy = 0.5 * np.einsum("j,ij,ij->i", I, w_B, w_B)
+    energy_ref = 0.5 * np.einsum("j,ij,ij->i", I, ref["w"], ref["w"])
+    L, L_ref = np.linalg.norm(I * w_B, axis=1), np.linalg.norm(I * ref["w"], axis=1)
+    out = {"err_angle": float(np.max(geodesic_angle(ref["q"], q))),
+           "err_w": float(np.max(np.linalg.norm(w_B - ref["w"], axis=1)) / np.max(np.linalg.norm(ref["w"], axis=1))),
+           "err_energy": float(np.max(np.abs(energy - energy_ref) / energy_ref)),
+           "err_L": float(np.max(np.abs(L - L_ref) / L_ref)),
+           "err_p": float(np.max(np.linalg.norm(p_W - ref["p"], axis=1))) if "p" in ref else float("nan")}
+    return out

@@ -1,20 +1,27 @@
 """One command for every benchmark: ``python -m benchmarks.run --quick|--full --out DIR``.
 
-Writes to DIR: work_precision.csv, throughput.csv, wrench_step.csv, node_timing.csv,
-targets.csv, results.md (every table, the issue's targets met or not, the machine),
-work_precision_<problem>.png, throughput.png and profile_<integrator>.txt.
-``--skip-node`` / ``--only-node`` select parts; ``--node-configs 1000x1,100x100`` picks node cases.
+Writes to DIR: results.md (every table, the targets met or not, the machine), throughput.csv,
+apply_cost.csv, site_force.csv, work_precision.csv, reduction.csv, node_timing.csv,
+targets.csv, core_compare.csv (with ``--baseline-core``), the plots, and profile_kernels.txt;
+to ``--docs``: choosing_an_integrator.md and its claims (benchmarks/choosing.py); with
+``--readme``: the generated block of the README's "Speed and accuracy" section (between
+``<!-- bench:begin -->`` and ``<!-- bench:end -->``), the same text as results.md's headline.
+
+Quick and full modes differ in the sizes swept and the seconds per sample, not in the number
+of repeats (≥ 5 everywhere). ``--parts`` runs a subset (while developing): it writes results_partial.md,
+which says which parts are missing, and never touches results.md or the README.
 """
 
 from __future__ import annotations
 
 import argparse
 import csv
+import datetime
 import math
-import platform
 import subprocess
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import matplotlib
@@ -23,13 +30,40 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from . import apply_cost, choosing, machine, reduction, throughput, work_precision  # noqa: E402
 from . import mujoco_models as mjm  # noqa: E402
-from . import node_timing, profile_step, reduction, throughput, work_precision  # noqa: E402
 from . import problems as P  # noqa: E402
+from .timing import MIN_REPEATS  # noqa: E402
 
-TARGETS = (1e-3, 1e-6, 1e-9)  # rad, problem (a)
-#: The node's and the Simulator's default integrator (README "Choosing an integrator").
-DEFAULT_INTEGRATOR = "rk4"
+PARTS = ("throughput", "apply", "work", "reduction", "profile", "node")
+README_BEGIN, README_END = "<!-- bench:begin -->", "<!-- bench:end -->"
+
+
+@dataclass(frozen=True)
+class Mode:
+    name: str
+    counts: tuple[int, ...]
+    repeats: int
+    min_seconds: float
+    steps_per_checkpoint: tuple[int, ...]
+    budget_s: float
+    reduction_count: int
+    kind_integrators: tuple[str, ...]
+    node_configs: tuple[tuple[float, int], ...]
+    node_seconds: float
+    profile_count: int
+
+
+QUICK = Mode("quick", (1, 100, 10_000), MIN_REPEATS, 0.05, work_precision.QUICK_STEPS_PER_CHECKPOINT, 0.5, 10_000,
+             ("rk4",), ((1000.0, 1), (100.0, 100)), 5.0, 10_000)
+FULL = Mode("full", (1, 10, 100, 1000, 10_000, 100_000), 7, 0.2, work_precision.FULL_STEPS_PER_CHECKPOINT, 3.0,
+            10_000, reduction.INTEGRATORS, tuple((r, b) for b in (1, 10, 100) for r in (100.0, 500.0, 1000.0)), 20.0,
+            10_000)
+#: Tiny sizes and samples: checks that the code runs (test/test_bench_smoke.py); its figures mean nothing.
+SMOKE = Mode("smoke", (1, 3), MIN_REPEATS, 0.0005, (1, 25, 100), 0.05, 6, ("rk4",), ((100.0, 1),), 2.0, 3)
+
+
+# ----------------------------------------------------------------------------- formatting
 
 
 def _write_csv(path: Path, rows: list[dict]) -> None:
@@ -42,7 +76,7 @@ def _write_csv(path: Path, rows: list[dict]) -> None:
         writer.writerows(rows)
 
 
-def _fmt(x, digits=3) -> str:
+def _fmt(x, digits: int = 3) -> str:
     if isinstance(x, str):
         return x
     if x is None or (isinstance(x, float) and not math.isfinite(x)):
@@ -50,32 +84,54 @@ def _fmt(x, digits=3) -> str:
     return f"{x:.{digits}g}"
 
 
-def _table(rows: list[dict], columns: list[tuple[str, str]]) -> str:
-    head = "| " + " | ".join(title for title, _ in columns) + " |\n|" + "---|" * len(columns) + "\n"
-    return head + "".join("| " + " | ".join(_fmt(r.get(k, "")) for _, k in columns) + " |\n" for r in rows)
+def _range(row: dict, key: str, digits: int = 3) -> str:
+    """``median (min–max)`` of a Stats.as_row triple in ``row``."""
+    if key not in row or row[key] is None or not math.isfinite(row[key]):
+        return "—"
+    return f"{row[key]:.{digits}g} ({row[key + '_min']:.{digits}g}–{row[key + '_max']:.{digits}g})"
 
 
-def machine() -> str:
-    lscpu = subprocess.run(["lscpu"], capture_output=True, text=True).stdout.splitlines()
-    keep = [l for l in lscpu if l.split(":")[0].strip() in ("Architecture", "CPU(s)", "Model name", "Thread(s) per core",
-                                                           "Core(s) per socket", "BogoMIPS")]
-    load = Path("/proc/loadavg").read_text().split()[:3]
-    return ("\n".join(f"    {l}" for l in keep)
-            + f"\n    Python {platform.python_version()}, numpy {np.__version__}, MuJoCo {mjm.version()}"
-            + f"\n    load average at the end: {' '.join(load)} (a shared machine: compare ratios within one run)")
+def _table(rows: list[dict], columns: list[tuple[str, object]]) -> str:
+    """Markdown table; a column is (title, key) or (title, function of the row)."""
+    head = "| " + " | ".join(t for t, _ in columns) + " |\n|" + "---|" * len(columns) + "\n"
+    body = ""
+    for r in rows:
+        cells = [c(r) if callable(c) else _fmt(r.get(c, "")) for _, c in columns]
+        body += "| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |\n"
+    return head + body
+
+
+def _git(*args: str) -> str:
+    try:
+        return subprocess.run(["git", *args], cwd=Path(__file__).resolve().parent.parent, capture_output=True,
+                              text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "?"
+
+
+def provenance(mode: Mode) -> str:
+    # code only: the results and docs a previous run left uncommitted do not make the code dirty
+    dirty = " + uncommitted changes" if _git("status", "--porcelain", "--", "rigid_body_sim", ":(glob)benchmarks/*.py",
+                                            "requirements*.txt") else ""
+    return (f"`make bench` {mode.name} mode, commit {_git('rev-parse', '--short', 'HEAD')}{dirty}, "
+            f"{datetime.date.today().isoformat()}, {machine.one_line()}")
+
+
+def _target(rows: list[dict], issue: str, comparison: str, goal: str, measured: str, met: bool | None) -> None:
+    rows.append({"issue": issue, "comparison": comparison, "target": goal, "measured": measured,
+                 "met": "—" if met is None else ("met" if met else "NOT met")})
+
+
+# ----------------------------------------------------------------------------- plots
 
 
 def plot_work_precision(rows: list[dict], out: Path) -> list[Path]:
     paths = []
     for problem in P.PROBLEMS:
-        key = "err_v" if problem == "box" else "err_angle"
-        label = {"err_v": "max relative COM velocity error", "err_angle": "max orientation error (rad)"}[key]
+        key, label = P.ERROR_KEY[problem]
         fig, (ax_t, ax_h) = plt.subplots(1, 2, figsize=(13, 5.2))
-        series = sorted({(r["system"], r["integrator"]) for r in rows if r["problem"] == problem})
-        for i, (system, name) in enumerate(series):
-            pts = sorted((r["h"], r["time_s"], r[key]) for r in rows if r["problem"] == problem
-                         and r["system"] == system and r["integrator"] == name and math.isfinite(r[key] if r[key] == r[key] else math.nan))
-            pts = [p for p in pts if p[2] > 0 and math.isfinite(p[1])]
+        for system, name in sorted({(r["system"], r["integrator"]) for r in rows if r["problem"] == problem}):
+            pts = [p for p in work_precision.curve(rows, problem, system, name, key) if p[2] > 0]
             if not pts:
                 continue
             h, t, e = map(np.array, zip(*pts))
@@ -84,20 +140,20 @@ def plot_work_precision(rows: list[dict], out: Path) -> list[Path]:
                          label=f"{'MuJoCo ' if system == 'mujoco' else ''}{name}")
             ax_t.loglog(t, e, **style)
             ax_h.loglog(h, e, **style)
-        hs = np.array(sorted({r["h"] for r in rows if r["problem"] == problem}))
-        for order, ls in ((1, ":"), (2, "-."), (4, (0, (5, 1)))):
-            ax_h.loglog(hs, 0.3 * (hs / hs.max()) ** order, color="grey", linestyle=ls, lw=1, label=f"order {order}")
-        ax_t.set_xlabel("wall time of the run (s), median")
+        hs = np.array(sorted({r["h"] for r in rows if r["problem"] == problem and math.isfinite(r["h"])}))
+        if len(hs):
+            for order, ls in ((1, ":"), (2, "-."), (4, (0, (5, 1)))):
+                ax_h.loglog(hs, 0.3 * (hs / hs.max()) ** order, color="grey", linestyle=ls, lw=1, label=f"order {order}")
+        ax_t.set_xlabel("wall time of the stepping calls (s), median")
         ax_h.set_xlabel("step h (s)")
         for ax in (ax_t, ax_h):
             ax.set_ylabel(label)
             ax.grid(True, which="both", alpha=0.3)
             ax.set_ylim(bottom=1e-15)
         ax_h.legend(fontsize=7, ncol=2)
-        title = {"top": "(a) torque-free asymmetric top vs elliptic closed form, t ≤ 10 s",
-                 "forced": "(b) forced rigid body (HNW), t ≤ 10 s; forcing held per step (world axes)",
-                 "box": "(c) box, body-fixed force, t ≤ 1 s: force held in world axes per step → order 1"}[problem]
-        fig.suptitle(title)
+        fig.suptitle({"top": "torque-free asymmetric top vs elliptic closed form, t ≤ 10 s; ours step(n), MuJoCo nstep",
+                      "box": "box, 10 N fixed in the body at a corner site, t ≤ 1 s; ours site frame, MuJoCo site motor"}
+                     [problem])
         fig.tight_layout()
         path = out / f"work_precision_{problem}.png"
         fig.savefig(path, dpi=90)
@@ -107,15 +163,17 @@ def plot_work_precision(rows: list[dict], out: Path) -> list[Path]:
 
 
 def plot_throughput(rows: list[dict], out: Path) -> Path:
-    fig, ax = plt.subplots(figsize=(8, 5))
-    for system, name in sorted({(r["system"], r["integrator"]) for r in rows}):
-        pts = sorted((r["bodies"], r["body_steps_per_s"]) for r in rows if r["system"] == system and r["integrator"] == name)
+    fig, ax = plt.subplots(figsize=(9, 5.5))
+    for system, name, mode in sorted({(r["system"], r["integrator"], r["mode"]) for r in rows}):
+        if mode == "per-step" and system != "numpy loop":
+            continue
+        pts = sorted((r["bodies"], r["body_steps_per_s"]) for r in rows
+                     if (r["system"], r["integrator"], r["mode"]) == (system, name, mode))
         n, v = zip(*pts)
-        ax.loglog(n, v, marker="o" if system == "rigid_body_sim" else "s",
-                  linestyle="-" if system == "rigid_body_sim" else "--",
-                  label=f"{'MuJoCo ' if system == 'mujoco' else ''}{name}")
+        style = {"rigid_body_sim": ("o", "-"), "mujoco": ("s", "--"), "floor": ("^", ":"), "numpy loop": ("x", "-.")}[system]
+        ax.loglog(n, v, marker=style[0], linestyle=style[1], label=f"{system} {name}")
     ax.set_xlabel("bodies N")
-    ax.set_ylabel("body-steps per second (median)")
+    ax.set_ylabel("body-steps per second (median; batched where the system has it)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7, ncol=2)
     fig.tight_layout()
@@ -125,257 +183,416 @@ def plot_throughput(rows: list[dict], out: Path) -> Path:
     return path
 
 
-STABILITY_LIMITS = {  # largest |ω|h with energy error < 1e-3 over 1e4 steps, I = (1, 2, 3) / rod 1e-6 (docs/stability.md)
-    "euler": "8e-4 / 6e-4", "semi_implicit_euler": "8e-4 / 6e-4", "implicit_gyroscopic": "8e-4 / 6e-4 (then damps)",
-    "splitting": "0.75 / 0.1", "symmetric_splitting": "0.3 / 2.9", "exact_rotor_splitting": "none (exact flow)",
-    "rk4": "0.25 / 0.21", "reference": "adaptive",
-}
+# ----------------------------------------------------------------------------- sections
 
 
-def choosing_page(wp: list[dict], tp: list[dict], ws: list[dict], red: list[dict], machine_text: str, quick: bool) -> str:
-    """docs/choosing_an_integrator.md: the advice, with this run's numbers in its tables."""
-    ours = [name for name in dict.fromkeys(r["integrator"] for r in wp if r["system"] == "rigid_body_sim")]
-    cost = {target: {c["integrator"]: c for c in work_precision.cost_at_error(wp, "top", target)
-                     if c["system"] == "rigid_body_sim"} for target in TARGETS}
-    mj_cost = {target: min((c["time_s"] for c in work_precision.cost_at_error(wp, "top", target)
-                            if c["system"] == "mujoco" and math.isfinite(c["time_s"])), default=math.nan)
-               for target in TARGETS}
-    one = {r["integrator"]: r["us_per_step"] for r in ws if r["system"] == "rigid_body_sim"}
-    many = {r["integrator"]: r["body_steps_per_s"] for r in tp if r["system"] == "rigid_body_sim" and r["bodies"] == 10000}
-    speedup = {r["integrator"]: r["speedup"] for r in red}
-    exact_ratio = (f"{one['exact_rotor_splitting'] / one['rk4']:.0f}×" if "exact_rotor_splitting" in one and "rk4" in one
-                   else "many times")
+def section_throughput(tp: list[dict], targets: list[dict], compare: list[dict]) -> str:
+    n_max = throughput.headline_bodies(tp)
+    at = {(r["system"], r["integrator"], r["mode"]): r for r in tp if r["bodies"] == n_max}
+    floor = {name: at.get(("floor", name, "batched")) for name in ("euler", "rk4")}
 
-    def ms(target: float, name: str) -> str:
-        c = cost[target].get(name)
-        if not c or not math.isfinite(c["time_s"]):
-            return "not reached"
-        return f"{1e3 * c['time_s'] / P.TOP_T:.3g} ms (h = {c['h']:.2g} s)"
+    def vs_floor(r: dict) -> str:
+        f = floor.get(r["integrator"]) if r["system"] == "rigid_body_sim" else None
+        return _fmt(r["ns_per_body_step"] / f["ns_per_body_step"], 3) + "×" if f else ""
 
-    rows = "".join(
-        f"| `{name}` | {ms(1e-3, name)} | {ms(1e-6, name)} | {ms(1e-9, name)} | {_fmt(one.get(name))} | "
-        f"{_fmt(many.get(name))} | {_fmt(speedup.get(name))} | {STABILITY_LIMITS.get(name, '')} |\n" for name in ours)
-    mj = " | ".join(f"{1e3 * mj_cost[t] / P.TOP_T:.3g} ms" if math.isfinite(mj_cost[t]) else "not reached" for t in TARGETS)
-    return f"""# Choosing an integrator and a step
+    def vs_mujoco(r: dict) -> str:
+        if r["system"] != "rigid_body_sim" or not r["peer"]:
+            return ""
+        m = at.get(("mujoco", r["peer"], r["mode"]))
+        return f"{r['body_steps_per_s'] / m['body_steps_per_s']:.3g}× MuJoCo {r['peer']}" if m else ""
 
-Generated by `make bench` ({'quick' if quick else 'full'} mode) from the numbers of the same run
-(`benchmarks/results/`); do not edit by hand. The stability limits come from
-[stability.md](stability.md) (`make envelope`).
+    head_rows = sorted(at.values(), key=lambda r: (["rigid_body_sim", "mujoco", "floor", "numpy loop"].index(r["system"]),
+                                                  r["integrator"], r["mode"]))
+    text = (f"## Throughput: N tumbling boxes, no wrench, h = 1 ms\n\n{throughput.__doc__.split(chr(10) * 2, 1)[1]}\n"
+            f"### At N = {n_max:g}\n\n"
+            + _table(head_rows, [("system", "system"), ("integrator", "integrator"), ("mode", "mode"),
+                                 ("ns per body-step", lambda r: _range(r, "ns_per_body_step")),
+                                 ("body-steps/s", lambda r: _fmt(r["body_steps_per_s"])),
+                                 ("time / floor of the same method", vs_floor),
+                                 ("vs the matched MuJoCo method, same mode", vs_mujoco)]))
+    counts = sorted({r["bodies"] for r in tp})
+    series = sorted({(r["system"], r["integrator"], r["mode"]) for r in tp})
+    pivot = []
+    for key in series:
+        row = {"system": key[0], "integrator": key[1], "mode": key[2]}
+        for r in tp:
+            if (r["system"], r["integrator"], r["mode"]) == key:
+                row[r["bodies"]] = _range(r, "body_steps_per_s")
+        pivot.append(row)
+    text += ("\n### Every N: body-steps/s, median (min–max)\n\n![throughput](throughput.png)\n\n"
+             + _table(pivot, [("system", "system"), ("integrator", "integrator"), ("mode", "mode")]
+                      + [(f"N = {n:g}", (lambda n: lambda r: r.get(n, ""))(n)) for n in counts]))
 
-## In short
+    def ratio(a, b):
+        return a["ns_per_body_step"] / b["ns_per_body_step"] if a and b else math.nan
 
-- **`rk4` (the default)** is the cheapest way to a given accuracy on a tumbling body at the
-  steps a controller runs at: fourth order, compiled, about 4 µs per step for one body with
-  a wrench applied. Keep |ω|·h below about 0.25 (ω the fastest body rate): beyond it, it loses energy,
-  and past |ω|·h ≈ 3 it blows up (the simulator then raises `DivergenceError`).
-- **Fast spin or large steps, torque-free:** `exact_rotor_splitting` is the exact free-rotor
-  flow at any |ω|·h (torques enter as second-order half kicks). It is numpy, not compiled:
-  {exact_ratio} the cost of `rk4` per step here, so it pays when it lets the step grow as much.
-- **Thin rods and discs:** `symmetric_splitting` holds up to |ω|·h ≈ 2.9 on a rod with
-  inertia ratio 1e-6 and keeps |L| to round-off; `splitting` degrades there.
-- **Long runs where invariants matter more than phase:** the splittings keep |L| to
-  round-off and bound the energy error; `rk4` drifts slowly (1e-9 over 1e6 steps at
-  |ω|·h = 0.01).
-- **Not for tumbling bodies:** `euler`, `semi_implicit_euler` (they gain energy every step and
-  diverge after ~2e4 steps at |ω|·h = 0.01) and `implicit_gyroscopic` (it damps the spin).
-  They are here for comparison with textbook and game-engine loops.
-- **Spheres, cubes, cylinders, static and kinematic bodies** get exact reduced models
-  whatever the integrator (README "Motions and model reduction"), so the choice matters
-  only for the bodies that need it.
+    ours = {name: at.get(("rigid_body_sim", name, "batched")) for name in ("euler", "rk4", "semi_implicit_euler")}
+    r_euler = ratio(ours["euler"], floor["euler"])
+    _target(targets, "17", f"N = {n_max:g}, batched: our `euler` `step(n)` vs the plain numba loop of the same step (time ratio)",
+            "≤ 3 (goal 2)", f"{_fmt(r_euler)}×", r_euler <= 3.0 if math.isfinite(r_euler) else None)
+    r_rk4 = ratio(ours["rk4"], floor["rk4"])
+    _target(targets, "17", f"N = {n_max:g}, batched: our `rk4` `step(n)` vs the plain numba rk4 loop (time ratio)",
+            "≤ 3", f"{_fmt(r_rk4)}×", r_rk4 <= 3.0 if math.isfinite(r_rk4) else None)
+    mj = at.get(("mujoco", "Euler", "batched"))
+    sie = ours["semi_implicit_euler"]
+    speed = sie["body_steps_per_s"] / mj["body_steps_per_s"] if sie and mj else math.nan
+    _target(targets, "17", f"N = {n_max:g}: our `semi_implicit_euler` `step(n)` vs MuJoCo `Euler` `mj_step(m, d, nstep=n)` "
+            "(body-steps/s ratio)", "≥ 3", f"{_fmt(speed)}×", speed >= 3.0 if math.isfinite(speed) else None)
+    diy = at.get(("numpy loop", "euler", "per-step")) or next(
+        (r for r in sorted(tp, key=lambda r: -r["bodies"]) if r["system"] == "numpy loop" and r["integrator"] == "euler"),
+        None)
+    if diy and ours["euler"]:
+        n_diy = diy["bodies"]
+        ours_at = next(r for r in tp if r["bodies"] == n_diy and (r["system"], r["integrator"], r["mode"])
+                       == ("rigid_body_sim", "euler", "batched"))
+        text += (f"\nThe do-it-yourself numpy loop (`euler`, one body at a time) at N = {n_diy:g}: "
+                 f"{_fmt(diy['ns_per_body_step'])} ns per body-step; ours `euler` `step(n)` is "
+                 f"{_fmt(diy['ns_per_body_step'] / ours_at['ns_per_body_step'])}× faster.\n")
+    if compare:
+        text += ("\n### This checkout's core against another revision's, same run\n\n"
+                 + _table(compare, [("integrator", "integrator"), ("N", "bodies"),
+                                    ("this checkout, body-steps/s", lambda r: _range(r, "this_body_steps_per_s")),
+                                    (f"{compare[0]['baseline']}, body-steps/s", lambda r: _range(r, "base_body_steps_per_s")),
+                                    ("this / baseline", "ratio")]))
+        worst = min(compare, key=lambda r: r["ratio"])
+        _target(targets, "13", f"N = {compare[0]['bodies']:g}, `step(n)`, every integrator: this checkout's core vs "
+                f"{compare[0]['baseline']}'s, interleaved in one run (body-steps/s ratio)", "≥ 1 (must not fall; ≥ 0.9 "
+                "counts as held: the same core against itself gave 0.88–1.12 on the loaded machine)",
+                f"lowest {_fmt(worst['ratio'])} ({worst['integrator']})", worst["ratio"] >= 0.9)
+    else:
+        _target(targets, "13", f"N = {n_max:g} throughput per integrator must not fall after the rewrite",
+                "≥ the baseline core's", "not measured in this run (pass `--baseline-core REV`)", None)
+    return text
 
-## Choosing the step
 
-1. Take the fastest body rate you expect, |ω|max (rad/s), and the integrator's limit from the
-   table (|ω|·h for an energy error below 1e-3 over 1e4 steps): h ≤ limit / |ω|max.
-2. For an accuracy goal, read the cost table below: the largest h that reached the
-   orientation error on the asymmetric top, and what one second of sim time cost.
-3. In the node, h = `real_time_factor` / (`rate_hz` · `substeps`): raise `substeps` to shorten
-   the step without publishing faster.
-4. A wrench fixed in the body (a thruster, a force at a body-frame point) is held in world
-   axes over each step, so it is first order in h with every integrator: halve h to halve
-   that error.
+def section_apply(frames: list[dict], sites: list[dict], targets: list[dict]) -> str:
+    text = ("## What a force costs from Python\n\n" + apply_cost.__doc__.split(chr(10) * 2, 1)[1] + "\n"
+            "### (i) Per frame, µs, median (min–max); integrator rk4 / MuJoCo RK4\n\n"
+            + _table(frames, [("call", "function"), ("frame", "frame"),
+                              ("one call", lambda r: _range(r, "call_us")),
+                              ("call + step(1)", lambda r: _range(r, "apply_step_us")),
+                              ("over step(1)", lambda r: _fmt(r.get("over_step_us"))),
+                              ("call / world", lambda r: _fmt(r.get("call_vs_world")) + ("×" if "call_vs_world" in r else "")),
+                              ("call + step / world", lambda r: _fmt(r.get("apply_step_vs_world"))
+                               + ("×" if "apply_step_vs_world" in r else ""))]))
+    ours = [r for r in frames if "call_vs_world" in r and r["frame"] != "world"]
+    if ours:
+        worst = max(ours, key=lambda r: max(r["call_vs_world"], r["apply_step_vs_world"]))
+        worst_ratio = max(worst["call_vs_world"], worst["apply_step_vs_world"])
+        _target(targets, "13", "`apply_force_at_point` / `apply_wrench` in `<body>/world_aligned`, `<body>`, a site (body "
+                "axes), a site (world axes) vs the `world` frame: the call alone and call + `step(1)` (time ratio)",
+                "≤ 1.5", f"worst {_fmt(worst_ratio)}× ({worst['function']}, {worst['frame']})", worst_ratio <= 1.5)
+    text += ("\n### (ii) One body, a new site-frame force every step from Python, µs, median (min–max)\n\n"
+             "Ours `apply_force_at_point(\"b\", F, (0, 0, 0), frame=\"b/corner\")` + `step(1)`; MuJoCo "
+             "`d.ctrl[0] = f` + `mj_step(m, d)` with a motor on a site at the same corner; each with its step "
+             "alone beside it.\n\n"
+             + _table(sites, [("ours", "integrator"), ("apply + step(1)", lambda r: _range(r, "ours_us")),
+                              ("step(1) alone", lambda r: _range(r, "ours_step_only_us")),
+                              ("MuJoCo (matched)", lambda r: r["mujoco"] or ""),
+                              ("ctrl + mj_step", lambda r: _range(r, "mujoco_us")),
+                              ("mj_step alone", lambda r: _range(r, "mujoco_step_only_us")),
+                              ("ours / MuJoCo", lambda r: _fmt(r.get("ratio")) + ("×" if "ratio" in r else ""))]))
+    for r in sites:
+        if "ratio" in r:
+            _target(targets, "13", f"1 body, new site force every step: our `{r['integrator']}` apply + `step(1)` vs MuJoCo "
+                    f"`{r['mujoco']}` `d.ctrl[0] = f; mj_step(m, d)` with a site motor (time ratio)", "≤ 0.5",
+                    f"{_fmt(r['ratio'])}× ({r['ours_us']:.3g} vs {r['mujoco_us']:.3g} µs)", r["ratio"] <= 0.5)
+    return text
 
-## The numbers
 
-Machine:
+def section_work(wp: list[dict], targets: list[dict]) -> str:
+    text = ("## Work-precision\n\n" + work_precision.__doc__.split(chr(10) * 2, 1)[1] + "\n"
+            + P.__doc__.split(chr(10) * 2, 1)[1].split("(The earlier")[0] + "\n")
+    for problem in P.PROBLEMS:
+        key, label = P.ERROR_KEY[problem]
+        unit = "rad" if problem == "top" else "m"
+        text += f"### {problem}\n\n![{problem}](work_precision_{problem}.png)\n\n"
+        goals = work_precision.TARGETS[problem]
+        series = [(s, n) for _p, s, n in work_precision.series((problem,))]
+        rows = []
+        for system, name in series:
+            row = {"system": system, "integrator": name}
+            for g in goals:
+                c = work_precision.cost_at_error(wp, problem, system, name, g)
+                row[g] = (f"{1e3 * c['time_s']:.3g} ms (h {c['h']:.2g})" if math.isfinite(c["time_s"]) else "not reached")
+            rows.append(row)
+        text += (f"Wall time of the whole run (interpolated) to reach a {label}; h interpolated, s:\n\n"
+                 + _table(rows, [("system", "system"), ("integrator", "integrator")]
+                          + [(f"{g:g} {unit}", (lambda g: lambda r: r[g])(g)) for g in goals]))
+        hs = sorted({r["h"] for r in wp if r["problem"] == problem and math.isfinite(r["h"])}, reverse=True)
+        pivot = []
+        for system, name in series:
+            row = {"system": system, "integrator": name}
+            for r in wp:
+                if r["problem"] == problem and r["system"] == system and r["integrator"] == name and math.isfinite(r["h"]):
+                    row[r["h"]] = r["note"] or _fmt(r.get(key, math.nan), 2)
+            pivot.append(row)
+        text += (f"\n{label} at each h (s):\n\n"
+                 + _table(pivot, [("system", "system"), ("integrator", "integrator")]
+                          + [(f"{h:.2g}", (lambda h: lambda r: r.get(h, ""))(h)) for h in hs]))
+        notes = [r for r in wp if r["problem"] == problem and not math.isfinite(r["h"])]
+        if notes:
+            text += "\n" + "".join(f"- {r['system']} {r['integrator']}: {r['note']}\n" for r in notes)
+        text += "\n"
+    # targets
+    ours = work_precision.cost_at_error(wp, "top", "rigid_body_sim", "rk4", 1e-6)
+    theirs = work_precision.cost_at_error(wp, "top", "mujoco", "RK4", 1e-6) if mjm.available() else None
+    if theirs:
+        r = ours["time_s"] / theirs["time_s"]
+        _target(targets, "17", "torque-free top to 1e-6 rad: our `rk4` `step(n)` vs MuJoCo `RK4` `mj_step(m, d, nstep=n)` "
+                "(wall-time ratio, interpolated)", "≤ 0.5 (goal 0.2)",
+                f"{_fmt(r)}× ({ours['time_s'] * 1e3:.3g} vs {theirs['time_s'] * 1e3:.3g} ms)",
+                r <= 0.5 if math.isfinite(r) else False)
+        e_ours = next((e for h, _t, e in work_precision.curve(wp, "box", "rigid_body_sim", "rk4") if abs(h - 1e-3) < 1e-12),
+                      math.nan)
+        e_mj = next((e for h, _t, e in work_precision.curve(wp, "box", "mujoco", "RK4") if abs(h - 1e-3) < 1e-12), math.nan)
+        q = e_ours / e_mj
+        _target(targets, "17", "box, 10 N fixed in the body at a corner site, h = 1 ms: our `rk4` COM error vs MuJoCo `RK4` "
+                "with a site motor (error ratio)", "≤ 10", f"{_fmt(q)}× ({_fmt(e_ours)} m vs {_fmt(e_mj)} m)",
+                q <= 10 if math.isfinite(q) else False)
+        worst = -math.inf
+        detail = []
+        for g in work_precision.TARGETS["box"]:
+            best = {}
+            for system, names in (("rigid_body_sim", sorted({r["integrator"] for r in wp if r["system"] == "rigid_body_sim"})),
+                                  ("mujoco", list(mjm.MJ_INTEGRATORS))):
+                found = [(c["time_s"], n) for n in names
+                         if math.isfinite((c := work_precision.cost_at_error(wp, "box", system, n, g))["time_s"])]
+                best[system] = min(found) if found else (math.inf, None)
+            (t_ours, n_ours), (t_mj, n_mj) = best["rigid_body_sim"], best["mujoco"]
+            if math.isinf(t_ours) and math.isinf(t_mj):
+                detail.append(f"{g:g} m: neither reached")
+                continue
+            ratio = t_ours / t_mj
+            worst = max(worst, ratio)
+            detail.append(f"{g:g} m: {_fmt(ratio) if math.isfinite(ratio) else 'ours not reached'}"
+                          + (f" ({n_ours} vs {n_mj})" if n_ours and n_mj else ""))
+        _target(targets, "17", "box (body-fixed force at a site): our cheapest vs MuJoCo's cheapest (`nstep`, site motor) "
+                "at every accuracy 1e-3 … 1e-9 m (wall-time ratio)", "≤ 1 at each",
+                "; ".join(detail), bool(worst <= 1.0))
+    return text
 
-{machine_text}
 
-Cost of one second of sim time to reach an orientation error of 1e-3, 1e-6 and 1e-9 rad over
-10 s on the torque-free asymmetric top I = (1, 2, 2.5) kg·m², |ω| = 2.25 rad/s (the largest
-step that reached it, interpolated on the sweep); µs per step of one body with a force at a
-point (`apply_force_at_point` + `step(1)`); body-steps/s at N = 1e4 boxes; speed-up of model
-reduction on the mixed 1e4-body scene; the stability limit (I = (1, 2, 3) / rod r = 1e-6).
+def section_reduction(red: list[dict], targets: list[dict]) -> str:
+    text = ("## Model reduction\n\n" + reduction.__doc__.split(chr(10) * 2, 1)[1] + "\n"
+            + _table(red, [("scene", "scene"), ("integrator", "integrator"), ("bodies (moving)", lambda r: f"{r['bodies']} ({r['moving']})"),
+                           ("reduced, µs/step", lambda r: _range(r, "reduced_us")),
+                           ("full (statics skipped), µs/step", lambda r: _range(r, "full_us")),
+                           ("full, statics stepped, µs/step", lambda r: _range(r, "full_statics_stepped_us")),
+                           ("gain", lambda r: _fmt(r.get("gain"))),
+                           ("gain vs statics stepped", lambda r: _fmt(r.get("gain_vs_statics_stepped"))),
+                           ("models", "models")]))
+    mixed = next((r for r in red if r["scene"] == "mixed" and r["integrator"] == "rk4"), None)
+    if mixed:
+        _target(targets, "6", f"mixed scene of {mixed['bodies']:g} bodies (sphere, box, static wall), `rk4`: reduced vs the full "
+                "model that skips static bodies (time ratio)", "≥ 2 (issue 6's target, re-measured fairly)",
+                f"{_fmt(mixed['gain'])}× ({_fmt(mixed.get('gain_vs_statics_stepped'))}× against a baseline that steps the walls)",
+                mixed["gain"] >= 2.0)
+    return text
 
-| integrator | 1e-3 rad | 1e-6 rad | 1e-9 rad | µs/step, 1 body + wrench | body-steps/s, N = 1e4 | reduction speed-up | \|ω\|·h limit |
-|---|---|---|---|---|---|---|---|
-{rows}| MuJoCo 4.0 (cheapest of its integrators) | {mj} | | | | |
 
-"""
+def section_node(node_rows: list[dict], targets: list[dict], seconds: float) -> str:
+    from . import node_timing
+    for r in node_rows:
+        r["jitter"] = "/".join(_fmt(r.get(k)) for k in ("jitter_med_ms", "jitter_p99_ms", "jitter_max_ms"))
+        r["late"] = "/".join(_fmt(r.get(k)) for k in ("late_med_ms", "late_p99_ms", "late_max_ms"))
+        r["latency"] = "/".join(_fmt(r.get(k)) for k in ("latency_med_ms", "latency_max_ms"))
+        r["node_late"] = "/".join(_fmt(r.get(k)) for k in ("node_late_med_ms", "node_late_p99_ms_max", "node_late_max_ms"))
+    text = (f"## Node timing ({seconds:g} s windows)\n\n" + node_timing.__doc__.split(chr(10) * 2, 1)[1] + "\n"
+            + _table(node_rows, [
+                ("rate_hz", "rate_hz"), ("bodies", "bodies"), ("achieved Hz", "achieved_hz"), ("sim/wall", "sim_wall"),
+                ("jitter med/p99/max (ms)", "jitter"), ("lateness med/p99/max (ms)", "late"),
+                ("node's own lateness med/worst 1-s p99/max (ms)", "node_late"), ("ticks missed (node)", "node_ticks_missed"),
+                ("node CPU share", "cpu_share"), ("listener CPU share", "listener_cpu_share"),
+                ("bodies watched", "watched_bodies"), ("pose every tick (frac)", "pose_every_tick_frac"),
+                ("twist/tick (min)", "twist_per_tick_min"), ("wrench→twist med/max (ms)", "latency"), ("error", "error")]))
+    for r in node_rows:
+        if r.get("rate_hz") == 1000.0 and r.get("bodies") == 1 and "sim_wall" in r:
+            worst_p99 = r.get("node_late_p99_ms_max", math.nan)
+            sim_wall = r.get("node_sim_wall", r["sim_wall"])
+            _target(targets, "5", f"node at 1 kHz, 1 body, {r['seconds']:g} s: sim/wall and p99 tick lateness (the node's "
+                    "own /diagnostics; lateness: its worst 1-s window)", "≥ 0.999 and < 0.5 ms",
+                    f"sim/wall {sim_wall:.4g}; p99 {_fmt(worst_p99)} ms (seen by the listener over DDS: sim/wall "
+                    f"{r['sim_wall']:.4g}, p99 lateness {_fmt(r['late_p99_ms'])} ms)",
+                    sim_wall >= 0.999 and worst_p99 < 0.5)
+        if r.get("rate_hz") == 100.0 and r.get("bodies") == 100 and "pose_every_tick_frac" in r:
+            _target(targets, "5", f"node, 100 bodies at 100 Hz, {r['seconds']:g} s: pose and twist of every body every tick",
+                    "every tick", f"pose on {r['pose_every_tick_frac']:.4g} of ticks, twist/tick min "
+                    f"{r['twist_per_tick_min']:.4g}, {r['achieved_hz']:.4g} Hz",
+                    r["pose_every_tick_frac"] >= 1.0 and r["twist_per_tick_min"] >= 0.999 and r["watched_bodies"] == 100)
+    return text
+
+
+def per_integrator(wp: list[dict], sites: list[dict], tp: list[dict]) -> str:
+    """One row per integrator (ours, then MuJoCo's): accuracy on both problems and cost, from this run."""
+    if not (wp and sites and tp):
+        return ""
+    n_max = throughput.headline_bodies(tp)
+    rate = {(r["system"], r["integrator"]): r for r in tp if r["bodies"] == n_max and r["mode"] == "batched"}
+    floor = {name: rate.get(("floor", name)) for name in ("euler", "rk4")}
+    site = {r["integrator"]: r for r in sites}
+    mj_site = {r["mujoco"]: r for r in sites if r.get("mujoco") and "mujoco_us" in r}
+
+    def err(problem, system, name, h):
+        """The error at h; if the series stopped refining before h, why (converged: below 1e-12; or its cost)."""
+        pts = work_precision.curve(wp, problem, system, name)
+        e = next((e for hh, _t, e in pts if abs(hh - h) < 1e-12 * h), None)
+        if e is not None:
+            return _fmt(e, 2)
+        stop = next((r["note"] for r in wp if r["problem"] == problem and r["system"] == system
+                     and r["integrator"] == name and not math.isfinite(r["h"])), "")
+        if pts and pts[-1][0] > h and "error below" in stop:
+            return f"< {work_precision.CONVERGED:g}"
+        if pts and pts[-1][0] > h:
+            return "not run (cost)"
+        return "—"
+
+    rows = []
+    systems = [("rigid_body_sim", n) for n in dict.fromkeys(r["integrator"] for r in wp if r["system"] == "rigid_body_sim")]
+    systems += [("mujoco", n) for n in mjm.MJ_INTEGRATORS if mjm.available()]
+    for system, name in systems:
+        r = rate.get((system, name))
+        f = floor.get(name) if system == "rigid_body_sim" else None
+        us = (site[name]["ours_us"] if system == "rigid_body_sim" and name in site
+              else mj_site[name]["mujoco_us"] if system == "mujoco" and name in mj_site else math.nan)
+        rows.append({
+            "name": f"`{name}`" if system == "rigid_body_sim" else f"MuJoCo `{name}`",
+            "top_01": err("top", system, name, 0.1), "top_001": err("top", system, name, 0.01),
+            "box": err("box", system, name, 1e-3),
+            "order": work_precision.observed_order(wp, "box", system, name, 1e-3, 4.0),
+            "site_us": us, "rate": r["body_steps_per_s"] if r else math.nan,
+            "floor": (r["ns_per_body_step"] / f["ns_per_body_step"]) if r and f else math.nan})
+    return ("Per integrator, this run: orientation error after 10 s on the torque-free asymmetric top at h = 0.1 s "
+            "and 0.01 s (rad); the box pushed by 10 N fixed in it at a corner site, COM error after 1 s at h = 1 ms (m) "
+            "and the observed order between h = 4 ms and 1 ms; one body with a new site-frame force every step "
+            "(ours `apply_force_at_point` + `step(1)`, MuJoCo `d.ctrl[0] = f` + `mj_step`), µs; "
+            f"body-steps/s at N = {n_max:g} batched (`step(n)`, `nstep`), and its time against the plain numba loop of "
+            "the same method.\n\n"
+            + _table(rows, [("integrator", "name"), ("top, h = 0.1", "top_01"), ("top, h = 0.01", "top_001"),
+                            ("box, h = 1 ms", "box"),
+                            ("box order", lambda r: _fmt(r["order"], 2)), ("µs/step, 1 body + site force", "site_us"),
+                            (f"body-steps/s, N = {n_max:g}", "rate"),
+                            ("time / plain loop", lambda r: _fmt(r["floor"]) + ("×" if math.isfinite(r["floor"]) else ""))]))
+
+
+def headline(targets: list[dict], prov: str, machine_text: str, summary: str) -> str:
+    return (f"From {prov}.\n\nMachine:\n\n{machine_text}\n"
+            + _table(targets, [("issue", "issue"), ("what is compared with what", "comparison"), ("target", "target"),
+                               ("measured (medians of ≥ 5)", "measured"), ("met", "met")])
+            + ("\n" + summary if summary else ""))
+
+
+def update_readme(path: Path, block: str) -> None:
+    text = path.read_text()
+    if README_BEGIN not in text or README_END not in text:
+        raise SystemExit(f"{path}: no {README_BEGIN} … {README_END} block to update")
+    head, rest = text.split(README_BEGIN, 1)
+    _old, tail = rest.split(README_END, 1)
+    path.write_text(f"{head}{README_BEGIN}\n{block}{README_END}{tail}")
+
+
+# ----------------------------------------------------------------------------- main
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__)
-    mode = parser.add_mutually_exclusive_group()
-    mode.add_argument("--quick", action="store_true", help="short sweeps, 5 s node windows (default)")
-    mode.add_argument("--full", action="store_true", help="long sweeps, N up to 1e5, 20 s node windows")
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    mode_group = parser.add_mutually_exclusive_group()
+    mode_group.add_argument("--quick", action="store_true", help="fewer sizes, shorter samples (default)")
+    mode_group.add_argument("--full", action="store_true", help="every size up to 1e5, longer samples, 20 s node windows")
+    mode_group.add_argument("--smoke", action="store_true", help="tiny sizes: only checks that the code runs")
     parser.add_argument("--out", default="benchmarks/results", help="output directory")
-    parser.add_argument("--skip-node", action="store_true")
-    parser.add_argument("--only-node", action="store_true")
+    parser.add_argument("--docs", default="docs", help="where choosing_an_integrator.md and its claims go")
+    parser.add_argument("--readme", default="", help="update this README's generated block (e.g. README.md)")
+    parser.add_argument("--parts", default=",".join(PARTS), help=f"comma-separated subset of {','.join(PARTS)}")
     parser.add_argument("--node-configs", default="", help="e.g. 1000x1,100x100 (rate_hz x bodies)")
-    parser.add_argument("--docs", default="docs", help="where choosing_an_integrator.md is written")
+    parser.add_argument("--baseline-core", default="", help="a git revision whose core is timed beside this one")
     args = parser.parse_args(argv)
-    quick = not args.full
+    mode = FULL if args.full else (SMOKE if args.smoke else QUICK)
+    parts = [p for p in args.parts.split(",") if p]
+    unknown = set(parts) - set(PARTS)
+    if unknown:
+        parser.error(f"--parts: unknown {sorted(unknown)}; choose from {PARTS}")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
     log = lambda s: print(s, flush=True)  # noqa: E731
-    md = [f"# rigid_body_sim benchmarks ({'quick' if quick else 'full'} mode)\n",
-          "Machine:\n\n" + machine() + "\n"]
-    if not mjm.available():
-        md.append("MuJoCo is not installed (`pip install -e .[bench]`): its columns are absent.\n")
     targets: list[dict] = []
+    sections: list[str] = []
+    tp: list[dict] = []
+    frames: list[dict] = []
+    sites: list[dict] = []
+    wp: list[dict] = []
+    red: list[dict] = []
+    compare: list[dict] = []
+    if not mjm.available():
+        sections.append("MuJoCo is not installed (`make bench-deps`): its rows are absent.\n")
 
-    if not args.only_node:
-        log("work-precision ...")
-        wp = work_precision.sweep(quick, log)
-        _write_csv(out / "work_precision.csv", wp)
-        plots = plot_work_precision(wp, out)
-        md.append("## Work-precision\n\nErrors are maxima over 10 checkpoints; time = wall time of the stepping "
-                  "loop (median of repeats). Wrenches are held constant in world axes over each step (both "
-                  "systems), so problems (b) and (c) are first order in h for every integrator.\n")
-        cols = [("system", "system"), ("integrator", "integrator"), ("h (s)", "h"), ("µs/step", "us_per_step"),
-                ("orientation err (rad)", "err_angle"), ("rel. ω err", "err_w"), ("rel. energy err", "err_energy"),
-                ("rel. abs(L) err", "err_L"), ("rel. v err", "err_v"), ("note", "note")]
-        for problem in P.PROBLEMS:
-            md.append(f"### Problem {problem}\n\n![{problem}]({out.name and f'work_precision_{problem}.png'})\n\n"
-                      + _table([r for r in wp if r["problem"] == problem], cols))
-        md.append("### Cheapest configuration per target orientation error on (a)\n")
-        for target in TARGETS:
-            costs = work_precision.cost_at_error(wp, "top", target)
-            best = {}
-            for c in costs:
-                if math.isfinite(c["time_s"]) and (c["system"] not in best or c["time_s"] < best[c["system"]]["time_s"]):
-                    best[c["system"]] = c
-            md.append(f"\nTarget {target:g} rad:\n\n" + _table(costs, [("system", "system"), ("integrator", "integrator"),
-                                                                       ("h (interp.)", "h"), ("time (s, interp.)", "time_s")]))
-            ours, theirs = best.get("rigid_body_sim"), best.get("mujoco")
-            if ours and theirs:
-                ratio = ours["time_s"] / theirs["time_s"]
-                md.append(f"\nCheapest: rigid_body_sim {ours['integrator']} {ours['time_s']:.3g} s, MuJoCo "
-                          f"{theirs['integrator']} {theirs['time_s']:.3g} s: ratio ours/MuJoCo = {ratio:.3g}\n")
-                if target == 1e-6:
-                    targets.append({"target": "cheapest at 1e-6 rad on (a) as fast as MuJoCo's (ratio ≤ 1)",
-                                    "measured": f"{ratio:.3g}× ({ours['integrator']} vs MuJoCo {theirs['integrator']})",
-                                    "met": ratio <= 1.0})
-            else:
-                md.append(f"\nCheapest: rigid_body_sim {ours and ours['integrator']}, MuJoCo {theirs and theirs['integrator']} "
-                          "(a system with none reaches the target within the sweep)\n")
-
+    if "throughput" in parts:
         log("throughput ...")
-        counts = [1, 10, 100, 1000, 10000] + ([] if quick else [100000])
-        min_s, reps = (0.2, 1) if quick else (0.5, 3)
-        ws = throughput.wrench_step(min_s, 3)
-        _write_csv(out / "wrench_step.csv", ws)
-        tp = throughput.bodies_sweep(counts, min_s, reps, log)
+        tp = throughput.sweep(list(mode.counts), mode.repeats, mode.min_seconds, log)
         _write_csv(out / "throughput.csv", tp)
         plot_throughput(tp, out)
-        md.append("## One body, one wrench at a point per step (µs, median of 3)\n\n"
-                  "Ours: `apply_force_at_point` + `step(1)`. MuJoCo: `mj_applyFT` (force and point from "
-                  "`d.xmat`/`d.xipos` with numpy) + `mj_step`; also `mj_step` alone.\n\n"
-                  + _table(ws, [("system", "system"), ("integrator", "integrator"), ("µs/step", "us_per_step")]))
-        mj_ft = min((r["us_per_step"] for r in ws if r["system"] == "mujoco"), default=math.nan)
-        ours_best = min((r for r in ws if r["system"] == "rigid_body_sim"), key=lambda r: r["us_per_step"])
-        if math.isfinite(mj_ft):
-            ratio = ours_best["us_per_step"] / mj_ft
-            md.append(f"\nFastest ours ({ours_best['integrator']}) / fastest MuJoCo (mj_applyFT + mj_step) = {ratio:.3g}\n")
-            targets.append({"target": "one body + wrench at a point: ≤ 0.5× MuJoCo's time",
-                            "measured": f"{ratio:.3g}× ({ours_best['integrator']} {ours_best['us_per_step']:.3g} µs vs {mj_ft:.3g} µs)",
-                            "met": ratio <= 0.5})
-        md.append("\n## Throughput: body-steps per second\n\n![throughput](throughput.png)\n\n")
-        systems = sorted({(r["system"], r["integrator"]) for r in tp})
-        pivot = []
-        for system, name in systems:
-            row = {"system": system, "integrator": name}
-            for r in tp:
-                if (r["system"], r["integrator"]) == (system, name):
-                    row[f"N={r['bodies']}"] = r["body_steps_per_s"]
-            pivot.append(row)
-        md.append(_table(pivot, [("system", "system"), ("integrator", "integrator")] + [(f"N={n}", f"N={n}") for n in counts]))
-        at = [r for r in tp if r["bodies"] == 10000]
-        ours_n = max((r for r in at if r["system"] == "rigid_body_sim"), key=lambda r: r["body_steps_per_s"], default=None)
-        mj_n = max((r for r in at if r["system"] == "mujoco"), key=lambda r: r["body_steps_per_s"], default=None)
-        if ours_n and mj_n:
-            ratio = ours_n["body_steps_per_s"] / mj_n["body_steps_per_s"]
-            md.append(f"\nN = 1e4: fastest ours ({ours_n['integrator']}) / fastest MuJoCo ({mj_n['integrator']}) = {ratio:.3g}\n")
-            targets.append({"target": "N = 1e4: ≥ 3× MuJoCo's body-steps/s", "measured": f"{ratio:.3g}×", "met": ratio >= 3.0})
+        if args.baseline_core:
+            from .core_compare import compare_throughput
+            compare = compare_throughput(args.baseline_core, throughput.headline_bodies(tp), mode.repeats,
+                                         mode.min_seconds, log)
+            _write_csv(out / "core_compare.csv", compare)
+        sections.append(section_throughput(tp, targets, compare))
+    if "apply" in parts:
+        log("apply cost ...")
+        frames = apply_cost.per_frame(mode.repeats, mode.min_seconds, log)
+        sites = apply_cost.site_force_per_step(mode.repeats, mode.min_seconds, log=log)
+        _write_csv(out / "apply_cost.csv", frames)
+        _write_csv(out / "site_force.csv", sites)
+        sections.append(section_apply(frames, sites, targets))
+    if "work" in parts:
+        log("work-precision ...")
+        wp = work_precision.sweep(mode.steps_per_checkpoint, mode.repeats, mode.budget_s, log=log)
+        _write_csv(out / "work_precision.csv", wp)
+        plot_work_precision(wp, out)
+        sections.append(section_work(wp, targets))
+    if "reduction" in parts:
         log("model reduction ...")
-        red = reduction.sweep(10000, 20 if quick else 100, 3 if quick else 5, log)
+        red = reduction.sweep(mode.reduction_count, mode.repeats, mode.min_seconds,
+                              kind_integrators=mode.kind_integrators, log=log)
         _write_csv(out / "reduction.csv", red)
-        md.append("\n## Model reduction: a mixed scene of 1e4 bodies, reduced vs forced onto the full model\n\n"
-                  + (reduction.__doc__ or "").split("\n\n", 1)[1] + "\n\n"
-                  + _table(red, [("integrator", "integrator"), ("reduced (body-steps/s)", "reduced_body_steps_per_s"),
-                                 ("full (body-steps/s)", "full_body_steps_per_s"), ("speed-up", "speedup"),
-                                 ("models (reduced)", "models")]))
-        default = next(r for r in red if r["integrator"] == DEFAULT_INTEGRATOR)
-        targets.append({"target": f"mixed 1e4-body scene: reduction ≥ 2× the full model ({DEFAULT_INTEGRATOR}, the default)",
-                        "measured": f"{default['speedup']:.3g}× (range {min(r['speedup'] for r in red):.3g}–"
-                                    f"{max(r['speedup'] for r in red):.3g}× over the integrators)",
-                        "met": default["speedup"] >= 2.0})
-        for name in ("rk4", "euler"):
-            (out / f"profile_{name}.txt").write_text(profile_step.profile(name))
-        page = Path(args.docs) / "choosing_an_integrator.md"
-        page.write_text(choosing_page(wp, tp, ws, red, machine(), quick))
-        log(f"  wrote {page}")
-        md.append("\nProfiles of one body step: profile_rk4.txt, profile_euler.txt (cProfile, own time).\n")
-
-    if not args.skip_node:
+        sections.append(section_reduction(red, targets))
+    if "profile" in parts:
+        log("kernel profile ...")
+        from . import profile_kernels
+        (out / "profile_kernels.txt").write_text(profile_kernels.report(mode.repeats, mode.min_seconds, mode.profile_count, log=log))
+        sections.append("## Where our kernels lose time against the floor\n\n"
+                        "[profile_kernels.txt](profile_kernels.txt) (benchmarks/profile_kernels.py): the floor loop "
+                        f"with our costs added one at a time, at N = {mode.profile_count:g} and N = 1.\n")
+    if "node" in parts:
         log("node timing ...")
-        if args.node_configs:
-            configs = [tuple(c.split("x")) for c in args.node_configs.split(",")]
-            node_rows = []
-            for rate, bodies in configs:
-                node_rows += node_timing.sweep([float(rate)], [int(bodies)], 5.0 if quick else 20.0, log)
-        elif quick:  # the issue's two node targets only, to keep the quick mode near 2 minutes
-            node_rows = node_timing.sweep([1000.0], [1], 5.0, log) + node_timing.sweep([100.0], [100], 5.0, log)
-        else:
-            node_rows = node_timing.sweep([100.0, 500.0, 1000.0], [1, 10, 100], 20.0, log)
+        from . import node_timing
+        configs = ([(float(r), int(b)) for r, b in (c.split("x") for c in args.node_configs.split(","))]
+                   if args.node_configs else list(mode.node_configs))
+        node_rows = []
+        for rate, bodies in configs:
+            node_rows += node_timing.sweep([rate], [bodies], mode.node_seconds, log)
         _write_csv(out / "node_timing.csv", node_rows)
-        md.append(f"\n## Node timing ({'5' if quick else '20'} s windows; node default integrator {DEFAULT_INTEGRATOR})\n")
-        for r in node_rows:
-            r["jitter"] = "/".join(_fmt(r.get(k)) for k in ("jitter_med_ms", "jitter_p99_ms", "jitter_max_ms"))
-            r["late"] = "/".join(_fmt(r.get(k)) for k in ("late_med_ms", "late_p99_ms", "late_max_ms"))
-            r["latency"] = "/".join(_fmt(r.get(k)) for k in ("latency_med_ms", "latency_max_ms"))
-            r["node_late"] = "/".join(_fmt(r.get(k)) for k in ("node_late_med_ms", "node_late_p99_ms_max", "node_late_max_ms"))
-        md.append(_table(node_rows, [
-            ("rate_hz", "rate_hz"), ("bodies", "bodies"), ("achieved Hz", "achieved_hz"), ("sim/wall", "sim_wall"),
-            ("jitter med/p99/max (ms)", "jitter"), ("lateness med/p99/max (ms)", "late"),
-            ("node's own lateness med/worst 1-s p99/max (ms)", "node_late"), ("ticks missed (node)", "node_ticks_missed"),
-            ("CPU share", "cpu_share"),
-            ("bodies watched", "watched_bodies"), ("pose every tick (frac)", "pose_every_tick_frac"),
-            ("twist/tick (min)", "twist_per_tick_min"), ("wrench→twist med/max (ms)", "latency"), ("error", "error")]))
-        for r in node_rows:
-            if r.get("rate_hz") == 1000.0 and r.get("bodies") == 1 and "sim_wall" in r:
-                # Strict: the worst 1-s window's p99 of the node's own tick lateness.
-                worst_p99 = r.get("node_late_p99_ms_max", math.nan)
-                ok = r["sim_wall"] >= 0.999 and worst_p99 < 0.5
-                targets.append({"target": f"node 1 kHz, 1 body: sim/wall ≥ 0.999, p99 lateness < 0.5 ms ({r['seconds']:g} s)",
-                                "measured": f"sim/wall {r['sim_wall']:.4g}; tick lateness p99 {worst_p99:.3g} ms (node, worst "
-                                            f"1-s window), {r['late_p99_ms']:.3g} ms (listener, whole run)", "met": ok})
-            if r.get("rate_hz") == 100.0 and r.get("bodies") == 100 and "pose_every_tick_frac" in r:
-                ok = r["pose_every_tick_frac"] >= 1.0 and r["twist_per_tick_min"] >= 0.999 and r["watched_bodies"] == 100
-                targets.append({"target": f"node 100 bodies at 100 Hz: pose and twist every tick ({r['seconds']:g} s)",
-                                "measured": f"pose on {r['pose_every_tick_frac']:.4g} of ticks (all 100 bodies), "
-                                            f"twist/tick min {r['twist_per_tick_min']:.4g}, achieved {r['achieved_hz']:.4g} Hz",
-                                "met": ok})
+        sections.append(section_node(node_rows, targets, mode.node_seconds))
 
+    machine_text = machine.text()
+    prov = provenance(mode)
+    missing = [p for p in PARTS if p not in parts]
+    if not set(missing) & {"throughput", "apply", "work", "reduction"}:  # the page's data, all from this run
+        for path in choosing.write(Path(args.docs), wp, sites, tp, red, machine_text, mode.name, prov):
+            log(f"  wrote {path}")
     _write_csv(out / "targets.csv", targets)
-    md.insert(2, "## The issue's targets\n\n" + _table(
-        [dict(t, met="met" if t["met"] else "NOT met") for t in targets],
-        [("target", "target"), ("measured", "measured"), ("met", "met")]) + "\n")
+    head = headline(targets, prov, machine_text, per_integrator(wp, sites, tp))
     elapsed = time.perf_counter() - started
-    md.append(f"\nRun time: {elapsed:.0f} s.\n")
-    (out / ("results.md" if not args.only_node else "results_node.md")).write_text("\n".join(md))
+    md = (f"# rigid_body_sim benchmarks ({mode.name} mode)\n\n"
+          + (f"Parts not run in this run: {', '.join(missing)}.\n\n" if missing else "")
+          + "## Headline: every target, each row one comparison\n\n" + head + "\n" + "\n".join(sections)
+          + f"\nRun time: {elapsed:.0f} s.\n")
+    # A partial run (--parts) never overwrites the complete results.md the README is checked against.
+    (out / ("results_partial.md" if missing else "results.md")).write_text(md)
+    if args.readme and not missing:
+        update_readme(Path(args.readme), head)
+        log(f"  updated {args.readme}")
     log(f"done in {elapsed:.0f} s: {out}")
     return 0
 

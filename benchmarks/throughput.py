@@ -1,139 +1,167 @@
-"""Throughput: body-steps per second against the number of bodies, and the one-body wrench step.
+"""Throughput: body-steps per second against the number of bodies N, every system side by side.
 
-For each N, a scene of N identical tumbling boxes (no gravity) is stepped with ``sim.step(1)``
-in a loop for at least ``min_seconds`` and at least 3 steps; body-steps/s = N·steps / wall
-time. MuJoCo: N free bodies (contact and gravity disabled), ``mj_step`` in a loop; one model per N,
-its ``opt.integrator`` switched between measurements; ``implicit`` (dense) skipped above 1e3
-bodies. The
-systems are interleaved at each N (ours for every integrator, then MuJoCo's) and each point
-is the median of ``repeats`` measurements.
+The problem: N identical 2 kg 1.0 × 0.6 × 0.4 m boxes (asymmetric: every integrator steps
+them, no model reduction applies), 10 m apart, at rest, each spinning at ω = (0.3, 1.0, 0.2)
+rad/s (body axes = world axes at the start), no gravity, no applied wrench, h = 1 ms. Every
+sample starts from that state (``setup``), so no method drifts into a blow-up.
 
-"One body, one wrench at a point per step" is ``apply_force_at_point(...)`` + ``step(1)``
-against ``mj_applyFT(...)`` (into ``qfrc_applied``, zeroed first) + ``mj_step``.
+Rows (``system``, ``integrator``, ``mode``):
+
+* ``rigid_body_sim`` — every integrator; ``batched``: ``sim.step(k)``; ``per-step``:
+  ``sim.step(1)`` k times in a Python loop;
+* ``mujoco`` — ``Euler``, ``implicitfast``, ``RK4`` (the matches of ``semi_implicit_euler``,
+  ``implicit_gyroscopic``, ``rk4``); ``batched``: ``mj_step(m, d, nstep=k)``; ``per-step``:
+  ``mj_step(m, d)`` k times in a Python loop;
+* ``floor`` — the plain numba loop of the same step (benchmarks/floors.py), ``euler`` and ``rk4``;
+* ``numpy loop`` — the do-it-yourself loop in plain numpy, one body at a time (floors.py),
+  ``euler`` and ``rk4``, up to N = 1000.
+
+Every figure is the median of ≥ 5 interleaved samples (benchmarks/timing.py) with its min–max.
 """
 
 from __future__ import annotations
 
-import statistics
-import time
+from typing import Callable
 
 import numpy as np
 
 from rigid_body_sim.core import INTEGRATORS, Simulator, load_scene
 
+from . import floors
 from . import mujoco_models as mjm
+from .timing import Case, interleaved
 
 DT = 1e-3                                    # s
-ANGULAR_VELOCITY = (0.3, 1.0, 0.2)           # rad/s, every body's initial spin
-#: The one-body wrench benchmark restarts from the initial state every this many calls.
-RESET_EVERY = 2000
-#: MuJoCo refuses models with 65534 or more bodies ("number of bodies plus flexes must be less
-#: than 65534"): it has no point at N = 1e5.
+ANGULAR_VELOCITY = np.array([0.3, 1.0, 0.2])  # rad/s, every body's initial spin (body = world axes at t = 0)
+MASS = 2.0                                   # kg
+SIDES = (1.0, 0.6, 0.4)                      # m
+INERTIA_BOX = MASS / 12.0 * np.array([SIDES[1] ** 2 + SIDES[2] ** 2, SIDES[0] ** 2 + SIDES[2] ** 2,
+                                      SIDES[0] ** 2 + SIDES[1] ** 2])  # kg·m², principal = body axes
+#: MuJoCo refuses models with 65534 or more bodies ("number of bodies plus flexes must be less than 65534").
 MUJOCO_MAX_BODIES = 65533
-INERTIA_BOX = np.array([0.0866666667, 0.1933333333, 0.2266666667])  # kg·m², 2 kg 1.0 × 0.6 × 0.4 m box
+#: Largest N for the numpy/scipy integrators and the do-it-yourself loop (seconds per step beyond).
+MAX_BODIES_REFERENCE = 100
+MAX_BODIES_NUMPY_LOOP = 1000
+#: The N of the headline figures (the issues' targets are at N = 1e4; MuJoCo has no point at 1e5).
+HEADLINE_BODIES = 10_000
+#: No sample takes more steps than this from the initial state (explicit Euler gains energy every step).
+MAX_STEPS_PER_SAMPLE = 200_000
 
 
-def _scene(count: int):
-    bodies = {f"b{i}": {"mass": 2.0, "inertia": {"box": [1.0, 0.6, 0.4]},
+def scene(count: int):
+    """The throughput scene: ``count`` tumbling boxes named b0 … b{count-1}."""
+    bodies = {f"b{i}": {"mass": MASS, "inertia": {"box": list(SIDES)},
                         "pose": {"position": [10.0 * i, 0.0, 0.0], "orientation": [0, 0, 0, 1]},
-                        "twist": {"linear": [0.0, 0.0, 0.0], "angular": list(ANGULAR_VELOCITY)}}
+                        "twist": {"linear": [0.0, 0.0, 0.0], "angular": ANGULAR_VELOCITY.tolist()}}
               for i in range(count)}
     return load_scene({"bodies": bodies})
 
 
-def _timed(step, min_seconds: float) -> tuple[int, float]:
-    """Call ``step()`` until min_seconds have passed and ≥ 3 calls; (calls, seconds)."""
-    step()  # warm-up (first-call allocations)
-    calls, t0 = 0, time.perf_counter()
-    while True:
-        step()
-        calls += 1
-        elapsed = time.perf_counter() - t0
-        if elapsed >= min_seconds and calls >= 3:
-            return calls, elapsed
+def _ours(sim: Simulator, name: str, mode: str) -> Case:
+    if mode == "batched":
+        run: Callable[[int], object] = sim.step
+    else:
+        step = sim.step
+
+        def run(k: int) -> None:
+            for _ in range(k):
+                step(1)
+    return Case(("rigid_body_sim", name, mode), run, sim.reset, MAX_STEPS_PER_SAMPLE)
 
 
-def bodies_sweep(counts: list[int], min_seconds: float, repeats: int, log=print) -> list[dict]:
+def _mujoco(m, d, name: str, mode: str) -> Case:
+    mj_step = mjm.mujoco.mj_step
+
+    def setup() -> None:
+        mjm.set_integrator(m, name)
+        mjm.reset(m, d, ANGULAR_VELOCITY)
+
+    if mode == "batched":
+        def run(k: int) -> None:
+            mj_step(m, d, nstep=k)
+    else:
+        def run(k: int) -> None:
+            for _ in range(k):
+                mj_step(m, d)
+    return Case(("mujoco", name, mode), run, setup, MAX_STEPS_PER_SAMPLE)
+
+
+def _floor(count: int, name: str) -> Case:
+    kernel = floors.FLOORS[name]
+    Y0 = floors.initial_rows(count, ANGULAR_VELOCITY)
+    Y = Y0.copy()
+    inertia = np.tile(INERTIA_BOX, (count, 1))
+    kernel(Y, inertia, DT, 1)  # compile (or load from the cache) outside the timing
+
+    def setup() -> None:
+        Y[:] = Y0
+
+    return Case(("floor", name, "batched"), lambda k: kernel(Y, inertia, DT, k), setup, MAX_STEPS_PER_SAMPLE)
+
+
+def _numpy_loop(count: int, name: str) -> Case:
+    Y0 = floors.initial_rows(count, ANGULAR_VELOCITY)
+    holder: list[floors.NumpyBodies] = []
+
+    def setup() -> None:
+        holder[:] = [floors.NumpyBodies(Y0, np.tile(INERTIA_BOX, (count, 1)), np.full(count, MASS), name)]
+
+    def run(k: int) -> None:
+        bodies = holder[0]
+        for _ in range(k):
+            bodies.step(DT)
+    return Case(("numpy loop", name, "per-step"), run, setup, MAX_STEPS_PER_SAMPLE)
+
+
+def cases_at(count: int, integrators: tuple[str, ...] = tuple(INTEGRATORS), with_mujoco: bool = True,
+             modes: tuple[str, ...] = ("batched", "per-step")) -> list[Case]:
+    """Every case at N = ``count`` (the MuJoCo model is compiled here: seconds at N = 1e4)."""
+    s = scene(count)
+    cases = []
+    for name in integrators:
+        if name == "reference" and count > MAX_BODIES_REFERENCE:
+            continue
+        for mode in modes:
+            cases.append(_ours(Simulator(s, integrator=name, dt=DT), name, mode))
+    if with_mujoco and mjm.available() and count <= MUJOCO_MAX_BODIES:
+        m, d = mjm.make(count, INERTIA_BOX, MASS, DT, "Euler")
+        for name in mjm.MJ_INTEGRATORS:
+            for mode in modes:
+                cases.append(_mujoco(m, d, name, mode))
+    for name in floors.FLOORS:
+        cases.append(_floor(count, name))
+    if count <= MAX_BODIES_NUMPY_LOOP:
+        for name in ("euler", "rk4"):
+            cases.append(_numpy_loop(count, name))
+    return cases
+
+
+def sweep(counts: list[int], repeats: int, min_seconds: float, log=print) -> list[dict]:
+    """One row per (system, integrator, mode, N): seconds per step and body-steps/s, median (min–max)."""
     rows = []
-    for n in counts:
-        scene = _scene(n)
-        mj = None
-        if mjm.available() and n < MUJOCO_MAX_BODIES:
-            mj = mjm.make(n, INERTIA_BOX, 2.0, DT, "Euler")  # compiled once (slow for 1e4 bodies)
-            mj[1].qvel.reshape(n, 6)[:, 3:] = ANGULAR_VELOCITY
-        samples: dict[tuple[str, str], list[float]] = {}
-        for _ in range(repeats):  # interleave systems within each repeat
-            for name in INTEGRATORS:
-                if name == "reference" and n > 1000:
-                    continue  # solve_ivp over 6e4+ states per step: minutes per point
-                sim = Simulator(scene, integrator=name, dt=DT)
-                calls, sec = _timed(lambda: sim.step(1), min_seconds)
-                samples.setdefault(("rigid_body_sim", name), []).append(n * calls / sec)
-            if mj:
-                m, d = mj
-                for name, member in mjm.MJ_INTEGRATORS.items():
-                    if name == "implicit" and n > 1000:
-                        continue  # dense implicit: O(nv²) memory and seconds per step at 6e4 dofs
-                    m.opt.integrator = getattr(mjm.mujoco.mjtIntegrator, member)
-                    step = mjm.mujoco.mj_step
-                    calls, sec = _timed(lambda: step(m, d), min_seconds)
-                    samples.setdefault(("mujoco", name), []).append(n * calls / sec)
-        for (system, name), values in samples.items():
-            rows.append({"system": system, "integrator": name, "bodies": n,
-                         "body_steps_per_s": statistics.median(values), "repeats": len(values)})
-        log(f"  throughput N={n} done")
+    for count in counts:
+        stats = interleaved(cases_at(count), repeats, min_seconds)
+        for (system, name, mode), s in stats.items():
+            rate = s.rate(count)
+            per_body_ns = s.scaled(1e9 / count)
+            rows.append({"system": system, "integrator": name, "mode": mode, "bodies": count,
+                         "peer": peer_of(system, name),
+                         **rate.as_row("body_steps_per_s"), **per_body_ns.as_row("ns_per_body_step"),
+                         "steps_per_sample": s.units})
+        log(f"  throughput N={count} done")
     return rows
 
 
-def wrench_step(min_seconds: float, repeats: int) -> list[dict]:
-    """µs per (one force at a point + one step) for one body, every integrator and MuJoCo's."""
-    scene = _scene(1)
-    force, point = np.array([0.0, 10.0, 0.0]), np.array([0.5, 0.3, 0.0])
-    samples: dict[tuple[str, str], list[float]] = {}
-    mj = {}
-    if mjm.available():
-        for name in mjm.MJ_INTEGRATORS:
-            mj[name] = mjm.make(1, INERTIA_BOX, 2.0, DT, name)
-            mj[name][1].qvel[3:6] = ANGULAR_VELOCITY  # as ours (free joint: body axes, identity pose)
-    for _ in range(repeats):
-        for name in INTEGRATORS:
-            sim = Simulator(scene, integrator=name, dt=DT)
-            calls_since_reset = [0]
+def peer_of(system: str, name: str) -> str:
+    """The matched method on the other side ('' if none)."""
+    if system == "rigid_body_sim":
+        return mjm.MATCHED.get(name, "")
+    if system == "mujoco":
+        return next((ours for ours, theirs in mjm.MATCHED.items() if theirs == name), "")
+    return name if system in ("floor", "numpy loop") else ""
 
-            def ours():
-                # The body-fixed force spins the box up without bound: back to the start every
-                # RESET_EVERY calls (both systems), before the explicit methods blow up.
-                calls_since_reset[0] += 1
-                if calls_since_reset[0] == RESET_EVERY:
-                    calls_since_reset[0] = 0
-                    sim.reset()
-                sim.apply_force_at_point("b0", force, point, frame="b0")
-                sim.step(1)
-            calls, sec = _timed(ours, min_seconds)
-            samples.setdefault(("rigid_body_sim", name), []).append(1e6 * sec / calls)
-        for name, (m, d) in mj.items():
-            mujoco = mjm.mujoco
-            zero3 = np.zeros(3)
 
-            mj_calls = [0]
-
-            def theirs():
-                mj_calls[0] += 1
-                if mj_calls[0] == RESET_EVERY:
-                    mj_calls[0] = 0
-                    mujoco.mj_resetData(m, d)
-                    d.qvel[3:6] = ANGULAR_VELOCITY
-                # force at a world point of the body (d.xipos/xmat: kinematics of the last step's start)
-                R = d.xmat[1].reshape(3, 3)
-                d.qfrc_applied[:] = 0.0
-                mujoco.mj_applyFT(m, d, R @ force, zero3, d.xipos[1] + R @ point, 1, d.qfrc_applied)
-                mujoco.mj_step(m, d)
-            calls, sec = _timed(theirs, min_seconds)
-            samples.setdefault(("mujoco", name), []).append(1e6 * sec / calls)
-
-            def bare():
-                mujoco.mj_step(m, d)
-            calls, sec = _timed(bare, min_seconds)
-            samples.setdefault(("mujoco (mj_step only)", name), []).append(1e6 * sec / calls)
-    return [{"system": s, "integrator": n, "us_per_step": statistics.median(v), "repeats": len(v)}
-            for (s, n), v in samples.items()]
+def headline_bodies(rows: list[dict]) -> int:
+    """HEADLINE_BODIES if the sweep has it, else its largest N."""
+    counts = {r["bodies"] for r in rows}
+    return HEADLINE_BODIES if HEADLINE_BODIES in counts else max(counts, default=0)

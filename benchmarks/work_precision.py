@@ -1,176 +1,211 @@
-"""Work-precision: error against CPU time and against h, for every integrator and MuJoCo's.
+"""Work-precision: error against wall time and against h, every integrator of ours beside MuJoCo's.
 
-Each run integrates one problem of :mod:`benchmarks.problems` over its horizon with a fixed
-step h and records, at CHECKPOINTS equally spaced times, the orientation (geodesic angle),
-body-rate, energy, |L| and (box) COM-velocity errors; a row keeps the maxima. The time is
-the wall time (perf_counter) of the stepping loop — the wrench applied before each step
-included — the median of ``repeats`` runs.
+For each problem of ``benchmarks/problems.py`` and each step h = T / (CHECKPOINTS · n), one run
+integrates the horizon T and reads the state at the CHECKPOINTS; a row keeps the maximum
+errors and the wall time of the stepping calls only (read-outs excluded), the median of ≥ 5
+runs interleaved across systems at that h.
+
+* Ours, batched: per checkpoint ``sim.step(n)`` (``box``: ``apply_force_at_point(b, F,
+  (0, 0, 0), frame="b/corner")`` first, held over the n steps).
+* MuJoCo, batched as its docs recommend: per checkpoint ``mj_step(m, d, nstep=n)`` (``box``:
+  ``d.ctrl[0] = 10`` on the site motor, set once), integrators Euler, implicitfast, RK4.
+
+A series stops refining once its error is below 1e-12 (finer steps only add
+round-off) or a run took longer than ``budget_s`` (the numpy/scipy integrators at fine h);
+the row says which.
 """
 
 from __future__ import annotations
 
 import math
-import statistics
 import time
 
 import numpy as np
 
-from rigid_body_sim.core import INTEGRATORS, Simulator
+from rigid_body_sim.core import INTEGRATORS, NonFiniteStateError, Simulator
 
 from . import mujoco_models as mjm
 from . import problems as P
+from .timing import MIN_REPEATS, Stats
+
+#: Below this error (rad or m) a series is converged: no finer h is run.
+CONVERGED = 1e-12
+QUICK_STEPS_PER_CHECKPOINT = (1, 2, 5, 10, 20, 25, 50, 100, 200, 500)
+FULL_STEPS_PER_CHECKPOINT = (1, 2, 3, 5, 7, 10, 15, 20, 25, 30, 50, 70, 100, 150, 200, 300, 500, 700, 1000, 2000)
+#: Accuracy goals of the cost tables: rad on ``top``, m on ``box``.
+TARGETS = {"top": (1e-3, 1e-6, 1e-9), "box": (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9)}
 
 
-def _errors(problem: str, times: np.ndarray, q: np.ndarray, w: np.ndarray, v: np.ndarray | None) -> dict:
-    ref = P.reference(problem, times)
-    out = {"err_angle": float(np.max(P.geodesic_angle(ref["q"], q))),
-           "err_w": float(np.max(np.linalg.norm(w - ref["w"], axis=1)) / max(np.max(np.linalg.norm(ref["w"], axis=1)), 1e-300))}
-    e, L = P.invariants(problem, w)
-    e_ref, L_ref = P.invariants(problem, ref["w"])
-    out["err_energy"] = float(np.max(np.abs(e - e_ref) / np.maximum(e_ref, 1e-300)))
-    out["err_L"] = float(np.max(np.abs(L - L_ref) / np.maximum(L_ref, 1e-300)))
-    if v is not None and "v" in ref:
-        out["err_v"] = float(np.max(np.linalg.norm(v - ref["v"], axis=1)) / np.max(np.linalg.norm(ref["v"], axis=1)))
-    else:
-        out["err_v"] = math.nan
+def _xyzw_to_wxyz(q: np.ndarray) -> np.ndarray:
+    return np.array([q[3], q[0], q[1], q[2]])
+
+
+class OurRun:
+    """One of our integrators on a problem at n steps per checkpoint."""
+
+    system = "rigid_body_sim"
+
+    def __init__(self, problem: str, integrator: str, n: int):
+        self.problem, self.integrator, self.n = problem, integrator, n
+        self.h = P.horizon(problem) / (P.CHECKPOINTS * n)
+        self.scene = P.scene(problem)
+
+    def __call__(self) -> tuple[float, dict]:
+        sim = Simulator(self.scene, integrator=self.integrator, dt=self.h)
+        apply, step, n = sim.apply_force_at_point, sim.step, self.n
+        force, origin = P.BOX_FORCE_S, np.zeros(3)
+        box = self.problem == "box"
+        q, w, p = [], [], []
+        elapsed = 0.0
+        for _ in range(P.CHECKPOINTS):
+            t0 = time.perf_counter()
+            if box:
+                apply("b", force, origin, "b/corner")
+            step(n)
+            elapsed += time.perf_counter() - t0
+            s = sim.body_state("b")
+            q.append(_xyzw_to_wxyz(s.orientation_xyzw))
+            w.append(s.angular_velocity_body)
+            p.append(s.position_world)
+        times = np.arange(1, P.CHECKPOINTS + 1) * n * self.h
+        return elapsed, P.errors(self.problem, times, np.array(q), np.array(w), np.array(p))
+
+
+class MujocoRun:
+    """One of MuJoCo's integrators on a problem at n steps per checkpoint (mj_step with nstep)."""
+
+    system = "mujoco"
+
+    def __init__(self, problem: str, integrator: str, n: int):
+        self.problem, self.integrator, self.n = problem, integrator, n
+        self.h = P.horizon(problem) / (P.CHECKPOINTS * n)
+        site = tuple(P.BOX_SITE_B) if problem == "box" else None
+        self.m, self.d = mjm.make(1, P.inertia(problem), P.mass(problem), self.h, integrator, site=site)
+
+    def __call__(self) -> tuple[float, dict]:
+        mujoco = mjm.mujoco
+        m, d, n = self.m, self.d, self.n
+        mujoco.mj_resetData(m, d)
+        if self.problem == "top":
+            d.qvel[3:6] = P.TOP_W0_B
+        else:
+            d.ctrl[0] = P.BOX_FORCE_S[1]  # the motor's gear is the site's y axis
+        mj_step = mujoco.mj_step
+        q, w, p = [], [], []
+        elapsed = 0.0
+        for _ in range(P.CHECKPOINTS):
+            t0 = time.perf_counter()
+            mj_step(m, d, nstep=n)
+            elapsed += time.perf_counter() - t0
+            q.append(d.qpos[3:7].copy())
+            w.append(d.qvel[3:6].copy())
+            p.append(d.qpos[0:3].copy())
+        if any(d.warning[int(w)].number for w in (mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADQVEL,
+                                                     mujoco.mjtWarning.mjWARN_BADQPOS)):
+            # MuJoCo resets the state when it meets a non-finite or huge value: a blow-up
+            raise MujocoDiverged(f"MuJoCo {self.integrator} reset after a non-finite or huge value at h = {self.h:g}")
+        times = np.arange(1, P.CHECKPOINTS + 1) * n * self.h
+        return elapsed, P.errors(self.problem, times, np.array(q), np.array(w), np.array(p))
+
+
+class MujocoDiverged(RuntimeError):
+    """MuJoCo met a non-finite or huge value and reset its state (its warning counters say so)."""
+
+
+def series(problems=P.PROBLEMS) -> list[tuple[str, str, str]]:
+    """(problem, system, integrator) of every curve."""
+    out = []
+    for problem in problems:
+        out += [(problem, "rigid_body_sim", name) for name in INTEGRATORS]
+        if mjm.available():
+            out += [(problem, "mujoco", name) for name in mjm.MJ_INTEGRATORS]
     return out
 
 
-def run_ours(problem: str, integrator: str, steps_per_checkpoint: int) -> tuple[float, dict]:
-    """One run of rigid_body_sim: (seconds of the stepping loop, error dict)."""
-    T = P.horizon(problem)
-    h = T / (P.CHECKPOINTS * steps_per_checkpoint)
-    sim = Simulator(P.scene(problem), integrator=integrator, dt=h)
-    n = steps_per_checkpoint
-    q, w, v = [], [], []
-    t0 = time.perf_counter()
-    for k in range(P.CHECKPOINTS):
-        if problem == "top":
-            sim.step(n)
-        elif problem == "forced":
-            for i in range(n):
-                t = (k * n + i + 0.5) * h  # midpoint sample of the forcing (held over the step)
-                sim.apply_wrench("b", torque=P.forced_torque_B(t), frame="b")
-                sim.step(1)
-        else:
-            for _ in range(n):
-                sim.apply_force_at_point("b", P.BOX_FORCE_B, P.BOX_POINT_B, frame="b")
-                sim.step(1)
-        q.append(sim.state.q_WP[0].copy())
-        w.append(sim.state.w_WP_P[0].copy())
-        v.append(sim.state.v_WC_W[0].copy())
-    elapsed = time.perf_counter() - t0
-    times = np.arange(1, P.CHECKPOINTS + 1) * n * h
-    return elapsed, _errors(problem, times, np.array(q), np.array(w), np.array(v))
-
-
-def run_mujoco(problem: str, integrator: str, steps_per_checkpoint: int) -> tuple[float, dict]:
-    """One run of MuJoCo (one free body, mj_step from Python; wrenches via xfrc_applied).
-
-    The body-fixed force and the forcing torque are rotated to world axes with the rotation
-    of the current qpos (mju_quat2Mat): d.xmat after mj_step is of the previous step's start.
-    """
-    mujoco = mjm.mujoco
-    T = P.horizon(problem)
-    h = T / (P.CHECKPOINTS * steps_per_checkpoint)
-    inertia = {"top": P.TOP_INERTIA, "forced": P.FORCED_INERTIA, "box": P.box_inertia()}[problem]
-    mass = P.BOX_MASS if problem == "box" else 1.0
-    m, d = mjm.make(1, inertia, mass, h, integrator)
-    d.qpos[:3] = 0.0
-    if problem == "top":
-        d.qvel[3:6] = P.TOP_W0_B
-    elif problem == "forced":
-        d.qvel[3:6] = P.FORCED_W0_B
-    tau_box_B = np.cross(P.BOX_POINT_B, P.BOX_FORCE_B)
-    R = np.zeros(9)
-    n = steps_per_checkpoint
-    q, w, v = [], [], []
-    xfrc = d.xfrc_applied
-    t0 = time.perf_counter()
-    for k in range(P.CHECKPOINTS):
-        if problem == "top":
-            for _ in range(n):
-                mujoco.mj_step(m, d)
-        elif problem == "forced":
-            for i in range(n):
-                mujoco.mju_quat2Mat(R, d.qpos[3:7])
-                xfrc[1, 3:] = R.reshape(3, 3) @ P.forced_torque_B((k * n + i + 0.5) * h)
-                mujoco.mj_step(m, d)
-        else:
-            for _ in range(n):
-                mujoco.mju_quat2Mat(R, d.qpos[3:7])
-                R3 = R.reshape(3, 3)
-                xfrc[1, :3] = R3 @ P.BOX_FORCE_B
-                xfrc[1, 3:] = R3 @ tau_box_B
-                mujoco.mj_step(m, d)
-        q.append(d.qpos[3:7].copy())
-        w.append(d.qvel[3:6].copy())
-        v.append(d.qvel[0:3].copy())
-    elapsed = time.perf_counter() - t0
-    times = np.arange(1, P.CHECKPOINTS + 1) * n * h
-    return elapsed, _errors(problem, times, np.array(q), np.array(w), np.array(v))
-
-
-def sweep(quick: bool, log=print) -> list[dict]:
-    """Every (system, integrator, problem, h); interleaved per h so load changes hit all alike."""
-    if quick:
-        per_checkpoint = [1, 3, 10, 30, 100, 300]
-        repeats = 1
-    else:
-        per_checkpoint = [1, 2, 5, 10, 20, 50, 100, 200, 500, 1000, 2000]
-        repeats = 3
-    systems = [("rigid_body_sim", name, run_ours) for name in INTEGRATORS]
-    if mjm.available():
-        systems += [("mujoco", name, run_mujoco) for name in mjm.MJ_INTEGRATORS]
-    rows = []
-    for problem in P.PROBLEMS:
-        for n in per_checkpoint:
+def sweep(steps_per_checkpoint=QUICK_STEPS_PER_CHECKPOINT, repeats: int = MIN_REPEATS, budget_s: float = 0.5,
+          problems=P.PROBLEMS, log=print) -> list[dict]:
+    """Every (problem, system, integrator, h): errors and wall time, median (min–max) of ``repeats``."""
+    rows: list[dict] = []
+    for problem in problems:
+        stopped: dict[tuple[str, str], str] = {}  # series → why it stopped refining
+        for n in steps_per_checkpoint:
             h = P.horizon(problem) / (P.CHECKPOINTS * n)
-            for system, name, runner in systems:
-                if system == "rigid_body_sim" and name == "reference" and n > 10:
-                    continue  # solve_ivp per step: ms each; a few coarse h suffice
-                times = []
-                try:
-                    for r in range(repeats if n * P.CHECKPOINTS <= 3000 or not quick else 1):
-                        elapsed, err = runner(problem, name, n)
-                        times.append(elapsed)
-                except Exception as exc:  # a blow-up (DivergenceError) is a result, not a crash
-                    rows.append({"system": system, "integrator": name, "problem": problem, "h": h,
-                                 "steps": n * P.CHECKPOINTS, "time_s": math.nan, "us_per_step": math.nan,
-                                 "err_angle": math.nan, "err_w": math.nan, "err_energy": math.nan,
-                                 "err_L": math.nan, "err_v": math.nan, "note": type(exc).__name__})
+            runs = []
+            for _problem, system, name in series((problem,)):
+                base = {"problem": problem, "system": system, "integrator": name, "h": h, "steps": n * P.CHECKPOINTS}
+                if (system, name) in stopped:
                     continue
-                t = statistics.median(times)
-                rows.append({"system": system, "integrator": name, "problem": problem, "h": h,
-                             "steps": n * P.CHECKPOINTS, "time_s": t, "us_per_step": 1e6 * t / (n * P.CHECKPOINTS),
-                             **err, "note": ""})
-            log(f"  work-precision {problem} h={h:.3g} done")
+                runs.append((base, (OurRun if system == "rigid_body_sim" else MujocoRun)(problem, name, n)))
+            times: dict[int, list[float]] = {i: [] for i in range(len(runs))}
+            result: dict[int, dict] = {}
+            for _ in range(repeats):
+                for i, (base, run) in enumerate(runs):
+                    if i in result and "note" in result[i]:
+                        continue
+                    try:
+                        elapsed, err = run()
+                    except (NonFiniteStateError, MujocoDiverged) as exc:  # a blow-up is a result, not a crash
+                        result[i] = {"note": type(exc).__name__}
+                        continue
+                    times[i].append(elapsed)
+                    result[i] = err
+            for i, (base, _run) in enumerate(runs):
+                key = (base["system"], base["integrator"])
+                if "note" in result[i]:
+                    rows.append({**base, "time_s": math.nan, "us_per_step": math.nan, "note": result[i]["note"]})
+                    continue
+                t = Stats.of(times[i], 1)
+                err = result[i]
+                rows.append({**base, **t.as_row("time_s"), "us_per_step": 1e6 * t.median / base["steps"], **err,
+                             "note": ""})
+                if err[P.ERROR_KEY[problem][0]] < CONVERGED:
+                    stopped[key] = "converged"
+                elif t.median > budget_s:
+                    stopped[key] = "cost"
+            log(f"  work-precision {problem} h={h:.3g} done ({len(runs)} series)")
+        for (system, name), why in stopped.items():
+            rows.append({"problem": problem, "system": system, "integrator": name, "h": math.nan, "steps": 0,
+                         "time_s": math.nan, "us_per_step": math.nan,
+                         "note": f"finer h not run: {'error below %g' % CONVERGED if why == 'converged' else 'run over %g s' % budget_s}"})
     return rows
 
 
-def cost_at_error(rows: list[dict], problem: str, target: float, key: str = "err_angle") -> list[dict]:
-    """Per (system, integrator): the time to reach ``target`` error, log-log interpolated on the curve.
+def curve(rows: list[dict], problem: str, system: str, integrator: str, key: str | None = None) -> list[tuple[float, float, float]]:
+    """(h, time_s, error) of one series, h descending, finite points only."""
+    key = key or P.ERROR_KEY[problem][0]
+    pts = [(r["h"], r["time_s"], r[key]) for r in rows if r["problem"] == problem and r["system"] == system
+           and r["integrator"] == integrator and math.isfinite(r.get("time_s", math.nan))
+           and math.isfinite(r.get(key, math.nan))]
+    return sorted(pts, reverse=True)
 
-    Returns rows {system, integrator, time_s, h} (time NaN when the sweep never reaches it).
+
+def cost_at_error(rows: list[dict], problem: str, system: str, integrator: str, target: float) -> dict:
+    """Wall time (and h) to reach ``target`` error: log-log interpolation between the sweep's points.
+
+    The coarsest h whose error is ≤ target, interpolated against the point before it (the
+    error curve is monotone in h for these methods over the sweep); NaN if never reached.
+    ``h_grid``: the largest h of the sweep itself that reached the target (no interpolation:
+    a claim a test can re-measure).
     """
-    out = []
-    pairs = sorted({(r["system"], r["integrator"]) for r in rows if r["problem"] == problem})
-    for system, name in pairs:
-        pts = sorted(((r["h"], r["time_s"], r[key]) for r in rows
-                      if r["problem"] == problem and r["system"] == system and r["integrator"] == name
-                      and math.isfinite(r["time_s"]) and math.isfinite(r[key])), reverse=True)  # h descending
-        best = (math.nan, math.nan)
-        for (h0, t0, e0), (h1, t1, e1) in zip(pts, pts[1:]):
-            if e0 <= target:  # the coarsest h already meets it
-                best = (t0, h0)
-                break
-            if e1 <= target < e0 and e1 > 0:
-                s = (math.log(target) - math.log(e0)) / (math.log(e1) - math.log(e0))
-                best = (math.exp(math.log(t0) + s * (math.log(t1) - math.log(t0))),
-                        math.exp(math.log(h0) + s * (math.log(h1) - math.log(h0))))
-                break
-        else:
-            if pts and pts[-1][2] <= target and len(pts) == 1:
-                best = (pts[0][1], pts[0][0])
-        out.append({"system": system, "integrator": name, "time_s": best[0], "h": best[1]})
-    return out
+    pts = curve(rows, problem, system, integrator)
+    for j, (h1, t1, e1) in enumerate(pts):
+        if e1 <= target:
+            if j == 0 or e1 <= 0.0:
+                return {"time_s": t1, "h": h1, "h_grid": h1, "error_at_h_grid": e1}
+            h0, t0, e0 = pts[j - 1]
+            s = (math.log(target) - math.log(e0)) / (math.log(e1) - math.log(e0))
+            return {"time_s": math.exp(math.log(t0) + s * (math.log(t1) - math.log(t0))),
+                    "h": math.exp(math.log(h0) + s * (math.log(h1) - math.log(h0))), "h_grid": h1,
+                    "error_at_h_grid": e1}
+    return {"time_s": math.nan, "h": math.nan, "h_grid": math.nan, "error_at_h_grid": math.nan}
+
+
+def observed_order(rows: list[dict], problem: str, system: str, integrator: str, h_fine: float,
+                   ratio: float = 4.0) -> float:
+    """log(e(ratio·h_fine) / e(h_fine)) / log(ratio) from the sweep (NaN if either point is missing)."""
+    pts = {round(math.log(h), 9): e for h, _t, e in curve(rows, problem, system, integrator)}
+    e_fine = pts.get(round(math.log(h_fine), 9))
+    e_coarse = pts.get(round(math.log(ratio * h_fine), 9))
+    if not e_fine or not e_coarse:
+        return math.nan
+    return math.log(e_coarse / e_fine) / math.log(ratio)

@@ -8,10 +8,18 @@ Subcommands (``rigid-body-sim SUBCOMMAND --help`` for each)::
     check SCENE
 
 Exit codes: 0 success; 1 a scene or input file that cannot be used (the message names the
-file, key path and expectation) or a run that failed; 2 bad command-line arguments
-(argparse's convention); 130 interrupted (Ctrl-C; files written so far are closed properly).
-This module only parses arguments and prints: the work is in :mod:`rigid_body_sim.offline`
-and :mod:`rigid_body_sim.core`.
+file, key path and expectation), a run that failed, or an output that could not be written
+to the end (a full disk); 2 bad command-line arguments (argparse's convention), including a
+step or rate no run can take and outputs that cannot be written (a FIFO, a device, a
+directory, a path that cannot be created, two outputs or an output and the scene on one
+file); 0 when stopped by a signal, Ctrl-C (SIGINT) or SIGTERM, or when the reader of stdout
+goes away (``describe ... | head``): a stop asked for is not a failure. An interrupted ``run``
+closes its files properly and ends them with a status saying where it stopped (``interrupted
+by SIGTERM at t = ... s``; a complete run's status says ``complete``), and says so on stderr:
+the files, not the exit code, tell a cut-short run from a whole one.
+No error ends in a traceback. This module only parses arguments and prints: the work is in
+:mod:`rigid_body_sim.offline` and :mod:`rigid_body_sim.core`. ``check`` imports the scene
+loader only (not the compiled simulator), so it is quick and small.
 """
 
 from __future__ import annotations
@@ -19,12 +27,19 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
+import signal
 import sys
-from contextlib import ExitStack
+import threading
+from contextlib import ExitStack, contextmanager
 from pathlib import Path
-from typing import Any, Sequence
+from typing import TYPE_CHECKING, Any, Iterator, Sequence
 
-from .core import INTEGRATORS, NonFiniteStateError, Scene, SceneError, Simulator, describe_scene, load_scene
+from .core import SceneError, load_scene
+from .paths import check_writable_path, open_for_reading, same_file
+
+if TYPE_CHECKING:
+    from .core import Scene
 
 __all__ = ["main", "build_parser", "DEFAULT_DT", "DEFAULT_RATE_HZ"]
 
@@ -40,6 +55,81 @@ _MCAP_MAGIC = b"\x89MCAP"
 
 class _Failure(Exception):
     """A failure to report as ``rigid-body-sim <command>: <message>`` with exit code 1."""
+
+
+class _Interrupted(KeyboardInterrupt):
+    """SIGINT or SIGTERM arrived (raised by the handler :func:`_signals_interrupt` installs)."""
+
+    def __init__(self, signum: int):
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+
+class _WriteError(OSError):
+    """Writing an output failed in the middle of a run (a full disk...)."""
+
+    def __init__(self, path: Path, error: OSError):
+        super().__init__(error.errno, error.strerror or str(error), str(path))
+
+
+class _Signals:
+    """SIGINT and SIGTERM while a command runs: raised as :class:`_Interrupted` at once, or, inside
+    :meth:`deferred`, only recorded (a run then stops between two samples, never inside a
+    write). A second signal while cleaning up is ignored."""
+
+    def __init__(self) -> None:
+        self.signum: int | None = None
+        self._defer = False
+
+    def handler(self, signum: int, frame: Any) -> None:
+        if self.signum is not None:
+            return
+        self.signum = signum
+        if not self._defer:
+            raise _Interrupted(signum)
+
+    def pending(self) -> bool:
+        return self.signum is not None
+
+    @contextmanager
+    def deferred(self) -> Iterator[None]:
+        self._defer = True
+        try:
+            yield
+        finally:
+            self._defer = False
+
+
+@contextmanager
+def _signals_interrupt() -> Iterator[_Signals]:
+    """Handle SIGTERM like Ctrl-C (so files are closed and marked). Only in the main thread
+    (where Python runs signal handlers); elsewhere the defaults stay."""
+    signals = _Signals()
+    if threading.current_thread() is not threading.main_thread():
+        yield signals
+        return
+    previous = {sig: signal.signal(sig, signals.handler) for sig in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield signals
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+
+
+class _IntegratorNames:
+    """The names of INTEGRATORS, looked up on first use (argparse ``choices``): building the
+    parser must not import the compiled simulator, which ``check`` never needs."""
+
+    def _names(self) -> list[str]:
+        from .core import INTEGRATORS
+
+        return sorted(INTEGRATORS)
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._names()
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._names())
 
 
 # ------------------------------------------------------------------------------ arguments
@@ -72,8 +162,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("scene", metavar="SCENE", help="scene YAML file")
     run.add_argument("--duration", "-T", required=True, type=_positive_float("s of sim time"),
                      help="sim time to run, s (rounded up to whole steps)")
-    run.add_argument("--integrator", default="rk4", choices=sorted(INTEGRATORS), metavar="NAME",
-                     help=f"one of {', '.join(sorted(INTEGRATORS))} (default rk4)")
+    run.add_argument("--integrator", default="rk4", choices=_IntegratorNames(), metavar="NAME",
+                     help="one of %(choices)s (default rk4)")
     run.add_argument("--dt", type=_positive_float("s"), default=DEFAULT_DT, help=f"physics step, s (default {DEFAULT_DT:g})")
     run.add_argument("--rate", type=_positive_float("samples per sim second"), default=DEFAULT_RATE_HZ,
                      help=f"samples per sim second in --csv and --record (default {DEFAULT_RATE_HZ:g}; "
@@ -117,73 +207,172 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     command = {"run": _run, "plot": _plot, "describe": _describe, "check": _check}[args.command]
-    try:
-        return command(args, args.command_parser)
-    except (SceneError, _Failure) as exc:
-        print(f"{PROG} {args.command}: {exc}", file=sys.stderr)
-        return 1
-    except KeyboardInterrupt:
-        print(f"{PROG} {args.command}: interrupted", file=sys.stderr)
-        return 130
+    with _signals_interrupt() as signals:
+        args.signals = signals
+        try:
+            return command(args, args.command_parser)
+        except (SceneError, _Failure) as exc:
+            print(f"{PROG} {args.command}: {exc}", file=sys.stderr)
+            return 1
+        except KeyboardInterrupt as exc:
+            signum = getattr(exc, "signum", signal.SIGINT)
+            closed = "; files written so far are closed and say where the run stopped" if args.command == "run" else ""
+            print(f"{PROG} {args.command}: interrupted by {signal.Signals(signum).name}{closed}", file=sys.stderr)
+            return 0
+        except BrokenPipeError:  # stdout's reader went away (| head): stop quietly
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())  # so that flushing stdout at exit fails no more
+            os.close(devnull)
+            return 0
 
 
-def _output_path(parser: argparse.ArgumentParser, option: str, value: str | None) -> Path | None:
-    """``value`` as a path whose directory exists (else a usage error naming ``option``)."""
+def _output_path(parser: argparse.ArgumentParser, option: str, value: str | None, expected: str) -> Path | None:
+    """``value`` as the path of a regular file that can be written (else a usage error naming ``option``)."""
     if value is None:
         return None
-    from .offline.recording import check_record_path
-
-    problem = check_record_path(value)
+    problem = check_writable_path(value, expected=expected)
     if problem is not None:
         parser.error(f"argument {option}: {problem}")
     return Path(value)
+
+
+def _refuse_one_file(parser: argparse.ArgumentParser, paths: list[tuple[str, Path | None]], inputs: list[tuple[str, str]]
+                     ) -> None:
+    """A usage error if two outputs, or an output and an input, are one file (symlinks and hard links too)."""
+    outputs = [(option, path) for option, path in paths if path is not None]
+    for i, (option, path) in enumerate(outputs):
+        for other, other_path in outputs[:i]:
+            if same_file(path, other_path):
+                parser.error(f"argument {option}: {str(path)!r} is the same file as {other}; expected another path")
+        for what, source in inputs:
+            if same_file(path, source):
+                parser.error(f"argument {option}: {str(path)!r} is {what}; expected another path")
 
 
 # ------------------------------------------------------------------------------ run
 
 
 def _run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
-    csv_path = _output_path(parser, "--csv", args.csv)
-    record_path = _output_path(parser, "--record", args.record)
-    scene = load_scene(args.scene)
-    sim = Simulator(scene, integrator=args.integrator, dt=args.dt, model_reduction=not args.no_reduction)
-
+    csv_path = _output_path(parser, "--csv", args.csv, "a CSV file")
+    record_path = _output_path(parser, "--record", args.record, "an .mcap file")
+    _refuse_one_file(parser, [("--csv", csv_path), ("--record", record_path)], [("the scene file", args.scene)])
     from .offline.run import run_offline, sample_interval, steps_for
 
-    total = steps_for(args.duration, args.dt)
-    every = sample_interval(args.rate, args.dt)
+    try:
+        total = steps_for(args.duration, args.dt)
+    except ValueError as exc:
+        parser.error(f"argument --dt: {str(exc).removeprefix('dt: ')}")
+    try:
+        every = sample_interval(args.rate, args.dt)
+    except ValueError as exc:
+        parser.error(f"argument --rate: {str(exc).removeprefix('rate: ')}")
+    scene = load_scene(args.scene)
+    from .core import NonFiniteStateError, Simulator
+
+    sim = Simulator(scene, integrator=args.integrator, dt=args.dt, model_reduction=not args.no_reduction)
     meta = {"scene": str(Path(args.scene).resolve()), "integrator": args.integrator, "dt": repr(args.dt),
             "duration": repr(args.duration), "sample_every_steps": str(every), "version": _version(),
             "model_reduction": str(not args.no_reduction)}
+    csv_writer, recorder = _open_outputs(parser, csv_path, record_path, sim, meta, scene.text)
+    outputs = [(path, writer) for path, writer in ((csv_path, csv_writer), (record_path, recorder)) if writer]
     callbacks = []
+    if csv_writer is not None:
+        callbacks.append(_guarded(csv_path, csv_writer.write))
+    if recorder is not None:
+        def record(s: Any) -> None:
+            recorder.write_wrenches(s.time, s.active_scripted_wrenches())
+            recorder.write_simulator(s)
+
+        callbacks.append(_guarded(record_path, record))
+    end = "incomplete"
+    failure: _Failure | None = None
     with ExitStack() as stack:
-        csv_writer = recorder = None
-        if csv_path is not None:
-            from .offline.csv_io import CsvWriter
-
-            csv_writer = stack.enter_context(CsvWriter(csv_path, sim.body_names, meta))
-            callbacks.append(csv_writer.write)
-        if record_path is not None:
-            from .offline.recording import McapRecorder
-
-            recorder = stack.enter_context(McapRecorder(record_path, metadata=meta, scene_text=_text_of(args.scene)))
-
-            def record(s: Simulator) -> None:
-                recorder.write_wrenches(s.time, s.active_scripted_wrenches())
-                recorder.write_simulator(s)
-
-            callbacks.append(record)
         bar = _progress_bar(total, args.quiet)
         if bar is not None:
             stack.callback(bar.close)
         try:
-            summary = run_offline(sim, args.duration, sample_every=every, on_sample=callbacks,
-                                  progress=bar.update if bar is not None else None)
+            with args.signals.deferred():
+                summary = run_offline(sim, args.duration, sample_every=every, on_sample=callbacks,
+                                      progress=bar.update if bar is not None else None, stop=args.signals.pending)
+            if summary.stopped:
+                raise _Interrupted(args.signals.signum or signal.SIGINT)
+            end = f"complete: {summary.steps} steps, t = {summary.sim_time:.9g} s"
         except NonFiniteStateError as exc:
-            raise _Failure(f"{exc} (t = {sim.time:.9g} s; files written up to there are closed)") from None
+            end = f"failed at t = {sim.time:.9g} s ({sim.step_count} steps): {exc}"
+            failure = _Failure(f"{exc} (t = {sim.time:.9g} s; files written up to there are closed)")
+        except _WriteError as exc:
+            end = f"failed at t = {sim.time:.9g} s ({sim.step_count} steps): cannot write {exc.filename}"
+            failure = _Failure(f"cannot write {exc.filename} ({exc.strerror}); the run stopped at t = {sim.time:.9g} s "
+                               f"after {sim.step_count} steps; the files are closed")
+        except KeyboardInterrupt as exc:
+            name = signal.Signals(getattr(exc, "signum", signal.SIGINT)).name
+            end = f"interrupted by {name} at t = {sim.time:.9g} s ({sim.step_count} steps)"
+            raise
+        finally:
+            problems = _close_outputs(outputs, end)
+            if problems and failure is None:
+                failure = _Failure("; ".join(problems))
+    if failure is not None:
+        raise failure
     if not args.quiet:
         _print_summary(args, summary, csv_writer, recorder)
     return 0
+
+
+def _open_outputs(parser: argparse.ArgumentParser, csv_path: Path | None, record_path: Path | None, sim: Any,
+                  meta: dict[str, str], scene_text: str | None) -> tuple[Any, Any]:
+    """Create the CSV writer and the recorder; a path that cannot be opened is a usage error
+    (and an output already created for this run is closed and removed)."""
+    from .offline.csv_io import CsvWriter
+    from .offline.recording import McapRecorder
+
+    opened: list[tuple[Path, Any]] = []
+    try:
+        for option, path in (("--csv", csv_path), ("--record", record_path)):
+            if path is None:
+                opened.append((path, None))
+                continue
+            try:
+                writer = (CsvWriter(path, sim.body_names, meta) if option == "--csv"
+                          else McapRecorder(path, metadata=meta, scene_text=scene_text))
+            except OSError as exc:
+                parser.error(f"argument {option}: cannot write {str(path)!r} ({exc.strerror or exc})")
+            opened.append((path, writer))
+            files = [w.fileno() for _, w in opened if w is not None]
+            if len(files) == 2 and os.path.sameopenfile(*files):
+                parser.error(f"argument {option}: {str(path)!r} is the same file as --csv; expected another path")
+    except BaseException:
+        for path, writer in opened:
+            if writer is not None:
+                try:
+                    writer.close("not run: the command line was refused")
+                except OSError:
+                    pass
+                Path(path).unlink(missing_ok=True)
+        raise
+    return opened[0][1], opened[1][1]
+
+
+def _guarded(path: Path, write: Any) -> Any:
+    """``write``, with an OSError (a full disk...) turned into a _WriteError naming ``path``."""
+    def call(sim: Any) -> None:
+        try:
+            write(sim)
+        except OSError as exc:
+            raise _WriteError(path, exc) from None
+
+    return call
+
+
+def _close_outputs(outputs: list[tuple[Path, Any]], status: str) -> list[str]:
+    """Close every output with ``status``; the problems met (each output is closed regardless)."""
+    problems = []
+    for path, writer in outputs:
+        try:
+            writer.close(status)
+        except OSError as exc:
+            problems.append(f"cannot finish {path} ({exc.strerror or exc})")
+    return problems
 
 
 def _progress_bar(total: int, quiet: bool) -> Any:
@@ -217,13 +406,6 @@ def _print_summary(args: argparse.Namespace, summary: Any, csv_writer: Any, reco
     print("\n".join(lines))
 
 
-def _text_of(path: str) -> str | None:
-    try:
-        return Path(path).read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError):
-        return None
-
-
 def _version() -> str:
     from importlib.metadata import PackageNotFoundError, version
 
@@ -239,16 +421,16 @@ def _version() -> str:
 def _plot(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     run_path = Path(args.run)
     try:
-        with open(run_path, "rb") as f:
+        with open_for_reading(run_path, expected="a CSV file or an MCAP recording") as f:
             head = f.read(len(_MCAP_MAGIC))
     except OSError as exc:
         raise _Failure(f"{run_path}: cannot read the run ({exc.strerror or exc})") from None
     if args.output is not None:
-        out = Path(args.output)
-        if not out.parent.is_dir() and str(out.parent):
-            parser.error(f"argument --output: directory {str(out.parent)!r} does not exist")
+        out = _output_path(parser, "--output", args.output, "a PNG file")
+        assert out is not None
     else:
         out = run_path.with_suffix(".png")
+    _refuse_one_file(parser, [("--output", out)], [("the run file itself", args.run)])
 
     from .offline.rundata import with_derived_quantities
 
@@ -264,6 +446,9 @@ def _plot(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
             data = read_csv(run_path)
     except (ValueError, OSError, UnicodeDecodeError) as exc:
         raise _Failure(str(exc)) from None
+    status = data.meta.get("status", "")
+    if status and not status.startswith("complete"):
+        print(f"{PROG} plot: warning: {run_path}: the run did not end normally ({status})", file=sys.stderr)
 
     scene = _plot_scene(args, data, scene_text)
     if scene is not None:
@@ -281,9 +466,16 @@ def _plot(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         bodies = [args.body]
     from .offline.plotting import plot_body
 
-    for body in bodies:
-        target = out if len(bodies) == 1 else out.with_name(f"{out.stem}_{body}{out.suffix or '.png'}")
-        plot_body(data, body, target, scene=scene)
+    targets = [out if len(bodies) == 1 else out.with_name(f"{out.stem}_{body}{out.suffix or '.png'}") for body in bodies]
+    for target in targets:
+        problem = check_writable_path(target, expected="a PNG file")
+        if problem is not None or same_file(target, run_path):
+            raise _Failure(f"cannot write {target}: {problem or 'it is the run file itself'}")
+    for body, target in zip(bodies, targets):
+        try:
+            plot_body(data, body, target, scene=scene)
+        except OSError as exc:
+            raise _Failure(f"cannot write {target} ({exc.strerror or exc})") from None
         print(f"wrote {target}")
     return 0
 
@@ -292,17 +484,15 @@ def _plot_scene(args: argparse.Namespace, data: Any, scene_text: str | None) -> 
     """The run's scene: --scene (its errors are fatal), else the attached or named one (warn on failure)."""
     if args.scene is not None:
         return load_scene(args.scene)
+    from .core.scene import load_scene_text
+
     try:
         if scene_text is not None:
-            import yaml
-
-            parsed = yaml.safe_load(scene_text)
-            if isinstance(parsed, dict):
-                return load_scene(parsed)
+            return load_scene_text(scene_text, f"{args.run} (its attached scene.yaml)")
         named = data.meta.get("scene")
         if named and Path(named).is_file():
             return load_scene(named)
-    except (SceneError, ValueError) as exc:
+    except SceneError as exc:
         print(f"{PROG} plot: warning: the run's scene cannot be loaded ({exc}); plotting without it",
               file=sys.stderr)
         return None
@@ -315,6 +505,8 @@ def _plot_scene(args: argparse.Namespace, data: Any, scene_text: str | None) -> 
 
 
 def _describe(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    from .core import describe_scene
+
     scene = load_scene(args.scene)
     bodies = describe_scene(scene, model_reduction=not args.no_reduction)
     if args.json:

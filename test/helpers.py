@@ -18,7 +18,7 @@ FIXED_STEP_INTEGRATORS = ("euler", "semi_implicit_euler", "implicit_gyroscopic",
                           "symmetric_splitting", "exact_rotor_splitting", "rk4")
 
 #: Observed convergence order each fixed-step method must show.
-ORDER = {"euler": 1, "semi_implicit_euler": 1, "implicit_gyroscopic": 1, "splitting": 2,
+ORDER = {"euler": 1, "semi_implicit_euler": 1, "implicit_gyroscopic": 2, "splitting": 2,
          "symmetric_splitting": 2, "exact_rotor_splitting": 2, "rk4": 4}
 
 #: Methods whose free rotor is the exact flow: torque-free, their only error is round-off

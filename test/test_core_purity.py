@@ -22,8 +22,8 @@ CORE = REPO / "rigid_body_sim" / "core"
 CORE_FILES = sorted(CORE.rglob("*.py"))
 
 #: Third-party top-level packages the core may import (convention 1: numpy and scipy; PyYAML,
-#: deferred, to read scene files; numba, only in kernels.py, the compiled per-body loops that
-#: earned it by the figures of issue 5). Everything else must be the standard library or the core.
+#: deferred, to read scene files; numba, only in the compiled per-body modules listed in
+#: COMPILED_MODULES, which earned it by the figures of issue 5). Everything else must be the standard library or the core.
 ALLOWED_THIRD_PARTY = {"numpy", "scipy", "yaml", "numba"}
 
 
@@ -115,7 +115,39 @@ def test_no_ros_module_is_loaded_by_importing_the_core() -> None:
     assert not ros, f"importing the core loaded ROS modules: {ros}"
 
 
-def test_numba_only_in_the_kernels_module() -> None:
+#: The modules whose per-body functions are compiled with numba: the rows' algebra, the
+#: forces, the dynamics, the integrators, the reduced models and the step driver.
+COMPILED_MODULES = ["dynamics.py", "forces.py", "integrators.py", "reduced_models.py", "rotation.py", "sensors.py",
+                    "stepping.py"]
+
+
+def test_numba_only_in_the_compiled_modules() -> None:
     users = sorted(path.name for path in CORE_FILES
                    if any(module.split(".")[0] == "numba" for _line, module in _imports(path)))
-    assert users == ["kernels.py"], f"numba is imported outside core/kernels.py: {users}"
+    assert users == COMPILED_MODULES, f"numba is imported outside {COMPILED_MODULES}: {users}"
+
+
+def test_numba_cache_is_dropped_when_any_core_source_changes(tmp_path: Path) -> None:
+    """numba checks a cached function against its own file only; the core's guard checks them all."""
+    from rigid_body_sim.core.jit import STAMP_NAME, invalidate_stale_cache
+
+    sources, cache = tmp_path / "core", tmp_path / "core" / "__pycache__"
+    sources.mkdir()
+    (sources / "integrators.py").write_text("A = 1\n")
+    (sources / "stepping.py").write_text("B = 2\n")
+    cache.mkdir()
+    cached = [cache / "stepping.advance-1.py311.nbi", cache / "stepping.advance-1.py311.1.nbc"]
+
+    def fill() -> None:
+        for path in cached:
+            path.write_bytes(b"machine code")
+
+    fill()
+    assert invalidate_stale_cache(sources, cache)  # no stamp yet: dropped, stamped
+    assert not any(p.exists() for p in cached) and (cache / STAMP_NAME).exists()
+    fill()
+    assert not invalidate_stale_cache(sources, cache)  # nothing changed: kept
+    assert all(p.exists() for p in cached)
+    (sources / "integrators.py").write_text("A = 3\n")  # a module stepping.advance inlines
+    assert invalidate_stale_cache(sources, cache)
+    assert not any(p.exists() for p in cached)

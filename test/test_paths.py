@@ -70,3 +70,75 @@ def test_missing_default_scene_is_reported(
     monkeypatch.setattr(paths, "_candidate_share_dirs", lambda: [share])
     with pytest.raises(FileNotFoundError, match=r"default scene .*default_scene\.yaml"):
         paths.default_scene_path()
+
+
+# --------------------------------------------------------------------------- opening files users name
+
+
+def test_read_regular_file_reads_a_file_and_bounds_the_size(tmp_path: Path) -> None:
+    path = tmp_path / "a.yaml"
+    path.write_bytes(b"x" * 100)
+    assert paths.read_regular_file(path, 100) == b"x" * 100
+    with pytest.raises(paths.FileTooLargeError, match="file is 100 bytes; expected at most 99"):
+        paths.read_regular_file(path, 99)
+
+
+@pytest.mark.parametrize("kind", ["fifo", "directory", "device"])
+def test_special_files_are_refused_for_reading_without_blocking(tmp_path: Path, kind: str) -> None:
+    import os
+
+    path = {"fifo": tmp_path / "f", "directory": tmp_path, "device": Path("/dev/zero")}[kind]
+    if kind == "fifo":
+        os.mkfifo(path)
+    expected = {"fifo": "a FIFO", "directory": "a directory", "device": "a character device"}[kind]
+    with pytest.raises(paths.NotRegularFileError, match=f"not a regular file \\({expected}\\); expected a YAML file"):
+        paths.read_regular_file(path, 10, expected="a YAML file")
+    with pytest.raises(paths.NotRegularFileError):
+        paths.open_for_reading(path)
+
+
+def test_open_for_writing_truncates_only_a_regular_file(tmp_path: Path) -> None:
+    import os
+
+    path = tmp_path / "out.csv"
+    path.write_text("old contents\n")
+    with paths.open_for_writing(path) as f:
+        f.write(b"new\n")
+    assert path.read_bytes() == b"new\n"
+    fifo = tmp_path / "out.fifo"
+    os.mkfifo(fifo)
+    reader = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)  # with a reader the open would succeed: fstat refuses it
+    try:
+        with pytest.raises(paths.NotRegularFileError, match=r"\(a FIFO\)"):
+            paths.open_for_writing(fifo)
+        assert os.read(reader, 10) == b""
+    finally:
+        os.close(reader)
+    with pytest.raises(paths.NotRegularFileError, match=r"\(a character device\)"):
+        paths.open_for_writing("/dev/full")
+    with pytest.raises(FileNotFoundError):
+        paths.open_for_writing(tmp_path / "missing" / "out.csv")
+
+
+def test_check_writable_path_says_why(tmp_path: Path) -> None:
+    import os
+
+    assert paths.check_writable_path(tmp_path / "new.csv") is None
+    assert "is a directory" in paths.check_writable_path(tmp_path)
+    assert "does not exist" in paths.check_writable_path(tmp_path / "missing" / "x.csv")
+    os.mkfifo(tmp_path / "f")
+    assert paths.check_writable_path(tmp_path / "f", expected="an .mcap file") == (
+        f"{str(tmp_path / 'f')!r} is a FIFO; expected the path of an .mcap file to write")
+    assert "is a character device" in paths.check_writable_path("/dev/null")
+
+
+def test_same_file_follows_links(tmp_path: Path) -> None:
+    import os
+
+    a = tmp_path / "a.csv"
+    a.write_text("x")
+    (tmp_path / "link").symlink_to(a)
+    os.link(a, tmp_path / "hard")
+    assert paths.same_file(a, tmp_path / "link") and paths.same_file(a, tmp_path / "hard")
+    assert paths.same_file(tmp_path / "new", tmp_path / "." / "new")  # neither exists: the same path
+    assert not paths.same_file(a, tmp_path / "b.csv")

@@ -68,14 +68,18 @@ def _with_spin_step(spec: dict, spin_step: float, dt: float) -> dict:
 @given(spec=bodies(), integrator=st.sampled_from(FIXED_STEP_INTEGRATORS), dt=st.sampled_from([1e-4, 1e-2, 0.5]),
        steps=st.integers(1, 40), accel=st.lists(st.floats(-100.0, 100.0), min_size=3, max_size=3))
 def test_momentum_change_is_force_times_time(spec, integrator, dt, steps, accel) -> None:
-    """A constant world force F = m a through the COM: p(t) − p(0) = F t, to ~n ulps."""
+    """A constant force F = m a at the COM, world axes: p(t) − p(0) = F t, to ~n ulps.
+
+    (Named at the COM, ``b/world_aligned``: a force about a world point that is the COM at a
+    step's start leaves the COM's path during the step, and its moment spins a needle up.)
+    """
     body = _with_spin_step(spec, 0.05, dt)
     mass = body["mass"]
     sim = Simulator(scene_of({"b": body}), integrator, dt)
     force = mass * np.array(accel)
     p0 = sim.linear_momentum()[0]
     for _ in range(steps):
-        sim.apply_force_at_point("b", force, sim.positions_world()[0], frame="world")  # through the COM
+        sim.apply_wrench("b", force=force, frame="b/world_aligned")  # at the COM
         sim.step()
     expected = p0 + force * steps * dt
     scale = np.abs(p0).max() + np.abs(force).max() * steps * dt
@@ -119,7 +123,11 @@ def test_quaternions_stay_unit(spec, integrator, steps, spin_step) -> None:
         assert abs(np.linalg.norm(sim.orientations_xyzw()[0]) - 1.0) <= 4 * EPS
 
 
-FRAMES = ("world", "body", "world_aligned", "site_body_axes", "site_world_axes")
+#: The same load named in frames that keep it the same inside a step (test_forces.FRAME_GROUPS):
+#: a force and couple fixed in the body, and a force along a line fixed in space.
+FRAME_GROUPS = {"body-fixed": ("body", "site_body_axes", "point_in_body_frame"),
+                "line fixed in space": ("world", "point_in_world_frame")}
+FRAMES = tuple(frame for group in FRAME_GROUPS.values() for frame in group)
 
 
 @SETTINGS
@@ -127,12 +135,12 @@ FRAMES = ("world", "body", "world_aligned", "site_body_axes", "site_world_axes")
        force=st.lists(st.floats(-10.0, 10.0), min_size=3, max_size=3),
        couple=st.lists(st.floats(-1.0, 1.0), min_size=3, max_size=3))
 def test_the_same_wrench_in_every_frame_gives_the_same_motion(spec, integrator, steps, force, couple) -> None:
-    """Force F at a body-fixed point r_B plus a couple C, named in each frame (converted by hand
-    from the current state every step): every copy moves identically, to round-off."""
+    """Force F at a body-fixed point r_B plus a couple C, named in each frame of its group (converted by
+    hand from the current state every step): every copy in a group moves identically, to round-off."""
     rng = spec["rng"]
     site_B = rng.normal(size=3)
     body = _with_spin_step(spec, 0.1, 0.01)
-    body["sites"] = {"s": {"position": site_B.tolist()}, "sw": {"position": site_B.tolist(), "axes": "world"}}
+    body["sites"] = {"s": {"position": site_B.tolist()}}
     sim = Simulator(scene_of({f"by_{frame}": body for frame in FRAMES}), integrator, 0.01)
     # Sized so that every body stays in every method's envelope over the run (|ω̇| ≲ 10 rad/s²,
     # |a| ≲ 100 m/s²): outside it, explicit methods amplify any difference, round-off included.
@@ -147,14 +155,16 @@ def test_the_same_wrench_in_every_frame_gives_the_same_motion(spec, integrator, 
             arm_W = R_WB @ site_B  # COM → point, world axes
             if frame == "world":  # about the world origin, world axes
                 sim.apply_wrench(name, F_W, C_W + np.cross(state.position_world + arm_W, F_W), frame="world")
+            elif frame == "point_in_world_frame":
+                sim.apply_force_at_point(name, F_W, state.position_world + arm_W, frame="world")
+                sim.apply_wrench(name, torque=C_W, frame="world")
             elif frame == "body":  # about the COM, body axes
                 sim.apply_wrench(name, R_WB.T @ F_W, R_WB.T @ (C_W + np.cross(arm_W, F_W)), frame=name)
-            elif frame == "world_aligned":  # about the COM, world axes
-                sim.apply_wrench(name, F_W, C_W + np.cross(arm_W, F_W), frame=f"{name}/world_aligned")
-            elif frame == "site_body_axes":  # about the point, body axes
+            elif frame == "point_in_body_frame":
+                sim.apply_force_at_point(name, R_WB.T @ F_W, site_B, frame=name)
+                sim.apply_wrench(name, torque=R_WB.T @ C_W, frame=name)
+            else:  # about the point, body axes
                 sim.apply_wrench(name, R_WB.T @ F_W, R_WB.T @ C_W, frame=f"{name}/s")
-            else:  # about the point, world axes
-                sim.apply_wrench(name, F_W, C_W, frame=f"{name}/sw")
         sim.step()
     # Round-off of the inputs: each frame's numbers reach the same (F, τ about the COM) up to
     # ~ε of the largest term added, |p + r| |F| for the world origin, through a chain of a
@@ -169,7 +179,10 @@ def test_the_same_wrench_in_every_frame_gives_the_same_motion(spec, integrator, 
     d_v = t * d_force / body["mass"]
     bounds = {"positions_world": t * d_v, "orientations_xyzw": t * d_w,
               "linear_velocities_world": d_v, "angular_velocities_world": d_w}
-    for readout in (sim.positions_world, sim.orientations_xyzw, sim.linear_velocities_world, sim.angular_velocities_world):
-        values = readout()
-        bound = 1e-12 * np.abs(values).max() + bounds[readout.__name__]
-        assert np.abs(values - values[0]).max() <= bound, (readout.__name__, values, bound)
+    for group, frames in FRAME_GROUPS.items():
+        rows = [FRAMES.index(frame) for frame in frames]
+        for readout in (sim.positions_world, sim.orientations_xyzw, sim.linear_velocities_world,
+                        sim.angular_velocities_world):
+            values = readout()[rows]
+            bound = 1e-12 * np.abs(values).max() + bounds[readout.__name__]
+            assert np.abs(values - values[0]).max() <= bound, (group, readout.__name__, values, bound)

@@ -4,12 +4,20 @@ Public API: :func:`load_scene`, :class:`Scene`, :class:`SceneError`, :class:`Sim
 :class:`BodyState`, :class:`NonFiniteStateError` (and its :class:`DivergenceError`),
 :data:`INTEGRATORS`, :class:`ScriptedWrench`, :func:`describe_scene`. Quaternions inside the
 core are (w, x, y, z); everything this API hands out or takes is (x, y, z, w), as in ROS.
+
+The scene loader is imported at once; the simulator, integrators and describe (numba, scipy)
+on first use of their names (PEP 562), so that checking a scene file (``rigid-body-sim
+check``) does not load the compiled kernels.
 """
 
-from .describe import body_model_kind, describe_scene
-from .integrators import INTEGRATORS
+from typing import TYPE_CHECKING, Any
+
 from .scene import Scene, SceneError, ScriptedWrench, load_scene
-from .simulator import BodyState, DivergenceError, NonFiniteStateError, Simulator
+
+if TYPE_CHECKING:
+    from .describe import body_model_kind, describe_scene
+    from .integrators import INTEGRATORS
+    from .simulator import BodyState, DivergenceError, NonFiniteStateError, Simulator
 
 __all__ = [
     "INTEGRATORS",
@@ -24,3 +32,18 @@ __all__ = [
     "describe_scene",
     "load_scene",
 ]
+
+_LAZY = {
+    "body_model_kind": "describe", "describe_scene": "describe", "INTEGRATORS": "integrators",
+    "BodyState": "simulator", "DivergenceError": "simulator", "NonFiniteStateError": "simulator", "Simulator": "simulator",
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        from importlib import import_module
+
+        value = getattr(import_module(f".{_LAZY[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -17,8 +17,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import integrate, special
+from scipy import special
 
+from . import elliptic
 from .quaternion import (
     quat_conjugate,
     quat_from_matrix,
@@ -43,7 +44,7 @@ SEPARATRIX_RTOL = 1e-14  # |L² − 2E·I2| ≤ this · L² counts as the separa
 UNIT_QUAT_ATOL = 1e-12  # allowed | |q_WB0| − 1 |
 TRIANGLE_RTOL = 1e-12  # slack in I_max ≤ I_j + I_k (a thin plate is exactly at equality)
 AXIAL_TORQUE_RTOL = 1e-12  # off-axis torque allowed, relative to |r_B|·|F_B|
-QUAD_EPS = 1e-13  # epsabs and epsrel of the precession-angle quadrature
+QUAD_EPS = 1e-13  # relative tolerance of the precession-angle quadrature
 _EPS = np.finfo(float).eps / 2.0  # unit round-off, 2^-53
 
 
@@ -249,43 +250,6 @@ def symmetric_top_flow(
 # ----------------------------------------------------------------------------- asymmetric top
 
 
-def _jacobi(u: np.ndarray, m: np.ndarray, m_c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Jacobi sn, cn, dn and am(u | m), given both m and m_c = 1 − m (each to full precision).
-
-    ``u``, ``m`` and ``m_c`` broadcast (one m per body in free_rotor.py): the recurrence runs
-    until every element has converged; extra steps on a converged one change it by round-off only.
-
-    The arithmetic-geometric mean and descending Landen recurrence of Abramowitz & Stegun
-    16.4 (the algorithm of ``scipy.special.ellipj``), but started from b0 = √m_c rather than
-    √(1 − m), and with dn = √(cn² + m_c sn²). ``scipy.special.ellipj`` takes only m, so it
-    loses about log10(1/m_c) digits near the separatrix, and for m within ~1e-9 of 1 switches
-    to a series that is O(1) wrong for u ≳ K (scipy issue #8480, still open in 1.17.1).
-    Measured against mpmath: ≤ 4e-15 for m_c ≥ 1e-10, 2e-14 at m_c = 1e-13, u ∈ [0, 2K].
-    """
-    a_seq, c_seq = [1.0], [np.sqrt(m)]
-    a, b = 1.0, np.sqrt(m_c)
-    while np.any(c_seq[-1] > _EPS * a_seq[-1]):
-        if len(a_seq) > 40:  # quadratic convergence: ~10 steps even for m_c = 1e-30
-            raise RuntimeError(f"AGM did not converge for m = {m!r}, m_c = {m_c!r}.")
-        a, b, c = 0.5 * (a + b), np.sqrt(a * b), 0.5 * (a - b)
-        a_seq.append(a)
-        c_seq.append(c)
-    n = len(a_seq) - 1
-    phi = (2.0**n * a_seq[n]) * np.asarray(u, dtype=float)
-    for i in range(n, 0, -1):
-        phi = 0.5 * (phi + np.arcsin(c_seq[i] / a_seq[i] * np.sin(phi)))
-    sn, cn = np.sin(phi), np.cos(phi)
-    return sn, cn, np.sqrt(cn * cn + m_c * sn * sn), phi
-
-
-def _elliptic_f(phi: np.ndarray, m_c: np.ndarray) -> np.ndarray:
-    """Incomplete elliptic integral F(φ | m), any real φ, from m_c = 1 − m (Carlson R_F); broadcasts."""
-    j = np.round(phi / np.pi)
-    phi_r = phi - j * np.pi  # in [−π/2, π/2]
-    s, c = np.sin(phi_r), np.cos(phi_r)
-    return 2.0 * j * special.ellipkm1(m_c) + s * special.elliprf(c * c, c * c + m_c * s * s, 1.0)
-
-
 @dataclass(frozen=True)
 class _EulerPoinsot:
     """Elliptic-function solution of a torque-free body, in sorted principal axes S.
@@ -303,8 +267,11 @@ class _EulerPoinsot:
     amp: np.ndarray  # (3,) amplitudes a1, a2, a3, rad/s
     nu: float  # du/dt, rad/s
     m: float  # elliptic parameter k², in [0, 1)
-    m_c: float  # 1 − m, computed without cancellation (matters near the separatrix)
-    u0: float  # initial phase
+    m_c: float  # 1 − m, to full relative precision (L² − 2E·I2 by error-free products)
+    j0: float  # initial phase u0 = 2K j0 + r0, r0 ∈ [−K, K]
+    r0: float
+    K: float  # K(m), the quarter period in u
+    qp: float  # q/p, the ratio of the (b, a) amplitudes of I ω (see asymmetric_top)
     L2: float  # |L|², (kg·m²/s)²
     transverse_zero: bool  # pure spin about the axis the polhode encircles
 
@@ -326,57 +293,68 @@ def _euler_poinsot(I: np.ndarray, w0: np.ndarray, caller: str) -> _EulerPoinsot 
     L2 = (I1 * w1) ** 2 + (I2 * w2) ** 2 + (I3 * w3) ** 2
     if L2 == 0.0:
         return None
-    # The three combinations of energy and momentum, written without cancellation:
-    D1 = I2 * (I2 - I1) * w2**2 + I3 * (I3 - I1) * w3**2  # L² − 2E·I1 ≥ 0
-    D3 = I1 * (I3 - I1) * w1**2 + I2 * (I3 - I2) * w2**2  # 2E·I3 − L² ≥ 0
-    D2 = I3 * (I3 - I2) * w3**2 - I1 * (I2 - I1) * w1**2  # L² − 2E·I2, sign picks the case
+    d21, d31, d32 = I2 - I1, I3 - I1, I3 - I2
+    # The three combinations of energy and momentum; D1, D3 are sums of squares, and D2,
+    # the difference that vanishes on the separatrix, is formed with error-free products so
+    # that m_c below has full relative precision however close to the separatrix w_B0 is.
+    D1 = I2 * d21 * w2**2 + I3 * d31 * w3**2  # L² − 2E·I1 ≥ 0
+    D3 = I1 * d31 * w1**2 + I2 * d32 * w2**2  # 2E·I3 − L² ≥ 0
+    D2 = float(elliptic.difference_of_products(I3 * d32, w3, I1 * d21, w1))  # L² − 2E·I2
     if abs(D2) <= SEPARATRIX_RTOL * L2:
         raise ValueError(
             f"{caller}: the motion is on the separatrix, L^2 = 2E*I2 within a relative {SEPARATRIX_RTOL} "
             f"(inertia={I}, w_B0={w0}); the elliptic solution degenerates (period -> infinity) there."
         )
     if D2 > 0.0:  # Landau & Lifshitz §37, (37.10): polhode about the largest-moment axis
-        case, sigma = 1, float(np.sign(w3))
-        amp = np.sqrt([D3 / (I1 * (I3 - I1)), D3 / (I2 * (I3 - I2)), D1 / (I3 * (I3 - I1))])
-        nu = np.sqrt((I3 - I2) * D1 / (I1 * I2 * I3))
-        m = (I2 - I1) * D3 / ((I3 - I2) * D1)
-        m_c = (I3 - I1) * D2 / ((I3 - I2) * D1)
-        # sn u0 = w2/a2, cn u0 = σ w1/a1 (scaled by a1 a2 > 0, so 0/0 cannot occur)
-        beta0 = np.arctan2(w2 * amp[0], sigma * w1 * amp[1])
+        case, sigma = 1, float(np.sign(w3)) or 1.0
+        amp = np.sqrt([D3 / (I1 * d31), D3 / (I2 * d32), D1 / (I3 * d31)])
+        nu = np.sqrt(d32 * D1 / (I1 * I2 * I3))
+        m = d21 * D3 / (d32 * D1)
+        m_c = d31 * D2 / (d32 * D1)
+        qp = np.sqrt(I2 * d31 / (I1 * d32))  # (I2 a2) / (I1 a1)
         transverse_zero = D3 == 0.0
     else:  # the same with axes 1 and 3 exchanged: polhode about the smallest-moment axis
-        case, sigma = 2, float(np.sign(w1))
-        amp = np.sqrt([D3 / (I1 * (I3 - I1)), D1 / (I2 * (I2 - I1)), D1 / (I3 * (I3 - I1))])
-        nu = np.sqrt((I2 - I1) * D3 / (I1 * I2 * I3))
-        m = (I3 - I2) * D1 / ((I2 - I1) * D3)
-        m_c = -(I3 - I1) * D2 / ((I2 - I1) * D3)
-        beta0 = np.arctan2(w2 * amp[2], sigma * w3 * amp[1])
+        case, sigma = 2, float(np.sign(w1)) or 1.0
+        amp = np.sqrt([D3 / (I1 * d31), D1 / (I2 * d21), D1 / (I3 * d31)])
+        nu = np.sqrt(d21 * D3 / (I1 * I2 * I3))
+        m = d32 * D1 / (d21 * D3)
+        m_c = -d31 * D2 / (d21 * D3)
+        qp = np.sqrt(I2 * d31 / (I3 * d21))  # (I2 a2) / (I3 a3)
         transverse_zero = D1 == 0.0
-    u0 = float(_elliptic_f(float(beta0), m_c))  # am(u0) = beta0
+    K = float(elliptic.complete_k(m_c))
+    j0, r0 = 0.0, 0.0
+    if not transverse_zero:
+        # sn u0, cn u0, dn u0 read off w_B0, each to full relative precision (the polhode is
+        # w_S = (σ a1 cn, a2 sn, σ a3 dn) in case 1, (σ a1 dn, a2 sn, σ a3 cn) in case 2).
+        r_w = np.array([w1, w2, w3]) / amp * np.array([sigma, 1.0, sigma])
+        sn0, cn0, dn0 = (r_w[1], r_w[0], abs(r_w[2])) if case == 1 else (r_w[1], r_w[2], abs(r_w[0]))
+        j0 = 1.0 if cn0 < 0.0 else 0.0  # u0 = 2K j0 + r0 with cn(r0) ≥ 0
+        r0 = float(elliptic.elliptic_f(sn0 if cn0 >= 0.0 else -sn0, abs(cn0), dn0))
     return _EulerPoinsot(
-        P, np.array([I1, I2, I3]), case, sigma, amp, float(nu), float(m), float(m_c), u0, L2, transverse_zero
+        P, np.array([I1, I2, I3]), case, sigma, amp, float(nu), float(m), float(m_c), j0, r0, K, float(qp), L2,
+        transverse_zero,
     )
 
 
 @dataclass(frozen=True)
 class _Phase:
-    """Jacobi functions at u = u0 + ν t, reduced: u = 2K n + r, r ∈ [0, 2K)."""
+    """Jacobi functions at u = u0 + ν t, reduced: u = 2K j + r, r ∈ [−K, K]."""
 
-    n: np.ndarray  # half-periods, float-valued integers
-    sn: np.ndarray  # sn(u) (sign restored)
+    j: np.ndarray  # half-periods, float-valued integers
+    r: np.ndarray  # reduced phase
+    sn: np.ndarray  # sn(u)
     cn: np.ndarray  # cn(u)
     dn: np.ndarray  # dn(u)
-    ph_r: np.ndarray  # am(r) ∈ [0, π); am(u) = π n + am(r)
+    sn_r: np.ndarray  # sn(r)
+    cn_r: np.ndarray  # cn(r) ≥ 0
 
 
 def _phase(ep: _EulerPoinsot, t: np.ndarray) -> _Phase:
-    two_K = 2.0 * float(special.ellipkm1(ep.m_c))
-    u = ep.u0 + ep.nu * t
-    n = np.floor(u / two_K)
-    r = np.clip(u - n * two_K, 0.0, two_K)
-    sn, cn, dn, ph = _jacobi(r, ep.m, ep.m_c)
-    parity = 1.0 - 2.0 * np.mod(n, 2.0)  # sn, cn change sign every 2K; dn does not
-    return _Phase(n, parity * sn, parity * cn, dn, np.clip(ph, 0.0, np.pi))
+    dj, r = elliptic.reduce_phase(ep.r0 + ep.nu * t, 2.0 * ep.K)  # relative to u0: no 2K j0 round trip
+    j = ep.j0 + dj
+    sn_r, cn_r, dn = elliptic.jacobi_reduced(r, ep.m_c)
+    parity = 1.0 - 2.0 * np.mod(j, 2.0)  # sn, cn change sign every 2K; dn does not
+    return _Phase(j, r, parity * sn_r, parity * cn_r, dn, sn_r, cn_r)
 
 
 def _rates_S(ep: _EulerPoinsot, ph: _Phase) -> np.ndarray:
@@ -403,10 +381,12 @@ def asymmetric_top_body_rates(inertia: np.ndarray, w_B0: np.ndarray, t: np.ndarr
     * L² < 2E·I2: the same with the indices 1 and 3 exchanged (ω1 ∝ dn, ω3 ∝ cn).
 
     σ = ±1 is the (constant) sign of the encircled-axis rate; the phase u0 comes from the
-    initial condition: am(u0) = atan2(sn u0, cn u0), u0 = F(am u0 | m). sn, cn, dn and F are
-    evaluated from both m and m_c = 1 − m (computed without cancellation), by an AGM and
-    Carlson's R_F, not by ``scipy.special.ellipj``/``ellipkinc``, which take only m and fail
-    near the separatrix (scipy issue #8480).
+    initial condition: sn u0, cn u0, dn u0 are read off w_B0 and u0 = F(am u0 | m) by
+    Carlson's R_F from them. sn, cn, dn and F are evaluated from m_c = 1 − m, itself computed
+    with error-free products (L² − 2E·I2 cancels near the separatrix), by Bulirsch's Landen
+    recurrence (:mod:`~rigid_body_sim.core.elliptic`), which keeps cn and dn to full relative
+    precision where they are small; not by ``scipy.special.ellipj``/``ellipkinc``, which take
+    only m and fail near the separatrix (scipy issue #8480).
 
     Any ordering of the moments is allowed: the axes are sorted by a signed permutation with
     det +1, a proper rotation, so Euler's equations keep their form. A pure spin about the
@@ -467,41 +447,54 @@ def intermediate_axis_flip_period(inertia: np.ndarray, w_B0: np.ndarray) -> floa
     ep = _euler_poinsot(I, w0, "intermediate_axis_flip_period")
     if ep is None:
         raise ValueError(f"Expected `w_B0` to be non-zero (rad/s), got {w0}: a body at rest never flips.")
-    return float(2.0 * special.ellipkm1(ep.m_c) / ep.nu)
+    return float(2.0 * ep.K / ep.nu)
 
 
-def _precession_integral(
-    ep: _EulerPoinsot, g: np.ndarray, I_ab: np.ndarray, beta_r: np.ndarray
-) -> tuple[np.ndarray, float]:
-    """H(β) = ∫₀^β h dβ' for β in [0, π] (shape (N,)), and H(π); see :func:`asymmetric_top`.
+def _precession_rate(ep: _EulerPoinsot, g: np.ndarray, I_ab: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """dφ/du · ν/|L| = (g_a f_a² + g_b f_b²) / (I_a g_a f_a² + I_b g_b f_b²), even and 2K-periodic in u.
 
-    h(β) = (g_a f_a² + g_b f_b²) / ((I_a g_a f_a² + I_b g_b f_b²) dn), g_i = 1/|I_c − I_i|,
-    (f_a, f_b) = (cos β, sin β) in case 1 and (sin β, cos β) in case 2, dn = √(1 − m sin²β):
-    φ' dt = (|L|/ν) h dβ, since (ω_a, ω_b) ∝ (√(g_a/I_a) f_a, √(g_b/I_b) f_b) and du = dβ/dn.
-
-    Integrated piecewise between the sorted β values, so the total work is one quadrature
-    over [0, π] whatever the number of output times.
+    g_i = 1/|I_c − I_i| and (f_a, f_b) = (cn u, sn u) in case 1, (sn u, cn u) in case 2: φ' =
+    |L| (I_a ω_a² + I_b ω_b²) / (I_a² ω_a² + I_b² ω_b²) on the polhode. Bounded between
+    1/max(I_a, I_b) and 1/min(I_a, I_b), smooth in u on the scale of one unit: no endpoint
+    singularity near the separatrix, unlike the same integral in β = am u.
     """
-    m, m_c = ep.m, ep.m_c
+    sn, cn, _ = elliptic.jacobi_reduced(u, ep.m_c)
+    fa2, fb2 = (cn * cn, sn * sn) if ep.case == 1 else (sn * sn, cn * cn)
+    return (g[0] * fa2 + g[1] * fb2) / (I_ab[0] * g[0] * fa2 + I_ab[1] * g[1] * fb2)
 
-    def h(beta: float) -> float:
-        s2 = np.sin(beta) ** 2
-        c2 = np.cos(beta) ** 2
-        fa2, fb2 = (c2, s2) if ep.case == 1 else (s2, c2)
-        num = g[0] * fa2 + g[1] * fb2
-        den = I_ab[0] * g[0] * fa2 + I_ab[1] * g[1] * fb2
-        return num / (den * np.sqrt(m_c + m * c2))  # dn = √(1 − m sin²β), no cancellation
 
-    order = np.argsort(beta_r)
-    knots = np.concatenate(([0.0], beta_r[order], [np.pi]))
-    pieces = np.empty(knots.size - 1)
-    for i in range(pieces.size):
-        lo, hi = knots[i], knots[i + 1]
-        pieces[i] = 0.0 if hi == lo else integrate.quad(h, lo, hi, epsabs=QUAD_EPS, epsrel=QUAD_EPS, limit=200)[0]
-    cumulative = np.cumsum(pieces)
-    H = np.empty_like(beta_r)
-    H[order] = cumulative[:-1]
-    return H, cumulative[-1]
+def _precession_integral(ep: _EulerPoinsot, g: np.ndarray, I_ab: np.ndarray, r: np.ndarray
+                         ) -> tuple[np.ndarray, float]:
+    """H(r) = ∫₀^r (dφ/du · ν/|L|) du for r ∈ [−K, K] (shape (N,)), and H(2K) = 2 H(K).
+
+    The integrand is even, so H is odd: the |r| are sorted and the pieces between successive
+    knots 0 ≤ |r_i| ≤ K are integrated by composite 16-point Gauss–Legendre, every panel at
+    most ``width`` long, halving ``width`` until two successive results agree to QUAD_EPS
+    (relative to H(K)). One vectorised evaluation per level, whatever N.
+    """
+    x_gl, w_gl = np.polynomial.legendre.leggauss(16)
+    knots = np.unique(np.concatenate(([0.0], np.abs(r), [ep.K])))
+    lengths = np.diff(knots)
+    previous = None
+    width = 0.5
+    for _ in range(12):
+        panels = np.maximum(1, np.ceil(lengths / width)).astype(int)
+        piece = np.repeat(np.arange(lengths.size), panels)
+        index = np.arange(piece.size) - np.repeat(np.cumsum(panels) - panels, panels)
+        panel_len = lengths[piece] / panels[piece]
+        start = knots[piece] + index * panel_len
+        u = start[:, None] + 0.5 * panel_len[:, None] * (x_gl + 1.0)
+        values = _precession_rate(ep, g, I_ab, u) @ w_gl * (0.5 * panel_len)
+        pieces = np.bincount(piece, weights=values, minlength=lengths.size)
+        cumulative = np.concatenate(([0.0], np.cumsum(pieces)))
+        if previous is not None and np.max(np.abs(cumulative - previous)) <= QUAD_EPS * cumulative[-1]:
+            break
+        previous = cumulative
+        width *= 0.5
+    else:  # pragma: no cover - 16-point panels of 0.5/2^11 in u resolve any body
+        raise RuntimeError(f"precession quadrature did not converge (inertia {ep.I_S}, m_c {ep.m_c}).")
+    H = np.sign(r) * np.interp(np.abs(r), knots, cumulative)  # exact at the knots
+    return H, 2.0 * cumulative[-1]
 
 
 def asymmetric_top(
@@ -519,10 +512,12 @@ def asymmetric_top(
         L_(a,b,c) = |L| (sin θ sin ψ, sin θ cos ψ, cos θ)      → θ, ψ from w_B(t)
         φ' = |L| (I_a ω_a² + I_b ω_b²) / (I_a² ω_a² + I_b² ω_b²)   > 0
 
-    φ is obtained by quadrature (``scipy.integrate.quad``, epsabs = epsrel = 1e-13) after the
-    change of variable u → β = am(u), in which φ' du/dβ is smooth and π-periodic; only the
-    fractional period is integrated, piecewise between the sorted output phases, so the
-    cost does not grow with t. Then
+    φ is obtained by quadrature in u = u0 + ν t (composite Gauss–Legendre refined to a
+    relative 1e-13), in which dφ/du is bounded, smooth and 2K-periodic even on the edge of the
+    separatrix (in β = am u it would peak like 1/dn there); only the fractional period is
+    integrated, piecewise between the sorted output phases, so the cost does not grow with t.
+    This is independent of :func:`~rigid_body_sim.core.free_rotor.exact_rotor`, which gets the
+    same angle from Legendre's integral of the third kind. Then
 
         R_WB(t) = C · Rz(φ(t) − φ(0)) · Rx(θ(t)) · Rz(ψ(t)) · Q,
 
@@ -569,17 +564,12 @@ def asymmetric_top(
     w_B = w_S @ ep.P
 
     I1, I2, I3 = ep.I_S
-    a1, a2, a3 = ep.amp
     if ep.case == 1:
         abc = (0, 1, 2)
         g = np.array([1.0 / (I3 - I1), 1.0 / (I3 - I2)])
-        # ψ = atan2(I1 ω1, I2 ω2) = atan2(σ p cos β, q sin β), p = I1 a1, q = I2 a2
-        p, q = I1 * a1, I2 * a2
     else:
         abc = (1, 2, 0)
         g = np.array([1.0 / (I2 - I1), 1.0 / (I3 - I1)])
-        # ψ = atan2(I2 ω2, I3 ω3) = atan2(q sin β, σ p cos β), p = I3 a3, q = I2 a2
-        p, q = I3 * a3, I2 * a2
     I_S = ep.I_S
     Q_cyc = np.eye(3)[list(abc)]
     Q = Q_cyc @ ep.P  # components in (a, b, c) = Q · components in B
@@ -589,17 +579,17 @@ def asymmetric_top(
     # θ ∈ (0, π): never 0 or π off the pure-spin case.
     theta = np.arctan2(np.hypot(L_abc[:, 0], L_abc[:, 1]), L_abc[:, 2])
 
-    # Continuous β = am(u) and χ = the continuous branch of atan2(q sin β, p cos β).
-    beta = np.pi * ph.n + ph.ph_r
-    chi = beta + np.arctan2((q - p) * ph.sn * ph.cn, p * ph.cn**2 + q * ph.sn**2)
+    # χ = the branch of atan2(q sn u, p cn u) continuous in u: jπ + atan2(q sn r, p cn r), cn r ≥ 0.
+    # Case 1: ψ = atan2(I1 ω1, I2 ω2) = atan2(σ p cn, q sn); case 2: ψ = atan2(I2 ω2, I3 ω3) = atan2(q sn, σ p cn).
+    chi = np.pi * ph.j + np.arctan2(ep.qp * ph.sn_r, ph.cn_r)
     if ep.case == 1:
         psi = ep.sigma * (0.5 * np.pi - chi)
     else:
         psi = chi if ep.sigma > 0 else np.pi - chi
 
-    # φ(t) − φ(0) = (|L|/ν) [H(β(t)) − H(β(0))], H(β + π) = H(β) + H(π).
-    H_r, H_pi = _precession_integral(ep, g, I_S[list(abc[:2])], ph.ph_r)
-    H = ph.n * H_pi + H_r
+    # φ(t) − φ(0) = (|L|/ν) [H(u(t)) − H(u(0))], H(2K j + r) = j H(2K) + H(r).
+    H_r, H_2K = _precession_integral(ep, g, I_S[list(abc[:2])], ph.r)
+    H = ph.j * H_2K + H_r
     dphi = (M / ep.nu) * (H - H[0])
 
     q_Lambda = quat_multiply(quat_multiply(_axis_quat(dphi, 2), _axis_quat(theta, 0)), _axis_quat(psi, 2))

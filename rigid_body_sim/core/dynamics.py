@@ -1,30 +1,40 @@
-"""Newton–Euler equations of N free rigid bodies: the continuous dynamics, apart from stepping.
+"""Newton–Euler equations of a free rigid body, written once, and the read-outs of energy and momentum.
 
 In the principal frame P (diagonal inertia I = (I1, I2, I3)):
 
-    m · dv_W/dt      = F_W + m g_W − c_v v_W
+    m · dv_W/dt      = F_W − c_v v_W                        (F_W includes m g)
     I · dw_P/dt      = τ_P − c_w w_P − w_P × (I w_P)        ← the gyroscopic term
     dp_W/dt          = v_W
     dq_WP/dt         = ½ q_WP ⊗ (0, w_P)                    (w, x, y, z)
 
-``F_W`` and ``τ_W`` are the applied force and the torque about the centre of mass, world
-axes; ``τ_P = R_WP^T τ_W``. The gyroscopic term is what makes a phone flip about its
-intermediate axis; leaving it out is the classic textbook bug.
+``F_W`` and ``τ_P`` are what :func:`~rigid_body_sim.core.forces.body_wrench` returns for the
+state at hand: the applied wrenches evaluated in their frames, plus gravity. The gyroscopic
+term is what makes a phone flip about its intermediate axis; leaving it out is the classic
+textbook bug. :func:`derivative` is the one implementation (compiled); every integrator that
+needs the right-hand side calls it, the scipy ``reference`` included.
 """
 
 from __future__ import annotations
 
-import numpy as np
+import math
 
+import numpy as np
+from numba import njit
+
+from .forces import body_wrench, resolve_wrench
+from .layout import (DAMP_ANG, DAMP_LIN, INERTIA, INERTIA_NORMAL, INV_INERTIA, INV_MASS, MODEL, MODEL_PLANAR, NORMAL,
+                     P, Q, V, W)
 from .model import BodyModel, State
-from .quaternion import cross3, quat_conjugate, quat_multiply, quat_rotate, quat_to_matrix
+from .quaternion import quat_to_matrix
+from .jit import INLINE, JIT
+from .rotation import normalise, rotate_back
 
 __all__ = [
-    "gyroscopic_torque_P",
-    "linear_acceleration_W",
-    "angular_acceleration_P",
-    "quaternion_rate",
+    "gyroscopic_torque",
+    "angular_acceleration",
+    "derivative",
     "derivatives",
+    "impulse_response",
     "kinetic_energy",
     "potential_energy",
     "linear_momentum_W",
@@ -32,47 +42,77 @@ __all__ = [
 ]
 
 
-def gyroscopic_torque_P(inertia_P: np.ndarray, w_WP_P: np.ndarray) -> np.ndarray:
-    """The gyroscopic term ``−w × (I w)``, shape (N, 3), P axes, N·m."""
-    return -cross3(w_WP_P, inertia_P * w_WP_P)
+@njit(**INLINE)
+def gyroscopic_torque(p, wx, wy, wz):
+    """The gyroscopic term −w × (I w), N·m, principal axes, of a body with parameter row ``p``."""
+    hx, hy, hz = p[INERTIA] * wx, p[INERTIA + 1] * wy, p[INERTIA + 2] * wz
+    return -(wy * hz - wz * hy), -(wz * hx - wx * hz), -(wx * hy - wy * hx)
 
 
-def linear_acceleration_W(model: BodyModel, v_WC_W: np.ndarray, force_W: np.ndarray) -> np.ndarray:
-    """Centre-of-mass acceleration, world axes (m/s², shape (N, 3)): ``F/m + g − (c_v/m) v``."""
-    inv_mass = (1.0 / model.mass)[:, None]
-    return force_W * inv_mass + model.gravity_W - (model.damping_linear[:, None] * inv_mass) * v_WC_W
+@njit(**INLINE)
+def angular_acceleration(p, wx, wy, wz, tx, ty, tz):
+    """dw_P/dt = I⁻¹(τ_P − c_w w − w × I w), rad/s², principal axes."""
+    gx, gy, gz = gyroscopic_torque(p, wx, wy, wz)
+    c = p[DAMP_ANG]
+    return ((tx - c * wx + gx) * p[INV_INERTIA], (ty - c * wy + gy) * p[INV_INERTIA + 1],
+            (tz - c * wz + gz) * p[INV_INERTIA + 2])
 
 
-def angular_acceleration_P(model: BodyModel, w_WP_P: np.ndarray, torque_P: np.ndarray) -> np.ndarray:
-    """Angular acceleration, P axes (rad/s², shape (N, 3)): ``I⁻¹(τ − c_w w − w × I w)``."""
-    total = torque_P - model.damping_angular[:, None] * w_WP_P + gyroscopic_torque_P(model.inertia_P, w_WP_P)
-    return total / model.inertia_P
+@njit(**INLINE)
+def derivative(y, p, w, d):
+    """d ← dy/dt of one body: state row ``y``, parameter row ``p``, wrench row ``w`` (layout.py)."""
+    fx, fy, fz, tx, ty, tz = body_wrench(y, p, w)
+    qw, qx, qy, qz = y[Q], y[Q + 1], y[Q + 2], y[Q + 3]
+    wx, wy, wz = y[W], y[W + 1], y[W + 2]
+    vx, vy, vz = y[V], y[V + 1], y[V + 2]
+    d[P], d[P + 1], d[P + 2] = vx, vy, vz
+    d[Q] = 0.5 * (-qx * wx - qy * wy - qz * wz)
+    d[Q + 1] = 0.5 * (qw * wx + qy * wz - qz * wy)
+    d[Q + 2] = 0.5 * (qw * wy - qx * wz + qz * wx)
+    d[Q + 3] = 0.5 * (qw * wz + qx * wy - qy * wx)
+    inv_m = p[INV_MASS]
+    rate = p[DAMP_LIN] * inv_m
+    d[V] = fx * inv_m - rate * vx
+    d[V + 1] = fy * inv_m - rate * vy
+    d[V + 2] = fz * inv_m - rate * vz
+    d[W], d[W + 1], d[W + 2] = angular_acceleration(p, wx, wy, wz, tx, ty, tz)
 
 
-def quaternion_rate(q_WP: np.ndarray, w_WP_P: np.ndarray) -> np.ndarray:
-    """``dq/dt = ½ q ⊗ (0, w_P)`` for (w, x, y, z) quaternions, shape (N, 4)."""
-    w_quat = np.concatenate((np.zeros(w_WP_P.shape[:-1] + (1,)), w_WP_P), axis=-1)
-    return 0.5 * quat_multiply(q_WP, w_quat)
+@njit(**JIT)
+def derivatives(Y, prm, wrenches, D):
+    """D ← dY/dt for every body: rows of ``Y`` (N, ≥ 13), ``prm``, ``wrenches``; D (N, 13)."""
+    for i in range(Y.shape[0]):
+        derivative(Y[i], prm[i], wrenches[i], D[i])
 
 
-def torque_in_P(q_WP: np.ndarray, torque_W: np.ndarray) -> np.ndarray:
-    """Rotate torques from world to P axes, using the normalised ``q_WP`` (shape (N, 4))."""
-    q = q_WP / np.linalg.norm(q_WP, axis=-1, keepdims=True)
-    return quat_rotate(quat_conjugate(q), torque_W)
+@njit(**JIT)
+def impulse_response(y, p, impulse, out):
+    """out ← y after the impulse row ``impulse`` (a wrench row of N·s and N·m·s, forces.add_wrench) acts at once.
 
-
-def derivatives(model: BodyModel, state: State, force_W: np.ndarray, torque_W: np.ndarray) -> State:
-    """Time derivative of ``state`` under applied force and torque (about the COM, world axes).
-
-    Returns a :class:`State` whose fields hold dp/dt, dq/dt, dv/dt and dw/dt.
+    The impulse is resolved at ``y`` like a wrench (forces.resolve_wrench, projected onto the
+    motion): Δv = J/m, and ΔL = H about the COM. A free body's Δw_P = I⁻¹ R(q)ᵀ H; a planar
+    body, whose angular velocity stays along the plane normal n, takes only
+    Δw = (H·n)/(nᵀ I_W n) n (the constraint's reaction absorbs the rest). Returns the
+    impulse's (|J|, |H|) after projection, for the energy bound.
     """
-    torque_P = torque_in_P(state.q_WP, torque_W)
-    return State(
-        state.v_WC_W,
-        quaternion_rate(state.q_WP, state.w_WP_P),
-        linear_acceleration_W(model, state.v_WC_W, force_W),
-        angular_acceleration_P(model, state.w_WP_P, torque_P),
-    )
+    for j in range(W + 3):
+        out[j] = y[j]
+    jx, jy, jz, hx, hy, hz = resolve_wrench(y, p, impulse)
+    inv_m = p[INV_MASS]
+    out[V] += jx * inv_m
+    out[V + 1] += jy * inv_m
+    out[V + 2] += jz * inv_m
+    qw, qx, qy, qz = normalise(y[Q], y[Q + 1], y[Q + 2], y[Q + 3])
+    if p[MODEL] == MODEL_PLANAR:
+        nx, ny, nz = p[NORMAL], p[NORMAL + 1], p[NORMAL + 2]
+        dw = (hx * nx + hy * ny + hz * nz) / p[INERTIA_NORMAL]
+        dP = rotate_back(qw, qx, qy, qz, dw * nx, dw * ny, dw * nz)
+        out[W], out[W + 1], out[W + 2] = out[W] + dP[0], out[W + 1] + dP[1], out[W + 2] + dP[2]
+    else:
+        hP = rotate_back(qw, qx, qy, qz, hx, hy, hz)
+        for a in range(3):
+            out[W + a] += hP[a] * p[INV_INERTIA + a]
+    return math.sqrt(jx * jx + jy * jy + jz * jz), math.sqrt(hx * hx + hy * hy + hz * hz)
 
 
 def kinetic_energy(model: BodyModel, state: State) -> np.ndarray:

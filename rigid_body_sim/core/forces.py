@@ -1,6 +1,6 @@
-"""Applied wrenches and the frame rule.
+"""Applied wrenches: the frame rule, the wrench rows, and the one function that evaluates them.
 
-One rule for every applied wrench: it is a force and a torque *about the origin of a frame,
+One rule for every applied wrench: a force and a torque *about the origin of a frame,
 expressed in that frame's axes*. The frames a wrench on body ``b`` may name:
 
 =========================  ===========================  ============================
@@ -14,45 +14,78 @@ frame                      origin                       axes
 
 A force F at point r of a frame is therefore the wrench (F, r × F) in that frame.
 
-Applied wrenches are kept in their own frame's terms in :class:`WrenchAccumulator` and are
-*resolved* into (force, torque about the centre of mass), world axes, at the start of every
-step (:meth:`WrenchAccumulator.resolve`), then held constant over that step. So a wrench in a
-body-fixed frame follows the body from step to step, and the same physical wrench named in
-any frame gives the same motion to round-off.
+A wrench is *kept in its frame's terms* in the body's wrench row (layout.py: F_WORLD …
+SITE_MOMENT), by :func:`add_wrench`, and *evaluated* from the body's state by
+:func:`body_wrench` wherever an integrator evaluates the dynamics: at every stage of rk4,
+every kick of the splittings, every step of the first-order methods. So a force fixed in the
+body turns with it inside the step, and the torque about the centre of mass of a wrench
+given about a world point sees the centre of mass where the stage puts it: every integrator
+keeps its order under forcing in every frame (MuJoCo re-runs its forward pass per RK stage
+for the same reason). Impulses are resolved by the same function at the state they act on.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from enum import Enum
 
 import numpy as np
+from numba import njit
 
-from . import kernels
-from .model import BodyModel, State
-from .quaternion import quat_conjugate, quat_rotate
+from .layout import (
+    ACTIVE,
+    F_COM_P,
+    F_COM_W,
+    F_WORLD,
+    FRAME_BODY,
+    FRAME_SITE_BODY_AXES,
+    FRAME_SITE_WORLD_AXES,
+    FRAME_WORLD,
+    FRAME_WORLD_ALIGNED,
+    GRAVITY,
+    MASS,
+    NORMAL,
+    P,
+    PROJECT,
+    PROJECT_ALL,
+    PROJECT_FORCE,
+    PROJECT_PLANE,
+    PROJECT_TORQUE,
+    Q,
+    Q_PB,
+    SITE_MOMENT,
+    T_COM_P,
+    T_COM_W,
+    T_WORLD,
+    WRENCH_WIDTH,
+)
+from .jit import INLINE, JIT
+from .rotation import matrix, normalise, rotate, rotate_back
 from .scene import WORLD_FRAME, Scene
 
-__all__ = ["FrameKind", "FrameRef", "parse_frame", "WrenchAccumulator"]
+__all__ = ["FrameRef", "FRAME_KIND_NAMES", "parse_frame", "add_wrench", "body_wrench", "resolve_wrench", "wrench_about_com",
+           "project", "project_twist", "new_wrench_rows"]
 
-
-class FrameKind(Enum):
-    """How a frame's origin and axes relate to its body."""
-
-    WORLD = "world"  # world origin, world axes
-    BODY = "body"  # centre of mass, body axes
-    WORLD_ALIGNED = "world_aligned"  # centre of mass, world axes
-    SITE_BODY_AXES = "site_body_axes"  # body-fixed point, body axes
-    SITE_WORLD_AXES = "site_world_axes"  # body-fixed point, world axes
+#: layout.FRAME_* → a readable name.
+FRAME_KIND_NAMES = {
+    FRAME_WORLD: "world",
+    FRAME_BODY: "body",
+    FRAME_WORLD_ALIGNED: "world_aligned",
+    FRAME_SITE_BODY_AXES: "site_body_axes",
+    FRAME_SITE_WORLD_AXES: "site_world_axes",
+}
 
 
 @dataclass(frozen=True)
 class FrameRef:
-    """A parsed frame name for a wrench on body ``body_index``."""
+    """A frame name parsed for a wrench on body ``body_index``.
+
+    ``kind`` is a layout.FRAME_* code; ``arm_P`` is the site's position from the centre of
+    mass in principal axes (m), zeros for the frames that are not sites.
+    """
 
     body_index: int
-    kind: FrameKind
-    site_index: int = -1
+    kind: int
+    arm_P: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
 
 def parse_frame(scene: Scene, body: str, frame: str) -> FrameRef:
@@ -64,97 +97,173 @@ def parse_frame(scene: Scene, body: str, frame: str) -> FrameRef:
         For an unknown body, or a frame that is not one of ``scene.frames_of(body)`` (listed).
     """
     names = scene.body_names
-    if body not in scene.sites:
+    if not isinstance(body, str) or body not in scene.sites:
         raise ValueError(f"unknown body {body!r}; bodies are {list(names)}")
     index = names.index(body)
     if frame == WORLD_FRAME:
-        return FrameRef(index, FrameKind.WORLD)
+        return FrameRef(index, FRAME_WORLD)
     if frame == body:
-        return FrameRef(index, FrameKind.BODY)
+        return FrameRef(index, FRAME_BODY)
     if frame == f"{body}/world_aligned":
-        return FrameRef(index, FrameKind.WORLD_ALIGNED)
+        return FrameRef(index, FRAME_WORLD_ALIGNED)
     if isinstance(frame, str) and frame.startswith(f"{body}/") and frame[len(body) + 1:] in scene.sites[body]:
         site = scene.model.site_names.index(frame)
-        world_axes = bool(scene.model.site_world_axes[site])
-        return FrameRef(index, FrameKind.SITE_WORLD_AXES if world_axes else FrameKind.SITE_BODY_AXES, site)
+        kind = FRAME_SITE_WORLD_AXES if scene.model.site_world_axes[site] else FRAME_SITE_BODY_AXES
+        return FrameRef(index, kind, tuple(float(x) for x in scene.model.site_p_P[site]))
     raise ValueError(f"unknown frame {frame!r} for body {body!r}; valid frames are {list(scene.frames_of(body))}")
 
 
-class WrenchAccumulator:
-    """Wrenches applied to N bodies, kept in the terms of the frame they were given in.
+def new_wrench_rows(count: int) -> np.ndarray:
+    """Empty wrench rows for ``count`` bodies, shape (count, WRENCH_WIDTH) (layout.py)."""
+    return np.zeros((count, WRENCH_WIDTH))
 
-    Buckets (all SI, all cleared by :meth:`clear`):
 
-    - ``force_W``, ``torque_O_W``: world frame; torque about the world origin, world axes.
-    - ``force_A``, ``torque_A``: about the centre of mass, world axes (``world_aligned``, and
-      the torque part of world-axes sites).
-    - ``force_P``, ``torque_P``: about the centre of mass, principal axes (body frame and
-      body-axes sites, whose moment arm is added when applied).
-    - ``site_force_W`` (S, 3): force at each world-axes site, world axes; its moment arm
-      rotates with the body, so it is resolved every step.
+@njit(**JIT)
+def add_wrench(w, p, kind, ax, ay, az, fx, fy, fz, tx, ty, tz):
+    """Add to wrench row ``w`` the wrench (f, t) about the origin of a frame, in its axes, in the frame's terms.
+
+    ``kind`` is a layout.FRAME_*, ``(ax, ay, az)`` the site's position from the COM in
+    principal axes (site frames), ``p`` the body's parameter row (q_PB for body axes).
     """
+    if kind == FRAME_WORLD:
+        w[F_WORLD] += fx
+        w[F_WORLD + 1] += fy
+        w[F_WORLD + 2] += fz
+        w[T_WORLD] += tx
+        w[T_WORLD + 1] += ty
+        w[T_WORLD + 2] += tz
+    elif kind == FRAME_WORLD_ALIGNED or kind == FRAME_SITE_WORLD_AXES:
+        w[F_COM_W] += fx
+        w[F_COM_W + 1] += fy
+        w[F_COM_W + 2] += fz
+        w[T_COM_W] += tx
+        w[T_COM_W + 1] += ty
+        w[T_COM_W + 2] += tz
+        if kind == FRAME_SITE_WORLD_AXES:  # M += f ⊗ r: the moment (R r) × f, evaluated per stage
+            for j, f in enumerate((fx, fy, fz)):
+                w[SITE_MOMENT + 3 * j] += f * ax
+                w[SITE_MOMENT + 3 * j + 1] += f * ay
+                w[SITE_MOMENT + 3 * j + 2] += f * az
+    else:  # FRAME_BODY, FRAME_SITE_BODY_AXES: into principal axes, where they stay
+        qw, qx, qy, qz = p[Q_PB], p[Q_PB + 1], p[Q_PB + 2], p[Q_PB + 3]
+        f_P = rotate(qw, qx, qy, qz, fx, fy, fz)
+        t_P = rotate(qw, qx, qy, qz, tx, ty, tz)
+        w[F_COM_P] += f_P[0]
+        w[F_COM_P + 1] += f_P[1]
+        w[F_COM_P + 2] += f_P[2]
+        w[T_COM_P] += t_P[0] + (ay * f_P[2] - az * f_P[1])
+        w[T_COM_P + 1] += t_P[1] + (az * f_P[0] - ax * f_P[2])
+        w[T_COM_P + 2] += t_P[2] + (ax * f_P[1] - ay * f_P[0])
+    w[ACTIVE] = 1.0
 
-    def __init__(self, model: BodyModel):
-        self._model = model
-        n, s = model.count, len(model.site_names)
-        #: (N, 18) all six buckets side by side, the layout of kernels.resolve_wrenches.
-        self.buckets = np.zeros((n, 18))
-        self.force_W = self.buckets[:, 0:3]
-        self.torque_O_W = self.buckets[:, 3:6]
-        self.force_A = self.buckets[:, 6:9]
-        self.torque_A = self.buckets[:, 9:12]
-        self.force_P = self.buckets[:, 12:15]
-        self.torque_P = self.buckets[:, 15:18]
-        #: (S, 7) world-axes sites for the kernels: owning body, p_P (m), the force there (N, world).
-        self.sites = np.zeros((s, 7))
-        if s:
-            self.sites[:, 0] = model.site_body
-            self.sites[:, 1:4] = model.site_p_P
-        self.site_force_W = self.sites[:, 4:7]
-        self.empty = True
 
-    def clear(self) -> None:
-        """Drop every applied wrench."""
-        if not self.empty:
-            self.buckets.fill(0.0)
-            self.site_force_W.fill(0.0)
-            self.empty = True
+@njit(**JIT)
+def project(kind, nx, ny, nz, fx, fy, fz, tx, ty, tz):
+    """The wrench (force, torque; world axes) with what a motion forbids projected out.
 
-    def add(self, ref: FrameRef, force: np.ndarray, torque: np.ndarray) -> None:
-        """Add the wrench (force N, torque N·m about the frame origin, frame axes) in frame ``ref``."""
-        b = ref.body_index
-        model = self._model
-        if ref.kind is FrameKind.WORLD:
-            self.force_W[b] += force
-            self.torque_O_W[b] += torque
-        elif ref.kind is FrameKind.WORLD_ALIGNED:
-            self.force_A[b] += force
-            self.torque_A[b] += torque
-        elif ref.kind is FrameKind.BODY:
-            q_PB = quat_conjugate(model.q_BP[b])
-            self.force_P[b] += quat_rotate(q_PB, force)
-            self.torque_P[b] += quat_rotate(q_PB, torque)
-        elif ref.kind is FrameKind.SITE_BODY_AXES:
-            q_PB = quat_conjugate(model.q_BP[b])
-            force_P = quat_rotate(q_PB, force)
-            self.force_P[b] += force_P
-            self.torque_P[b] += quat_rotate(q_PB, torque) + np.cross(model.site_p_P[ref.site_index], force_P)
-        else:  # SITE_WORLD_AXES: the moment arm of the force is added at resolution
-            self.site_force_W[ref.site_index] += force
-            self.torque_A[b] += torque
-        self.empty = False
+    ``kind`` is the body's layout.PROJECT_*, (nx, ny, nz) its plane normal (planar).
+    """
+    if kind == PROJECT_ALL or kind == PROJECT_FORCE:
+        fx, fy, fz = 0.0, 0.0, 0.0
+    if kind == PROJECT_ALL or kind == PROJECT_TORQUE:
+        tx, ty, tz = 0.0, 0.0, 0.0
+    if kind == PROJECT_PLANE:  # force in the plane, torque along its normal
+        f_n = fx * nx + fy * ny + fz * nz
+        t_n = tx * nx + ty * ny + tz * nz
+        fx, fy, fz = fx - f_n * nx, fy - f_n * ny, fz - f_n * nz
+        tx, ty, tz = t_n * nx, t_n * ny, t_n * nz
+    return fx, fy, fz, tx, ty, tz
 
-    def resolve(self, state: State) -> tuple[np.ndarray, np.ndarray]:
-        """Total applied (force, torque about the centre of mass), world axes, at ``state``.
 
-        Returns
-        -------
-        force_W, torque_W : ndarray, shape (N, 3)
-            Fresh arrays (zeros when nothing is applied).
-        """
-        n = self._model.count
-        wrench = np.zeros((n, 6))
-        if not self.empty:
-            unconstrained = np.zeros((n, kernels.PRM_WIDTH))  # PROJECT_NONE: nothing projected out
-            kernels.resolve_wrenches(state.rows(), unconstrained, self.buckets, self.sites, wrench)
-        return wrench[:, 0:3], wrench[:, 3:6]
+@njit(**JIT)
+def wrench_about_com(R, p_W, f_world, t_world, f_com_w, t_com_w, f_com_p, t_com_p, site_moment):
+    """Force (world axes) and torque about the COM (world axes) of a wrench row's parts, at a pose.
+
+    ``R`` is R(q) row-major (9), ``p_W`` the COM position (3); the rest are the wrench row's
+    parts (layout.py): 3-tuples, and ``site_moment`` M = Σ f_W ⊗ r_P row-major (9). The torque
+    is τ_O − p × F of the world-frame wrench, the COM torques (world and, turned by R,
+    principal axes) and the moment Σ (R r) × f of world-axes sites: τ_k = ε_kij (R Mᵀ)_ij.
+    Scalars in, scalars out: this is the frame algebra, read once from the row by the caller.
+    """
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = R
+    px, py, pz = p_W
+    f0, f1, f2 = f_world
+    bx, by, bz = f_com_p
+    cx, cy, cz = t_com_p
+    m0, m1, m2, m3, m4, m5, m6, m7, m8 = site_moment
+    fx = f0 + f_com_w[0] + r00 * bx + r01 * by + r02 * bz
+    fy = f1 + f_com_w[1] + r10 * bx + r11 * by + r12 * bz
+    fz = f2 + f_com_w[2] + r20 * bx + r21 * by + r22 * bz
+    a01 = r00 * m3 + r01 * m4 + r02 * m5
+    a02 = r00 * m6 + r01 * m7 + r02 * m8
+    a10 = r10 * m0 + r11 * m1 + r12 * m2
+    a12 = r10 * m6 + r11 * m7 + r12 * m8
+    a20 = r20 * m0 + r21 * m1 + r22 * m2
+    a21 = r20 * m3 + r21 * m4 + r22 * m5
+    tx = t_world[0] - (py * f2 - pz * f1) + t_com_w[0] + r00 * cx + r01 * cy + r02 * cz + (a12 - a21)
+    ty = t_world[1] - (pz * f0 - px * f2) + t_com_w[1] + r10 * cx + r11 * cy + r12 * cz + (a20 - a02)
+    tz = t_world[2] - (px * f1 - py * f0) + t_com_w[2] + r20 * cx + r21 * cy + r22 * cz + (a01 - a10)
+    return fx, fy, fz, tx, ty, tz
+
+
+@njit(**INLINE)
+def resolve_wrench(y, p, w):
+    """The applied force and torque about the COM of wrench row ``w`` at state row ``y``, world axes, projected.
+
+    Returns (fx, fy, fz, tx, ty, tz): N and N·m, world axes, no gravity.
+    """
+    qw, qx, qy, qz = normalise(y[Q], y[Q + 1], y[Q + 2], y[Q + 3])
+    # Every number is read here, in straight-line code: inlined functions that take the rows
+    # must not be called in a branch (stepping.py's loops would keep their reference counts).
+    fx, fy, fz, tx, ty, tz = wrench_about_com(
+        matrix(qw, qx, qy, qz), (y[P], y[P + 1], y[P + 2]),
+        (w[F_WORLD], w[F_WORLD + 1], w[F_WORLD + 2]), (w[T_WORLD], w[T_WORLD + 1], w[T_WORLD + 2]),
+        (w[F_COM_W], w[F_COM_W + 1], w[F_COM_W + 2]), (w[T_COM_W], w[T_COM_W + 1], w[T_COM_W + 2]),
+        (w[F_COM_P], w[F_COM_P + 1], w[F_COM_P + 2]), (w[T_COM_P], w[T_COM_P + 1], w[T_COM_P + 2]),
+        (w[SITE_MOMENT], w[SITE_MOMENT + 1], w[SITE_MOMENT + 2], w[SITE_MOMENT + 3], w[SITE_MOMENT + 4],
+         w[SITE_MOMENT + 5], w[SITE_MOMENT + 6], w[SITE_MOMENT + 7], w[SITE_MOMENT + 8]))
+    return project(p[PROJECT], p[NORMAL], p[NORMAL + 1], p[NORMAL + 2], fx, fy, fz, tx, ty, tz)
+
+
+@njit(**INLINE)
+def body_wrench(y, p, w):
+    """The generalised force on a body at state ``y``: what every stage of every integrator calls.
+
+    Parameters
+    ----------
+    y : state row (layout.P, Q; only the position and orientation are read)
+    p : parameter row (mass, gravity as the motion allows it, projection)
+    w : wrench row in frame terms (:func:`add_wrench`)
+
+    Returns
+    -------
+    (fx, fy, fz, tx, ty, tz)
+        The total force on the COM, N, world axes (applied wrenches and gravity), and the
+        applied torque about the COM, N·m, principal axes P. Damping, which depends on the
+        velocities, is part of the dynamics (dynamics.derivative) and of the exact kicks.
+    """
+    m = p[MASS]
+    fx, fy, fz = m * p[GRAVITY], m * p[GRAVITY + 1], m * p[GRAVITY + 2]
+    tx, ty, tz = 0.0, 0.0, 0.0
+    if w[ACTIVE] != 0.0:  # indexing only in here, and functions of scalars (see resolve_wrench)
+        qw, qx, qy, qz = normalise(y[Q], y[Q + 1], y[Q + 2], y[Q + 3])
+        R = matrix(qw, qx, qy, qz)
+        ax, ay, az, bx, by, bz = wrench_about_com(
+            R, (y[P], y[P + 1], y[P + 2]),
+            (w[F_WORLD], w[F_WORLD + 1], w[F_WORLD + 2]), (w[T_WORLD], w[T_WORLD + 1], w[T_WORLD + 2]),
+            (w[F_COM_W], w[F_COM_W + 1], w[F_COM_W + 2]), (w[T_COM_W], w[T_COM_W + 1], w[T_COM_W + 2]),
+            (w[F_COM_P], w[F_COM_P + 1], w[F_COM_P + 2]), (w[T_COM_P], w[T_COM_P + 1], w[T_COM_P + 2]),
+            (w[SITE_MOMENT], w[SITE_MOMENT + 1], w[SITE_MOMENT + 2], w[SITE_MOMENT + 3], w[SITE_MOMENT + 4],
+             w[SITE_MOMENT + 5], w[SITE_MOMENT + 6], w[SITE_MOMENT + 7], w[SITE_MOMENT + 8]))
+        ax, ay, az, bx, by, bz = project(p[PROJECT], p[NORMAL], p[NORMAL + 1], p[NORMAL + 2], ax, ay, az, bx, by, bz)
+        fx, fy, fz = fx + ax, fy + ay, fz + az
+        tx, ty, tz = rotate_back(qw, qx, qy, qz, bx, by, bz)  # into principal axes
+    _pin = y[P], p[MASS], w[ACTIVE]  # the arrays' last use, out of the branch (jit.py)
+    return fx, fy, fz, tx, ty, tz
+
+
+@njit(**JIT)
+def project_twist(p, twist):
+    """Project the twist (6,: v, ω; world axes) of a body in place onto its motion (as a wrench is)."""
+    twist[0], twist[1], twist[2], twist[3], twist[4], twist[5] = project(
+        p[PROJECT], p[NORMAL], p[NORMAL + 1], p[NORMAL + 2], twist[0], twist[1], twist[2], twist[3], twist[4], twist[5])

@@ -137,11 +137,11 @@ class State:
 
     @staticmethod
     def of_rows(rows: np.ndarray) -> "State":
-        """The State viewing an (N, 13) array of rows (p, q, v, w), as the kernels store it (no copy)."""
+        """The State viewing an (N, 13) array of rows (p, q, v, w), as the compiled step stores it, layout.py (no copy)."""
         return State(rows[:, 0:3], rows[:, 3:7], rows[:, 7:10], rows[:, 10:13])
 
     def rows(self) -> np.ndarray:
-        """A new (N, 13) C-ordered array of rows (p, q, v, w): the kernels' layout (kernels.py)."""
+        """A new (N, 13) C-ordered array of rows (p, q, v, w): the compiled step's layout (layout.py)."""
         return np.concatenate((self.p_WC_W, self.q_WP, self.v_WC_W, self.w_WP_P), axis=-1)
 
     def take(self, indices: np.ndarray) -> "State":

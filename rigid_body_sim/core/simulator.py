@@ -16,22 +16,17 @@ frame B; internally the core integrates the principal frame P with (w, x, y, z) 
 
 from __future__ import annotations
 
-import functools
 import math
-from dataclasses import dataclass, replace
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, Sequence
 
 import numpy as np
 
-from .dynamics import (
-    angular_momentum_W,
-    kinetic_energy,
-    linear_momentum_W,
-    potential_energy,
-)
-from . import kernels, reduction
-from .forces import FrameKind, FrameRef, WrenchAccumulator, parse_frame
-from .integrators import INTEGRATORS, Integrator, get_integrator, step_reference
+from . import layout as L
+from . import reduction, sensors, stepping
+from .dynamics import angular_momentum_W, impulse_response, kinetic_energy, linear_momentum_W, potential_energy
+from .forces import FrameRef, add_wrench, new_wrench_rows, parse_frame, project_twist
+from .integrators import INTEGRATORS, Method, get_integrator, step_exact_rotor_splitting, step_reference
 from .model import State
 from .quaternion import (
     quat_conjugate,
@@ -42,7 +37,8 @@ from .quaternion import (
 )
 from .scene import ORIENTATION_TOLERANCE, Scene
 
-__all__ = ["Simulator", "BodyState", "NonFiniteStateError", "DivergenceError", "SCRIPT_TIME_TOLERANCE"]
+__all__ = ["Simulator", "BodyState", "SiteReadings", "NonFiniteStateError", "DivergenceError",
+           "SCRIPT_TIME_TOLERANCE"]
 
 #: A step whose start time is within this fraction of ``dt`` of a scripted wrench's window edge
 #: counts as on the edge, so a window given in multiples of ``dt`` covers exactly
@@ -136,6 +132,28 @@ class DivergenceError(NonFiniteStateError):
 
 
 @dataclass(frozen=True)
+class SiteReadings:
+    """Ideal IMU readings at sites (:meth:`Simulator.site_readings`), one row per site.
+
+    Attributes
+    ----------
+    sites : tuple of str
+        ``"<body>/<site>"``.
+    specific_force : ndarray, shape (k, 3)
+        Acceleration minus gravity, m/s², in the site's axes (the body's axes B, or world).
+    angular_velocity : ndarray, shape (k, 3)
+        rad/s, in the site's axes.
+    orientation_xyzw : ndarray, shape (k, 4)
+        Unit quaternion (x, y, z, w) of the site's axes in the world.
+    """
+
+    sites: tuple[str, ...]
+    specific_force: np.ndarray
+    angular_velocity: np.ndarray
+    orientation_xyzw: np.ndarray
+
+
+@dataclass(frozen=True)
 class BodyState:
     """One body's state, in the user's conventions.
 
@@ -194,53 +212,38 @@ class Simulator:
         if (isinstance(limit, bool) or not isinstance(limit, (int, float, np.floating, np.integer))
                 or not math.isfinite(limit) or limit <= 1.0):
             raise ValueError(f"energy_growth_limit: expected a finite number > 1, got {limit!r}")
-        self.energy_growth_limit = float(limit)
-        # Per-body constants of the kernels (kernels.py): mass properties, gravity, damping, the
-        # energy bound's 1/√(2m) and 1/√(2 I_min) (DivergenceError), each body's reduced model.
-        self._prm = kernels.pack_parameters(self.model)
-        self._budget_per_force = self._prm[:, kernels.BUDGET_FORCE]
-        self._budget_per_torque = self._prm[:, kernels.BUDGET_TORQUE]
         n = self.model.count
-        # The state lives in one (N, 13) array of rows (p, q, v, w), stepped in place; ``state``
-        # views it. Scratch of the kernels: the next step, the resolved wrench, the bound, status.
-        # Two buffers: the state is Ys[cur]; a step writes Ys[1 - cur] and, if it passes, flips cur.
-        self._Ys = np.zeros((2, n, kernels.STATE_WIDTH))
-        self._cur = 0
+        # The buffers of the compiled step (stepping.py; layout.py names their columns): two
+        # state buffers (the state is _Ys[_control[CUR]]), per-body parameters, status, step
+        # controls and inputs, and the applied wrenches in their frames' terms.
+        self._prm = stepping.pack_parameters(self.model)
+        self._Ys, self._status, self._control, self._inputs = stepping.new_buffers(n)
         self._views = (State.of_rows(self._Ys[0]), State.of_rows(self._Ys[1]))
+        self._wrenches = new_wrench_rows(n)
         self._members = np.zeros(0, dtype=np.int64)  # the moving bodies, grouped by model (_replan)
-        self._first = 0  # how many of them, first, the integrator steps (model full)
-        self._wrench_W = np.zeros((n, 6))
-        # The energy bound √J (see DivergenceError) in two buffers like the state, and each body's status.
-        self._aux = np.zeros((3, n))
-        self._status = self._aux[2]
-        self._wrenches = WrenchAccumulator(self.model)
+        self._inputs[L.LIMIT] = float(limit)
         self._frame_refs: dict[tuple[str, str], FrameRef] = {}
-        # (body, force column, torque column) of the buckets, per frame whose wrench can be pending.
-        self._pending_columns: dict[FrameRef, tuple[int, int, int]] = {}
-        # One applied wrench waits here, (body, force column, torque column, fx, fy, fz, tx, ty, tz)
-        # of the buckets, until the next step hands it to the kernel or another wrench arrives.
-        self._pending: tuple | None = None
-        # q_PB per body as floats, None where P = B (the usual case): body-frame wrenches.
-        self._q_PB = [None if np.array_equal(q, (1.0, 0.0, 0.0, 0.0)) else tuple(quat_conjugate(q).tolist())
-                      for q in self.model.q_BP]
+        # An applied wrench waits in _inputs[PENDING...] (the one-call fast path); any other goes
+        # into _wrenches at once. True while one waits.
+        self._pending = False
+        self._any_wrench = False  # something is in _wrenches (or pending)
+        self._last_wrenches = self._wrenches  # the rows the last step ran with (site_readings)
         self._reference_options = {"rtol": _positive(reference_rtol, "reference_rtol"),
                                    "atol": _positive(reference_atol, "reference_atol")}
-        self._integrator_name = ""
-        self._step_function: Integrator = INTEGRATORS["rk4"]
-        self._method: int | None = kernels.METHODS["rk4"]  # kernel method number; None: numpy/scipy path
-        self.integrator = integrator
-        self._dt = _positive(dt, "dt")
-        # The scene's scripted wrenches: (frame, force, torque, start, end) per entry, applied at
-        # the start of every step from their own accumulator, which user wrenches never touch.
+        # The scene's scripted wrenches: (frame, force, torque, start, end) per entry, summed into
+        # their own rows, which user wrenches never touch, whenever the active set changes.
         self._script = tuple((parse_frame(scene, w.body, w.frame), w.force, w.torque, w.start, w.end)
                              for w in scene.wrenches)
-        self._script_wrenches = WrenchAccumulator(self.model)
+        self._method: Method = INTEGRATORS["rk4"]
+        self.integrator = integrator
+        self.dt = dt
+        self._script_wrenches = new_wrench_rows(n)
         self._script_active: tuple[int, ...] = ()
-        self._stopped = np.zeros(self.model.count, dtype=bool)
+        self._stopped = np.zeros(n, dtype=bool)
         if not isinstance(model_reduction, (bool, np.bool_)):
             raise ValueError(f"model_reduction: expected True or False, got {model_reduction!r}")
         self._reduce = bool(model_reduction)
-        self._plans: list[reduction.BodyPlan] = []
+        self._plans: list[reduction.BodyPlan] | None = None
         self.reset()
 
     # ----------------------------------------------------------------- configuration
@@ -248,22 +251,20 @@ class Simulator:
     @property
     def integrator(self) -> str:
         """Name of the integrator in use; setting it validates the name."""
-        return self._integrator_name
+        return self._method.name
 
     @integrator.setter
     def integrator(self, name: str) -> None:
-        function = get_integrator(name)
-        if function is step_reference:
-            function = functools.partial(step_reference, **self._reference_options)
-        self._step_function = function
-        self._method = kernels.METHODS.get(name)
-        if self._method is not None:
-            # kernels.advance compiled for this method and exactly these arrays, called without
-            # numba's per-call type dispatch.
-            self._advance = kernels.entry_point(
-                kernels.advance, self._method, self._Ys, 0, self._prm, self._members, 0, self._wrenches.buckets,
-                self._wrenches.sites, self._aux, False, 0, 1.0, 2.0, -1, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-        self._integrator_name = name
+        method = get_integrator(name)
+        self._method = method
+        self._control[L.METHOD] = -1 if method.code is None else method.code
+        # Scripted wrenches and the numpy/scipy integrators step one step per call (_step_once).
+        self._step_by_step = bool(self._script) or method.code is None
+
+    @property
+    def energy_growth_limit(self) -> float:
+        """The factor of the blow-up check (:class:`DivergenceError`)."""
+        return float(self._inputs[L.LIMIT])
 
     @property
     def dt(self) -> float:
@@ -277,6 +278,7 @@ class Simulator:
             self._time_origin = self.time
             self._step_origin = self.step_count
         self._dt = new_dt
+        self._inputs[L.DT] = new_dt
 
     @property
     def body_names(self) -> tuple[str, ...]:
@@ -291,7 +293,7 @@ class Simulator:
     def reset(self) -> None:
         """Back to the scene's initial state: t = 0, no applied wrench, no stopped body."""
         self.state = self.scene.initial_state
-        self._aux[0:2] = np.sqrt(kinetic_energy(self.model, self.state))  # √J, see DivergenceError
+        self._Ys[:, :, L.BOUND] = np.sqrt(kinetic_energy(self.model, self.state))  # √J, see DivergenceError
         self.step_count = 0
         self._time_origin = 0.0
         self._step_origin = 0
@@ -319,17 +321,24 @@ class Simulator:
 
     def body_models(self) -> list[reduction.BodyPlan]:
         """The model each body gets now and why (reduction.BodyPlan: body, motion, model, code, reason)."""
+        if self._plans is None:
+            self._plans = reduction.plan_models(self.model, self._reduce, self._stopped,
+                                                self._prm[:, L.MODEL].astype(np.int64))
         return list(self._plans)
 
     def _replan(self) -> None:
         """Derive each body's model from the scene, the switch, the stopped bodies and the current state."""
-        self._plans = reduction.plan_models(self.model, self._reduce, self._stopped)
-        self._members, self._first = reduction.apply_plan(self._prm, self.model, self.scene.initial_state, self.state,
-                                                          self._plans)
-        # Bodies that no longer move keep their row in both buffers (the kernels never write it).
-        cur = self._cur
+        codes = reduction.model_codes(self.model, self._reduce, self._stopped)
+        self._plans = None  # body_models() explains the codes when asked
+        self._members, groups = reduction.apply_plan(self._prm, self.model, self.scene.initial_state, self.state,
+                                                     codes)
+        self._control[L.GROUPS:L.GROUPS + groups.size] = groups.ravel()
+        # The buffers of stepping.advance, in its order: one tuple, so a step(1) builds no arguments.
+        self._buffers = (self._Ys, self._prm, self._wrenches, self._members, self._status, self._control,
+                         self._inputs)
+        # Bodies that no longer move keep their row in both buffers (the step never writes it).
+        cur = self._control[L.CUR]
         self._Ys[1 - cur] = self._Ys[cur]
-        self._aux[1 - cur] = self._aux[cur]
 
     @property
     def state(self) -> State:
@@ -338,14 +347,15 @@ class Simulator:
         A view into the simulator's buffers, valid until the next step: ``copy()`` it to keep
         it. Assigning a :class:`State` copies it in (arrays (N, 3) and (N, 4) as its fields say).
         """
-        return self._views[self._cur]
+        return self._views[self._control[L.CUR]]
 
     @state.setter
     def state(self, value: State) -> None:
         rows = value.rows()
-        if rows.shape != self._Ys.shape[1:]:
-            raise ValueError(f"state: expected {self._Ys.shape[1]} bodies of 13 numbers, got shape {rows.shape}")
-        self._Ys[:] = rows  # both buffers: bodies that do not move are never rewritten
+        if rows.shape != (self.model.count, L.STATE_WIDTH):
+            raise ValueError(f"state: expected {self.model.count} bodies of {L.STATE_WIDTH} numbers, "
+                             f"got shape {rows.shape}")
+        self._Ys[:, :, :L.STATE_WIDTH] = rows  # both buffers: bodies that do not move are never rewritten
 
     @property
     def stopped_bodies(self) -> tuple[str, ...]:
@@ -358,8 +368,10 @@ class Simulator:
                      frame: str = "world") -> None:
         """Apply force (N) and torque (N·m) about the origin of ``frame``, in ``frame``'s axes.
 
-        The wrench holds for every step of the next :meth:`step` call (re-resolved at the start
-        of each, so body-fixed frames follow the body) and is then cleared.
+        The wrench holds for every step of the next :meth:`step` call and is then cleared. It
+        is kept in ``frame``'s terms and evaluated wherever the integrator evaluates the
+        forces (every stage, kick or iterate), so a wrench in a body-fixed frame turns with the
+        body during each step, and one about a world point sees where the centre of mass is.
 
         Raises
         ------
@@ -367,20 +379,23 @@ class Simulator:
             Unknown body or frame (the valid ones are listed), or a force/torque that is not 3
             finite numbers. Nothing is applied then.
         """
-        ref = self._frame_ref(body, frame)
+        ref = self._frame_refs.get((body, frame)) if isinstance(body, str) and isinstance(frame, str) else None
+        if ref is None:
+            ref = self._frame_ref(body, frame)
         fx, fy, fz = _floats3(force, "force")
         tx, ty, tz = _floats3(torque, "torque")
-        self._add_wrench(ref, fx, fy, fz, tx, ty, tz)
+        if self._pending:
+            self._flush_pending()
+        self._inputs[L.PENDING:L.INPUT_WIDTH] = (1.0, ref.body_index, ref.kind, *ref.arm_P, fx, fy, fz, tx, ty, tz)
+        self._pending = self._any_wrench = True
 
     def apply_force_at_point(self, body: str, force: Any, point: Any, frame: str = "world") -> None:
         """Apply force F (N) at point r (m) of ``frame``, both in ``frame``'s axes: the wrench (F, r × F).
 
         Same rule and errors as :meth:`apply_wrench` (a moment r × F that overflows is refused).
         """
-        # The hot path of a controller: kept flat (see _add_wrench for what it does).
-        try:
-            ref = self._frame_refs[body, frame]
-        except (KeyError, TypeError):
+        ref = self._frame_refs.get((body, frame)) if isinstance(body, str) and isinstance(frame, str) else None
+        if ref is None:
             ref = self._frame_ref(body, frame)
         fx, fy, fz = _floats3(force, "force")
         rx, ry, rz = _floats3(point, "point")
@@ -388,69 +403,47 @@ class Simulator:
         if not (math.isfinite(tx) and math.isfinite(ty) and math.isfinite(tz)):
             raise ValueError(f"torque: expected 3 finite numbers, got {[tx, ty, tz]!r} (the moment r × F of "
                              f"force {[fx, fy, fz]!r} at point {[rx, ry, rz]!r})")
-        columns = self._pending_columns.get(ref)
-        if columns is None or self._pending is not None:
-            self._add_wrench(ref, fx, fy, fz, tx, ty, tz)
-        else:
-            self._pending = (columns[0], columns[1], columns[2], fx, fy, fz, tx, ty, tz)
+        # The hot path of a controller: the wrench waits as the pending one (inputs[PENDING...])
+        # and the next step's single compiled call adds it; an earlier pending one goes in now.
+        if self._pending:
+            self._flush_pending()
+        self._inputs[L.PENDING:L.INPUT_WIDTH] = (1.0, ref.body_index, ref.kind, *ref.arm_P, fx, fy, fz, tx, ty, tz)
+        self._pending = self._any_wrench = True
 
     def _frame_ref(self, body: str, frame: str) -> FrameRef:
         """parse_frame, remembered per (body, frame) (only valid pairs are remembered)."""
-        try:
-            return self._frame_refs[body, frame]
-        except (KeyError, TypeError):
-            ref = parse_frame(self.scene, body, frame)  # raises, listing the valid choices
-            self._frame_refs[body, frame] = ref
-            kind, b = ref.kind, ref.body_index
-            if kind is FrameKind.BODY and self._q_PB[b] is None:
-                self._pending_columns[ref] = (b, 12, 15)
-            elif kind is FrameKind.WORLD:
-                self._pending_columns[ref] = (b, 0, 3)
-            elif kind is FrameKind.WORLD_ALIGNED:
-                self._pending_columns[ref] = (b, 6, 9)
-            return ref
-
-    def _add_wrench(self, ref: FrameRef, fx: float, fy: float, fz: float, tx: float, ty: float, tz: float) -> None:
-        """Accumulate a validated wrench: world, world-aligned and body frames (P = B) wait as
-        the pending wrench of the next step; other frames go through WrenchAccumulator.add."""
-        self._flush_pending()
-        columns = self._pending_columns.get(ref)
-        if columns is None:
-            self._wrenches.add(ref, np.array((fx, fy, fz)), np.array((tx, ty, tz)))
-        else:
-            self._pending = (columns[0], columns[1], columns[2], fx, fy, fz, tx, ty, tz)
+        ref = parse_frame(self.scene, body, frame)  # raises, listing the valid choices
+        self._frame_refs[body, frame] = ref
+        return ref
 
     def _flush_pending(self) -> None:
-        """Move the pending wrench into the accumulator."""
-        if self._pending is not None:
-            kernels.add_wrench(self._wrenches.buckets, *self._pending)
-            self._wrenches.empty = False
-            self._pending = None
+        """Move the pending wrench into the wrench rows (dropping the last step's spent ones first)."""
+        stepping.add_pending(self._wrenches, self._prm, self._inputs)
+        self._pending = False
 
     def apply_impulse(self, body: str, linear: Any = (0.0, 0.0, 0.0), angular: Any = (0.0, 0.0, 0.0),
                       frame: str = "world") -> None:
         """Change velocities at once by a linear impulse (N·s) and an angular impulse (N·m·s).
 
-        Same frame rule as :meth:`apply_wrench`: the angular impulse is about ``frame``'s origin.
+        Same frame rule as :meth:`apply_wrench`: the angular impulse is about ``frame``'s
+        origin, resolved at the current state by the same function as wrenches, and projected
+        onto the body's motion (a planar body takes only the spin about its plane normal, with
+        the moment of inertia about that normal).
         """
         ref = self._frame_ref(body, frame)
-        J = _vector3(linear, "linear impulse")
-        H = _vector3(angular, "angular impulse")
-        single = WrenchAccumulator(self.model)
-        single.add(ref, J, H)
-        J_W, H_W = single.resolve(self.state)
+        jx, jy, jz = _floats3(linear, "linear impulse")
+        hx, hy, hz = _floats3(angular, "angular impulse")
         b = ref.body_index
-        impulse = np.concatenate((J_W[b], H_W[b]))
-        kernels.project_wrench(self._prm[b], impulse)  # onto the body's motion
-        J_W[b], H_W[b] = impulse[:3], impulse[3:]
-        state = self.state.copy()
-        state.v_WC_W[b] += J_W[b] / self.model.mass[b]
-        state.w_WP_P[b] += quat_rotate(quat_conjugate(state.q_WP[b]), H_W[b]) / self.model.inertia_P[b]
-        if not state.finite_bodies()[b]:
+        row = np.zeros(L.WRENCH_WIDTH)
+        add_wrench(row, self._prm[b], ref.kind, *ref.arm_P, jx, jy, jz, hx, hy, hz)
+        Y = self._Ys[self._control[L.CUR]]
+        out = np.empty(L.ROW_WIDTH)
+        with np.errstate(all="ignore"):
+            size_J, size_H = impulse_response(Y[b], self._prm[b], row, out)
+        if not np.isfinite(out[:L.STATE_WIDTH]).all():
             raise ValueError(f"impulse on {body!r} would make its velocity non-finite; not applied")
-        self.state = state
-        self._aux[0:2, b] += (math.hypot(*J_W[b]) * self._budget_per_force[b]
-                                   + math.hypot(*H_W[b]) * self._budget_per_torque[b])
+        self._Ys[:, b, L.V:L.W + 3] = out[L.V:L.W + 3]
+        self._Ys[:, b, L.BOUND] += size_J * self._prm[b, L.BUDGET_FORCE] + size_H * self._prm[b, L.BUDGET_TORQUE]
 
     def active_scripted_wrenches(self, time: float | None = None) -> list[tuple[str, str, np.ndarray, np.ndarray]]:
         """The scene's scripted wrenches that act on a step starting at ``time`` (default: now).
@@ -470,8 +463,11 @@ class Simulator:
 
     def clear_wrenches(self) -> None:
         """Drop every applied wrench before the next step."""
-        self._pending = None
-        self._wrenches.clear()
+        self._pending = False
+        self._inputs[L.PENDING] = self._inputs[L.SPENT] = 0.0
+        if self._any_wrench:
+            stepping.clear_wrenches(self._wrenches)
+            self._any_wrench = False
 
     def set_body_state(self, body: str, position_world: Any = None, orientation_xyzw: Any = None,
                        linear_velocity_world: Any = None, angular_velocity_world: Any = None) -> None:
@@ -493,19 +489,61 @@ class Simulator:
         if angular_velocity_world is not None:
             w_W = _vector3(angular_velocity_world, "angular_velocity_world")
             state.w_WP_P[b] = quat_rotate(quat_conjugate(state.q_WP[b]), w_W)
-        # Keep the body's motion: velocities projected as wrenches are (a kinematic body takes
-        # the new twist as its constant one), a planar body's position onto its plane.
+        self._constrain(b, state)
+        if not state.finite_bodies()[b]:
+            raise ValueError(f"set_body_state of {body!r}: the new state is not finite; nothing was changed")
+        self.state = state
+        self._Ys[:, b, L.BOUND] = np.sqrt(kinetic_energy(self.model, state)[b])  # a new start for the bound
+        self._replan()
+
+    def _constrain(self, b: int, state: State) -> None:
+        """Keep body b's motion in ``state`` (in place): velocities projected as wrenches are (a
+        kinematic body takes its twist as its constant one), a planar body put back on its plane."""
         twist = np.concatenate((state.v_WC_W[b], quat_rotate(state.q_WP[b], state.w_WP_P[b])))
         if self.model.motions[b] != "kinematic":
-            kernels.project_wrench(self._prm[b], twist)
+            project_twist(self._prm[b], twist)
         state.v_WC_W[b] = twist[:3]
         state.w_WP_P[b] = quat_rotate(quat_conjugate(state.q_WP[b]), twist[3:])
         if self.model.motions[b] == "planar":
-            n = self._prm[b, kernels.NORMAL:kernels.NORMAL + 3]
-            state.p_WC_W[b] -= (state.p_WC_W[b] @ n - self._prm[b, kernels.PLANE_OFFSET]) * n
-        self.state = state
-        self._aux[0:2, b] = np.sqrt(kinetic_energy(self.model, state)[b])  # a new start for the bound
-        self._replan()
+            n = self._prm[b, L.NORMAL:L.NORMAL + 3]
+            state.p_WC_W[b] -= (state.p_WC_W[b] @ n - self._prm[b, L.PLANE_OFFSET]) * n
+
+    def with_scene(self, scene: Scene) -> "Simulator":
+        """A simulator of ``scene`` that goes on from this one, for adding and removing bodies at run time.
+
+        The time, step count, integrator, dt, blow-up limit and reduction switch carry over;
+        every body in both scenes (by name) keeps its current pose and twist (in its own frame
+        B and world axes, so a redefined body keeps where it is), its energy bound and whether
+        it is stopped; bodies new to ``scene`` start at their initial state; bodies not in it
+        are gone. The applied wrenches do not carry over. This simulator is unchanged.
+        """
+        options = self._reference_options
+        new = Simulator(scene, self.integrator, self.dt, reference_rtol=options["rtol"], reference_atol=options["atol"],
+                        energy_growth_limit=self.energy_growth_limit, model_reduction=self._reduce)
+        state = new.state.copy()
+        old_state = self.state
+        for b, name in enumerate(scene.body_names):
+            if name not in self.scene.sites:  # new to the scene: its initial state
+                continue
+            a = self._index(name)
+            q_WB = quat_multiply(old_state.q_WP[a], quat_conjugate(self.model.q_BP[a]))
+            state.q_WP[b] = quat_multiply(q_WB, scene.model.q_BP[b])
+            state.p_WC_W[b] = old_state.p_WC_W[a]
+            state.v_WC_W[b] = old_state.v_WC_W[a]
+            state.w_WP_P[b] = quat_rotate(quat_conjugate(state.q_WP[b]), quat_rotate(old_state.q_WP[a],
+                                                                                      old_state.w_WP_P[a]))
+            new._constrain(b, state)
+            new._stopped[b] = self._stopped[a]
+        new.state = state
+        bound = np.sqrt(kinetic_energy(new.model, state))
+        for b, name in enumerate(scene.body_names):
+            if name in self.scene.sites:
+                bound[b] = max(bound[b], self._Ys[self._control[L.CUR], self._index(name), L.BOUND])
+        new._Ys[:, :, L.BOUND] = bound
+        new.step_count = self.step_count
+        new._time_origin, new._step_origin = self.time, self.step_count
+        new._replan()
+        return new
 
     # ----------------------------------------------------------------- stepping
 
@@ -534,118 +572,84 @@ class Simulator:
             n = int(n)
         elif n < 0:
             raise ValueError(f"n: expected a whole number of steps ≥ 0, got {n!r}")
-        if self._script or self._method is None:
+        if self._step_by_step:
+            self._flush_pending()
             for _ in range(n):
-                self._step_once()
+                self._last_wrenches = self._step_once()
             self.clear_wrenches()
             return
         if not n:
             self.clear_wrenches()
             return
-        wrenches = self._wrenches
-        pending = self._pending
-        if pending is None:
-            done, outcome, self._cur = self._advance(
-                self._method, self._Ys, self._cur, self._prm, self._members, self._first, wrenches.buckets,
-                wrenches.sites, self._aux, not wrenches.empty, n, self._dt, self.energy_growth_limit,
-                -1, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-        else:
-            self._pending = None
-            done, outcome, self._cur = self._advance(
-                self._method, self._Ys, self._cur, self._prm, self._members, self._first, wrenches.buckets,
-                wrenches.sites, self._aux, not wrenches.empty, n, self._dt, self.energy_growth_limit,
-                pending[0], pending[1], pending[2], pending[3], pending[4], pending[5], pending[6], pending[7],
-                pending[8])
-        self.step_count += done
+        outcome = stepping.advance(*self._buffers, n)
+        self._pending = False  # advance took the pending wrench
         if outcome:
-            wrenches.empty = wrenches.empty and pending is None  # the kernel kept them, pending one included
-            self._raise_step_failure(outcome)
-        wrenches.empty = True  # the kernel cleared them
+            self.step_count += int(self._control[L.DONE])
+            self._raise_step_failure(outcome)  # the wrenches are kept, for the caller to stop the body and step again
+        self.step_count += n
+        self._last_wrenches = self._wrenches  # spent: they stay for the sensors until something new is applied
 
-    def _step_once(self) -> None:
-        """One step with the scene's scripted wrenches added, or with a numpy/scipy integrator."""
-        self._flush_pending()
-        buckets, sites, has_wrench = self._wrenches_of_this_step()
-        if self._method is not None:
-            if buckets is self._wrenches.buckets or buckets is self._script_wrenches.buckets:
-                # advance clears the buckets it is given: these must last all n steps (the script, its window)
-                buckets, sites = buckets.copy(), sites.copy()
-            done, outcome, self._cur = self._advance(
-                self._method, self._Ys, self._cur, self._prm, self._members, self._first, buckets, sites, self._aux,
-                has_wrench, 1, self._dt, self.energy_growth_limit, -1, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-            self.step_count += done
-            if outcome:
-                self._raise_step_failure(outcome)
-            return
-        wrench = self._wrench_W
-        cur, nxt = self._cur, 1 - self._cur
-        Y, Y_next = self._Ys[cur], self._Ys[nxt]
-        if has_wrench:
-            kernels.resolve_wrenches(Y, self._prm, buckets, sites, wrench)
+    def _step_once(self) -> np.ndarray:
+        """One step with the scene's scripted wrenches added, or with a numpy/scipy integrator; its wrench rows."""
+        wrenches = self._wrenches_of_this_step()
+        if self._method.code is not None:
+            stepping.advance(self._Ys, self._prm, wrenches, self._members, self._status, self._control,
+                             self._inputs, 1)
+            self._inputs[L.SPENT] = 0.0  # ``wrenches`` is this step's own array: nothing to drop before the next
         else:
-            wrench.fill(0.0)
-        force_W, torque_W = wrench[:, 0:3], wrench[:, 3:6]
-        dt = self._dt
-        members = self._members
-        # The reduced models step in the kernels; the integrator takes the rest (model full,
-        # and isotropic/symmetric bodies under a torque this step).
-        fallback = kernels.step_reduced(Y, Y_next, self._prm, wrench, members, self._first, dt)
-        full = np.concatenate((members[:self._first], fallback))
-        # Overflow on the way to a non-finite state is reported as NonFiniteStateError below,
-        # not as a floating-point warning from wherever it first happened.
-        with np.errstate(all="ignore"):
-            if len(full):
-                # Each body's gravity as its motion allows (projected, in the kernels' parameters).
-                sub_model = replace(self.model.subset(full),
-                                    gravity_W=self._prm[full, kernels.GRAVITY:kernels.GRAVITY + 3].copy())
-                sub = self._step_function(sub_model, self.state.take(full), force_W[full], torque_W[full], dt)
-                Y_next[full] = sub.rows()
-        outcome = kernels.check_step(Y_next, self._prm, wrench, has_wrench, self._aux[cur], self._aux[nxt],
-                                     self._status, members, dt, self.energy_growth_limit)
-        if outcome:
-            self._raise_step_failure(outcome)
-        self._cur = nxt
-        self.step_count += 1
+            bodies = stepping.step_reduced(self._Ys, self._prm, wrenches, self._members, self._status,
+                                           self._control, self._inputs)
+            cur = self._control[L.CUR]
+            if len(bodies):
+                with np.errstate(all="ignore"):  # a blow-up is reported as NonFiniteStateError below
+                    if self._method.name == "exact_rotor_splitting":
+                        step_exact_rotor_splitting(self._Ys[cur], self._Ys[1 - cur], self._prm, wrenches, bodies,
+                                                   self._dt)
+                    else:
+                        step_reference(self._Ys[cur], self._Ys[1 - cur], self._prm, wrenches, bodies, self._dt,
+                                       **self._reference_options)
+            stepping.check_members(self._Ys, self._prm, wrenches, self._members, self._status, self._control,
+                                   self._inputs)
+        self.step_count += int(self._control[L.DONE])
+        if self._control[L.OUTCOME]:
+            self._raise_step_failure(int(self._control[L.OUTCOME]))
+        return wrenches
+
+    def _wrenches_of_this_step(self) -> np.ndarray:
+        """The applied plus the scripted wrenches active at the start of this step: a fresh array of rows."""
+        if self._script:
+            active = self._script_indices_at(self.time)
+            if active != self._script_active:
+                self._script_wrenches.fill(0.0)
+                for i in active:
+                    ref, force, torque, _start, _end = self._script[i]
+                    add_wrench(self._script_wrenches[ref.body_index], self._prm[ref.body_index], ref.kind,
+                               *ref.arm_P, *force, *torque)
+                self._script_active = active
+            if active:
+                return self._wrenches + self._script_wrenches
+        return self._wrenches.copy()
 
     def _raise_step_failure(self, outcome: int) -> None:
-        """Raise NonFiniteStateError / DivergenceError for the failed step left in the kernels' scratch."""
+        """Raise NonFiniteStateError / DivergenceError for the failed step left in the other buffer."""
         dt = self._dt
         names = self.model.names
         index = np.flatnonzero(self._status == outcome)
         bad = tuple(names[i] for i in index)
+        cur = self._control[L.CUR]
         # math.hypot scales internally: |w| of a finite w never overflows (np.linalg.norm can).
-        spin = {names[i]: math.hypot(*self._Ys[self._cur, i, 10:13]) * dt for i in index}
-        if outcome == kernels.NON_FINITE:
-            raise NonFiniteStateError(bad, self.step_count, self._integrator_name, dt, spin)
-        failed = self._views[1 - self._cur]
+        spin = {names[i]: math.hypot(*self._Ys[cur, i, L.W:L.W + 3]) * dt for i in index}
+        if outcome == L.NON_FINITE:
+            raise NonFiniteStateError(bad, self.step_count, self.integrator, dt, spin)
+        failed = self._views[1 - cur]
         with np.errstate(all="ignore"):
             energy = kinetic_energy(self.model, failed)
         raise DivergenceError(
-            bad, self.step_count, self._integrator_name, dt, spin,
+            bad, self.step_count, self.integrator, dt, spin,
             {names[i]: float(energy[i]) for i in index},
-            {names[i]: float(self._aux[1 - self._cur, i] ** 2) for i in index},
+            {names[i]: float(self._Ys[1 - cur, i, L.BOUND] ** 2) for i in index},
             self.energy_growth_limit,
         )
-
-    def _wrenches_of_this_step(self) -> tuple[np.ndarray, np.ndarray, bool]:
-        """(buckets, sites, any) of the applied plus the scripted wrenches active at the start of this step."""
-        user = self._wrenches
-        if self._script:
-            active = self._script_indices_at(self.time)
-            if active != self._script_active:
-                self._script_wrenches.clear()
-                for i in active:
-                    ref, force, torque, _start, _end = self._script[i]
-                    self._script_wrenches.add(ref, force, torque)
-                self._script_active = active
-            script = self._script_wrenches
-            if not script.empty:
-                if user.empty:
-                    return script.buckets, script.sites, True
-                sites = user.sites.copy()
-                sites[:, 4:7] += script.site_force_W
-                return user.buckets + script.buckets, sites, True
-        return user.buckets, user.sites, not user.empty
 
     @property
     def time(self) -> float:
@@ -653,6 +657,35 @@ class Simulator:
         return self._time_origin + (self.step_count - self._step_origin) * self._dt
 
     # ----------------------------------------------------------------- read-outs
+
+    def site_readings(self, sites: Sequence[str] | None = None) -> SiteReadings:
+        """What an ideal IMU at each site reads now: specific force and angular velocity, in the site's axes.
+
+        ``sites`` are names ``"<body>/<site>"`` (default: every site of the scene, in scene
+        order). The specific force is the site's acceleration minus gravity (REP-145: zero in
+        free fall, +g upward at rest), the acceleration that of the body's model at the current
+        state under the wrenches of the last :meth:`step` (read right after stepping: applying
+        a second wrench, or :meth:`clear_wrenches`, replaces them). See sensors.py.
+        """
+        model = self.model
+        if sites is None:
+            index = np.arange(len(model.site_names))
+        else:
+            names = list(model.site_names)
+            try:
+                index = np.array([names.index(s) for s in sites], dtype=np.int64)
+            except ValueError:
+                unknown = [s for s in sites if s not in names]
+                raise ValueError(f"unknown site(s) {unknown}; sites are {names}") from None
+        out = np.empty((len(index), 10))
+        with np.errstate(all="ignore"):
+            sensors.site_readings(self._Ys[self._control[L.CUR]], self._prm, self._last_wrenches,
+                                  np.asarray(model.gravity_W, dtype=float), np.asarray(model.site_body, np.int64)[index],
+                                  np.ascontiguousarray(model.site_p_P[index], dtype=float),
+                                  np.asarray(model.site_world_axes, dtype=np.bool_)[index], out)
+        return SiteReadings(tuple(model.site_names[i] for i in index), out[:, 0:3], out[:, 3:6],
+                            quat_xyzw_from_wxyz(out[:, 6:10]))
+
 
     def body_state(self, body: str) -> BodyState:
         """The state of ``body`` in the user's conventions (see :class:`BodyState`)."""
@@ -749,7 +782,7 @@ def _vector3(value: Any, name: str) -> np.ndarray:
 
 
 def compile_kernels() -> None:
-    """Compile (or load from numba's cache) every kernel a Simulator uses: ~1 min once per checkout.
+    """Compile (or load from numba's cache) every compiled function the core uses: ~2 CPU-minutes once per checkout.
 
     ``make venv`` runs it, so that neither the first node start nor the first test pays it.
     Steps a scene with a body of every model, with and without a wrench, with every integrator.
@@ -773,3 +806,10 @@ def compile_kernels() -> None:
         sim.apply_wrench("ball", torque=[0.0, 0.0, 0.1], frame="ball/s")
         sim.step(2)
         sim.apply_impulse("can", linear=[0.1, 0.0, 0.0])
+        sim.set_body_state("puck", linear_velocity_world=[0.1, 0.2, 0.0])
+        sim.apply_wrench("puck", force=[0.0, 1.0, 0.0], frame="puck/s")  # a planar body under a turning force
+        sim.step(1)
+    from .stepping import unchecked_steps
+
+    for name in INTEGRATORS:  # tools/envelope.py and the tests step bodies without the checks too
+        unchecked_steps(name, scene.model, scene.initial_state, 0.01, 1)

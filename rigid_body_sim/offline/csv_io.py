@@ -17,6 +17,12 @@ column                       meaning
 ``B.L``                      |angular momentum| about the centre of mass, kg·m²/s
 ===========================  =====================================================================
 
+How the run ended is its last ``# status:`` line: ``# status: incomplete: ...`` comes first,
+and the writer ends the file with ``# status: complete: N steps, t = T s``, ``# status:
+interrupted by SIGTERM at t = T s (N steps)`` (Ctrl-C or SIGTERM) or ``# status: failed: ...``
+(a blow-up). A file whose last status is still ``incomplete`` was cut off: its writer was
+killed; its last row may be cut in half (:func:`read_csv` drops it and says so in ``status``).
+
 Other readers: ``pandas.read_csv(path, comment="#")``; with the standard library,
 ``csv.DictReader(line for line in open(path) if not line.startswith("#"))``; with numpy,
 ``numpy.genfromtxt((line for line in open(path) if not line.startswith("#")), delimiter=",",
@@ -33,9 +39,15 @@ from typing import IO, Any, Mapping
 import numpy as np
 
 from ..core import Simulator
-from .rundata import BodyTrack, RunData
+from ..paths import open_for_reading, open_for_writing, text_writer
+from .rundata import MAX_RUN_FILE_BYTES, BodyTrack, RunData
 
-__all__ = ["CsvWriter", "read_csv", "COLUMNS", "column_names"]
+__all__ = ["CsvWriter", "read_csv", "COLUMNS", "column_names", "STATUS_INCOMPLETE", "MAX_LINE_BYTES"]
+
+#: The status a file has until its writer closes it.
+STATUS_INCOMPLETE = "incomplete: the run was never finished (its writer was killed or crashed)"
+#: Longest line :func:`read_csv` reads, bytes (a row of 10⁵ bodies is about 45 MB).
+MAX_LINE_BYTES = 64 << 20
 
 #: Per-body columns, in order; the CSV header names them ``<body>.<column>``.
 COLUMNS = ("px", "py", "pz", "qx", "qy", "qz", "qw", "vx", "vy", "vz", "wx", "wy", "wz",
@@ -59,17 +71,23 @@ class CsvWriter:
     bodies : sequence of str
         The bodies to write, in column order.
     meta : mapping of str to str, optional
-        Written as ``# key: value`` lines above the header (no newlines in keys or values).
+        Written as ``# key: value`` lines above the header (newlines in them become spaces).
+
+    Raises
+    ------
+    OSError
+        If the file cannot be created; :class:`rigid_body_sim.paths.NotRegularFileError` for a
+        FIFO, device or directory (never blocking, nothing written to it).
     """
 
     def __init__(self, path: str | os.PathLike[str], bodies: tuple[str, ...] | list[str],
                  meta: Mapping[str, str] | None = None):
         self.path = Path(path)
         self.bodies = tuple(bodies)
-        self._file: IO[str] | None = open(self.path, "w", newline="", encoding="utf-8")  # noqa: SIM115
+        self._file: IO[str] | None = text_writer(open_for_writing(self.path, expected="a CSV file"))
         self._file.write("# rigid_body_sim run: one row per sample, SI units\n")
-        for key, value in (meta or {}).items():
-            self._file.write(f"# {key}: {value}\n")
+        for key, value in {**(meta or {}), "status": STATUS_INCOMPLETE}.items():
+            self._file.write(f"# {_one_line(key)}: {_one_line(value)}\n")
         self._file.write(f"# columns: {_COLUMN_TEXT}\n")
         self._csv = csv.writer(self._file)
         self._csv.writerow(column_names(self.bodies))
@@ -89,11 +107,32 @@ class CsvWriter:
         self._csv.writerow([repr(float(sim.time))] + [repr(float(x)) for x in columns.ravel()])
         self.rows += 1
 
-    def close(self) -> None:
-        """Flush and close the file. Safe to call twice."""
-        if self._file is not None:
-            self._file.close()
-            self._file = None
+    def fileno(self) -> int:
+        """The open file's descriptor (e.g. to compare two outputs with ``os.path.sameopenfile``)."""
+        if self._file is None:
+            raise ValueError(f"CSV file {self.path} is closed")
+        return self._file.fileno()
+
+    def close(self, status: str = "complete") -> None:
+        """End the file with ``# status: <status>`` (how the run ended), flush and close it. Safe to
+        call twice.
+
+        Raises
+        ------
+        OSError
+            If the end cannot be written (a full disk); the file is closed all the same.
+        """
+        if self._file is None:
+            return
+        file, self._file = self._file, None
+        try:
+            file.write(f"# status: {_one_line(status)}\n")
+            file.flush()
+        finally:
+            try:
+                file.close()
+            except OSError:  # the write above already failed: report that one
+                pass
 
     def __enter__(self) -> "CsvWriter":
         return self
@@ -102,8 +141,16 @@ class CsvWriter:
         self.close()
 
 
+def _one_line(value: Any) -> str:
+    return " ".join(str(value).split())
+
+
 def read_csv(path: str | os.PathLike[str]) -> RunData:
     """Read a CSV file written by :class:`CsvWriter`.
+
+    Only a regular file of at most :data:`~rigid_body_sim.offline.rundata.MAX_RUN_FILE_BYTES`
+    is read, line by line, no line longer than :data:`MAX_LINE_BYTES`. A last row cut short
+    (the writer was killed) is dropped, and ``meta["status"]`` says so.
 
     Raises
     ------
@@ -112,40 +159,57 @@ def read_csv(path: str | os.PathLike[str]) -> RunData:
     """
     path = Path(path)
     meta: dict[str, str] = {}
-    with open(path, newline="", encoding="utf-8") as f:
-        lines = [line for line in f]
-    body_lines = []
-    for line in lines:
-        if line.startswith("#"):
-            key, sep, value = line[1:].partition(":")
-            if sep:
-                meta[key.strip()] = value.strip()
-        elif line.strip():
-            body_lines.append(line)
-    if not body_lines:
+    try:
+        handle = open_for_reading(path, expected="a CSV file from 'rigid-body-sim run --csv'")
+    except OSError as exc:
+        raise ValueError(f"{path}: cannot read the run ({exc.strerror or exc})") from None
+    header: list[str] | None = None
+    rows: list[np.ndarray] = []
+    cut = False
+    with handle:
+        size = os.fstat(handle.fileno()).st_size
+        if size > MAX_RUN_FILE_BYTES:
+            raise ValueError(f"{path}: the run is {size} bytes; expected at most {MAX_RUN_FILE_BYTES}")
+        number = 0
+        while True:
+            raw = handle.readline(MAX_LINE_BYTES + 1)
+            if not raw:
+                break
+            if len(raw) > MAX_LINE_BYTES:
+                raise ValueError(f"{path}: expected lines of at most {MAX_LINE_BYTES} bytes, got a longer one")
+            try:
+                line = raw.decode("utf-8")
+            except UnicodeDecodeError as exc:
+                raise ValueError(f"{path}: expected UTF-8 text ({exc.reason} at byte {exc.start} of a line)") from None
+            if line.startswith("#"):
+                key, sep, value = line[1:].partition(":")
+                if sep:
+                    meta[key.strip()] = value.strip()
+                continue
+            if not line.strip():
+                continue
+            if not raw.endswith(b"\n"):  # the writer ends every line: this one was cut by a killed writer
+                cut = True
+                break
+            fields = next(csv.reader([line]))
+            if header is None:
+                header = _check_header(path, fields)
+                continue
+            number += 1
+            if len(fields) != len(header):
+                raise ValueError(f"{path}: expected {len(header)} values in sample row {number}, got {len(fields)}")
+            try:
+                rows.append(np.array([float(x) for x in fields]))
+            except ValueError as exc:
+                raise ValueError(f"{path}: expected numbers in every sample row ({exc})") from None
+    if header is None:
         raise ValueError(f"{path}: expected a header row and at least one sample row, found none")
-    rows = list(csv.reader(body_lines))
-    header, rows = rows[0], rows[1:]
-    if not header or header[0] != "t":
-        raise ValueError(f"{path}: expected the first column to be 't', got {header[:1]}")
-    bodies: list[str] = []
-    for name in header[1:]:
-        body, _, column = name.rpartition(".")
-        if column not in COLUMNS or not body:
-            raise ValueError(f"{path}: expected columns named <body>.<one of {list(COLUMNS)}>, got {name!r}")
-        if body not in bodies:
-            bodies.append(body)
-    if header != column_names(bodies):
-        raise ValueError(f"{path}: expected the columns {column_names(bodies)}, got {header}")
     if not rows:
         raise ValueError(f"{path}: expected at least one sample row after the header")
-    for number, row in enumerate(rows, start=1):
-        if len(row) != len(header):
-            raise ValueError(f"{path}: expected {len(header)} values in sample row {number}, got {len(row)}")
-    try:
-        table = np.array([[float(x) for x in row] for row in rows])
-    except ValueError as exc:
-        raise ValueError(f"{path}: expected numbers in every sample row ({exc})") from None
+    if cut:
+        meta["status"] = f"cut short: the last row was incomplete and is left out ({meta.get('status', 'no status')})"
+    table = np.array(rows)
+    bodies = list(dict.fromkeys(name.rpartition(".")[0] for name in header[1:]))
     tracks = {}
     n = len(COLUMNS)
     for i, body in enumerate(bodies):
@@ -155,3 +219,18 @@ def read_csv(path: str | os.PathLike[str]) -> RunData:
             angular_velocity_world=block[:, 10:13], angular_velocity_body=block[:, 13:16],
             energy=block[:, 16], angular_momentum_norm=block[:, 17])
     return RunData(time=table[:, 0], bodies=tracks, meta=meta, source=str(path))
+
+
+def _check_header(path: Path, header: list[str]) -> list[str]:
+    if not header or header[0] != "t":
+        raise ValueError(f"{path}: expected the first column to be 't', got {header[:1]}")
+    bodies: list[str] = []
+    for name in header[1:]:
+        body, _, column = name.rpartition(".")
+        if column not in COLUMNS or not body:
+            raise ValueError(f"{path}: expected columns named <body>.<one of {list(COLUMNS)}>, got {name[:100]!r}")
+        if body not in bodies:
+            bodies.append(body)
+    if header != column_names(bodies):
+        raise ValueError(f"{path}: expected the columns {column_names(bodies)[:40]}, got {header[:40]}")
+    return header

@@ -113,8 +113,24 @@ def plot_body(data: RunData, body: str, out: str | os.PathLike[str], *, scene: S
         title = " — ".join(parts[:2]) + ("  (" + ", ".join(parts[2:]) + ")" if parts[2:] else "")
     fig.suptitle(title, fontsize="x-large")
     out = Path(out)
-    fig.savefig(out, dpi=dpi)
+    _save_whole(fig, out, dpi)
     return out
+
+
+def _save_whole(fig, out: Path, dpi: int) -> None:
+    """Write the PNG to a new file beside ``out``, then rename it over ``out``: an interrupted
+    plot leaves the old file or none, never half a PNG (and never writes into a FIFO or device)."""
+    import secrets
+
+    temporary = out.with_name(f".{out.name}.{secrets.token_hex(6)}.tmp")
+    fd = os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_CLOEXEC, 0o666)  # the umask applies
+    try:
+        with os.fdopen(fd, "wb") as handle:
+            fig.savefig(handle, dpi=dpi, format="png")
+        os.replace(temporary, out)
+    except BaseException:
+        temporary.unlink(missing_ok=True)
+        raise
 
 
 def _lines(ax, t: np.ndarray, values: np.ndarray, labels: list[str], ylabel: str) -> None:

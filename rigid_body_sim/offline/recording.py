@@ -21,6 +21,16 @@ encoding of :mod:`~rigid_body_sim.offline.msgdefs`, zstd chunks) and finished, w
 summary and index, by :meth:`McapRecorder.close`. The scene file (when it is one) is attached
 as ``scene.yaml`` and the run's settings are in the metadata record ``rigid_body_sim``, so
 ``rigid-body-sim plot`` can recompute energy and the closed form from a recording alone.
+
+How the recording ended is its ``status``, the key ``status`` of the metadata records named
+``rigid_body_sim_status`` (the last one wins): ``incomplete: ...`` is written first, and
+:meth:`McapRecorder.close` writes the final one (``complete: ...``, ``interrupted by SIGTERM
+at t = ... s``...). A file that still
+says ``incomplete`` was never closed; one without a summary (its writer was killed) is read by
+:func:`read_recording` up to where it was cut, with ``status`` ``cut short: ...``.
+
+The file is created with :func:`rigid_body_sim.paths.open_for_writing`: never blocking on a FIFO
+and refusing anything but a regular file (the node's ``record_path`` gets the same checks).
 """
 
 from __future__ import annotations
@@ -33,17 +43,23 @@ import numpy as np
 from mcap_ros2.writer import Writer
 
 from ..core import Simulator
+from ..paths import check_writable_path, open_for_reading, open_for_writing
 from .msgdefs import complete_definition
-from .rundata import BodyTrack, RunData, angular_velocity_body
+from .rundata import MAX_RUN_FILE_BYTES, BodyTrack, RunData, angular_velocity_body
 
-__all__ = ["McapRecorder", "read_recording", "stamp_ns", "check_record_path", "METADATA_NAME", "SCENE_ATTACHMENT"]
+__all__ = ["McapRecorder", "read_recording", "stamp_ns", "check_record_path", "METADATA_NAME", "SCENE_ATTACHMENT",
+           "STATUS_METADATA_NAME", "STATUS_INCOMPLETE"]
 
 #: Name of the MCAP metadata record that holds the run's settings.
 METADATA_NAME = "rigid_body_sim"
+#: Name of the metadata records that say how the recording ended (key ``status``; the last counts).
+STATUS_METADATA_NAME = "rigid_body_sim_status"
 #: Name of the attachment holding the scene file's text.
 SCENE_ATTACHMENT = "scene.yaml"
 #: Chunk size, bytes: a chunk is written (and safe from a crash) each time this much has gathered.
 CHUNK_SIZE = 256 * 1024
+#: The status a recording has until it is closed.
+STATUS_INCOMPLETE = "incomplete: the recording was never closed (its writer was killed or crashed)"
 
 
 def stamp_ns(seconds: float) -> int:
@@ -61,18 +77,9 @@ def _xyz(v: np.ndarray) -> dict[str, float]:
 
 def check_record_path(path: str | os.PathLike[str]) -> str | None:
     """Why ``path`` cannot be recorded to, or None: its directory must exist and be writable,
-    and the path must not be a directory."""
-    p = Path(path)
-    directory = p.parent if str(p.parent) else Path(".")
-    if p.is_dir():
-        return f"{str(p)!r} is a directory; expected the path of an .mcap file to write"
-    if not directory.is_dir():
-        return f"directory {str(directory)!r} of {str(p)!r} does not exist"
-    if not os.access(directory, os.W_OK | os.X_OK):
-        return f"directory {str(directory)!r} of {str(p)!r} is not writable"
-    if p.exists() and not os.access(p, os.W_OK):
-        return f"{str(p)!r} exists and is not writable"
-    return None
+    and the path must not be a directory, FIFO or device (:func:`rigid_body_sim.paths.check_writable_path`;
+    :class:`McapRecorder` checks the opened file again)."""
+    return check_writable_path(path, expected="an .mcap file")
 
 
 class McapRecorder:
@@ -94,7 +101,8 @@ class McapRecorder:
     Raises
     ------
     OSError
-        If the file cannot be created.
+        If the file cannot be created; :class:`rigid_body_sim.paths.NotRegularFileError` if the
+        path is a FIFO, device or directory (never blocking, nothing written to it).
     """
 
     def __init__(self, path: str | os.PathLike[str], *, world_frame: str = "world", namespace: str = "/",
@@ -102,7 +110,7 @@ class McapRecorder:
         self.path = Path(path)
         self.world_frame = world_frame
         self._prefix = namespace.rstrip("/") + "/"
-        self._file: IO[bytes] | None = open(self.path, "wb")  # noqa: SIM115 - closed in close()
+        self._file: IO[bytes] | None = open_for_writing(self.path, expected="an .mcap file")
         try:
             self._writer = Writer(self._file, chunk_size=CHUNK_SIZE)
             self._schemas = {name: self._writer.register_msgdef(name, complete_definition(name)) for name in (
@@ -110,6 +118,7 @@ class McapRecorder:
                 "geometry_msgs/msg/WrenchStamped", "rosgraph_msgs/msg/Clock")}
             if metadata:
                 self._writer.add_metadata(METADATA_NAME, {str(k): str(v) for k, v in metadata.items()})
+            self._writer.add_metadata(STATUS_METADATA_NAME, {"status": STATUS_INCOMPLETE})
             if scene_text is not None:
                 self._writer.add_attachment(0, 0, SCENE_ATTACHMENT, "application/yaml", scene_text.encode("utf-8"))
         except BaseException:
@@ -122,6 +131,12 @@ class McapRecorder:
     @property
     def closed(self) -> bool:
         return self._file is None
+
+    def fileno(self) -> int:
+        """The open file's descriptor (e.g. to compare two outputs with ``os.path.sameopenfile``)."""
+        if self._file is None:
+            raise ValueError(f"recording {self.path} is closed")
+        return self._file.fileno()
 
     def _write(self, topic: str, schema: str, message: dict[str, Any], ns: int) -> None:
         if self._file is None:
@@ -190,11 +205,19 @@ class McapRecorder:
         if clock:
             self.write_clock(sim.time)
 
-    def close(self) -> None:
-        """Finish the file (summary, index, footer) and close it. Safe to call twice."""
+    def close(self, status: str = "complete") -> None:
+        """Write ``status`` (how the recording ended: ``"complete"``, ``"interrupted by SIGTERM at
+        t = 1.5 s"``...), finish the file (summary, index, footer) and close it. Safe to call twice.
+
+        Raises
+        ------
+        OSError
+            If the end cannot be written (a full disk); the file is closed all the same.
+        """
         if self._file is None:
             return
         try:
+            self._writer.add_metadata(STATUS_METADATA_NAME, {"status": " ".join(str(status).split())})
             self._writer.finish()
         finally:
             self._file.close()
@@ -216,55 +239,98 @@ def read_recording(path: str | os.PathLike[str]) -> tuple[RunData, str | None]:
     republish) the last message counts. Energy and |L| are left unknown
     (:func:`~rigid_body_sim.offline.rundata.with_derived_quantities` fills them in).
 
+    A file without a summary (its writer was killed) is read record by record up to where
+    it ends; its ``status`` then starts with ``cut short``. Only regular files of at most
+    :data:`~rigid_body_sim.offline.rundata.MAX_RUN_FILE_BYTES` are read, no record longer
+    than the file.
+
     Returns
     -------
     data : RunData
-        ``meta`` is the ``rigid_body_sim`` metadata record, if any.
+        ``meta`` is the ``rigid_body_sim`` metadata record, if any, and ``status`` (from the
+        last ``rigid_body_sim_status`` record, or ``cut short: ...``).
     scene_text : str or None
         The attached ``scene.yaml``, if any.
 
     Raises
     ------
     ValueError
-        If the file is not an MCAP file or has no pose and twist topics.
+        If the file is not an MCAP file (or not a regular file, or too large) or has no pose
+        and twist topics.
     """
     from mcap.exceptions import McapError
-    from mcap.reader import make_reader
+    from mcap.reader import NonSeekingReader, SeekingReader
     from mcap_ros2.decoder import DecoderFactory
 
     path = Path(path)
     poses: dict[str, dict[int, tuple[list[float], list[float]]]] = {}
     twists: dict[str, dict[int, tuple[list[float], list[float]]]] = {}
     meta: dict[str, str] = {}
-    scene_text = None
+    found: dict[str, str | None] = {"scene": None, "cut": None}
+    failures = (McapError, OSError, UnicodeDecodeError, ValueError, MemoryError, EOFError)
+
+    def take(schema: Any, channel: Any, message: Any, decoded: Any) -> None:
+        topic = channel.topic
+        body = topic.rstrip("/").split("/")[-2] if topic.count("/") >= 2 else ""
+        if not body:
+            return
+        if topic.endswith("/pose") and schema.name.endswith("PoseStamped"):
+            p, q = decoded.pose.position, decoded.pose.orientation
+            poses.setdefault(body, {})[message.log_time] = ([p.x, p.y, p.z], [q.x, q.y, q.z, q.w])
+        elif topic.endswith("/twist") and schema.name.endswith("/Twist"):
+            v, w = decoded.linear, decoded.angular
+            twists.setdefault(body, {})[message.log_time] = ([v.x, v.y, v.z], [w.x, w.y, w.z])
+
+    def read_metadata(reader: Any) -> None:
+        for record in reader.iter_metadata():
+            if record.name in (METADATA_NAME, STATUS_METADATA_NAME):
+                meta.update(record.metadata)
+
+    def read_attachments(reader: Any) -> None:
+        for attachment in reader.iter_attachments():
+            if attachment.name == SCENE_ATTACHMENT:
+                found["scene"] = bytes(attachment.data).decode("utf-8")
+
+    def read_messages(reader: Any) -> None:
+        for item in reader.iter_decoded_messages(log_time_order=False):
+            take(*item)
+
+    parts = (read_metadata, read_attachments, read_messages)
     try:
-        with open(path, "rb") as f:
-            reader = make_reader(f, decoder_factories=[DecoderFactory()])
-            for record in reader.iter_metadata():
-                if record.name == METADATA_NAME:
-                    meta.update(record.metadata)
-            for attachment in reader.iter_attachments():
-                if attachment.name == SCENE_ATTACHMENT:
-                    scene_text = bytes(attachment.data).decode("utf-8")
-            for schema, channel, message, decoded in reader.iter_decoded_messages(log_time_order=True):
-                topic = channel.topic
-                body = topic.rstrip("/").split("/")[-2] if topic.count("/") >= 2 else ""
-                if not body:
+        f = open_for_reading(path, expected="an MCAP recording")
+    except OSError as exc:
+        raise ValueError(f"{path}: cannot read the recording ({exc.strerror or exc})") from None
+    with f:
+        size = os.fstat(f.fileno()).st_size
+        if size > MAX_RUN_FILE_BYTES:
+            raise ValueError(f"{path}: the recording is {size} bytes; expected at most {MAX_RUN_FILE_BYTES}")
+        try:
+            try:
+                summary = SeekingReader(f, record_size_limit=size).get_summary()
+            except failures:
+                summary = None
+            for part in parts:
+                f.seek(0)
+                if summary is not None:
+                    part(SeekingReader(f, decoder_factories=[DecoderFactory()], record_size_limit=size))
                     continue
-                if topic.endswith("/pose") and schema.name.endswith("PoseStamped"):
-                    p, q = decoded.pose.position, decoded.pose.orientation
-                    poses.setdefault(body, {})[message.log_time] = ([p.x, p.y, p.z], [q.x, q.y, q.z, q.w])
-                elif topic.endswith("/twist") and schema.name.endswith("/Twist"):
-                    v, w = decoded.linear, decoded.angular
-                    twists.setdefault(body, {})[message.log_time] = ([v.x, v.y, v.z], [w.x, w.y, w.z])
-    except (McapError, OSError, UnicodeDecodeError) as exc:
-        raise ValueError(f"{path}: cannot read it as an MCAP recording ({exc})") from None
+                try:  # no summary: read record by record, keeping what comes before a cut
+                    part(NonSeekingReader(f, decoder_factories=[DecoderFactory()], record_size_limit=size))
+                except failures as exc:
+                    found["cut"] = f"{type(exc).__name__}{': ' + str(exc) if str(exc) else ''}"
+        except failures as exc:
+            raise ValueError(f"{path}: cannot read it as an MCAP recording ({exc})") from None
     bodies = [b for b in poses if b in twists]
+    if not bodies and found["cut"] is not None:
+        raise ValueError(f"{path}: cannot read it as an MCAP recording ({found['cut'][:200]})")
     if not bodies:
         raise ValueError(f"{path}: expected <body>/pose (PoseStamped) and <body>/twist (Twist) topics, found none")
     times = sorted(set.intersection(*(set(poses[b]) & set(twists[b]) for b in bodies)))
     if not times:
         raise ValueError(f"{path}: no time at which every body {bodies} has both a pose and a twist")
+    if found["cut"] is not None:
+        meta["status"] = (f"cut short: the recording has no summary and ends in the middle of a record "
+                          f"({found['cut'][:200]}); read up to t = {times[-1] * 1e-9:.9g} s")
     tracks = {}
     for body in bodies:
         p = np.array([poses[body][t][0] for t in times])
@@ -273,4 +339,5 @@ def read_recording(path: str | os.PathLike[str]) -> tuple[RunData, str | None]:
         w = np.array([twists[body][t][1] for t in times])
         tracks[body] = BodyTrack(position_world=p, orientation_xyzw=q, linear_velocity_world=v,
                                  angular_velocity_world=w, angular_velocity_body=angular_velocity_body(q, w))
-    return RunData(time=np.array(times, dtype=float) * 1e-9, bodies=tracks, meta=meta, source=str(path)), scene_text
+    return RunData(time=np.array(times, dtype=float) * 1e-9, bodies=tracks, meta=meta,
+                   source=str(path)), found["scene"]

@@ -18,27 +18,53 @@ import numpy as np
 
 from ..core import Simulator
 
-__all__ = ["RunSummary", "run_offline", "steps_for", "sample_interval"]
+__all__ = ["RunSummary", "run_offline", "steps_for", "sample_interval", "MAX_RUN_STEPS"]
 
 #: A duration within this fraction of a step of a whole number of steps counts as that number.
 STEP_ROUNDING = 1e-9
+#: Most steps a run may take, and most steps between two samples: 2^53, so that step counts
+#: are exact in float64 (and a run of 2^53 steps of 1 µs already lasts 285 years).
+MAX_RUN_STEPS = 2**53
 
 
 def steps_for(duration: float, dt: float) -> int:
     """Steps of ``dt`` needed to cover ``duration`` (s): ``ceil(duration / dt)``, where a duration
-    within 1e-9 steps of a whole number counts as that number."""
+    within 1e-9 steps of a whole number counts as that number.
+
+    Raises
+    ------
+    ValueError
+        If ``duration`` or ``dt`` is not a finite number > 0, or the run would take more than
+        :data:`MAX_RUN_STEPS` steps (``--dt 1e-320`` makes it infinite).
+    """
     if not (math.isfinite(duration) and duration > 0.0):
         raise ValueError(f"duration: expected a finite number of seconds > 0, got {duration!r}")
+    if not (math.isfinite(dt) and dt > 0.0):
+        raise ValueError(f"dt: expected a finite number of seconds > 0, got {dt!r}")
     ratio = duration / dt
+    if not ratio <= MAX_RUN_STEPS:
+        raise ValueError(f"dt: expected a step giving at most 2^53 steps over the duration, got {duration:g} s / "
+                         f"{dt:g} s = {ratio:.3g} steps")
     nearest = round(ratio)
     return max(1, int(nearest if abs(ratio - nearest) <= STEP_ROUNDING * max(1.0, ratio) else math.ceil(ratio)))
 
 
 def sample_interval(rate_hz: float, dt: float) -> int:
-    """Steps between samples for ``rate_hz`` samples per sim second: ``round(1 / (rate_hz·dt))``, ≥ 1."""
+    """Steps between samples for ``rate_hz`` samples per sim second: ``round(1 / (rate_hz·dt))``, ≥ 1.
+
+    Raises
+    ------
+    ValueError
+        If ``rate_hz`` is not a finite number > 0, or there would be more than
+        :data:`MAX_RUN_STEPS` steps between samples (``rate_hz·dt`` underflows to 0).
+    """
     if not (math.isfinite(rate_hz) and rate_hz > 0.0):
         raise ValueError(f"rate: expected a finite number of samples per second > 0, got {rate_hz!r}")
-    return max(1, int(round(1.0 / (rate_hz * dt))))
+    interval = 1.0 / (rate_hz * dt) if rate_hz * dt > 0.0 else math.inf
+    if not interval <= MAX_RUN_STEPS:
+        raise ValueError(f"rate: expected a rate giving at least one sample per 2^53 steps, got {rate_hz:g} samples/s "
+                         f"at a step of {dt:g} s")
+    return max(1, int(round(interval)))
 
 
 @dataclass(frozen=True)
@@ -60,6 +86,8 @@ class RunSummary:
         (absolute, J, when E(0) = 0). Energy is kinetic plus gravitational potential.
     momentum_initial, momentum_drift : dict of str to float
         The same for |L| about the centre of mass (kg·m²/s).
+    stopped : bool
+        True if ``stop`` ended the run before the duration (e.g. on SIGTERM).
     """
 
     steps: int
@@ -70,6 +98,7 @@ class RunSummary:
     energy_drift: dict[str, float]
     momentum_initial: dict[str, float]
     momentum_drift: dict[str, float]
+    stopped: bool = False
 
     @property
     def real_time_factor(self) -> float:
@@ -79,7 +108,8 @@ class RunSummary:
 
 def run_offline(sim: Simulator, duration: float, *, sample_every: int = 1,
                 on_sample: Iterable[Callable[[Simulator], None]] = (),
-                progress: Callable[[int], None] | None = None) -> RunSummary:
+                progress: Callable[[int], None] | None = None,
+                stop: Callable[[], bool] | None = None) -> RunSummary:
     """Step ``sim`` from its current state for ``duration`` seconds of sim time.
 
     Parameters
@@ -94,6 +124,9 @@ def run_offline(sim: Simulator, duration: float, *, sample_every: int = 1,
         Called with ``sim`` at each sample (a CSV writer, a recorder...).
     progress : callable, optional
         Called with the number of steps just taken, after each batch of steps.
+    stop : callable, optional
+        Asked after each sample; when it returns True the run ends there (``stopped`` is set),
+        so a signal ends a run between two samples, never inside a write.
 
     Raises
     ------
@@ -125,7 +158,11 @@ def run_offline(sim: Simulator, duration: float, *, sample_every: int = 1,
     start_steps = sim.step_count
     sample()
     done = 0
+    stopped = False
     while done < total:
+        if stop is not None and stop():
+            stopped = True
+            break
         n = min(sample_every, total - done)
         sim.step(n)
         done += n
@@ -137,7 +174,7 @@ def run_offline(sim: Simulator, duration: float, *, sample_every: int = 1,
         steps=sim.step_count - start_steps, sim_time=sim.time, wall_time=wall, samples=samples,
         energy_initial=dict(zip(names, energy0.tolist())), energy_drift=dict(zip(names, energy_drift.tolist())),
         momentum_initial=dict(zip(names, momentum0.tolist())),
-        momentum_drift=dict(zip(names, momentum_drift.tolist())),
+        momentum_drift=dict(zip(names, momentum_drift.tolist())), stopped=stopped,
     )
 
 

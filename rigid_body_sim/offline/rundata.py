@@ -15,7 +15,12 @@ import numpy as np
 from ..core import Scene
 from ..core.quaternion import quat_conjugate, quat_rotate, quat_to_matrix, quat_wxyz_from_xyzw
 
-__all__ = ["BodyTrack", "RunData", "with_derived_quantities", "angular_velocity_body"]
+__all__ = ["BodyTrack", "RunData", "with_derived_quantities", "angular_velocity_body", "MAX_RUN_FILE_BYTES"]
+
+#: Largest CSV file or recording ``plot`` reads, bytes: what it reads is held in memory (about
+#: a third of a CSV file's size as float64, more for a compressed recording), so a larger file,
+#: a sparse one or a special file like /dev/zero is refused rather than read without end.
+MAX_RUN_FILE_BYTES = 1 << 30
 
 
 @dataclass(frozen=True)
@@ -59,7 +64,8 @@ class RunData:
         Sim time, s, increasing.
     bodies : dict of str to BodyTrack
     meta : dict of str to str
-        What the file says about the run (``scene``, ``integrator``, ``dt``...).
+        What the file says about the run (``scene``, ``integrator``, ``dt``..., and ``status``:
+        how it ended, e.g. ``complete: 10 steps, t = 0.1 s`` or ``interrupted by SIGTERM at ...``).
     source : str
         The file it was read from.
     """
