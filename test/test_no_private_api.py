@@ -4,8 +4,8 @@ Statically, over every module of the package: no attribute with a leading unders
 anything but ``self``/``cls`` (``node._parameter_overrides``...), no import of a module whose
 path has a private part (``rclpy.impl.implementation_singleton``'s ``_rclpy``...), and none of
 the known undocumented entry points (numba's ``Dispatcher.overloads`` / ``entry_point``)
-outside the one place allowed to isolate a measured need, ``core/kernels.py``, which has its
-own test that fails loudly when numba changes.
+anywhere. The compiled core reaches numba only through ``numba.njit`` (core/jit.py); no module
+is exempt.
 """
 
 from __future__ import annotations
@@ -23,8 +23,6 @@ MODULES = sorted(PACKAGE.rglob("*.py"))
 UNDOCUMENTED = {"overloads", "implementation_singleton", "rclpy_implementation"}
 #: Underscore names the standard library documents as public (os._exit: exit without clean-up).
 DOCUMENTED = {("os", "_exit")}
-#: The one module allowed to isolate an undocumented entry point (numba's, for the kernels' speed).
-ISOLATED = PACKAGE / "core" / "kernels.py"
 
 
 def private_uses(path: Path) -> list[str]:
@@ -38,7 +36,7 @@ def private_uses(path: Path) -> list[str]:
                 continue
             if node.attr.startswith("_") and not node.attr.startswith("__") and not own:
                 found.append(f"{node.lineno}: {ast.unparse(node)}")
-            elif node.attr in UNDOCUMENTED and not own and path != ISOLATED:
+            elif node.attr in UNDOCUMENTED and not own:
                 found.append(f"{node.lineno}: {ast.unparse(node)}")
         elif isinstance(node, (ast.Import, ast.ImportFrom)):
             if isinstance(node, ast.ImportFrom) and (node.level > 0 or (node.module or "").startswith("rigid_body_sim")):
