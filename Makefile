@@ -126,6 +126,8 @@ BENCH_FLAGS = --out $(BENCH_OUT) --docs $(if $(BENCH_DEFAULT_OUT),docs,$(BENCH_O
 bench-deps: $(STAMP)
 	$(PIP) install -r requirements-bench.txt
 bench: bench-deps
+	$(VENV_PY) -m pytest -q -m bench
 	$(VENV_PY) -m benchmarks.run --quick $(BENCH_FLAGS)
 bench-full: bench-deps
+	$(VENV_PY) -m pytest -q -m bench
 	$(VENV_PY) -m benchmarks.run --full $(BENCH_FLAGS)

@@ -54,8 +54,8 @@ def test_floor_and_numpy_loop_take_our_step(method):
     np.testing.assert_allclose(bodies.rows(), ours, rtol=0, atol=1e-12)
 
 
+@pytest.mark.bench
 def test_mujoco_site_motor_is_a_force_fixed_in_the_body():
-    pytest.importorskip("mujoco", reason="MuJoCo is the optional bench extra (make bench-deps)")
     import mujoco
 
     from benchmarks import mujoco_models as mjm

@@ -25,13 +25,39 @@ UNDOCUMENTED = {"overloads", "implementation_singleton", "rclpy_implementation"}
 DOCUMENTED = {("os", "_exit")}
 
 
-def private_uses(path: Path) -> list[str]:
-    """'line: expression' of every private or undocumented use in ``path``."""
+def own_private_names(modules: list[Path]) -> set[str]:
+    """Underscore names our own package defines: ``self._x = ...`` and ``def _x`` in a class.
+
+    One of our classes may read another instance of itself (``Simulator.with_scene`` fills the
+    new simulator's buffers); that is our API, not a library's. A name a library keeps private
+    (``_parameter_overrides``...) is refused here even if we defined it too (see the test).
+    """
+    names = set()
+    for path in modules:
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ClassDef):
+                for item in node.body:
+                    if isinstance(item, ast.FunctionDef) and item.name.startswith("_"):
+                        names.add(item.name)
+            elif (isinstance(node, ast.Attribute) and isinstance(node.ctx, ast.Store)
+                  and isinstance(node.value, ast.Name) and node.value.id == "self" and node.attr.startswith("_")):
+                names.add(node.attr)
+    return {name for name in names if not name.startswith("__")} - LIBRARY_PRIVATE
+
+
+#: Private names of rclpy and numba the seed used (never ours, whatever we name our own).
+LIBRARY_PRIVATE = {"_parameter_overrides", "_rclpy", "_take_subscription", "_dispatcher", "_cache"}
+
+
+def private_uses(path: Path, own_names: set[str] | None = None) -> list[str]:
+    """'line: expression' of every private or undocumented use in ``path``; ``own`` are the
+    underscore names of our own classes (allowed on any instance of them)."""
+    own_names = own_names or set()
     found = []
     tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
     for node in ast.walk(tree):
         if isinstance(node, ast.Attribute):
-            own = isinstance(node.value, ast.Name) and node.value.id in ("self", "cls")
+            own = (isinstance(node.value, ast.Name) and node.value.id in ("self", "cls")) or node.attr in own_names
             if isinstance(node.value, ast.Name) and (node.value.id, node.attr) in DOCUMENTED:
                 continue
             if node.attr.startswith("_") and not node.attr.startswith("__") and not own:
@@ -54,13 +80,16 @@ def private_uses(path: Path) -> list[str]:
     return found
 
 
+OWN = own_private_names(MODULES)
+
+
 def test_the_package_has_modules_to_check():
     assert len(MODULES) > 20 and PACKAGE / "ros" / "node.py" in MODULES
 
 
 @pytest.mark.parametrize("path", MODULES, ids=[str(p.relative_to(PACKAGE)) for p in MODULES])
 def test_no_private_api(path: Path):
-    assert private_uses(path) == []
+    assert private_uses(path, OWN) == []
 
 
 def test_the_check_sees_what_it_must(tmp_path: Path):
@@ -72,6 +101,8 @@ def test_the_check_sees_what_it_must(tmp_path: Path):
         "fast = dispatcher.overloads[sig].entry_point\n"
         "from .closed_form import _jacobi\n"
         "own = self._lock\n"
+        "other = new._Ys\n"
+        "again = node._parameter_overrides\n"
     )
-    found = private_uses(sample)
-    assert [line.split(":")[0] for line in found] == ["1", "1", "2", "3", "4"]
+    found = private_uses(sample, own_private_names([sample]) | {"_Ys", "_parameter_overrides"} - LIBRARY_PRIVATE)
+    assert sorted(line.split(":")[0] for line in found) == ["1", "1", "2", "3", "4", "8"]
