@@ -192,7 +192,7 @@ def test_record_path_fifo_is_refused_at_once_and_ticks_go_on(tmp_path):
     with SimHarness(paused=False, parameters={"diagnostics_period": 0.0}) as harness:
         start = time.monotonic()
         result = harness.set_parameters_atomically(record_path=str(fifo))
-        assert not result.successful and "not a regular file" in result.reason
+        assert not result.successful and "is a FIFO" in result.reason
         assert time.monotonic() - start < 5.0
         assert harness.get_parameter("record_path") == ""
         with harness.node.locked_simulator() as sim:
@@ -216,6 +216,29 @@ def test_too_many_bodies_are_refused_and_ticks_go_on_while_loading(tmp_path):
         assert harness.node.simulator.body_names == ("box",)
         # The tick thread kept sim time going while the executor thread was loading the file.
         assert sim_after - sim_before >= 0.5 * (wall_after - wall_before)
+
+
+def test_an_alias_bomb_scene_change_is_refused_and_ticks_go_on(tmp_path):
+    """Issue 18: a ~600-byte scene whose anchors expand to 10⁹ nodes froze the node (0 ticks,
+    services dead, 4.5 GB in 30 s). Now the change is refused with the loader's reason, the
+    scene stays, and the tick thread keeps sim time going while the file is refused."""
+    bomb = "[" + ", ".join(["&a0 [" + ", ".join(["1"] * 10) + "]"]
+                           + [f"&a{i} [" + ", ".join([f"*a{i - 1}"] * 10) + "]" for i in range(1, 9)]) + "]"
+    path = tmp_path / "bomb.yaml"
+    path.write_text(f"bodies: {{b: {{mass: {bomb}, inertia: {{sphere: 1}}}}}}\n")
+    with SimHarness(paused=False, parameters={"diagnostics_period": 0.0}) as harness:
+        with harness.node.locked_simulator() as sim:
+            sim_before, wall_before = sim.time, time.monotonic()
+        result = harness.set_parameters_atomically(scene=str(path))
+        time.sleep(0.3)  # running, not paused: the tick thread advances sim time meanwhile
+        with harness.node.locked_simulator() as sim:
+            sim_after, wall_after = sim.time, time.monotonic()
+        assert not result.successful
+        assert "at most 10,000,000 nodes with aliases expanded" in result.reason, result.reason
+        assert harness.node.simulator.body_names == ("box",)
+        assert wall_after - wall_before < 10.0  # refused at once (measured well under 1 s)
+        assert sim_after - sim_before >= 0.5 * (wall_after - wall_before)
+        assert harness.get_parameter("scene") != str(path)
 
 
 def test_locked_simulator_holds_the_ticks():

@@ -53,11 +53,15 @@ def source_files() -> list[Path]:
 
 
 def copy_kernel_cache(package_dir: Path) -> None:
-    """Copy the checkout's compiled numba kernels beside ``package_dir``'s core (same sources)."""
+    """Copy the checkout's compiled numba kernels beside ``package_dir``'s core (same sources),
+    with the stamp of the sources they were compiled from (core/jit.py keeps a cache only with
+    its stamp)."""
+    from rigid_body_sim.core.jit import STAMP_NAME
+
     cache = ROOT / PACKAGE / "core" / "__pycache__"
     target = package_dir / "core" / "__pycache__"
     target.mkdir(exist_ok=True)
-    for path in list(cache.glob("*.nbi")) + list(cache.glob("*.nbc")):
+    for path in [*cache.glob("*.nbi"), *cache.glob("*.nbc"), cache / STAMP_NAME]:
         shutil.copy2(path, target / path.name)
 
 
