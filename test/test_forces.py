@@ -485,8 +485,18 @@ def test_unknown_frame_lists_the_frames(frame: str) -> None:
         (lambda s: s.apply_force_at_point("box", [0.0, 10.0, 0.0], [np.nan, 0.3, 0.0]), "point"),
         (lambda s: s.apply_impulse("box", linear=[np.nan, 0.0, 0.0]), "linear impulse"),
         (lambda s: s.apply_impulse("box", linear=[1.0, 0.0, 0.0], angular=[0.0, 0.0, np.inf]), "angular impulse"),
+        # float64 arrays take the fast path; a non-finite number in any slot is still refused
+        (lambda s: s.apply_wrench("box", force=np.array([0.0, 0.0, np.nan]), frame="box/corner"), "force"),
+        (lambda s: s.apply_wrench("box", torque=np.array([-np.inf, 0.0, 0.0]), frame="box"), "torque"),
+        (lambda s: s.apply_force_at_point("box", np.array([0.0, np.inf, 0.0]), np.zeros(3), "box/corner"), "force"),
+        (lambda s: s.apply_force_at_point("box", np.ones(3), np.array([0.0, 0.0, np.nan]), "box"), "point"),
+        # finite force and point whose moment r × F overflows
+        (lambda s: s.apply_force_at_point("box", np.array([0.0, 1e200, 0.0]), np.array([1e200, 0.0, 0.0])),
+         "torque"),
     ],
-    ids=["force-nan", "torque-inf", "force-2", "force-str", "point-force-inf", "point-nan", "impulse-nan", "angular-impulse-inf"],
+    ids=["force-nan", "torque-inf", "force-2", "force-str", "point-force-inf", "point-nan", "impulse-nan",
+         "angular-impulse-inf", "array-force-nan-z", "array-torque-inf", "array-point-force-inf",
+         "array-point-nan-z", "moment-overflow"],
 )
 def test_non_finite_or_malformed_input_is_rejected_and_nothing_is_applied(call: Any, name: str) -> None:
     sim = Simulator(_textbook_scene(), "rk4", 0.01)
