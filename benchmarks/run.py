@@ -265,16 +265,31 @@ def section_throughput(tp: list[dict], targets: list[dict], compare: list[dict])
     return text
 
 
-def section_apply(frames: list[dict], sites: list[dict], targets: list[dict]) -> str:
-    text = ("## What a force costs from Python\n\n" + apply_cost.__doc__.split(chr(10) * 2, 1)[1] + "\n"
-            "### (i) Per frame, µs, median (min–max); integrator rk4 / MuJoCo RK4\n\n"
+def apply_tables(frames: list[dict], sites: list[dict], level: str = "###") -> str:
+    """The two tables of what a force costs from Python (results.md and the README's block)."""
+    return (f"{level} (i) Per frame, µs, median (min–max); integrator rk4 / MuJoCo RK4\n\n"
             + _table(frames, [("call", "function"), ("frame", "frame"),
                               ("one call", lambda r: _range(r, "call_us")),
                               ("call + step(1)", lambda r: _range(r, "apply_step_us")),
                               ("over step(1)", lambda r: _fmt(r.get("over_step_us"))),
                               ("call / world", lambda r: _fmt(r.get("call_vs_world")) + ("×" if "call_vs_world" in r else "")),
                               ("call + step / world", lambda r: _fmt(r.get("apply_step_vs_world"))
-                               + ("×" if "apply_step_vs_world" in r else ""))]))
+                               + ("×" if "apply_step_vs_world" in r else ""))])
+            + f"\n{level} (ii) One body, a new site-frame force every step from Python, µs, median (min–max)\n\n"
+            "Ours `apply_force_at_point(\"b\", F, (0, 0, 0), frame=\"b/corner\")` + `step(1)`; MuJoCo "
+            "`d.ctrl[0] = f` + `mj_step(m, d)` with a motor on a site at the same corner; each with its step "
+            "alone beside it.\n\n"
+            + _table(sites, [("ours", "integrator"), ("apply + step(1)", lambda r: _range(r, "ours_us")),
+                             ("step(1) alone", lambda r: _range(r, "ours_step_only_us")),
+                             ("MuJoCo (matched)", lambda r: r["mujoco"] or ""),
+                             ("ctrl + mj_step", lambda r: _range(r, "mujoco_us")),
+                             ("mj_step alone", lambda r: _range(r, "mujoco_step_only_us")),
+                             ("ours / MuJoCo", lambda r: _fmt(r.get("ratio")) + ("×" if "ratio" in r else ""))]))
+
+
+def section_apply(frames: list[dict], sites: list[dict], targets: list[dict]) -> str:
+    text = ("## What a force costs from Python\n\n" + apply_cost.__doc__.split(chr(10) * 2, 1)[1] + "\n"
+            + apply_tables(frames, sites))
     ours = [r for r in frames if "call_vs_world" in r and r["frame"] != "world"]
     if ours:
         worst = max(ours, key=lambda r: max(r["call_vs_world"], r["apply_step_vs_world"]))
@@ -282,16 +297,6 @@ def section_apply(frames: list[dict], sites: list[dict], targets: list[dict]) ->
         _target(targets, "13", "`apply_force_at_point` / `apply_wrench` in `<body>/world_aligned`, `<body>`, a site (body "
                 "axes), a site (world axes) vs the `world` frame: the call alone and call + `step(1)` (time ratio)",
                 "≤ 1.5", f"worst {_fmt(worst_ratio)}× ({worst['function']}, {worst['frame']})", worst_ratio <= 1.5)
-    text += ("\n### (ii) One body, a new site-frame force every step from Python, µs, median (min–max)\n\n"
-             "Ours `apply_force_at_point(\"b\", F, (0, 0, 0), frame=\"b/corner\")` + `step(1)`; MuJoCo "
-             "`d.ctrl[0] = f` + `mj_step(m, d)` with a motor on a site at the same corner; each with its step "
-             "alone beside it.\n\n"
-             + _table(sites, [("ours", "integrator"), ("apply + step(1)", lambda r: _range(r, "ours_us")),
-                              ("step(1) alone", lambda r: _range(r, "ours_step_only_us")),
-                              ("MuJoCo (matched)", lambda r: r["mujoco"] or ""),
-                              ("ctrl + mj_step", lambda r: _range(r, "mujoco_us")),
-                              ("mj_step alone", lambda r: _range(r, "mujoco_step_only_us")),
-                              ("ours / MuJoCo", lambda r: _fmt(r.get("ratio")) + ("×" if "ratio" in r else ""))]))
     for r in sites:
         if "ratio" in r:
             _target(targets, "13", f"1 body, new site force every step: our `{r['integrator']}` apply + `step(1)` vs MuJoCo "
@@ -591,7 +596,9 @@ def main(argv=None) -> int:
     # A partial run (--parts) never overwrites the complete results.md the README is checked against.
     (out / ("results_partial.md" if missing else "results.md")).write_text(md)
     if args.readme and not missing:
-        update_readme(Path(args.readme), head)
+        update_readme(Path(args.readme), head + "\n**What a force costs from Python**, this run "
+                      "(how: [results.md](benchmarks/results/results.md#what-a-force-costs-from-python)):\n\n"
+                      + apply_tables(frames, sites, level="####"))
         log(f"  updated {args.readme}")
     log(f"done in {elapsed:.0f} s: {out}")
     return 0
