@@ -867,3 +867,27 @@ def test_control_characters_in_a_path_are_escaped_in_messages(tmp_path: Path) ->
     with pytest.raises(SceneError) as info:
         load_scene(path)
     assert "\x1b" not in str(info.value) and "red\\x1b[31m.yaml: cannot read scene file" in str(info.value)
+
+
+@pytest.mark.parametrize("integrator", ["euler", "semi_implicit_euler", "implicit_gyroscopic", "splitting",
+                                        "symmetric_splitting", "rk4", "exact_rotor_splitting"])
+@pytest.mark.parametrize("twist", [{"linear": [1e50, 0.0, 0.0]}, {"angular": [1e50, 0.0, 1e40]},
+                                   {"linear": [1e150, 1e150, 0.0], "angular": [1e150, 1.0, 1.0]}],
+                         ids=["v-1e50", "w-1e50", "v-w-1e150"])
+def test_huge_twists_step_or_stop_loudly_never_crash(integrator: str, twist: dict) -> None:
+    """Issue 14: a 1e50 m/s twist once raised ZeroDivisionError inside the compiled step (the
+    node's tick thread died). Now every integrator either steps it to a finite state or raises
+    NonFiniteStateError (a DivergenceError is one) and leaves the last finite state."""
+    from rigid_body_sim.core.simulator import NonFiniteStateError
+
+    scene = load_scene({"bodies": {"b": {"mass": 1.0, "inertia": {"box": [1.0, 0.6, 0.4]}, "twist": twist}}})
+    sim = Simulator(scene, integrator, 0.01)
+    try:
+        sim.step(10)
+    except NonFiniteStateError:
+        pass
+    state = sim.body_state("b")
+    for value in (state.position_world, state.orientation_xyzw, state.linear_velocity_world,
+                  state.angular_velocity_world):
+        assert np.all(np.isfinite(value))
+    assert sim.step_count <= 10
