@@ -38,6 +38,7 @@ from ..core import NonFiniteStateError, Scene, SceneError, Simulator, load_scene
 from ..offline.recording import McapRecorder
 from .conversions import MAX_ROS_TIME_S
 from .diagnostics import TickWindow, busy_status, diagnostic_statuses
+from .imu import ImuPublishers
 from .inputs import WrenchInputs
 from .node_log import StatusLog, log_models, log_scene
 from .node_recording import NodeRecording
@@ -129,6 +130,8 @@ class RigidBodySimNode(Node):
         self._inputs = WrenchInputs(self, qos, self._world_frame)
         self._outputs.commit(self._outputs.prepare(self._sim.body_names, settings["publish_odometry"]))
         self._inputs.commit(self._inputs.prepare(self._sim))
+        self._imus = ImuPublishers(self, qos)
+        self._imus.commit(self._imus.prepare(self._sim.scene, keep_state=False))
         self._recording = NodeRecording(self.get_logger(), self._world_frame, self.get_namespace(),
                                         self.get_fully_qualified_name())
         if settings["record_path"]:
@@ -265,17 +268,19 @@ class RigidBodySimNode(Node):
         sim = change.simulator or self._sim
         # Endpoints of a new scene (or odometry publishers) are made before the lock and the
         # replaced ones destroyed after it: the ticks wait only for the swap itself.
-        publishers = inputs = None
+        publishers = inputs = imus = None
         if change.simulator is not None or "publish_odometry" in changed:
             publishers = self._outputs.prepare(sim.body_names, new["publish_odometry"])
         if change.simulator is not None:
             inputs = self._inputs.prepare(sim)
+            imus = self._imus.prepare(sim.scene, keep_state=False)
         with self._lock:
             self._settings = new
             if change.simulator is not None:
                 self._sim = sim
                 self._fault = self._fault if self.tick_failure is not None else None
                 self._inputs.commit(inputs)
+                self._imus.commit(imus)
             else:
                 if "integrator" in changed:
                     sim.integrator = new["integrator"]
@@ -302,6 +307,8 @@ class RigidBodySimNode(Node):
             self._outputs.release(publishers)
         if inputs is not None:
             self._inputs.release(inputs)
+        if imus is not None:
+            self._imus.release(imus)
         if old_recorder is not None:
             self._recording.finish(old_recorder)
         if "model_reduction" in changed and change.simulator is None:
@@ -379,8 +386,14 @@ class RigidBodySimNode(Node):
                 for body in failure.bodies:
                     sim.stop_body(body)
                 self.get_logger().error(f"stopped {list(failure.bodies)}: {failure}")
+        self._imus.publish(sim, tick_s, self._record_imu if self._recording.recorder is not None else None)
         self._publish_state_locked()
         return True
+
+    def _record_imu(self, sample: Any) -> None:
+        self._recording.write(lambda recorder: recorder.write_imu(
+            sample.time, sample.site, sample.orientation_xyzw, sample.angular_velocity, sample.specific_force,
+            sample.covariances))
 
     def step_paused(self) -> tuple[bool, str]:
         """``~/step``: one tick if paused; (success, message)."""
@@ -400,6 +413,7 @@ class RigidBodySimNode(Node):
         try:
             with self._lock_or_busy():
                 self._sim.reset()
+                self._imus.commit(self._imus.prepare(self._sim.scene, keep_state=False))  # no new endpoints
                 self._fault = None if self.tick_failure is None else self._fault
                 self._open_diagnostics_window()
                 self._inputs.clear()
