@@ -130,3 +130,146 @@ def test_noisy_imu_rate_and_covariances_through_the_node(tmp_path) -> None:
         assert [round(stamp_s(m) / TICK_S) for m in msgs] == [1, 5, 9]
         assert msgs[0].linear_acceleration_covariance[0] == pytest.approx(0.01**2 * 25.0, rel=1e-12)
         assert msgs[0].angular_velocity_covariance[4] == pytest.approx(0.002**2 * 25.0, rel=1e-12)
+
+
+# ---------------------------------------------------------------------------------------- set_state
+
+BALL = {"mass": 2.0, "inertia": {"sphere": 0.5}, "pose": {"position": [0.0, 0.0, 0.0]}}
+
+
+def odometry(frame_id: str, child: str, position, orientation_xyzw, linear, angular):
+    from nav_msgs.msg import Odometry
+
+    msg = Odometry()
+    msg.header.frame_id, msg.child_frame_id = frame_id, child
+    p, o = msg.pose.pose.position, msg.pose.pose.orientation
+    p.x, p.y, p.z = (float(v) for v in position)
+    o.x, o.y, o.z, o.w = (float(v) for v in orientation_xyzw)
+    v, w = msg.twist.twist.linear, msg.twist.twist.angular
+    v.x, v.y, v.z = (float(x) for x in linear)
+    w.x, w.y, w.z = (float(x) for x in angular)
+    return msg
+
+
+def set_state_publisher(h: SimHarness, body: str):
+    from nav_msgs.msg import Odometry
+
+    pub = h.client.create_publisher(Odometry, f"{body}/set_state", QoSProfile(depth=10))
+    h.spin_until(lambda: pub.get_subscription_count() > 0, f"the node's {body}/set_state subscription")
+    return pub
+
+
+def send(h: SimHarness, pub, msg) -> None:
+    seen = h.messages_seen()
+    pub.publish(msg)
+    h.spin_until(lambda: h.messages_seen() > seen, "the node to take the set_state message")
+
+
+def quat_exp_world(w_W: np.ndarray, t: float) -> np.ndarray:
+    """Rotation by |ω| t about ω (x, y, z, w)."""
+    angle = np.linalg.norm(w_W) * t
+    axis = w_W / np.linalg.norm(w_W)
+    return np.concatenate((np.sin(angle / 2) * axis, [np.cos(angle / 2)]))
+
+
+def quat_mul_xyzw(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    ax, ay, az, aw = a
+    bx, by, bz, bw = b
+    return np.array([aw * bx + ax * bw + ay * bz - az * by, aw * by - ax * bz + ay * bw + az * bx,
+                     aw * bz + ax * by - ay * bx + az * bw, aw * bw - ax * bx - ay * by - az * bz])
+
+
+@pytest.mark.parametrize("twist_axes", ["body", "world"])
+def test_set_state_then_one_tick_matches_the_closed_form(tmp_path, twist_axes: str) -> None:
+    """A sphere (ω stays constant) under gravity, set to (p0, q0, v, ω) while paused, then one tick of
+    h: p = p0 + v_W h + g h²/2, v = v_W + g h, q = Exp(ω_W h) ⊗ q0 (RK4: exact for the polynomial
+    motion; the rotation's truncation error (|ω| h)⁵/5! ≈ 1e-12 is far inside 1e-9). In body axes
+    the twist is turned by q0 first: v_W = R(q0) v_B, ω_W = R(q0) ω_B."""
+    scene = write_scene(tmp_path, {"ball": BALL, "box": spinning_box()})
+    p0 = np.array([1.0, 2.0, 3.0])
+    axis = np.array([1.0, 2.0, 3.0]) / np.sqrt(14.0)
+    q0 = np.concatenate((np.sin(0.4) * axis, [np.cos(0.4)]))
+    v_in, w_in = np.array([1.0, -2.0, 0.5]), np.array([0.3, -0.7, 1.1])
+    R0 = quat_to_matrix(quat_wxyz_from_xyzw(q0))
+    v_W, w_W = (R0 @ v_in, R0 @ w_in) if twist_axes == "body" else (v_in, w_in)
+    child = "ball" if twist_axes == "body" else "world"
+    with SimHarness(scene, {"integrator": "rk4"}) as h:
+        pub = set_state_publisher(h, "ball")
+        send(h, pub, odometry("world", child, p0, q0, v_in, w_in))
+        # paused: the tick thread applies it and publishes the new state at the same sim time
+        h.spin_until(lambda: np.allclose([h.latest_pose("ball").pose.position.x], [p0[0]], rtol=0, atol=1e-12),
+                     "the set state on ball/pose")
+        with h.node.locked_simulator() as sim:
+            assert sim.time == 0.0
+            np.testing.assert_allclose(sim.body_state("ball").linear_velocity_world, v_W, rtol=0, atol=1e-15)
+        h.step(1)
+        g = np.array([0.0, 0.0, -G])
+        pose, twist = h.latest_pose("ball").pose, h.latest_twist("ball")
+        np.testing.assert_allclose(vec(pose.position), p0 + v_W * TICK_S + 0.5 * g * TICK_S**2, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(vec(twist.linear), v_W + g * TICK_S, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(vec(twist.angular), w_W, rtol=0, atol=1e-9)
+        q = np.array([pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w])
+        expected = quat_mul_xyzw(quat_exp_world(w_W, TICK_S), q0)
+        np.testing.assert_allclose(q * np.sign(q @ expected), expected, rtol=0, atol=1e-9)
+        assert stamp_s(h.latest_pose("ball")) == pytest.approx(TICK_S, abs=1e-9)
+
+
+def test_rejected_set_state_changes_nothing_and_is_counted(tmp_path) -> None:
+    from diagnostic_msgs.msg import DiagnosticArray  # noqa: F401  (the node's report type)
+
+    from rigid_body_sim.ros.diagnostics import status_values
+
+    scene = write_scene(tmp_path, {"ball": BALL, "box": spinning_box()})
+    good_q = [0.0, 0.0, 0.0, 1.0]
+    bad = [
+        ("non_finite", odometry("world", "ball", [float("nan"), 0, 0], good_q, [0, 0, 0], [0, 0, 0])),
+        ("non_finite", odometry("world", "ball", [0, 0, 0], good_q, [0, float("inf"), 0], [0, 0, 0])),
+        ("non_unit_quaternion", odometry("world", "ball", [0, 0, 0], [0.0, 0.0, 0.0, 2.0], [0, 0, 0], [0, 0, 0])),
+        ("non_unit_quaternion", odometry("world", "ball", [0, 0, 0], [0.0, 0.0, 0.0, 0.0], [0, 0, 0], [0, 0, 0])),
+        ("unknown_frame", odometry("map", "ball", [0, 0, 0], good_q, [0, 0, 0], [0, 0, 0])),
+        ("unknown_frame", odometry("world", "base_link", [0, 0, 0], good_q, [0, 0, 0], [0, 0, 0])),
+        ("unknown_frame", odometry("world", "box", [0, 0, 0], good_q, [0, 0, 0], [0, 0, 0])),
+        ("too_large", odometry("world", "ball", [1e13, 0, 0], good_q, [0, 0, 0], [0, 0, 0])),
+    ]
+    with SimHarness(scene, {"integrator": "rk4"}) as h:
+        h.step(2)
+        pub = set_state_publisher(h, "ball")
+        with h.node.locked_simulator() as sim:
+            before = [a.copy() for a in (sim.positions_world(), sim.orientations_xyzw(),
+                                         sim.linear_velocities_world(), sim.angular_velocities_world())]
+            time_before = sim.time
+        rejected_before = h.node.rejected
+        h.node.diagnostics()  # opens a new window
+        for _, msg in bad:
+            send(h, pub, msg)
+        h.spin_for(0.1)  # several paused ticks: nothing pending may be applied
+        with h.node.locked_simulator() as sim:
+            after = [sim.positions_world(), sim.orientations_xyzw(), sim.linear_velocities_world(),
+                     sim.angular_velocities_world()]
+            assert sim.time == time_before
+        for a, b in zip(before, after):
+            np.testing.assert_array_equal(a, b)
+        counts = h.node.rejected
+        for reason in ("non_finite", "non_unit_quaternion", "unknown_frame", "too_large"):
+            expected = sum(1 for r, _ in bad if r == reason)
+            assert counts[reason] - rejected_before.get(reason, 0) == expected, reason
+        report = {s.name: status_values(s) for s in h.node.diagnostics().status}
+        inputs = report["rigid_body_sim: input"]
+        assert inputs["rejected non_unit_quaternion (window)"] == "2"
+        assert inputs["rejected unknown_frame (window)"] == "3"
+
+
+def test_set_state_is_projected_onto_the_bodys_motion(tmp_path) -> None:
+    """A translation-only body given a spin keeps none; a static body stays where it is."""
+    scene = write_scene(tmp_path, {"ball": {**BALL, "motion": "translation_only"},
+                                   "post": {**BALL, "motion": "static"}}, gravity=(0.0, 0.0, 0.0))
+    with SimHarness(scene, {"integrator": "rk4"}) as h:
+        for body in ("ball", "post"):
+            send(h, set_state_publisher(h, body),
+                 odometry("world", "world", [0.5, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 0.0, 2.0]))
+        h.spin_until(lambda: h.latest_pose("ball").pose.position.x == 0.5, "the set state on ball/pose")
+        h.step(1)
+        np.testing.assert_allclose(vec(h.latest_twist("ball").angular), 0.0, atol=0)
+        np.testing.assert_allclose(vec(h.latest_pose("ball").pose.position), [0.5 + TICK_S, 0.0, 0.0], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(vec(h.latest_twist("post").linear), 0.0, atol=0)
+        np.testing.assert_allclose(vec(h.latest_twist("post").angular), 0.0, atol=0)

@@ -202,6 +202,16 @@ class WrenchInputs:
                 linear, angular = pending[0] + linear, pending[1] + angular
             self.pending_impulses[(body, frame)] = (linear, angular)
 
+    def count_rejection(self, body: str, topic: str, rejection: RejectedMessage) -> None:
+        """Count (and warn about, throttled) a message dropped by another input of the node (``set_state``)."""
+        with self._lock:
+            self._reject(body, topic, None, rejection)
+
+    def count_accepted(self) -> None:
+        """Count a message accepted by another input of the node (``set_state``)."""
+        with self._lock:
+            self.accepted += 1
+
     # ------------------------------------------------------------------ per tick
 
     def apply(self, sim: Simulator, wrench_timeout: float) -> list[tuple[str, str, np.ndarray, np.ndarray]]:

@@ -45,6 +45,7 @@ from .node_recording import NodeRecording
 from .parameters import BY_NAME, coerce, declare_parameters, problems
 from .publishers import StatePublishers
 from .services import create_services
+from .set_state import SetStateInputs
 from .tick_loop import TickLoop
 
 __all__ = ["RigidBodySimNode", "DEFAULT_INTEGRATOR", "MAX_BODIES", "QUEUE_DEPTH"]
@@ -132,6 +133,8 @@ class RigidBodySimNode(Node):
         self._inputs.commit(self._inputs.prepare(self._sim))
         self._imus = ImuPublishers(self, qos)
         self._imus.commit(self._imus.prepare(self._sim.scene, keep_state=False))
+        self._set_state = SetStateInputs(self, qos, self._world_frame, self._inputs)
+        self._set_state.commit(self._set_state.prepare(self._sim.body_names))
         self._recording = NodeRecording(self.get_logger(), self._world_frame, self.get_namespace(),
                                         self.get_fully_qualified_name())
         if settings["record_path"]:
@@ -268,12 +271,13 @@ class RigidBodySimNode(Node):
         sim = change.simulator or self._sim
         # Endpoints of a new scene (or odometry publishers) are made before the lock and the
         # replaced ones destroyed after it: the ticks wait only for the swap itself.
-        publishers = inputs = imus = None
+        publishers = inputs = imus = set_state = None
         if change.simulator is not None or "publish_odometry" in changed:
             publishers = self._outputs.prepare(sim.body_names, new["publish_odometry"])
         if change.simulator is not None:
             inputs = self._inputs.prepare(sim)
             imus = self._imus.prepare(sim.scene, keep_state=False)
+            set_state = self._set_state.prepare(sim.body_names)
         with self._lock:
             self._settings = new
             if change.simulator is not None:
@@ -281,6 +285,8 @@ class RigidBodySimNode(Node):
                 self._fault = self._fault if self.tick_failure is not None else None
                 self._inputs.commit(inputs)
                 self._imus.commit(imus)
+                self._set_state.commit(set_state)
+                self._set_state.clear()
             else:
                 if "integrator" in changed:
                     sim.integrator = new["integrator"]
@@ -309,6 +315,8 @@ class RigidBodySimNode(Node):
             self._inputs.release(inputs)
         if imus is not None:
             self._imus.release(imus)
+        if set_state is not None:
+            self._set_state.release(set_state)
         if old_recorder is not None:
             self._recording.finish(old_recorder)
         if "model_reduction" in changed and change.simulator is None:
@@ -329,6 +337,8 @@ class RigidBodySimNode(Node):
         self._tick_window.record(due_ns, period_ns, missed=missed)
         if not self._settings["paused"]:
             self._advance_one_tick_locked()
+        elif self._set_state.apply(self._sim):  # set_state also while paused: applied and shown at once
+            self._publish_state_locked()
         self._status_log.maybe_log(self.get_logger(), self._sim, self._settings["status_period"], self._settings["paused"])
 
     def _on_tick_failure(self, exc: BaseException) -> None:
@@ -369,6 +379,7 @@ class RigidBodySimNode(Node):
         if self._fault is not None:
             return False
         tick_s = settings["real_time_factor"] / settings["rate_hz"]
+        self._set_state.apply(sim)  # set_state messages take effect, whole, at the start of the tick
         if sim.time + tick_s > MAX_ROS_TIME_S:
             self._fault = (f"sim time {sim.time:.9g} s cannot advance past {MAX_ROS_TIME_S} s, the end of ROS time "
                            "(int32 seconds in builtin_interfaces/Time); ~/reset or a new scene starts again")
@@ -417,6 +428,7 @@ class RigidBodySimNode(Node):
                 self._fault = None if self.tick_failure is None else self._fault
                 self._open_diagnostics_window()
                 self._inputs.clear()
+                self._set_state.clear()
                 self._publish_state_locked()
         except NodeBusy as busy:
             return False, f"refused: {busy}"
@@ -544,12 +556,12 @@ class RigidBodySimNode(Node):
 
     @property
     def rejected(self) -> dict[str, int]:
-        """Dropped wrench and impulse messages by reason (see diagnostics.REJECTION_REASONS)."""
+        """Dropped wrench, impulse and set_state messages by reason (see diagnostics.REJECTION_REASONS)."""
         return dict(self._inputs.snapshot()[3])
 
     @property
     def accepted_messages(self) -> int:
-        """Wrench and impulse messages accepted so far."""
+        """Wrench, impulse and set_state messages accepted so far."""
         return self._inputs.snapshot()[2]
 
     @property
