@@ -273,3 +273,177 @@ def test_set_state_is_projected_onto_the_bodys_motion(tmp_path) -> None:
         np.testing.assert_allclose(vec(h.latest_pose("ball").pose.position), [0.5 + TICK_S, 0.0, 0.0], rtol=0, atol=1e-12)
         np.testing.assert_allclose(vec(h.latest_twist("post").linear), 0.0, atol=0)
         np.testing.assert_allclose(vec(h.latest_twist("post").angular), 0.0, atol=0)
+
+
+# ---------------------------------------------------------------------------------------- step N, spawn, delete
+
+def clock_ns(msg) -> int:
+    return msg.clock.sec * 1_000_000_000 + msg.clock.nanosec
+
+
+@pytest.mark.parametrize("substeps", [1, 3])
+def test_step_ticks_advances_exactly_n_ticks_and_is_refused_while_running(tmp_path, substeps: int) -> None:
+    from rosgraph_msgs.msg import Clock as ClockMsg
+
+    scene = write_scene(tmp_path, {"ball": BALL})
+    with SimHarness(scene, {"substeps": substeps}) as h:
+        clocks = Collector(h, ClockMsg, ["/clock"])
+        clocks.wait_matched(h)
+        result = h.step_ticks(7)
+        assert result.successful, result.reason
+        assert "stepped 7 ticks to t = 0.070000000 s" in result.reason
+        with h.node.locked_simulator() as sim:
+            assert sim.step_count == 7 * substeps
+            assert sim.time == pytest.approx(7 * TICK_S, abs=1e-12)
+        h.spin_until(lambda: len(clocks.messages["/clock"]) >= 7, "seven /clock messages")
+        h.spin_for(0.1)
+        ticks = [clock_ns(m) for m in clocks.messages["/clock"] if clock_ns(m) > 0]
+        assert ticks == [k * 10_000_000 for k in range(1, 8)]
+        assert stamp_s(h.latest_pose("ball")) == pytest.approx(0.07, abs=1e-9)
+        for bad in (0, -3, 2_000_000):
+            refused = h.step_ticks(bad)
+            assert not refused.successful and "expected an integer from 1 to" in refused.reason
+        assert h.set_paused(False).success
+        refused = h.step_ticks(3)
+        assert not refused.successful and "running" in refused.reason and "pause it first" in refused.reason
+
+
+SPAWNED = """
+mass: 1.5
+inertia: {box: [0.2, 0.3, 0.4]}
+pose: {position: [4.0, 0.0, 1.0]}
+twist: {linear: [0.0, 1.0, 0.0]}
+sites:
+  nose: {position: [0.1, 0.0, 0.0], imu: {}}
+"""
+
+
+def test_spawn_and_delete_while_running_keep_clock_increasing_and_topics_consistent(tmp_path) -> None:
+    """While running: spawn a body (its pose, twist and IMU topics appear, it starts at its
+    definition's state at the current sim time), delete another (its topics go); /clock never
+    steps back, every other body keeps its motion, and the node's bodies are what the topics say."""
+    from rosgraph_msgs.msg import Clock as ClockMsg
+
+    scene = write_scene(tmp_path, {"ball": BALL, "box": spinning_box()}, gravity=(0.0, 0.0, 0.0))
+    with SimHarness(scene, {"integrator": "rk4"}, paused=False) as h:
+        clocks = Collector(h, ClockMsg, ["/clock"])
+        clocks.wait_matched(h)
+        h.spin_until(lambda: len(clocks.messages["/clock"]) > 5, "/clock while running")
+        result = h.spawn(crate=SPAWNED)
+        assert result.successful, result.reason
+        spawn_time = float(result.reason.rsplit("t = ", 1)[1].split()[0])
+        assert spawn_time > 0.0
+        imu = Collector(h, Imu, ["crate/nose/imu"])
+        h.watch_body("crate")
+        imu.wait_matched(h)
+        h.spin_until(lambda: len(imu.messages["crate/nose/imu"]) > 3, "the spawned body's IMU")
+        # the spawned body moves from its definition's pose at the spawn time: y = v (t - t_spawn)
+        pose = h.latest_pose("crate")
+        np.testing.assert_allclose(vec(pose.pose.position), [4.0, 1.0 * (stamp_s(pose) - spawn_time), 1.0],
+                                   rtol=0, atol=1e-9)
+        assert h.node.simulator.body_names == ("ball", "box", "crate")
+        result = h.delete("box")
+        assert result.successful, result.reason
+        with h.node.locked_simulator() as sim:
+            assert sim.body_names == ("ball", "crate")
+        assert set(h.node.publisher_subscription_counts()) == {"ball", "crate"}
+        h.spin_until(lambda: h.client.count_publishers("box/pose") == 0, "box/pose to go")
+        assert h.client.count_subscribers("box/wrench") == 0
+        n = len(clocks.messages["/clock"])
+        h.spin_until(lambda: len(clocks.messages["/clock"]) > n + 5, "/clock after the delete")
+        ticks = [clock_ns(m) for m in clocks.messages["/clock"]]
+        assert all(b > a for a, b in zip(ticks, ticks[1:])), "/clock stepped back or stood still"
+        # the box's spin and the ball's rest were never disturbed: the spawned body's pose still agrees
+        pose = h.latest_pose("crate")
+        np.testing.assert_allclose(pose.pose.position.y, stamp_s(pose) - spawn_time, rtol=0, atol=1e-9)
+        np.testing.assert_array_equal(vec(h.latest_pose("ball").pose.position), 0.0)
+
+
+@pytest.mark.parametrize("request_kind, payload, expected", [
+    ("spawn", {"crate": "mass: -1\ninertia: {sphere: 0.1}"}, "bodies.crate.mass: expected a number > 0"),
+    ("spawn", {"crate": "mass: 1\n"}, "required key 'inertia'"),
+    ("spawn", {"crate": "[1, 2]"}, "bodies.crate: expected a mapping"),
+    ("spawn", {"crate": "mass: [1"}, "bodies.crate: expected a body definition in YAML"),
+    ("spawn", {"ball": "mass: 1\ninertia: {sphere: 0.1}"}, "a body of that name exists"),
+    ("spawn", {"9lives": "mass: 1\ninertia: {sphere: 0.1}"}, "9lives"),
+    ("spawn", {"world": "mass: 1\ninertia: {sphere: 0.1}"}, "reserved"),
+    ("delete", ["ghost"], "cannot delete ['ghost']: no such body; bodies are ['ball', 'box']"),
+    ("delete", ["ball", "box"], "would leave no body"),
+])
+def test_bad_spawn_or_delete_names_the_problem_and_changes_nothing(tmp_path, request_kind, payload, expected) -> None:
+    scene = write_scene(tmp_path, {"ball": BALL, "box": spinning_box()})
+    with SimHarness(scene) as h:
+        h.step(3)
+        with h.node.locked_simulator() as sim:
+            before = (sim.body_names, sim.time, sim.positions_world(), sim.angular_velocities_world())
+        result = h.spawn(**payload) if request_kind == "spawn" else h.delete(*payload)
+        assert not result.successful
+        assert expected in result.reason
+        with h.node.locked_simulator() as sim:
+            assert sim.body_names == before[0] and sim.time == before[1]
+            np.testing.assert_array_equal(sim.positions_world(), before[2])
+            np.testing.assert_array_equal(sim.angular_velocities_world(), before[3])
+        h.step(1)  # still steps
+
+
+# ---------------------------------------------------------------------------------------- markers
+
+def test_marker_array_shows_shapes_sites_and_held_wrenches(tmp_path) -> None:
+    """Shapes from the inertia declarations (box edges, sphere and cylinder diameters, the
+    equivalent ellipsoid of principal moments: a² = 5 (I_b + I_c − I_a) / (2 m)), sites at
+    p + R r, an arrow from a site along the held force (scaled by marker_force_scale), all in
+    world_frame at the tick's sim time; a deleted body disappears (DELETEALL first)."""
+    from visualization_msgs.msg import Marker, MarkerArray
+
+    q45 = [0.0, 0.0, float(np.sin(np.pi / 8)), float(np.cos(np.pi / 8))]  # 45° about z
+    bodies = {
+        "crate": {"mass": 2.0, "inertia": {"box": [1.0, 0.6, 0.4]}, "pose": {"position": [1.0, 2.0, 3.0],
+                                                                            "orientation": q45},
+                  "sites": {"corner": {"position": [0.5, 0.3, 0.0]}}},
+        "ball": {"mass": 1.0, "inertia": {"sphere": 0.25}, "pose": {"position": [-1.0, 0.0, 0.0]}},
+        "can": {"mass": 1.0, "inertia": {"cylinder": [0.1, 0.5]}, "pose": {"position": [0.0, -1.0, 0.0]}},
+        "rock": {"mass": 5.0, "inertia": {"principal": [1.0, 2.0, 2.5]}, "pose": {"position": [0.0, 0.0, -1.0]}},
+    }
+    scene = write_scene(tmp_path, bodies, gravity=(0.0, 0.0, 0.0))
+    scale = 0.1
+    with SimHarness(scene, {"marker_rate_hz": 1000.0, "marker_force_scale": scale, "wrench_timeout": 0.0}) as h:
+        arrays = Collector(h, MarkerArray, ["markers"])
+        arrays.wait_matched(h)
+        h.publish_wrench("crate", force=(0.0, 10.0, 0.0), frame_id="crate/corner")
+        h.step(1)
+        h.spin_until(lambda: len(arrays.messages["markers"]) >= 1, "a MarkerArray")
+        array = arrays.messages["markers"][-1]
+        assert array.markers[0].action == Marker.DELETEALL
+        by_key = {(m.ns, m.id): m for m in array.markers[1:]}
+        assert all(m.header.frame_id == "world" and stamp_s(m) == pytest.approx(TICK_S, abs=1e-9)
+                   for m in array.markers[1:])
+        expected = {"crate": (Marker.CUBE, [1.0, 0.6, 0.4]), "ball": (Marker.SPHERE, [0.5] * 3),
+                    "can": (Marker.CYLINDER, [0.2, 0.2, 0.5]),
+                    "rock": (Marker.SPHERE, [2.0 * np.sqrt(5.0 * (b + c - a) / (2.0 * 5.0))
+                                             for a, b, c in ((1.0, 2.0, 2.5), (2.0, 2.5, 1.0), (2.5, 1.0, 2.0))])}
+        for body, (kind, dims) in expected.items():
+            m = by_key[(body, 0)]
+            assert m.type == kind and m.action == Marker.ADD
+            np.testing.assert_allclose([m.scale.x, m.scale.y, m.scale.z], dims, rtol=1e-12)
+            pose = h.latest_pose(body).pose
+            np.testing.assert_array_equal(vec(m.pose.position), vec(pose.position))
+        # the shape turns with the body: its orientation is the published pose's
+        crate = h.latest_pose("crate").pose
+        q = [crate.orientation.x, crate.orientation.y, crate.orientation.z, crate.orientation.w]
+        o = by_key[("crate", 0)].pose.orientation
+        np.testing.assert_allclose([o.x, o.y, o.z, o.w], q, rtol=0, atol=1e-15)
+        R = quat_to_matrix(quat_wxyz_from_xyzw(np.array(q)))
+        corner_W = vec(crate.position) + R @ np.array([0.5, 0.3, 0.0])
+        np.testing.assert_allclose(vec(by_key[("crate", 1)].pose.position), corner_W, rtol=0, atol=1e-12)
+        assert by_key[("crate", 1)].type == Marker.SPHERE
+        arrow = by_key[("crate/wrench", 0)]
+        assert arrow.type == Marker.ARROW
+        np.testing.assert_allclose(vec(arrow.points[0]), corner_W, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(vec(arrow.points[1]) - vec(arrow.points[0]), scale * (R @ [0.0, 10.0, 0.0]),
+                                   rtol=0, atol=1e-12)
+        assert len(array.markers) == 1 + 4 + 1 + 1  # DELETEALL, 4 shapes, 1 site, 1 arrow
+        assert h.delete("ball").successful
+        n = len(arrays.messages["markers"])
+        h.step(1)
+        h.spin_until(lambda: len(arrays.messages["markers"]) > n, "a MarkerArray after the delete")
+        assert "ball" not in {m.ns for m in arrays.messages["markers"][-1].markers}
