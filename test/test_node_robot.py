@@ -116,6 +116,27 @@ def test_imu_at_rest_on_a_body_that_cannot_fall_reads_g_upward(tmp_path, motion:
             np.testing.assert_allclose(R @ vec(msgs[-1].linear_acceleration), [0.0, 0.0, G], rtol=0, atol=1e-9)
 
 
+def test_node_records_its_imu_messages(tmp_path) -> None:
+    """record_path: /b/centre/imu and /b/arm/imu in the MCAP file, one per tick, as published."""
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    w_z = 3.0
+    scene = write_scene(tmp_path, {"b": spinning_box(w_z=w_z)})
+    record = tmp_path / "run.mcap"
+    with SimHarness(scene, {"record_path": str(record)}) as h:
+        h.step(4)
+    with open(record, "rb") as f:
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        msgs = [(c.topic, m) for _, c, _, m in reader.iter_decoded_messages(topics=["/b/centre/imu", "/b/arm/imu"])]
+    assert sorted(t for t, _ in msgs) == ["/b/arm/imu"] * 4 + ["/b/centre/imu"] * 4
+    for topic, m in msgs:
+        expected = [-w_z**2, 0.0, 0.0] if topic == "/b/arm/imu" else [0.0, 0.0, 0.0]
+        assert m.header.frame_id == topic[1:-4]
+        np.testing.assert_allclose(vec(m.linear_acceleration), expected, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(vec(m.angular_velocity), [0.0, 0.0, w_z], rtol=0, atol=1e-9)
+
+
 def test_noisy_imu_rate_and_covariances_through_the_node(tmp_path) -> None:
     """A 25 Hz IMU on 100 Hz ticks publishes every 4th tick; its covariances are σ_n²·rate."""
     imu = {"rate": 25.0, "seed": 4, "accelerometer": {"noise_density": 0.01}, "gyroscope": {"noise_density": 0.002}}
