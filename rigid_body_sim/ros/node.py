@@ -4,7 +4,9 @@ Per body B (relative names, so namespaces and remaps apply): out ``B/pose``, ``B
 ``B/odom`` (publishers.py); in ``B/wrench`` and ``B/impulse`` (inputs.py). Also ``/clock``
 each tick, ``/diagnostics`` every ``diagnostics_period`` wall seconds (diagnostics.py), the
 services ``~/reset``, ``~/set_paused`` and ``~/step`` (services.py), and the parameters of
-parameters.py. Each physics step advances ``real_time_factor / (rate_hz · substeps)`` s.
+parameters.py. For robot stacks: ``B/S/imu`` per IMU site (imu.py), ``B/set_state``
+(set_state.py), ``~/step_ticks``, ``~/spawn`` and ``~/delete`` (robot_services.py,
+scene_edit.py) and ``markers`` (markers.py). Each physics step advances ``real_time_factor / (rate_hz · substeps)`` s.
 
 This module wires those parts together and owns what they share: the simulator, the lock,
 the tick (tick_loop.py calls :meth:`RigidBodySimNode._tick` from its thread), parameter changes
