@@ -95,6 +95,31 @@ def test_imus_on_a_spinning_pushed_body_in_free_fall_read_the_closed_form(tmp_pa
             assert list(last.linear_acceleration_covariance) == [0.0] * 9
 
 
+def test_imu_off_centre_reads_the_tangential_term_of_a_torque(tmp_path) -> None:
+    """From rest, F = (0, 10, 0) N fixed in the box at its corner (0.5, 0.3, 0): τ = 5 N·m about the
+    principal z axis, so ω = α t e_z with α = 5 / I_z; in free fall the centre reads F/m and the
+    site 1 m along x reads F/m + α e_z × r − (α t)² r (body axes), at every tick."""
+    body = spinning_box(w_z=0.0)
+    body["sites"]["corner"] = {"position": [0.5, 0.3, 0.0]}
+    scene = write_scene(tmp_path, {"b": body})
+    with SimHarness(scene, {"integrator": "rk4", "wrench_timeout": 0.0}) as h:
+        imus = Collector(h, Imu, ["b/centre/imu", "b/arm/imu"])
+        imus.wait_matched(h)
+        h.publish_wrench("b", force=(0.0, 10.0, 0.0), frame_id="b/corner")
+        n = 20
+        assert h.step_ticks(n).successful
+        h.spin_until(lambda: all(len(m) >= n for m in imus.messages.values()), "the IMU messages")
+        alpha = 5.0 / (2.0 * (1.0 + 0.36) / 12.0)
+        for k in range(n):
+            t = (k + 1) * TICK_S
+            centre, arm = imus.messages["b/centre/imu"][k], imus.messages["b/arm/imu"][k]
+            assert stamp_s(arm) == pytest.approx(t, abs=1e-9)
+            np.testing.assert_allclose(vec(centre.linear_acceleration), [0.0, 5.0, 0.0], rtol=0, atol=1e-9)
+            np.testing.assert_allclose(vec(arm.linear_acceleration), [-(alpha * t) ** 2, 5.0 + alpha, 0.0],
+                                       rtol=0, atol=1e-9)
+            np.testing.assert_allclose(vec(arm.angular_velocity), [0.0, 0.0, alpha * t], rtol=0, atol=1e-9)
+
+
 @pytest.mark.parametrize("motion", ["static", "kinematic"])
 def test_imu_at_rest_on_a_body_that_cannot_fall_reads_g_upward(tmp_path, motion: str) -> None:
     """A body tilted 90° about x, at rest, that gravity cannot move: the accelerometer feels the
@@ -419,6 +444,8 @@ def test_spawn_and_delete_while_running_keep_clock_increasing_and_topics_consist
     ("spawn", {"ball": "mass: 1\ninertia: {sphere: 0.1}"}, "a body of that name exists"),
     ("spawn", {"9lives": "mass: 1\ninertia: {sphere: 0.1}"}, "9lives"),
     ("spawn", {"world": "mass: 1\ninertia: {sphere: 0.1}"}, "reserved"),
+    ("spawn", {"crate": "#" * (8 * 1024 * 1024 + 1)}, "expected a definition of at most"),
+    ("spawn", {"crate": "mass: 1\ninertia: {sphere: 0.1}\ncolour: red"}, "bodies.crate.colour"),
     ("delete", ["ghost"], "cannot delete ['ghost']: no such body; bodies are ['ball', 'box']"),
     ("delete", ["ball", "box"], "would leave no body"),
 ])
