@@ -291,6 +291,26 @@ def test_set_state_then_one_tick_matches_the_closed_form(tmp_path, twist_axes: s
         assert stamp_s(h.latest_pose("ball")) == pytest.approx(TICK_S, abs=1e-9)
 
 
+def test_set_state_while_running_acts_from_the_start_of_a_tick(tmp_path) -> None:
+    """Running, no gravity, a ball at rest set to p0 with v: the first pose published afterwards is
+    already one tick on (p0 + v h: applied at the start of the tick, whole), and every later one
+    is p0 + v (t − t0) with t0 = that pose's stamp − h; the other body never notices."""
+    from geometry_msgs.msg import PoseStamped
+
+    scene = write_scene(tmp_path, {"ball": BALL, "box": spinning_box(w_z=0.0)}, gravity=(0.0, 0.0, 0.0))
+    p0, v = np.array([1.0, 2.0, 3.0]), np.array([0.5, 0.0, -0.25])
+    with SimHarness(scene, {"integrator": "rk4"}, paused=False) as h:
+        poses = Collector(h, PoseStamped, ["ball/pose"])
+        poses.wait_matched(h)
+        send(h, set_state_publisher(h, "ball"), odometry("world", "world", p0, [0, 0, 0, 1], v, [0, 0, 0]))
+        h.spin_until(lambda: sum(m.pose.position.x > 0.5 for m in poses.messages["ball/pose"]) > 5, "the set state")
+        moved = [m for m in poses.messages["ball/pose"] if m.pose.position.x > 0.5]
+        t0 = stamp_s(moved[0]) - TICK_S
+        for m in moved:
+            np.testing.assert_allclose(vec(m.pose.position), p0 + v * (stamp_s(m) - t0), rtol=0, atol=1e-9)
+        np.testing.assert_array_equal(vec(h.latest_pose("box").pose.position), [0.0, 0.0, 5.0])
+
+
 def test_rejected_set_state_changes_nothing_and_is_counted(tmp_path) -> None:
     from diagnostic_msgs.msg import DiagnosticArray  # noqa: F401  (the node's report type)
 
