@@ -591,7 +591,8 @@ def _describe(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         ]
         if d["sites"]:
             lines.append("  sites              " + "; ".join(
-                f"{s['name']} at {_vec(s['position_B'])} m ({s['axes']} axes)" for s in d["sites"]))
+                f"{s['name']} at {_vec(s['position_B'])} m ({s['axes']} axes{', IMU' if s.get('imu') else ''})"
+                for s in d["sites"]))
         else:
             lines.append("  sites              none")
         lines.append("  wrench frames      " + ", ".join(d["frames"]))

@@ -50,6 +50,14 @@ def test_bad_imu_keys_name_the_key_path(imu: object, where: str, expected: str) 
     assert where in str(info.value)
 
 
+def test_describe_lists_imus() -> None:
+    from rigid_body_sim.core import describe_scene
+
+    sites = describe_scene(load_scene(_scene({"rate": 50.0, "gyroscope": {"bias": 0.5}})))[0]["sites"]
+    assert sites[0]["imu"] == {"rate": 50.0, "seed": 0, "orientation": True, "accelerometer": None,
+                               "gyroscope": {"noise_density": 0.0, "bias": [0.5, 0.5, 0.5], "bias_random_walk": 0.0}}
+
+
 def test_white_noise_and_bias_match_their_parameters() -> None:
     """Mean = bias, standard deviation = σ_n/√Δt, per axis, over 2·10⁴ samples (within 5 %)."""
     dt = 0.005
