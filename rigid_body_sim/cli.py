@@ -2,7 +2,7 @@
 
 Subcommands (``rigid-body-sim SUBCOMMAND --help`` for each)::
 
-    run SCENE --duration T [--integrator NAME] [--dt H] [--rate HZ] [--csv OUT.csv] [--record OUT.mcap] [-q]
+    run SCENE --duration T [--integrator NAME] [--dt H] [--rate HZ] [--csv OUT.csv] [--record OUT.mcap] [--imu-csv OUT.csv] [-q]
     plot RUN [-o OUT.png] [--scene SCENE] [--body NAME]
     describe SCENE [--json]
     check SCENE
@@ -170,7 +170,11 @@ def build_parser() -> argparse.ArgumentParser:
                           "every step if the step is longer)")
     run.add_argument("--csv", metavar="OUT.csv", help="write the samples to this CSV file (read by 'plot')")
     run.add_argument("--record", metavar="OUT.mcap",
-                     help="write an MCAP recording (ROS 2 messages: /B/pose, /B/twist, /B/wrench, /clock)")
+                     help="write an MCAP recording (ROS 2 messages: /B/pose, /B/twist, /B/wrench, /clock, "
+                          "and /B/S/imu for each IMU site)")
+    run.add_argument("--imu-csv", metavar="OUT.csv",
+                     help="write the samples of the scene's IMUs (sites with imu:) to this CSV file, one row per "
+                          "sample; an IMU samples at each --rate sample, or at its own lower rate")
     run.add_argument("--quiet", "-q", action="store_true", help="no progress bar and no summary")
     run.add_argument("--no-reduction", action="store_true",
                      help="step every body with the integrator (no model reduction; for comparisons)")
@@ -255,7 +259,9 @@ def _refuse_one_file(parser: argparse.ArgumentParser, paths: list[tuple[str, Pat
 def _run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     csv_path = _output_path(parser, "--csv", args.csv, "a CSV file")
     record_path = _output_path(parser, "--record", args.record, "an .mcap file")
-    _refuse_one_file(parser, [("--csv", csv_path), ("--record", record_path)], [("the scene file", args.scene)])
+    imu_path = _output_path(parser, "--imu-csv", args.imu_csv, "a CSV file")
+    _refuse_one_file(parser, [("--csv", csv_path), ("--record", record_path), ("--imu-csv", imu_path)],
+                     [("the scene file", args.scene)])
     from .offline.run import run_offline, sample_interval, steps_for
 
     try:
@@ -284,6 +290,9 @@ def _run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
             recorder.write_simulator(s)
 
         callbacks.append(_guarded(record_path, record))
+    imu_writer = _open_imu_output(parser, imu_path, meta, outputs)
+    if scene.imus and (imu_writer is not None or recorder is not None):
+        callbacks.append(_imu_callback(scene, every * args.dt, imu_path, imu_writer, record_path, recorder))
     end = "incomplete"
     failure: _Failure | None = None
     with ExitStack() as stack:
@@ -353,6 +362,52 @@ def _open_outputs(parser: argparse.ArgumentParser, csv_path: Path | None, record
     return opened[0][1], opened[1][1]
 
 
+def _open_imu_output(parser: argparse.ArgumentParser, path: Path | None, meta: dict[str, str],
+                     outputs: list[tuple[Path, Any]]) -> Any:
+    """The ``--imu-csv`` writer (appended to ``outputs``), or None; a path that cannot be opened is a
+    usage error (and the outputs already open are closed and removed)."""
+    if path is None:
+        return None
+    from .offline.imu_csv import ImuCsvWriter
+
+    try:
+        writer = ImuCsvWriter(path, meta)
+    except OSError as exc:
+        for other, opened in outputs:
+            try:
+                opened.close("not run: the command line was refused")
+            except OSError:
+                pass
+            Path(other).unlink(missing_ok=True)
+        parser.error(f"argument --imu-csv: cannot write {str(path)!r} ({exc.strerror or exc})")
+    outputs.append((path, writer))
+    return writer
+
+
+def _imu_callback(scene: Any, sample_dt: float, imu_path: Path | None, imu_writer: Any, record_path: Path | None,
+                  recorder: Any) -> Any:
+    """A sample callback writing the scene's IMUs (core/imu.py), read right after the steps before
+    each sample (none at t = 0, before any step), to ``--imu-csv`` and ``--record``."""
+    from .core.imu import ImuBank
+
+    bank = ImuBank(scene.imus)
+
+    def write(sim: Any) -> None:
+        if sim.step_count == 0:
+            return
+        samples = bank.sample(sim, sample_dt)
+        if imu_writer is not None:
+            _guarded(imu_path, imu_writer.write)(samples)
+        if recorder is not None:
+            def record(batch: Any) -> None:
+                for s in batch:
+                    recorder.write_imu(s.time, s.site, s.orientation_xyzw, s.angular_velocity, s.specific_force,
+                                       s.covariances)
+            _guarded(record_path, record)(samples)
+
+    return write
+
+
 def _guarded(path: Path, write: Any) -> Any:
     """``write``, with an OSError (a full disk...) turned into a _WriteError naming ``path``."""
     def call(sim: Any) -> None:
@@ -403,6 +458,8 @@ def _print_summary(args: argparse.Namespace, summary: Any, csv_writer: Any, reco
         lines.append(f"  wrote {csv_writer.path} ({csv_writer.rows} samples)")
     if recorder is not None:
         lines.append(f"  wrote {recorder.path} ({recorder.message_count} messages)")
+    if getattr(args, "imu_csv", None):
+        lines.append(f"  wrote {args.imu_csv} (IMU samples)")
     print("\n".join(lines))
 
 
@@ -534,7 +591,8 @@ def _describe(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         ]
         if d["sites"]:
             lines.append("  sites              " + "; ".join(
-                f"{s['name']} at {_vec(s['position_B'])} m ({s['axes']} axes)" for s in d["sites"]))
+                f"{s['name']} at {_vec(s['position_B'])} m ({s['axes']} axes{', IMU' if s.get('imu') else ''})"
+                for s in d["sites"]))
         else:
             lines.append("  sites              none")
         lines.append("  wrench frames      " + ", ".join(d["frames"]))

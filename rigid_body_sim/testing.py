@@ -30,6 +30,7 @@ import rclpy
 from geometry_msgs.msg import PoseStamped, Twist, WrenchStamped
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import SetParametersResult
+from rcl_interfaces.srv import SetParameters
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
@@ -102,6 +103,8 @@ class SimHarness:
             self._step = self.client.create_client(Trigger, f"{self._service_prefix}/step")
             self._reset = self.client.create_client(Trigger, f"{self._service_prefix}/reset")
             self._set_paused = self.client.create_client(SetBool, f"{self._service_prefix}/set_paused")
+            self._robot = {name: self.client.create_client(SetParameters, f"{self._service_prefix}/{name}")
+                           for name in ("step_ticks", "spawn", "delete")}
             self._parameters = AsyncParameterClient(self.client, self._service_prefix)
             self._wait_for_connections()
         except BaseException:
@@ -164,13 +167,14 @@ class SimHarness:
             self.spin_until(lambda p=pub: p.get_subscription_count() > 0, f"the node's {body}/{topic} subscription")
         self.spin_until(lambda: self.node.publisher_subscription_counts().get(body, 0) > 0,
                         f"the node's {body}/pose and {body}/twist publishers to match the harness")
-        self.node.publish_state()
+        if self.get_parameter("paused"):  # running, the ticks publish it (and /clock never repeats a time)
+            self.node.publish_state()
         self.wait_for_latest_state()
 
     def _wait_for_connections(self) -> None:
         for (body, topic), pub in self._publishers.items():
             self.spin_until(lambda p=pub: p.get_subscription_count() > 0, f"the node's {body}/{topic} subscription")
-        for client in (self._step, self._reset, self._set_paused):
+        for client in (self._step, self._reset, self._set_paused, *self._robot.values()):
             self.spin_until(client.service_is_ready, f"service {client.srv_name}")
         self.spin_until(self._parameters.services_are_ready, "the node's parameter services")
         self.spin_until(lambda: min(self.node.publisher_subscription_counts().values()) > 0,
@@ -218,6 +222,27 @@ class SimHarness:
             if not response.success:
                 raise AssertionError(f"~/step refused: {response.message}")
         self.wait_for_latest_state()
+
+    def step_ticks(self, ticks: int) -> SetParametersResult:
+        """Call ``~/step_ticks`` with ``ticks`` and return its (first) result; after a success, wait
+        for the poses at the sim time reached."""
+        result = self._robot_call("step_ticks", [Parameter("ticks", Parameter.Type.INTEGER, ticks)])
+        if result.successful:
+            self.wait_for_latest_state()
+        return result
+
+    def spawn(self, **definitions: str) -> SetParametersResult:
+        """Call ``~/spawn`` with body name → definition (YAML text of what goes under ``bodies.<name>``)."""
+        return self._robot_call("spawn", [Parameter(name, Parameter.Type.STRING, text)
+                                          for name, text in definitions.items()])
+
+    def delete(self, *bodies: str) -> SetParametersResult:
+        """Call ``~/delete`` with the bodies' names."""
+        return self._robot_call("delete", [Parameter(name, Parameter.Type.BOOL, True) for name in bodies])
+
+    def _robot_call(self, service: str, parameters: list[Parameter]) -> SetParametersResult:
+        request = SetParameters.Request(parameters=[p.to_parameter_msg() for p in parameters])
+        return self._call(self._robot[service], request).results[0]
 
     def call_step(self) -> Trigger.Response:
         """Call ``~/step`` once and return the response as is (it may be a refusal)."""

@@ -180,7 +180,7 @@ BAD_SCENES: list[tuple[str, Callable[[dict[str, Any]], None], str, str]] = [
     ("unknown-pose-key", _set(f"{C}.pose.rotation", [0, 0, 0, 1]), f"{C}.pose.rotation", r"\['position', 'orientation'\] \(unknown key\)"),
     ("unknown-twist-key", _set(f"{C}.twist.omega", [0, 0, 1]), f"{C}.twist.omega", r"\['linear', 'angular'\] \(unknown key\)"),
     ("unknown-damping-key", _set(f"{C}.damping.quadratic", 0.1), f"{C}.damping.quadratic", r"\['linear', 'angular'\] \(unknown key\)"),
-    ("unknown-site-key", _set(f"{C}.sites.corner.frame", "body"), f"{C}.sites.corner.frame", r"\['position', 'axes'\] \(unknown key\)"),
+    ("unknown-site-key", _set(f"{C}.sites.corner.frame", "body"), f"{C}.sites.corner.frame", r"\['position', 'axes', 'imu'\] \(unknown key\)"),
     ("unknown-inertia-kind", _set(f"{C}.inertia", {"cube": 1.0}), f"{C}.inertia", r"one of the keys \['box', 'sphere', 'cylinder', 'principal', 'tensor'\], got 'cube'"),
     ("two-inertia-kinds", _set(f"{C}.inertia", {"box": [1, 1, 1], "sphere": 1.0}), f"{C}.inertia", r"exactly one of the keys"),
     ("bad-site-axes", _set(f"{C}.sites.corner.axes", "local"), f"{C}.sites.corner.axes", r"'body' or 'world', got 'local'"),

@@ -54,7 +54,9 @@ def describe_scene(scene: Scene, model_reduction: bool = True) -> list[dict[str,
     - ``kinetic_energy`` (J) and ``angular_momentum_norm`` (|L| about the centre of mass,
       kg·m²/s), both initial
     - ``damping``: ``{"linear": N·s/m, "angular": N·m·s/rad}``
-    - ``sites``: ``[{"name", "position_B" (m, from the centre of mass, B axes), "axes"}]``
+    - ``sites``: ``[{"name", "position_B" (m, from the centre of mass, B axes), "axes", "imu"}]``,
+      ``imu`` None or the site's IMU (core/imu.py: ``rate``, ``seed``, ``orientation``,
+      ``accelerometer`` and ``gyroscope`` as ``{"noise_density", "bias", "bias_random_walk"}`` or None)
     - ``frames``: every frame a wrench on the body may name
     - ``scripted_wrenches``: ``[{"frame", "force", "torque", "start", "duration"}]`` (duration
       ``None`` = forever)
@@ -77,6 +79,7 @@ def describe_scene(scene: Scene, model_reduction: bool = True) -> list[dict[str,
                 "name": site_name.split("/", 1)[1],
                 "position_B": _floats(quat_rotate(q_BP, model.site_p_P[s])),
                 "axes": "world" if model.site_world_axes[s] else "body",
+                "imu": _imu(scene.imus.get(site_name)),
             })
         out.append({
             "name": name,
@@ -104,6 +107,16 @@ def describe_scene(scene: Scene, model_reduction: bool = True) -> list[dict[str,
             ],
         })
     return out
+
+
+def _imu(spec: Any) -> dict | None:
+    """A site's IMU spec as plain data (None without one)."""
+    if spec is None:
+        return None
+    channels = {key: None if c is None else {"noise_density": c.noise_density, "bias": list(c.bias),
+                                             "bias_random_walk": c.bias_random_walk}
+                for key, c in (("accelerometer", spec.accelerometer), ("gyroscope", spec.gyroscope))}
+    return {"rate": spec.rate, "seed": spec.seed, "orientation": spec.orientation, **channels}
 
 
 def _floats(values: np.ndarray) -> list[float]:

@@ -20,6 +20,7 @@ Schema (every key not listed is an error; see README "Scene files")::
         sites:                                                  # optional
           corner: {position: [0.5, 0.3, 0.0]}                   # body frame, from the COM
           nozzle: {position: [0, 0, -0.2], axes: world}         # axes: body (default) | world
+          imu_mount: {position: [0, 0, 0.1], imu: {}}           # an IMU on the site (imu.py; {} = ideal)
     wrenches:                             # optional: scripted wrenches over sim time
       - {body: crate, frame: crate/corner, force: [0, 10, 0], torque: [0, 0, 0], start: 0.5, duration: 0.2}
 
@@ -53,13 +54,14 @@ import math
 import re
 import sys
 from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from ..paths import FileTooLargeError, NotRegularFileError, read_regular_file
+from .imu import IMU_CHANNEL_KEYS, IMU_KEYS, ImuChannel, ImuSpec
 from .mass_properties import (
     TRIANGLE_RTOL,
     box_inertia,
@@ -184,6 +186,8 @@ class Scene:
     text : str or None
         The YAML text the scene was read from (decoded; None for a dict), e.g. to attach to a
         recording without reading the file again (it may have changed or been swapped since).
+    imus : dict of str to ImuSpec
+        The IMUs declared on sites, by site name ``"<body>/<site>"``, in scene order.
     """
 
     source: str
@@ -193,6 +197,7 @@ class Scene:
     wrenches: tuple[ScriptedWrench, ...] = ()
     energy_growth_limit: float = DEFAULT_ENERGY_GROWTH_LIMIT
     text: str | None = None
+    imus: Mapping[str, ImuSpec] = field(default_factory=dict)
 
     @property
     def body_names(self) -> tuple[str, ...]:
@@ -398,6 +403,7 @@ class _Bodies:
         self.site_p_B: list[list[float]] = []
         self.site_world: list[bool] = []
         self.sites_of: dict[str, tuple[str, ...]] = {}
+        self.imus: dict[str, ImuSpec] = {}
 
 
 _ZERO3 = [0.0, 0.0, 0.0]
@@ -450,7 +456,7 @@ def _build(data: Mapping, source: str) -> Scene:
     state = State(np.array(out.positions, dtype=float).reshape(-1, 3), q_WP,
                   np.array(out.v_W, dtype=float).reshape(-1, 3), w_WP_P)
     scene = Scene(source=source, model=model, initial_state=state, sites=out.sites_of,
-                  energy_growth_limit=energy_growth_limit)
+                  energy_growth_limit=energy_growth_limit, imus=out.imus)
     if top.get("wrenches") is not None:
         scene = replace(scene, wrenches=_wrenches(check, top["wrenches"], scene))
     _check_derived(check, scene)
@@ -514,7 +520,7 @@ def _read_body(check: _Checker, index: int, raw_name: Any, raw_body: Any, out: _
         for raw_site, raw_spec in sites.items():
             site = check.name(raw_site, f"{path}.sites", _RESERVED_SITE_NAMES)
             spath = f"{path}.sites.{site}"
-            spec = check.mapping(raw_spec, spath, ("position", "axes"), required=("position",))
+            spec = check.mapping(raw_spec, spath, ("position", "axes", "imu"), required=("position",))
             out.site_p_B.append(check.vector(spec["position"], f"{spath}.position", 3, unit="m, body frame from the COM"))
             axes = spec.get("axes", "body")
             if axes != "body" and axes != "world":
@@ -523,6 +529,8 @@ def _read_body(check: _Checker, index: int, raw_name: Any, raw_body: Any, out: _
             out.site_body.append(index)
             out.site_world.append(axes == "world")
             body_sites.append(site)
+            if "imu" in spec:
+                out.imus[f"{name}/{site}"] = _imu(check, spec["imu"], f"{spath}.imu")
 
     out.names.append(name)
     out.motions.append(motion)
@@ -538,6 +546,48 @@ def _read_body(check: _Checker, index: int, raw_name: Any, raw_body: Any, out: _
     out.v_W.append(v_W)
     out.w_W.append(w_W)
     out.sites_of[name] = tuple(body_sites)
+
+
+def _imu(check: _Checker, value: Any, path: str) -> ImuSpec:
+    """An ``imu:`` mapping (core/imu.py): every key optional; an empty mapping (or null) is an ideal IMU."""
+    if value is None:
+        return ImuSpec()
+    imu = check.mapping(value, path, IMU_KEYS)
+    rate = None
+    if imu.get("rate") is not None:
+        rate = check.number(imu["rate"], f"{path}.rate", minimum=0.0, strict=True, scale=True, unit="Hz of sim time")
+    seed = imu.get("seed", 0)
+    if type(seed) is not int or not 0 <= seed < 2**63:
+        check.fail(f"{path}.seed", "an integer in [0, 2**63)", seed)
+    orientation = imu.get("orientation", True)
+    if type(orientation) is not bool:
+        check.fail(f"{path}.orientation", "true or false", orientation)
+    channels = {}
+    for key, units in (("accelerometer", ("m/s²/√Hz", "m/s²", "m/s³/√Hz")),
+                       ("gyroscope", ("rad/s/√Hz", "rad/s", "rad/s²/√Hz"))):
+        raw = imu.get(key)
+        if raw is None:
+            channels[key] = None
+            continue
+        cpath = f"{path}.{key}"
+        spec = check.mapping(raw, cpath, IMU_CHANNEL_KEYS)
+        density = walk = 0.0
+        bias = (0.0, 0.0, 0.0)
+        if spec.get("noise_density") is not None:
+            density = check.number(spec["noise_density"], f"{cpath}.noise_density", minimum=0.0, unit=units[0])
+        if spec.get("bias") is not None:
+            if isinstance(spec["bias"], (list, tuple)):
+                bias = tuple(check.vector(spec["bias"], f"{cpath}.bias", 3, unit=units[1] + ", sensor axes"))
+            else:
+                b = check.number(spec["bias"], f"{cpath}.bias", unit=units[1] + " on every axis, or [x, y, z]")
+                bias = (b, b, b)
+        if spec.get("bias_random_walk") is not None:
+            walk = check.number(spec["bias_random_walk"], f"{cpath}.bias_random_walk", minimum=0.0, unit=units[2])
+        for what, x in (("noise_density", density), ("bias_random_walk", walk), ("bias", max(map(abs, bias)))):
+            if x > MAX_NORM:
+                check.fail(f"{cpath}.{what}", f"at most {MAX_NORM:g}", x)
+        channels[key] = ImuChannel(density, bias, walk)
+    return ImuSpec(rate=rate, seed=seed, orientation=orientation, **channels)
 
 
 def _check_moments(check: _Checker, inertia_P: np.ndarray, paths: list[str]) -> None:

@@ -5,7 +5,7 @@ the ``ros2msg`` encoding that rosbag2 writes: the type's own .msg text first, th
 it depends on (recursively), each after a line of 80 ``=`` and a ``MSG: pkg/msg/Type`` line.
 Foxglove and mcap-ros2-support build their CDR decoders from this text, so it must match the
 real types field for field. The texts below are the .msg files of ROS 2 Kilted (geometry_msgs
-5.5, std_msgs 5.5, builtin_interfaces 2.3, rosgraph_msgs 2.3) without comments; a test
+5.5, std_msgs 5.5, builtin_interfaces 2.3, rosgraph_msgs 2.3, sensor_msgs 5.5) without comments; a test
 compares them with the .msg files the ROS wheels install. Kept here, not read from the ROS
 installation, so that recording works without ROS.
 """
@@ -33,6 +33,11 @@ MSG_TEXT: dict[str, tuple[str, tuple[str, ...]]] = {
     "geometry_msgs/msg/WrenchStamped": ("std_msgs/Header header\nWrench wrench\n",
                                         ("std_msgs/msg/Header", "geometry_msgs/msg/Wrench")),
     "rosgraph_msgs/msg/Clock": ("builtin_interfaces/Time clock\n", ("builtin_interfaces/msg/Time",)),
+    "sensor_msgs/msg/Imu": ("std_msgs/Header header\ngeometry_msgs/Quaternion orientation\n"
+                            "float64[9] orientation_covariance\ngeometry_msgs/Vector3 angular_velocity\n"
+                            "float64[9] angular_velocity_covariance\ngeometry_msgs/Vector3 linear_acceleration\n"
+                            "float64[9] linear_acceleration_covariance\n",
+                            ("std_msgs/msg/Header", "geometry_msgs/msg/Quaternion", "geometry_msgs/msg/Vector3")),
 }
 
 

@@ -11,6 +11,8 @@ topic              type                          content
                                                  acting from the stamp on, in that frame (frame
                                                  rule: force N, torque N·m about the frame's
                                                  origin, its axes); zeros once it stopped
+``/B/S/imu``       sensor_msgs/Imu               the IMU on site S of B (scene ``imu:``), as the
+                                                 node publishes it (frame ``B/S``, REP-145)
 ``/clock``         rosgraph_msgs/Clock           sim time
 =================  ============================  =============================================
 
@@ -115,7 +117,7 @@ class McapRecorder:
             self._writer = Writer(self._file, chunk_size=CHUNK_SIZE)
             self._schemas = {name: self._writer.register_msgdef(name, complete_definition(name)) for name in (
                 "geometry_msgs/msg/PoseStamped", "geometry_msgs/msg/Twist",
-                "geometry_msgs/msg/WrenchStamped", "rosgraph_msgs/msg/Clock")}
+                "geometry_msgs/msg/WrenchStamped", "rosgraph_msgs/msg/Clock", "sensor_msgs/msg/Imu")}
             if metadata:
                 self._writer.add_metadata(METADATA_NAME, {str(k): str(v) for k, v in metadata.items()})
             self._writer.add_metadata(STATUS_METADATA_NAME, {"status": STATUS_INCOMPLETE})
@@ -194,6 +196,27 @@ class McapRecorder:
                 "header": {"stamp": stamp, "frame_id": frame},
                 "wrench": {"force": _xyz(force), "torque": _xyz(torque)},
             }, ns)
+
+    def write_imu(self, time: float, site: str, orientation_xyzw: np.ndarray | None, angular_velocity: np.ndarray,
+                  specific_force: np.ndarray, covariances: tuple[list[float], list[float], list[float]]) -> None:
+        """Write ``/<site>/imu`` (sensor_msgs/Imu, frame ``site`` = ``"B/S"``) at sim ``time`` (s).
+
+        ``orientation_xyzw`` of the sensor frame in ``world_frame`` (None: zeros, as a message
+        without orientation has), ``angular_velocity`` (rad/s) and ``specific_force`` (m/s²) in
+        the sensor's axes, and the three row-major 3×3 covariances (orientation, angular
+        velocity, linear acceleration) as the node publishes them (ros/imu.py).
+        """
+        ns = stamp_ns(time)
+        q = orientation_xyzw if orientation_xyzw is not None else (0.0, 0.0, 0.0, 0.0)
+        self._write(f"{self._prefix}{site}/imu", "sensor_msgs/msg/Imu", {
+            "header": {"stamp": _time_dict(ns), "frame_id": site},
+            "orientation": {"x": float(q[0]), "y": float(q[1]), "z": float(q[2]), "w": float(q[3])},
+            "orientation_covariance": [float(c) for c in covariances[0]],
+            "angular_velocity": _xyz(angular_velocity),
+            "angular_velocity_covariance": [float(c) for c in covariances[1]],
+            "linear_acceleration": _xyz(specific_force),
+            "linear_acceleration_covariance": [float(c) for c in covariances[2]],
+        }, ns)
 
     def write_simulator(self, sim: Simulator, *, skip: Iterable[str] = (), clock: bool = True) -> None:
         """Write every body's pose and twist at ``sim.time`` (except ``skip``), then ``/clock``."""

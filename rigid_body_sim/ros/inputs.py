@@ -34,7 +34,7 @@ from geometry_msgs.msg import WrenchStamped
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
 
-from ..core import Simulator
+from ..core import Scene, Simulator
 from .conversions import RejectedMessage, wrench_from_msg
 
 __all__ = ["REJECTION_WARNING_PERIOD", "BodyInputs", "InputChange", "WrenchInputs"]
@@ -98,8 +98,8 @@ class WrenchInputs:
 
     # ------------------------------------------------------------------ endpoints
 
-    def prepare(self, sim: Simulator) -> InputChange:
-        """Subscriptions for ``sim``'s bodies: existing ones kept (frames updated), new ones created."""
+    def prepare(self, sim: Simulator | Scene) -> InputChange:
+        """Subscriptions for the bodies of ``sim`` (or a scene): existing ones kept (frames updated), new ones created."""
         bodies: dict[str, BodyInputs] = {}
         for body in sim.body_names:
             frames = {self._world_frame: "world"}
@@ -117,12 +117,17 @@ class WrenchInputs:
         stale = [s for name, old in self.bodies.items() if name not in bodies for s in (old.wrench, old.impulse)]
         return InputChange(bodies, stale)
 
-    def commit(self, change: InputChange) -> None:
-        """Swap in prepared subscriptions and drop every hold and pending impulse."""
+    def commit(self, change: InputChange, keep_holds: bool = False) -> None:
+        """Swap in prepared subscriptions and drop every hold and pending impulse (with ``keep_holds``:
+        only those of bodies no longer there, for a spawn or delete)."""
         with self._lock:
             self.bodies = change.bodies
-            self.holds.clear()
-            self.pending_impulses.clear()
+            if keep_holds:
+                self.holds = {key: h for key, h in self.holds.items() if key[0] in self.bodies}
+                self.pending_impulses = {key: j for key, j in self.pending_impulses.items() if key[0] in self.bodies}
+            else:
+                self.holds.clear()
+                self.pending_impulses.clear()
 
     def release(self, change: InputChange) -> None:
         """Destroy the subscriptions ``change`` replaced (after :meth:`commit`, without the lock)."""
@@ -201,6 +206,16 @@ class WrenchInputs:
             if pending is not None:  # impulses due at the same step add
                 linear, angular = pending[0] + linear, pending[1] + angular
             self.pending_impulses[(body, frame)] = (linear, angular)
+
+    def count_rejection(self, body: str, topic: str, rejection: RejectedMessage) -> None:
+        """Count (and warn about, throttled) a message dropped by another input of the node (``set_state``)."""
+        with self._lock:
+            self._reject(body, topic, None, rejection)
+
+    def count_accepted(self) -> None:
+        """Count a message accepted by another input of the node (``set_state``)."""
+        with self._lock:
+            self.accepted += 1
 
     # ------------------------------------------------------------------ per tick
 

@@ -4,7 +4,9 @@ Per body B (relative names, so namespaces and remaps apply): out ``B/pose``, ``B
 ``B/odom`` (publishers.py); in ``B/wrench`` and ``B/impulse`` (inputs.py). Also ``/clock``
 each tick, ``/diagnostics`` every ``diagnostics_period`` wall seconds (diagnostics.py), the
 services ``~/reset``, ``~/set_paused`` and ``~/step`` (services.py), and the parameters of
-parameters.py. Each physics step advances ``real_time_factor / (rate_hz · substeps)`` s.
+parameters.py. For robot stacks: ``B/S/imu`` per IMU site (imu.py), ``B/set_state``
+(set_state.py), ``~/step_ticks``, ``~/spawn`` and ``~/delete`` (robot_services.py,
+scene_edit.py) and ``markers`` (markers.py). Each physics step advances ``real_time_factor / (rate_hz · substeps)`` s.
 
 This module wires those parts together and owns what they share: the simulator, the lock,
 the tick (tick_loop.py calls :meth:`RigidBodySimNode._tick` from its thread), parameter changes
@@ -38,12 +40,17 @@ from ..core import NonFiniteStateError, Scene, SceneError, Simulator, load_scene
 from ..offline.recording import McapRecorder
 from .conversions import MAX_ROS_TIME_S
 from .diagnostics import TickWindow, busy_status, diagnostic_statuses
+from .imu import ImuPublishers
 from .inputs import WrenchInputs
+from .markers import MarkerPublisher
 from .node_log import StatusLog, log_models, log_scene
 from .node_recording import NodeRecording
 from .parameters import BY_NAME, coerce, declare_parameters, problems
 from .publishers import StatePublishers
+from .robot_services import create_robot_services
+from .scene_edit import edited_scene
 from .services import create_services
+from .set_state import SetStateInputs
 from .tick_loop import TickLoop
 
 __all__ = ["RigidBodySimNode", "DEFAULT_INTEGRATOR", "MAX_BODIES", "QUEUE_DEPTH"]
@@ -56,6 +63,8 @@ QUEUE_DEPTH = 10
 #: and their creation (~2 ms each); above this a scene change would stall the parameter
 #: service for many seconds. A larger scene is refused with this number in the reason.
 MAX_BODIES = 1000
+#: Most ticks one ``~/step_ticks`` request may ask for (the node's other callbacks wait while it steps).
+MAX_STEP_TICKS = 1_000_000
 #: Longest wait (s) of a parameter change for the one before it to finish.
 CHANGE_WAIT_S = 30.0
 #: Longest wait (s) of a service or parameter change for a tick under way; then it is refused as busy.
@@ -129,6 +138,11 @@ class RigidBodySimNode(Node):
         self._inputs = WrenchInputs(self, qos, self._world_frame)
         self._outputs.commit(self._outputs.prepare(self._sim.body_names, settings["publish_odometry"]))
         self._inputs.commit(self._inputs.prepare(self._sim))
+        self._imus = ImuPublishers(self, qos)
+        self._imus.commit(self._imus.prepare(self._sim.scene, keep_state=False))
+        self._set_state = SetStateInputs(self, qos, self._world_frame, self._inputs)
+        self._set_state.commit(self._set_state.prepare(self._sim.body_names))
+        self._markers = MarkerPublisher(self, qos, self._world_frame)
         self._recording = NodeRecording(self.get_logger(), self._world_frame, self.get_namespace(),
                                         self.get_fully_qualified_name())
         if settings["record_path"]:
@@ -136,7 +150,7 @@ class RigidBodySimNode(Node):
                 self._recording.replace(self._recording.open(settings["record_path"], self._sim))
             except OSError as exc:
                 raise ValueError(f"record_path rejected: cannot record to {settings['record_path']!r} ({exc})") from exc
-        self._service_handles = create_services(self)
+        self._service_handles = create_services(self) + create_robot_services(self)
         self.add_pre_set_parameters_callback(self._coerce_parameters)
         self.add_on_set_parameters_callback(self._prepare_change)
         self.add_post_set_parameters_callback(self._apply_change)
@@ -265,17 +279,22 @@ class RigidBodySimNode(Node):
         sim = change.simulator or self._sim
         # Endpoints of a new scene (or odometry publishers) are made before the lock and the
         # replaced ones destroyed after it: the ticks wait only for the swap itself.
-        publishers = inputs = None
+        publishers = inputs = imus = set_state = None
         if change.simulator is not None or "publish_odometry" in changed:
             publishers = self._outputs.prepare(sim.body_names, new["publish_odometry"])
         if change.simulator is not None:
             inputs = self._inputs.prepare(sim)
+            imus = self._imus.prepare(sim.scene, keep_state=False)
+            set_state = self._set_state.prepare(sim.body_names)
         with self._lock:
             self._settings = new
             if change.simulator is not None:
                 self._sim = sim
                 self._fault = self._fault if self.tick_failure is not None else None
                 self._inputs.commit(inputs)
+                self._imus.commit(imus)
+                self._set_state.commit(set_state)
+                self._set_state.clear()
             else:
                 if "integrator" in changed:
                     sim.integrator = new["integrator"]
@@ -302,6 +321,10 @@ class RigidBodySimNode(Node):
             self._outputs.release(publishers)
         if inputs is not None:
             self._inputs.release(inputs)
+        if imus is not None:
+            self._imus.release(imus)
+        if set_state is not None:
+            self._set_state.release(set_state)
         if old_recorder is not None:
             self._recording.finish(old_recorder)
         if "model_reduction" in changed and change.simulator is None:
@@ -322,6 +345,8 @@ class RigidBodySimNode(Node):
         self._tick_window.record(due_ns, period_ns, missed=missed)
         if not self._settings["paused"]:
             self._advance_one_tick_locked()
+        elif self._set_state.apply(self._sim):  # set_state also while paused: applied and shown at once
+            self._publish_state_locked()
         self._status_log.maybe_log(self.get_logger(), self._sim, self._settings["status_period"], self._settings["paused"])
 
     def _on_tick_failure(self, exc: BaseException) -> None:
@@ -362,6 +387,7 @@ class RigidBodySimNode(Node):
         if self._fault is not None:
             return False
         tick_s = settings["real_time_factor"] / settings["rate_hz"]
+        self._set_state.apply(sim)  # set_state messages take effect, whole, at the start of the tick
         if sim.time + tick_s > MAX_ROS_TIME_S:
             self._fault = (f"sim time {sim.time:.9g} s cannot advance past {MAX_ROS_TIME_S} s, the end of ROS time "
                            "(int32 seconds in builtin_interfaces/Time); ~/reset or a new scene starts again")
@@ -379,8 +405,14 @@ class RigidBodySimNode(Node):
                 for body in failure.bodies:
                     sim.stop_body(body)
                 self.get_logger().error(f"stopped {list(failure.bodies)}: {failure}")
+        self._imus.publish(sim, tick_s, self._record_imu if self._recording.recorder is not None else None)
         self._publish_state_locked()
         return True
+
+    def _record_imu(self, sample: Any) -> None:
+        self._recording.write(lambda recorder: recorder.write_imu(
+            sample.time, sample.site, sample.orientation_xyzw, sample.angular_velocity, sample.specific_force,
+            sample.covariances))
 
     def step_paused(self) -> tuple[bool, str]:
         """``~/step``: one tick if paused; (success, message)."""
@@ -394,15 +426,78 @@ class RigidBodySimNode(Node):
         except NodeBusy as busy:
             return False, f"refused: {busy}"
 
+    def step_ticks(self, ticks: int) -> tuple[bool, str]:
+        """``~/step_ticks``: exactly ``ticks`` ticks while paused, answered when done; (success, message)."""
+        if not 1 <= ticks <= MAX_STEP_TICKS:
+            return False, f"refused: ticks = {ticks}; expected an integer from 1 to {MAX_STEP_TICKS}"
+        try:
+            with self._lock_or_busy():
+                if not self._settings["paused"]:
+                    return False, "refused: the simulation is running; pause it first (~/set_paused true, or paused:=true)"
+                for done in range(ticks):
+                    if not self._advance_one_tick_locked():
+                        return False, (f"stopped after {done} of {ticks} ticks at t = {self._sim.time:.9f} s: "
+                                       f"{self._fault}")
+                return True, f"stepped {ticks} ticks to t = {self._sim.time:.9f} s"
+        except NodeBusy as busy:
+            return False, f"refused: {busy}"
+
+    def edit_scene(self, spawn: dict[str, str], delete: list[str]) -> tuple[bool, str]:
+        """``~/spawn`` and ``~/delete``: add bodies (name → definition in the scene file's YAML form)
+        and remove bodies, keeping sim time and every other body's state; (success, message).
+
+        The request is checked whole and the new scene's simulator, publishers and subscriptions
+        made before the swap (scene_edit.py); a refused request changes nothing. Serialized with
+        parameter changes (a ``scene`` change and a spawn never interleave). Holds of the bodies
+        kept stay; pending set_states of deleted bodies are dropped.
+        """
+        if not self._change_lock.acquire(timeout=CHANGE_WAIT_S):
+            return False, f"refused: another change has been under way for more than {CHANGE_WAIT_S:g} s; try again"
+        try:
+            try:
+                with self._lock_or_busy():
+                    settings, scene = self._settings, self._sim.scene
+            except NodeBusy as busy:
+                return False, f"refused: {busy}"
+            try:
+                new_scene = edited_scene(scene, spawn, delete)
+                self._check_scene(new_scene, settings["world_frame"])
+            except (SceneError, ValueError) as exc:
+                return False, f"refused: {exc}"
+            publishers = self._outputs.prepare(new_scene.body_names, settings["publish_odometry"])
+            inputs = self._inputs.prepare(new_scene)
+            imus = self._imus.prepare(new_scene, keep_state=True)
+            set_state = self._set_state.prepare(new_scene.body_names)
+            with self._lock:
+                self._sim = self._sim.with_scene(new_scene)
+                self._outputs.commit(publishers)
+                self._inputs.commit(inputs, keep_holds=True)
+                self._imus.commit(imus)
+                self._set_state.commit(set_state)
+                self._outputs.publish(self._sim, False)  # new bodies at once; /clock only from ticks (never repeated)
+                time_s = self._sim.time
+            self._outputs.release(publishers)
+            self._inputs.release(inputs)
+            self._imus.release(imus)
+            self._set_state.release(set_state)
+        finally:
+            self._change_lock.release()
+        what = "; ".join(part for part in (f"spawned {list(spawn)}" if spawn else "",
+                                           f"deleted {list(delete)}" if delete else "") if part)
+        self.get_logger().info(f"{what} at t = {time_s:.9f} s")
+        return True, f"{what} at t = {time_s:.9f} s"
+
     def reset_simulation(self) -> tuple[bool, str]:
         """``~/reset``: the scene's initial state at t = 0, holds and pending impulses dropped,
         published; (success, message)."""
         try:
             with self._lock_or_busy():
                 self._sim.reset()
+                self._imus.commit(self._imus.prepare(self._sim.scene, keep_state=False))  # no new endpoints
                 self._fault = None if self.tick_failure is None else self._fault
                 self._open_diagnostics_window()
                 self._inputs.clear()
+                self._set_state.clear()
                 self._publish_state_locked()
         except NodeBusy as busy:
             return False, f"refused: {busy}"
@@ -416,8 +511,10 @@ class RigidBodySimNode(Node):
             self._publish_state_locked()
 
     def _publish_state_locked(self) -> None:
-        sim = self._sim
-        self._outputs.publish(sim, self._settings["publish_clock"])
+        sim, settings = self._sim, self._settings
+        self._outputs.publish(sim, settings["publish_clock"])
+        self._markers.publish(sim, settings["marker_rate_hz"], lambda: self._inputs.snapshot()[0],
+                              settings["marker_force_scale"] if settings["marker_wrenches"] else None)
         if self._recording.recorder is not None:
             finite = sim.state.finite_bodies().tolist()
             skip = [body for index, body in enumerate(sim.body_names) if not finite[index]]
@@ -530,12 +627,12 @@ class RigidBodySimNode(Node):
 
     @property
     def rejected(self) -> dict[str, int]:
-        """Dropped wrench and impulse messages by reason (see diagnostics.REJECTION_REASONS)."""
+        """Dropped wrench, impulse and set_state messages by reason (see diagnostics.REJECTION_REASONS)."""
         return dict(self._inputs.snapshot()[3])
 
     @property
     def accepted_messages(self) -> int:
-        """Wrench and impulse messages accepted so far."""
+        """Wrench, impulse and set_state messages accepted so far."""
         return self._inputs.snapshot()[2]
 
     @property

@@ -210,6 +210,13 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
                   "time); '' = no recording. A change finishes the current file and starts the new one.",
                   constraints="'' or the path of a regular file (or a new one) in a writable directory",
                   check=_check_record_path, takes_effect="at once"),
+    ParameterSpec("marker_rate_hz", _T.DOUBLE, 10.0,
+                  "MarkerArray on 'markers' (bodies' shapes, sites, held wrenches in world_frame) per sim "
+                  "second, at most once a tick and only while subscribed; 0 = none.", range=(0.0, 1e6)),
+    ParameterSpec("marker_wrenches", _T.BOOL, True,
+                  "Draw each held wrench's force as an arrow from its frame's origin in 'markers'."),
+    ParameterSpec("marker_force_scale", _T.DOUBLE, 0.05, "Length of a wrench arrow in 'markers' per newton (m/N).",
+                  range=(1e-9, 1e9)),
 )
 
 #: :data:`PARAMETERS` by name.
