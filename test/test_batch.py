@@ -165,6 +165,18 @@ def test_batches_match_simulator_and_body_names(tmp_path, scene_file):
         assert same_tick and twists[-1].header == same_tick[-1].header
         assert twists[-1].twist.angular.x == sim.angular_velocities_world()[3, 0]
 
+        # A late joiner while paused (no tick since): it gets the current state and time at once.
+        from rosgraph_msgs.msg import Clock
+        late_poses: list[PoseArray] = []
+        late_clock: list[Clock] = []
+        late = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        peer.node.create_subscription(PoseArray, "/poses", late_poses.append, late)
+        peer.node.create_subscription(Clock, "/clock", late_clock.append, late)
+        peer.spin_until(lambda: late_poses and late_clock, "the latched state for a late joiner")
+        assert stamp_ns(late_poses[-1].header) == want_ns
+        assert late_clock[-1].clock.sec * 1_000_000_000 + late_clock[-1].clock.nanosec == want_ns
+        np.testing.assert_array_equal(pose_rows(late_poses[-1]), expected)
+
         # body_names is the node's: a client's change is refused and changes nothing.
         request = SetParameters.Request(parameters=[Parameter("body_names", Parameter.Type.STRING_ARRAY, ["x"]).to_parameter_msg()])
         result = peer.call(SetParameters, "/rigid_body_sim/set_parameters", request).results[0]
