@@ -346,6 +346,7 @@ class RigidBodySimNode(Node):
         self._tick_window.record(due_ns, period_ns, missed=missed)
         if not self._settings["paused"]:
             self._advance_one_tick_locked()
+        self._recording.flush_if_due()
         self._status_log.maybe_log(self.get_logger(), self._sim, self._settings["status_period"], self._settings["paused"])
 
     def _on_tick_failure(self, exc: BaseException) -> None:
