@@ -233,3 +233,21 @@ def test_qos_overrides_take_effect(tmp_path, scene_file):
     assert bad.wait(timeout=60) == 2
     log = (tmp_path / "bad.log").read_text()
     assert "qos_overrides for 'velocities' rejected" in log and "Traceback" not in log
+
+
+def test_body_names_follow_a_scene_change(tmp_path):
+    """A ``scene`` change sets body_names to the new scene's order (and poses has its size)."""
+    from rigid_body_sim.testing import SimHarness
+
+    first, second = tmp_path / "first.yaml", tmp_path / "second.yaml"
+    first.write_text(yaml.safe_dump(free_bodies_scene(3)))
+    scene = free_bodies_scene(2, seed=1)
+    scene["bodies"] = {f"other{k}": body for k, body in enumerate(scene["bodies"].values())}
+    second.write_text(yaml.safe_dump(scene))
+    with SimHarness(scene=first) as harness:
+        assert harness.get_parameter("body_names") == ["b0", "b1", "b2"]
+        (result,) = harness.set_parameters(scene=str(second))
+        assert result.successful, result.reason
+        assert harness.get_parameter("body_names") == ["other0", "other1"]
+        with harness.node.locked_simulator() as sim:
+            assert list(sim.body_names) == ["other0", "other1"]

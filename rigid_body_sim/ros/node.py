@@ -512,6 +512,11 @@ class RigidBodySimNode(Node):
 
     def destroy_node(self) -> None:
         """Stop the tick thread, finish the recording (a complete, indexed MCAP file), then destroy the node."""
+        self.stop_ticking_and_recording()
+        super().destroy_node()
+
+    def stop_ticking_and_recording(self) -> None:
+        """Stop the tick thread (a tick under way ends first) and finish the recording. Safe to call twice."""
         if self._tick_loop is not None:
             self._tick_loop.stop()
         recording = getattr(self, "_recording", None)  # None if the constructor failed before it
@@ -520,7 +525,6 @@ class RigidBodySimNode(Node):
                 recorder = recording.replace(None)
             if recorder is not None:
                 recording.finish(recorder)
-        super().destroy_node()
 
     def finish_recording_now(self) -> None:
         """Finish the recording without waiting for the lock: for an exit that cannot wait for a
