@@ -251,3 +251,47 @@ def test_body_names_follow_a_scene_change(tmp_path):
         assert harness.get_parameter("body_names") == ["other0", "other1"]
         with harness.node.locked_simulator() as sim:
             assert list(sim.body_names) == ["other0", "other1"]
+
+
+def test_a_stopped_body_stays_in_the_batches_flagged_with_its_last_state(tmp_path):
+    """A body driven to an infinite velocity is stopped: it stays in poses and velocities with the
+    last state published for it before it was stopped and stopped = 1; nothing non-finite is
+    published, and the other body runs on (stopped = 0)."""
+    from rigid_body_sim.testing import SimHarness
+
+    scene = {"bodies": {"feather": {"mass": 1e-300, "inertia": {"sphere": 1.0}},
+                        "box": {"mass": 2.0, "inertia": {"box": [1.0, 0.6, 0.4]}}}}
+    path = tmp_path / "two.yaml"
+    path.write_text(yaml.safe_dump(scene))
+    with SimHarness(path, parameters={"integrator": "euler", "wrench_timeout": 0.0}) as harness:
+        poses: list[PoseArray] = []
+        clouds: list[PointCloud2] = []
+        latched = QoSProfile(depth=100, durability=DurabilityPolicy.TRANSIENT_LOCAL)  # also the t = 0 state
+        harness.client.create_subscription(PoseArray, "poses", poses.append, latched)
+        harness.client.create_subscription(PointCloud2, "velocities", clouds.append, latched)
+        harness.spin_until(lambda: harness.client.count_publishers("poses") and harness.node.count_subscribers("poses")
+                           and harness.node.count_subscribers("velocities"), "the batch subscriptions")
+        harness.publish_wrench("feather", force=(1e12, 0.0, 0.0), frame_id="world")
+        harness.publish_wrench("box", force=(2.0, 0.0, 0.0), frame_id="world")
+        harness.spin_until(lambda: poses and clouds, "the t = 0 batches")
+        harness.step(4)
+        want_ns = round(4 * 0.01 * 1e9)
+        harness.spin_until(lambda: poses and clouds and stamp_ns(poses[-1].header) == want_ns
+                           and stamp_ns(clouds[-1].header) == want_ns, "the batches after 4 ticks")
+        assert harness.node.simulator.stopped_bodies == ("feather",)
+        names = harness.get_parameter("body_names")
+        f, b = names.index("feather"), names.index("box")
+        by_stamp = {stamp_ns(c.header): cloud_points(c) for c in clouds}
+        pose_by_stamp = {stamp_ns(p.header): pose_rows(p) for p in poses}
+        flagged = sorted(t for t, (_v, _w, stopped) in by_stamp.items() if stopped[f])
+        assert flagged and flagged[-1] == want_ns
+        before = max(t for t in by_stamp if t < flagged[0])
+        for t in flagged:
+            v, w, stopped = by_stamp[t]
+            assert stopped[f] and not stopped[b]
+            np.testing.assert_array_equal(pose_by_stamp[t][f], pose_by_stamp[before][f])
+            np.testing.assert_array_equal(v[f], by_stamp[before][0][f])
+        for rows in pose_by_stamp.values():
+            assert np.all(np.isfinite(rows))
+        for v, w, _stopped in by_stamp.values():
+            assert np.all(np.isfinite(v)) and np.all(np.isfinite(w))
