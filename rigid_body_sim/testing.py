@@ -65,8 +65,8 @@ class SimHarness:
     timeout : float
         Seconds any single wait may take before :class:`HarnessTimeout`.
     executor : type, optional
-        Executor class to spin both nodes with; default :class:`~rclpy.executors.SingleThreadedExecutor`
-        (what ``rigid_body_sim_node`` spins). ``rclpy.experimental.EventsExecutor`` takes a message
+        Executor class to spin both nodes with; default :class:`~rclpy.executors.SingleThreadedExecutor`.
+        ``rclpy.experimental.EventsExecutor`` (what ``rigid_body_sim_node`` spins) takes a message
         in about a fifth of the time, which suits high-volume tests.
     """
 
