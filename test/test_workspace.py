@@ -57,7 +57,8 @@ def copy_kernel_cache(package_dir: Path) -> None:
     cache = ROOT / PACKAGE / "core" / "__pycache__"
     target = package_dir / "core" / "__pycache__"
     target.mkdir(exist_ok=True)
-    for path in list(cache.glob("*.nbi")) + list(cache.glob("*.nbc")):
+    # With the stamp of the sources they were compiled from (core/jit.py drops a cache without it).
+    for path in list(cache.glob("*.nbi")) + list(cache.glob("*.nbc")) + list(cache.glob("numba-sources.sha256")):
         shutil.copy2(path, target / path.name)
 
 
