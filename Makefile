@@ -131,3 +131,12 @@ bench: bench-deps
 bench-full: bench-deps
 	$(VENV_PY) -m pytest -q -m bench
 	$(VENV_PY) -m benchmarks.run --full $(BENCH_FLAGS)
+
+# The node with batched output (issue 15): 1, 100, 1000, 10000 bodies at 100 Hz and 100 at 1 kHz, rk4, 1 substep,
+# per_body_topics false, a `poses` subscriber in another process; sim/wall, ticks delivered, CPU per tick, RSS,
+# start to first poses, stop time (medians of 5 runs of 10 s; BENCH_NODE_ARGS=--quick for 3 runs of 5 s).
+# Writes benchmarks/results/node_batch.md (the README's "Many bodies" figures come from it).
+BENCH_NODE_ARGS ?=
+.PHONY: bench-node
+bench-node: $(STAMP)
+	$(VENV_PY) -m benchmarks.node_batch $(BENCH_NODE_ARGS)

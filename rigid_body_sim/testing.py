@@ -66,8 +66,8 @@ class SimHarness:
     timeout : float
         Seconds any single wait may take before :class:`HarnessTimeout`.
     executor : type, optional
-        Executor class to spin both nodes with; default :class:`~rclpy.executors.SingleThreadedExecutor`
-        (what ``rigid_body_sim_node`` spins). ``rclpy.experimental.EventsExecutor`` takes a message
+        Executor class to spin both nodes with; default :class:`~rclpy.executors.SingleThreadedExecutor`.
+        ``rclpy.experimental.EventsExecutor`` (what ``rigid_body_sim_node`` spins) takes a message
         in about a fifth of the time, which suits high-volume tests.
     """
 
@@ -75,6 +75,10 @@ class SimHarness:
                  paused: bool = True, domain_id: int | None = None, node_name: str = "rigid_body_sim",
                  namespace: str | None = None, timeout: float = 10.0, executor: type | None = None):
         params = dict(parameters or {})
+        if params.get("per_body_topics", True) is False:
+            raise ValueError("per_body_topics: the harness reads each body's pose and twist topics, so it runs "
+                             "with per_body_topics true (the default); for a batch-only node, start it with "
+                             "testing.start_process and subscribe to 'poses' and 'velocities'")
         if scene is not None:
             params["scene"] = str(scene)
         params.setdefault("paused", paused)

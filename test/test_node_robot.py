@@ -421,10 +421,14 @@ def test_spawn_and_delete_while_running_keep_clock_increasing_and_topics_consist
     steps back, every other body keeps its motion, and the node's bodies are what the topics say."""
     from rosgraph_msgs.msg import Clock as ClockMsg
 
+    from geometry_msgs.msg import PoseArray
+
     scene = write_scene(tmp_path, {"ball": BALL, "box": spinning_box()}, gravity=(0.0, 0.0, 0.0))
     with SimHarness(scene, {"integrator": "rk4"}, paused=False) as h:
         clocks = Collector(h, ClockMsg, ["/clock"])
+        batches = Collector(h, PoseArray, ["poses"])
         clocks.wait_matched(h)
+        batches.wait_matched(h)
         h.spin_until(lambda: len(clocks.messages["/clock"]) > 5, "/clock while running")
         result = h.spawn(crate=SPAWNED)
         assert result.successful, result.reason
@@ -439,6 +443,15 @@ def test_spawn_and_delete_while_running_keep_clock_increasing_and_topics_consist
         np.testing.assert_allclose(vec(pose.pose.position), [4.0, 1.0 * (stamp_s(pose) - spawn_time), 1.0],
                                    rtol=0, atol=1e-9)
         assert h.node.simulator.body_names == ("ball", "box", "crate")
+        # the batch follows at once: three poses in body_names' order, the crate's the same as its own topic's
+        assert h.get_parameter("body_names") == ["ball", "box", "crate"]
+        h.spin_until(lambda: len(batches.messages["poses"][-1].poses) == 3, "a poses batch with the crate")
+        pose = h.latest_pose("crate")
+        h.spin_until(lambda: any(stamp_s(b) == stamp_s(pose) for b in batches.messages["poses"]),
+                     "the batch of the crate's latest pose")
+        batch = next(b for b in batches.messages["poses"] if stamp_s(b) == stamp_s(pose))
+        assert len(batch.poses) == 3
+        np.testing.assert_array_equal(vec(batch.poses[2].position), vec(pose.pose.position))
         result = h.delete("box")
         assert result.successful, result.reason
         with h.node.locked_simulator() as sim:
@@ -450,6 +463,15 @@ def test_spawn_and_delete_while_running_keep_clock_increasing_and_topics_consist
         h.spin_until(lambda: len(clocks.messages["/clock"]) > n + 5, "/clock after the delete")
         ticks = [clock_ns(m) for m in clocks.messages["/clock"]]
         assert all(b > a for a, b in zip(ticks, ticks[1:])), "/clock stepped back or stood still"
+        assert h.get_parameter("body_names") == ["ball", "crate"]
+        h.spin_until(lambda: len(batches.messages["poses"][-1].poses) == 2, "a poses batch without the box")
+        stamps = [stamp_s(b) for b in batches.messages["poses"]]
+        # never back; a spawn or delete republishes the current state with the new body set at its
+        # tick's stamp (transient local keeps the current state for late joiners), so one stamp may repeat
+        assert all(b >= a for a, b in zip(stamps, stamps[1:])), "the batches' stamps stepped back"
+        sizes = [len(b.poses) for b in batches.messages["poses"]]
+        runs = [n for i, n in enumerate(sizes) if i == 0 or n != sizes[i - 1]]
+        assert runs == [2, 3, 2], runs  # two bodies, three from the spawn on, two from the delete on
         # the box's spin and the ball's rest were never disturbed: the spawned body's pose still agrees
         pose = h.latest_pose("crate")
         np.testing.assert_allclose(pose.pose.position.y, stamp_s(pose) - spawn_time, rtol=0, atol=1e-9)

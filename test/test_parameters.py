@@ -13,6 +13,7 @@ import yaml
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.parameter import Parameter
 
+from rigid_body_sim.ros.publishers import OVERRIDABLE_TOPICS
 from rigid_body_sim.ros.parameters import BY_NAME, PARAMETERS, markdown_table, params_yaml, problem
 from rigid_body_sim.testing import SimHarness
 
@@ -46,10 +47,13 @@ def test_describe_parameters_from_a_client_shows_every_type_range_and_descriptio
                 assert not got.floating_point_range and not got.integer_range, spec.name
             for choice in spec.choices:
                 assert choice in got.additional_constraints, spec.name
-        # Every declared parameter is in the table, but rclpy's own two.
+        # Every declared parameter is in the table, but rclpy's own two and the standard
+        # qos_overrides of the batch and /clock publishers (issue 15).
         future = harness._parameters.list_parameters()
         harness.spin_until(future.done, "list_parameters")
-        assert set(future.result().result.names) == set(names) | {"use_sim_time", "start_type_description_service"}
+        qos = {f"qos_overrides.{'/' + t.lstrip('/')}.publisher.{policy}" for t in OVERRIDABLE_TOPICS
+               for policy in ("history", "depth", "reliability", "durability")}
+        assert set(future.result().result.names) == set(names) | {"use_sim_time", "start_type_description_service"} | qos
 
 
 def ranged() -> list[tuple[str, object]]:

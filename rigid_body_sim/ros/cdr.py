@@ -26,7 +26,7 @@ import struct
 from collections.abc import Sequence
 
 from builtin_interfaces.msg import Time
-from geometry_msgs.msg import PoseStamped, Twist
+from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
 from rclpy.serialization import deserialize_message, serialize_message
 from rosgraph_msgs.msg import Clock
 
@@ -46,7 +46,7 @@ def _string_block(text: str, offset: int, order: str) -> bytes:
 
 
 class PoseTwistClockCdr:
-    """Serializes PoseStamped (with a fixed ``frame_id``), Twist and Clock to CDR bytes.
+    """Serializes PoseStamped and TwistStamped (with a fixed ``frame_id``), Twist and Clock to CDR bytes.
 
     Parameters
     ----------
@@ -71,6 +71,8 @@ class PoseTwistClockCdr:
         self._pose = struct.Struct(f"{order}4siI{len(frame)}s7d")
         self._frame = frame
         self._twist = struct.Struct(f"{order}4s6d")  # linear xyz, angular xyz
+        # header.stamp, header.frame_id, twist.linear xyz, twist.angular xyz
+        self._twist_stamped = struct.Struct(f"{order}4siI{len(frame)}s6d")
         self._clock = struct.Struct(f"{order}4siI")  # clock.sec, clock.nanosec
 
     def pose_stamped(self, sec: int, nanosec: int, position: Sequence[float], orientation_xyzw: Sequence[float]) -> bytes:
@@ -81,6 +83,11 @@ class PoseTwistClockCdr:
     def twist(self, linear: Sequence[float], angular: Sequence[float]) -> bytes:
         """CDR of a Twist (``linear`` and ``angular``, 3 floats each)."""
         return self._twist.pack(self._head, linear[0], linear[1], linear[2], angular[0], angular[1], angular[2])
+
+    def twist_stamped(self, sec: int, nanosec: int, linear: Sequence[float], angular: Sequence[float]) -> bytes:
+        """CDR of a TwistStamped at stamp (``sec``, ``nanosec``) in ``frame_id``."""
+        return self._twist_stamped.pack(self._head, sec, nanosec, self._frame, linear[0], linear[1], linear[2],
+                                         angular[0], angular[1], angular[2])
 
     def clock(self, sec: int, nanosec: int) -> bytes:
         """CDR of a rosgraph_msgs/Clock."""
@@ -124,6 +131,13 @@ def check_against_middleware(cdr: PoseTwistClockCdr) -> str | None:
     ours = cdr.twist(linear, angular)
     if ours != serialize_message(reference_twist):  # no padding in a Twist: bytewise equal
         return "Twist: bytes differ from the middleware's"
+
+    reference_stamped = TwistStamped()
+    reference_stamped.header.stamp, reference_stamped.header.frame_id = stamp, cdr.frame_id
+    reference_stamped.twist = reference_twist
+    ours = cdr.twist_stamped(stamp.sec, stamp.nanosec, linear, angular)
+    if len(ours) != len(serialize_message(reference_stamped)) or deserialize_message(ours, TwistStamped) != reference_stamped:
+        return "TwistStamped: bytes differ from the middleware's"
 
     ours = cdr.clock(stamp.sec, stamp.nanosec)
     if ours != serialize_message(Clock(clock=stamp)):

@@ -1,7 +1,8 @@
 """The ``rigid_body_sim`` node: steps the core at a fixed wall-clock rate and talks ROS 2.
 
-Per body B (relative names, so namespaces and remaps apply): out ``B/pose``, ``B/twist``,
-``B/odom`` (publishers.py); in ``B/wrench`` and ``B/impulse`` (inputs.py). Also ``/clock``
+Every tick the batches ``poses`` and ``velocities`` (all bodies in scene order, batch.py) and, unless
+``per_body_topics`` is false, per body B (relative names, so namespaces and remaps apply)
+``B/pose``, ``B/twist``, ``B/odom`` (publishers.py); in ``B/wrench`` and ``B/impulse`` (inputs.py). Also ``/clock``
 each tick, ``/diagnostics`` every ``diagnostics_period`` wall seconds (diagnostics.py), the
 services ``~/reset``, ``~/set_paused`` and ``~/step`` (services.py), and the parameters of
 parameters.py. For robot stacks: ``B/S/imu`` per IMU site (imu.py), ``B/set_state``
@@ -53,11 +54,12 @@ from .services import create_services
 from .set_state import SetStateInputs
 from .tick_loop import TickLoop
 
-__all__ = ["RigidBodySimNode", "DEFAULT_INTEGRATOR", "MAX_BODIES", "QUEUE_DEPTH"]
+__all__ = ["RigidBodySimNode", "DEFAULT_INTEGRATOR", "MAX_BODIES", "MAX_BATCH_ONLY_BODIES", "QUEUE_DEPTH"]
 
 #: Integrator used unless the ``integrator`` parameter says otherwise.
 DEFAULT_INTEGRATOR = BY_NAME["integrator"].default
-#: History depth of every publisher and subscription (bounded memory under floods).
+#: History depth of every subscription and of /diagnostics (bounded memory under floods); state
+#: publishers keep the latest message only (publishers.STATE_QOS).
 QUEUE_DEPTH = 10
 #: Most bodies a scene may have (start-up or ``scene`` change): every body costs four topics
 #: and their creation (~2 ms each); above this a scene change would stall the parameter
@@ -65,6 +67,9 @@ QUEUE_DEPTH = 10
 MAX_BODIES = 1000
 #: Most ticks one ``~/step_ticks`` request may ask for (the node's other callbacks wait while it steps).
 MAX_STEP_TICKS = 1_000_000
+#: Most bodies with ``per_body_topics`` false (batches only; inputs stay per body: two
+#: subscriptions each).
+MAX_BATCH_ONLY_BODIES = 10_000
 #: Longest wait (s) of a parameter change for the one before it to finish.
 CHANGE_WAIT_S = 30.0
 #: Longest wait (s) of a service or parameter change for a tick under way; then it is refused as busy.
@@ -133,8 +138,10 @@ class RigidBodySimNode(Node):
         settings = self._settings
         self._world_frame: str = settings["world_frame"]
         self._sim = self._build_simulator(settings["scene"], settings)
+        self._set_body_names(self._sim.body_names)
         qos = QoSProfile(depth=QUEUE_DEPTH)
-        self._outputs = StatePublishers(self, qos, self._world_frame)
+        self._outputs = StatePublishers(self, self._world_frame, per_body_topics=settings["per_body_topics"],
+                                        twist_stamped=settings["twist_stamped"])
         self._inputs = WrenchInputs(self, qos, self._world_frame)
         self._outputs.commit(self._outputs.prepare(self._sim.body_names, settings["publish_odometry"]))
         self._inputs.commit(self._inputs.prepare(self._sim))
@@ -181,19 +188,30 @@ class RigidBodySimNode(Node):
             If a body is named like ``world_frame``.
         """
         scene = load_scene(path)
-        self._check_scene(scene, settings["world_frame"])
+        self._check_scene(scene, settings["world_frame"], settings["per_body_topics"])
         return Simulator(scene, integrator=settings["integrator"], dt=physics_dt(settings),
                          model_reduction=settings["model_reduction"])
 
     @staticmethod
-    def _check_scene(scene: Scene, world_frame: str) -> None:
-        if len(scene.body_names) > MAX_BODIES:
+    def _check_scene(scene: Scene, world_frame: str, per_body_topics: bool) -> None:
+        if per_body_topics and len(scene.body_names) > MAX_BODIES:
             raise SceneError(f"{scene.source}: {len(scene.body_names)} bodies; this node takes at most {MAX_BODIES} "
-                             "(each body has its own topics)")
+                             f"(each body has its own topics); with per_body_topics:=false, up to {MAX_BATCH_ONLY_BODIES}")
+        if len(scene.body_names) > MAX_BATCH_ONLY_BODIES:
+            raise SceneError(f"{scene.source}: {len(scene.body_names)} bodies; this node takes at most "
+                             f"{MAX_BATCH_ONLY_BODIES} (each body has its own wrench and impulse subscriptions)")
         if world_frame in scene.body_names:
             raise ValueError(f"body name {world_frame!r} clashes with world_frame; rename the body")
 
     # ------------------------------------------------------------------ parameters
+
+    def _set_body_names(self, names: tuple[str, ...] | list[str]) -> None:
+        """Set the node-owned ``body_names`` parameter (past the refusal clients get)."""
+        self._pending.internal = True
+        try:
+            self.set_parameters([Parameter("body_names", Parameter.Type.STRING_ARRAY, list(names))])
+        finally:
+            self._pending.internal = False
 
     def _coerce_parameters(self, parameters: list[Parameter]) -> list[Parameter]:
         """Pre-set: whole numbers for float parameters are floats (``rate_hz:=200`` means 200.0)."""
@@ -213,6 +231,8 @@ class RigidBodySimNode(Node):
         simulation. The prepared change waits, keyed to this request and thread, for
         :meth:`_apply_change`; changes are serialized from here to there, so two clients (or
         the threads of a multi-threaded executor) never interleave theirs."""
+        if getattr(self._pending, "internal", False):
+            return SetParametersResult(successful=True)
         stale = getattr(self._pending, "change", None)
         self._pending.change = None
         if stale is not None:  # prepared on this thread, then refused by a later callback: never applied
@@ -260,6 +280,8 @@ class RigidBodySimNode(Node):
 
     def _apply_change(self, parameters: list[Parameter]) -> None:
         """Post-set: apply the change :meth:`_prepare_change` prepared for this request, whole."""
+        if getattr(self._pending, "internal", False):
+            return
         change = getattr(self._pending, "change", None)
         self._pending.change = None
         if change is None:
@@ -327,6 +349,8 @@ class RigidBodySimNode(Node):
             self._set_state.release(set_state)
         if old_recorder is not None:
             self._recording.finish(old_recorder)
+        if change.simulator is not None and tuple(change.simulator.body_names) != tuple(self.get_parameter("body_names").value):
+            self._set_body_names(change.simulator.body_names)
         if "model_reduction" in changed and change.simulator is None:
             with self._lock:
                 log_models(self.get_logger(), self._sim)
@@ -347,6 +371,7 @@ class RigidBodySimNode(Node):
             self._advance_one_tick_locked()
         elif self._set_state.apply(self._sim):  # set_state also while paused: applied and shown at once
             self._publish_state_locked()
+        self._recording.flush_if_due()
         self._status_log.maybe_log(self.get_logger(), self._sim, self._settings["status_period"], self._settings["paused"])
 
     def _on_tick_failure(self, exc: BaseException) -> None:
@@ -461,7 +486,7 @@ class RigidBodySimNode(Node):
                 return False, f"refused: {busy}"
             try:
                 new_scene = edited_scene(scene, spawn, delete)
-                self._check_scene(new_scene, settings["world_frame"])
+                self._check_scene(new_scene, settings["world_frame"], settings["per_body_topics"])
             except (SceneError, ValueError) as exc:
                 return False, f"refused: {exc}"
             publishers = self._outputs.prepare(new_scene.body_names, settings["publish_odometry"])
@@ -480,6 +505,7 @@ class RigidBodySimNode(Node):
             self._inputs.release(inputs)
             self._imus.release(imus)
             self._set_state.release(set_state)
+            self._set_body_names(new_scene.body_names)  # the batches' order follows at once
         finally:
             self._change_lock.release()
         what = "; ".join(part for part in (f"spawned {list(spawn)}" if spawn else "",
@@ -584,6 +610,11 @@ class RigidBodySimNode(Node):
 
     def destroy_node(self) -> None:
         """Stop the tick thread, finish the recording (a complete, indexed MCAP file), then destroy the node."""
+        self.stop_ticking_and_recording()
+        super().destroy_node()
+
+    def stop_ticking_and_recording(self) -> None:
+        """Stop the tick thread (a tick under way ends first) and finish the recording. Safe to call twice."""
         if self._tick_loop is not None:
             self._tick_loop.stop()
         recording = getattr(self, "_recording", None)  # None if the constructor failed before it
@@ -592,7 +623,6 @@ class RigidBodySimNode(Node):
                 recorder = recording.replace(None)
             if recorder is not None:
                 recording.finish(recorder)
-        super().destroy_node()
 
     def finish_recording_now(self) -> None:
         """Finish the recording without waiting for the lock: for an exit that cannot wait for a

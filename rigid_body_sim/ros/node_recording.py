@@ -4,17 +4,137 @@ A new file is opened while a parameter change is prepared (never under the tick 
 open that blocks or fails only refuses the change), swapped in with the change, and the one it
 replaces is finished afterwards. A failed write (disk full...) ends the recording with an error
 in the log; the simulation goes on.
+
+Crash safety: the node records with :class:`FlushingRecorder`, the offline
+:class:`~rigid_body_sim.offline.recording.McapRecorder` (same topics, schemas, metadata and
+status records, so :func:`~rigid_body_sim.offline.recording.read_recording` and any MCAP tool
+read it) written through mcap's own ``mcap.writer.Writer`` with messages serialized by rclpy,
+whose public ``flush()`` ends the open chunk. The node flushes at most :data:`FLUSH_PERIOD_S`
+wall seconds after a message was written (checked every tick, also while paused), so after a
+SIGKILL or a crash the file holds every message written up to about ``FLUSH_PERIOD_S`` plus one
+tick before the kill, and is read as ``cut short`` (no summary). A clean stop finishes the file.
 """
 
 from __future__ import annotations
 
+import importlib
+import os
+import time
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Iterable, Mapping
+
+import numpy as np
+
+from mcap.writer import CompressionType, Writer
+from rclpy.serialization import serialize_message
 
 from ..core import Simulator
-from ..offline.recording import McapRecorder
+from ..offline.msgdefs import complete_definition
+from ..offline.recording import (CHUNK_SIZE, METADATA_NAME, SCENE_ATTACHMENT, STATUS_INCOMPLETE, STATUS_METADATA_NAME,
+                                 McapRecorder, stamp_ns)
+from ..paths import open_for_writing
+from .cdr import PoseTwistClockCdr
 
-__all__ = ["NodeRecording"]
+__all__ = ["NodeRecording", "FlushingRecorder", "FLUSH_PERIOD_S"]
+
+#: Longest wall time (s) a written message waits in memory before it is flushed to the file.
+FLUSH_PERIOD_S = 0.5
+
+
+def _message_from_dict(msg_type: Any, fields: Mapping[str, Any]) -> Any:
+    """An rclpy message of ``msg_type`` with the (nested) ``fields`` of a recorder's dict."""
+    msg = msg_type()
+    for name, value in fields.items():
+        if isinstance(value, Mapping):
+            value = _message_from_dict(type(getattr(msg, name)), value)
+        setattr(msg, name, value)
+    return msg
+
+
+class FlushingRecorder(McapRecorder):
+    """:class:`McapRecorder` written with ``mcap.writer.Writer`` and rclpy's serializer, flushable.
+
+    Parameters are those of :class:`McapRecorder`.
+    """
+
+    def __init__(self, path: str | os.PathLike[str], *, world_frame: str = "world", namespace: str = "/",
+                 metadata: Mapping[str, str] | None = None, scene_text: str | None = None):
+        self.path = Path(path)
+        self.world_frame = world_frame
+        self._prefix = namespace.rstrip("/") + "/"
+        self._file = open_for_writing(self.path, expected="an .mcap file")
+        try:
+            self._writer = Writer(self._file, chunk_size=CHUNK_SIZE, compression=CompressionType.ZSTD)
+            self._writer.start(profile="ros2", library="rigid_body_sim")
+            if metadata:
+                self._writer.add_metadata(METADATA_NAME, {str(k): str(v) for k, v in metadata.items()})
+            self._writer.add_metadata(STATUS_METADATA_NAME, {"status": STATUS_INCOMPLETE})
+            if scene_text is not None:
+                self._writer.add_attachment(0, 0, SCENE_ATTACHMENT, "application/yaml", scene_text.encode("utf-8"))
+            self._file.flush()
+        except BaseException:
+            self._file.close()
+            self._file = None
+            raise
+        self._cdr = PoseTwistClockCdr(world_frame)
+        self._schema_ids: dict[str, tuple[int, Any]] = {}  # name -> (schema id, message class)
+        self._channel_ids: dict[str, int] = {}
+        self._wrench_keys: list[tuple[str, str]] = []
+        self.message_count = 0
+        self._unflushed_since: float | None = None
+
+    def write_state(self, time: float, bodies: Iterable[str], positions_world: np.ndarray,
+                    orientations_xyzw: np.ndarray, linear_velocities_world: np.ndarray,
+                    angular_velocities_world: np.ndarray) -> None:
+        """As :meth:`McapRecorder.write_state`, serialized by :mod:`.cdr` (the bytes the node publishes)."""
+        ns = stamp_ns(time)
+        sec, nanosec = divmod(ns, 1_000_000_000)
+        cdr = self._cdr
+        p, q = positions_world.tolist(), orientations_xyzw.tolist()
+        v, w = linear_velocities_world.tolist(), angular_velocities_world.tolist()
+        for i, body in enumerate(bodies):
+            self._write_bytes(f"{self._prefix}{body}/pose", "geometry_msgs/msg/PoseStamped",
+                              cdr.pose_stamped(sec, nanosec, p[i], q[i]), ns)
+            self._write_bytes(f"{self._prefix}{body}/twist", "geometry_msgs/msg/Twist", cdr.twist(v[i], w[i]), ns)
+
+    def write_clock(self, time: float) -> None:
+        """As :meth:`McapRecorder.write_clock`."""
+        ns = stamp_ns(time)
+        self._write_bytes("/clock", "rosgraph_msgs/msg/Clock", self._cdr.clock(*divmod(ns, 1_000_000_000)), ns)
+
+    def _write(self, topic: str, schema: str, message: dict[str, Any], ns: int) -> None:
+        known = self._schema(schema)
+        self._write_bytes(topic, schema, serialize_message(_message_from_dict(known[1], message)), ns)
+
+    def _schema(self, schema: str) -> tuple[int, Any]:
+        known = self._schema_ids.get(schema)
+        if known is None:
+            package, _, name = schema.split("/")
+            known = (self._writer.register_schema(schema, "ros2msg", complete_definition(schema).encode()),
+                     getattr(importlib.import_module(f"{package}.msg"), name))
+            self._schema_ids[schema] = known
+        return known
+
+    def _write_bytes(self, topic: str, schema: str, data: bytes, ns: int) -> None:
+        if self._file is None:
+            raise ValueError(f"recording {self.path} is closed")
+        channel = self._channel_ids.get(topic)
+        if channel is None:
+            channel = self._channel_ids[topic] = self._writer.register_channel(topic, "cdr", self._schema(schema)[0])
+        self._writer.add_message(channel, log_time=ns, data=data, publish_time=ns, sequence=self.message_count)
+        self.message_count += 1
+        if self._unflushed_since is None:
+            self._unflushed_since = time.monotonic()
+
+    def flush_if_due(self, period_s: float = FLUSH_PERIOD_S) -> bool:
+        """Flush (end the chunk, write it, flush the file) if a message has waited ``period_s``; True if it did."""
+        since = self._unflushed_since
+        if since is None or self._file is None or time.monotonic() - since < period_s:
+            return False
+        self._writer.flush()
+        self._file.flush()
+        self._unflushed_since = None
+        return True
 
 
 class NodeRecording:
@@ -47,7 +167,7 @@ class NodeRecording:
             scene_text = source.read_text(encoding="utf-8") if source.is_file() else None
         except (OSError, UnicodeDecodeError):
             scene_text = None
-        recorder = McapRecorder(
+        recorder = FlushingRecorder(
             path, world_frame=self._world_frame, namespace=self._namespace, scene_text=scene_text,
             metadata={"scene": str(sim.scene.source), "integrator": integrator or sim.integrator,
                       "dt": repr(sim.dt if dt is None else dt), "node": self._node_name})
@@ -71,6 +191,12 @@ class NodeRecording:
             self._logger.error(f"recording to {recorder.path} failed ({exc}); not recording")
             self.recorder = None
             self.finish(recorder)
+
+    def flush_if_due(self) -> None:
+        """Flush the recording if a message has waited :data:`FLUSH_PERIOD_S` (every tick, also paused)."""
+        recorder = self.recorder
+        if isinstance(recorder, FlushingRecorder):
+            self.write(lambda r: r.flush_if_due())
 
     def finish(self, recorder: McapRecorder) -> None:
         """Close ``recorder``: its summary and index are written, so the file is complete."""

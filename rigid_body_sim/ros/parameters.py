@@ -52,6 +52,7 @@ _TYPE_NAMES = {
     Parameter.Type.INTEGER: "integer",
     Parameter.Type.DOUBLE: "double",
     Parameter.Type.STRING: "string",
+    Parameter.Type.STRING_ARRAY: "string array",
 }
 
 
@@ -81,6 +82,9 @@ class ParameterSpec:
         ``check(value) -> reason or None``: a constraint that needs code (paths, frame names).
     takes_effect : str
         When an accepted change takes effect (README).
+    node_owned : bool
+        The node sets the value (``body_names``); any value from outside, at start-up or later,
+        is refused.
     """
 
     name: str
@@ -93,6 +97,7 @@ class ParameterSpec:
     constraints: str = ""
     check: Callable[[Any], str | None] | None = None
     takes_effect: str = "at the next tick"
+    node_owned: bool = False
 
     def default_value(self) -> Any:
         """The default, with ``scene``'s computed from the installation."""
@@ -111,6 +116,8 @@ class ParameterSpec:
             parts.append(self.constraints)
         if self.read_only:
             parts.append("read-only: set at start-up only")
+        if self.node_owned:
+            parts.append("read-only: set by the node, never by a client")
         return "; ".join(parts)
 
     def descriptor(self) -> ParameterDescriptor:
@@ -129,7 +136,8 @@ class ParameterSpec:
     def expected(self) -> str:
         """What a valid value is, in words (for error messages)."""
         kind = {Parameter.Type.BOOL: "a bool (true or false)", Parameter.Type.INTEGER: "a whole number",
-                Parameter.Type.DOUBLE: "a finite number (double)", Parameter.Type.STRING: "a string"}[self.type]
+                Parameter.Type.DOUBLE: "a finite number (double)", Parameter.Type.STRING: "a string",
+                Parameter.Type.STRING_ARRAY: "a list of strings"}[self.type]
         extra = self.additional_constraints()
         return f"{kind}, {extra}" if extra else kind
 
@@ -196,6 +204,17 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec("publish_clock", _T.BOOL, True, "Publish /clock (rosgraph_msgs/Clock) with sim time every tick."),
     ParameterSpec("publish_odometry", _T.BOOL, False,
                   "Also publish B/odom (nav_msgs/Odometry, twist in B's body axes) for every body B."),
+    ParameterSpec("per_body_topics", _T.BOOL, True,
+                  "Publish B/pose, B/twist (and B/odom) for every body B besides the batches poses and "
+                  "velocities; false: only the batches (B/wrench and B/impulse stay per body). False also "
+                  "lifts the node's body limit from 1000 to 10000.",
+                  read_only=True, takes_effect="start-up only"),
+    ParameterSpec("twist_stamped", _T.BOOL, False,
+                  "Publish B/twist as geometry_msgs/TwistStamped (the stamp and frame_id of B/pose) instead "
+                  "of Twist.", read_only=True, takes_effect="start-up only"),
+    ParameterSpec("body_names", _T.STRING_ARRAY, None,
+                  "The scene's body names in scene order: the order of poses and velocities. Set by the node "
+                  "at start-up and on every scene change.", node_owned=True, takes_effect="set by the node"),
     ParameterSpec("paused", _T.BOOL, False, "When true, sim time advances only through ~/step."),
     ParameterSpec("wrench_timeout", _T.DOUBLE, 0.5,
                   "Sim seconds a received wrench stays applied; 0 = until replaced or cleared.",
@@ -236,11 +255,15 @@ def problem(name: str, value: Any) -> str | None:
     spec = BY_NAME.get(name)
     if spec is None:
         return f"{name!r} is not a parameter of this node; expected one of {list(BY_NAME)}"
+    if spec.node_owned:
+        return (f"{name} is read-only: the node sets it (the scene's body names in scene order); "
+                f"got a request to set it to {value!r}")
     ok_type = {
         Parameter.Type.BOOL: isinstance(value, bool),
         Parameter.Type.INTEGER: isinstance(value, int) and not isinstance(value, bool),
         Parameter.Type.DOUBLE: isinstance(value, float) and math.isfinite(value),
         Parameter.Type.STRING: isinstance(value, str),
+        Parameter.Type.STRING_ARRAY: isinstance(value, (list, tuple)) and all(isinstance(v, str) for v in value),
     }[spec.type]
     if not ok_type:
         return f"{name} must be {spec.expected()}; got {value!r} ({type(value).__name__})"
@@ -275,14 +298,22 @@ def declare_parameters(node: Node) -> dict[str, Any]:
         Naming every start-up value that is not acceptable and what was expected.
     """
     values = {}
+    reasons = []
     for spec in PARAMETERS:
+        if spec.node_owned:  # declared without a value; an override from outside is refused
+            declared = node.declare_parameter(spec.name, spec.type, spec.descriptor())
+            if declared.type_ is not Parameter.Type.NOT_SET:
+                reasons.append(problem(spec.name, declared.value))
+            continue
         declared = node.declare_parameter(spec.name, spec.default_value(),
                                           ParameterDescriptor(description=spec.description, dynamic_typing=True))
         values[spec.name] = coerce(spec, declared.value)
-    reasons = problems(values)
+    reasons = problems(values) + reasons
     if reasons:
         raise ValueError("; ".join(reasons))
     for spec in PARAMETERS:
+        if spec.node_owned:
+            continue
         value = Parameter(spec.name, spec.type, values[spec.name]).get_parameter_value()
         node.set_descriptor(spec.name, spec.descriptor(), alternative_value=value)
     return values
@@ -305,7 +336,8 @@ def params_yaml(node_name: str = NODE_NAME) -> str:
         "# Parameters of the rigid_body_sim node, generated from rigid_body_sim/ros/parameters.py",
         "# (python -m rigid_body_sim.ros.parameters --yaml > config/params.yaml; a test checks it). Use:",
         "#   rigid_body_sim_node --ros-args --params-file config/params.yaml",
-        "# `scene` is left out: it defaults to the installed config/default_scene.yaml.",
+        "# `scene` is left out: it defaults to the installed config/default_scene.yaml; `body_names` too: the",
+        "# node sets it.",
         f"{node_name}:",
         "  ros__parameters:",
     ]
@@ -324,7 +356,8 @@ def markdown_table() -> str:
     """The README's parameter table (between the ``parameters`` markers)."""
     rows = ["| parameter | type | default | valid values | changes | meaning |", "|---|---|---|---|---|---|"]
     for spec in PARAMETERS:
-        default = "installed `config/default_scene.yaml`" if spec.default is None else f"`{_yaml_value(spec.default)}`"
+        default = ("the scene's body names" if spec.node_owned else "installed `config/default_scene.yaml`"
+                   if spec.default is None else f"`{_yaml_value(spec.default)}`")
         valid = []
         if spec.choices:
             valid.append(", ".join(f"`{c}`" for c in spec.choices))
@@ -332,7 +365,7 @@ def markdown_table() -> str:
             valid.append(f"{_fmt(spec.range[0])} to {_fmt(spec.range[1])}")
         if spec.constraints:
             valid.append(spec.constraints)
-        changes = "read-only" if spec.read_only else spec.takes_effect
+        changes = "read-only" if spec.read_only or spec.node_owned else spec.takes_effect
         rows.append(f"| `{spec.name}` | {_TYPE_NAMES[spec.type]} | {default} | {'; '.join(valid) or 'any'} "
                     f"| {changes} | {spec.description} |")
     return "\n".join(rows) + "\n"

@@ -1,8 +1,18 @@
-"""What the node sends each tick: per body ``B/pose``, ``B/twist`` (and ``B/odom``), and ``/clock``.
+"""What the node sends each tick: the batches ``poses`` and ``velocities`` (batch.py), per body
+``B/pose``, ``B/twist`` (and ``B/odom``) unless ``per_body_topics`` is false, and ``/clock``.
 
-Poses, twists and /clock go out as CDR bytes built by :mod:`.cdr` (``Publisher.publish``
-takes serialized bytes; checked against the middleware at start-up, message objects
-otherwise); odometry as message objects.
+Poses, twists, the batches and /clock go out as CDR bytes built by :mod:`.cdr` and
+:mod:`.batch` (``Publisher.publish`` takes serialized bytes; checked against the middleware at
+start-up, message objects otherwise); odometry as message objects.
+
+QoS (README "QoS"): every state topic (``poses``, ``velocities``, ``B/pose``, ``B/twist``,
+``B/odom``) and ``/clock`` is RELIABLE, TRANSIENT_LOCAL, KEEP_LAST 1 (:data:`STATE_QOS`): a
+subscriber that joins late (also while the simulation is paused) gets the latest state at once,
+and the publisher matches both reliable and best-effort, volatile and transient-local
+subscribers. ``poses``, ``velocities`` and ``/clock`` take the standard
+``qos_overrides./<topic>.publisher.{history,depth,reliability,durability}`` parameters
+(:class:`rclpy.qos_overriding_options.QoSOverridingOptions`); per-body topics do not (four
+read-only parameters per topic and body would be thousands of parameters).
 
 Per-body publishers change in three steps so that a scene change never holds the tick lock
 while creating or destroying endpoints: :meth:`StatePublishers.prepare` creates what the new
@@ -16,17 +26,37 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Iterable
 
-from geometry_msgs.msg import PoseStamped, Twist
+import numpy as np
+from geometry_msgs.msg import PoseArray, PoseStamped, Twist, TwistStamped
 from nav_msgs.msg import Odometry
+from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
-from rclpy.qos import QoSProfile
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos_overriding_options import InvalidQosOverridesError, QoSOverridingOptions, QoSPolicyKind
 from rosgraph_msgs.msg import Clock as ClockMsg
+from sensor_msgs.msg import PointCloud2
 
 from ..core import Simulator
+from .batch import BatchCdr, batch_rows, pose_array, velocity_cloud
 from .cdr import PoseTwistClockCdr, check_against_middleware
 from .conversions import fill_odometry, fill_pose_stamped, fill_twist, time_msg_from_seconds
 
-__all__ = ["BodyPublishers", "PublisherChange", "StatePublishers"]
+__all__ = ["BodyPublishers", "PublisherChange", "StatePublishers", "STATE_QOS", "OVERRIDABLE_TOPICS"]
+
+#: QoS of every state topic and /clock, before ``qos_overrides``: the latest state to late joiners.
+STATE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                       durability=DurabilityPolicy.TRANSIENT_LOCAL)
+#: Topics whose publisher QoS the ``qos_overrides./<topic>.publisher.*`` parameters change.
+OVERRIDABLE_TOPICS = ("poses", "velocities", "/clock")
+_OVERRIDDEN_POLICIES = (QoSPolicyKind.HISTORY, QoSPolicyKind.DEPTH, QoSPolicyKind.RELIABILITY,
+                        QoSPolicyKind.DURABILITY)
+
+
+def _valid_qos(qos: QoSProfile) -> SetParametersResult:
+    """A KEEP_LAST history needs a depth of at least 1."""
+    if qos.history == HistoryPolicy.KEEP_LAST and qos.depth < 1:
+        return SetParametersResult(successful=False, reason=f"depth must be at least 1 with history keep_last, got {qos.depth}")
+    return SetParametersResult(successful=True)
 
 
 @dataclass
@@ -37,7 +67,7 @@ class BodyPublishers:
     twist: Any
     odom: Any | None
     pose_msg: PoseStamped = field(default_factory=PoseStamped)
-    twist_msg: Twist = field(default_factory=Twist)
+    twist_msg: Any = field(default_factory=Twist)
     odom_msg: Odometry = field(default_factory=Odometry)
 
 
@@ -56,20 +86,44 @@ class StatePublishers:
     ----------
     node : rclpy.node.Node
         Owner of the publishers.
-    qos : QoSProfile
-        Of every publisher.
     world_frame : str
-        ``header.frame_id`` of poses and odometry.
+        ``header.frame_id`` of poses, batches, odometry and stamped twists.
+    per_body_topics : bool
+        Publish ``B/pose``, ``B/twist`` (``B/odom``) per body; False: only the batches.
+    twist_stamped : bool
+        ``B/twist`` as TwistStamped (the pose's stamp and frame) instead of Twist.
+
+    Raises
+    ------
+    ValueError
+        If a ``qos_overrides`` parameter is not a valid policy value.
     """
 
-    def __init__(self, node: Node, qos: QoSProfile, world_frame: str):
+    def __init__(self, node: Node, world_frame: str, *, per_body_topics: bool = True, twist_stamped: bool = False):
         self._node = node
-        self._qos = qos
+        self._qos = STATE_QOS
         self._world_frame = world_frame
+        self.per_body_topics = per_body_topics
+        self._twist_type = TwistStamped if twist_stamped else Twist
         self.bodies: dict[str, BodyPublishers] = {}
-        self._clock_pub = node.create_publisher(ClockMsg, "/clock", qos)
+        self._clock_pub = self._overridable(ClockMsg, "/clock")
+        self._poses_pub = self._overridable(PoseArray, "poses")
+        self._velocities_pub = self._overridable(PointCloud2, "velocities")
         self._clock_msg = ClockMsg()
         self._cdr = self._make_cdr()
+        self._batch: BatchCdr | None = None
+        self._batch_failed = False
+        self._index: dict[str, int] = {}
+        self._last: tuple[Any, int, np.ndarray, np.ndarray] | None = None  # (sim, n, pose rows, points)
+
+    def _overridable(self, msg_type: Any, topic: str) -> Any:
+        try:
+            return self._node.create_publisher(
+                msg_type, topic, QoSProfile(**{k: getattr(STATE_QOS, k) for k in ("history", "depth", "reliability", "durability")}),
+                qos_overriding_options=QoSOverridingOptions(_OVERRIDDEN_POLICIES, callback=_valid_qos))
+        except (InvalidQosOverridesError, RuntimeError, ValueError) as exc:
+            raise ValueError(f"qos_overrides for {topic!r} rejected: {exc}; expected history keep_last|keep_all, "
+                             "depth >= 1, reliability reliable|best_effort, durability volatile|transient_local") from exc
 
     def _make_cdr(self) -> PoseTwistClockCdr | None:
         """The CDR serializer for pose, twist and /clock, or None (publish message objects) if it
@@ -90,17 +144,18 @@ class StatePublishers:
     def prepare(self, names: Iterable[str], publish_odometry: bool) -> PublisherChange:
         """Create what ``names`` need beyond what exists; touches nothing the ticks read."""
         bodies: dict[str, BodyPublishers] = {}
-        for name in names:
+        for name in names if self.per_body_topics else ():
             old = self.bodies.get(name)
             if old is None:
                 bodies[name] = BodyPublishers(
                     pose=self._node.create_publisher(PoseStamped, f"{name}/pose", self._qos),
-                    twist=self._node.create_publisher(Twist, f"{name}/twist", self._qos),
+                    twist=self._node.create_publisher(self._twist_type, f"{name}/twist", self._qos),
+                    twist_msg=self._twist_type(),
                     odom=self._odom_publisher(name) if publish_odometry else None)
             elif (old.odom is not None) == publish_odometry:
                 bodies[name] = old
             else:
-                bodies[name] = BodyPublishers(pose=old.pose, twist=old.twist,
+                bodies[name] = BodyPublishers(pose=old.pose, twist=old.twist, twist_msg=old.twist_msg,
                                               odom=self._odom_publisher(name) if publish_odometry else None)
         stale = []
         for name, old in self.bodies.items():
@@ -132,39 +187,104 @@ class StatePublishers:
     # ------------------------------------------------------------------ per tick
 
     def publish(self, sim: Simulator, publish_clock: bool) -> None:
-        """Publish every running body's pose and twist (and odometry), then /clock, at ``sim.time``.
+        """Publish ``poses`` and ``velocities``, then every running body's pose and twist (and
+        odometry) if ``per_body_topics``, then /clock, at ``sim.time``. Hold the node's lock.
 
-        Bodies stopped for blow-up, or with a non-finite state, are skipped. Hold the node's lock.
+        Bodies stopped for blow-up, or with a non-finite state, stay in the batches with the
+        last finite state published for them and ``stopped`` = 1; the per-body topics skip them.
         """
         stamp = time_msg_from_seconds(sim.time)
         sec, nanosec = stamp.sec, stamp.nanosec
-        stopped = set(sim.stopped_bodies)
+        names = sim.body_names
+        n = len(names)
+        positions, orientations = sim.positions_world(), sim.orientations_xyzw()
+        velocities, rates_world = sim.linear_velocities_world(), sim.angular_velocities_world()
+        finite = sim.state.finite_bodies()
+        stopped_names = sim.stopped_bodies
+        stopped = ~finite
+        if stopped_names:
+            if len(self._index) != n or any(self._index.get(b) is None for b in stopped_names):
+                self._index = {b: k for k, b in enumerate(names)}
+            stopped = stopped.copy()
+            stopped[[self._index[b] for b in stopped_names]] = True
+        rows, points = batch_rows(positions, orientations, velocities, rates_world, stopped)
+        last = self._last
+        if not finite.all():
+            if last is not None and last[0] is sim and last[1] == n:
+                rows[~finite] = last[2][~finite]
+                points[~finite, :48] = last[3][~finite, :48]
+            else:  # never published finite (cannot happen: a scene starts finite); publish zeros, flagged
+                rows[~finite] = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)
+                points[~finite, :48] = 0
+        self._last = (sim, n, rows, points)
+        self._publish_batches(sec, nanosec, stamp, rows, points)
+        if self.bodies:
+            self._publish_per_body(sim, stamp, stopped)
+        if publish_clock:
+            if self._cdr is not None:
+                self._clock_pub.publish(self._cdr.clock(sec, nanosec))
+            else:
+                self._clock_msg.clock = stamp
+                self._clock_pub.publish(self._clock_msg)
+
+    def _publish_batches(self, sec: int, nanosec: int, stamp: Any, rows: np.ndarray, points: np.ndarray) -> None:
+        n = len(rows)
+        batch = self._batch
+        if not self._batch_failed and (batch is None or batch.n != n):
+            try:
+                batch = BatchCdr(n, self._world_frame)
+                reason = batch.check()
+            except ValueError as exc:
+                reason = str(exc)
+            if reason is not None:
+                self._node.get_logger().warning(
+                    f"publishing batch message objects (slower): direct CDR does not match the middleware: {reason}")
+                self._batch_failed, batch = True, None
+            self._batch = batch
+        if batch is not None:
+            self._poses_pub.publish(batch.poses(sec, nanosec, rows))
+            self._velocities_pub.publish(batch.velocities(sec, nanosec, points))
+            return
+        poses = pose_array(n)
+        poses.header.stamp, poses.header.frame_id = stamp, self._world_frame
+        for pose, row in zip(poses.poses, rows.tolist()):
+            pose.position.x, pose.position.y, pose.position.z = row[:3]
+            pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w = row[3:]
+        cloud = velocity_cloud(n)
+        cloud.header.stamp, cloud.header.frame_id = stamp, self._world_frame
+        cloud.data = points.tobytes()
+        self._poses_pub.publish(poses)
+        self._velocities_pub.publish(cloud)
+
+    def _publish_per_body(self, sim: Simulator, stamp: Any, stopped: np.ndarray) -> None:
+        sec, nanosec = stamp.sec, stamp.nanosec
         # One conversion per array and tick: rows of plain Python floats, no numpy scalars per field.
         positions = sim.positions_world().tolist()
         orientations = sim.orientations_xyzw().tolist()
         velocities = sim.linear_velocities_world().tolist()
         rates_world = sim.angular_velocities_world().tolist()
-        finite = sim.state.finite_bodies().tolist()
+        skip = stopped.tolist()
         cdr = self._cdr
         world = self._world_frame
+        stamped = self._twist_type is TwistStamped
         for index, body in enumerate(sim.body_names):
-            if not finite[index] or body in stopped:
+            if skip[index]:
                 continue
             pubs = self.bodies[body]
             if cdr is not None:
                 pubs.pose.publish(cdr.pose_stamped(sec, nanosec, positions[index], orientations[index]))
-                pubs.twist.publish(cdr.twist(velocities[index], rates_world[index]))
+                pubs.twist.publish(cdr.twist_stamped(sec, nanosec, velocities[index], rates_world[index]) if stamped
+                                   else cdr.twist(velocities[index], rates_world[index]))
             else:
                 pubs.pose.publish(fill_pose_stamped(pubs.pose_msg, stamp, world, positions[index], orientations[index]))
-                pubs.twist.publish(fill_twist(pubs.twist_msg, velocities[index], rates_world[index]))
+                if stamped:
+                    pubs.twist_msg.header.stamp, pubs.twist_msg.header.frame_id = stamp, world
+                    fill_twist(pubs.twist_msg.twist, velocities[index], rates_world[index])
+                    pubs.twist.publish(pubs.twist_msg)
+                else:
+                    pubs.twist.publish(fill_twist(pubs.twist_msg, velocities[index], rates_world[index]))
             if pubs.odom is not None:
                 state = sim.body_state(body)
                 pubs.odom.publish(fill_odometry(pubs.odom_msg, stamp, world, body, state.position_world,
                                                 state.orientation_xyzw, state.linear_velocity_body,
                                                 state.angular_velocity_body))
-        if publish_clock:
-            if cdr is not None:
-                self._clock_pub.publish(cdr.clock(sec, nanosec))
-            else:
-                self._clock_msg.clock = stamp
-                self._clock_pub.publish(self._clock_msg)

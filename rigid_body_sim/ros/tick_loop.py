@@ -7,8 +7,10 @@ than one period) skips the periods it missed, which are counted, as an rcl timer
 
 Why a thread and not an rclpy timer: rclpy's SingleThreadedExecutor rebuilds its wait set over
 every entity each time it wakes (milliseconds with hundreds of per-body subscriptions), which a
-timer in that executor would pay on every tick. The executor keeps the subscriptions, services,
-parameters and /diagnostics; the node's lock guards what both threads touch.
+timer in that executor would pay on every tick (``rigid_body_sim_node`` now spins the
+EventsExecutor, which does not, but the launch-free harness may spin either; a thread also keeps
+the deadline schedule independent of the executor's callbacks). The executor keeps the
+subscriptions, services, parameters and /diagnostics; the node's lock guards what both threads touch.
 
 This is the only tick path: ``rigid_body_sim_node`` and the launch-free harness
 (:mod:`rigid_body_sim.testing`) both tick through it.

@@ -1,0 +1,297 @@
+"""Batched state over ROS (issue 15): ``poses`` and ``velocities`` against the simulator, the
+``body_names`` parameter, ``per_body_topics``, TwistStamped, QoS overrides and late joiners.
+
+The node runs as a separate process (its console script) on this session's private
+ROS_DOMAIN_ID; this process is an ordinary rclpy peer over Fast DDS. The node is paused, so
+the state it publishes is the scene's initial state (the core's own read-outs give the
+expected values: same arrays, bitwise) or the state after ~/step ticks, replayed by the core
+with the same steps (same arithmetic, bitwise).
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import rclpy
+import yaml
+from geometry_msgs.msg import PoseArray, PoseStamped, Twist, TwistStamped
+from rcl_interfaces.srv import GetParameters, SetParameters
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.parameter import Parameter, parameter_value_to_python
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import PointCloud2
+from std_srvs.srv import Trigger
+
+from rigid_body_sim.core import Simulator, load_scene
+from rigid_body_sim.ros.batch import VELOCITY_FIELDS, VELOCITY_POINT_STEP
+from rigid_body_sim.testing import start_process, stop_process
+
+pytestmark = pytest.mark.ros
+
+N_BODIES = 7
+
+
+def free_bodies_scene(n: int, seed: int = 0) -> dict:
+    """``n`` free asymmetric bodies at distinct poses, spinning and moving, no gravity."""
+    rng = np.random.default_rng(seed)
+    bodies = {}
+    for k in range(n):
+        q = rng.normal(size=4)
+        q /= np.linalg.norm(q)
+        bodies[f"b{k}"] = {"mass": float(1.0 + rng.random()),
+                           "inertia": {"box": [float(0.5 + rng.random()), float(0.3 + rng.random()), float(0.2 + rng.random())]},
+                           "pose": {"position": rng.normal(size=3).tolist(), "orientation": q.tolist()},
+                           "twist": {"linear": rng.normal(size=3).tolist(), "angular": (3 * rng.normal(size=3)).tolist()}}
+    return {"bodies": bodies}
+
+
+def cloud_points(msg: PointCloud2) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(v (N,3), w (N,3), stopped (N,) bool) from ``velocities``, reading the fields by name."""
+    offsets = {f.name: (f.offset, f.datatype) for f in msg.fields}
+    raw = np.frombuffer(bytes(msg.data), dtype=np.uint8).reshape(msg.width, msg.point_step)
+
+    def column(name: str) -> np.ndarray:
+        offset, datatype = offsets[name]
+        if datatype == 8:
+            return raw[:, offset:offset + 8].copy().view("<f8")[:, 0]
+        return raw[:, offset]
+
+    v = np.stack([column(c) for c in ("vx", "vy", "vz")], axis=1)
+    w = np.stack([column(c) for c in ("wx", "wy", "wz")], axis=1)
+    return v, w, column("stopped").astype(bool)
+
+
+def pose_rows(msg: PoseArray) -> np.ndarray:
+    return np.array([[p.position.x, p.position.y, p.position.z, p.orientation.x, p.orientation.y,
+                      p.orientation.z, p.orientation.w] for p in msg.poses])
+
+
+def stamp_ns(header) -> int:
+    return header.stamp.sec * 1_000_000_000 + header.stamp.nanosec
+
+
+class Peer:
+    """An rclpy participant in this process: subscriptions, service and parameter clients."""
+
+    def __init__(self, name: str = "batch_peer"):
+        self.context = Context()
+        rclpy.init(context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.node = Node(name, context=self.context)
+        self.executor.add_node(self.node)
+
+    def spin_until(self, condition, what: str, timeout: float = 20.0) -> None:
+        deadline = time.monotonic() + timeout
+        while not condition():
+            if time.monotonic() > deadline:
+                raise AssertionError(f"timed out waiting for {what}")
+            self.executor.spin_once(timeout_sec=0.05)
+
+    def call(self, srv_type, name: str, request, timeout: float = 20.0):
+        client = self.node.create_client(srv_type, name)
+        self.spin_until(client.service_is_ready, f"service {name}", timeout)
+        future = client.call_async(request)
+        self.spin_until(future.done, f"response of {name}", timeout)
+        return future.result()
+
+    def get_parameter(self, name: str):
+        response = self.call(GetParameters, "/rigid_body_sim/get_parameters", GetParameters.Request(names=[name]))
+        return parameter_value_to_python(response.values[0])
+
+    def close(self) -> None:
+        self.executor.shutdown()
+        self.node.destroy_node()
+        self.context.try_shutdown()
+
+
+@pytest.fixture
+def scene_file(tmp_path) -> Path:
+    path = tmp_path / "free.yaml"
+    path.write_text(yaml.safe_dump(free_bodies_scene(N_BODIES)))
+    return path
+
+
+def run_node(tmp_path: Path, scene: Path, *extra: str):
+    return start_process(["-p", f"scene:={scene}", "-p", "paused:=true", "-p", "status_period:=0.0", *extra],
+                         tmp_path / "node.log")
+
+
+def test_batches_match_simulator_and_body_names(tmp_path, scene_file):
+    """Paused: the late-joining subscribers get the initial state (transient local); after 3 ~/step
+    ticks, poses and velocities equal the core's replay of the same steps bitwise, with equal stamps."""
+    process = run_node(tmp_path, scene_file, "-p", "per_body_topics:=true", "-p", "twist_stamped:=true")
+    peer = Peer()
+    try:
+        sim = Simulator(load_scene(scene_file), integrator="rk4", dt=0.01)
+        poses: list[PoseArray] = []
+        clouds: list[PointCloud2] = []
+        twists: list[TwistStamped] = []
+        pose_b3: list[PoseStamped] = []
+        latched = QoSProfile(depth=10, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        peer.node.create_subscription(PoseArray, "/poses", poses.append, latched)
+        peer.node.create_subscription(PointCloud2, "/velocities", clouds.append, latched)
+        peer.node.create_subscription(TwistStamped, "/b3/twist", twists.append, latched)
+        peer.node.create_subscription(PoseStamped, "/b3/pose", pose_b3.append, latched)
+        peer.spin_until(lambda: poses and clouds and twists and pose_b3, "the latched initial state")
+        names = peer.get_parameter("body_names")
+        assert names == list(sim.body_names) == [f"b{k}" for k in range(N_BODIES)]
+
+        for step in range(3):
+            result = peer.call(Trigger, "/rigid_body_sim/step", Trigger.Request())
+            assert result.success, result.message
+            sim.step(1)
+        want_ns = round(sim.time * 1e9)
+        peer.spin_until(lambda: stamp_ns(poses[-1].header) == want_ns and stamp_ns(clouds[-1].header) == want_ns
+                        and twists and stamp_ns(twists[-1].header) == want_ns, "the state after 3 steps")
+        msg, cloud = poses[-1], clouds[-1]
+        assert msg.header.frame_id == "world" and cloud.header.frame_id == "world"
+        expected = np.hstack([sim.positions_world(), sim.orientations_xyzw()])
+        np.testing.assert_array_equal(pose_rows(msg), expected)
+        assert (cloud.height, cloud.width, cloud.point_step, cloud.row_step, cloud.is_bigendian, cloud.is_dense) == (
+            1, N_BODIES, VELOCITY_POINT_STEP, VELOCITY_POINT_STEP * N_BODIES, False, True)
+        assert [(f.name, f.offset, f.datatype, f.count) for f in cloud.fields] == [
+            (name, offset, datatype, 1) for name, offset, datatype in VELOCITY_FIELDS]
+        v, w, stopped = cloud_points(cloud)
+        np.testing.assert_array_equal(v, sim.linear_velocities_world())
+        np.testing.assert_array_equal(w, sim.angular_velocities_world())
+        assert not stopped.any()
+        # B/twist as TwistStamped: the stamp and frame of B/pose at the same tick.
+        same_tick = [p for p in pose_b3 if stamp_ns(p.header) == want_ns]
+        assert same_tick and twists[-1].header == same_tick[-1].header
+        assert twists[-1].twist.angular.x == sim.angular_velocities_world()[3, 0]
+
+        # A late joiner while paused (no tick since): it gets the current state and time at once.
+        from rosgraph_msgs.msg import Clock
+        late_poses: list[PoseArray] = []
+        late_clock: list[Clock] = []
+        late = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        peer.node.create_subscription(PoseArray, "/poses", late_poses.append, late)
+        peer.node.create_subscription(Clock, "/clock", late_clock.append, late)
+        peer.spin_until(lambda: late_poses and late_clock, "the latched state for a late joiner")
+        assert stamp_ns(late_poses[-1].header) == want_ns
+        assert late_clock[-1].clock.sec * 1_000_000_000 + late_clock[-1].clock.nanosec == want_ns
+        np.testing.assert_array_equal(pose_rows(late_poses[-1]), expected)
+
+        # body_names is the node's: a client's change is refused and changes nothing.
+        request = SetParameters.Request(parameters=[Parameter("body_names", Parameter.Type.STRING_ARRAY, ["x"]).to_parameter_msg()])
+        result = peer.call(SetParameters, "/rigid_body_sim/set_parameters", request).results[0]
+        assert not result.successful and "read-only" in result.reason
+        assert peer.get_parameter("body_names") == names
+    finally:
+        peer.close()
+        assert stop_process(process) == 0
+
+
+def test_per_body_topics_false_has_only_batches(tmp_path, scene_file):
+    """per_body_topics:=false: no B/pose, B/twist publishers exist (graph query), inputs stay."""
+    process = run_node(tmp_path, scene_file, "-p", "per_body_topics:=false")
+    peer = Peer()
+    try:
+        poses: list[PoseArray] = []
+        peer.node.create_subscription(PoseArray, "/poses", poses.append,
+                                      QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+        peer.spin_until(lambda: poses, "poses")
+        assert len(poses[-1].poses) == N_BODIES
+        peer.spin_until(lambda: peer.node.count_subscribers("/b0/wrench") == 1, "the wrench subscription of b0")
+        topics = {name for name, _types in peer.node.get_topic_names_and_types()}
+        publishers = {t: peer.node.count_publishers(t) for t in topics}
+        per_body = [t for t, count in publishers.items() if count and t.rsplit("/", 1)[-1] in ("pose", "twist", "odom")]
+        assert per_body == []
+        assert publishers["/poses"] == 1 and publishers["/velocities"] == 1
+    finally:
+        peer.close()
+        assert stop_process(process) == 0
+
+
+def test_qos_overrides_take_effect(tmp_path, scene_file):
+    """qos_overrides./poses.publisher.* change the endpoint the graph reports; a volatile best-effort
+    publisher no longer latches, a bad value is refused at start-up with exit 2."""
+    process = run_node(tmp_path, scene_file, "-p", "qos_overrides./poses.publisher.reliability:=best_effort",
+                       "-p", "qos_overrides./poses.publisher.durability:=volatile",
+                       "-p", "qos_overrides./poses.publisher.depth:=5")
+    peer = Peer()
+    try:
+        peer.spin_until(lambda: peer.node.get_publishers_info_by_topic("/poses")
+                        and peer.node.get_publishers_info_by_topic("/velocities"), "the batch publishers")
+        poses_qos = peer.node.get_publishers_info_by_topic("/poses")[0].qos_profile
+        velocities_qos = peer.node.get_publishers_info_by_topic("/velocities")[0].qos_profile
+        assert poses_qos.reliability == ReliabilityPolicy.BEST_EFFORT
+        assert poses_qos.durability == DurabilityPolicy.VOLATILE
+        assert velocities_qos.reliability == ReliabilityPolicy.RELIABLE
+        assert velocities_qos.durability == DurabilityPolicy.TRANSIENT_LOCAL
+        assert peer.get_parameter("qos_overrides./poses.publisher.depth") == 5
+    finally:
+        peer.close()
+        assert stop_process(process) == 0
+    bad = start_process(["-p", f"scene:={scene_file}", "-p", "qos_overrides./velocities.publisher.reliability:=sometimes"],
+                        tmp_path / "bad.log")
+    assert bad.wait(timeout=60) == 2
+    log = (tmp_path / "bad.log").read_text()
+    assert "qos_overrides for 'velocities' rejected" in log and "Traceback" not in log
+
+
+def test_body_names_follow_a_scene_change(tmp_path):
+    """A ``scene`` change sets body_names to the new scene's order (and poses has its size)."""
+    from rigid_body_sim.testing import SimHarness
+
+    first, second = tmp_path / "first.yaml", tmp_path / "second.yaml"
+    first.write_text(yaml.safe_dump(free_bodies_scene(3)))
+    scene = free_bodies_scene(2, seed=1)
+    scene["bodies"] = {f"other{k}": body for k, body in enumerate(scene["bodies"].values())}
+    second.write_text(yaml.safe_dump(scene))
+    with SimHarness(scene=first) as harness:
+        assert harness.get_parameter("body_names") == ["b0", "b1", "b2"]
+        (result,) = harness.set_parameters(scene=str(second))
+        assert result.successful, result.reason
+        assert harness.get_parameter("body_names") == ["other0", "other1"]
+        with harness.node.locked_simulator() as sim:
+            assert list(sim.body_names) == ["other0", "other1"]
+
+
+def test_a_stopped_body_stays_in_the_batches_flagged_with_its_last_state(tmp_path):
+    """A body driven to an infinite velocity is stopped: it stays in poses and velocities with the
+    last state published for it before it was stopped and stopped = 1; nothing non-finite is
+    published, and the other body runs on (stopped = 0)."""
+    from rigid_body_sim.testing import SimHarness
+
+    scene = {"bodies": {"feather": {"mass": 1e-300, "inertia": {"sphere": 1.0}},
+                        "box": {"mass": 2.0, "inertia": {"box": [1.0, 0.6, 0.4]}}}}
+    path = tmp_path / "two.yaml"
+    path.write_text(yaml.safe_dump(scene))
+    with SimHarness(path, parameters={"integrator": "euler", "wrench_timeout": 0.0}) as harness:
+        poses: list[PoseArray] = []
+        clouds: list[PointCloud2] = []
+        latched = QoSProfile(depth=100, durability=DurabilityPolicy.TRANSIENT_LOCAL)  # also the t = 0 state
+        harness.client.create_subscription(PoseArray, "poses", poses.append, latched)
+        harness.client.create_subscription(PointCloud2, "velocities", clouds.append, latched)
+        harness.spin_until(lambda: harness.client.count_publishers("poses") and harness.node.count_subscribers("poses")
+                           and harness.node.count_subscribers("velocities"), "the batch subscriptions")
+        harness.publish_wrench("feather", force=(1e12, 0.0, 0.0), frame_id="world")
+        harness.publish_wrench("box", force=(2.0, 0.0, 0.0), frame_id="world")
+        harness.spin_until(lambda: poses and clouds, "the t = 0 batches")
+        harness.step(4)
+        want_ns = round(4 * 0.01 * 1e9)
+        harness.spin_until(lambda: poses and clouds and stamp_ns(poses[-1].header) == want_ns
+                           and stamp_ns(clouds[-1].header) == want_ns, "the batches after 4 ticks")
+        assert harness.node.simulator.stopped_bodies == ("feather",)
+        names = harness.get_parameter("body_names")
+        f, b = names.index("feather"), names.index("box")
+        by_stamp = {stamp_ns(c.header): cloud_points(c) for c in clouds}
+        pose_by_stamp = {stamp_ns(p.header): pose_rows(p) for p in poses}
+        flagged = sorted(t for t, (_v, _w, stopped) in by_stamp.items() if stopped[f])
+        assert flagged and flagged[-1] == want_ns
+        before = max(t for t in by_stamp if t < flagged[0])
+        for t in flagged:
+            v, w, stopped = by_stamp[t]
+            assert stopped[f] and not stopped[b]
+            np.testing.assert_array_equal(pose_by_stamp[t][f], pose_by_stamp[before][f])
+            np.testing.assert_array_equal(v[f], by_stamp[before][0][f])
+        for rows in pose_by_stamp.values():
+            assert np.all(np.isfinite(rows))
+        for v, w, _stopped in by_stamp.values():
+            assert np.all(np.isfinite(v)) and np.all(np.isfinite(w))
