@@ -62,16 +62,10 @@ def column_names(bodies: tuple[str, ...] | list[str]) -> list[str]:
     return ["t"] + [f"{body}.{column}" for body in bodies for column in COLUMNS]
 
 
-class CsvWriter:
-    """Writes the samples of a simulation to a CSV file (see the module docstring for the columns).
-
-    Parameters
-    ----------
-    path : str or Path
-    bodies : sequence of str
-        The bodies to write, in column order.
-    meta : mapping of str to str, optional
-        Written as ``# key: value`` lines above the header (newlines in them become spaces).
+class CommentedCsvFile:
+    """A CSV file that starts with ``# title`` and ``# key: value`` lines (``status`` first
+    ``incomplete``) and ends with ``# status: <how the run ended>``: what CsvWriter and
+    imu_csv.ImuCsvWriter share. Subclasses write their header row and rows through ``self._csv``.
 
     Raises
     ------
@@ -80,32 +74,14 @@ class CsvWriter:
         FIFO, device or directory (never blocking, nothing written to it).
     """
 
-    def __init__(self, path: str | os.PathLike[str], bodies: tuple[str, ...] | list[str],
-                 meta: Mapping[str, str] | None = None):
+    def __init__(self, path: str | os.PathLike[str], title: str, meta: Mapping[str, str] | None = None):
         self.path = Path(path)
-        self.bodies = tuple(bodies)
         self._file: IO[str] | None = text_writer(open_for_writing(self.path, expected="a CSV file"))
-        self._file.write("# rigid_body_sim run: one row per sample, SI units\n")
+        self._file.write(f"# {title}\n")
         for key, value in {**(meta or {}), "status": STATUS_INCOMPLETE}.items():
             self._file.write(f"# {_one_line(key)}: {_one_line(value)}\n")
-        self._file.write(f"# columns: {_COLUMN_TEXT}\n")
         self._csv = csv.writer(self._file)
-        self._csv.writerow(column_names(self.bodies))
         self.rows = 0
-
-    def write(self, sim: Simulator) -> None:
-        """Append one row: ``sim``'s state at ``sim.time``."""
-        if self._file is None:
-            raise ValueError(f"CSV file {self.path} is closed")
-        index = [sim.body_names.index(b) for b in self.bodies]
-        columns = np.concatenate([
-            sim.positions_world()[index], sim.orientations_xyzw()[index], sim.linear_velocities_world()[index],
-            sim.angular_velocities_world()[index], sim.angular_velocities_body()[index],
-            (sim.kinetic_energy() + sim.potential_energy())[index, None],
-            np.linalg.norm(sim.angular_momentum(), axis=1)[index, None],
-        ], axis=1)
-        self._csv.writerow([repr(float(sim.time))] + [repr(float(x)) for x in columns.ravel()])
-        self.rows += 1
 
     def fileno(self) -> int:
         """The open file's descriptor (e.g. to compare two outputs with ``os.path.sameopenfile``)."""
@@ -134,12 +110,51 @@ class CsvWriter:
             except OSError:  # the write above already failed: report that one
                 pass
 
-    def __enter__(self) -> "CsvWriter":
+    def __enter__(self):
         return self
 
     def __exit__(self, *exc: Any) -> None:
         self.close()
 
+
+class CsvWriter(CommentedCsvFile):
+    """Writes the samples of a simulation to a CSV file (see the module docstring for the columns).
+
+    Parameters
+    ----------
+    path : str or Path
+    bodies : sequence of str
+        The bodies to write, in column order.
+    meta : mapping of str to str, optional
+        Written as ``# key: value`` lines above the header (newlines in them become spaces).
+
+    Raises
+    ------
+    OSError
+        If the file cannot be created; :class:`rigid_body_sim.paths.NotRegularFileError` for a
+        FIFO, device or directory (never blocking, nothing written to it).
+    """
+
+    def __init__(self, path: str | os.PathLike[str], bodies: tuple[str, ...] | list[str],
+                 meta: Mapping[str, str] | None = None):
+        super().__init__(path, "rigid_body_sim run: one row per sample, SI units", meta)
+        self.bodies = tuple(bodies)
+        self._file.write(f"# columns: {_COLUMN_TEXT}\n")
+        self._csv.writerow(column_names(self.bodies))
+
+    def write(self, sim: Simulator) -> None:
+        """Append one row: ``sim``'s state at ``sim.time``."""
+        if self._file is None:
+            raise ValueError(f"CSV file {self.path} is closed")
+        index = [sim.body_names.index(b) for b in self.bodies]
+        columns = np.concatenate([
+            sim.positions_world()[index], sim.orientations_xyzw()[index], sim.linear_velocities_world()[index],
+            sim.angular_velocities_world()[index], sim.angular_velocities_body()[index],
+            (sim.kinetic_energy() + sim.potential_energy())[index, None],
+            np.linalg.norm(sim.angular_momentum(), axis=1)[index, None],
+        ], axis=1)
+        self._csv.writerow([repr(float(sim.time))] + [repr(float(x)) for x in columns.ravel()])
+        self.rows += 1
 
 def _one_line(value: Any) -> str:
     return " ".join(str(value).split())
