@@ -26,7 +26,7 @@ import numpy as np
 from . import layout as L
 from . import reduction, sensors, stepping
 from .dynamics import angular_momentum_W, impulse_response, kinetic_energy, linear_momentum_W, potential_energy
-from .forces import FrameRef, add_wrench, new_wrench_rows, parse_frame, project_twist
+from .forces import add_wrench, new_wrench_rows, parse_frame, project_twist
 from .integrators import INTEGRATORS, Method, get_integrator, step_exact_rotor_splitting, step_reference
 from .model import State
 from .quaternion import (
@@ -223,7 +223,6 @@ class Simulator:
         self._wrenches = new_wrench_rows(n)
         self._members = np.zeros(0, dtype=np.int64)  # the moving bodies, grouped by model (_replan)
         self._inputs[L.LIMIT] = float(limit)
-        self._frame_refs: dict[tuple[str, str], FrameRef] = {}
         self._pending_heads: dict[tuple[str, str], tuple[float, ...]] = {}
         # An applied wrench waits in _inputs[PENDING...] (the one-call fast path); any other goes
         # into _wrenches at once. True while one waits.
@@ -420,16 +419,10 @@ class Simulator:
     def _pending_head(self, body: str, frame: str) -> tuple[float, ...]:
         """(1, body index, frame kind, arm_P) of a wrench in ``frame`` on ``body``: the first six
         numbers of the pending row, remembered per valid (body, frame)."""
-        ref = self._frame_ref(body, frame)  # raises, listing the valid choices
+        ref = parse_frame(self.scene, body, frame)  # raises, listing the valid choices
         head = (1.0, float(ref.body_index), float(ref.kind), *map(float, ref.arm_P))
         self._pending_heads[body, frame] = head
         return head
-
-    def _frame_ref(self, body: str, frame: str) -> FrameRef:
-        """parse_frame, remembered per (body, frame) (only valid pairs are remembered)."""
-        ref = parse_frame(self.scene, body, frame)  # raises, listing the valid choices
-        self._frame_refs[body, frame] = ref
-        return ref
 
     def _flush_pending(self) -> None:
         """Move the pending wrench into the wrench rows (dropping the last step's spent ones first)."""
@@ -445,7 +438,7 @@ class Simulator:
         onto the body's motion (a planar body takes only the spin about its plane normal, with
         the moment of inertia about that normal).
         """
-        ref = self._frame_ref(body, frame)
+        ref = parse_frame(self.scene, body, frame)
         jx, jy, jz = _floats3(linear, "linear impulse")
         hx, hy, hz = _floats3(angular, "angular impulse")
         b = ref.body_index
