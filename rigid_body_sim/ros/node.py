@@ -152,11 +152,6 @@ class RigidBodySimNode(Node):
         self._markers = MarkerPublisher(self, qos, self._world_frame)
         self._recording = NodeRecording(self.get_logger(), self._world_frame, self.get_namespace(),
                                         self.get_fully_qualified_name())
-        if settings["record_path"]:
-            try:
-                self._recording.replace(self._recording.open(settings["record_path"], self._sim))
-            except OSError as exc:
-                raise ValueError(f"record_path rejected: cannot record to {settings['record_path']!r} ({exc})") from exc
         self._service_handles = create_services(self) + create_robot_services(self)
         self.add_pre_set_parameters_callback(self._coerce_parameters)
         self.add_on_set_parameters_callback(self._prepare_change)
@@ -169,6 +164,11 @@ class RigidBodySimNode(Node):
         self._set_diagnostics_period(settings["diagnostics_period"])
         self._status_log = StatusLog()
         self._log_start_up()
+        if settings["record_path"]:  # opened last, right before the state it starts with is written:
+            try:                     # a stop during start-up leaves no recording, or one with a sample
+                self._recording.replace(self._recording.open(settings["record_path"], self._sim))
+            except OSError as exc:
+                raise ValueError(f"record_path rejected: cannot record to {settings['record_path']!r} ({exc})") from exc
         self.publish_state()
         self._tick_loop = TickLoop(f"{self.get_name()} ticks", lambda: round(1e9 / self._settings["rate_hz"]),
                                    self._tick, self._lock, self._on_tick_failure)
