@@ -10,7 +10,10 @@ Signals are the node's own business here, not rclpy's: ``rclpy.init`` is told to
 handler (its handlers shut the context down underneath a spinning executor, which then fails
 in the middle of building a wait set or taking a message). Until the node is built and
 spinning, SIGINT and SIGTERM raise :class:`KeyboardInterrupt`, so start-up stops at once, and
-whatever was built is torn down quietly. Once spinning, a signal only sets a flag; the spin
+whatever was built is torn down quietly (the node hands itself over as soon as it exists, so
+an interrupted construction is stopped too; with thousands of endpoints, without destroying
+them one by one). The recording is opened and the ticks started only once a signal just sets
+the flag, so a stop never leaves a recording half-opened. Once spinning, a signal only sets a flag; the spin
 loop (``spin_once`` with a timeout) sees it within :data:`SPIN_TIMEOUT_S` and stops the tick
 thread, finishes the recording, destroys the node and shuts the context down, in that order.
 
@@ -123,6 +126,7 @@ def main(args: list[str] | None = None) -> int:
     """Run the node until SIGINT or SIGTERM; return the exit status (see the module docstring)."""
     signals = _Signals()
     context = node = executor = watchdog = None
+    built: list[Any] = []  # the node as soon as it exists, also if a signal interrupts its construction
     try:
         import rclpy
         from rclpy.exceptions import ParameterException
@@ -137,7 +141,7 @@ def main(args: list[str] | None = None) -> int:
         rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
         context = rclpy.get_default_context()
         try:
-            node = RigidBodySimNode(start_ticking=False)
+            node = RigidBodySimNode(start_ticking=False, on_created=built.append)
         except (SceneError, ValueError, ParameterException) as exc:
             _say(str(exc))
             return 2
@@ -149,7 +153,11 @@ def main(args: list[str] | None = None) -> int:
         signals.raising = False
         if signals.requested is not None:
             return 0
-        node.start_ticking()
+        try:
+            node.start_ticking()
+        except ValueError as exc:  # record_path cannot be written
+            _say(str(exc))
+            return 2
         try:
             while signals.requested is None and context.ok():
                 executor.spin_once(timeout_sec=SPIN_TIMEOUT_S)
@@ -165,6 +173,8 @@ def main(args: list[str] | None = None) -> int:
         return 0
     finally:
         signals.ignore()
+        if node is None and built:
+            node = built[0]  # construction was interrupted: stop what was built
         if watchdog is not None:
             watchdog.start()
         if signals.requested is not None and node is not None and _endpoints(node) > FAST_EXIT_ENDPOINTS:
@@ -183,10 +193,8 @@ def _compile_if_cold() -> None:
     core), say so at once and compile them here, in the main thread, during start-up: a signal
     then stops the process at once (exit 0), where a compile inside the first tick would hold
     the tick thread, and the stop, for a minute. ``make venv`` compiles them at install time."""
-    from ..core.jit import CACHE_DIR
-
-    if not os.access(CACHE_DIR, os.W_OK) or any(CACHE_DIR.glob("*.nbi")):
-        return  # warm (or a read-only install whose cache numba keeps elsewhere)
+    if _kernels_cached():
+        return
     low, high = COLD_COMPILE_S
     _say(f"first start: numba's cache is empty, compiling the simulator kernels now (about {low}-{high} s, "
          "once; later starts take about 2 s)")
@@ -197,6 +205,22 @@ def _compile_if_cold() -> None:
     start = time.monotonic()
     compile_kernels()
     _say(f"kernels compiled in {time.monotonic() - start:.0f} s")
+
+
+def _kernels_cached() -> bool:
+    """True if numba's cache holds compiled core kernels, or if where it keeps them is unknown.
+
+    numba caches next to the sources (``core/__pycache__``) unless ``NUMBA_CACHE_DIR`` is set
+    (numba's documented variable: anything compiled under it counts, its layout is numba's) or
+    the sources are read-only (a per-user directory this does not guess: reported as cached)."""
+    from pathlib import Path
+
+    from ..core.jit import CACHE_DIR
+
+    user_dir = os.environ.get("NUMBA_CACHE_DIR")
+    if user_dir:
+        return any(Path(user_dir).rglob("*.nbi"))
+    return not os.access(CACHE_DIR, os.W_OK) or any(CACHE_DIR.glob("*.nbi"))
 
 
 #: Above this many publishers and subscriptions, a stop by signal ends the process once the

@@ -27,7 +27,7 @@ import contextlib
 import threading
 import traceback
 from dataclasses import dataclass
-from typing import Any, Iterator
+from typing import Any, Callable, Iterator
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
@@ -116,8 +116,14 @@ class RigidBodySimNode(Node):
     node_name : str
         Name of the node.
     start_ticking : bool
-        Start the tick thread at the end of the constructor (default). ``rigid_body_sim_node``
-        passes False and calls :meth:`start_ticking` once its signal handling is in place.
+        Call :meth:`start_ticking` at the end of the constructor (default): open the recording,
+        publish the initial state, start the tick thread. ``rigid_body_sim_node`` passes False
+        and calls it once a signal can no longer interrupt it half-way.
+    on_created : callable, optional
+        Called with the node as soon as it exists, before its scene and endpoints are built, so
+        that a caller whose construction is interrupted (a signal during the tens of seconds
+        10,000 bodies' endpoints take) can still stop what was built: ``rigid_body_sim_node``
+        then exits without destroying thousands of endpoints one by one.
 
     Raises
     ------
@@ -127,13 +133,17 @@ class RigidBodySimNode(Node):
         If start-up parameters are invalid (the message says which and what was expected).
     """
 
-    def __init__(self, node_name: str = "rigid_body_sim", *, start_ticking: bool = True, **kwargs: Any):
+    def __init__(self, node_name: str = "rigid_body_sim", *, start_ticking: bool = True,
+                 on_created: Callable[["RigidBodySimNode"], None] | None = None, **kwargs: Any):
         super().__init__(node_name, **kwargs)
         self._lock = threading.RLock()
         self._pending = threading.local()  # the prepared change of the request being set, per thread
         self._change_lock = threading.Lock()  # one parameter change at a time, from on-set to post-set
         self._tick_loop: TickLoop | None = None
+        self._recording: NodeRecording | None = None
         self._fault: str | None = None  # why the simulation cannot go on (ERROR on /diagnostics)
+        if on_created is not None:
+            on_created(self)
         self._settings: dict[str, Any] = declare_parameters(self)
         settings = self._settings
         self._world_frame: str = settings["world_frame"]
@@ -164,12 +174,6 @@ class RigidBodySimNode(Node):
         self._set_diagnostics_period(settings["diagnostics_period"])
         self._status_log = StatusLog()
         self._log_start_up()
-        if settings["record_path"]:  # opened last, right before the state it starts with is written:
-            try:                     # a stop during start-up leaves no recording, or one with a sample
-                self._recording.replace(self._recording.open(settings["record_path"], self._sim))
-            except OSError as exc:
-                raise ValueError(f"record_path rejected: cannot record to {settings['record_path']!r} ({exc})") from exc
-        self.publish_state()
         self._tick_loop = TickLoop(f"{self.get_name()} ticks", lambda: round(1e9 / self._settings["rate_hz"]),
                                    self._tick, self._lock, self._on_tick_failure)
         if start_ticking:
@@ -360,9 +364,30 @@ class RigidBodySimNode(Node):
     # ------------------------------------------------------------------ ticks
 
     def start_ticking(self) -> None:
-        """Start the tick thread (once; the constructor does it unless ``start_ticking=False``)."""
-        if self._tick_loop is not None and not self._tick_loop.alive and self._tick_loop.failure is None:
-            self._tick_loop.start()
+        """Start: open the recording (``record_path``), publish the initial state, start the tick
+        thread. Once; the constructor calls it unless ``start_ticking=False``.
+
+        The recording is opened here, right before the state it starts with is written, so a
+        stop during start-up leaves no recording, or one that holds the initial state.
+
+        Raises
+        ------
+        ValueError
+            If ``record_path`` cannot be written (the node then publishes and records nothing).
+        """
+        loop = self._tick_loop
+        if loop is None or loop.started:
+            return
+        path = self._settings["record_path"]
+        if path and self._recording.recorder is None:
+            try:
+                recorder = self._recording.open(path, self._sim)
+            except OSError as exc:
+                raise ValueError(f"record_path rejected: cannot record to {path!r} ({exc})") from exc
+            with self._lock:
+                self._recording.replace(recorder)
+        self.publish_state()
+        loop.start()
 
     def _tick(self, due_ns: int, period_ns: int, missed: int) -> None:
         """One tick of the tick thread (the lock is held): advance unless paused, then log status."""
@@ -617,7 +642,7 @@ class RigidBodySimNode(Node):
         """Stop the tick thread (a tick under way ends first) and finish the recording. Safe to call twice."""
         if self._tick_loop is not None:
             self._tick_loop.stop()
-        recording = getattr(self, "_recording", None)  # None if the constructor failed before it
+        recording = self._recording  # None if construction stopped before it
         if recording is not None:
             with self._lock:
                 recorder = recording.replace(None)
@@ -627,7 +652,7 @@ class RigidBodySimNode(Node):
     def finish_recording_now(self) -> None:
         """Finish the recording without waiting for the lock: for an exit that cannot wait for a
         tick stuck in a step (which writes nothing while it steps)."""
-        recording = getattr(self, "_recording", None)
+        recording = self._recording
         recorder = recording.replace(None) if recording is not None else None
         if recorder is not None:
             recording.finish(recorder)

@@ -68,6 +68,11 @@ class TickLoop:
         self._thread.start()
 
     @property
+    def started(self) -> bool:
+        """True once :meth:`start` was called (a thread starts once)."""
+        return self._thread.ident is not None
+
+    @property
     def alive(self) -> bool:
         """True while the thread runs."""
         return self._thread.is_alive()
