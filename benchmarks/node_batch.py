@@ -16,6 +16,9 @@ node starts. Measured:
 * ``rss_mb``: the node's resident memory at the end of the window;
 * ``stop_s`` and ``exit``: SIGINT to exit, and the exit status.
 
+With "recording" the node also records to an MCAP file (``record_path``; with
+``per_body_topics:=false`` it records the two batches a tick as published).
+
 Each figure is the median over the repeats, with the min-max beside it. The subscriber shares
 the 2 cores with the node (and with whatever else runs): a lost message may be the
 subscriber's. Run: ``python -m benchmarks.node_batch [--quick] [--out benchmarks/results]``
@@ -43,8 +46,9 @@ REPO = Path(__file__).resolve().parent.parent
 NODE = REPO / ".venv" / "bin" / "rigid_body_sim_node"
 DOMAIN_ID = 78
 SETTLE_S = 2.0
-#: (bodies, rate_hz): the issue's points.
-CASES = ((1, 100.0), (100, 100.0), (1000, 100.0), (10_000, 100.0), (100, 1000.0))
+#: (bodies, rate_hz, recording): the issue's points, and 1000 bodies recording (``record_path``).
+CASES = ((1, 100.0, False), (100, 100.0, False), (1000, 100.0, False), (1000, 100.0, True), (10_000, 100.0, False),
+         (100, 1000.0, False))
 
 
 def write_scene(directory: Path, n: int, seed: int = 0) -> Path:
@@ -73,8 +77,8 @@ def _rss_mb(pid: int) -> float:
     return float("nan")
 
 
-def measure(scene: Path, n: int, rate_hz: float, seconds: float) -> dict:
-    """One run of the node on ``scene``: the figures of the module docstring."""
+def measure(scene: Path, n: int, rate_hz: float, seconds: float, record: Path | None = None) -> dict:
+    """One run of the node on ``scene`` (recording to ``record`` if given): the figures of the module docstring."""
     import rclpy
     from geometry_msgs.msg import PoseArray
     from rclpy.context import Context
@@ -105,8 +109,9 @@ def measure(scene: Path, n: int, rate_hz: float, seconds: float) -> dict:
     start = time.monotonic()
     process = subprocess.Popen([str(NODE), "--ros-args", "-p", f"scene:={scene}", "-p", f"rate_hz:={rate_hz}",
                                 "-p", "per_body_topics:=false", "-p", "status_period:=0.0", "-p", "integrator:=rk4",
-                                "-p", "substeps:=1"], stdout=log, stderr=subprocess.STDOUT, env=env)
-    row: dict = {"bodies": n, "rate_hz": rate_hz}
+                                "-p", "substeps:=1", *(["-p", f"record_path:={record}"] if record else [])],
+                               stdout=log, stderr=subprocess.STDOUT, env=env)
+    row: dict = {"bodies": n, "rate_hz": rate_hz, "recording": record is not None}
     try:
         deadline = start + 120.0
         while not arrivals and time.monotonic() < deadline and process.poll() is None:
@@ -145,7 +150,8 @@ def measure(scene: Path, n: int, rate_hz: float, seconds: float) -> dict:
 
 
 def _median_row(rows: list[dict]) -> dict:
-    out = {"bodies": rows[0]["bodies"], "rate_hz": rows[0]["rate_hz"], "repeats": len(rows)}
+    out = {"bodies": rows[0]["bodies"], "rate_hz": rows[0]["rate_hz"], "recording": rows[0]["recording"],
+           "repeats": len(rows)}
     for key in ("first_poses_s", "sim_over_wall", "achieved_hz", "delivered", "cpu_ms_per_tick", "cpu_share",
                 "rss_mb", "stop_s"):
         values = np.array([r[key] for r in rows])
@@ -156,13 +162,13 @@ def _median_row(rows: list[dict]) -> dict:
 
 def markdown(rows: list[dict]) -> str:
     """The README table."""
-    lines = ["| bodies | rate (Hz) | sim/wall | ticks delivered to a `poses` subscriber | CPU per tick (ms) | CPU share (cores) "
+    lines = ["| bodies | rate (Hz) | recording | sim/wall | ticks delivered to a `poses` subscriber | CPU per tick (ms) | CPU share (cores) "
              "| RSS (MB) | start to first `poses` (s) | SIGINT to exit (s), exit status |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         def f(key, fmt):
             return f"{r[key]:{fmt}} ({r[key + '_min']:{fmt}}–{r[key + '_max']:{fmt}})"
-        lines.append(f"| {r['bodies']} | {r['rate_hz']:g} | {f('sim_over_wall', '.3f')} | {f('delivered', '.1%')} "
+        lines.append(f"| {r['bodies']} | {r['rate_hz']:g} | {'yes' if r['recording'] else 'no'} | {f('sim_over_wall', '.3f')} | {f('delivered', '.1%')} "
                      f"| {f('cpu_ms_per_tick', '.3f')} | {f('cpu_share', '.2f')} | {f('rss_mb', '.0f')} "
                      f"| {f('first_poses_s', '.2f')} | {f('stop_s', '.2f')}, {r['exits']} |")
     return "\n".join(lines) + "\n"
@@ -182,9 +188,10 @@ def main(argv: list[str] | None = None) -> int:
     rows = []
     load_before = os.getloadavg()
     with tempfile.TemporaryDirectory() as directory:
-        for n, rate in cases:
+        for n, rate, recording in cases:
             scene = write_scene(Path(directory), n)
-            runs = [measure(scene, n, rate, seconds) for _ in range(repeats)]
+            runs = [measure(scene, n, rate, seconds, Path(directory) / f"run{k}.mcap" if recording else None)
+                    for k in range(repeats)]
             rows.append(_median_row(runs))
             print(markdown(rows[-1:]).splitlines()[-1], flush=True)
     text = (f"# Node with batched output ({repeats} repeats, {seconds:g} s windows; medians, min–max)\n\n"

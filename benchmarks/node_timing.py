@@ -40,7 +40,6 @@ account.
 from __future__ import annotations
 
 import os
-import signal
 import statistics
 import struct
 import subprocess

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
-from typing import Any, Callable, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 import rclpy
 from geometry_msgs.msg import PoseStamped, Twist, WrenchStamped
@@ -40,6 +40,9 @@ from rclpy.qos import QoSProfile
 from std_srvs.srv import SetBool, Trigger
 
 from .ros.node import RigidBodySimNode
+
+if TYPE_CHECKING:
+    import subprocess
 
 __all__ = ["SimHarness", "HarnessTimeout", "stop_process"]
 

@@ -10,6 +10,8 @@ with the same steps (same arithmetic, bitwise).
 
 from __future__ import annotations
 
+import json
+
 import time
 from pathlib import Path
 
@@ -17,7 +19,7 @@ import numpy as np
 import pytest
 import rclpy
 import yaml
-from geometry_msgs.msg import PoseArray, PoseStamped, Twist, TwistStamped
+from geometry_msgs.msg import PoseArray, PoseStamped, TwistStamped
 from rcl_interfaces.srv import GetParameters, SetParameters
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
@@ -251,6 +253,56 @@ def test_body_names_follow_a_scene_change(tmp_path):
         assert harness.get_parameter("body_names") == ["other0", "other1"]
         with harness.node.locked_simulator() as sim:
             assert list(sim.body_names) == ["other0", "other1"]
+
+
+def test_recording_with_per_body_topics_false_holds_the_published_batches(tmp_path, scene_file):
+    """per_body_topics:=false with record_path: the recording holds poses, velocities and /clock only,
+    two batch messages a tick with the scene order in their channel metadata, and read_recording
+    gives back exactly what a subscriber received at every stamp (t = 0 and 3 ~/step ticks)."""
+    from mcap.reader import make_reader
+
+    from rigid_body_sim.offline.recording import BODY_NAMES_KEY, read_recording
+
+    record = tmp_path / "batches.mcap"
+    process = run_node(tmp_path, scene_file, "-p", "per_body_topics:=false", "-p", f"record_path:={record}")
+    peer = Peer()
+    try:
+        poses: list[PoseArray] = []
+        clouds: list[PointCloud2] = []
+        latched = QoSProfile(depth=100, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        peer.node.create_subscription(PoseArray, "/poses", poses.append, latched)
+        peer.node.create_subscription(PointCloud2, "/velocities", clouds.append, latched)
+        peer.spin_until(lambda: poses and clouds, "the latched initial state")
+        names = peer.get_parameter("body_names")
+        for _ in range(3):
+            assert peer.call(Trigger, "/rigid_body_sim/step", Trigger.Request()).success
+        want_ns = round(3 * 0.01 * 1e9)
+        peer.spin_until(lambda: stamp_ns(poses[-1].header) == want_ns and stamp_ns(clouds[-1].header) == want_ns,
+                        "the state after 3 steps")
+    finally:
+        peer.close()
+        assert stop_process(process) == 0
+    with open(record, "rb") as f:
+        reader = make_reader(f)
+        channels = reader.get_summary().channels.values()
+        counts = reader.get_summary().statistics.channel_message_counts
+    by_topic = {c.topic: c for c in channels}
+    assert set(by_topic) == {"/poses", "/velocities", "/clock"}
+    assert json.loads(by_topic["/poses"].metadata[BODY_NAMES_KEY]) == names
+    assert json.loads(by_topic["/velocities"].metadata[BODY_NAMES_KEY]) == names
+    assert counts[by_topic["/poses"].id] == counts[by_topic["/velocities"].id] == 4
+    data, _scene = read_recording(record)
+    assert data.meta["status"].startswith("complete")
+    received = {stamp_ns(p.header): pose_rows(p) for p in poses}
+    received_v = {stamp_ns(c.header): cloud_points(c) for c in clouds}
+    assert [round(t * 1e9) for t in data.time] == sorted(received) == [0, 10_000_000, 20_000_000, 30_000_000]
+    for k, body in enumerate(names):
+        track = data.bodies[body]
+        rows = np.array([received[t][k] for t in sorted(received)])
+        np.testing.assert_array_equal(track.position_world, rows[:, :3])
+        np.testing.assert_array_equal(track.orientation_xyzw, rows[:, 3:])
+        np.testing.assert_array_equal(track.linear_velocity_world, [received_v[t][0][k] for t in sorted(received)])
+        np.testing.assert_array_equal(track.angular_velocity_world, [received_v[t][1][k] for t in sorted(received)])
 
 
 def test_a_stopped_body_stays_in_the_batches_flagged_with_its_last_state(tmp_path):

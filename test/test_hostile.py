@@ -295,9 +295,9 @@ TINY = scene_module.MIN_POSITIVE
 
 
 @pytest.mark.parametrize(("text", "key", "expected"), [
-    (f"bodies: {{b: {{mass: 5e-324, inertia: {{principal: [1, 1, 1]}}}}}}", "bodies.b.mass",
+    ("bodies: {b: {mass: 5e-324, inertia: {principal: [1, 1, 1]}}}", "bodies.b.mass",
      r"a number ≥ 2.225e-308 \(kg\), a normal float64"),
-    (f"bodies: {{b: {{mass: 1, inertia: {{principal: [1, 1, 5e-324]}}}}}}", "bodies.b.inertia.principal",
+    ("bodies: {b: {mass: 1, inertia: {principal: [1, 1, 5e-324]}}}", "bodies.b.inertia.principal",
      r"3 numbers ≥ 2.225e-308 .*normal float64s"),
     ("bodies: {b: {mass: 1e-200, inertia: {sphere: 1e-60}}}", "bodies.b.inertia.sphere",
      r"a mass and shape whose principal moments are finite and ≥ 2.225e-308"),

@@ -33,6 +33,14 @@ MSG_TEXT: dict[str, tuple[str, tuple[str, ...]]] = {
     "geometry_msgs/msg/WrenchStamped": ("std_msgs/Header header\nWrench wrench\n",
                                         ("std_msgs/msg/Header", "geometry_msgs/msg/Wrench")),
     "rosgraph_msgs/msg/Clock": ("builtin_interfaces/Time clock\n", ("builtin_interfaces/msg/Time",)),
+    "geometry_msgs/msg/PoseArray": ("std_msgs/Header header\nPose[] poses\n",
+                                    ("std_msgs/msg/Header", "geometry_msgs/msg/Pose")),
+    "sensor_msgs/msg/PointField": ("uint8 INT8 = 1\nuint8 UINT8 = 2\nuint8 INT16 = 3\nuint8 UINT16 = 4\n"
+                                   "uint8 INT32 = 5\nuint8 UINT32 = 6\nuint8 FLOAT32 = 7\nuint8 FLOAT64 = 8\n"
+                                   "string name\nuint32 offset\nuint8 datatype\nuint32 count\n", ()),
+    "sensor_msgs/msg/PointCloud2": ("std_msgs/Header header\nuint32 height\nuint32 width\nPointField[] fields\n"
+                                    "bool is_bigendian\nuint32 point_step\nuint32 row_step\nuint8[] data\n"
+                                    "bool is_dense\n", ("std_msgs/msg/Header", "sensor_msgs/msg/PointField")),
     "sensor_msgs/msg/Imu": ("std_msgs/Header header\ngeometry_msgs/Quaternion orientation\n"
                             "float64[9] orientation_covariance\ngeometry_msgs/Vector3 angular_velocity\n"
                             "float64[9] angular_velocity_covariance\ngeometry_msgs/Vector3 linear_acceleration\n"

@@ -16,6 +16,19 @@ topic              type                          content
 ``/clock``         rosgraph_msgs/Clock           sim time
 =================  ============================  =============================================
 
+or, instead of ``/B/pose`` and ``/B/twist`` (the node with ``per_body_topics`` false: one
+message per tick for all bodies, as it publishes them; ros/batch.py has the layout):
+
+=================  ============================  =============================================
+``/poses``         geometry_msgs/PoseArray       every body's pose in scene order, stamp = sim
+                                                 time, frame ``world_frame``
+``/velocities``    sensor_msgs/PointCloud2       per body: vx vy vz wx wy wz (float64, world
+                                                 axes) and ``stopped`` (uint8: 1 once it blew up)
+=================  ============================  =============================================
+
+The scene order of the batches is in their channel's metadata, key ``body_names`` (a JSON list
+of names); a new pair of channels starts wherever the order changes.
+
 Every message's log and publish time is its sim time in nanoseconds (as rosbag2 records a
 ``use_sim_time`` system), so a player's timeline is sim time from t = 0. The file is written
 with ``mcap`` and ``mcap-ros2-support`` (profile ``ros2``, schemas in the ``ros2msg``
@@ -37,6 +50,7 @@ and refusing anything but a regular file (the node's ``record_path`` gets the sa
 
 from __future__ import annotations
 
+import json
 import os
 from pathlib import Path
 from typing import IO, Any, Iterable, Mapping
@@ -49,9 +63,12 @@ from ..paths import check_writable_path, open_for_reading, open_for_writing
 from .msgdefs import complete_definition
 from .rundata import MAX_RUN_FILE_BYTES, BodyTrack, RunData, angular_velocity_body
 
-__all__ = ["McapRecorder", "read_recording", "stamp_ns", "check_record_path", "METADATA_NAME", "SCENE_ATTACHMENT",
+__all__ = ["McapRecorder", "read_recording", "stamp_ns", "check_record_path", "BODY_NAMES_KEY", "METADATA_NAME",
+           "SCENE_ATTACHMENT",
            "STATUS_METADATA_NAME", "STATUS_INCOMPLETE"]
 
+#: Key, in the metadata of a ``poses``/``velocities`` channel, of its body order (a JSON list).
+BODY_NAMES_KEY = "body_names"
 #: Name of the MCAP metadata record that holds the run's settings.
 METADATA_NAME = "rigid_body_sim"
 #: Name of the metadata records that say how the recording ended (key ``status``; the last counts).
@@ -253,12 +270,35 @@ class McapRecorder:
         self.close()
 
 
+def _cloud_columns(cloud: Any, fields: tuple[str, ...], n: int) -> np.ndarray | None:
+    """(n, len(fields)) float64 of a decoded PointCloud2's named FLOAT64 or UINT8 fields (little
+    or big endian), or None if it has not ``n`` points or lacks one of the fields."""
+    offsets = {f.name: (f.offset, f.datatype) for f in cloud.fields}
+    step = cloud.point_step
+    if cloud.width * cloud.height != n or any(name not in offsets for name in fields) or len(cloud.data) < n * step:
+        return None
+    raw = np.frombuffer(bytes(cloud.data), dtype=np.uint8)[: n * step].reshape(n, step)
+    out = np.empty((n, len(fields)))
+    for column, name in enumerate(fields):
+        offset, datatype = offsets[name]
+        if offset < 0 or offset + (8 if datatype == 8 else 1) > step:
+            return None
+        if datatype == 8:  # FLOAT64
+            out[:, column] = raw[:, offset:offset + 8].copy().view(">f8" if cloud.is_bigendian else "<f8")[:, 0]
+        elif datatype == 2:  # UINT8
+            out[:, column] = raw[:, offset]
+        else:
+            return None
+    return out
+
+
 def read_recording(path: str | os.PathLike[str]) -> tuple[RunData, str | None]:
     """Read the poses and twists of a recording back into a :class:`RunData`, with the scene text.
 
     Uses mcap's reader and mcap-ros2-support's decoder (built from the schemas in the file),
     so any MCAP file with ``<ns>/B/pose`` (PoseStamped) and ``<ns>/B/twist`` (Twist) topics
-    works. Samples are the log times at which a body has both; at a time written twice (a
+    works, and the node's batches (``poses`` and ``velocities`` channels with ``body_names`` in
+    their metadata; a stopped body has no sample from where it is flagged). Samples are the log times at which a body has both; at a time written twice (a
     republish) the last message counts. Energy and |L| are left unknown
     (:func:`~rigid_body_sim.offline.rundata.with_derived_quantities` fills them in).
 
@@ -294,6 +334,10 @@ def read_recording(path: str | os.PathLike[str]) -> tuple[RunData, str | None]:
 
     def take(schema: Any, channel: Any, message: Any, decoded: Any) -> None:
         topic = channel.topic
+        names = channel.metadata.get(BODY_NAMES_KEY)
+        if names is not None:
+            take_batch(schema.name, topic, json.loads(names), message.log_time, decoded)
+            return
         body = topic.rstrip("/").split("/")[-2] if topic.count("/") >= 2 else ""
         if not body:
             return
@@ -303,6 +347,21 @@ def read_recording(path: str | os.PathLike[str]) -> tuple[RunData, str | None]:
         elif topic.endswith("/twist") and schema.name.endswith("/Twist"):
             v, w = decoded.linear, decoded.angular
             twists.setdefault(body, {})[message.log_time] = ([v.x, v.y, v.z], [w.x, w.y, w.z])
+
+    def take_batch(schema_name: str, topic: str, names: list[str], t_ns: int, decoded: Any) -> None:
+        """A ``poses`` or ``velocities`` batch: one sample per body, none for a stopped body."""
+        if topic.endswith("/poses") and schema_name.endswith("/PoseArray") and len(decoded.poses) == len(names):
+            for body, pose in zip(names, decoded.poses):
+                p, q = pose.position, pose.orientation
+                poses.setdefault(body, {})[t_ns] = ([p.x, p.y, p.z], [q.x, q.y, q.z, q.w])
+        elif topic.endswith("/velocities") and schema_name.endswith("/PointCloud2"):
+            columns = _cloud_columns(decoded, ("vx", "vy", "vz", "wx", "wy", "wz", "stopped"), len(names))
+            if columns is None:
+                return
+            v, w, stopped = columns[:, :3].tolist(), columns[:, 3:6].tolist(), columns[:, 6].tolist()
+            for k, body in enumerate(names):
+                if not stopped[k]:  # no sample once stopped, as a per-body recording has none
+                    twists.setdefault(body, {})[t_ns] = (v[k], w[k])
 
     def read_metadata(reader: Any) -> None:
         for record in reader.iter_metadata():
@@ -347,7 +406,9 @@ def read_recording(path: str | os.PathLike[str]) -> tuple[RunData, str | None]:
     if not bodies and found["cut"] is not None:
         raise ValueError(f"{path}: cannot read it as an MCAP recording ({found['cut'][:200]})")
     if not bodies:
-        raise ValueError(f"{path}: expected <body>/pose (PoseStamped) and <body>/twist (Twist) topics, found none")
+        raise ValueError(f"{path}: expected <body>/pose (PoseStamped) and <body>/twist (Twist) topics, or poses "
+                         f"(PoseArray) and velocities (PointCloud2) with {BODY_NAMES_KEY} in their channel metadata; "
+                         "found none")
     times = sorted(set.intersection(*(set(poses[b]) & set(twists[b]) for b in bodies)))
     if not times:
         raise ValueError(f"{path}: no time at which every body {bodies} has both a pose and a twist")

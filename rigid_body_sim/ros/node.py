@@ -45,7 +45,7 @@ from .imu import ImuPublishers
 from .inputs import WrenchInputs
 from .markers import MarkerPublisher
 from .node_log import StatusLog, log_models, log_scene
-from .node_recording import NodeRecording
+from .node_recording import FlushingRecorder, NodeRecording
 from .parameters import BY_NAME, coerce, declare_parameters, problems
 from .publishers import StatePublishers
 from .robot_services import create_robot_services
@@ -335,7 +335,8 @@ class RigidBodySimNode(Node):
             if "record_path" in changed:
                 old_recorder = self._recording.replace(change.recorder)
                 change.recorder = None
-                self._recording.write(lambda recorder: recorder.write_simulator(sim))
+                if change.simulator is None:  # else the new scene's first state is written below
+                    self._record_state_locked()
             if change.simulator is not None or "rate_hz" in changed:
                 self._open_diagnostics_window()
             if "rate_hz" in changed and self._tick_loop is not None:
@@ -567,9 +568,21 @@ class RigidBodySimNode(Node):
         self._markers.publish(sim, settings["marker_rate_hz"], lambda: self._inputs.snapshot()[0],
                               settings["marker_force_scale"] if settings["marker_wrenches"] else None)
         if self._recording.recorder is not None:
-            finite = sim.state.finite_bodies().tolist()
-            skip = [body for index, body in enumerate(sim.body_names) if not finite[index]]
-            self._recording.write(lambda recorder: recorder.write_simulator(sim, skip=skip))
+            self._record_state_locked()
+
+    def _record_state_locked(self) -> None:
+        """Write the state just published, then /clock: with ``per_body_topics`` false the two
+        batches as published (two messages a tick for all bodies), else each running body's
+        pose and twist."""
+        sim = self._sim
+        batches = self._outputs.last_batches
+        if (not self._settings["per_body_topics"] and batches is not None and batches[0] is sim.body_names
+                and isinstance(self._recording.recorder, FlushingRecorder)):
+            self._recording.write(lambda recorder: (recorder.write_batches(*batches), recorder.write_clock(sim.time)))
+            return
+        finite = sim.state.finite_bodies().tolist()
+        skip = [body for index, body in enumerate(sim.body_names) if not finite[index]]
+        self._recording.write(lambda recorder: recorder.write_simulator(sim, skip=skip))
 
     def _set_diagnostics_period(self, period: float) -> None:
         """(Re)start the /diagnostics timer at ``period`` wall seconds; 0 stops it."""

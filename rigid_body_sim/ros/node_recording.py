@@ -18,6 +18,7 @@ tick before the kill, and is read as ``cut short`` (no summary). A clean stop fi
 from __future__ import annotations
 
 import importlib
+import json
 import os
 import time
 from pathlib import Path
@@ -30,8 +31,8 @@ from rclpy.serialization import serialize_message
 
 from ..core import Simulator
 from ..offline.msgdefs import complete_definition
-from ..offline.recording import (CHUNK_SIZE, METADATA_NAME, SCENE_ATTACHMENT, STATUS_INCOMPLETE, STATUS_METADATA_NAME,
-                                 McapRecorder, stamp_ns)
+from ..offline.recording import (BODY_NAMES_KEY, CHUNK_SIZE, METADATA_NAME, SCENE_ATTACHMENT, STATUS_INCOMPLETE,
+                                 STATUS_METADATA_NAME, McapRecorder, stamp_ns)
 from ..paths import open_for_writing
 from .cdr import PoseTwistClockCdr
 
@@ -80,6 +81,9 @@ class FlushingRecorder(McapRecorder):
         self._schema_ids: dict[str, tuple[int, Any]] = {}  # name -> (schema id, message class)
         self._channel_ids: dict[str, int] = {}
         self._wrench_keys: list[tuple[str, str]] = []
+        self._batch_channels: dict[tuple[str, ...], tuple[int, int]] = {}  # body order -> (poses, velocities)
+        self._batch_names: tuple[str, ...] | None = None  # the order last written (compared by identity first)
+        self._batch_ids: tuple[int, int] = (0, 0)
         self.message_count = 0
         self._unflushed_since: float | None = None
 
@@ -96,6 +100,27 @@ class FlushingRecorder(McapRecorder):
             self._write_bytes(f"{self._prefix}{body}/pose", "geometry_msgs/msg/PoseStamped",
                               cdr.pose_stamped(sec, nanosec, p[i], q[i]), ns)
             self._write_bytes(f"{self._prefix}{body}/twist", "geometry_msgs/msg/Twist", cdr.twist(v[i], w[i]), ns)
+
+    def write_batches(self, body_names: tuple[str, ...], sec: int, nanosec: int, poses_cdr: bytes,
+                      velocities_cdr: bytes) -> None:
+        """Write ``<ns>/poses`` (geometry_msgs/PoseArray) and ``<ns>/velocities``
+        (sensor_msgs/PointCloud2), the CDR bytes the node published at sim time ``sec.nanosec``
+        (layout: ros/batch.py). Their channels carry the scene order in their metadata
+        (:data:`~rigid_body_sim.offline.recording.BODY_NAMES_KEY`, a JSON list); a new pair of
+        channels is registered whenever the order changes (a scene change, a spawn)."""
+        if body_names is not self._batch_names:
+            key = tuple(body_names)
+            channels = self._batch_channels.get(key)
+            if channels is None:
+                metadata = {BODY_NAMES_KEY: json.dumps(list(key))}
+                channels = self._batch_channels[key] = tuple(
+                    self._writer.register_channel(f"{self._prefix}{topic}", "cdr", self._schema(schema)[0], metadata)
+                    for topic, schema in (("poses", "geometry_msgs/msg/PoseArray"),
+                                          ("velocities", "sensor_msgs/msg/PointCloud2")))
+            self._batch_names, self._batch_ids = body_names, channels
+        ns = sec * 1_000_000_000 + nanosec
+        self._add(self._batch_ids[0], poses_cdr, ns)
+        self._add(self._batch_ids[1], velocities_cdr, ns)
 
     def write_clock(self, time: float) -> None:
         """As :meth:`McapRecorder.write_clock`."""
@@ -116,11 +141,16 @@ class FlushingRecorder(McapRecorder):
         return known
 
     def _write_bytes(self, topic: str, schema: str, data: bytes, ns: int) -> None:
-        if self._file is None:
-            raise ValueError(f"recording {self.path} is closed")
         channel = self._channel_ids.get(topic)
         if channel is None:
+            if self._file is None:
+                raise ValueError(f"recording {self.path} is closed")
             channel = self._channel_ids[topic] = self._writer.register_channel(topic, "cdr", self._schema(schema)[0])
+        self._add(channel, data, ns)
+
+    def _add(self, channel: int, data: bytes, ns: int) -> None:
+        if self._file is None:
+            raise ValueError(f"recording {self.path} is closed")
         self._writer.add_message(channel, log_time=ns, data=data, publish_time=ns, sequence=self.message_count)
         self.message_count += 1
         if self._unflushed_since is None:

@@ -225,8 +225,9 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
                   "Wall seconds between DiagnosticArray messages on /diagnostics; 0 = none.",
                   range=(0.0, 1e6), takes_effect="at once"),
     ParameterSpec("record_path", _T.STRING, "",
-                  "MCAP file to record to (B/pose, B/twist, B/wrench, /clock as ROS 2 messages, stamps = sim "
-                  "time); '' = no recording. A change finishes the current file and starts the new one.",
+                  "MCAP file to record to (B/pose and B/twist, or with per_body_topics false the poses and "
+                  "velocities batches; B/wrench, /clock; ROS 2 messages, stamps = sim time); '' = no recording. "
+                  "A change finishes the current file and starts the new one.",
                   constraints="'' or the path of a regular file (or a new one) in a writable directory",
                   check=_check_record_path, takes_effect="at once"),
     ParameterSpec("marker_rate_hz", _T.DOUBLE, 10.0,

@@ -33,6 +33,7 @@ from rcl_interfaces.msg import SetParametersResult
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.qos_overriding_options import InvalidQosOverridesError, QoSOverridingOptions, QoSPolicyKind
+from rclpy.serialization import serialize_message
 from rosgraph_msgs.msg import Clock as ClockMsg
 from sensor_msgs.msg import PointCloud2
 
@@ -106,6 +107,9 @@ class StatePublishers:
         self.per_body_topics = per_body_topics
         self._twist_type = TwistStamped if twist_stamped else Twist
         self.bodies: dict[str, BodyPublishers] = {}
+        #: (body names, sec, nanosec, poses CDR, velocities CDR) of the batches published last
+        #: (for the recording; the names are the simulator's ``body_names`` tuple itself).
+        self.last_batches: tuple[tuple[str, ...], int, int, bytes, bytes] | None = None
         self._clock_pub = self._overridable(ClockMsg, "/clock")
         self._poses_pub = self._overridable(PoseArray, "poses")
         self._velocities_pub = self._overridable(PointCloud2, "velocities")
@@ -217,7 +221,7 @@ class StatePublishers:
                 rows[~finite] = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)
                 points[~finite, :48] = 0
         self._last = (sim, n, rows, points)
-        self._publish_batches(sec, nanosec, stamp, rows, points)
+        self._publish_batches(names, sec, nanosec, stamp, rows, points)
         if self.bodies:
             self._publish_per_body(sim, stamp, stopped)
         if publish_clock:
@@ -227,7 +231,8 @@ class StatePublishers:
                 self._clock_msg.clock = stamp
                 self._clock_pub.publish(self._clock_msg)
 
-    def _publish_batches(self, sec: int, nanosec: int, stamp: Any, rows: np.ndarray, points: np.ndarray) -> None:
+    def _publish_batches(self, names: tuple[str, ...], sec: int, nanosec: int, stamp: Any, rows: np.ndarray,
+                         points: np.ndarray) -> None:
         n = len(rows)
         batch = self._batch
         if not self._batch_failed and (batch is None or batch.n != n):
@@ -242,8 +247,10 @@ class StatePublishers:
                 self._batch_failed, batch = True, None
             self._batch = batch
         if batch is not None:
-            self._poses_pub.publish(batch.poses(sec, nanosec, rows))
-            self._velocities_pub.publish(batch.velocities(sec, nanosec, points))
+            poses_cdr, velocities_cdr = batch.poses(sec, nanosec, rows), batch.velocities(sec, nanosec, points)
+            self._poses_pub.publish(poses_cdr)
+            self._velocities_pub.publish(velocities_cdr)
+            self.last_batches = (names, sec, nanosec, poses_cdr, velocities_cdr)
             return
         poses = pose_array(n)
         poses.header.stamp, poses.header.frame_id = stamp, self._world_frame
@@ -255,6 +262,7 @@ class StatePublishers:
         cloud.data = points.tobytes()
         self._poses_pub.publish(poses)
         self._velocities_pub.publish(cloud)
+        self.last_batches = (names, sec, nanosec, serialize_message(poses), serialize_message(cloud))
 
     def _publish_per_body(self, sim: Simulator, stamp: Any, stopped: np.ndarray) -> None:
         sec, nanosec = stamp.sec, stamp.nanosec
