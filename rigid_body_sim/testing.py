@@ -18,16 +18,20 @@ another process; ``close()`` (or leaving the ``with`` block, also on failure) de
 The node starts paused by default, so time advances only through :meth:`SimHarness.step`:
 runs are bitwise deterministic. The node ticks exactly as ``rigid_body_sim_node`` does, from
 its own tick thread (there is no other tick path); paused, that thread advances nothing.
+With ``parameters={"per_body_topics": False}`` the harness reads the ``poses`` and
+``velocities`` batches and answers :meth:`SimHarness.latest_pose` and
+:meth:`SimHarness.latest_twist` from them.
 """
 
 from __future__ import annotations
 
+import struct
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 import rclpy
-from geometry_msgs.msg import PoseStamped, Twist, WrenchStamped
+from geometry_msgs.msg import PoseArray, PoseStamped, Twist, WrenchStamped
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import SetParametersResult
 from rcl_interfaces.srv import SetParameters
@@ -37,6 +41,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter, parameter_value_to_python
 from rclpy.parameter_client import AsyncParameterClient
 from rclpy.qos import QoSProfile
+from sensor_msgs.msg import PointCloud2
 from std_srvs.srv import SetBool, Trigger
 
 from .ros.node import RigidBodySimNode
@@ -78,10 +83,9 @@ class SimHarness:
                  paused: bool = True, domain_id: int | None = None, node_name: str = "rigid_body_sim",
                  namespace: str | None = None, timeout: float = 10.0, executor: type | None = None):
         params = dict(parameters or {})
-        if params.get("per_body_topics", True) is False:
-            raise ValueError("per_body_topics: the harness reads each body's pose and twist topics, so it runs "
-                             "with per_body_topics true (the default); for a batch-only node, start it with "
-                             "testing.start_process and subscribe to 'poses' and 'velocities'")
+        #: True when the node publishes only the batches (``per_body_topics`` false): the harness
+        #: then reads ``poses`` and ``velocities`` and answers :meth:`latest_pose` from them.
+        self.batched = params.get("per_body_topics", True) is False
         if scene is not None:
             params["scene"] = str(scene)
         params.setdefault("paused", paused)
@@ -105,6 +109,11 @@ class SimHarness:
             self._twists: dict[str, Twist] = {}
             self._odoms: dict[str, Odometry] = {}
             self._publishers: dict[tuple[str, str], Any] = {}
+            self._batches: dict[str, Any] = {}  # "poses" -> latest PoseArray, "velocities" -> latest PointCloud2
+            if self.batched:
+                for topic, msg_type in (("poses", PoseArray), ("velocities", PointCloud2)):
+                    self.client.create_subscription(msg_type, topic, lambda m, t=topic: self._batches.__setitem__(t, m),
+                                                    QoSProfile(depth=10))
             for body in self.node.simulator.body_names:
                 self._create_body_endpoints(body)
             self._step = self.client.create_client(Trigger, f"{self._service_prefix}/step")
@@ -158,11 +167,13 @@ class SimHarness:
 
     def _create_body_endpoints(self, body: str) -> None:
         qos = QoSProfile(depth=100)
+        for topic in ("wrench", "impulse"):
+            self._publishers[(body, topic)] = self.client.create_publisher(WrenchStamped, f"{body}/{topic}", qos)
+        if self.batched:
+            return
         self.client.create_subscription(PoseStamped, f"{body}/pose", lambda m, b=body: self._poses.__setitem__(b, m), qos)
         self.client.create_subscription(Twist, f"{body}/twist", lambda m, b=body: self._twists.__setitem__(b, m), qos)
         self.client.create_subscription(Odometry, f"{body}/odom", lambda m, b=body: self._odoms.__setitem__(b, m), qos)
-        for topic in ("wrench", "impulse"):
-            self._publishers[(body, topic)] = self.client.create_publisher(WrenchStamped, f"{body}/{topic}", qos)
 
     def watch_body(self, body: str) -> None:
         """Subscribe to and publish for a body that appeared after start-up (a new ``scene``), and
@@ -172,8 +183,9 @@ class SimHarness:
         for topic in ("wrench", "impulse"):
             pub = self._publishers[(body, topic)]
             self.spin_until(lambda p=pub: p.get_subscription_count() > 0, f"the node's {body}/{topic} subscription")
-        self.spin_until(lambda: self.node.publisher_subscription_counts().get(body, 0) > 0,
-                        f"the node's {body}/pose and {body}/twist publishers to match the harness")
+        if not self.batched:
+            self.spin_until(lambda: self.node.publisher_subscription_counts().get(body, 0) > 0,
+                            f"the node's {body}/pose and {body}/twist publishers to match the harness")
         if self.get_parameter("paused"):  # running, the ticks publish it (and /clock never repeats a time)
             self.node.publish_state()
         self.wait_for_latest_state()
@@ -184,8 +196,12 @@ class SimHarness:
         for client in (self._step, self._reset, self._set_paused, *self._robot.values()):
             self.spin_until(client.service_is_ready, f"service {client.srv_name}")
         self.spin_until(self._parameters.services_are_ready, "the node's parameter services")
-        self.spin_until(lambda: min(self.node.publisher_subscription_counts().values()) > 0,
-                        "the node's pose and twist publishers to match the harness")
+        if self.batched:
+            self.spin_until(lambda: self.node.batch_subscription_count() > 0,
+                            "the node's poses and velocities publishers to match the harness")
+        else:
+            self.spin_until(lambda: min(self.node.publisher_subscription_counts().values()) > 0,
+                            "the node's pose and twist publishers to match the harness")
         self.node.publish_state()
         self.wait_for_latest_state()
 
@@ -293,7 +309,19 @@ class SimHarness:
         with self.node.locked_simulator() as sim:
             time_s = sim.time
             running = [body for body in sim.body_names if body not in sim.stopped_bodies]
+            self._names = sim.body_names
         target = int(round(time_s * 1e9))
+        if self.batched:
+            seen_batches = dict(self._batches)
+
+            def batch_arrived(topic: str) -> bool:
+                msg = self._batches.get(topic)
+                return msg is not None and (_stamp_ns(msg) == target or (msg is not seen_batches.get(topic)
+                                                                         and _stamp_ns(msg) >= target))
+
+            for topic in ("poses", "velocities"):
+                self.spin_until(lambda t=topic: batch_arrived(t), f"{topic} at t = {time_s:.9f} s")
+            return
         seen = {body: self._poses.get(body) for body in running}
 
         def arrived(body: str) -> bool:
@@ -306,19 +334,57 @@ class SimHarness:
             self.spin_until(lambda b=body: arrived(b), f"{body}/pose at t = {time_s:.9f} s")
 
     def latest_pose(self, body: str) -> PoseStamped:
-        """The last PoseStamped received on ``body/pose``."""
+        """The last PoseStamped received on ``body/pose``; batched, ``body``'s pose in the last
+        ``poses`` (with its header), the scene order being the node's at the last wait."""
+        if self.batched:
+            batch = self.latest_poses()
+            msg = PoseStamped()
+            msg.header = batch.header
+            msg.pose = batch.poses[self._index(body)]
+            return msg
         return self._poses[body]
 
     def latest_twist(self, body: str) -> Twist:
-        """The last Twist received on ``body/twist``."""
+        """The last Twist received on ``body/twist``; batched, ``body``'s point of the last
+        ``velocities`` (world axes, as ``B/twist``)."""
+        if self.batched:
+            cloud = self.latest_velocities()
+            step, k = cloud.point_step, self._index(body)
+            values = struct.unpack_from("<6d", bytes(cloud.data[k * step: k * step + 48]))
+            msg = Twist()
+            (msg.linear.x, msg.linear.y, msg.linear.z, msg.angular.x, msg.angular.y, msg.angular.z) = values
+            return msg
         return self._twists[body]
 
+    def latest_poses(self) -> PoseArray:
+        """The last ``poses`` batch (batched harness only)."""
+        return self._batch("poses")
+
+    def latest_velocities(self) -> PointCloud2:
+        """The last ``velocities`` batch (batched harness only; layout in ros/batch.py)."""
+        return self._batch("velocities")
+
     def latest_odometry(self, body: str) -> Odometry:
-        """The last Odometry received on ``body/odom`` (needs ``publish_odometry``)."""
+        """The last Odometry received on ``body/odom`` (needs ``publish_odometry`` and per-body topics)."""
+        if self.batched:
+            raise ValueError("latest_odometry: the node publishes no B/odom with per_body_topics false; "
+                             "use latest_pose and latest_twist")
         return self._odoms[body]
 
+    def _batch(self, topic: str) -> Any:
+        if not self.batched:
+            raise ValueError(f"latest {topic}: this harness reads the per-body topics; pass "
+                             "parameters={'per_body_topics': False} to read the batches")
+        return self._batches[topic]
 
-def _stamp_ns(msg: PoseStamped) -> int:
+    def _index(self, body: str) -> int:
+        try:
+            return self._names.index(body)
+        except ValueError:
+            raise KeyError(f"{body!r} is not a body of the scene; bodies are {list(self._names)}") from None
+
+
+def _stamp_ns(msg: Any) -> int:
     return msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
 
 

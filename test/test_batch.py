@@ -305,6 +305,37 @@ def test_recording_with_per_body_topics_false_holds_the_published_batches(tmp_pa
         np.testing.assert_array_equal(track.angular_velocity_world, [received_v[t][1][k] for t in sorted(received)])
 
 
+def test_harness_with_per_body_topics_false_reads_the_batches(tmp_path):
+    """SimHarness with per_body_topics false answers latest_pose / latest_twist from the batches:
+    the same wrench and ticks give bitwise the same poses and twists as a per-body harness (the
+    same core computes both), with the same stamps; per-body-only reads say what to use instead."""
+    from rigid_body_sim.testing import SimHarness
+
+    path = tmp_path / "twelve.yaml"
+    path.write_text(yaml.safe_dump(free_bodies_scene(12)))
+    seen = {}
+    for batched in (False, True):
+        with SimHarness(path, parameters={"per_body_topics": not batched, "integrator": "rk4"}) as harness:
+            harness.publish_wrench("b7", force=(0.0, 3.0, 0.0), torque=(0.5, 0.0, 0.0), frame_id="b7")
+            harness.step(3)
+            seen[batched] = {b: (harness.latest_pose(b), harness.latest_twist(b)) for b in harness.node.simulator.body_names}
+            if batched:
+                assert len(harness.latest_poses().poses) == 12 and harness.latest_velocities().width == 12
+                with pytest.raises(ValueError, match="per_body_topics false"):
+                    harness.latest_odometry("b0")
+                with pytest.raises(KeyError, match="bodies are"):
+                    harness.latest_pose("nope")
+            else:
+                with pytest.raises(ValueError, match="per_body_topics"):
+                    harness.latest_poses()
+    assert set(seen[True]) == set(seen[False])
+    for body, (pose, twist) in seen[False].items():
+        batch_pose, batch_twist = seen[True][body]
+        assert batch_pose.header == pose.header and stamp_ns(pose.header) == 30_000_000
+        assert batch_pose.pose == pose.pose, body
+        assert batch_twist == twist, body
+
+
 def test_a_stopped_body_stays_in_the_batches_flagged_with_its_last_state(tmp_path):
     """A body driven to an infinite velocity is stopped: it stays in poses and velocities with the
     last state published for it before it was stopped and stopped = 1; nothing non-finite is

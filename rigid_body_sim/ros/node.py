@@ -693,6 +693,11 @@ class RigidBodySimNode(Node):
         with self._lock:
             return self._outputs.subscription_counts()
 
+    def batch_subscription_count(self) -> int:
+        """How many subscriptions the ``poses`` and ``velocities`` publishers have matched (the smaller)."""
+        with self._lock:
+            return self._outputs.batch_subscription_count()
+
     @property
     def rejected(self) -> dict[str, int]:
         """Dropped wrench, impulse and set_state messages by reason (see diagnostics.REJECTION_REASONS)."""

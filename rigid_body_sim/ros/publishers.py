@@ -188,6 +188,10 @@ class StatePublishers:
         return {b: min(p.pose.get_subscription_count(), p.twist.get_subscription_count())
                 for b, p in self.bodies.items()}
 
+    def batch_subscription_count(self) -> int:
+        """How many subscriptions the ``poses`` and ``velocities`` publishers have matched (the smaller)."""
+        return min(self._poses_pub.get_subscription_count(), self._velocities_pub.get_subscription_count())
+
     # ------------------------------------------------------------------ per tick
 
     def publish(self, sim: Simulator, publish_clock: bool) -> None:
