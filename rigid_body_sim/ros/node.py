@@ -45,7 +45,7 @@ from .imu import ImuPublishers
 from .inputs import WrenchInputs
 from .markers import MarkerPublisher
 from .node_log import StatusLog, log_models, log_scene
-from .node_recording import FlushingRecorder, NodeRecording
+from .node_recording import NodeRecording
 from .parameters import BY_NAME, coerce, declare_parameters, problems
 from .publishers import StatePublishers
 from .robot_services import create_robot_services
@@ -576,8 +576,7 @@ class RigidBodySimNode(Node):
         pose and twist."""
         sim = self._sim
         batches = self._outputs.last_batches
-        if (not self._settings["per_body_topics"] and batches is not None and batches[0] is sim.body_names
-                and isinstance(self._recording.recorder, FlushingRecorder)):
+        if not self._settings["per_body_topics"] and batches is not None and batches[0] is sim.body_names:
             self._recording.write(lambda recorder: (recorder.write_batches(*batches), recorder.write_clock(sim.time)))
             return
         finite = sim.state.finite_bodies().tolist()
