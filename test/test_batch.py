@@ -336,6 +336,42 @@ def test_harness_with_per_body_topics_false_reads_the_batches(tmp_path):
         assert batch_twist == twist, body
 
 
+def test_message_object_fallback_publishes_and_records_the_same_batches(tmp_path, monkeypatch, capfd):
+    """When direct CDR does not match the middleware (forced here: the check reports a mismatch,
+    which this machine's Fast DDS never does), the node publishes PoseArray and PointCloud2
+    objects instead: subscribers get the same messages, bitwise, and the recording, which
+    serializes them only because it records, holds the same state."""
+    from rigid_body_sim.offline.recording import read_recording
+    from rigid_body_sim.ros import batch
+    from rigid_body_sim.testing import SimHarness
+
+    path = tmp_path / "five.yaml"
+    path.write_text(yaml.safe_dump(free_bodies_scene(5)))
+    seen = {}
+    for fallback in (False, True):
+        if fallback:
+            monkeypatch.setattr(batch.BatchCdr, "check", lambda self: "forced by the test")
+        record = tmp_path / f"fallback_{fallback}.mcap"
+        parameters = {"per_body_topics": False, "integrator": "rk4", "record_path": str(record)}
+        capfd.readouterr()
+        with SimHarness(path, parameters=parameters) as harness:
+            warned = "publishing batch message objects (slower)" in capfd.readouterr().err
+            assert warned == fallback
+            harness.publish_wrench("b3", force=(0.0, 0.0, 2.0), torque=(0.0, 0.4, 0.0), frame_id="b3")
+            harness.step(4)
+            seen[fallback] = (harness.latest_poses(), harness.latest_velocities())
+        data, _scene = read_recording(record)
+        assert data.meta["status"].startswith("complete") and len(data.time) == 5
+        seen[fallback] += (data,)
+    (poses, cloud, data), (poses_f, cloud_f, data_f) = seen[False], seen[True]
+    assert stamp_ns(poses.header) == 40_000_000
+    assert poses_f == poses and cloud_f == cloud
+    np.testing.assert_array_equal(data_f.time, data.time)
+    for body, track in data.bodies.items():
+        for field in ("position_world", "orientation_xyzw", "linear_velocity_world", "angular_velocity_world"):
+            np.testing.assert_array_equal(getattr(data_f.bodies[body], field), getattr(track, field))
+
+
 def test_a_stopped_body_stays_in_the_batches_flagged_with_its_last_state(tmp_path):
     """A body driven to an infinite velocity is stopped: it stays in poses and velocities with the
     last state published for it before it was stopped and stopped = 1; nothing non-finite is

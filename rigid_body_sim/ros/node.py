@@ -575,7 +575,7 @@ class RigidBodySimNode(Node):
         batches as published (two messages a tick for all bodies), else each running body's
         pose and twist."""
         sim = self._sim
-        batches = self._outputs.last_batches
+        batches = self._outputs.last_batches_cdr()
         if not self._settings["per_body_topics"] and batches is not None and batches[0] is sim.body_names:
             self._recording.write(lambda recorder: (recorder.write_batches(*batches), recorder.write_clock(sim.time)))
             return

@@ -107,9 +107,9 @@ class StatePublishers:
         self.per_body_topics = per_body_topics
         self._twist_type = TwistStamped if twist_stamped else Twist
         self.bodies: dict[str, BodyPublishers] = {}
-        #: (body names, sec, nanosec, poses CDR, velocities CDR) of the batches published last
-        #: (for the recording; the names are the simulator's ``body_names`` tuple itself).
-        self.last_batches: tuple[tuple[str, ...], int, int, bytes, bytes] | None = None
+        # (body names, sec, nanosec, poses, velocities) of the batches published last: CDR bytes,
+        # or the message objects of the fallback, serialized only if asked (last_batches_cdr).
+        self._last_batches: tuple[tuple[str, ...], int, int, Any, Any] | None = None
         self._clock_pub = self._overridable(ClockMsg, "/clock")
         self._poses_pub = self._overridable(PoseArray, "poses")
         self._velocities_pub = self._overridable(PointCloud2, "velocities")
@@ -254,7 +254,7 @@ class StatePublishers:
             poses_cdr, velocities_cdr = batch.poses(sec, nanosec, rows), batch.velocities(sec, nanosec, points)
             self._poses_pub.publish(poses_cdr)
             self._velocities_pub.publish(velocities_cdr)
-            self.last_batches = (names, sec, nanosec, poses_cdr, velocities_cdr)
+            self._last_batches = (names, sec, nanosec, poses_cdr, velocities_cdr)
             return
         poses = pose_array(n)
         poses.header.stamp, poses.header.frame_id = stamp, self._world_frame
@@ -266,7 +266,18 @@ class StatePublishers:
         cloud.data = points.tobytes()
         self._poses_pub.publish(poses)
         self._velocities_pub.publish(cloud)
-        self.last_batches = (names, sec, nanosec, serialize_message(poses), serialize_message(cloud))
+        self._last_batches = (names, sec, nanosec, poses, cloud)
+
+    def last_batches_cdr(self) -> tuple[tuple[str, ...], int, int, bytes, bytes] | None:
+        """(body names, sec, nanosec, poses CDR, velocities CDR) of the batches published last, or
+        None before the first: for the recording. The names are the simulator's ``body_names``
+        tuple itself. With the message-object fallback they are serialized here, so a node that
+        does not record never pays for it."""
+        last = self._last_batches
+        if last is not None and not isinstance(last[3], bytes):
+            names, sec, nanosec, poses, cloud = last
+            last = self._last_batches = (names, sec, nanosec, serialize_message(poses), serialize_message(cloud))
+        return last
 
     def _publish_per_body(self, sim: Simulator, stamp: Any, stopped: np.ndarray) -> None:
         sec, nanosec = stamp.sec, stamp.nanosec
