@@ -12,7 +12,9 @@ in the middle of building a wait set or taking a message). Until the node is bui
 spinning, SIGINT and SIGTERM raise :class:`KeyboardInterrupt`, so start-up stops at once, and
 whatever was built is torn down quietly (the node hands itself over as soon as it exists, so
 an interrupted construction is stopped too; with thousands of endpoints, without destroying
-them one by one). The recording is opened and the ticks started only once a signal just sets
+them one by one), also when a library turned the KeyboardInterrupt into its own error (an
+import of a C extension interrupted during its initialization) or when it landed where Python
+drops exceptions (see :class:`_Signals`). The recording is opened and the ticks started only once a signal just sets
 the flag, so a stop never leaves a recording half-opened. Once spinning, a signal only sets a flag; the spin
 loop (``spin_once`` with a timeout) sees it within :data:`SPIN_TIMEOUT_S` and stops the tick
 thread, finishes the recording, destroys the node and shuts the context down, in that order.
@@ -27,6 +29,7 @@ import os
 import signal
 import sys
 import threading
+from importlib.machinery import ExtensionFileLoader
 from types import FrameType
 from typing import Any, Callable
 
@@ -43,12 +46,24 @@ _STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 
 class _Signals:
-    """SIGINT/SIGTERM: raise KeyboardInterrupt during start-up, only set a flag once running."""
+    """SIGINT/SIGTERM: raise KeyboardInterrupt during start-up, only set a flag once running.
+
+    A KeyboardInterrupt raised where Python can only print and drop an exception (a finalizer
+    or what it calls, a weakref or gc callback, a ctypes callback such as llvmlite's while numba
+    loads its cache) would not stop start-up and would print "Exception ignored ... Traceback";
+    raised in an extension module's initialization, it may be printed and replaced by another
+    error. Where the frames show such a place, the signal is sent again shortly instead of
+    raising; anywhere else that drops it, ``sys.unraisablehook`` sees this handler's own
+    exception, says nothing, and sends the signal again, so that it lands in ordinary code.
+    """
 
     def __init__(self) -> None:
         self.requested: int | None = None
         self.raising = True
         self.on_stop: Callable[[], None] | None = None  # called at the first signal once running
+        self._raised: KeyboardInterrupt | None = None  # the exception raised at a start-up signal
+        self._print_unraisable = sys.unraisablehook
+        sys.unraisablehook = self._unraisable
         for signum in _STOP_SIGNALS:
             signal.signal(signum, self._handle)
 
@@ -58,23 +73,42 @@ class _Signals:
             self.requested = signum
         if self.raising:
             if _swallows_exceptions(frame):
-                # An exception raised here would be printed and ignored (a ctypes callback of
-                # llvmlite while numba loads its cache, a finalizer): send the signal again
-                # shortly, so that it lands in ordinary code.
-                timer = threading.Timer(RETRY_SIGNAL_S, os.kill, (os.getpid(), signum))
-                timer.daemon = True
-                timer.start()
+                _send_again(signum)
                 return
             self.raising = False
-            raise KeyboardInterrupt
+            self._raised = KeyboardInterrupt()
+            raise self._raised
         if first and self.on_stop is not None:
             self.on_stop()
+
+    def stopped_by(self, exc: BaseException) -> bool:
+        """True if start-up ended with ``exc`` because of a signal: the KeyboardInterrupt itself, or
+        any error after it interrupted start-up (a library may turn it into its own error, with
+        or without a chain; seen: "ImportError: initialization failed" from scipy's highspy)."""
+        return isinstance(exc, KeyboardInterrupt) or self._raised is not None
+
+    def _unraisable(self, info: Any) -> None:
+        """``sys.unraisablehook``: this handler's KeyboardInterrupt was dropped; raise it again soon."""
+        if self._raised is not None and info.exc_value is self._raised:
+            self._raised = None
+            self.raising = True
+            _send_again(self.requested)
+            return
+        self._print_unraisable(info)
 
     def ignore(self) -> None:
         """From now on a signal changes nothing (tear-down is under way)."""
         self.raising = False
         for signum in _STOP_SIGNALS:
             signal.signal(signum, lambda *_: None)
+        sys.unraisablehook = self._print_unraisable
+
+
+def _send_again(signum: int) -> None:
+    """Send ``signum`` to this process after :data:`RETRY_SIGNAL_S`, from a timer thread."""
+    timer = threading.Timer(RETRY_SIGNAL_S, os.kill, (os.getpid(), signum))
+    timer.daemon = True
+    timer.start()
 
 
 class _StopWatchdog:
@@ -110,12 +144,28 @@ class _StopWatchdog:
             os._exit(1)
 
 
+#: Code of the import steps that run an extension module's initialization (C code that may call
+#: Python and then print or replace an exception instead of passing it on).
+_EXTENSION_INIT_CODE = (ExtensionFileLoader.create_module.__code__, ExtensionFileLoader.exec_module.__code__)
+
+
 def _swallows_exceptions(frame: FrameType | None) -> bool:
-    """True if an exception raised in ``frame`` would be printed and dropped, not propagated: a
-    Python callback called from C through ctypes (llvmlite's), or a finalizer."""
-    if frame is None:
-        return False
-    return "llvmlite" in frame.f_code.co_filename or frame.f_code.co_name in ("__del__", "_raw_object_cache_notify")
+    """True if an exception raised in ``frame`` may not propagate as raised: in llvmlite, or in
+    anything called from its ctypes callbacks (numba's object-cache hooks), from a finalizer or
+    from an extension module's initialization (numba's ``_dispatcher`` prints a KeyboardInterrupt
+    and raises "ImportError: numba._devicearray failed to import" instead). Other places that
+    drop exceptions (weakref and gc callbacks, other ctypes callbacks) do not show in the frames:
+    :meth:`_Signals._unraisable` catches those."""
+    innermost = True
+    while frame is not None:
+        code = frame.f_code
+        if code.co_name == "__del__" or code.co_name.startswith("_raw_object_cache_") or code in _EXTENSION_INIT_CODE:
+            return True
+        if innermost and "llvmlite" in code.co_filename:
+            return True
+        innermost = False
+        frame = frame.f_back
+    return False
 
 
 def _say(message: str) -> None:
@@ -143,6 +193,8 @@ def main(args: list[str] | None = None) -> int:
         try:
             node = RigidBodySimNode(start_ticking=False, on_created=built.append)
         except (SceneError, ValueError, ParameterException) as exc:
+            if signals.stopped_by(exc):
+                return 0
             _say(str(exc))
             return 2
         executor = EventsExecutor()
@@ -169,8 +221,10 @@ def main(args: list[str] | None = None) -> int:
             _say(f"exiting with status 1: the tick thread failed ({exc!r})")
             return 1
         return 0
-    except KeyboardInterrupt:  # a signal during start-up
-        return 0
+    except BaseException as exc:  # noqa: BLE001  (a signal during start-up, as raised or as a library re-raised it)
+        if signals.stopped_by(exc):
+            return 0
+        raise
     finally:
         signals.ignore()
         if node is None and built:

@@ -1,0 +1,150 @@
+"""A start-up signal that lands where Python drops exceptions still stops start-up, silently.
+
+During start-up the node's entry point turns SIGINT/SIGTERM into KeyboardInterrupt
+(rigid_body_sim.ros.main._Signals). Raised inside a finalizer, a weakref or gc callback or a
+ctypes callback, that exception would be printed as "Exception ignored ... Traceback" and
+dropped, and start-up would go on. Each case here runs in its own process: it installs the
+entry point's handlers, enters such a place and spins there for SPIN_S; this test sends the real
+signal once it is inside. The process must then stop with KeyboardInterrupt in ordinary code
+right after it leaves that place, and print no traceback. A library that turns the
+KeyboardInterrupt into its own error, with or without a chain (seen: ``ImportError:
+initialization failed`` from scipy's highspy extension), still counts as the stop.
+"""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+import pytest
+
+SPIN_S = 1.0
+
+PRELUDE = textwrap.dedent(f"""
+    import ctypes, ctypes.util, gc, sys, time, weakref
+    from rigid_body_sim.ros import main as entry
+
+    def spin():
+        print("inside", flush=True)
+        deadline = time.monotonic() + {SPIN_S}
+        while time.monotonic() < deadline:
+            pass
+
+    signals = entry._Signals()
+""")
+
+CASES = {
+    # a ctypes callback that is not llvmlite's: libc's qsort calling a Python comparator
+    "ctypes callback": """
+        libc = ctypes.CDLL(ctypes.util.find_library("c"))
+        compare = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p)(lambda a, b: spin() or 0)
+        values = (ctypes.c_int * 2)(2, 1)
+        libc.qsort(values, 2, ctypes.sizeof(ctypes.c_int), compare)
+    """,
+    # a function called by a finalizer
+    "finalizer": """
+        class Held:
+            def __del__(self):
+                spin()
+        held = Held()
+        del held
+    """,
+    "weakref callback": """
+        class Target:
+            pass
+        target = Target()
+        finalizer = weakref.finalize(target, spin)
+        del target
+    """,
+    # an extension module's initialization calling Python: _pickle imports _compat_pickle (shadowed
+    # here by one that spins, then runs the real one)
+    "extension module initialization": """
+        import os, sysconfig, tempfile
+        shadow = tempfile.mkdtemp()
+        real = os.path.join(sysconfig.get_paths()["stdlib"], "_compat_pickle.py")
+        with open(os.path.join(shadow, "_compat_pickle.py"), "w") as f:
+            f.write(chr(10).join(["from __main__ import spin", "spin()", open(real).read()]))
+        sys.path.insert(0, shadow)
+        import _pickle
+        assert _pickle.loads(_pickle.dumps([1])) == [1]
+    """,
+    "gc callback": """
+        def on_collect(phase, info):
+            if phase == "start":
+                gc.callbacks.remove(on_collect)
+                spin()
+        gc.callbacks.append(on_collect)
+        gc.collect()
+    """,
+}
+
+EPILOGUE = textwrap.dedent("""
+    left_at = time.monotonic()
+    try:
+        while time.monotonic() < left_at + 5.0:
+            time.sleep(0.001)
+        print("not stopped", flush=True)
+    except KeyboardInterrupt:
+        print(f"stopped in ordinary code {time.monotonic() - left_at:.3f} s after leaving", flush=True)
+""")
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+@pytest.mark.parametrize("case", list(CASES))
+def test_a_start_up_signal_where_exceptions_are_dropped_stops_in_ordinary_code(case, signum):
+    body = textwrap.indent(textwrap.dedent(CASES[case]), "    ")
+    script = PRELUDE + "try:\n" + body + "except KeyboardInterrupt:\n    print('raised inside that place')\n" + EPILOGUE
+    process = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert process.stdout.readline().strip() == "inside", process.stderr.read()
+        time.sleep(0.1)  # well inside the spin
+        process.send_signal(signum)
+        out, err = process.communicate(timeout=20)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    assert process.returncode == 0, err
+    assert "Traceback" not in err and "Exception ignored" not in err, err
+    lines = out.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("stopped in ordinary code"), out + err
+    after_s = float(lines[0].split()[4])
+    assert after_s < 1.0, out  # sent again every 20 ms: it lands as soon as the spin is over
+
+
+REPLACED = PRELUDE.replace("signals = entry._Signals()", "") + textwrap.dedent("""
+    signals = entry._Signals()
+    print("before the signal", signals.stopped_by(ValueError("bad scene")), flush=True)
+    try:
+        failed = False
+        try:
+            spin()
+        except KeyboardInterrupt:  # replaced without a chain, as numba's _dispatcher does
+            failed = True
+        if failed:
+            raise ImportError("numba._devicearray failed to import")
+    except BaseException as exc:
+        print("after the signal", type(exc).__name__, exc.__context__, signals.stopped_by(exc), flush=True)
+""")
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_a_start_up_signal_a_library_turned_into_its_own_error_still_counts_as_the_stop(signum):
+    """Once a start-up signal has raised its KeyboardInterrupt, any error start-up ends with counts
+    as the stop (``_Signals.stopped_by``: the entry point returns 0); before, an error is an error."""
+    process = subprocess.Popen([sys.executable, "-c", REPLACED], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert process.stdout.readline().strip() == "before the signal False", process.stderr.read()
+        assert process.stdout.readline().strip() == "inside", process.stderr.read()
+        time.sleep(0.1)
+        process.send_signal(signum)
+        out, err = process.communicate(timeout=20)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    assert process.returncode == 0 and not err, err
+    assert out.splitlines() == ["after the signal ImportError None True"], out
