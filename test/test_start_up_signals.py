@@ -148,3 +148,63 @@ def test_a_start_up_signal_a_library_turned_into_its_own_error_still_counts_as_t
             process.wait()
     assert process.returncode == 0 and not err, err
     assert out.splitlines() == ["after the signal ImportError None True"], out
+
+
+HALF_REGISTERED = PRELUDE + textwrap.dedent("""
+    import rclpy
+    from rclpy.context import Context
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.node import Node
+    from rclpy.signals import SignalHandlerOptions
+    from std_msgs.msg import Empty
+
+    armed = False
+
+    class SpinningWake(SingleThreadedExecutor):
+        def wake(self):
+            global armed
+            if armed:  # rclpy's create_subscription has listed the subscription, not yet its event handlers
+                armed = False
+                spin()
+            super().wake()
+
+    context = Context()
+    rclpy.init(context=context, signal_handler_options=SignalHandlerOptions.NO)
+    executor = SpinningWake(context=context)
+    node = Node("half_registered", context=context)
+    executor.add_node(node)
+    try:
+        armed = True
+        try:
+            node.create_subscription(Empty, "half_registered_topic", lambda _msg: None, 10)
+        except KeyboardInterrupt:
+            print("raised inside that place", flush=True)
+        armed = False
+""") + textwrap.indent(EPILOGUE, "    ") + textwrap.dedent("""
+    finally:
+        executor.shutdown()
+        node.destroy_node()
+        context.try_shutdown()
+        print("destroyed", flush=True)
+""")
+
+
+@pytest.mark.ros
+def test_a_start_up_signal_inside_an_rclpy_call_lands_after_it():
+    """A signal while rclpy registers a subscription (its call into the executor's wake) is sent
+    again until the call is over: the node is then whole, and destroy_node succeeds."""
+    process = subprocess.Popen([sys.executable, "-c", HALF_REGISTERED], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                               text=True)
+    try:
+        assert process.stdout.readline().strip() == "inside", process.stderr.read()
+        time.sleep(0.1)
+        process.send_signal(signal.SIGINT)
+        out, err = process.communicate(timeout=30)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    assert process.returncode == 0 and "Traceback" not in err, err
+    lines = out.strip().splitlines()
+    assert len(lines) == 2 and lines[0].startswith("stopped in ordinary code") and lines[1] == "destroyed", out + err
+    assert float(lines[0].split()[4]) < 1.0, out

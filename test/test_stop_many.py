@@ -11,7 +11,6 @@ the exit is printed (``-s``), not asserted: the machine is shared.
 from __future__ import annotations
 
 import signal
-import subprocess
 import time
 
 import numpy as np
@@ -22,6 +21,7 @@ from rigid_body_sim.offline.recording import read_recording
 from rigid_body_sim.testing import start_process
 
 from test_batch import free_bodies_scene
+from test_stop_start_up import stop_and_check
 
 pytestmark = pytest.mark.ros
 
@@ -44,22 +44,7 @@ def test_twenty_stops_at_1000_bodies_exit_0(tmp_path):
         log = tmp_path / f"run{k}.log"
         process = start_process(args, log)
         time.sleep(delay)
-        sent = time.monotonic()
-        process.send_signal(signum)
-        try:
-            code = process.wait(timeout=30)
-        except subprocess.TimeoutExpired:
-            process.kill()
-            process.wait()
-            pytest.fail(f"run {k} ({signum.name} after {delay:.2f} s) did not exit within 30 s:\n{log.read_text()[-2000:]}")
-        stop_times.append(time.monotonic() - sent)
-        text = log.read_text()
-        assert code == 0, f"run {k} ({signum.name} after {delay:.2f} s) exited {code}:\n{text[-2000:]}"
-        assert "Traceback" not in text and "KeyboardInterrupt" not in text, f"run {k}:\n{text[-2000:]}"
-        if record.exists():  # created once the node is built: then it must be complete and readable
-            data, _scene = read_recording(record)
-            status = data.meta.get("status", "")
-            assert status.startswith("complete"), f"run {k}: recording status {status!r}"
+        stop_times.append(stop_and_check(process, signum, log, record, what=f"run {k} ({signum.name} after {delay:.2f} s)"))
     times = np.array(stop_times)
     print(f"\n{STOPS} stops at {N_BODIES} bodies: signal to exit median {np.median(times):.2f} s, "
           f"max {times.max():.2f} s, over 2 s: {(times > 2.0).sum()}")

@@ -81,11 +81,16 @@ class _Signals:
         if first and self.on_stop is not None:
             self.on_stop()
 
+    @property
+    def interrupted(self) -> bool:
+        """True once a start-up signal has raised its KeyboardInterrupt (start-up was cut short)."""
+        return self._raised is not None
+
     def stopped_by(self, exc: BaseException) -> bool:
         """True if start-up ended with ``exc`` because of a signal: the KeyboardInterrupt itself, or
         any error after it interrupted start-up (a library may turn it into its own error, with
         or without a chain; seen: "ImportError: initialization failed" from scipy's highspy)."""
-        return isinstance(exc, KeyboardInterrupt) or self._raised is not None
+        return isinstance(exc, KeyboardInterrupt) or self.interrupted
 
     def _unraisable(self, info: Any) -> None:
         """``sys.unraisablehook``: this handler's KeyboardInterrupt was dropped; raise it again soon."""
@@ -148,20 +153,29 @@ class _StopWatchdog:
 #: Python and then print or replace an exception instead of passing it on).
 _EXTENSION_INIT_CODE = (ExtensionFileLoader.create_module.__code__, ExtensionFileLoader.exec_module.__code__)
 
+#: Packages whose state the tear-down relies on: a KeyboardInterrupt inside one of their calls
+#: could leave it half-updated (seen: rclpy's create_subscription interrupted after listing the
+#: subscription but before its event handlers, so destroy_node failed with "list.remove(x): x
+#: not in list").
+_TORN_DOWN_WITH = ("rclpy",)
+
 
 def _swallows_exceptions(frame: FrameType | None) -> bool:
-    """True if an exception raised in ``frame`` may not propagate as raised: in llvmlite, or in
+    """True if a KeyboardInterrupt raised in ``frame`` may not propagate cleanly: in llvmlite, or in
     anything called from its ctypes callbacks (numba's object-cache hooks), from a finalizer or
     from an extension module's initialization (numba's ``_dispatcher`` prints a KeyboardInterrupt
-    and raises "ImportError: numba._devicearray failed to import" instead). Other places that
-    drop exceptions (weakref and gc callbacks, other ctypes callbacks) do not show in the frames:
-    :meth:`_Signals._unraisable` catches those."""
+    and raises "ImportError: numba._devicearray failed to import" instead), or anywhere inside a
+    call into :data:`_TORN_DOWN_WITH`. Other places that drop exceptions (weakref and gc
+    callbacks, other ctypes callbacks) do not show in the frames: :meth:`_Signals._unraisable`
+    catches those."""
+    package_dirs = tuple(os.path.dirname(module.__file__) + os.sep for module in map(sys.modules.get, _TORN_DOWN_WITH)
+                         if getattr(module, "__file__", None))
     innermost = True
     while frame is not None:
         code = frame.f_code
         if code.co_name == "__del__" or code.co_name.startswith("_raw_object_cache_") or code in _EXTENSION_INIT_CODE:
             return True
-        if innermost and "llvmlite" in code.co_filename:
+        if (innermost and "llvmlite" in code.co_filename) or code.co_filename.startswith(package_dirs):
             return True
         innermost = False
         frame = frame.f_back
@@ -233,7 +247,10 @@ def main(args: list[str] | None = None) -> int:
             watchdog.start()
         if signals.requested is not None and node is not None and _endpoints(node) > FAST_EXIT_ENDPOINTS:
             _exit_without_tear_down(node)
-        _tear_down(executor, node, context)
+        if signals.interrupted:
+            _tear_down_half_built(executor, node, context)
+        else:
+            _tear_down(executor, node, context)
         if watchdog is not None:
             watchdog.cancel()
 
@@ -307,6 +324,18 @@ def _tear_down(executor, node, context) -> None:
         node.destroy_node()
     if context is not None:
         context.try_shutdown()
+
+
+def _tear_down_half_built(executor, node, context) -> None:
+    """:func:`_tear_down` after a signal cut start-up short (nothing recorded, no ticks): if what was
+    half-built cannot be destroyed, say so in one line and exit 0 without it, as after a crash."""
+    try:
+        _tear_down(executor, node, context)
+    except Exception as exc:  # noqa: BLE001
+        _say(f"stopped during start-up; destroying what was built failed ({exc!r}), exiting without it")
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(0)
 
 
 def _freeze_start_up_objects() -> None:
