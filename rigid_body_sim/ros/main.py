@@ -75,11 +75,34 @@ class _Signals:
             if _swallows_exceptions(frame):
                 _send_again(signum)
                 return
-            self.raising = False
-            self._raised = KeyboardInterrupt()
-            raise self._raised
+            caller = _caller_of_torn_down_package(frame)
+            if caller is not None:
+                self._raise_when_back_in(caller)
+                return
+            self._raise()
         if first and self.on_stop is not None:
             self.on_stop()
+
+    def _raise(self) -> None:
+        self.raising = False
+        self._raised = KeyboardInterrupt()
+        raise self._raised
+
+    def _raise_when_back_in(self, caller: FrameType) -> None:
+        """Raise the KeyboardInterrupt in ``caller`` as soon as the call it made returns: a trace
+        function on that frame alone (the documented ``frame.f_trace``, as pdb's ``set_trace``
+        uses it) raises at its next line or its return; new frames are not traced."""
+
+        def back_in_caller(frame: FrameType, event: str, _arg: Any) -> Any:
+            if event in ("line", "return") and self.raising:
+                sys.settrace(None)
+                caller.f_trace = None
+                self._raise()
+            return back_in_caller
+
+        caller.f_trace_lines = True
+        caller.f_trace = back_in_caller
+        sys.settrace(_trace_no_new_frames)
 
     @property
     def interrupted(self) -> bool:
@@ -156,30 +179,45 @@ _EXTENSION_INIT_CODE = (ExtensionFileLoader.create_module.__code__, ExtensionFil
 #: Packages whose state the tear-down relies on: a KeyboardInterrupt inside one of their calls
 #: could leave it half-updated (seen: rclpy's create_subscription interrupted after listing the
 #: subscription but before its event handlers, so destroy_node failed with "list.remove(x): x
-#: not in list").
+#: not in list"); a start-up signal there is raised once the call has returned.
 _TORN_DOWN_WITH = ("rclpy",)
 
 
 def _swallows_exceptions(frame: FrameType | None) -> bool:
-    """True if a KeyboardInterrupt raised in ``frame`` may not propagate cleanly: in llvmlite, or in
-    anything called from its ctypes callbacks (numba's object-cache hooks), from a finalizer or
-    from an extension module's initialization (numba's ``_dispatcher`` prints a KeyboardInterrupt
-    and raises "ImportError: numba._devicearray failed to import" instead), or anywhere inside a
-    call into :data:`_TORN_DOWN_WITH`. Other places that drop exceptions (weakref and gc
-    callbacks, other ctypes callbacks) do not show in the frames: :meth:`_Signals._unraisable`
-    catches those."""
-    package_dirs = tuple(os.path.dirname(module.__file__) + os.sep for module in map(sys.modules.get, _TORN_DOWN_WITH)
-                         if getattr(module, "__file__", None))
+    """True if a KeyboardInterrupt raised in ``frame`` may not propagate as raised: in llvmlite, or
+    in anything called from its ctypes callbacks (numba's object-cache hooks), from a finalizer
+    or from an extension module's initialization (numba's ``_dispatcher`` prints a
+    KeyboardInterrupt and raises "ImportError: numba._devicearray failed to import" instead).
+    Other places that drop exceptions (weakref and gc callbacks, other ctypes callbacks) do not
+    show in the frames: :meth:`_Signals._unraisable` catches those."""
     innermost = True
     while frame is not None:
         code = frame.f_code
         if code.co_name == "__del__" or code.co_name.startswith("_raw_object_cache_") or code in _EXTENSION_INIT_CODE:
             return True
-        if (innermost and "llvmlite" in code.co_filename) or code.co_filename.startswith(package_dirs):
+        if innermost and "llvmlite" in code.co_filename:
             return True
         innermost = False
         frame = frame.f_back
     return False
+
+
+def _caller_of_torn_down_package(frame: FrameType | None) -> FrameType | None:
+    """The frame that made the outermost call into a :data:`_TORN_DOWN_WITH` package under way in
+    ``frame``'s stack, or None if no such call is under way."""
+    package_dirs = tuple(os.path.dirname(module.__file__) + os.sep for module in map(sys.modules.get, _TORN_DOWN_WITH)
+                         if getattr(module, "__file__", None))
+    caller = None
+    while frame is not None:
+        if package_dirs and frame.f_code.co_filename.startswith(package_dirs):
+            caller = frame.f_back
+        frame = frame.f_back
+    return caller
+
+
+def _trace_no_new_frames(_frame: FrameType, _event: str, _arg: Any) -> None:
+    """Global trace function while a raise waits for a call to return: trace no new frame."""
+    return None
 
 
 def _say(message: str) -> None:
