@@ -216,3 +216,23 @@ def test_a_start_up_signal_inside_an_rclpy_call_lands_after_it():
     lines = out.strip().splitlines()
     assert len(lines) == 2 and lines[0].startswith("stopped in ordinary code") and lines[1] == "destroyed", out + err
     assert float(lines[0].split()[4]) < 1.0, out
+
+
+def test_a_half_built_node_that_will_not_tear_down_exits_0_saying_why():
+    """After a signal cut start-up short, a failing tear-down (what an interrupted rclpy call
+    could leave) ends the process with status 0 and one line naming the error, no traceback."""
+    script = textwrap.dedent("""
+        from rigid_body_sim.ros import main as entry
+
+        class HalfBuilt:
+            def destroy_node(self):
+                raise ValueError("list.remove(x): x not in list")
+
+        entry._tear_down_half_built(None, HalfBuilt(), None)
+        print("not reached")
+    """)
+    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
+    assert result.returncode == 0 and result.stdout == "", result.stdout + result.stderr
+    assert result.stderr.splitlines() == [
+        "rigid_body_sim_node: stopped during start-up; destroying what was built failed "
+        "(ValueError('list.remove(x): x not in list')), exiting without it"], result.stderr
