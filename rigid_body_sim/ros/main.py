@@ -62,6 +62,8 @@ class _Signals:
         self.raising = True
         self.on_stop: Callable[[], None] | None = None  # called at the first signal once running
         self._raised: KeyboardInterrupt | None = None  # the exception raised at a start-up signal
+        self._traced: FrameType | None = None  # the frame a raise waits in (see _raise_when_back_in)
+        self._previous_trace: Any = None
         self._print_unraisable = sys.unraisablehook
         sys.unraisablehook = self._unraisable
         for signum in _STOP_SIGNALS:
@@ -91,15 +93,19 @@ class _Signals:
     def _raise_when_back_in(self, caller: FrameType) -> None:
         """Raise the KeyboardInterrupt in ``caller`` as soon as the call it made returns: a trace
         function on that frame alone (the documented ``frame.f_trace``, as pdb's ``set_trace``
-        uses it) raises at its next line or its return; new frames are not traced."""
+        uses it) raises at its next line or its return; new frames are not traced. Python unsets
+        the thread's trace function when it raises; :meth:`ignore` puts the previous one back
+        (a debugger's, coverage's)."""
 
         def back_in_caller(frame: FrameType, event: str, _arg: Any) -> Any:
             if event in ("line", "return") and self.raising:
-                sys.settrace(None)
                 caller.f_trace = None
                 self._raise()
             return back_in_caller
 
+        if self._traced is None:
+            self._previous_trace = sys.gettrace()
+        self._traced = caller
         caller.f_trace_lines = True
         caller.f_trace = back_in_caller
         sys.settrace(_trace_no_new_frames)
@@ -127,6 +133,10 @@ class _Signals:
     def ignore(self) -> None:
         """From now on a signal changes nothing (tear-down is under way)."""
         self.raising = False
+        if self._traced is not None:
+            self._traced.f_trace = None
+            self._traced = None
+            sys.settrace(self._previous_trace)
         for signum in _STOP_SIGNALS:
             signal.signal(signum, lambda *_: None)
         sys.unraisablehook = self._print_unraisable
