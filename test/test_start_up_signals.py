@@ -244,3 +244,46 @@ def test_a_half_built_node_that_will_not_tear_down_exits_0_saying_why():
     assert result.stderr.splitlines() == [
         "rigid_body_sim_node: stopped during start-up; destroying what was built failed "
         "(ValueError('list.remove(x): x not in list')), exiting without it"], result.stderr
+
+
+CUT_AFTER_RCLPY_NODE = PRELUDE + textwrap.dedent("""
+    import rclpy
+    from rclpy.context import Context
+    from rclpy.signals import SignalHandlerOptions
+    from rigid_body_sim.ros.node import RigidBodySimNode
+
+    class SpinningContext(Context):
+        def track_node(self, node):  # called by rclpy's Node constructor
+            spin()
+            super().track_node(node)
+
+    context = SpinningContext()
+    rclpy.init(context=context, signal_handler_options=SignalHandlerOptions.NO)
+    try:
+        RigidBodySimNode(context=context, start_ticking=False)
+        print("built", flush=True)
+    except KeyboardInterrupt:
+        print("stopped in the constructor", flush=True)
+        context.try_shutdown()  # destroys every node it tracks, this half-built one too
+        print("context shut down", flush=True)
+""")
+
+
+@pytest.mark.ros
+def test_a_node_cut_short_right_after_rclpy_built_it_is_destroyed_cleanly():
+    """A signal during rclpy's Node constructor is raised in RigidBodySimNode's constructor right
+    after it, before any of the node's own attributes exist; rclpy's Context.shutdown then
+    destroys that half-built node, which must work (it failed with AttributeError '_tick_loop')."""
+    process = subprocess.Popen([sys.executable, "-c", CUT_AFTER_RCLPY_NODE], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True)
+    try:
+        assert process.stdout.readline().strip() == "inside", process.stderr.read()
+        time.sleep(0.1)
+        process.send_signal(signal.SIGTERM)
+        out, err = process.communicate(timeout=30)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    assert process.returncode == 0 and not err, err
+    assert out.splitlines() == ["stopped in the constructor", "context shut down"], out + err

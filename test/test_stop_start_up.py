@@ -60,6 +60,7 @@ def stop_and_check(process: subprocess.Popen, signum: signal.Signals, log_path: 
     text = log_path.read_text()
     assert code == 0, f"{what}: {signum.name} -> exit {code}:\n{text[-2000:]}"
     assert "Traceback" not in text and "KeyboardInterrupt" not in text, f"{what}:\n{text[-2000:]}"
+    assert "destroying what was built failed" not in text, f"{what}: the tear-down's safety net caught:\n{text[-2000:]}"
     if record is not None and record.exists():
         data, _scene = read_recording(record)
         assert data.meta.get("status", "").startswith("complete"), f"{what}: recording {data.meta.get('status')!r}"

@@ -133,6 +133,12 @@ class RigidBodySimNode(Node):
         If start-up parameters are invalid (the message says which and what was expected).
     """
 
+    # What the tear-down reads, here as well as in the constructor: rclpy's Context.shutdown
+    # destroys every node it tracks, also one whose construction a signal cut short right
+    # after rclpy's own constructor returned.
+    _tick_loop: TickLoop | None = None
+    _recording: NodeRecording | None = None
+
     def __init__(self, node_name: str = "rigid_body_sim", *, start_ticking: bool = True,
                  on_created: Callable[["RigidBodySimNode"], None] | None = None, **kwargs: Any):
         super().__init__(node_name, **kwargs)
