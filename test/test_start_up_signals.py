@@ -106,21 +106,29 @@ def in_try(body: str) -> str:
     return "try:\n" + textwrap.indent(textwrap.dedent(body) + AFTER, "    ") + STOPPED
 
 
-@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
-@pytest.mark.parametrize("case", list(CASES))
-def test_a_start_up_signal_where_exceptions_are_dropped_stops_in_ordinary_code(case, signum):
-    script = PRELUDE + in_try(CASES[case])
+def signal_once_inside(script: str, signum: signal.Signals, timeout: float, *,
+                       first_lines: tuple[str, ...] = ()) -> tuple[int, str, str]:
+    """Run ``script`` in its own Python; after it prints ``first_lines`` then "inside", send
+    ``signum`` 0.1 s later (well inside the spin). Returns (exit status, stdout after "inside", stderr)."""
     process = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
-        assert process.stdout.readline().strip() == "inside", process.stderr.read()
-        time.sleep(0.1)  # well inside the spin
+        for line in (*first_lines, "inside"):
+            assert process.stdout.readline().strip() == line, process.stderr.read()
+        time.sleep(0.1)
         process.send_signal(signum)
-        out, err = process.communicate(timeout=20)
+        out, err = process.communicate(timeout=timeout)
     finally:
         if process.poll() is None:
             process.kill()
             process.wait()
-    assert process.returncode == 0, err
+    return process.returncode, out, err
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+@pytest.mark.parametrize("case", list(CASES))
+def test_a_start_up_signal_where_exceptions_are_dropped_stops_in_ordinary_code(case, signum):
+    returncode, out, err = signal_once_inside(PRELUDE + in_try(CASES[case]), signum, timeout=20)
+    assert returncode == 0, err
     assert "Traceback" not in err and "Exception ignored" not in err, err
     lines = out.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("stopped in ordinary code"), out + err
@@ -148,18 +156,8 @@ REPLACED = PRELUDE.replace("signals = entry._Signals()", "") + textwrap.dedent("
 def test_a_start_up_signal_a_library_turned_into_its_own_error_still_counts_as_the_stop(signum):
     """Once a start-up signal has raised its KeyboardInterrupt, any error start-up ends with counts
     as the stop (``_Signals.stopped_by``: the entry point returns 0); before, an error is an error."""
-    process = subprocess.Popen([sys.executable, "-c", REPLACED], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
-        assert process.stdout.readline().strip() == "before the signal False", process.stderr.read()
-        assert process.stdout.readline().strip() == "inside", process.stderr.read()
-        time.sleep(0.1)
-        process.send_signal(signum)
-        out, err = process.communicate(timeout=20)
-    finally:
-        if process.poll() is None:
-            process.kill()
-            process.wait()
-    assert process.returncode == 0 and not err, err
+    returncode, out, err = signal_once_inside(REPLACED, signum, timeout=20, first_lines=("before the signal False",))
+    assert returncode == 0 and not err, err
     assert out.splitlines() == ["after the signal ImportError None True"], out
 
 
@@ -208,18 +206,8 @@ HALF_REGISTERED = PRELUDE + textwrap.dedent("""
 def test_a_start_up_signal_inside_an_rclpy_call_lands_after_it():
     """A signal while rclpy registers a subscription (its call into the executor's wake) is raised
     once that call has returned: the node is then whole, and destroy_node succeeds."""
-    process = subprocess.Popen([sys.executable, "-c", HALF_REGISTERED], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                               text=True)
-    try:
-        assert process.stdout.readline().strip() == "inside", process.stderr.read()
-        time.sleep(0.1)
-        process.send_signal(signal.SIGINT)
-        out, err = process.communicate(timeout=30)
-    finally:
-        if process.poll() is None:
-            process.kill()
-            process.wait()
-    assert process.returncode == 0 and "Traceback" not in err, err
+    returncode, out, err = signal_once_inside(HALF_REGISTERED, signal.SIGINT, timeout=30)
+    assert returncode == 0 and "Traceback" not in err, err
     lines = out.strip().splitlines()
     assert len(lines) == 3 and lines[0].startswith("stopped in ordinary code"), out + err
     assert lines[1:] == ["trace put back True", "destroyed"], out + err
@@ -274,16 +262,6 @@ def test_a_node_cut_short_right_after_rclpy_built_it_is_destroyed_cleanly():
     """A signal during rclpy's Node constructor is raised in RigidBodySimNode's constructor right
     after it, before any of the node's own attributes exist; rclpy's Context.shutdown then
     destroys that half-built node, which must work (it failed with AttributeError '_tick_loop')."""
-    process = subprocess.Popen([sys.executable, "-c", CUT_AFTER_RCLPY_NODE], stdout=subprocess.PIPE,
-                               stderr=subprocess.PIPE, text=True)
-    try:
-        assert process.stdout.readline().strip() == "inside", process.stderr.read()
-        time.sleep(0.1)
-        process.send_signal(signal.SIGTERM)
-        out, err = process.communicate(timeout=30)
-    finally:
-        if process.poll() is None:
-            process.kill()
-            process.wait()
-    assert process.returncode == 0 and not err, err
+    returncode, out, err = signal_once_inside(CUT_AFTER_RCLPY_NODE, signal.SIGTERM, timeout=30)
+    assert returncode == 0 and not err, err
     assert out.splitlines() == ["stopped in the constructor", "context shut down"], out + err
