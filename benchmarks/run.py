@@ -4,12 +4,13 @@ Writes to DIR: results.md (every table, the targets met or not, the machine), th
 apply_cost.csv, site_force.csv, work_precision.csv, reduction.csv, node_timing.csv,
 targets.csv, core_compare.csv (with ``--baseline-core``), the plots, and profile_kernels.txt;
 to ``--docs``: choosing_an_integrator.md and its claims (benchmarks/choosing.py); with
-``--readme``: the generated block of the README's "Speed and accuracy" section (between
-``<!-- bench:begin -->`` and ``<!-- bench:end -->``), the same text as results.md's headline.
+``--performance``: the generated block of docs/performance.md (between ``<!-- bench:begin -->``
+and ``<!-- bench:end -->``): the provenance, the machine, the per-integrator table and the
+per-frame cost tables of results.md, from the same run (the targets table stays in results.md).
 
 Quick and full modes differ in the sizes swept and the seconds per sample, not in the number
 of repeats (≥ 5 everywhere). ``--parts`` runs a subset (while developing): it writes results_partial.md,
-which says which parts are missing, and never touches results.md or the README.
+which says which parts are missing, and never touches results.md or docs/performance.md.
 """
 
 from __future__ import annotations
@@ -36,7 +37,7 @@ from . import problems as P  # noqa: E402
 from .timing import MIN_REPEATS  # noqa: E402
 
 PARTS = ("throughput", "apply", "work", "reduction", "profile", "node")
-README_BEGIN, README_END = "<!-- bench:begin -->", "<!-- bench:end -->"
+BLOCK_BEGIN, BLOCK_END = "<!-- bench:begin -->", "<!-- bench:end -->"
 
 
 @dataclass(frozen=True)
@@ -266,7 +267,7 @@ def section_throughput(tp: list[dict], targets: list[dict], compare: list[dict])
 
 
 def apply_tables(frames: list[dict], sites: list[dict], level: str = "###") -> str:
-    """The two tables of what a force costs from Python (results.md and the README's block)."""
+    """The two tables of what a force costs from Python (results.md and docs/performance.md's block)."""
     return (f"{level} (i) Per frame, µs, median (min–max); integrator rk4 / MuJoCo RK4\n\n"
             + _table(frames, [("call", "function"), ("frame", "frame"),
                               ("one call", lambda r: _range(r, "call_us")),
@@ -487,13 +488,23 @@ def headline(targets: list[dict], prov: str, machine_text: str, summary: str) ->
             + ("\n" + summary if summary else ""))
 
 
-def update_readme(path: Path, block: str) -> None:
+def performance_block(prov: str, machine_text: str, summary: str, frames: list[dict], sites: list[dict]) -> str:
+    """docs/performance.md's generated block: results.md's headline without its targets table, and the
+    per-frame cost tables one heading level down (each part is text of results.md, from the same run)."""
+    return (f"From {prov}.\n\nMachine:\n\n{machine_text}\n" + summary
+            + "\n**What a force costs from Python**, this run "
+            "(how: [results.md](../benchmarks/results/results.md#what-a-force-costs-from-python)):\n\n"
+            + apply_tables(frames, sites, level="####"))
+
+
+def update_block(path: Path, block: str) -> None:
+    """Replace the text between the bench markers of ``path`` (docs/performance.md) with ``block``."""
     text = path.read_text()
-    if README_BEGIN not in text or README_END not in text:
-        raise SystemExit(f"{path}: no {README_BEGIN} … {README_END} block to update")
-    head, rest = text.split(README_BEGIN, 1)
-    _old, tail = rest.split(README_END, 1)
-    path.write_text(f"{head}{README_BEGIN}\n{block}{README_END}{tail}")
+    if BLOCK_BEGIN not in text or BLOCK_END not in text:
+        raise SystemExit(f"{path}: no {BLOCK_BEGIN} … {BLOCK_END} block to update")
+    head, rest = text.split(BLOCK_BEGIN, 1)
+    _old, tail = rest.split(BLOCK_END, 1)
+    path.write_text(f"{head}{BLOCK_BEGIN}\n{block}{BLOCK_END}{tail}")
 
 
 # ----------------------------------------------------------------------------- main
@@ -507,7 +518,8 @@ def main(argv=None) -> int:
     mode_group.add_argument("--smoke", action="store_true", help="tiny sizes: only checks that the code runs")
     parser.add_argument("--out", default="benchmarks/results", help="output directory")
     parser.add_argument("--docs", default="docs", help="where choosing_an_integrator.md and its claims go")
-    parser.add_argument("--readme", default="", help="update this README's generated block (e.g. README.md)")
+    parser.add_argument("--performance", default="",
+                        help="update the generated block of this page (docs/performance.md)")
     parser.add_argument("--parts", default=",".join(PARTS), help=f"comma-separated subset of {','.join(PARTS)}")
     parser.add_argument("--node-configs", default="", help="e.g. 1000x1,100x100 (rate_hz x bodies)")
     parser.add_argument("--baseline-core", default="", help="a git revision whose core is timed beside this one")
@@ -593,13 +605,12 @@ def main(argv=None) -> int:
           + (f"Parts not run in this run: {', '.join(missing)}.\n\n" if missing else "")
           + "## Headline: every target, each row one comparison\n\n" + head + "\n" + "\n".join(sections)
           + f"\nRun time: {elapsed:.0f} s.\n")
-    # A partial run (--parts) never overwrites the complete results.md the README is checked against.
+    # A partial run (--parts) never overwrites the complete results.md docs/performance.md is checked against.
     (out / ("results_partial.md" if missing else "results.md")).write_text(md)
-    if args.readme and not missing:
-        update_readme(Path(args.readme), head + "\n**What a force costs from Python**, this run "
-                      "(how: [results.md](benchmarks/results/results.md#what-a-force-costs-from-python)):\n\n"
-                      + apply_tables(frames, sites, level="####"))
-        log(f"  updated {args.readme}")
+    if args.performance and not missing:
+        update_block(Path(args.performance),
+                     performance_block(prov, machine_text, per_integrator(wp, sites, tp), frames, sites))
+        log(f"  updated {args.performance}")
     log(f"done in {elapsed:.0f} s: {out}")
     return 0
 
