@@ -114,14 +114,14 @@ envelope: $(STAMP)
 # profile and node timing. Every figure is a median of >= 5 samples with its min-max.
 # bench: quick mode (fewer sizes, a few minutes); bench-full: every size up to 1e5, 20 s node windows.
 # Into the default BENCH_OUT they also write docs/choosing_an_integrator.md (+ .claims.json) and the
-# README's generated "Speed and accuracy" table, so README, docs and results.md come from one run.
+# generated block of docs/performance.md, so the docs and results.md come from one run.
 # BENCH_BASELINE=<git rev>: also time that revision's core beside this one at N = 1e4 (core_compare.py).
 BENCH_OUT ?= benchmarks/results
 BENCH_ARGS ?=
 BENCH_BASELINE ?=
 BENCH_DEFAULT_OUT := $(filter benchmarks/results,$(BENCH_OUT))
 BENCH_FLAGS = --out $(BENCH_OUT) --docs $(if $(BENCH_DEFAULT_OUT),docs,$(BENCH_OUT)) \
-	$(if $(BENCH_DEFAULT_OUT),--readme README.md) $(if $(BENCH_BASELINE),--baseline-core $(BENCH_BASELINE)) $(BENCH_ARGS)
+	$(if $(BENCH_DEFAULT_OUT),--performance docs/performance.md) $(if $(BENCH_BASELINE),--baseline-core $(BENCH_BASELINE)) $(BENCH_ARGS)
 .PHONY: bench bench-full bench-deps
 bench-deps: $(STAMP)
 	$(PIP) install -r requirements-bench.txt
@@ -132,10 +132,10 @@ bench-full: bench-deps
 	$(VENV_PY) -m pytest -q -m bench
 	$(VENV_PY) -m benchmarks.run --full $(BENCH_FLAGS)
 
-# The node with batched output (issue 15): 1, 100, 1000, 10000 bodies at 100 Hz and 100 at 1 kHz, rk4, 1 substep,
+# The node with batched output: 1, 100, 1000, 10000 bodies at 100 Hz and 100 at 1 kHz, rk4, 1 substep,
 # per_body_topics false, a `poses` subscriber in another process; sim/wall, ticks delivered, CPU per tick, RSS,
 # start to first poses, stop time (medians of 5 runs of 10 s; BENCH_NODE_ARGS=--quick for 3 runs of 5 s).
-# Writes benchmarks/results/node_batch.md (the README's "Many bodies" figures come from it).
+# Writes benchmarks/results/node_batch.md (linked from docs/performance.md).
 BENCH_NODE_ARGS ?=
 .PHONY: bench-node
 bench-node: $(STAMP)

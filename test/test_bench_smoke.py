@@ -99,14 +99,18 @@ def test_the_package_never_imports_benchmarks():
     assert offenders == []
 
 
-def test_readme_speed_table_is_the_one_in_results_md():
-    """The README's generated block is results.md's headline, from the same run (make bench writes both)."""
-    readme = (REPO / "README.md").read_text()
-    block = readme.split("<!-- bench:begin -->", 1)[1].split("<!-- bench:end -->", 1)[0].strip()
-    assert block, "the README's benchmark block is empty: run `make bench`"
+def test_performance_page_block_is_the_one_in_results_md():
+    """docs/performance.md's generated block is text of results.md, from the same run (make bench writes both):
+    the provenance and machine, the per-integrator table, and the per-frame cost tables one heading level down."""
+    page = (REPO / "docs" / "performance.md").read_text()
+    block = page.split("<!-- bench:begin -->", 1)[1].split("<!-- bench:end -->", 1)[0].strip()
+    assert block, "docs/performance.md's benchmark block is empty: run `make bench`"
     results = (REPO / "benchmarks" / "results" / "results.md").read_text()
     head, marker, costs = block.partition("**What a force costs from Python**")
-    assert marker, "the README's block lacks the per-frame cost tables: run `make bench`"
-    assert head.strip() in results
+    assert marker, "the block lacks the per-frame cost tables: run `make bench`"
+    machine, per_integrator_marker, per_integrator = head.partition("Per integrator, this run")
+    assert per_integrator_marker, "the block lacks the per-integrator table: run `make bench`"
+    assert machine.strip() in results
+    assert (per_integrator_marker + per_integrator).strip() in results
     tables = costs.split("\n", 2)[2].strip()  # after the one-line lead-in: the two tables, one heading level down
     assert tables.replace("\n#### ", "\n### ").replace("#### ", "### ", 1) in results

@@ -237,7 +237,7 @@ def test_yaml_11_booleans_are_names(tmp_path: Path) -> None:
     assert load_scene(path).body_names == ("on", "yes", "no")
 
 
-# --------------------------------------------------------------------------- YAML 1.2 numbers, README
+# --------------------------------------------------------------------------- YAML 1.2 numbers, README and docs
 
 
 @pytest.mark.parametrize("spelling", ["1.0e6", "1e6", "1E+6", "1000000", "1.0e+6", "0x10", "+1e6"])
@@ -253,12 +253,15 @@ def test_quoted_numbers_stay_strings(tmp_path: Path) -> None:
         load_scene(path)
 
 
-#: A ```yaml block in README.md preceded by this line is a fragment (not a whole scene).
+#: A ```yaml block in README.md or docs/*.md preceded by this line is a fragment (not a whole scene).
 README_FRAGMENT_MARKER = "<!-- yaml fragment: not a whole scene -->"
 
+#: The pages whose ```yaml blocks are scenes a reader may copy.
+DOC_PAGES = [REPO / "README.md", *sorted((REPO / "docs").glob("*.md"))]
 
-def _readme_yaml_blocks() -> list[tuple[int, str, bool]]:
-    lines = (REPO / "README.md").read_text(encoding="utf-8").splitlines()
+
+def _yaml_blocks(page: Path) -> list[tuple[int, str, bool]]:
+    lines = page.read_text(encoding="utf-8").splitlines()
     blocks, i = [], 0
     while i < len(lines):
         if lines[i].strip() == "```yaml":
@@ -274,18 +277,19 @@ def _readme_yaml_blocks() -> list[tuple[int, str, bool]]:
     return blocks
 
 
-def test_every_yaml_block_in_the_readme_loads(tmp_path: Path) -> None:
-    blocks = _readme_yaml_blocks()
-    assert blocks, "README.md has no ```yaml block"
-    for line, text, fragment in blocks:
-        path = write(tmp_path, text, f"readme_line_{line}.yaml")
+def test_every_yaml_block_in_the_readme_and_docs_loads(tmp_path: Path) -> None:
+    blocks = [(page, *block) for page in DOC_PAGES for block in _yaml_blocks(page)]
+    assert {page.name for page, *_ in blocks} >= {"README.md", "scenes.md", "robot_stack.md"}, "a scene example is gone"
+    for page, line, text, fragment in blocks:
+        where = f"{page.relative_to(REPO)} line {line}"
+        path = write(tmp_path, text, f"{page.stem}_line_{line}.yaml")
         if fragment:
             from rigid_body_sim.core.scene_yaml import read_yaml
 
             read_yaml(text)  # a fragment must still be YAML
             continue
         scene = load_scene(path)
-        assert scene.body_names, f"README.md line {line}"
+        assert scene.body_names, where
 
 
 # --------------------------------------------------------------------------- scenes that load but cannot run

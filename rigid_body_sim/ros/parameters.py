@@ -354,7 +354,7 @@ def params_yaml(node_name: str = NODE_NAME) -> str:
 
 
 def markdown_table() -> str:
-    """The README's parameter table (between the ``parameters`` markers)."""
+    """The parameter table of docs/interface.md (between the ``parameters`` markers)."""
     rows = ["| parameter | type | default | valid values | changes | meaning |", "|---|---|---|---|---|---|"]
     for spec in PARAMETERS:
         default = ("the scene's body names" if spec.node_owned else "installed `config/default_scene.yaml`"
