@@ -315,3 +315,48 @@ def test_node_process_finishes_its_recording_on_ctrl_c(tmp_path: Path) -> None:
     times = [stamp(p.header) for _s, _m, p in by_topic(recording, "/box/pose")]
     assert len(times) > 10 and times == sorted(times)
     assert "recording finished" in log_path.read_text()
+
+
+# --------------------------------------------------------------------------- CLI paths that cannot name a file
+
+
+def _cli_error(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str]:
+    capsys.readouterr()
+    try:
+        code = main(argv)
+    except SystemExit as exc:  # argparse's usage errors
+        code = exc.code
+    return code, capsys.readouterr().err
+
+
+@pytest.mark.parametrize("kind", ["loop", "through-loop", "too-long", "not-a-directory", "directory"])
+@pytest.mark.parametrize("option", ["--csv", "--record", "--imu-csv", "SCENE", "plot RUN", "plot --output",
+                                    "plot --scene"])
+def test_paths_that_cannot_name_a_file_are_usage_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                                        kind: str, option: str) -> None:
+    """A symlink loop (ELOOP), a name too long (ENAMETOOLONG), a file used as a directory
+    (ENOTDIR), a directory for a file: exit 2 with one error line naming the path and what was
+    expected, never a traceback."""
+    scene = tmp_path / "scene.yaml"
+    scene.write_text(yaml.safe_dump(SCENE), encoding="utf-8")
+    record = tmp_path / "run.mcap"
+    assert main(["run", str(scene), "-T", "0.02", "--record", str(record), "-q"]) == 0
+    (tmp_path / "loop_a").symlink_to(tmp_path / "loop_b")
+    (tmp_path / "loop_b").symlink_to(tmp_path / "loop_a")
+    path = {"loop": str(tmp_path / "loop_a"), "through-loop": str(tmp_path / "loop_a" / "x.out"),
+            "too-long": str(tmp_path / ("n" * 300)), "not-a-directory": str(scene / "x.out"),
+            "directory": str(tmp_path)}[kind]
+    argv = {"--csv": ["run", str(scene), "-T", "0.02", "--csv", path],
+            "--record": ["run", str(scene), "-T", "0.02", "--record", path],
+            "--imu-csv": ["run", str(scene), "-T", "0.02", "--imu-csv", path],
+            "SCENE": ["run", path, "-T", "0.02", "--csv", str(tmp_path / "out.csv")],
+            "plot RUN": ["plot", path],
+            "plot --output": ["plot", str(record), "-o", path],
+            "plot --scene": ["plot", str(record), "--scene", path, "-o", str(tmp_path / "p.png")]}[option]
+    code, err = _cli_error(argv, capsys)
+    assert code == 2, err
+    assert "Traceback" not in err
+    errors = [line for line in err.splitlines() if line.startswith("rigid-body-sim")]
+    assert len(errors) == 1 and " error: argument " in errors[0], err
+    assert repr(path) in errors[0] and "; expected " in errors[0], err
+    assert not (tmp_path / "out.csv").exists()
