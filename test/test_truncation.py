@@ -189,3 +189,39 @@ def test_node_recording_cut_anywhere_reads_up_to_the_cut(tmp_path: Path) -> None
     counts = check_cuts(tmp_path, full, seed=3)
     assert counts["cuts"] == CUTS + 9
     check_plot_on_cuts(tmp_path, full, seed=4)
+
+
+_FULL_DISK = """\
+import resource, signal, sys
+signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit fails with EFBIG, as on a full disk
+limit = int(sys.argv.pop(1))
+resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+from rigid_body_sim.cli import main
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+@pytest.mark.parametrize("limit", [3_000, 40_000, 90_000, 150_000, 260_000])
+def test_recordings_of_a_full_disk_read_up_to_where_the_disk_filled(tmp_path: Path, limit: int) -> None:
+    """``run --record`` with the file size capped (a write fails with EFBIG, as on a full disk):
+    the run says it could not write, and the recording it left reads up to the cut, as cut short."""
+    scene = tmp_path / "scene.yaml"
+    scene.write_text(yaml.safe_dump(SCENE), encoding="utf-8")
+    record = tmp_path / "full.mcap"
+    done = subprocess.run([sys.executable, "-c", _FULL_DISK, str(limit), "run", str(scene), "-T", "8",
+                           "--record", str(record), "-q"], capture_output=True, text=True, timeout=120, check=False)
+    assert done.returncode == 1 and "Traceback" not in done.stderr, done.stderr
+    assert "cannot write" in done.stderr or "cannot finish" in done.stderr, done.stderr
+    assert 0 < record.stat().st_size <= limit
+    try:
+        run, _scene = read_recording(record)
+    except ValueError as exc:
+        assert CUT_SHORT in str(exc)
+    else:
+        assert run.meta["status"].startswith(f"{CUT_SHORT}: ")
+        assert len(run.time) > 0 and np.all(np.diff(run.time) > 0)
+    stderr = io.StringIO()
+    with contextlib.redirect_stderr(stderr), contextlib.redirect_stdout(io.StringIO()):
+        code = main(["plot", str(record), "--body", "ball", "-o", str(tmp_path / "full.png")])
+    assert code in (0, 1) and "Traceback" not in stderr.getvalue()
+    assert CUT_SHORT in stderr.getvalue(), stderr.getvalue()
