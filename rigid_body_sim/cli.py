@@ -10,10 +10,9 @@ Subcommands (``rigid-body-sim SUBCOMMAND --help`` for each)::
 Exit codes: 0 success; 1 a scene or input file that cannot be used (the message names the
 file, key path and expectation), a run that failed, or an output that could not be written
 to the end (a full disk); 2 bad command-line arguments (argparse's convention), including a
-step or rate no run can take, outputs that cannot be written (a FIFO, a device, a
+step or rate no run can take and outputs that cannot be written (a FIFO, a device, a
 directory, a path that cannot be created, two outputs or an output and the scene on one
-file) and paths that cannot name a file at all (a symlink loop, a name too long, a
-component that is not a directory, a directory given for a file); 0 when stopped by a signal, Ctrl-C (SIGINT) or SIGTERM, or when the reader of stdout
+file); 0 when stopped by a signal, Ctrl-C (SIGINT) or SIGTERM, or when the reader of stdout
 goes away (``describe ... | head``): a stop asked for is not a failure. An interrupted ``run``
 closes its files properly and ends them with a status saying where it stopped (``interrupted
 by SIGTERM at t = ... s``; a complete run's status says ``complete``), and says so on stderr:

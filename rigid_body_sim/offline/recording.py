@@ -36,16 +36,18 @@ with ``mcap``'s writer (profile ``ros2``, zstd chunks) as rosbag2 writes one: sc
 messages in CDR (:class:`CdrEncoder`, driven by those definitions), and on every channel the
 key ``offered_qos_profiles`` the ``ros2`` profile requires: the QoS the node offers on that
 topic, as rosbag2's YAML (:func:`offered_qos_profiles`; state topics and ``/clock`` are
-latched). It is finished, with its summary and index, by :meth:`McapRecorder.close`. The scene file (when it is one) is attached
-as ``scene.yaml`` and the run's settings are in the metadata record ``rigid_body_sim``, so
-``rigid-body-sim plot`` can recompute energy and the closed form from a recording alone.
+latched). It is finished, with its summary and index, by :meth:`McapRecorder.close`. The
+scene file (when it is one) is attached as ``scene.yaml`` and the run's settings are in the
+metadata record ``rigid_body_sim``, so ``rigid-body-sim plot`` can recompute energy and the
+closed form from a recording alone.
 
 How the recording ended is its ``status``, the key ``status`` of the metadata records named
 ``rigid_body_sim_status`` (the last one wins): ``incomplete: ...`` is written first, and
 :meth:`McapRecorder.close` writes the final one (``complete: ...``, ``interrupted by SIGTERM
 at t = ... s``...). A file that still
-says ``incomplete`` was never closed; one without a summary (its writer was killed) is read by
-:func:`read_recording` up to where it was cut, with ``status`` ``cut short: ...``.
+says ``incomplete`` was never closed; one cut anywhere (its writer was killed, the disk filled
+up: no footer at its end) is read by :func:`read_recording` up to the last whole record before
+the cut, with ``status`` ``cut short: ...``.
 
 The file is created with :func:`rigid_body_sim.paths.open_for_writing`: never blocking on a FIFO
 and refusing anything but a regular file (the node's ``record_path`` gets the same checks).

@@ -8,9 +8,10 @@ in the log; the simulation goes on.
 Crash safety: the node records with :class:`FlushingRecorder`, the offline
 :class:`~rigid_body_sim.offline.recording.McapRecorder` (same topics, schemas, metadata and
 status records, channel metadata ``offered_qos_profiles``, so
-:func:`~rigid_body_sim.offline.recording.read_recording`, Foxglove and any MCAP tool read it) written through mcap's own ``mcap.writer.Writer`` with messages serialized by rclpy,
-whose public ``flush()`` ends the open chunk. The node flushes at most :data:`FLUSH_PERIOD_S`
-wall seconds after a message was written (checked every tick, also while paused), so after a
+:func:`~rigid_body_sim.offline.recording.read_recording`, Foxglove and any MCAP tool read it)
+written through mcap's own ``mcap.writer.Writer`` with messages serialized by rclpy, whose
+public ``flush()`` ends the open chunk. The node flushes at most :data:`FLUSH_PERIOD_S` wall
+seconds after a message was written (checked every tick, also while paused), so after a
 SIGKILL or a crash the file holds every message written up to about ``FLUSH_PERIOD_S`` plus one
 tick before the kill, and is read as ``cut short`` (no summary). A clean stop finishes the file.
 """
