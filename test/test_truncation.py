@@ -150,6 +150,7 @@ def check_plot_on_cuts(tmp_path: Path, full: Path, seed: int, n: int = 6) -> Non
             assert len(lines) == 1 and str(cut_file) in lines[0], text
 
 
+@pytest.mark.timeout(300)
 def test_cli_recording_cut_anywhere_reads_up_to_the_cut(tmp_path: Path) -> None:
     scene = tmp_path / "scene.yaml"
     scene.write_text(yaml.safe_dump(SCENE), encoding="utf-8")
@@ -161,7 +162,7 @@ def test_cli_recording_cut_anywhere_reads_up_to_the_cut(tmp_path: Path) -> None:
 
 
 @pytest.mark.ros
-@pytest.mark.timeout(180)
+@pytest.mark.timeout(300)
 def test_node_recording_cut_anywhere_reads_up_to_the_cut(tmp_path: Path) -> None:
     """The node flushes a chunk every 0.5 s of wall time: 3 s of running gives several chunks."""
     scene = tmp_path / "scene.yaml"
