@@ -552,7 +552,7 @@ def _plot(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
 
     scene_text = None
     try:
-        if head == _MCAP_MAGIC:
+        if head and _MCAP_MAGIC.startswith(head):  # an MCAP file, or one cut inside its magic
             from .offline.recording import read_recording
 
             data, scene_text = read_recording(run_path)

@@ -133,7 +133,7 @@ def check_plot_on_cuts(tmp_path: Path, full: Path, seed: int, n: int = 6) -> Non
     """``rigid-body-sim plot`` on cut files: exit 0 (with the cut-short warning) or 1, one line, no traceback."""
     data = full.read_bytes()
     rng = np.random.default_rng(seed)
-    for k, cut in enumerate([3, *sorted(int(c) for c in rng.integers(0, len(data), n))]):
+    for k, cut in enumerate([1, 3, 5, *sorted(int(c) for c in rng.integers(0, len(data), n))]):
         cut_file = tmp_path / f"plot_cut_{k}.mcap"
         cut_file.write_bytes(data[:cut])
         stderr = io.StringIO()
@@ -147,7 +147,7 @@ def check_plot_on_cuts(tmp_path: Path, full: Path, seed: int, n: int = 6) -> Non
         else:
             assert code == 1
             lines = [line for line in text.splitlines() if not line.startswith("rigid-body-sim plot: warning")]
-            assert len(lines) == 1 and str(cut_file) in lines[0], text
+            assert len(lines) == 1 and str(cut_file) in lines[0] and CUT_SHORT in lines[0], text
 
 
 @pytest.mark.timeout(300)
