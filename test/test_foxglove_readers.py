@@ -368,6 +368,27 @@ def test_200_batched_bodies_from_the_node_decode_in_foxglove(tmp_path: Path) -> 
     assert batches[-1][0] == max(t for t, _ in batches)
 
 
+def test_batched_recording_declares_the_qos_the_node_offers(tmp_path: Path) -> None:
+    """per_body_topics false, in-process: /poses, /velocities and /clock carry the QoS the ROS
+    graph reports for the node's publishers, and the last batch is the simulator's state."""
+    from rigid_body_sim.testing import SimHarness
+
+    out = tmp_path / "batched.mcap"
+    with SimHarness(parameters={"record_path": str(out), "per_body_topics": False}) as h:
+        h.step(12)
+        sim = h.node.simulator
+        last = (round(sim.time * 1e9), sim.positions_world()[0].tolist(), sim.orientations_xyzw()[0].tolist())
+        live_qos = {topic: graph_qos(h.client, topic) for topic in ("/poses", "/velocities", "/clock")}
+    result = foxglove_decode(out)
+    check_everything_decodes(result, finished=True)
+    for topic, qos in live_qos.items():
+        assert recorded_qos(result, topic) == qos
+    t, batch = by_topic(result, "/poses")[-1]
+    assert t == last[0] == round(12 * TICK_S * 1e9)
+    pose = batch["poses"][0]
+    assert xyz(pose["position"]).tolist() == last[1] and xyzw(pose["orientation"]).tolist() == last[2]
+
+
 # --------------------------------------------------------------------------- the node process killed with SIGKILL
 
 
