@@ -536,6 +536,9 @@ def read_recording(path: str | os.PathLike[str]) -> tuple[RunData, str | None]:
             size = os.fstat(f.fileno()).st_size
             if size > MAX_RUN_FILE_BYTES:
                 raise ValueError(f"{path}: the recording is {size} bytes; expected at most {MAX_RUN_FILE_BYTES}")
+            head = f.read(len(MCAP_MAGIC))
+            if not MCAP_MAGIC.startswith(head):
+                raise ValueError(f"{path}: not an MCAP recording (it does not start with the MCAP magic)")
             # A finished file ends with its footer and the magic; one without them was cut (a kill,
             # a full disk, a copy stopped half way) and is read record by record up to the cut.
             f.seek(max(0, size - len(MCAP_MAGIC)))
