@@ -4,6 +4,7 @@
 #   make test       set up if needed, then pytest (slow tests excluded)   <- what CI runs
 #   make test-slow  set up if needed, then pytest -m slow (long stability/soak runs)
 #   make venv       only the set-up: .venv with Python 3.11, pinned requirements, package -e
+#   make foxglove-deps  Node.js (apt if missing) and the pinned npm modules of test/foxglove (Foxglove's readers)
 #   make clean      remove caches and build output (keeps .venv); make distclean also .venv
 #
 # Variables: PYTHON=/path/to/python3.11, PYTEST_ARGS="-k foo -x", RUN_ARGS="--ros-args ...",
@@ -32,7 +33,7 @@ RUN_ARGS ?=
 # ROS_LOCALHOST_ONLY; ROS_AUTOMATIC_DISCOVERY_RANGE is the variable it reads).
 export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
 
-.PHONY: venv run test test-slow clean distclean
+.PHONY: venv run test test-slow clean distclean foxglove-deps
 
 venv: $(STAMP)
 
@@ -83,8 +84,28 @@ $(STAMP): requirements.txt requirements-test.txt setup.py setup.cfg package.xml
 run: $(STAMP)
 	exec $(VENV)/bin/rigid_body_sim_node $(RUN_ARGS)
 
+# Foxglove's own readers (@mcap/core, @mcap/support, @foxglove/rosmsg, @foxglove/rosmsg2-serialization), pinned
+# in test/foxglove/package-lock.json, for test/test_foxglove_readers.py. Node.js and npm come from apt if missing.
+FOXGLOVE_DIR := test/foxglove
+FOXGLOVE_STAMP := $(FOXGLOVE_DIR)/node_modules/.package-lock.json
+foxglove-deps: $(FOXGLOVE_STAMP)
+
+$(FOXGLOVE_STAMP): $(FOXGLOVE_DIR)/package.json $(FOXGLOVE_DIR)/package-lock.json
+	@say() { printf '[make foxglove-deps] %s\n' "$$*"; }
+	die() { printf '[make foxglove-deps] ERROR: %s\n' "$$*" >&2; exit 1; }
+	if ! command -v node >/dev/null || ! command -v npm >/dev/null; then
+	  command -v apt-get >/dev/null && [ "$$(id -u)" = 0 ] \
+	    || die "node and npm are needed for the Foxglove reader test: install Node.js >= 18 (Debian: apt-get install nodejs npm)"
+	  say "installing Debian packages: nodejs npm (apt-get update first)"
+	  export DEBIAN_FRONTEND=noninteractive
+	  apt-get update -qq && apt-get install -y -qq --no-install-recommends nodejs npm >/dev/null
+	fi
+	say "installing the pinned npm modules of $(FOXGLOVE_DIR) (node $$(node --version))"
+	npm ci --prefix "$(FOXGLOVE_DIR)" --no-audit --no-fund --ignore-scripts --loglevel=error
+	touch "$@"
+
 # --foreground: Ctrl-C still reaches pytest; SIGINT first so pytest prints its summary.
-test: $(STAMP)
+test: $(STAMP) $(FOXGLOVE_STAMP)
 	timeout --foreground -s INT -k 60 $(TEST_TIMEOUT_S) $(VENV_PY) -m pytest $(PYTEST_ARGS)
 
 test-slow: $(STAMP)

@@ -25,10 +25,12 @@ loader only (not the compiled simulator), so it is quick and small.
 from __future__ import annotations
 
 import argparse
+import errno
 import json
 import math
 import os
 import signal
+import stat
 import sys
 import threading
 from contextlib import ExitStack, contextmanager
@@ -230,11 +232,62 @@ def main(argv: Sequence[str] | None = None) -> int:
             return 0
 
 
+#: What a path is when looking it up fails with this errno (the lookup, not the file, is the problem).
+_PATH_ERRNOS = {
+    errno.ELOOP: "is a symbolic link loop (or goes through one)",
+    errno.ENAMETOOLONG: "is too long a name for the file system",
+    errno.ENOTDIR: "goes through something that is not a directory",
+    errno.EISDIR: "is a directory",
+    errno.EACCES: "cannot be reached (permission denied on a directory of it)",
+    errno.EOVERFLOW: "cannot be examined (value too large)",
+}
+
+
+def _path_error(value: str, expected: str) -> str | None:
+    """Why ``value`` cannot even be looked up as the path of ``expected`` to write (a symlink loop,
+    a name too long, a component that is not a directory...), as one line naming it, or None."""
+    try:
+        os.stat(value)
+    except FileNotFoundError:
+        return None  # a new file (its directory is checked by check_writable_path)
+    except ValueError:  # an embedded NUL byte
+        return f"{value!r} contains a NUL byte; expected the path of {expected} to write"
+    except OSError as exc:
+        what = _PATH_ERRNOS.get(exc.errno or 0, f"cannot be looked up ({exc.strerror or exc})")
+        return f"{value!r} {what}; expected the path of {expected} to write"
+    return None
+
+
+def _input_path(parser: argparse.ArgumentParser, argument: str, value: str | None, expected: str) -> None:
+    """A usage error naming ``argument`` if ``value`` cannot name a file to read at all: a symlink
+    loop, a name too long, a component that is not a directory, or a directory itself. A missing
+    or unreadable file, a FIFO or a device stays the reader's error (exit 1)."""
+    if value is None:
+        return
+    try:
+        mode = os.stat(value).st_mode
+    except (OSError, ValueError) as exc:
+        code = getattr(exc, "errno", None)
+        if code in (errno.ELOOP, errno.ENAMETOOLONG, errno.ENOTDIR):
+            parser.error(f"argument {argument}: {value!r} {_PATH_ERRNOS[code]}; expected {expected}")
+        return
+    if stat.S_ISDIR(mode):
+        parser.error(f"argument {argument}: {value!r} is a directory; expected {expected}")
+
+
+def _same_file(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
+    """:func:`same_file`, False where a path cannot be resolved at all (a symlink loop: never the other file)."""
+    try:
+        return same_file(a, b)
+    except (OSError, RuntimeError, ValueError):
+        return False
+
+
 def _output_path(parser: argparse.ArgumentParser, option: str, value: str | None, expected: str) -> Path | None:
     """``value`` as the path of a regular file that can be written (else a usage error naming ``option``)."""
     if value is None:
         return None
-    problem = check_writable_path(value, expected=expected)
+    problem = _path_error(value, expected) or check_writable_path(value, expected=expected)
     if problem is not None:
         parser.error(f"argument {option}: {problem}")
     return Path(value)
@@ -246,10 +299,10 @@ def _refuse_one_file(parser: argparse.ArgumentParser, paths: list[tuple[str, Pat
     outputs = [(option, path) for option, path in paths if path is not None]
     for i, (option, path) in enumerate(outputs):
         for other, other_path in outputs[:i]:
-            if same_file(path, other_path):
+            if _same_file(path, other_path):
                 parser.error(f"argument {option}: {str(path)!r} is the same file as {other}; expected another path")
         for what, source in inputs:
-            if same_file(path, source):
+            if _same_file(path, source):
                 parser.error(f"argument {option}: {str(path)!r} is {what}; expected another path")
 
 
@@ -257,6 +310,7 @@ def _refuse_one_file(parser: argparse.ArgumentParser, paths: list[tuple[str, Pat
 
 
 def _run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    _input_path(parser, "SCENE", args.scene, "a scene YAML file")
     csv_path = _output_path(parser, "--csv", args.csv, "a CSV file")
     record_path = _output_path(parser, "--record", args.record, "an .mcap file")
     imu_path = _output_path(parser, "--imu-csv", args.imu_csv, "a CSV file")
@@ -476,6 +530,8 @@ def _version() -> str:
 
 
 def _plot(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    _input_path(parser, "RUN", args.run, "a CSV file or an MCAP recording")
+    _input_path(parser, "--scene", args.scene, "a scene YAML file")
     run_path = Path(args.run)
     try:
         with open_for_reading(run_path, expected="a CSV file or an MCAP recording") as f:
@@ -487,13 +543,16 @@ def _plot(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         assert out is not None
     else:
         out = run_path.with_suffix(".png")
+        problem = _path_error(str(out), "a PNG file")
+        if problem is not None:
+            parser.error(f"argument --output: the default {problem}; pass --output")
     _refuse_one_file(parser, [("--output", out)], [("the run file itself", args.run)])
 
     from .offline.rundata import with_derived_quantities
 
     scene_text = None
     try:
-        if head == _MCAP_MAGIC:
+        if head and _MCAP_MAGIC.startswith(head):  # an MCAP file, or one cut inside its magic
             from .offline.recording import read_recording
 
             data, scene_text = read_recording(run_path)
@@ -525,8 +584,8 @@ def _plot(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
 
     targets = [out if len(bodies) == 1 else out.with_name(f"{out.stem}_{body}{out.suffix or '.png'}") for body in bodies]
     for target in targets:
-        problem = check_writable_path(target, expected="a PNG file")
-        if problem is not None or same_file(target, run_path):
+        problem = _path_error(str(target), "a PNG file") or check_writable_path(target, expected="a PNG file")
+        if problem is not None or _same_file(target, run_path):
             raise _Failure(f"cannot write {target}: {problem or 'it is the run file itself'}")
     for body, target in zip(bodies, targets):
         try:
@@ -564,6 +623,7 @@ def _plot_scene(args: argparse.Namespace, data: Any, scene_text: str | None) -> 
 def _describe(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from .core import describe_scene
 
+    _input_path(parser, "SCENE", args.scene, "a scene YAML file")
     scene = load_scene(args.scene)
     bodies = describe_scene(scene, model_reduction=not args.no_reduction)
     if args.json:
@@ -605,6 +665,7 @@ def _describe(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
 
 
 def _check(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    _input_path(parser, "SCENE", args.scene, "a scene YAML file")
     scene = load_scene(args.scene)
     count = len(scene.body_names)
     print(f"{scene.source}: ok ({count} bod{'y' if count == 1 else 'ies'}: {', '.join(scene.body_names)}; "
