@@ -105,7 +105,7 @@ def test_tick_thread_counts_only_skipped_ticks_as_missed():
         node = sim.node
         sim.spin_for(0.2)
         node.diagnostics()  # a fresh window
-        with node._lock:  # the tick thread waits here: a 0.3 s stall, 30 periods
+        with node.locked_simulator():  # the tick thread waits here: a 0.3 s stall, 30 periods
             time.sleep(0.3)
         sim.spin_for(0.3)
         values = {kv.key: kv.value for kv in node.diagnostics().status[0].values}
@@ -118,7 +118,7 @@ def test_an_error_in_the_tick_thread_reaches_the_executor():
         def broken() -> None:
             raise RuntimeError("broken tick")
 
-        sim.node._advance_one_tick_locked = broken
+        sim.node.session.advance = broken
         with pytest.raises(RuntimeError, match="broken tick"):
             sim.spin_for(1.0)
         assert not sim.node._tick_loop.alive
