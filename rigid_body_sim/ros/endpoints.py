@@ -26,6 +26,7 @@ from .inputs import InputChange, WrenchInputs
 from .markers import MarkerPublisher
 from .node_recording import NodeRecording
 from .publishers import PublisherChange, StatePublishers
+from .session import physics_dt
 from .set_state import SetStateChange, SetStateInputs
 
 __all__ = ["BodyEndpoints", "EndpointChange"]
@@ -132,6 +133,16 @@ class BodyEndpoints:
         finite = sim.state.finite_bodies().tolist()
         skip = [body for index, body in enumerate(sim.body_names) if not finite[index]]
         self.recording.write(lambda recorder: recorder.write_simulator(sim, skip=skip))
+
+    def open_recorder(self, path: str, sim: Simulator, settings: Mapping[str, Any]) -> McapRecorder:
+        """A new recorder at ``path`` for a change to ``settings``, starting from ``sim``'s state.
+
+        Raises
+        ------
+        OSError
+            If ``path`` cannot be written.
+        """
+        return self.recording.open(path, sim, dt=physics_dt(settings), integrator=settings["integrator"])
 
     def replace_recorder(self, recorder: McapRecorder | None) -> McapRecorder | None:
         """Record from now on with ``recorder`` (None: stop); returns the one replaced (hold the lock)."""

@@ -9,13 +9,10 @@ parameters.py. For robot stacks: ``B/S/imu`` per IMU site (imu.py), ``B/set_stat
 (set_state.py), ``~/step_ticks``, ``~/spawn`` and ``~/delete`` (robot_services.py,
 scene_edit.py) and ``markers`` (markers.py). Each physics step advances ``real_time_factor / (rate_hz · substeps)`` s.
 
-This module wires those parts together: the simulation session (session.py: simulator, lock,
-tick, step, reset, spawn/delete, busy answers), the per-body endpoints (endpoints.py), the tick
-thread (tick_loop.py), the recording (node_recording.py) and /diagnostics. It also holds the
-parameter-change protocol: a change is validated and prepared (a new scene loaded and its
-simulator built, a recording file opened) in the on-set callback without the session's lock,
-then applied whole under it in the post-set callback; endpoints of a new scene are created
-before and destroyed after, so a scene change never stops the ticks for longer than the swap.
+This module wires those parts together (the session, session.py; the per-body endpoints,
+endpoints.py; the tick thread, tick_loop.py; node_diagnostics.py) and keeps rclpy's parameter
+callbacks: a change is validated and prepared by the session in the on-set callback, then
+applied whole in the post-set callback.
 """
 
 from __future__ import annotations
@@ -34,7 +31,6 @@ from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile
 
 from ..core import Simulator
-from ..offline.recording import McapRecorder
 from .conversions import MAX_ROS_TIME_S
 from .endpoints import BodyEndpoints
 from .node_diagnostics import NodeDiagnostics
@@ -43,7 +39,7 @@ from .node_recording import NodeRecording
 from .parameters import BY_NAME, coerce, declare_parameters, problems
 from .robot_services import create_robot_services
 from .services import create_services
-from .session import MAX_BATCH_ONLY_BODIES, MAX_BODIES, SimSession, build_simulator, physics_dt
+from .session import MAX_BATCH_ONLY_BODIES, MAX_BODIES, SimSession, build_simulator
 from .tick_loop import TickLoop
 
 __all__ = ["RigidBodySimNode", "DEFAULT_INTEGRATOR", "MAX_BODIES", "MAX_BATCH_ONLY_BODIES", "QUEUE_DEPTH"]
@@ -53,6 +49,7 @@ DEFAULT_INTEGRATOR = BY_NAME["integrator"].default
 #: History depth of every subscription and of /diagnostics (bounded memory under floods); state
 #: publishers keep the latest message only (publishers.STATE_QOS).
 QUEUE_DEPTH = 10
+
 
 class RigidBodySimNode(Node):
     """Rigid-body simulator node. Keyword arguments go to :class:`rclpy.node.Node` (``context``,
@@ -81,20 +78,17 @@ class RigidBodySimNode(Node):
                  **kwargs: Any):
         super().__init__(node_name, **kwargs)
         self._tick_loop: TickLoop | None = None  # what destroy_node reads, if construction stops early
-        self._recording: NodeRecording | None = None
         self._pending = threading.local()  # the prepared change of the request being set, per thread
         settings = declare_parameters(self)
         sim = build_simulator(settings["scene"], settings)
         self._set_body_names(sim.body_names)
-        recording = NodeRecording(self.get_logger(), settings["world_frame"], self.get_namespace(),
-                                  self.get_fully_qualified_name())
         qos = QoSProfile(depth=QUEUE_DEPTH)
-        self._endpoints = BodyEndpoints(self, qos, settings, recording)
+        self._endpoints = BodyEndpoints(self, qos, settings, NodeRecording(
+            self.get_logger(), settings["world_frame"], self.get_namespace(), self.get_fully_qualified_name()))
         self._endpoints.commit(self._endpoints.prepare(sim.scene, settings["publish_odometry"], keep_state=False))
         self._session = SimSession(sim, settings, self._endpoints, self.get_logger(), max_time_s=MAX_ROS_TIME_S,
                                    tick_running_for=self.tick_running_for, on_bodies=self._set_body_names,
                                    on_restart=lambda: self._diagnostics.open_window())
-        self._recording = recording
         self._service_handles = create_services(self, self._session) + create_robot_services(self, self._session)
         self.add_pre_set_parameters_callback(self._coerce_parameters)
         self.add_on_set_parameters_callback(self._prepare_change)
@@ -142,11 +136,8 @@ class RigidBodySimNode(Node):
         values = {p.name: p.value for p in parameters if p.name in BY_NAME}  # the last of a name wins, as in rclpy
         reason = "; ".join(problems(values))
         if not reason:
-            reason, self._pending.change = self._session.begin_change(values, self._open_recorder, parameters)
+            reason, self._pending.change = self._session.begin_change(values, self._endpoints.open_recorder, parameters)
         return SetParametersResult(successful=not reason, reason=reason or "")
-
-    def _open_recorder(self, path: str, sim: Simulator, settings: dict[str, Any]) -> McapRecorder:
-        return self._recording.open(path, sim, dt=physics_dt(settings), integrator=settings["integrator"])
 
     def _apply_change(self, parameters: list[Parameter]) -> None:
         """Post-set: apply the change :meth:`_prepare_change` prepared for this request, whole."""
@@ -172,8 +163,7 @@ class RigidBodySimNode(Node):
     # ------------------------------------------------------------------ ticks
 
     def start_ticking(self) -> None:
-        """Open the recording (``record_path``), publish the initial state, start the tick thread.
-        Once; the constructor calls it unless ``start_ticking=False``.
+        """Open the recording (``record_path``), publish the initial state, start the tick thread; once.
 
         Raises
         ------
@@ -192,7 +182,7 @@ class RigidBodySimNode(Node):
         """One tick of the tick thread (the session's lock is held): the session's tick, then flush and log."""
         self._diagnostics.window.record(due_ns, period_ns, missed=missed)
         self._session.tick()
-        self._recording.flush_if_due()
+        self._endpoints.recording.flush_if_due()
         settings = self._session.settings
         self._status_log.maybe_log(self.get_logger(), self._session.simulator, settings["status_period"],
                                    settings["paused"])
@@ -204,7 +194,7 @@ class RigidBodySimNode(Node):
         detail = "".join(traceback.format_exception(exc)).rstrip()
         self.get_logger().fatal(f"tick thread failed, the simulation has stopped: {exc!r}\n{detail}")
         with contextlib.suppress(Exception):
-            self.publish_diagnostics()
+            self._diagnostics.publish()
         # A timer due at once raises the failure in the executor at every spin (rclpy's
         # EventsExecutor does not support guard conditions).
         self.create_timer(0.0, self._raise_tick_failure, clock=self._steady_clock)
@@ -232,17 +222,6 @@ class RigidBodySimNode(Node):
         with self._session.lock:
             self._endpoints.publish(self._session.simulator, self._session.settings)
 
-    # ------------------------------------------------------------------ diagnostics
-
-    def diagnostics(self, wait_s: float | None = None) -> DiagnosticArray:
-        """The /diagnostics report for the window since the last one; opens a new window. With
-        ``wait_s``, a tick that keeps the simulator longer than that gives a report that says so."""
-        return self._diagnostics.report(wait_s)
-
-    def publish_diagnostics(self) -> None:
-        """Publish :meth:`diagnostics` on /diagnostics; never waits long for a tick."""
-        self._diagnostics.publish()
-
     def _log_start_up(self) -> None:
         frames = {body: list(inputs.frames) for body, inputs in self._endpoints.inputs.bodies.items()}
         log_scene(self.get_logger(), self._session.simulator, self._session.settings, frames)
@@ -256,18 +235,22 @@ class RigidBodySimNode(Node):
 
     def stop_ticking_and_recording(self) -> None:
         """Stop the tick thread (a tick under way ends first) and finish the recording. Safe to call twice."""
-        if self._tick_loop is not None:
+        if self._tick_loop is not None:  # else construction stopped before any recording could start
             self._tick_loop.stop()
-        if self._recording is not None:
             self._endpoints.stop_recording(self._session.lock)
 
     def finish_recording_now(self) -> None:
         """Finish the recording without waiting for the lock: for an exit that cannot wait for a
         tick stuck in a step (which writes nothing while it steps)."""
-        if self._recording is not None:
+        if self._tick_loop is not None:
             self._endpoints.stop_recording(contextlib.nullcontext())
 
     # ------------------------------------------------------------------ read-only access for tools and tests
+
+    def diagnostics(self, wait_s: float | None = None) -> DiagnosticArray:
+        """The /diagnostics report for the window since the last one; opens a new window. With
+        ``wait_s``, a tick that keeps the simulator longer than that gives a report that says so."""
+        return self._diagnostics.report(wait_s)
 
     @property
     def session(self) -> SimSession:
