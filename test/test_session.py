@@ -233,31 +233,91 @@ def test_a_refused_edit_changes_nothing():
     assert session.simulator.body_names == ("box", "ball") and not io.named("prepare")
 
 
-def test_busy_refusal_says_how_long_the_tick_has_run():
-    """A tick holding the lock longer than the services wait: they are refused, saying for how long."""
-    holding, release = threading.Event(), threading.Event()
-    session, _ = make_session(busy_wait_s=0.05, tick_running_for=lambda: 2.5)
+class BackToBackTicks:
+    """A tick thread whose ticks overrun their period: each holds the lock ``tick_s`` and the next
+    one starts at once (through ``session.lock.ticks``, as tick_loop.py takes it)."""
 
-    def long_tick() -> None:
-        with session.lock:
+    def __init__(self, session: SimSession, tick_s: float):
+        self.started = 0  # ticks started so far
+        self._session, self._tick_s = session, tick_s
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run)
+
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            with self._session.lock.ticks:
+                self.started += 1
+                time.sleep(self._tick_s)  # a step that keeps the lock (the GIL is free, as in a compiled step)
+
+    def __enter__(self) -> "BackToBackTicks":
+        self._thread.start()
+        while not self.started:
+            time.sleep(0.001)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._stop.set()
+        self._thread.join()
+
+
+def test_requests_get_in_between_back_to_back_ticks():
+    """Each request waits for the tick under way at most, never for the one after it: the lock
+    lets every caller already waiting in before the next tick."""
+    session, io = make_session(settings={"paused": False}, busy_wait_s=1.0)
+    seen = []  # ticks started when a request arrived, and when it got the lock
+    io.take_set_states = lambda sim: False  # the fake ticks never call it; requests do not either
+    with BackToBackTicks(session, tick_s=0.05) as ticks:
+        original_prepare = io.prepare
+
+        def prepare(*args, **kwargs):
+            seen[-1].append(ticks.started)
+            return original_prepare(*args, **kwargs)
+
+        io.prepare = prepare
+        for _ in range(10):
+            seen.append([ticks.started])
+            ok, message = session.reset()
+            assert ok, message
+            time.sleep(0.013)  # arrive at different moments of the ticks
+    assert all(got - arrived <= 1 for arrived, got in seen), seen
+
+
+def test_busy_refusal_says_who_holds_the_simulator_and_for_how_long():
+    """A refusal names what kept the simulator (a tick, or another request) and how long it has
+    been running, measured, not guessed: at least the wait, at most the time since it started."""
+    session, _ = make_session(busy_wait_s=0.2)
+    with BackToBackTicks(session, tick_s=3.0):
+        start = time.monotonic()
+        answers = [session.step_paused(), session.step_ticks(2), session.reset(), session.edit({}, ["ball"])]
+        assert session.tick_running_for() == pytest.approx(time.monotonic() - start, abs=0.1)
+        elapsed = time.monotonic() - start
+    assert elapsed < 2.0  # each waited busy_wait_s, not for the tick
+    for ok, message in answers:
+        assert not ok and message.startswith("refused: busy: a tick has been running for "), message
+        assert "heavy scene" in message
+    running = [float(message.split("running for ")[1].split(" s")[0]) for _, message in answers]
+    assert running == sorted(running) and 0.2 - 0.05 <= running[0] and running[-1] <= elapsed + 0.05, running
+    assert session.simulator.time == 0.0 and session.simulator.body_names == ("box", "ball")
+    assert session.tick_running_for() is None and session.step_paused()[0]  # no tick: served again
+
+    holding, release = threading.Event(), threading.Event()
+
+    def long_request() -> None:
+        with session.lock("~/step_ticks"):
             holding.set()
             release.wait(10)
 
-    thread = threading.Thread(target=long_tick)
+    thread = threading.Thread(target=long_request)
     thread.start()
     try:
         assert holding.wait(10)
-        start = time.monotonic()
-        answers = [session.step_paused(), session.step_ticks(2), session.reset(),
-                   session.edit({}, ["ball"])]
-        assert time.monotonic() - start < 2.0  # each waited about busy_wait_s, not for the tick
-        for ok, message in answers:
-            assert not ok and message.startswith("refused: busy: a tick has been running for 2.5 s"), message
+        ok, message = session.reset()
+        assert not ok and message.startswith("refused: busy: ~/step_ticks has been running for ") and "heavy" not in message
+        assert 0.15 <= float(message.split("running for ")[1].split(" s")[0]) < 10.0, message
+        assert session.tick_running_for() is None  # a request, not a tick, holds it
     finally:
         release.set()
         thread.join()
-    assert session.simulator.time == 0.0 and session.simulator.body_names == ("box", "ball")
-    assert session.step_paused()[0]  # the tick is over: served again
 
 
 def test_a_settings_change_applies_whole():

@@ -87,7 +87,7 @@ class RigidBodySimNode(Node):
             self.get_logger(), settings["world_frame"], self.get_namespace(), self.get_fully_qualified_name()))
         self._endpoints.commit(self._endpoints.prepare(sim.scene, settings["publish_odometry"], keep_state=False))
         self._session = SimSession(sim, settings, self._endpoints, self.get_logger(), max_time_s=MAX_ROS_TIME_S,
-                                   tick_running_for=self.tick_running_for, on_bodies=self._set_body_names,
+                                   on_bodies=self._set_body_names,
                                    on_restart=lambda: self._diagnostics.open_window())
         self._service_handles = create_services(self, self._session) + create_robot_services(self, self._session)
         self.add_pre_set_parameters_callback(self._coerce_parameters)
@@ -100,7 +100,7 @@ class RigidBodySimNode(Node):
         self._status_log = StatusLog()
         self._log_start_up()
         self._tick_loop = TickLoop(f"{self.get_name()} ticks", lambda: round(1e9 / self._session.settings["rate_hz"]),
-                                   self._tick, self._session.lock, self._on_tick_failure)
+                                   self._tick, self._session.lock.ticks, self._on_tick_failure)
         if start_ticking:
             self.start_ticking()
 

@@ -78,7 +78,7 @@ class NodeDiagnostics:
         array.header.stamp = self._node.get_clock().now().to_msg()
         name, session = self._node.get_name(), self._session
         try:
-            with session.busy_or_locked(math.inf if wait_s is None else wait_s):
+            with session.busy_or_locked(math.inf if wait_s is None else wait_s, holder="a /diagnostics report"):
                 sim, settings = session.simulator, session.settings
                 holds, pending, accepted, rejected = self._inputs.snapshot()
                 array.status = diagnostic_statuses(

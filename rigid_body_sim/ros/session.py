@@ -19,6 +19,7 @@ from __future__ import annotations
 import contextlib
 import math
 import threading
+import time
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Mapping, Protocol
 
@@ -157,6 +158,98 @@ class SettingsChange:
             self.recorder = None
 
 
+class SessionLock:
+    """The session's lock: re-entrant, fair to callers over the ticks, and it knows who holds it since when.
+
+    A tick takes it as ``with lock.ticks:``. Before it does, every caller already waiting for the
+    lock gets its turn (or gives up), so a caller waits for the tick under way at most, also when
+    ticks overrun their period and follow each other at once. A plain lock makes no such promise:
+    the tick thread that releases it may take it again before a waiting thread wakes up.
+    Callers take it as ``with lock:`` or ``with lock("~/reset"):``, naming themselves, so that one
+    that gives up can say what kept it out and for how long (:meth:`held`).
+    """
+
+    TICK = "a tick"  #: How a tick is named as holder.
+
+    def __init__(self) -> None:
+        self._lock = threading.RLock()
+        self._turns = threading.Condition()  # guards the tickets and the waiting set
+        self._next_ticket = 0
+        self._waiting: set[int] = set()  # tickets of callers waiting for the lock
+        self._depth = 0  # re-entrant holds of the holder
+        self._holder: tuple[str, int] | None = None  # (name, monotonic ns since) of the outermost hold
+        self.ticks = _TickTurn(self)
+
+    def acquire(self, blocking: bool = True, timeout: float = -1, holder: str = "a request") -> bool:
+        """Take the lock as ``holder`` (see :meth:`threading.RLock.acquire`); True if taken."""
+        with self._turns:
+            ticket, self._next_ticket = self._next_ticket, self._next_ticket + 1
+            self._waiting.add(ticket)
+        try:
+            taken = self._lock.acquire(blocking, timeout)
+        finally:
+            with self._turns:
+                self._waiting.discard(ticket)
+                self._turns.notify_all()
+        if taken:
+            self._enter(holder)
+        return taken
+
+    def acquire_for_tick(self) -> None:
+        """Take the lock for a tick, once every caller already waiting has had its turn."""
+        with self._turns:
+            arrived = self._next_ticket  # callers from now on wait for this tick
+            self._turns.wait_for(lambda: not self._waiting or min(self._waiting) >= arrived)
+        self._lock.acquire()
+        self._enter(self.TICK)
+
+    def release(self) -> None:
+        """Release one hold (the holder's thread)."""
+        self._depth -= 1
+        if self._depth == 0:
+            self._holder = None
+        self._lock.release()
+
+    def _enter(self, holder: str) -> None:
+        self._depth += 1
+        if self._depth == 1:
+            self._holder = (holder, time.monotonic_ns())
+
+    def held(self) -> tuple[str, float] | None:
+        """(Who holds the lock, for how many seconds so far), or None if nobody does."""
+        holder = self._holder
+        return None if holder is None else (holder[0], (time.monotonic_ns() - holder[1]) * 1e-9)
+
+    def __enter__(self) -> "SessionLock":
+        self.acquire()
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.release()
+
+    @contextlib.contextmanager
+    def __call__(self, holder: str) -> Iterator[None]:
+        """``with lock("~/reset"):``: the lock, held as ``holder``."""
+        self.acquire(holder=holder)
+        try:
+            yield
+        finally:
+            self.release()
+
+
+class _TickTurn:
+    """``with lock.ticks:`` (what the tick thread holds around a tick)."""
+
+    def __init__(self, lock: SessionLock):
+        self._lock = lock
+
+    def __enter__(self) -> None:
+        self._lock.acquire_for_tick()
+
+    def __exit__(self, *exc: Any) -> None:
+        self._lock.release()
+
+
 class SimSession:
     """A running simulation: simulator, settings and fault under one lock, driven tick by tick.
 
@@ -175,8 +268,6 @@ class SimSession:
         Sim time (s) no tick may pass (the end of ROS time); the session faults instead.
     busy_wait_s : float
         Longest wait (s) of a service for a tick under way (:data:`BUSY_WAIT_S`).
-    tick_running_for : callable
-        Seconds the tick under way has been running, or None between ticks (for busy answers).
     on_bodies : callable
         Called with the new body names after a spawn or delete (without the lock).
     on_restart : callable
@@ -185,9 +276,8 @@ class SimSession:
 
     def __init__(self, simulator: Simulator, settings: Mapping[str, Any], io: BodyIO, logger: Any, *,
                  max_time_s: float = math.inf, busy_wait_s: float = BUSY_WAIT_S,
-                 tick_running_for: Callable[[], float | None] = lambda: None,
                  on_bodies: Callable[[tuple[str, ...]], None] = _ignore, on_restart: Callable[[], None] = _ignore):
-        self.lock = threading.RLock()
+        self.lock = SessionLock()  # the tick thread takes it as ``with session.lock.ticks:``
         self.change_lock = threading.Lock()  # one scene or parameter change at a time, prepare to apply
         self.simulator = simulator
         self.settings: dict[str, Any] = dict(settings)
@@ -197,30 +287,36 @@ class SimSession:
         self._logger = logger
         self._max_time_s = max_time_s
         self._busy_wait_s = busy_wait_s
-        self._tick_running_for = tick_running_for
         self._on_bodies = on_bodies
         self._on_restart = on_restart
 
     # ------------------------------------------------------------------ the lock
 
     @contextlib.contextmanager
-    def busy_or_locked(self, wait_s: float | None = None) -> Iterator[None]:
-        """The lock; :class:`SessionBusy` if a tick keeps it longer than ``wait_s`` (default ``busy_wait_s``;
-        ``math.inf``: wait)."""
+    def busy_or_locked(self, wait_s: float | None = None, holder: str = "a request") -> Iterator[None]:
+        """The lock, held as ``holder``; :class:`SessionBusy` if whoever holds it keeps it longer than
+        ``wait_s`` (default ``busy_wait_s``; ``math.inf``: wait), saying who and for how long."""
         wait_s = self._busy_wait_s if wait_s is None else wait_s
-        if not self.lock.acquire(timeout=-1 if math.isinf(wait_s) else wait_s):
-            running = self.tick_running_for()
-            raise SessionBusy("busy: a tick has been running for "
-                              + (f"{running:.1f} s" if running is not None else "a while")
-                              + " (a heavy scene, many substeps, or the reference integrator with a long step); try again")
+        if not self.lock.acquire(timeout=-1 if math.isinf(wait_s) else wait_s, holder=holder):
+            raise SessionBusy(self._busy_message(wait_s))
         try:
             yield
         finally:
             self.lock.release()
 
+    def _busy_message(self, waited_s: float) -> str:
+        held = self.lock.held()
+        if held is None:  # released at the moment the wait ended
+            return f"busy: the simulator was held for all of the {waited_s:g} s this request waits; try again"
+        holder, for_s = held
+        why = (" (a heavy scene, many substeps, or the reference integrator with a long step)"
+               if holder == SessionLock.TICK else "")
+        return f"busy: {holder} has been running for {for_s:.1f} s{why}; try again"
+
     def tick_running_for(self) -> float | None:
-        """Seconds the tick under way has been running, or None between ticks."""
-        return self._tick_running_for()
+        """Seconds the tick under way has been running, or None if no tick holds the lock."""
+        held = self.lock.held()
+        return held[1] if held is not None and held[0] == SessionLock.TICK else None
 
     def fail(self, reason: str) -> None:
         """Stop for good (the tick thread died): every later tick and step is refused with ``reason``."""
@@ -269,7 +365,7 @@ class SimSession:
     def step_paused(self) -> tuple[bool, str]:
         """``~/step``: one tick if paused; (success, message)."""
         try:
-            with self.busy_or_locked():
+            with self.busy_or_locked(holder="~/step"):
                 if not self.settings["paused"]:
                     return False, _RUNNING
                 if not self.advance():
@@ -283,7 +379,7 @@ class SimSession:
         if not 1 <= ticks <= MAX_STEP_TICKS:
             return False, f"refused: ticks = {ticks}; expected an integer from 1 to {MAX_STEP_TICKS}"
         try:
-            with self.busy_or_locked():
+            with self.busy_or_locked(holder="~/step_ticks"):
                 if not self.settings["paused"]:
                     return False, _RUNNING
                 for done in range(ticks):
@@ -298,7 +394,7 @@ class SimSession:
         """``~/reset``: the scene's initial state at t = 0, holds, pending impulses and set_states
         dropped, IMUs afresh, published; (success, message). Clears a fault unless the tick thread died."""
         try:
-            with self.busy_or_locked():
+            with self.busy_or_locked(holder="~/reset"):
                 sim = self.simulator
                 sim.reset()
                 self._io.commit(self._io.prepare(sim.scene, self.settings["publish_odometry"], keep_state=False))
@@ -321,7 +417,7 @@ class SimSession:
             return False, f"refused: another change has been under way for more than {CHANGE_WAIT_S:g} s; try again"
         try:
             try:
-                with self.busy_or_locked():
+                with self.busy_or_locked(holder="a spawn or delete"):
                     settings, scene = self.settings, self.simulator.scene
             except SessionBusy as busy:
                 return False, f"refused: {busy}"
@@ -331,7 +427,7 @@ class SimSession:
             except (SceneError, ValueError) as exc:
                 return False, f"refused: {exc}"
             change = self._io.prepare(new_scene, settings["publish_odometry"], keep_state=True)
-            with self.lock:
+            with self.lock("a spawn or delete"):
                 self.simulator = self.simulator.with_scene(new_scene)
                 self._io.commit(change)
                 self._io.publish_bodies(self.simulator)  # new bodies at once; /clock only from ticks
@@ -370,7 +466,7 @@ class SimSession:
     def _prepare_change(self, values: Mapping[str, Any], open_recorder: Callable[[str, Simulator, dict], Any],
                         request: Any) -> tuple[str | None, SettingsChange | None]:
         try:
-            with self.busy_or_locked():
+            with self.busy_or_locked(holder="a parameter change"):
                 settings, current = {**self.settings, **values}, self.simulator
         except SessionBusy as busy:
             return str(busy), None
@@ -412,7 +508,7 @@ class SimSession:
             old_names, endpoints, old_recorder = self.simulator.body_names, None, None
             if new_scene or "publish_odometry" in changed:
                 endpoints = self._io.prepare(sim.scene, settings["publish_odometry"], keep_state=not new_scene)
-            with self.lock:
+            with self.lock("a parameter change"):
                 self.apply_settings(settings, change.simulator)
                 if endpoints is not None:
                     self._io.commit(endpoints)

@@ -10,7 +10,7 @@ every entity each time it wakes (milliseconds with hundreds of per-body subscrip
 timer in that executor would pay on every tick (``rigid_body_sim_node`` now spins the
 EventsExecutor, which does not, but the launch-free harness may spin either; a thread also keeps
 the deadline schedule independent of the executor's callbacks). The executor keeps the
-subscriptions, services, parameters and /diagnostics; the node's lock guards what both threads touch.
+subscriptions, services, parameters and /diagnostics; the session's lock guards what both threads touch.
 
 This is the only tick path: ``rigid_body_sim_node`` and the launch-free harness
 (:mod:`rigid_body_sim.testing`) both tick through it.
@@ -43,7 +43,8 @@ class TickLoop:
         ``tick(due_ns, period_ns, missed)``: one tick, due at ``due_ns`` (steady clock), with
         ``missed`` periods skipped before it. Called with ``lock`` held.
     lock : context manager
-        Held around each tick (the node's lock).
+        Held around each tick: the session's lock as ticks take it (``session.lock.ticks``, which
+        first lets in every caller already waiting, so back-to-back ticks cannot keep them out).
     on_failure : callable
         Called once, from the thread, with the exception if ``tick`` raises; the thread then
         ends. Never called for an exception raised after :meth:`stop`.
