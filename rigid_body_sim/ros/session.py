@@ -7,11 +7,13 @@ its :class:`~rigid_body_sim.ros.endpoints.BodyEndpoints` and a test as a plain r
 tick, ``~/step``, ``~/step_ticks``, ``~/reset``, ``~/spawn`` and ``~/delete`` can be run and
 checked without DDS (test/test_session.py).
 
-One re-entrant lock guards the simulator, the settings and the fault between the tick thread and
-the executor's callbacks. A service never waits for a tick longer than ``busy_wait_s``: it is
-refused, and the answer says how long the tick under way has been running. Changes of the scene
-(a ``scene`` parameter change, a spawn, a delete) also take :attr:`SimSession.change_lock`, one
-at a time, for as long as they take to prepare, so two never interleave.
+One re-entrant lock (:class:`SessionLock`) guards the simulator, the settings and the fault
+between the tick thread and the executor's callbacks. It is fair to callers: a tick first lets
+in every caller already waiting, so a caller waits for the tick under way at most, even when
+ticks overrun their period. A service never waits longer than ``busy_wait_s``: it is refused,
+and the answer says who holds the simulator (a tick, or which request) and for how long.
+Changes of settings and scene (a parameter change, a spawn, a delete) also take
+:attr:`SimSession.change_lock`, one at a time, from preparing to applying, so two never interleave.
 """
 
 from __future__ import annotations
@@ -28,7 +30,8 @@ from .node_log import log_models
 from .scene_edit import edited_scene
 
 __all__ = ["BUSY_WAIT_S", "CHANGE_WAIT_S", "MAX_BATCH_ONLY_BODIES", "MAX_BODIES", "MAX_STEP_TICKS", "BodyIO",
-           "SessionBusy", "SettingsChange", "SimSession", "build_simulator", "check_scene", "physics_dt"]
+           "SessionBusy", "SessionLock", "SettingsChange", "SimSession", "build_simulator", "check_scene",
+           "physics_dt"]
 
 #: Most bodies a scene may have (start-up, ``scene`` change or spawn): every body costs four topics
 #: and their creation (~2 ms each); above this a scene change would stall the parameter
@@ -48,7 +51,7 @@ _RUNNING = "refused: the simulation is running; pause it first (~/set_paused tru
 
 
 class SessionBusy(RuntimeError):
-    """A tick has kept the simulator longer than a caller would wait; the message says for how long."""
+    """A tick or request has kept the simulator longer than a caller would wait; the message says which and for how long."""
 
 
 class BodyIO(Protocol):
@@ -267,7 +270,7 @@ class SimSession:
     max_time_s : float
         Sim time (s) no tick may pass (the end of ROS time); the session faults instead.
     busy_wait_s : float
-        Longest wait (s) of a service for a tick under way (:data:`BUSY_WAIT_S`).
+        Longest wait (s) of a service for the lock (:data:`BUSY_WAIT_S`); then it is refused as busy.
     on_bodies : callable
         Called with the new body names after a spawn or delete (without the lock).
     on_restart : callable
