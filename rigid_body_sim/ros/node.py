@@ -209,8 +209,8 @@ class RigidBodySimNode(Node):
         return self._tick_loop.failure if self._tick_loop is not None else None
 
     def tick_running_for(self) -> float | None:
-        """Seconds the tick under way has been running, or None between ticks."""
-        return self._tick_loop.busy_for() if self._tick_loop is not None else None
+        """Seconds the tick under way has been running, or None between ticks (the session's lock knows)."""
+        return self._session.tick_running_for() if self._tick_loop is not None else None
 
     def advance_one_tick(self) -> None:
         """Advance ``substeps`` physics steps with the held wrenches and pending impulses, then publish."""

@@ -9,8 +9,9 @@
     Exactly one tick while paused; refused with a reason while running.
 
 Each handler is a few lines over a method of the node's :class:`~rigid_body_sim.ros.session.SimSession`,
-which does the work under its lock; a tick that keeps the simulator longer than ``BUSY_WAIT_S``
-(session.py) makes ``~/reset`` and ``~/step`` refuse with a reason rather than wait.
+which does the work under its lock; a tick (or another request) that keeps the simulator longer
+than ``BUSY_WAIT_S`` (session.py) makes ``~/reset`` and ``~/step`` refuse, saying which and for
+how long, rather than wait.
 """
 
 from __future__ import annotations

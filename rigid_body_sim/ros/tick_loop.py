@@ -60,7 +60,6 @@ class TickLoop:
         self._retime = threading.Event()
         self._wake = threading.Event()
         self.failure: BaseException | None = None
-        self._busy_since_ns: int | None = None
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
 
     def start(self) -> None:
@@ -77,11 +76,6 @@ class TickLoop:
     def alive(self) -> bool:
         """True while the thread runs."""
         return self._thread.is_alive()
-
-    def busy_for(self) -> float | None:
-        """Seconds the tick under way has been running, or None between ticks."""
-        since = self._busy_since_ns
-        return None if since is None else (time.monotonic_ns() - since) * 1e-9
 
     def retime(self) -> None:
         """Restart the schedule from now with the current period (a new ``rate_hz``)."""
@@ -115,11 +109,7 @@ class TickLoop:
                 with self._lock:
                     if self._retime.is_set() or self._stop.is_set():
                         continue
-                    self._busy_since_ns = time.monotonic_ns()
-                    try:
-                        self._tick(due_ns, period_ns, missed)
-                    finally:
-                        self._busy_since_ns = None
+                    self._tick(due_ns, period_ns, missed)
             except BaseException as exc:  # noqa: BLE001  (reported through on_failure)
                 if self._stop.is_set():
                     return  # shutting down: publishers may already be invalid
