@@ -57,7 +57,9 @@ class SessionBusy(RuntimeError):
 class BodyIO(Protocol):
     """What a session drives at its edge: the node's per-body endpoints, or a recorder in a test.
 
-    Every method but :meth:`prepare` and :meth:`release` is called with the session's lock held.
+    Every method but :meth:`prepare` and :meth:`release` is called with the session's lock held;
+    those two create and destroy endpoints, and are called without it (a reset prepares the
+    running scene again, which creates nothing, under the lock).
     """
 
     def take_set_states(self, sim: Simulator) -> bool:
@@ -76,10 +78,11 @@ class BodyIO(Protocol):
         """Publish the bodies' state only (no /clock, not recorded): new bodies show at once after a spawn."""
 
     def prepare(self, scene: Scene, publish_odometry: bool, *, keep_state: bool) -> Any:
-        """Make what ``scene`` needs beyond what exists (without the lock); returns the change."""
+        """Make what ``scene`` needs beyond what exists; returns the change. Without ``keep_state``,
+        committing it starts every hold, impulse, set_state and IMU afresh."""
 
     def commit(self, change: Any) -> None:
-        """Swap the prepared change in; without ``keep_state`` every hold, impulse, set_state and IMU starts afresh."""
+        """Swap the prepared change in."""
 
     def release(self, change: Any) -> None:
         """Destroy what the committed change replaced (without the lock)."""
