@@ -414,10 +414,10 @@ def test_sigstop_sigcont_the_node_resumes_and_counts_the_missed_ticks(tmp_path):
 
 FAILING_TICK = textwrap.dedent("""
     import sys
-    from rigid_body_sim.ros.node import RigidBodySimNode
     from rigid_body_sim.ros.main import main
+    from rigid_body_sim.ros.session import SimSession
 
-    original = RigidBodySimNode._advance_one_tick_locked
+    original = SimSession.advance
     ticks = [0]
 
     def failing(self):
@@ -426,7 +426,7 @@ FAILING_TICK = textwrap.dedent("""
             raise ZeroDivisionError("float division by zero (injected into the 300th tick)")
         original(self)
 
-    RigidBodySimNode._advance_one_tick_locked = failing
+    SimSession.advance = failing
     sys.exit(main(sys.argv[1:]))
 """)
 
@@ -466,10 +466,10 @@ def test_a_failing_tick_thread_is_loud_and_the_process_exits_1(tmp_path):
 STUCK_TICK = textwrap.dedent("""
     import sys
     import time
-    from rigid_body_sim.ros.node import RigidBodySimNode
     from rigid_body_sim.ros.main import main
+    from rigid_body_sim.ros.session import SimSession
 
-    original = RigidBodySimNode._advance_one_tick_locked
+    original = SimSession.advance
     ticks = [0]
 
     def stuck(self):
@@ -479,7 +479,7 @@ STUCK_TICK = textwrap.dedent("""
             time.sleep(3600)  # as a step of days would (the reference integrator, dt = 1e9 s)
         return original(self)
 
-    RigidBodySimNode._advance_one_tick_locked = stuck
+    SimSession.advance = stuck
     sys.exit(main(sys.argv[1:]))
 """)
 
