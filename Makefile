@@ -38,7 +38,8 @@ export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
 venv: $(STAMP)
 
 # The venv is (re)provisioned when a pin, the build script or the manifest changes.
-$(STAMP): requirements.txt requirements-test.txt setup.py setup.cfg package.xml
+$(STAMP): requirements.txt requirements-test.txt setup.py setup.cfg package.xml \
+		tools/ros_interfaces/build.py $(wildcard tools/ros_interfaces/*/msg/*.msg)
 	@say() { printf '[make venv] %s\n' "$$*"; }
 	die() { printf '[make venv] ERROR: %s\n' "$$*" >&2; exit 1; }
 	is_py311() { "$$1" -c 'import sys; sys.exit(sys.version_info[:2] != (3, 11))' 2>/dev/null; }
@@ -73,6 +74,11 @@ $(STAMP): requirements.txt requirements-test.txt setup.py setup.cfg package.xml
 	say "installing pinned requirements (pip $(PIP_VERSION), requirements-test.txt)"
 	$(PIP) install "pip==$(PIP_VERSION)"
 	$(PIP) install -r requirements-test.txt
+	# tf2_msgs has no wheel on PyPI: build it from its message definition (needs gcc and g++).
+	command -v g++ >/dev/null || apt_install gcc g++ || die "no C/C++ compiler: install gcc and g++ (Debian: apt-get install gcc g++)"
+	say "building tf2_msgs from its message definition (tools/ros_interfaces)"
+	$(VENV_PY) tools/ros_interfaces/build.py tf2_msgs 2>&1 | grep -v -e 'duplicate entry point' -e '^Reading input' -e '^Writing output' || true
+	$(VENV_PY) -c 'import tf2_msgs.msg' || die "tf2_msgs did not build (tools/ros_interfaces/build.py)"
 	say "installing rigid_body_sim in editable mode"
 	$(PIP) install --no-deps -e .
 	$(PIP) check >/dev/null || { $(PIP) check; die "pip check found inconsistent dependencies"; }
