@@ -41,6 +41,7 @@ from ..core import NonFiniteStateError, Scene, SceneError, Simulator, load_scene
 from ..offline.recording import McapRecorder
 from .conversions import MAX_ROS_TIME_S
 from .diagnostics import TickWindow, busy_status, diagnostic_statuses
+from .file_access import change_refusal
 from .imu import ImuPublishers
 from .inputs import WrenchInputs
 from .markers import MarkerPublisher
@@ -167,7 +168,7 @@ class RigidBodySimNode(Node):
         self._set_state.commit(self._set_state.prepare(self._sim.body_names))
         self._markers = MarkerPublisher(self, qos, self._world_frame)
         self._recording = NodeRecording(self.get_logger(), self._world_frame, self.get_namespace(),
-                                        self.get_fully_qualified_name())
+                                        self.get_fully_qualified_name(), settings["record_overwrite"])
         self._service_handles = create_services(self) + create_robot_services(self)
         self.add_pre_set_parameters_callback(self._coerce_parameters)
         self.add_on_set_parameters_callback(self._prepare_change)
@@ -272,6 +273,8 @@ class RigidBodySimNode(Node):
                 current = self._sim
         except NodeBusy as busy:
             return SetParametersResult(successful=False, reason=str(busy)), None
+        if (refused := change_refusal(values, settings, current, self._recording)) is not None:
+            return SetParametersResult(successful=False, reason=refused), None
         change = _Change(parameters, values, settings)
         if "scene" in values:
             try:
