@@ -87,6 +87,7 @@ class Peer:
 # ---------------------------------------------------------------------- files: over DDS, the node process
 
 
+@pytest.mark.timeout(900)  # a fresh installation compiles the kernels first (START_TIMEOUT_S)
 def test_a_peer_cannot_write_or_read_files_outside_the_configured_directories(tmp_path):
     """Before: ``record_path:=`` a read-only (0400) decoy replaced it with MCAP, and ``scene:=`` a
     file put its first line into the refusal and told whether a path exists. Now both are
@@ -173,6 +174,7 @@ def test_record_path_never_targets_the_scene_the_recording_or_an_existing_file(t
     assert scene.read_text() == scene_text
 
 
+@pytest.mark.timeout(900)  # a fresh installation compiles the kernels first (START_TIMEOUT_S)
 def test_an_existing_record_path_at_start_up_is_refused_without_record_overwrite(tmp_path):
     """The operator's start-up record_path is not confined to record_dirs, but never overwrites an
     existing file without record_overwrite:=true: exit 2 with the reason, the file intact."""
@@ -204,6 +206,7 @@ def test_default_directories_are_the_package_config_and_the_working_directory():
 # ---------------------------------------------------------------------- access: discovery range and ROS security
 
 
+@pytest.mark.timeout(900)  # a fresh installation compiles the kernels first (START_TIMEOUT_S)
 def test_security_variables_without_security_libraries_exit_2_in_one_line(tmp_path):
     """Before: an SROS2-layout keystore with ROS_SECURITY_ENABLE=true and Enforce ended in a
     traceback and exit 1 ("This Fast DDS version doesn't have the security libraries"); a
@@ -233,6 +236,7 @@ def test_security_variables_without_security_libraries_exit_2_in_one_line(tmp_pa
     assert len(lines) == 1 and "does not exist" in lines[0], lines
 
 
+@pytest.mark.timeout(900)  # a fresh installation compiles the kernels first (START_TIMEOUT_S)
 def test_discovery_range_is_the_local_host_unless_the_environment_says_otherwise(tmp_path):
     """Before: run directly (not through `make run`), the node was discoverable from the subnet.
     Now ROS_AUTOMATIC_DISCOVERY_RANGE is LOCALHOST in the node's process unless set, and the
@@ -304,6 +308,7 @@ def test_sites_and_imus_per_scene_are_bounded():
         load_scene_text(yaml.safe_dump({"bodies": bodies}))
 
 
+@pytest.mark.timeout(900)  # a fresh installation compiles the kernels first (START_TIMEOUT_S)
 def test_a_120_character_namespace_exits_2_with_the_reason(tmp_path):
     """Before: a 120-character namespace was accepted, then a spawn of a 63-character body with a
     63-character IMU site crashed the node (InvalidTopicNameException); the same scene at

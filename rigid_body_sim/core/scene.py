@@ -116,10 +116,11 @@ MAX_SCENE_TEXT_CHARS = 2 * MAX_SCENE_BYTES
 MAX_SITES_PER_BODY = 1_000
 MAX_SITES = 100_000
 #: Most IMUs one body may carry, and most in a scene. Each IMU is a ROS publisher, created while
-#: the node's executor waits (0.3-0.6 ms each: one spawned body with 20,000 IMUs held it for 6.6-11.8 s)
-#: and a message every tick; 1,000 keep a scene change or spawn well under a second.
+#: the node's executor waits, and a message every tick: one spawned body with 20,000 IMUs held the
+#: executor for 6.6-11.8 s; a spawn of 928 IMUs (16 bodies) took 1.9 s on the loaded 2-core test
+#: machine, so 256 keep a spawn or scene change to about half a second.
 MAX_IMUS_PER_BODY = 64
-MAX_IMUS = 1_000
+MAX_IMUS = 256
 #: Smallest mass (kg), inertia-shape length (m) and principal moment (kg·m²): the smallest
 #: normal float64. Below it 1/m and 1/I overflow and the first step is not finite.
 MIN_POSITIVE = sys.float_info.min
