@@ -27,6 +27,7 @@ from rclpy.parameter import Parameter
 
 from ..core import INTEGRATORS
 from ..core.scene import MAX_NAMESPACE_LENGTH
+from ..offline.recording import check_record_path
 from ..package_data import default_scene_path
 from .file_access import default_scene_dirs
 
@@ -365,6 +366,10 @@ def declare_parameters(node: Node) -> dict[str, Any]:
                                           ParameterDescriptor(description=spec.description, dynamic_typing=True))
         values[spec.name] = coerce(spec, declared.value)
     reasons = problems(values) + [reason for reason in reasons if reason]
+    if values.get("record_path") and not reasons:  # the operator's start-up path: said before the scene loads
+        unwritable = check_record_path(values["record_path"])
+        if unwritable is not None:
+            reasons.append(f"record_path rejected: {unwritable}")
     if reasons:
         raise ValueError("; ".join(reasons))
     for spec in PARAMETERS:
