@@ -167,6 +167,9 @@ def test_record_path_never_targets_the_scene_the_recording_or_an_existing_file(t
         recording, _ = read_recording(first)  # finished whole: never truncated under its writer
         assert len(recording.time) >= 4
         assert harness.set_parameters_atomically(record_path=str(first)).successful  # created by this node
+        assert harness.spawn(ball=yaml.safe_dump(BOX)).successful  # the scene is now the edited one...
+        result = harness.set_parameters_atomically(record_path=str(scene))  # ...its file is still the scene
+        assert not result.successful and "is the scene file" in result.reason, result.reason
     with SimHarness(scene, {**dirs, "record_overwrite": True}) as harness:
         assert harness.set_parameters_atomically(record_path=str(existing)).successful
         assert not harness.set_parameters_atomically(record_path=str(scene)).successful

@@ -85,7 +85,7 @@ def change_refusal(values: Mapping[str, Any], settings: Mapping[str, Any], runni
     values : mapping
         The parameters of the request (name → value).
     settings : mapping
-        The node's settings (``scene_dirs``, ``record_dirs``).
+        The node's settings with the request's values (``scene``, ``scene_dirs``, ``record_dirs``).
     running : Simulator
         The running simulator (its scene's file may not be recorded to).
     recording : NodeRecording
@@ -104,7 +104,7 @@ def change_refusal(values: Mapping[str, Any], settings: Mapping[str, Any], runni
     reason = outside_reason("record_path", path, settings["record_dirs"], "record_dirs")
     if reason is not None:
         return reason
-    scenes = [running.scene.source] + ([values["scene"]] if "scene" in values else [])
+    scenes = {str(running.scene.source), str(settings["scene"])}  # the file, also once a spawn renamed the source
     if any(same_file(path, scene) for scene in scenes):
         return f"record_path rejected: {path!r} is the scene file; a recording never overwrites the scene"
     current = recording.recorder
