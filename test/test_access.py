@@ -123,6 +123,10 @@ def test_a_peer_cannot_write_or_read_files_outside_the_configured_directories(tm
         assert not peer.set(record_path=str(allowed / "link.mcap")).successful
         assert not peer.set(record_path=str(allowed / ".." / "outside" / "decoy.mcap")).successful
         assert decoy.read_text() == f"{SECRET}\nprecious\n"
+        # Inside the directory, only an .mcap file: no shell start-up file or key file is created.
+        result = peer.set(record_path=str(allowed / ".bashrc"))
+        assert not result.successful and "does not end with .mcap" in result.reason, result.reason
+        assert not (allowed / ".bashrc").exists()
         # Inside the directories, what the peer asks for is done.
         assert peer.set(record_path=str(allowed / "rec.mcap")).successful
         assert peer.set(scene=str(write_scene(allowed / "other.yaml", {"ball": BOX}))).successful

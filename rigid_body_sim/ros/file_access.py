@@ -6,8 +6,8 @@ operator named at start-up (read-only parameters):
 
 - ``scene_dirs``: a run-time ``scene`` must be a ``.yaml``/``.yml`` file inside one of them
   (default: the package's ``config/`` and the working directory);
-- ``record_dirs``: a run-time ``record_path`` must be inside one of them (default: the working
-  directory).
+- ``record_dirs``: a run-time ``record_path`` must be an ``.mcap`` file inside one of them
+  (default: the working directory).
 
 Paths are compared after resolving symlinks and ``..`` (:func:`os.path.realpath`), so a link in
 an allowed directory that points out of it is refused too. A refusal names the parameter and
@@ -31,10 +31,12 @@ from ..package_data import config_dir
 from ..safe_open import create_new_file, same_file
 
 __all__ = ["RecordTargetRefused", "RecordTargets", "change_refusal", "default_scene_dirs", "outside_reason",
-           "SCENE_SUFFIXES"]
+           "SCENE_SUFFIXES", "RECORD_SUFFIX"]
 
 #: What a run-time scene file's name must end with.
 SCENE_SUFFIXES = (".yaml", ".yml")
+#: What a run-time recording's name must end with.
+RECORD_SUFFIX = ".mcap"
 
 
 class RecordTargetRefused(OSError):
@@ -111,6 +113,9 @@ def change_refusal(values: Mapping[str, Any], settings: Mapping[str, Any], runni
     if current is not None and same_file(path, current.path):
         return (f"record_path rejected: {path!r} is the file being recorded now; choose another file "
                 "(or set record_path:='' first to finish it)")
+    if not str(path).lower().endswith(RECORD_SUFFIX):
+        return (f"record_path rejected: {path!r} does not end with {RECORD_SUFFIX} (a run-time recording is "
+                "an MCAP file; no other name, such as a shell start-up file, may be created)")
     return None
 
 

@@ -252,7 +252,7 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
                   "MCAP file to record to (B/pose and B/twist, or with per_body_topics false the poses and "
                   "velocities batches; B/wrench, /clock; ROS 2 messages, stamps = sim time); '' = no recording. "
                   "A change finishes the current file and starts the new one.",
-                  constraints="'' or the path of a new file in a writable directory (at run time: inside record_dirs); "
+                  constraints="'' or the path of a new file in a writable directory (at run time: an .mcap file inside record_dirs); "
                   "never the scene file, the file being recorded, or an existing file the node did not create "
                   "(unless record_overwrite)",
                   check=_check_record_path, takes_effect="at once"),
@@ -263,7 +263,7 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
                   read_only=True, check=_check_dirs("scene_dirs"), takes_effect="start-up only",
                   default_text="the installed `config/` and `.` (the working directory)"),
     ParameterSpec("record_dirs", _T.STRING_ARRAY, ["."],
-                  "Directories a run-time change of record_path may write in (symlinks resolved); any other "
+                  "Directories a run-time change of record_path may write in (an .mcap file, symlinks resolved); any other "
                   "path is refused without being looked at. Relative paths are from the working directory. "
                   "The start-up record_path is not confined.",
                   read_only=True, check=_check_dirs("record_dirs"), takes_effect="start-up only"),
