@@ -333,6 +333,20 @@ def test_a_120_character_namespace_exits_2_with_the_reason(tmp_path):
         assert f"at most {MAX_NAMESPACE_LENGTH}" in output and "MAX_NAMESPACE_LENGTH" in output, output
 
 
+@pytest.mark.timeout(900)  # a fresh installation compiles the kernels first (START_TIMEOUT_S)
+def test_a_node_name_too_long_for_its_services_exits_2_in_one_line():
+    """A namespace within its limit and a node name so long that ~/set_parameters_atomically
+    exceeds ROS's 247 characters: rclpy raised InvalidServiceNameException from the node's
+    constructor (traceback, exit 1). Now: one line naming the limit, exit 2."""
+    namespace = "/" + "n" * (MAX_NAMESPACE_LENGTH - 1)
+    result = run_to_exit(["-r", f"__ns:={namespace}", "-r", f"__node:={'m' * 140}", "-p", "status_period:=0.0"])
+    output = result.stdout + result.stderr
+    assert result.returncode == 2, output
+    assert "Traceback" not in output
+    lines = not_info(output)
+    assert len(lines) == 1 and "MAX_TOPIC_NAME_LENGTH 247" in lines[0], lines
+
+
 def test_the_longest_namespace_takes_the_longest_names():
     """At MAX_NAMESPACE_LENGTH, a spawned body and IMU site of MAX_NAME_LENGTH characters each work."""
     namespace = "/" + "n" * (MAX_NAMESPACE_LENGTH - 1)

@@ -14,6 +14,11 @@
   exist under ``Enforce``), the reason is said in one line and the exit status is 2, as for any
   bad start-up setting, instead of a traceback from inside the node's constructor.
 
+- **Names.** A namespace and node name (``-r __ns:=`` / ``-r __node:=``) so long that the node's
+  own services would exceed ROS's name length are refused in one line, exit 2 (rclpy would
+  raise inside the node's constructor). The namespace's own limit, for topics
+  ``<namespace>/<body>/<site>/imu``, is checked with the parameters (parameters.py).
+
 Only the standard library is imported at module level (``main`` imports this before rclpy).
 docs/security.md says what a peer on the domain can do and how to confine it.
 """
@@ -24,7 +29,7 @@ import os
 import sys
 import warnings
 
-__all__ = ["prepare_access", "DISCOVERY_RANGES", "DEFAULT_DISCOVERY_RANGE"]
+__all__ = ["prepare_access", "DISCOVERY_RANGES", "DEFAULT_DISCOVERY_RANGE", "MAX_TOPIC_NAME_LENGTH"]
 
 #: Values rcl takes for ROS_AUTOMATIC_DISCOVERY_RANGE.
 DISCOVERY_RANGES = ("SUBNET", "LOCALHOST", "OFF", "SYSTEM_DEFAULT")
@@ -67,6 +72,10 @@ def prepare_access(args: list[str] | None = None) -> int | None:
         return EXIT_BAD_SETTING
     else:
         _info(f"discovery range {given.upper()} (from {_RANGE_VAR})")
+    too_long = _service_name_problem(sys.argv[1:] if args is None else args)
+    if too_long is not None:
+        _say(too_long)
+        return EXIT_BAD_SETTING
     if os.environ.get("ROS_SECURITY_ENABLE", "").lower() != "true":
         return None
     reason = _security_problem(args)
@@ -76,6 +85,50 @@ def prepare_access(args: list[str] | None = None) -> int | None:
     _say(f"ROS security is requested (ROS_SECURITY_ENABLE=true, ROS_SECURITY_STRATEGY={strategy}) but cannot be "
          f"used: {reason}; not starting (see docs/security.md)")
     return EXIT_BAD_SETTING
+
+
+#: Longest ROS topic or service name (rmw: 255 less the 8 characters of DDS prefixes and suffixes).
+MAX_TOPIC_NAME_LENGTH = 247
+#: The node's longest own service suffix (rclpy's parameter services).
+_LONGEST_SERVICE = "/set_parameters_atomically"
+_NODE_NAME = "rigid_body_sim"
+
+
+def _remapped(args: list[str]) -> tuple[str, str]:
+    """The namespace and node name that the command line's ``--ros-args -r __ns:=... -r __node:=...``
+    give this node (rcl's rules: the last remap wins; ``name:`` prefixes apply to that node only)."""
+    namespace, name = "/", _NODE_NAME
+    in_ros_args = False
+    rules = []
+    for k, arg in enumerate(args):
+        if arg == "--ros-args":
+            in_ros_args = True
+        elif arg == "--":
+            in_ros_args = False
+        elif in_ros_args and arg in ("-r", "--remap") and k + 1 < len(args):
+            rules.append(args[k + 1])
+    for rule in rules:
+        target, _, value = rule.partition(":=")
+        node, _, key = target.rpartition(":")
+        if node and node != _NODE_NAME:
+            continue
+        if key == "__ns":
+            namespace = value if value.startswith("/") else "/" + value
+        elif key in ("__node", "__name"):
+            name = value
+    return namespace, name
+
+
+def _service_name_problem(args: list[str]) -> str | None:
+    """Why the node's own services would get names too long for ROS (rclpy would raise inside the
+    node's constructor), or None."""
+    namespace, name = _remapped(args)
+    full = namespace.rstrip("/") + "/" + name
+    if len(full) + len(_LONGEST_SERVICE) > MAX_TOPIC_NAME_LENGTH:
+        return (f"node name {full!r} has {len(full)} characters with its namespace; at most "
+                f"{MAX_TOPIC_NAME_LENGTH - len(_LONGEST_SERVICE)} (MAX_TOPIC_NAME_LENGTH {MAX_TOPIC_NAME_LENGTH} less "
+                f"its longest service name {_LONGEST_SERVICE!r}); not starting")
+    return None
 
 
 def _security_problem(args: list[str] | None) -> str | None:
