@@ -26,6 +26,15 @@ def test_default_scene_is_found_with_importlib_resources(tmp_path: Path, monkeyp
     assert package_data.default_scene_path() == tmp_path / package_data.DEFAULT_SCENE_FILE
 
 
+def test_a_develop_install_reads_config_beside_the_package(monkeypatch: pytest.MonkeyPatch) -> None:
+    """`setup.py develop` (colcon --symlink-install) does not apply package_dir: no rigid_body_sim.config."""
+    def missing(package: str):
+        raise ModuleNotFoundError(f"No module named {package!r}")
+
+    monkeypatch.setattr(package_data, "files", missing)
+    assert package_data.default_scene_path() == REPO_ROOT / "config" / package_data.DEFAULT_SCENE_FILE
+
+
 def test_missing_default_scene_is_reported(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(package_data, "files", lambda package: tmp_path)
     with pytest.raises(FileNotFoundError, match=r"default scene .*default_scene\.yaml is not installed"):
