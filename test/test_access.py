@@ -261,22 +261,96 @@ def test_discovery_range_is_the_local_host_unless_the_environment_says_otherwise
                          env={**env, "ROS_AUTOMATIC_DISCOVERY_RANGE": "EVERYWHERE"})
     assert bad.stdout.split()[0] == "2" and "is not one of" in bad.stderr
 
-    # The node itself, started without the variable: its log names the range.
-    log = tmp_path / "node.log"
-    saved = os.environ.pop("ROS_AUTOMATIC_DISCOVERY_RANGE", None)
-    try:
-        process = start_process(["-p", "status_period:=0.0"], log)
-    finally:
-        if saved is not None:
-            os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = saved
-    try:
-        deadline = time.monotonic() + START_TIMEOUT_S
-        while "scene " not in log.read_text():
-            assert process.poll() is None and time.monotonic() < deadline, log.read_text()
-            time.sleep(0.05)
-    finally:
-        stop_process(process)
-    assert "discovery range LOCALHOST" in log.read_text()
+
+SUBNET_PEER_PROFILE = """<?xml version="1.0" encoding="UTF-8" ?>
+<dds xmlns="http://www.eprosima.com">
+  <profiles>
+    <transport_descriptors>
+      <transport_descriptor>
+        <transport_id>subnet_only</transport_id>
+        <type>UDPv4</type>
+        <interfaces><allowlist><interface name="{interface}"/></allowlist></interfaces>
+      </transport_descriptor>
+    </transport_descriptors>
+    <participant profile_name="subnet_peer" is_default_profile="true">
+      <rtps>
+        <userTransports><transport_id>subnet_only</transport_id></userTransports>
+        <useBuiltinTransports>false</useBuiltinTransports>
+      </rtps>
+    </participant>
+  </profiles>
+</dds>
+"""
+
+SUBNET_PEER = """
+import sys, time, rclpy
+from rclpy.node import Node
+rclpy.init()
+node = Node("subnet_peer")
+deadline = time.monotonic() + float(sys.argv[1])
+seen = set()
+while time.monotonic() < deadline and "/box/pose" not in seen:
+    rclpy.spin_once(node, timeout_sec=0.2)
+    seen |= {name for name, _ in node.get_topic_names_and_types()}
+print("seen" if "/box/pose" in seen else "not seen")
+"""
+
+
+def network_interface() -> str | None:
+    """The name of a network interface other than loopback that has an IPv4 address (the subnet)."""
+    import fcntl
+    import socket
+    import struct
+
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        for _, name in socket.if_nameindex():
+            if name == "lo":
+                continue
+            try:
+                fcntl.ioctl(probe.fileno(), 0x8915, struct.pack("256s", name[:15].encode()))  # SIOCGIFADDR
+            except OSError:
+                continue
+            return name
+    return None
+
+
+@pytest.mark.timeout(900)  # a fresh installation compiles the kernels first (START_TIMEOUT_S)
+def test_a_peer_on_the_subnet_does_not_discover_the_node_run_directly(tmp_path):
+    """Before: run directly (not through `make run`, which exports the variable), the node was
+    discoverable from the subnet. A peer whose only transport is the subnet interface (a Fast
+    DDS profile allowing only it) does not discover the node started without
+    ROS_AUTOMATIC_DISCOVERY_RANGE; it does discover one started with SUBNET (so it could)."""
+    interface = network_interface()
+    assert interface is not None, "this test needs a network interface besides loopback (the subnet a peer uses)"
+    profile = tmp_path / "subnet_peer.xml"
+    profile.write_text(SUBNET_PEER_PROFILE.format(interface=interface))
+    peer_env = {**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": "SYSTEM_DEFAULT",
+                "FASTDDS_DEFAULT_PROFILES_FILE": str(profile)}
+    seen = {}
+    for label, node_range in (("run directly", None), ("asked for SUBNET", "SUBNET")):
+        log = tmp_path / f"node-{node_range}.log"
+        saved = os.environ.pop("ROS_AUTOMATIC_DISCOVERY_RANGE", None)
+        if node_range is not None:
+            os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = node_range
+        try:
+            process = start_process(["-p", "status_period:=0.0", "-p", "diagnostics_period:=0.0"], log)
+        finally:
+            os.environ.pop("ROS_AUTOMATIC_DISCOVERY_RANGE", None)
+            if saved is not None:
+                os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = saved
+        try:
+            deadline = time.monotonic() + START_TIMEOUT_S
+            while "scene " not in log.read_text():
+                assert process.poll() is None and time.monotonic() < deadline, log.read_text()
+                time.sleep(0.05)
+            peer = subprocess.run([sys.executable, "-c", SUBNET_PEER, "8"], capture_output=True, text=True,
+                                  env=peer_env, timeout=120)
+            seen[label] = peer.stdout.strip().splitlines()[-1] if peer.stdout.strip() else peer.stderr[-500:]
+        finally:
+            stop_process(process)
+    assert seen == {"run directly": "not seen", "asked for SUBNET": "seen"}, seen
+    assert "discovery range LOCALHOST" in (tmp_path / "node-None.log").read_text()  # it says which range it uses
+    assert "discovery range SUBNET" in (tmp_path / "node-SUBNET.log").read_text()
 
 
 # ---------------------------------------------------------------------- limits at every door
