@@ -38,7 +38,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Iterator, Sequence
 
 from .core import SceneError, load_scene
-from .paths import check_writable_path, open_for_reading, same_file
+from .safe_open import check_writable_path, open_for_reading, same_file
 
 if TYPE_CHECKING:
     from .core import Scene

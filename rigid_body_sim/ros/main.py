@@ -33,6 +33,8 @@ from importlib.machinery import ExtensionFileLoader
 from types import FrameType
 from typing import Any, Callable
 
+from .access import prepare_access
+
 __all__ = ["main", "SPIN_TIMEOUT_S"]
 
 #: Longest wait of one ``spin_once``: how soon a stop request is seen while spinning.
@@ -240,6 +242,7 @@ def main(args: list[str] | None = None) -> int:
     context = node = executor = watchdog = None
     built: list[Any] = []  # the node as soon as it exists, also if a signal interrupts its construction
     try:
+        if (refused := prepare_access(args)) is not None: return refused  # discovery range, ROS security: access.py
         import rclpy
         from rclpy.exceptions import ParameterException
         from rclpy.executors import ExternalShutdownException

@@ -33,6 +33,7 @@ from rclpy.qos import QoSProfile
 from ..core import Simulator
 from .conversions import MAX_ROS_TIME_S
 from .endpoints import BodyEndpoints
+from .file_access import change_refusal
 from .node_diagnostics import NodeDiagnostics
 from .node_log import StatusLog, log_scene
 from .node_recording import NodeRecording
@@ -84,7 +85,8 @@ class RigidBodySimNode(Node):
         self._set_body_names(sim.body_names)
         qos = QoSProfile(depth=QUEUE_DEPTH)
         self._endpoints = BodyEndpoints(self, qos, settings, NodeRecording(
-            self.get_logger(), settings["world_frame"], self.get_namespace(), self.get_fully_qualified_name()))
+            self.get_logger(), settings["world_frame"], self.get_namespace(), self.get_fully_qualified_name(),
+            settings["record_overwrite"]))
         self._endpoints.commit(self._endpoints.prepare(sim.scene, settings["publish_odometry"], keep_state=False))
         self._session = SimSession(sim, settings, self._endpoints, self.get_logger(), max_time_s=MAX_ROS_TIME_S,
                                    on_bodies=self._set_body_names,
@@ -135,6 +137,9 @@ class RigidBodySimNode(Node):
             self._session.abandon_change(stale)
         values = {p.name: p.value for p in parameters if p.name in BY_NAME}  # the last of a name wins, as in rclpy
         reason = "; ".join(problems(values))
+        if not reason:  # a peer's scene or record_path only inside scene_dirs / record_dirs (file_access.py)
+            reason = change_refusal(values, {**self._session.settings, **values}, self._session.simulator,
+                                    self._endpoints.recording) or ""
         if not reason:
             reason, self._pending.change = self._session.begin_change(values, self._endpoints.open_recorder, parameters)
         return SetParametersResult(successful=not reason, reason=reason or "")

@@ -34,8 +34,9 @@ from ..core import Simulator
 from ..offline.msgdefs import complete_definition
 from ..offline.recording import (BODY_NAMES_KEY, CHUNK_SIZE, METADATA_NAME, SCENE_ATTACHMENT, STATUS_INCOMPLETE,
                                  STATUS_METADATA_NAME, McapRecorder, channel_metadata, stamp_ns)
-from ..paths import open_for_writing
+from ..safe_open import open_for_writing
 from .cdr import PoseTwistClockCdr
+from .file_access import RecordTargets
 
 __all__ = ["NodeRecording", "FlushingRecorder", "FLUSH_PERIOD_S"]
 
@@ -178,14 +179,17 @@ class NodeRecording:
     logger : rclpy logger
     world_frame, namespace, node_name : str
         Written into each recording (frame of poses, topic prefix, metadata).
+    overwrite : bool
+        ``record_overwrite``: a recording may overwrite an existing file the node did not create.
     """
 
-    def __init__(self, logger: Any, world_frame: str, namespace: str, node_name: str):
+    def __init__(self, logger: Any, world_frame: str, namespace: str, node_name: str, overwrite: bool = False):
         self._logger = logger
         self._world_frame = world_frame
         self._namespace = namespace
         self._node_name = node_name
         self.recorder: McapRecorder | None = None
+        self.targets = RecordTargets(overwrite)
 
     def open(self, path: str, sim: Simulator, *, dt: float | None = None, integrator: str | None = None) -> McapRecorder:
         """A new recorder at ``path`` for ``sim`` (not yet the current one).
@@ -193,8 +197,9 @@ class NodeRecording:
         Raises
         ------
         OSError
-            If the file cannot be created.
+            If the file cannot be created, or may not be recorded to (:class:`RecordTargets`).
         """
+        self.targets.claim(path, sim.scene.source, self.recorder)
         source = Path(sim.scene.source)
         try:
             scene_text = source.read_text(encoding="utf-8") if source.is_file() else None
