@@ -29,6 +29,7 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import PointCloud2
 from std_srvs.srv import Trigger
 
+from helpers import free_bodies_scene
 from rigid_body_sim.core import Simulator, load_scene
 from rigid_body_sim.ros.batch import VELOCITY_FIELDS, VELOCITY_POINT_STEP
 from rigid_body_sim.testing import start_process, stop_process
@@ -36,20 +37,6 @@ from rigid_body_sim.testing import start_process, stop_process
 pytestmark = pytest.mark.ros
 
 N_BODIES = 7
-
-
-def free_bodies_scene(n: int, seed: int = 0) -> dict:
-    """``n`` free asymmetric bodies at distinct poses, spinning and moving, no gravity."""
-    rng = np.random.default_rng(seed)
-    bodies = {}
-    for k in range(n):
-        q = rng.normal(size=4)
-        q /= np.linalg.norm(q)
-        bodies[f"b{k}"] = {"mass": float(1.0 + rng.random()),
-                           "inertia": {"box": [float(0.5 + rng.random()), float(0.3 + rng.random()), float(0.2 + rng.random())]},
-                           "pose": {"position": rng.normal(size=3).tolist(), "orientation": q.tolist()},
-                           "twist": {"linear": rng.normal(size=3).tolist(), "angular": (3 * rng.normal(size=3)).tolist()}}
-    return {"bodies": bodies}
 
 
 def cloud_points(msg: PointCloud2) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
