@@ -12,8 +12,9 @@ What is swept, and what is asserted:
 * Inertia ratios down to 1e-6 (rods, flat strips), near-degenerate triangle-inequality bodies
   (I1 + I2 ≈ I3), dt from 1e-7 s to 1 s, masses from 1e-6 to 1e6 kg with matching forces,
   wrenches up to 1e12, spin exactly along each principal axis and just off the intermediate one.
-* The two integrators of issue 4: symmetric_splitting (exact on symmetric tops, error ∝
-  asymmetry) and exact_rotor_splitting (exact when torque-free, second order with torques).
+* The two splittings built for fast spins: symmetric_splitting (exact on symmetric tops,
+  error ∝ asymmetry) and exact_rotor_splitting (exact when torque-free); their second order
+  with torques is measured with every other method's in test_order.py.
 
 Tolerances come from the method (round-off ~ n·ε for exact rotations; the documented 1e-3
 envelope; order × h), never from a previous run of the same code.
@@ -105,7 +106,7 @@ def test_documented_envelope_holds_at_its_limit_and_fails_just_above(integrator:
         )
 
 
-def test_issue_targets_are_met_and_documented() -> None:
+def test_exact_rotor_targets_are_met_and_documented() -> None:
     """exact_rotor_splitting: energy < 1e-3 over 1e4 steps at |ω|h = 4 for (1, 2, 3) and 0.5 for
     the rod r = 1e-6, |L| to 1e-10. The exact flow keeps both to round-off: ~n·ε, far below."""
     run = envelope.issue_targets()
@@ -117,7 +118,7 @@ def test_issue_targets_are_met_and_documented() -> None:
 
 
 def test_documented_claims_about_the_known_failures() -> None:
-    """The facts issue 4 builds on, as the table shows them."""
+    """The known failures the fast-spin splittings answer, as the table shows them."""
     limits = {name: {b: v["limit"] for b, v in d["limits"].items()} for name, d in _documented()["envelope"].items()}
     for name in EXPLODING:
         assert max(limits[name].values()) < 0.01  # any explicit ω update: drift at |ω|h ≈ 1e-3 already
@@ -496,27 +497,6 @@ def test_symmetric_splitting_error_is_proportional_to_the_asymmetry() -> None:
     run = envelope.torque_free_run("symmetric_splitting", np.stack((r, np.ones(3), 1.0 + 0.5 * r), axis=1),
                                    np.full(3, 0.5), 1000)
     assert loglog_slope(r, run.energy_error) == pytest.approx(1.0, abs=0.15), run.energy_error
-
-
-@pytest.mark.parametrize("integrator", ["symmetric_splitting", "exact_rotor_splitting"])
-def test_new_splittings_are_second_order_with_a_torque(integrator: str) -> None:
-    """A constant world torque on a tumbling (1, 2, 3) body: the error against the reference
-    integrator falls as h² (the half kicks of a Strang splitting)."""
-    bodies = _spinning((1.0, 2.0, 3.0), (0.4, -0.7, 0.9))
-    torque = np.array([0.3, 0.2, -0.5])
-    T = 2.0
-
-    def final(name: str, h: float) -> np.ndarray:
-        sim = Simulator(scene_of(bodies), name, h)
-        for _ in range(round(T / h)):
-            sim.apply_wrench("b", torque=torque, frame="world")
-            sim.step()
-        return np.concatenate((sim.angular_velocities_world()[0], quat_wxyz_from_xyzw(sim.orientations_xyzw()[0])))
-
-    exact = final("reference", 0.5)
-    h = np.array([0.1, 0.05, 0.025])
-    errors = [np.abs(final(integrator, step) - exact).max() for step in h]
-    assert loglog_slope(h, np.array(errors)) == pytest.approx(2.0, abs=0.3), errors
 
 
 # ----------------------------------------------------------------------------- the node
