@@ -316,21 +316,6 @@ def test_bad_wrenches_dropped_and_counted(resting_box):
         assert node.node.accepted_messages == 1
 
 
-def test_two_identical_runs_are_bitwise_equal():
-    def run():
-        with SimHarness(parameters={"integrator": "splitting", "substeps": 3}) as node:
-            node.publish_wrench("box", force=(0.0, 10.0, 0.0), frame_id="box/corner")
-            node.step(7)
-            node.publish_wrench("box", torque=(0.1, 0.0, 0.0), frame_id="world")
-            node.publish_impulse("box", linear=(0.0, 0.0, 0.3), frame_id="box/world_aligned")
-            node.step(60)
-            return pose_arrays(node, "box")
-
-    first, second = run(), run()
-    for a, b in zip(first, second):
-        assert a.tobytes() == b.tobytes()
-
-
 def test_odometry_twist_is_in_body_axes(resting_box):
     """nav_msgs/Odometry: pose in the world frame, twist in the body frame, child_frame_id = body."""
     with SimHarness(resting_box, parameters={"publish_odometry": True}) as node:
