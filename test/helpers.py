@@ -145,3 +145,12 @@ def with_spin_step(spec: dict[str, Any], spin_step: float, dt: float) -> dict[st
     w = np.array(body["twist"]["angular"])
     body["twist"] = {"linear": body["twist"]["linear"], "angular": (w * spin_step / (np.linalg.norm(w) * dt)).tolist()}
     return body
+
+
+def assert_white_noise(samples: np.ndarray, bias: Any, sigma: float, standard_errors: float = 4.5) -> None:
+    """Per axis, the samples (n, 3) have mean ``bias`` and standard deviation ``sigma``, each within
+    ``standard_errors`` of its standard error: σ/√n for the mean, σ/√(2(n − 1)) for the standard
+    deviation of Gaussian samples (4.5 of them: a false alarm about once in 10⁵ seeds)."""
+    n = len(samples)
+    np.testing.assert_allclose(samples.mean(axis=0), bias, rtol=0, atol=standard_errors * sigma / np.sqrt(n))
+    np.testing.assert_allclose(samples.std(axis=0, ddof=1), sigma, rtol=standard_errors / np.sqrt(2 * (n - 1)))
