@@ -1,4 +1,4 @@
-"""Batched state over ROS (issue 15): ``poses`` and ``velocities`` against the simulator, the
+"""Batched state over ROS: ``poses`` and ``velocities`` against the simulator, the
 ``body_names`` parameter, ``per_body_topics``, TwistStamped, QoS overrides and late joiners.
 
 The node runs as a separate process (its console script) on this session's private

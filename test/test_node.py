@@ -113,7 +113,7 @@ def test_each_frame_of_the_rule_matches_core(resting_box, frame_id):
 def test_same_physical_wrench_in_every_frame_of_a_group_gives_same_tick(resting_box):
     """One tick: F at the corner named in frames that hold the same load through the tick.
 
-    A wrench is kept in its frame and evaluated at every stage (issue 13), so frames agree
+    A wrench is kept in its frame and evaluated at every stage of a step, so frames agree
     bitwise-close (1e-12) only within a group that moves the load the same way: the box and its
     corner are both fixed in the box. A force in world axes (``box/world_aligned``, ``world``)
     does not turn with the box: the body-fixed force turns by θ = α t²/2 (α = τ/I_z), so the
@@ -147,7 +147,7 @@ def test_same_physical_wrench_in_every_frame_of_a_group_gives_same_tick(resting_
 
 
 def test_seed_box_through_the_node_matches_the_closed_form_to_1e_6(tmp_path):
-    """Issue 13 through ROS: the 2 kg box pushed by 10 N along its own y at box/corner by one
+    """A force fixed in the body, through ROS: the 2 kg box pushed by 10 N along its own y at box/corner by one
     WrenchStamped held (wrench_timeout 0), rk4, rate 100 Hz × 10 substeps (h = 1e-3), stepped
     100 ticks with ~/step while paused: pose, orientation and twist within 1e-6 of the Fresnel
     closed form after 1 s (rk4's own error at h = 1e-3 is ~1e-11; the seed missed by 2.2e-3)."""
