@@ -23,6 +23,15 @@ FIXED_STEP_INTEGRATORS = tuple(name for name, method in INTEGRATORS.items() if m
 #: Observed convergence order each fixed-step method must show: the order the table claims.
 ORDER = {name: INTEGRATORS[name].order for name in FIXED_STEP_INTEGRATORS}
 
+#: The compiled fixed-step methods (a ``code`` stepping dispatches on) and the ones the Simulator
+#: steps in numpy (no ``code``: a step costs a few hundred µs of Python, so long runs of them are
+#: kept short in the default suite).
+COMPILED_INTEGRATORS = tuple(name for name in FIXED_STEP_INTEGRATORS if INTEGRATORS[name].code is not None)
+NUMPY_STEPPED_INTEGRATORS = tuple(name for name in FIXED_STEP_INTEGRATORS if INTEGRATORS[name].code is None)
+
+#: The Lie–Poisson splittings: every stage an exact rotation, so |L| is kept to round-off.
+SPLITTING_FAMILY = ("splitting", "symmetric_splitting", "exact_rotor_splitting")
+
 #: Methods whose free rotor is the exact flow: torque-free, their only error is round-off
 #: (their order shows with applied torques; test_stability.py).
 EXACT_FREE_ROTOR = ("exact_rotor_splitting",)

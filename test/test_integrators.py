@@ -31,6 +31,7 @@ from hypothesis import strategies as st
 from helpers import (
     EPS,
     FIXED_STEP_INTEGRATORS,
+    NUMPY_STEPPED_INTEGRATORS,
     PROPERTY_SETTINGS,
     random_tumbling_bodies,
     scene_of,
@@ -78,7 +79,6 @@ DEFAULT_STEPS = 10_000
 SLOW_STEPS = (100_000, 1_000_000)
 #: Methods stepped in numpy (a few ms a step of six bodies on a loaded machine): 1e3 steps in the
 #: default suite, their 1e4 with the soak runs.
-NUMPY_STEPPED = ("exact_rotor_splitting",)
 NUMPY_DEFAULT_STEPS = 1_000
 
 
@@ -92,7 +92,7 @@ def _unit_cases() -> list:
     for the numpy-stepped methods), and the soak lengths marked slow."""
     cases = []
     for name in FIXED_STEP_INTEGRATORS:
-        if name in NUMPY_STEPPED:
+        if name in NUMPY_STEPPED_INTEGRATORS:
             counts = _steps(NUMPY_DEFAULT_STEPS, DEFAULT_STEPS, *SLOW_STEPS, default=NUMPY_DEFAULT_STEPS)
         else:
             counts = _steps(DEFAULT_STEPS, *SLOW_STEPS)

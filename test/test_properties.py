@@ -23,10 +23,17 @@ import numpy as np
 from hypothesis import given
 from hypothesis import strategies as st
 
-from helpers import EPS, FIXED_STEP_INTEGRATORS, PROPERTY_SETTINGS, scene_of, valid_bodies, with_spin_step
+from helpers import (
+    EPS,
+    FIXED_STEP_INTEGRATORS,
+    PROPERTY_SETTINGS,
+    SPLITTING_FAMILY,
+    scene_of,
+    valid_bodies,
+    with_spin_step,
+)
 from rigid_body_sim.core import Simulator
 
-SPLITTING_FAMILY = ("splitting", "symmetric_splitting", "exact_rotor_splitting")
 ORDER_OF_L_ERROR = {"euler": 2, "semi_implicit_euler": 2, "implicit_gyroscopic": 2, "rk4": 5}  # per-step |L| error: (|ω|h)^p
 
 

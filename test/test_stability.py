@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from helpers import EPS, FIXED_STEP_INTEGRATORS, loglog_slope, scene_of
+from helpers import EPS, FIXED_STEP_INTEGRATORS, NUMPY_STEPPED_INTEGRATORS, SPLITTING_FAMILY, loglog_slope, scene_of
 from rigid_body_sim.core import DivergenceError, NonFiniteStateError, SceneError, Simulator, load_scene
 from rigid_body_sim.core import closed_form
 from rigid_body_sim.core.free_rotor import exact_rotor, rotor_pairing, symmetric_split_rotor
@@ -37,7 +37,6 @@ from rigid_body_sim.core.quaternion import quat_angle_between, quat_wxyz_from_xy
 from rigid_body_sim.tools import envelope
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "stability.md"
-SPLITTING_FAMILY = ("splitting", "symmetric_splitting", "exact_rotor_splitting")  # exact rotations: |L| to round-off
 EXPLODING = ("euler", "semi_implicit_euler")
 
 
@@ -78,17 +77,16 @@ def test_the_document_covers_every_fixed_step_integrator() -> None:
     assert set(data["long"]) == set(envelope.SWEPT_INTEGRATORS), "regenerate docs/stability.md without --no-long"
 
 
-#: The exact rotor is stepped in numpy (ms a step): 1e4 steps of it are a soak, run slow; the
+#: The numpy-stepped methods (the exact rotor: ms a step): 1e4 steps of them are a soak, run slow; the
 #: default run keeps SHORT_STEPS of it. Its limits are the grid's end (it never fails there), so a
 #: shorter run checks the same thing over fewer steps.
-NUMPY_STEPPED = ("exact_rotor_splitting",)
 SHORT_STEPS = 1_000
 
 
 def _envelope_cases() -> list:
     cases = []
     for name in envelope.SWEPT_INTEGRATORS:
-        if name in NUMPY_STEPPED:
+        if name in NUMPY_STEPPED_INTEGRATORS:
             cases += [pytest.param(name, SHORT_STEPS, id=f"{name}-{SHORT_STEPS:.0e}".replace("+0", "")),
                       pytest.param(name, envelope.ENVELOPE_STEPS, marks=pytest.mark.slow, id=name)]
         else:
