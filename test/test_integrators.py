@@ -153,8 +153,9 @@ def test_quaternion_stays_unit_over_long_runs(integrator: str, n_steps: int) -> 
 @given(spec=valid_bodies(), integrator=st.sampled_from(FIXED_STEP_INTEGRATORS), steps=st.integers(1, 30),
        spin_step=st.floats(1e-4, 4.0))
 def test_quaternion_stays_unit_after_every_step(spec, integrator, steps, spin_step) -> None:
-    """Any valid body (hypothesis, helpers.valid_bodies): after every step, | |q| − 1 | ≤ 4 ε, internally and as reported, at any |ω|h that does
-    not blow up (a blow-up is reported, and leaves the last good, unit q)."""
+    """Any valid body (hypothesis, helpers.valid_bodies): after every step, | |q| − 1 | ≤ 4 ε,
+    internally and as reported, at any |ω|h that does not blow up (a blow-up is reported, and
+    leaves the last good, unit q). Over long runs: the test above."""
     sim = Simulator(scene_of({"b": with_spin_step(spec, spin_step, 0.01)}), integrator, 0.01)
     for _ in range(steps):
         try:
