@@ -1,8 +1,9 @@
 # rigid_body_sim: set-up, run and test in a local virtualenv (.venv) with pinned wheels.
 #
 #   make run        set up if needed, then run rigid_body_sim_node on the default scene
-#   make test       set up if needed, then pytest (slow tests excluded)   <- what CI runs
-#   make test-slow  set up if needed, then pytest -m slow (long stability/soak runs)
+#   make test       set up if needed, then pytest (slow tests excluded; a budget of ~3 min)  <- what CI runs
+#   make test-slow  set up if needed, then pytest -m slow (soak, statistics, repeated runs:
+#                   1e5-1e6 steps, the 100,000-message DDS fuzz, colcon test, environment probes)
 #   make venv       only the set-up: .venv with Python 3.11, pinned requirements, package -e
 #   make foxglove-deps  Node.js (apt if missing) and the pinned npm modules of test/foxglove (Foxglove's readers)
 #   make clean      remove caches and build output (keeps .venv); make distclean also .venv

@@ -8,9 +8,9 @@ system python3 that has rclpy: the installed console scripts get its shebang.
 The compiled numba kernels are cached beside the core's sources (rigid_body_sim/core/__pycache__);
 a fresh installation compiles them once, about 100 s on this machine. So that the default suite
 does not pay that, the checkout's cache is copied beside the installed core (the sources keep
-their modification times, which is what numba checks); ``test_cold_installed_node_compiles_and_publishes``
-(slow) runs a fresh installation cold, and ``test_colcon_test_runs_the_whole_suite`` (slow) runs
-every test through ``colcon test``:
+their modification times, which is what numba checks). The default run builds once and runs the
+installed node; the slow run (``make test-slow``) adds ``colcon test`` on a few files and on the
+whole suite, and a fresh installation started cold (``test_cold_installed_node_compiles_and_publishes``):
 
     .venv/bin/python -m pytest -m slow test/test_workspace.py
 """
@@ -162,6 +162,7 @@ def test_installed_node_publishes_a_pose(built, tmp_path):
     assert "Traceback" not in text
 
 
+@pytest.mark.slow
 def test_colcon_test_runs_the_package_tests(built):
     """``colcon test`` finds pytest (setup.py's ``test`` extra) and runs the package's tests from the
     workspace; here a fast subset, the whole suite in the slow test below."""
