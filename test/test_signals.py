@@ -1,15 +1,9 @@
-"""A start-up signal that lands where Python drops exceptions still stops start-up, silently.
+"""The two phases of :mod:`rigid_body_sim.signals`, each in a process of its own.
 
-During start-up the node's entry point turns SIGINT/SIGTERM into KeyboardInterrupt
-(rigid_body_sim.ros.main._Signals). Raised inside a finalizer, a weakref or gc callback or a
-ctypes callback, that exception would be printed as "Exception ignored ... Traceback" and
-dropped, and start-up would go on. Each case here runs in its own process: it installs the
-entry point's handlers, enters such a place and spins there for SPIN_S; this test sends the real
-signal once it is inside. The process must then stop with KeyboardInterrupt in ordinary code
-right after it leaves that place, and print no traceback. Inside an rclpy call (a half-done
-call would break the tear-down) the KeyboardInterrupt must come once the call has returned. A library that turns the
-KeyboardInterrupt into its own error, with or without a chain (seen: ``ImportError:
-initialization failed`` from scipy's highspy extension), still counts as the stop.
+Phase 1: a signal ends the process at once, status 0, one line on stderr, no ``finally`` run,
+and its Fast DDS segments removed. Phase 2: a signal only sets the flag (``on_first`` once,
+also for a second signal), and the program goes on to stop in order. The watchdog ends a stop
+that takes too long with status 1. The node and the CLI built on them: test_stops.py.
 """
 
 from __future__ import annotations
@@ -19,249 +13,148 @@ import subprocess
 import sys
 import textwrap
 import time
+from pathlib import Path
 
 import pytest
 
-SPIN_S = 1.0
+SHM = Path("/dev/shm")
 
-PRELUDE = textwrap.dedent(f"""
-    import ctypes, ctypes.util, gc, sys, time, weakref
-    from rigid_body_sim.ros import main as entry
-
-    left_at = None
-
-    def spin():
-        global left_at
-        print("inside", flush=True)
-        deadline = time.monotonic() + {SPIN_S}
-        try:
-            while time.monotonic() < deadline:
-                pass
-        finally:  # also when interrupted there (then dropped and sent again, or passed on)
-            left_at = time.monotonic()
-
-    signals = entry._Signals()
-""")
-
-CASES = {
-    # a ctypes callback that is not llvmlite's: libc's qsort calling a Python comparator
-    "ctypes callback": """
-        libc = ctypes.CDLL(ctypes.util.find_library("c"))
-        compare = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p)(lambda a, b: spin() or 0)
-        values = (ctypes.c_int * 2)(2, 1)
-        libc.qsort(values, 2, ctypes.sizeof(ctypes.c_int), compare)
-    """,
-    # a function called by a finalizer
-    "finalizer": """
-        class Held:
-            def __del__(self):
-                spin()
-        held = Held()
-        del held
-    """,
-    "weakref callback": """
-        class Target:
-            pass
-        target = Target()
-        finalizer = weakref.finalize(target, spin)
-        del target
-    """,
-    # an extension module's initialization calling Python: _pickle imports _compat_pickle (shadowed
-    # here by one that spins, then runs the real one)
-    "extension module initialization": """
-        import os, sysconfig, tempfile
-        shadow = tempfile.mkdtemp()
-        real = os.path.join(sysconfig.get_paths()["stdlib"], "_compat_pickle.py")
-        with open(os.path.join(shadow, "_compat_pickle.py"), "w") as f:
-            f.write(chr(10).join(["from __main__ import spin", "spin()", open(real).read()]))
-        sys.path.insert(0, shadow)
-        import _pickle
-        assert _pickle.loads(_pickle.dumps([1])) == [1]
-    """,
-    "gc callback": """
-        def on_collect(phase, info):
-            if phase == "start":
-                gc.callbacks.remove(on_collect)
-                spin()
-        gc.callbacks.append(on_collect)
-        gc.collect()
-    """,
-}
-
-# after the place: ordinary code for up to 5 s (inside the same try as the place)
-AFTER = textwrap.dedent("""
-    while time.monotonic() < left_at + 5.0:
-        time.sleep(0.001)
-    print("not stopped", flush=True)
-""")
-
-STOPPED = textwrap.dedent("""
-    except KeyboardInterrupt:
-        print(f"stopped in ordinary code {time.monotonic() - (left_at or float('nan')):.3f} s after leaving", flush=True)
-""")
+SIGNALS = [signal.SIGINT, signal.SIGTERM]
+IDS = [s.name for s in SIGNALS]
 
 
-def in_try(body: str) -> str:
-    """``body`` then AFTER inside ``try:``, with STOPPED as its handler."""
-    return "try:\n" + textwrap.indent(textwrap.dedent(body) + AFTER, "    ") + STOPPED
-
-
-def signal_once_inside(script: str, signum: signal.Signals, timeout: float, *,
-                       first_lines: tuple[str, ...] = ()) -> tuple[int, str, str]:
-    """Run ``script`` in its own Python; after it prints ``first_lines`` then "inside", send
-    ``signum`` 0.1 s later (well inside the spin). Returns (exit status, stdout after "inside", stderr)."""
-    process = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+def signal_after_ready(script: str, *signums: signal.Signals, timeout: float = 30.0) -> tuple[int, str, str, float]:
+    """Run ``script`` in its own Python; once it prints "ready", send ``signums`` 0.1 s apart.
+    Returns (exit status, stdout after "ready", stderr, seconds from the first signal to the exit)."""
+    process = subprocess.Popen([sys.executable, "-c", textwrap.dedent(script)], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True)
     try:
-        for line in (*first_lines, "inside"):
-            assert process.stdout.readline().strip() == line, process.stderr.read()
-        time.sleep(0.1)
-        process.send_signal(signum)
+        assert process.stdout.readline().strip() == "ready", process.stderr.read()
+        sent = time.monotonic()
+        for signum in signums:
+            process.send_signal(signum)
+            time.sleep(0.1)
         out, err = process.communicate(timeout=timeout)
+        return process.returncode, out, err, time.monotonic() - sent
     finally:
         if process.poll() is None:
             process.kill()
             process.wait()
-    return process.returncode, out, err
 
 
-@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
-@pytest.mark.parametrize("case", list(CASES))
-def test_a_start_up_signal_where_exceptions_are_dropped_stops_in_ordinary_code(case, signum):
-    returncode, out, err = signal_once_inside(PRELUDE + in_try(CASES[case]), signum, timeout=20)
-    assert returncode == 0, err
-    assert "Traceback" not in err and "Exception ignored" not in err, err
-    lines = out.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("stopped in ordinary code"), out + err
-    after_s = float(lines[0].split()[4])
-    assert after_s < 1.0, out  # sent again every 20 ms (or raised on return): it lands once the spin is over
+@pytest.mark.parametrize("signum", SIGNALS, ids=IDS)
+def test_phase_1_exits_0_at_once_with_one_line(signum):
+    returncode, out, err, took = signal_after_ready("""
+        import time
+        from rigid_body_sim.signals import TwoPhaseSignals
 
-
-REPLACED = PRELUDE.replace("signals = entry._Signals()", "") + textwrap.dedent("""
-    signals = entry._Signals()
-    print("before the signal", signals.stopped_by(ValueError("bad scene")), flush=True)
-    try:
-        failed = False
+        signals = TwoPhaseSignals("prog")
         try:
-            spin()
-        except KeyboardInterrupt:  # replaced without a chain, as numba's _dispatcher does
-            failed = True
-        if failed:
-            raise ImportError("numba._devicearray failed to import")
-    except BaseException as exc:
-        print("after the signal", type(exc).__name__, exc.__context__, signals.stopped_by(exc), flush=True)
-""")
+            print("ready", flush=True)
+            time.sleep(20)
+        finally:
+            print("finally ran", flush=True)
+    """, signum)
+    assert returncode == 0 and out == "", out + err
+    assert err == f"prog: stopped by {signum.name} during start-up\n"
+    assert took < 5.0
 
 
-@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
-def test_a_start_up_signal_a_library_turned_into_its_own_error_still_counts_as_the_stop(signum):
-    """Once a start-up signal has raised its KeyboardInterrupt, any error start-up ends with counts
-    as the stop (``_Signals.stopped_by``: the entry point returns 0); before, an error is an error."""
-    returncode, out, err = signal_once_inside(REPLACED, signum, timeout=20, first_lines=("before the signal False",))
-    assert returncode == 0 and not err, err
-    assert out.splitlines() == ["after the signal ImportError None True"], out
+@pytest.mark.parametrize("signum", SIGNALS, ids=IDS)
+def test_phase_2_only_sets_the_flag_and_calls_on_first_once(signum):
+    returncode, out, err, _took = signal_after_ready("""
+        import signal
+        from rigid_body_sim.signals import TwoPhaseSignals
+
+        signals = TwoPhaseSignals("prog")
+        stop = signals.switch_to_orderly(on_first=lambda: print("first", flush=True))
+        print("ready", flush=True)
+        assert stop.wait(20)
+        import time
+        time.sleep(0.5)  # the second signal arrives meanwhile: nothing more happens
+        print("stopped in order by", signals.signal_name, flush=True)
+        signals.restore()
+        print("restored", signal.getsignal(signal.SIGINT) is signal.default_int_handler, flush=True)
+    """, signum, signal.SIGINT)
+    assert returncode == 0 and err == "", err
+    assert out.splitlines() == ["first", f"stopped in order by {signum.name}", "restored True"]
 
 
-HALF_REGISTERED = PRELUDE + textwrap.dedent("""
-    import rclpy
-    from rclpy.context import Context
-    from rclpy.executors import SingleThreadedExecutor
-    from rclpy.node import Node
-    from rclpy.signals import SignalHandlerOptions
-    from std_msgs.msg import Empty
+@pytest.mark.parametrize("fails", [False, True], ids=["on_expire", "on_expire-fails"])
+def test_the_watchdog_calls_on_expire_then_exits_1(fails):
+    process = subprocess.run([sys.executable, "-c", textwrap.dedent(f"""
+        import time
+        from rigid_body_sim.signals import Watchdog
 
-    armed = False
+        def on_expire():
+            print("expired", flush=True)
+            if {fails}:
+                raise RuntimeError("saving failed")
 
-    class SpinningWake(SingleThreadedExecutor):
-        def wake(self):
-            global armed
-            if armed:  # rclpy's create_subscription has listed the subscription, not yet its event handlers
-                armed = False
-                spin()
-            super().wake()
-
-    context = Context()
-    rclpy.init(context=context, signal_handler_options=SignalHandlerOptions.NO)
-    executor = SpinningWake(context=context)
-    node = Node("half_registered", context=context)
-    executor.add_node(node)
-
-    def outer_trace(frame, event, arg):  # a debugger's or coverage's, say: put back after the raise
-        return None
-
-    sys.settrace(outer_trace)
-""") + in_try("""
-    armed = True
-    node.create_subscription(Empty, "half_registered_topic", lambda _msg: None, 10)
-""") + textwrap.dedent("""
-    signals.ignore()  # what the entry point does first when start-up ends
-    print("trace put back", sys.gettrace() is outer_trace, flush=True)
-    executor.shutdown()
-    node.destroy_node()
-    context.try_shutdown()
-    print("destroyed", flush=True)
-""")
+        Watchdog(0.2, on_expire).start()
+        time.sleep(20)  # an orderly stop that does not end
+        print("not reached", flush=True)
+    """)], capture_output=True, text=True, timeout=30)
+    assert process.returncode == 1 and process.stdout == "expired\n", process.stdout + process.stderr
 
 
-@pytest.mark.ros
-def test_a_start_up_signal_inside_an_rclpy_call_lands_after_it():
-    """A signal while rclpy registers a subscription (its call into the executor's wake) is raised
-    once that call has returned: the node is then whole, and destroy_node succeeds."""
-    returncode, out, err = signal_once_inside(HALF_REGISTERED, signal.SIGINT, timeout=30)
-    assert returncode == 0 and "Traceback" not in err, err
-    lines = out.strip().splitlines()
-    assert len(lines) == 3 and lines[0].startswith("stopped in ordinary code"), out + err
-    assert lines[1:] == ["trace put back True", "destroyed"], out + err
-    assert float(lines[0].split()[4]) < 1.0, out
+def test_a_cancelled_watchdog_does_nothing():
+    process = subprocess.run([sys.executable, "-c", textwrap.dedent("""
+        import time
+        from rigid_body_sim.signals import Watchdog
 
-
-def test_a_half_built_node_that_will_not_tear_down_exits_0_saying_why():
-    """After a signal cut start-up short, a failing tear-down (what an interrupted rclpy call
-    could leave) ends the process with status 0 and one line naming the error, no traceback."""
-    script = textwrap.dedent("""
-        from rigid_body_sim.ros import main as entry
-
-        class HalfBuilt:
-            def destroy_node(self):
-                raise ValueError("list.remove(x): x not in list")
-
-        entry._tear_down_half_built(None, HalfBuilt(), None)
-        print("not reached")
-    """)
-    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
-    assert result.returncode == 0 and result.stdout == "", result.stdout + result.stderr
-    assert result.stderr.splitlines() == [
-        "rigid_body_sim_node: stopped during start-up; destroying what was built failed "
-        "(ValueError('list.remove(x): x not in list')), exiting without it"], result.stderr
-
-
-CUT_AFTER_RCLPY_NODE = PRELUDE + textwrap.dedent("""
-    import rclpy
-    from rclpy.context import Context
-    from rclpy.signals import SignalHandlerOptions
-    from rigid_body_sim.ros.node import RigidBodySimNode
-
-    class SpinningContext(Context):
-        def track_node(self, node):  # called by rclpy's Node constructor
-            spin()
-            super().track_node(node)
-
-    context = SpinningContext()
-    rclpy.init(context=context, signal_handler_options=SignalHandlerOptions.NO)
-    try:
-        RigidBodySimNode(context=context, start_ticking=False)
-        print("built", flush=True)
-    except KeyboardInterrupt:
-        print("stopped in the constructor", flush=True)
-        context.try_shutdown()  # destroys every node it tracks, this half-built one too
-        print("context shut down", flush=True)
-""")
+        watchdog = Watchdog(0.2, lambda: print("expired", flush=True))
+        watchdog.start()
+        watchdog.cancel()
+        time.sleep(0.5)
+        print("went on", flush=True)
+    """)], capture_output=True, text=True, timeout=30)
+    assert process.returncode == 0 and process.stdout == "went on\n", process.stdout + process.stderr
 
 
 @pytest.mark.ros
-def test_a_node_cut_short_right_after_rclpy_built_it_is_destroyed_cleanly():
-    """A signal during rclpy's Node constructor is raised in RigidBodySimNode's constructor right
-    after it, before any of the node's own attributes exist; rclpy's Context.shutdown then
-    destroys that half-built node, which must work (it failed with AttributeError '_tick_loop')."""
-    returncode, out, err = signal_once_inside(CUT_AFTER_RCLPY_NODE, signal.SIGTERM, timeout=30)
-    assert returncode == 0 and not err, err
-    assert out.splitlines() == ["stopped in the constructor", "context shut down"], out + err
+def test_an_exit_without_tear_down_removes_the_participants_shared_memory():
+    """A Fast DDS participant's segment (/dev/shm/fastdds_<id> and its lock file) outlives
+    ``os._exit``; :func:`exit_now` removes it first, and only it (not the port segments, which
+    every participant on the host shares)."""
+    process = subprocess.run([sys.executable, "-c", textwrap.dedent("""
+        import rclpy
+        from rclpy.node import Node
+        from std_msgs.msg import Empty
+        from rigid_body_sim.signals import exit_now
+
+        rclpy.init()
+        node = Node("shm_check")
+        node.create_publisher(Empty, "shm_check", 10)
+        maps = open("/proc/self/maps").read()
+        for name in sorted({line.split("/dev/shm/")[1] for line in maps.splitlines() if "/dev/shm/fastdds_" in line}):
+            print(name, flush=True)
+        exit_now(0, "bye")
+    """)], capture_output=True, text=True, timeout=60)
+    assert process.returncode == 0 and process.stderr.endswith("bye\n"), process.stderr
+    own = [name for name in process.stdout.split() if not name.startswith("fastdds_port")]
+    assert own, f"no segment of its own: {process.stdout}"
+    left = [path for name in own for path in (SHM / name, SHM / f"{name}_el") if path.exists()]
+    assert not left, left
+
+
+def test_only_the_segments_whose_lock_this_process_holds_are_removed(tmp_path, monkeypatch):
+    """The owner of a segment keeps its ``_el`` lock file open; peers' segments (mapped, not
+    locked here), port segments and other files stay. What is removed is returned."""
+    from rigid_body_sim import signals
+
+    shm, fds = tmp_path / "shm", tmp_path / "fd"
+    shm.mkdir()
+    fds.mkdir()
+    for name in ("fastdds_0123abcd", "fastdds_0123abcd_el", "fastdds_port7000", "fastdds_port7000_el",
+                 "sem.fastdds_port7000_mutex", "fastdds_feedbeef", "fastdds_feedbeef_el", "other_el"):
+        (shm / name).write_text("")
+    for fd, name in enumerate(("fastdds_0123abcd_el", "fastdds_port7000_el", "fastdds_feedbeef", "other_el")):
+        (fds / str(fd)).symlink_to(shm / name)
+    (fds / "9").symlink_to(tmp_path / "elsewhere_el")
+    monkeypatch.setattr(signals, "SHM_DIR", shm)
+    monkeypatch.setattr(signals, "FDS", fds)
+    assert signals.remove_own_shared_memory() == ["fastdds_0123abcd", "fastdds_0123abcd_el"]
+    assert sorted(p.name for p in shm.iterdir()) == [
+        "fastdds_feedbeef", "fastdds_feedbeef_el", "fastdds_port7000", "fastdds_port7000_el", "other_el",
+        "sem.fastdds_port7000_mutex"]
