@@ -15,6 +15,7 @@ level, so that the handlers are in place before the heavy imports begin.
 
 from __future__ import annotations
 
+import gc
 import os
 import sys
 from typing import Any
@@ -58,7 +59,8 @@ def main(args: list[str] | None = None) -> int:
         return 2
     executor = EventsExecutor()
     executor.add_node(node)
-    _freeze_start_up_objects()
+    gc.collect()  # what start-up made stays for good: a full collection of it stalled the ticks ~90 ms
+    gc.freeze()
     watchdog = Watchdog(STOP_GRACE_S, lambda: _give_up(node))
     stop = signals.switch_to_orderly(on_first=watchdog.start)  # phase 2: a signal only sets `stop`
     status = 0
@@ -79,8 +81,13 @@ def main(args: list[str] | None = None) -> int:
         status = 1
     finally:
         watchdog.start()
-        if stop.is_set() and _endpoints(node) > FAST_EXIT_ENDPOINTS:
-            _exit_without_tear_down(node)
+        endpoints = sum(1 for _ in node.publishers) + sum(1 for _ in node.subscriptions)
+        if stop.is_set() and endpoints > FAST_EXIT_ENDPOINTS:
+            node.stop_ticking_and_recording()
+            _say(f"stopped; exiting without destroying {endpoints} endpoints one by one (slow at this count); "
+                 "DDS peers drop them when the lease expires")
+            sys.stdout.flush()
+            exit_now(0)
         executor.shutdown(timeout_sec=1.0)
         node.destroy_node()  # stops the tick thread, finishes the recording
         rclpy.try_shutdown()
@@ -99,19 +106,6 @@ def _give_up(node: Any) -> None:
          + (f": a tick has been running for {running:.1f} s" if running is not None else "")
          + "; finishing the recording and exiting with status 1")
     node.finish_recording_now()
-
-
-def _endpoints(node: Any) -> int:
-    return sum(1 for _ in node.publishers) + sum(1 for _ in node.subscriptions)
-
-
-def _exit_without_tear_down(node: Any) -> None:
-    """Stop the ticks, finish the recording, say why, and exit 0 without destroying the endpoints."""
-    node.stop_ticking_and_recording()
-    _say(f"stopped; exiting without destroying {_endpoints(node)} endpoints one by one (slow at this "
-         f"count); DDS peers drop them when the lease expires")
-    sys.stdout.flush()
-    exit_now(0)
 
 
 def _compile_if_cold() -> None:
@@ -144,15 +138,6 @@ def _kernels_cached() -> bool:
     if user_dir:
         return any(Path(user_dir).rglob("*.nbi"))
     return not os.access(CACHE_DIR, os.W_OK) or any(CACHE_DIR.glob("*.nbi"))
-
-
-def _freeze_start_up_objects() -> None:
-    """Move what start-up allocated (rclpy, numpy, numba, the node) out of the collector's reach:
-    one full collection of it stalled the tick thread for about 90 ms."""
-    import gc
-
-    gc.collect()
-    gc.freeze()
 
 
 if __name__ == "__main__":
