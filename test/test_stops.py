@@ -30,7 +30,8 @@ import yaml
 from rigid_body_sim.offline.recording import read_recording
 from rigid_body_sim.testing import node_command, start_process
 
-from helpers import kill_if_running, stop_and_check, wait_for_line, wait_for_participant, write_tumbling_scene
+from helpers import (kill_if_running, own_shared_memory, stop_and_check, wait_for_line, wait_for_participant,
+                     write_tumbling_scene)
 
 pytestmark = pytest.mark.ros
 
@@ -151,6 +152,18 @@ def start_flooders(topics: list[str], mode: str, rate: int) -> list[subprocess.P
                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True) for topic in topics]
 
 
+def stop_flooders(flooders: list[subprocess.Popen]) -> None:
+    """SIGINT, so that each destroys its participant (a SIGKILL would leave its segment in /dev/shm)."""
+    for flooder in flooders:
+        if flooder.poll() is None:
+            flooder.send_signal(signal.SIGINT)
+    for flooder in flooders:
+        try:
+            flooder.communicate(timeout=10)
+        except subprocess.TimeoutExpired:
+            kill_if_running(flooder)
+
+
 def wait_until_flooding(flooders: list[subprocess.Popen]) -> None:
     for flooder in flooders:
         line = flooder.stdout.readline()
@@ -191,9 +204,8 @@ def flood_and_stop(tmp_path: Path, flood: str, signum: signal.Signals) -> None:
         assert process.poll() is None and all(s.poll() is None for s in senders), log.read_text()[-2000:]
         took = stop_and_check(process, signum, log, record, what=f"{flood}, {signum.name}")
     finally:
-        kill_if_running(process, *senders)
-        for sender in senders:
-            sender.stdout.close()
+        kill_if_running(process)
+        stop_flooders(senders)
     check_phase(moment, signum, log, record)
     assert took < LAUNCH_GRACE_S
 
@@ -303,8 +315,11 @@ def test_sigkill_during_a_recording_loses_at_most_a_second(tmp_path):
             assert time.monotonic() < deadline and process.poll() is None, (tmp_path / "node.log").read_text()[-2000:]
             executor.spin_once(timeout_sec=0.05)
         last_clock_ns = clocks[-1]
+        segments = own_shared_memory(process.pid)
         process.send_signal(signal.SIGKILL)
         process.wait(timeout=10)
+        for path in segments:  # what a SIGKILL leaves in /dev/shm
+            path.unlink(missing_ok=True)
     finally:
         kill_if_running(process)
         executor.shutdown()
