@@ -266,9 +266,10 @@ def test_twenty_stops_at_1000_bodies_at_any_moment(tmp_path):
 @pytest.mark.timeout(900)
 @pytest.mark.parametrize("signum", SIGNALS, ids=[s.name for s in SIGNALS])
 def test_a_signal_at_every_moment_of_start_up_exits_0(signum, tmp_path):
-    """The default scene, a signal every 0.1 s from 0.15 s to 3 s after start. (Before ~0.1 s the
-    interpreter itself is still starting, twice with the ROS wheels' re-exec, and a SIGINT there
-    ends in Python's own KeyboardInterrupt.)"""
+    """The default scene, a signal every 0.1 s from 0.15 s to 3 s after start. (Before about 0.07 s
+    the interpreter itself is still starting, twice: the ROS wheels' bootstrapper re-execs it. No
+    handler of ours is installed yet: a SIGINT there ends in Python's own KeyboardInterrupt, or is
+    lost across the re-exec, and a SIGTERM kills the process, status -15.)"""
     for k in range(29):
         delay = 0.15 + 0.1 * k
         log = tmp_path / f"node_{k}.log"
