@@ -16,7 +16,9 @@ file); 0 when stopped by a signal, Ctrl-C (SIGINT) or SIGTERM, or when the reade
 goes away (``describe ... | head``): a stop asked for is not a failure. An interrupted ``run``
 closes its files properly and ends them with a status saying where it stopped (``interrupted
 by SIGTERM at t = ... s``; a complete run's status says ``complete``), and says so on stderr:
-the files, not the exit code, tell a cut-short run from a whole one.
+the files, not the exit code, tell a cut-short run from a whole one. Before ``run`` opens its
+files, and in the other commands, a signal ends the command at once (status 0, one line on
+stderr; :mod:`rigid_body_sim.signals`).
 No error ends in a traceback. This module only parses arguments and prints: the work is in
 :mod:`rigid_body_sim.offline` and :mod:`rigid_body_sim.core`. ``check`` imports the scene
 loader only (not the compiled simulator), so it is quick and small.
@@ -32,13 +34,13 @@ import os
 import signal
 import stat
 import sys
-import threading
-from contextlib import ExitStack, contextmanager
+from contextlib import ExitStack
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Iterator, Sequence
 
 from .core import SceneError, load_scene
 from .safe_open import check_writable_path, open_for_reading, same_file
+from .signals import TwoPhaseSignals
 
 if TYPE_CHECKING:
     from .core import Scene
@@ -60,7 +62,7 @@ class _Failure(Exception):
 
 
 class _Interrupted(KeyboardInterrupt):
-    """SIGINT or SIGTERM arrived (raised by the handler :func:`_signals_interrupt` installs)."""
+    """SIGINT or SIGTERM stopped a run between two samples (raised by :func:`_run`)."""
 
     def __init__(self, signum: int):
         super().__init__(signal.Signals(signum).name)
@@ -72,50 +74,6 @@ class _WriteError(OSError):
 
     def __init__(self, path: Path, error: OSError):
         super().__init__(error.errno, error.strerror or str(error), str(path))
-
-
-class _Signals:
-    """SIGINT and SIGTERM while a command runs: raised as :class:`_Interrupted` at once, or, inside
-    :meth:`deferred`, only recorded (a run then stops between two samples, never inside a
-    write). A second signal while cleaning up is ignored."""
-
-    def __init__(self) -> None:
-        self.signum: int | None = None
-        self._defer = False
-
-    def handler(self, signum: int, frame: Any) -> None:
-        if self.signum is not None:
-            return
-        self.signum = signum
-        if not self._defer:
-            raise _Interrupted(signum)
-
-    def pending(self) -> bool:
-        return self.signum is not None
-
-    @contextmanager
-    def deferred(self) -> Iterator[None]:
-        self._defer = True
-        try:
-            yield
-        finally:
-            self._defer = False
-
-
-@contextmanager
-def _signals_interrupt() -> Iterator[_Signals]:
-    """Handle SIGTERM like Ctrl-C (so files are closed and marked). Only in the main thread
-    (where Python runs signal handlers); elsewhere the defaults stay."""
-    signals = _Signals()
-    if threading.current_thread() is not threading.main_thread():
-        yield signals
-        return
-    previous = {sig: signal.signal(sig, signals.handler) for sig in (signal.SIGINT, signal.SIGTERM)}
-    try:
-        yield signals
-    finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
 
 
 class _IntegratorNames:
@@ -213,8 +171,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     command = {"run": _run, "plot": _plot, "describe": _describe, "check": _check}[args.command]
-    with _signals_interrupt() as signals:
-        args.signals = signals
+    # Phase 1 (nothing written yet): a signal exits 0 at once; ``run`` switches to phase 2 before
+    # it opens its outputs, so that a signal then stops it between two samples.
+    args.signals = TwoPhaseSignals(f"{PROG} {args.command}", during="")
+    try:
         try:
             return command(args, args.command_parser)
         except (SceneError, _Failure) as exc:
@@ -230,6 +190,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             os.dup2(devnull, sys.stdout.fileno())  # so that flushing stdout at exit fails no more
             os.close(devnull)
             return 0
+    finally:
+        args.signals.restore()
 
 
 #: What a path is when looking it up fails with this errno (the lookup, not the file, is the problem).
@@ -333,6 +295,7 @@ def _run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     meta = {"scene": str(Path(args.scene).resolve()), "integrator": args.integrator, "dt": repr(args.dt),
             "duration": repr(args.duration), "sample_every_steps": str(every), "version": _version(),
             "model_reduction": str(not args.no_reduction)}
+    stop = args.signals.switch_to_orderly()  # from here a signal only asks the run to stop between samples
     csv_writer, recorder = _open_outputs(parser, csv_path, record_path, sim, meta, scene.text)
     outputs = [(path, writer) for path, writer in ((csv_path, csv_writer), (record_path, recorder)) if writer]
     callbacks = []
@@ -354,11 +317,10 @@ def _run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         if bar is not None:
             stack.callback(bar.close)
         try:
-            with args.signals.deferred():
-                summary = run_offline(sim, args.duration, sample_every=every, on_sample=callbacks,
-                                      progress=bar.update if bar is not None else None, stop=args.signals.pending)
+            summary = run_offline(sim, args.duration, sample_every=every, on_sample=callbacks,
+                                  progress=bar.update if bar is not None else None, stop=stop.is_set)
             if summary.stopped:
-                raise _Interrupted(args.signals.signum or signal.SIGINT)
+                raise _Interrupted(args.signals.signum)
             end = f"complete: {summary.steps} steps, t = {summary.sim_time:.9g} s"
         except NonFiniteStateError as exc:
             end = f"failed at t = {sim.time:.9g} s ({sim.step_count} steps): {exc}"

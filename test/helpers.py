@@ -2,15 +2,23 @@
 
 Everything random here takes a seeded ``numpy.random.Generator`` from the caller, so every
 test is reproducible. Quaternions are (w, x, y, z) unless a name says ``_xyzw``.
+
+At the end, helpers of the stop tests: node processes started, signalled and checked.
 """
 
 from __future__ import annotations
 
+import os
+import signal
+import subprocess
+import time
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 from hypothesis import HealthCheck, settings
 from hypothesis import strategies as st
+import yaml
 
 from rigid_body_sim.core import INTEGRATORS, Scene, Simulator, load_scene
 from rigid_body_sim.core.quaternion import quat_wxyz_from_xyzw, quat_xyzw_from_wxyz
@@ -163,3 +171,87 @@ def assert_white_noise(samples: np.ndarray, bias: Any, sigma: float, standard_er
     n = len(samples)
     np.testing.assert_allclose(samples.mean(axis=0), bias, rtol=0, atol=standard_errors * sigma / np.sqrt(n))
     np.testing.assert_allclose(samples.std(axis=0, ddof=1), sigma, rtol=standard_errors / np.sqrt(2 * (n - 1)))
+# ------------------------------------------------------------------ node processes and their stops
+
+
+def write_tumbling_scene(path: Path, count: int, seed: int = 0) -> Path:
+    """Write a scene of ``count`` torque-free tumbling bodies (b0, b1, ...) to ``path``; return it."""
+    bodies = random_tumbling_bodies(np.random.default_rng(seed), count, spin_rate=2.0)
+    path.write_text(yaml.safe_dump({"bodies": bodies}))
+    return path
+
+
+def wait_for_line(log_path: Path, text: str, process: subprocess.Popen, timeout: float) -> float:
+    """Wait until ``text`` is in the log of a running ``process``; return when it was seen (monotonic s)."""
+    deadline = time.monotonic() + timeout
+    while text not in log_path.read_text():
+        assert process.poll() is None, f"exited {process.returncode} before {text!r}:\n{log_path.read_text()[-2000:]}"
+        assert time.monotonic() < deadline, f"{text!r} not logged within {timeout} s:\n{log_path.read_text()[-2000:]}"
+        time.sleep(0.02)
+    return time.monotonic()
+
+
+def own_shared_memory(pid: int) -> set[Path]:
+    """The Fast DDS segments process ``pid`` owns in /dev/shm, with their lock files: those whose
+    ``_el`` lock file it keeps open (the shared port segments left out)."""
+    paths = set()
+    try:
+        fds = list(Path(f"/proc/{pid}/fd").iterdir())
+    except OSError:
+        return paths
+    for fd in fds:
+        try:
+            path = Path(os.readlink(fd))
+        except OSError:
+            continue
+        if path.parent == Path("/dev/shm") and path.name.startswith("fastdds_") and path.name.endswith("_el") \
+                and not path.name.startswith("fastdds_port"):
+            paths |= {path, path.with_name(path.name.removesuffix("_el"))}
+    return paths
+
+
+def wait_for_participant(process: subprocess.Popen, timeout: float = 120.0) -> float:
+    """Wait until ``process`` has created its DDS participant (it owns a Fast DDS segment);
+    return when that was seen (monotonic s)."""
+    deadline = time.monotonic() + timeout
+    while not own_shared_memory(process.pid):
+        assert process.poll() is None, f"exited {process.returncode} before creating a participant"
+        assert time.monotonic() < deadline, f"no participant within {timeout} s"
+        time.sleep(0.02)
+    return time.monotonic()
+
+
+def stop_and_check(process: subprocess.Popen, signum: signal.Signals, log_path: Path,
+                   record: Path | None = None, what: str = "", timeout: float = 60.0) -> float:
+    """Send ``signum``: the process must exit 0 with no traceback and leave no Fast DDS segment of
+    its own in /dev/shm; a recording, if there is one, must be complete. Returns the seconds from
+    the signal to the exit."""
+    segments = own_shared_memory(process.pid)
+    sent = time.monotonic()
+    process.send_signal(signum)
+    try:
+        code = process.wait(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        process.wait()
+        raise AssertionError(f"{what}: no exit within {timeout} s of {signum.name}:\n{log_path.read_text()[-2000:]}")
+    took = time.monotonic() - sent
+    text = log_path.read_text()
+    assert code == 0, f"{what}: {signum.name} -> exit {code}:\n{text[-2000:]}"
+    assert "Traceback" not in text and "KeyboardInterrupt" not in text and "Error" not in text, f"{what}:\n{text[-2000:]}"
+    left = sorted(str(path) for path in segments if path.exists())
+    assert not left, f"{what}: left in /dev/shm: {left}"
+    if record is not None and record.exists():
+        from rigid_body_sim.offline.recording import read_recording
+
+        data, _scene = read_recording(record)
+        assert data.meta.get("status", "").startswith("complete"), f"{what}: recording {data.meta.get('status')!r}"
+    return took
+
+
+def kill_if_running(*processes: subprocess.Popen) -> None:
+    """SIGKILL what still runs (the end of a test that failed half-way)."""
+    for process in processes:
+        if process.poll() is None:
+            process.kill()
+            process.wait()

@@ -20,7 +20,7 @@ import time
 from collections.abc import Callable, Iterator
 
 import pytest
-import rclpy  # a missing or broken rclpy fails the run; it is never skipped
+import rclpy  # noqa: F401  (a missing or broken rclpy fails the run; it is never skipped)
 from rclpy.context import Context
 from rclpy.executors import Executor, SingleThreadedExecutor
 from rclpy.node import Node
