@@ -212,7 +212,7 @@ def test_body_names_follow_a_scene_change(tmp_path):
     scene = free_bodies_scene(2, seed=1)
     scene["bodies"] = {f"other{k}": body for k, body in enumerate(scene["bodies"].values())}
     second.write_text(yaml.safe_dump(scene))
-    with SimHarness(scene=first) as harness:
+    with SimHarness(scene=first, parameters={"scene_dirs": [str(tmp_path)]}) as harness:
         assert harness.get_parameter("body_names") == ["b0", "b1", "b2"]
         (result,) = harness.set_parameters(scene=str(second))
         assert result.successful, result.reason

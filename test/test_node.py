@@ -247,7 +247,7 @@ def test_reset_pause_and_step():
         ({"integrator": "leapfrog"}, "integrator must be one of"),
         ({"real_time_factor": 0.0}, "real_time_factor"),
         ({"wrench_timeout": -1.0}, "wrench_timeout"),
-        ({"scene": "/nonexistent/scene.yaml"}, "cannot read scene file"),
+        ({"scene": "/nonexistent/scene.yaml"}, "not inside the directories of scene_dirs"),
         ({"rate_hz": "fast"}, "type"),
         ({"world_frame": "map"}, "read-only"),
     ],

@@ -266,7 +266,7 @@ def test_record_path_changes_at_runtime_and_bad_paths_are_rejected(tmp_path: Pat
     from rigid_body_sim.testing import SimHarness
 
     first, second = tmp_path / "first.mcap", tmp_path / "second.mcap"
-    with SimHarness() as harness:
+    with SimHarness(parameters={"record_dirs": [str(tmp_path)]}) as harness:
         assert harness.get_parameter("record_path") == ""
         assert harness.set_parameters(record_path=str(first))[0].successful
         harness.step(2)
@@ -275,7 +275,8 @@ def test_record_path_changes_at_runtime_and_bad_paths_are_rejected(tmp_path: Pat
         harness.step(3)
         result = harness.set_parameters(record_path=str(tmp_path / "missing" / "x.mcap"))[0]
         assert not result.successful and "does not exist" in result.reason
-        result = harness.set_parameters(record_path=str(tmp_path))[0]
+        (tmp_path / "directory.mcap").mkdir()
+        result = harness.set_parameters(record_path=str(tmp_path / "directory.mcap"))[0]
         assert not result.successful and "is a directory" in result.reason
         assert harness.get_parameter("record_path") == str(second)
         assert harness.set_parameters(record_path="")[0].successful
