@@ -62,7 +62,7 @@ def test_one_request_naming_scene_twice_applies_the_last(tmp_path):
     name of the request, and `KeyError` escaped from `_prepared_scenes.pop` into the executor."""
     a = write_scene(tmp_path / "a.yaml", ["p"])
     b = write_scene(tmp_path / "b.yaml", ["q"])
-    with SimHarness(a) as harness:
+    with SimHarness(a, parameters={"scene_dirs": [str(tmp_path)]}) as harness:
         future = harness._parameters.set_parameters_atomically([Parameter("scene", value=a), Parameter("scene", value=b)])
         harness.spin_until(future.done, "the parameter service")
         assert future.result().result.successful
@@ -78,7 +78,7 @@ def test_scene_changes_from_two_threads_at_once_stay_consistent(tmp_path):
     time, and the scene the node runs is always the one its parameter names."""
     scenes = [write_scene(tmp_path / f"s{k}.yaml", [f"body{k}", "shared"]) for k in range(4)]
     failures: list[BaseException] = []
-    with SimHarness(scenes[0], paused=False) as harness:
+    with SimHarness(scenes[0], paused=False, parameters={"scene_dirs": [str(tmp_path)]}) as harness:
         node = harness.node
 
         def hammer(offset: int) -> None:
@@ -187,9 +187,9 @@ def test_record_path_fifo_is_refused_at_once_and_ticks_go_on(tmp_path):
     """Before: ``record_path:=`` a FIFO opened it for writing under the tick lock, which blocks
     until a reader appears: the node froze (no ticks, no services). Now the change is refused
     with a reason and the simulation never waits for it."""
-    fifo = tmp_path / "record.fifo"
+    fifo = tmp_path / "record.mcap"  # named like a recording, inside record_dirs: the opener's own check refuses it
     os.mkfifo(fifo)
-    with SimHarness(paused=False, parameters={"diagnostics_period": 0.0}) as harness:
+    with SimHarness(paused=False, parameters={"diagnostics_period": 0.0, "record_dirs": [str(tmp_path)]}) as harness:
         start = time.monotonic()
         result = harness.set_parameters_atomically(record_path=str(fifo))
         assert not result.successful and "is a FIFO" in result.reason
@@ -206,7 +206,7 @@ def test_too_many_bodies_are_refused_and_ticks_go_on_while_loading(tmp_path):
     tick lock: no ticks, no services for minutes. Now more than MAX_BODIES bodies are refused
     with the limit in the reason, and the ticks go on while the file is loaded and checked."""
     big = write_scene(tmp_path / "big.yaml", [f"b{i}" for i in range(MAX_BODIES + 1)])
-    with SimHarness(paused=False, parameters={"diagnostics_period": 0.0}) as harness:
+    with SimHarness(paused=False, parameters={"diagnostics_period": 0.0, "scene_dirs": [str(tmp_path)]}) as harness:
         with harness.node.locked_simulator() as sim:
             sim_before, wall_before = sim.time, time.monotonic()
         result = harness.set_parameters_atomically(scene=big)
@@ -219,14 +219,14 @@ def test_too_many_bodies_are_refused_and_ticks_go_on_while_loading(tmp_path):
 
 
 def test_an_alias_bomb_scene_change_is_refused_and_ticks_go_on(tmp_path):
-    """Issue 18: a ~600-byte scene whose anchors expand to 10⁹ nodes froze the node (0 ticks,
+    """A ~600-byte scene whose anchors expand to 10⁹ nodes froze the node (0 ticks,
     services dead, 4.5 GB in 30 s). Now the change is refused with the loader's reason, the
     scene stays, and the tick thread keeps sim time going while the file is refused."""
     bomb = "[" + ", ".join(["&a0 [" + ", ".join(["1"] * 10) + "]"]
                            + [f"&a{i} [" + ", ".join([f"*a{i - 1}"] * 10) + "]" for i in range(1, 9)]) + "]"
     path = tmp_path / "bomb.yaml"
     path.write_text(f"bodies: {{b: {{mass: {bomb}, inertia: {{sphere: 1}}}}}}\n")
-    with SimHarness(paused=False, parameters={"diagnostics_period": 0.0}) as harness:
+    with SimHarness(paused=False, parameters={"diagnostics_period": 0.0, "scene_dirs": [str(tmp_path)]}) as harness:
         with harness.node.locked_simulator() as sim:
             sim_before, wall_before = sim.time, time.monotonic()
         result = harness.set_parameters_atomically(scene=str(path))
