@@ -23,7 +23,7 @@ CORE_FILES = sorted(CORE.rglob("*.py"))
 
 #: Third-party top-level packages the core may import (convention 1: numpy and scipy; PyYAML,
 #: deferred, to read scene files; numba, only in the compiled per-body modules listed in
-#: COMPILED_MODULES, which earned it by the figures of issue 5). Everything else must be the standard library or the core.
+#: core/kernels/, which earned it by the measured per-body cost). Everything else must be the standard library or the core.
 ALLOWED_THIRD_PARTY = {"numpy", "scipy", "yaml", "numba"}
 
 
@@ -52,7 +52,8 @@ def _imports(path: Path) -> list[tuple[int, str]]:
 
 def test_the_core_has_modules_to_check() -> None:
     names = {p.name for p in CORE_FILES}
-    assert {"__init__.py", "quaternion.py", "dynamics.py", "integrators.py", "simulator.py", "scene.py"} <= names
+    assert {"__init__.py", "quaternion.py", "dynamics.py", "integrators.py", "simulator.py", "scene.py", "layout.py",
+            "stepping.py"} <= names
 
 
 @pytest.mark.parametrize("path", CORE_FILES, ids=[str(p.relative_to(CORE)) for p in CORE_FILES])
@@ -94,7 +95,8 @@ def test_the_static_check_sees_deferred_and_aliased_imports(tmp_path: Path) -> N
 
 def test_no_ros_module_is_loaded_by_importing_the_core() -> None:
     modules = ["rigid_body_sim.core"] + [
-        "rigid_body_sim.core." + p.stem for p in CORE_FILES if p.parent == CORE and p.stem != "__init__"
+        "rigid_body_sim.core." + ".".join(p.relative_to(CORE).with_suffix("").parts).removesuffix(".__init__")
+        for p in CORE_FILES if p != CORE / "__init__.py"
     ]
     program = (
         "import importlib, json, sys\n"
@@ -115,21 +117,47 @@ def test_no_ros_module_is_loaded_by_importing_the_core() -> None:
     assert not ros, f"importing the core loaded ROS modules: {ros}"
 
 
-#: The modules whose per-body functions are compiled with numba: the rows' algebra, the
-#: forces, the dynamics, the integrators, the reduced models and the step driver.
-COMPILED_MODULES = ["dynamics.py", "forces.py", "integrators.py", "reduced_models.py", "rotation.py", "sensors.py",
-                    "stepping.py"]
+#: Where every compiled (numba) module lives: the one folder the kernel cache depends on (kernels/jit.py).
+KERNELS = CORE / "kernels"
 
 
-def test_numba_only_in_the_compiled_modules() -> None:
-    users = sorted(path.name for path in CORE_FILES
+def test_numba_only_under_kernels() -> None:
+    users = sorted(str(path.relative_to(CORE)) for path in CORE_FILES
                    if any(module.split(".")[0] == "numba" for _line, module in _imports(path)))
-    assert users == COMPILED_MODULES, f"numba is imported outside {COMPILED_MODULES}: {users}"
+    outside = [name for name in users if not name.startswith("kernels/")]
+    assert users and not outside, f"numba is imported outside core/kernels/: {outside}"
 
 
-def test_numba_cache_is_dropped_when_any_core_source_changes(tmp_path: Path) -> None:
-    """numba checks a cached function against its own file only; the core's guard checks them all."""
-    from rigid_body_sim.core.jit import STAMP_NAME, invalidate_stale_cache
+def _relative_targets(path: Path) -> list[tuple[int, tuple[str, ...]]]:
+    """(line, module path as parts from rigid_body_sim/) of every relative import in ``path``, at any depth."""
+    package = path.relative_to(REPO).with_suffix("").parts[:-1]
+    found = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.ImportFrom) and node.level:
+            base = package[:len(package) - node.level + 1]
+            if node.module:
+                found.append((node.lineno, base + tuple(node.module.split("."))))
+            else:
+                found.extend((node.lineno, base + (alias.name,)) for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("rigid_body_sim"):
+            found.append((node.lineno, tuple(node.module.split("."))))
+        elif isinstance(node, ast.Import):
+            found.extend((node.lineno, tuple(a.name.split("."))) for a in node.names if a.name.startswith("rigid_body_sim"))
+    return found
+
+
+@pytest.mark.parametrize("path", sorted(KERNELS.rglob("*.py")), ids=lambda p: str(p.relative_to(KERNELS)))
+def test_kernels_import_nothing_else_of_the_package(path: Path) -> None:
+    """What the compiled code is built from is all under kernels/, so the cache's stamp of that folder covers it."""
+    inside = KERNELS.relative_to(REPO).parts
+    foreign = [f"{path.name}:{line}: {'.'.join(target)}" for line, target in _relative_targets(path)
+               if target[:len(inside)] != inside]
+    assert not foreign, f"core/kernels/ imports only itself: {foreign}"
+
+
+def test_numba_cache_is_dropped_when_any_kernel_source_changes(tmp_path: Path) -> None:
+    """numba checks a cached function against its own file only; the kernels' guard checks them all."""
+    from rigid_body_sim.core.kernels.jit import STAMP_NAME, invalidate_stale_cache
 
     sources, cache = tmp_path / "core", tmp_path / "core" / "__pycache__"
     sources.mkdir()

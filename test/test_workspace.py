@@ -56,7 +56,7 @@ def copy_kernel_cache(package_dir: Path) -> None:
     """Copy the checkout's compiled numba kernels beside ``package_dir``'s core (same sources),
     with the stamp of the sources they were compiled from (core/jit.py keeps a cache only with
     its stamp)."""
-    from rigid_body_sim.core.jit import STAMP_NAME
+    from rigid_body_sim.core.kernels.jit import STAMP_NAME
 
     cache = ROOT / PACKAGE / "core" / "__pycache__"
     target = package_dir / "core" / "__pycache__"

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from .dynamics import angular_momentum_W, kinetic_energy
+from .mechanics import angular_momentum_W, kinetic_energy
 from .quaternion import quat_conjugate, quat_multiply, quat_rotate, quat_to_matrix, quat_xyzw_from_wxyz
 from .reduction import plan_models
 from .scene import Scene

@@ -23,11 +23,15 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from . import layout as L
-from . import reduction, sensors, stepping
-from .dynamics import angular_momentum_W, impulse_response, kinetic_energy, linear_momentum_W, potential_energy
-from .forces import add_wrench, new_wrench_rows, parse_frame, project_twist
+from . import reduction
+from .frames import new_wrench_rows, parse_frame
 from .integrators import INTEGRATORS, Method, get_integrator, step_exact_rotor_splitting, step_reference
+from .kernels import layout as L
+from .kernels import sensors, stepping
+from .kernels.compile import compile_kernels  # noqa: F401  (ros/main.py imports it from here)
+from .kernels.dynamics import impulse_response
+from .kernels.forces import add_wrench, project_twist
+from .mechanics import angular_momentum_W, kinetic_energy, linear_momentum_W, potential_energy
 from .model import State
 from .quaternion import (
     quat_conjugate,
@@ -37,6 +41,7 @@ from .quaternion import (
     quat_xyzw_from_wxyz,
 )
 from .scene import ORIENTATION_TOLERANCE, Scene
+from .stepping import pack_parameters
 
 __all__ = ["Simulator", "BodyState", "SiteReadings", "NonFiniteStateError", "DivergenceError",
            "SCRIPT_TIME_TOLERANCE"]
@@ -217,7 +222,7 @@ class Simulator:
         # The buffers of the compiled step (stepping.py; layout.py names their columns): two
         # state buffers (the state is _Ys[_control[CUR]]), per-body parameters, status, step
         # controls and inputs, and the applied wrenches in their frames' terms.
-        self._prm = stepping.pack_parameters(self.model)
+        self._prm = pack_parameters(self.model)
         self._Ys, self._status, self._control, self._inputs = stepping.new_buffers(n)
         self._views = (State.of_rows(self._Ys[0]), State.of_rows(self._Ys[1]))
         self._wrenches = new_wrench_rows(n)
@@ -791,37 +796,3 @@ def _vector3(value: Any, name: str) -> np.ndarray:
     if v.shape != (3,) or not np.all(np.isfinite(v)):
         raise ValueError(f"{name}: expected 3 finite numbers, got {value!r}")
     return v
-
-
-def compile_kernels() -> None:
-    """Compile (or load from numba's cache) every compiled function the core uses: ~2 CPU-minutes once per checkout.
-
-    ``make venv`` runs it, so that neither the first node start nor the first test pays it.
-    Steps a scene with a body of every model, with and without a wrench, with every integrator.
-    """
-    from .scene import load_scene
-
-    def spec(inertia: dict, motion: str = "free", **twist: list) -> dict:
-        return {"mass": 1.0, "inertia": inertia, "motion": motion, "twist": twist,
-                "sites": {"s": {"position": [0.1, 0.0, 0.0], "axes": "world"}}}
-
-    box = {"box": [1.0, 0.6, 0.4]}
-    scene = load_scene({"gravity": [0.0, 0.0, -9.81], "bodies": {
-        "full": spec(box, angular=[0.3, 1.0, 0.2]), "ball": spec({"sphere": 0.1}, angular=[1.0, 0.0, 0.0]),
-        "can": spec({"cylinder": [0.1, 0.5]}, angular=[1.0, 0.0, 3.0]), "wall": spec(box, "static"),
-        "belt": spec(box, "kinematic", linear=[1.0, 0.0, 0.0]), "puck": spec(box, "planar"),
-        "sat": spec(box, "rotation_only"), "cart": spec(box, "translation_only")}})
-    for name in INTEGRATORS:
-        sim = Simulator(scene, integrator=name, dt=0.01)
-        sim.step(1)
-        sim.apply_force_at_point("full", [0.0, 1.0, 0.0], [0.5, 0.3, 0.0], frame="full")
-        sim.apply_wrench("ball", torque=[0.0, 0.0, 0.1], frame="ball/s")
-        sim.step(2)
-        sim.apply_impulse("can", linear=[0.1, 0.0, 0.0])
-        sim.set_body_state("puck", linear_velocity_world=[0.1, 0.2, 0.0])
-        sim.apply_wrench("puck", force=[0.0, 1.0, 0.0], frame="puck/s")  # a planar body under a turning force
-        sim.step(1)
-    from .stepping import unchecked_steps
-
-    for name in INTEGRATORS:  # tools/envelope.py and the tests step bodies without the checks too
-        unchecked_steps(name, scene.model, scene.initial_state, 0.01, 1)
