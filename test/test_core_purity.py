@@ -115,6 +115,8 @@ def test_no_ros_module_is_loaded_by_importing_the_core() -> None:
     assert set(modules) <= set(loaded)
     ros = [m for m in loaded if _is_ros(m)]
     assert not ros, f"importing the core loaded ROS modules: {ros}"
+    references = [m for m in loaded if m.startswith("rigid_body_sim.exact")]
+    assert not references, f"stepping the core loaded the exact references: {references}"
 
 
 #: Where every compiled (numba) module lives: the one folder the kernel cache depends on (kernels/jit.py).
@@ -129,10 +131,14 @@ def test_numba_only_under_kernels() -> None:
 
 
 def _relative_targets(path: Path) -> list[tuple[int, tuple[str, ...]]]:
-    """(line, module path as parts from rigid_body_sim/) of every relative import in ``path``, at any depth."""
+    """(line, imported module as name parts) of every import of the package in ``path``, relative ones resolved."""
+    return _relative_targets_of_text(path, path.read_text(encoding="utf-8"))
+
+
+def _relative_targets_of_text(path: Path, text: str) -> list[tuple[int, tuple[str, ...]]]:
     package = path.relative_to(REPO).with_suffix("").parts[:-1]
     found = []
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+    for node in ast.walk(ast.parse(text)):
         if isinstance(node, ast.ImportFrom) and node.level:
             base = package[:len(package) - node.level + 1]
             if node.module:
@@ -179,3 +185,27 @@ def test_numba_cache_is_dropped_when_any_kernel_source_changes(tmp_path: Path) -
     (sources / "integrators.py").write_text("A = 3\n")  # a module stepping.advance inlines
     assert invalidate_stale_cache(sources, cache)
     assert not any(p.exists() for p in cached)
+
+
+#: Where the exact references may be imported: the references themselves and the offline plots'
+#: "error against the closed form" (tests and benchmarks live outside the package).
+REFERENCE_USERS = ("exact", "offline")
+
+
+@pytest.mark.parametrize("path", sorted((REPO / "rigid_body_sim").rglob("*.py")),
+                         ids=lambda p: str(p.relative_to(REPO / "rigid_body_sim")))
+def test_production_never_imports_the_references(path: Path) -> None:
+    """The oracle and the code it checks share nothing: no production module imports rigid_body_sim.exact."""
+    if path.relative_to(REPO / "rigid_body_sim").parts[0] in REFERENCE_USERS:
+        return
+    used = [f"{path.name}:{line}: {'.'.join(target)}" for line, target in _relative_targets(path)
+            if target[:2] == ("rigid_body_sim", "exact") or target[-1] == "closed_form"]
+    assert not used, f"production code imports the exact references: {used}"
+
+
+def test_the_reference_check_resolves_relative_imports() -> None:
+    """The checker itself: ``from ..exact import closed_form`` inside a function is found."""
+    fake = REPO / "rigid_body_sim" / "core" / "sample.py"
+    found = [target for _line, target in _relative_targets_of_text(
+        fake, "def f():\n    from ..exact import closed_form\n    from .kernels import layout\n")]
+    assert found == [("rigid_body_sim", "exact"), ("rigid_body_sim", "core", "kernels")]

@@ -18,7 +18,7 @@ from scipy.spatial.transform import Rotation
 
 from helpers import EPS, FIXED_STEP_INTEGRATORS, ORDER, loglog_slope, random_rotation_matrix, random_unit_quaternion, scene_of
 from rigid_body_sim.core import INTEGRATORS, Scene, Simulator, load_scene
-from rigid_body_sim.core import closed_form
+from rigid_body_sim.exact import closed_form
 from rigid_body_sim.core.kernels.dynamics import derivatives
 from rigid_body_sim.core.frames import new_wrench_rows, parse_frame
 from rigid_body_sim.core.kernels.forces import add_wrench

@@ -38,7 +38,7 @@ from helpers import (
     scene_of,
 )
 from rigid_body_sim.core import INTEGRATORS, NonFiniteStateError, Simulator, load_scene
-from rigid_body_sim.core import closed_form
+from rigid_body_sim.exact import closed_form
 from rigid_body_sim.core.quaternion import quat_angle_between, quat_rotate, quat_xyzw_from_wxyz
 
 # ----------------------------------------------------------------------------- convergence order

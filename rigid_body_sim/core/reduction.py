@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .kernels import layout as L
-from .closed_form import EQUAL_MOMENTS_RTOL
+from .free_rotor import EQUAL_MOMENTS_RTOL
 from .model import BodyModel, State
 from .quaternion import quat_rotate, quat_to_matrix
 
