@@ -1,7 +1,10 @@
 """IMU sensor models on sites: what a scene declares under ``imu:``, and the noise added to ideal readings.
 
-The ideal readings (specific force and angular velocity in the site's axes) come from
-:meth:`Simulator.site_readings` (sensors.py). This module adds what a real IMU adds, with the
+Data and the noise model only: the scene schema (:class:`ImuSpec`, :data:`IMU_KEYS`, parsed by
+scene.py) and :class:`ImuNoise`; the sampler that reads a running Simulator is
+:class:`~rigid_body_sim.core.imu_bank.ImuBank`. The ideal readings (specific force and angular
+velocity in the site's axes) come from :meth:`Simulator.site_readings` (kernels/sensors.py). This
+module adds what a real IMU adds, with the
 discrete-time model of Kalibr and Gazebo, per axis and per sample of interval Δt (s):
 
     b_k   = b_{k-1} + σ_b · √Δt · N(0, 1)           (bias random walk; b_0 = ``bias``)
@@ -28,14 +31,11 @@ from __future__ import annotations
 import math
 import zlib
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Mapping
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from .simulator import Simulator
-
-__all__ = ["ImuChannel", "ImuSpec", "ImuNoise", "ImuSample", "ImuBank", "IMU_KEYS", "IMU_CHANNEL_KEYS"]
+__all__ = ["ImuChannel", "ImuSpec", "ImuNoise", "ImuSample", "IMU_KEYS", "IMU_CHANNEL_KEYS", "NOT_PROVIDED",
+           "noise_covariance"]
 
 #: Keys of an ``imu:`` mapping and of its ``accelerometer`` / ``gyroscope`` mappings.
 IMU_KEYS = ("rate", "seed", "orientation", "accelerometer", "gyroscope")
@@ -168,72 +168,6 @@ class ImuSample:
     covariances: tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...]]
 
 
-def _diagonal(variance: float) -> tuple[float, ...]:
+def noise_covariance(variance: float) -> tuple[float, ...]:
+    """The row-major 3×3 covariance of three independent axes of equal ``variance``."""
     return (variance, 0.0, 0.0, 0.0, variance, 0.0, 0.0, 0.0, variance)
-
-
-class ImuBank:
-    """The IMUs of a scene, sampled after the steps of a tick (node) or an output step (CLI).
-
-    Parameters
-    ----------
-    imus : mapping of site name to ImuSpec
-        ``Scene.imus``.
-    previous : ImuBank, optional
-        IMUs of the same site and spec keep their noise state and schedule from it (a body
-        spawned or deleted at run time does not restart the other IMUs' noise).
-    """
-
-    def __init__(self, imus: Mapping[str, ImuSpec], previous: "ImuBank | None" = None):
-        self.noise: dict[str, ImuNoise] = {}  # by site
-        #: Sim time (s) of the next sample of each IMU with a rate (None: at the next call).
-        self.next_due_s: dict[str, float | None] = {}
-        for site, spec in imus.items():
-            old = previous.noise.get(site) if previous is not None else None
-            if old is not None and old.spec == spec:
-                self.noise[site] = old
-                self.next_due_s[site] = previous.next_due_s[site]
-            else:
-                self.noise[site] = ImuNoise(spec, site)
-                self.next_due_s[site] = None
-        self.sites = tuple(self.noise)
-
-    def sample(self, sim: "Simulator", step_dt: float) -> list[ImuSample]:
-        """The samples due at ``sim.time``, read right after the step(s) just taken.
-
-        An IMU without ``rate`` samples at every call, Δt = ``step_dt`` (s of sim time, the
-        interval between calls); one with ``rate`` at the first call at or after each multiple
-        of 1/rate from its first sample (at most one per call: a rate above the call rate gives
-        one sample per call, each with Δt = 1/rate), Δt = 1/rate.
-        """
-        if not self.sites:
-            return []
-        t = sim.time
-        due = []
-        for site in self.sites:
-            next_due = self.next_due_s[site]
-            if next_due is None or t >= next_due - 1e-9 * max(1.0, abs(t)):
-                due.append(site)
-        if not due:
-            return []
-        readings = sim.site_readings(due)
-        out = []
-        for k, site in enumerate(due):
-            noise = self.noise[site]
-            spec = noise.spec
-            if spec.rate is None:
-                dt = step_dt
-            else:
-                dt = 1.0 / spec.rate
-                next_due = self.next_due_s[site]
-                next_due = t + dt if next_due is None else next_due + dt
-                if next_due <= t:  # fallen behind by more than one sample: go on from now
-                    next_due = t + dt
-                self.next_due_s[site] = next_due
-            force, rate = noise.sample(readings.specific_force[k], readings.angular_velocity[k], dt)
-            covariances = ((0.0,) * 9 if spec.orientation else NOT_PROVIDED,
-                           _diagonal(ImuNoise.variance(spec.gyroscope, dt)),
-                           _diagonal(ImuNoise.variance(spec.accelerometer, dt)))
-            out.append(ImuSample(site, t, readings.orientation_xyzw[k].copy() if spec.orientation else None,
-                                 rate, force, covariances))
-        return out
