@@ -40,7 +40,8 @@ long runs) is measured in docs/stability.md.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -67,7 +68,7 @@ from .layout import (
 from .jit import INLINE, JIT
 from .rotation import exp_map, normalise, qmul, rotate
 
-__all__ = ["Method", "INTEGRATORS", "get_integrator", "kick_and_drift", "final_kick", "EULER_TABLEAU", "RK4_TABLEAU"]
+__all__ = ["Method", "INTEGRATORS", "COMPILED", "get_integrator", "kick_and_drift", "final_kick", "EULER_TABLEAU", "RK4_TABLEAU"]
 
 
 # ----------------------------------------------------------------------------- explicit Runge–Kutta
@@ -247,7 +248,7 @@ def splitting(y, out, p, w, dt, k):
 
 @njit(**INLINE)
 def top_flow(out, inv_inertia_t, axis, c_axis, t):
-    """Exact flow of |L|²/(2 I_t)·[inv_inertia_t ≠ 0] + ½ c L_axis² over t (closed_form.symmetric_top_flow)."""
+    """Exact flow of |L|²/(2 I_t)·[inv_inertia_t ≠ 0] + ½ c L_axis² over t (free_rotor._top_flow in numpy)."""
     Lx, Ly, Lz = out[W], out[W + 1], out[W + 2]
     qw, qx, qy, qz = out[Q], out[Q + 1], out[Q + 2], out[Q + 3]
     if inv_inertia_t != 0.0:
@@ -398,34 +399,42 @@ class Method:
     """An integrator of :data:`INTEGRATORS`.
 
     ``order`` is its order of convergence under forcing in any frame (None: adaptive);
-    ``code`` the number stepping._integrate dispatches on (None: a numpy/scipy method the
-    Simulator runs step by step: exact_rotor_splitting, reference).
+    ``step`` the compiled per-body step ``step(y, out, p, w, dt, k)`` (None: a numpy/scipy
+    method the Simulator runs group by group, core/integrators.py: exact_rotor_splitting,
+    reference); ``code`` its position in :data:`COMPILED`, the number stepping.integrate
+    dispatches on (None with ``step``).
     """
 
     name: str
     order: int | None
-    code: int | None
+    step: Any
     summary: str
+    code: int | None = None
 
 
-#: Method.code of the compiled integrators (stepping._integrate dispatches on them).
-EULER, SEMI_IMPLICIT_EULER, IMPLICIT_GYROSCOPIC, SPLITTING, SYMMETRIC_SPLITTING, RK4 = range(6)
-
-#: Every integrator, by name. A compiled one also needs its loop in stepping._integrate.
-INTEGRATORS: dict[str, Method] = {m.name: m for m in (
-    Method("euler", 1, EULER, "explicit Euler with the gyroscopic term; q += dq·dt, then normalised"),
-    Method("semi_implicit_euler", 1, SEMI_IMPLICIT_EULER,
+#: Every integrator, by name: the one place to add one. A compiled one is a per-body step
+#: function (as above) in a row here; stepping.py builds its loop over bodies from the row.
+INTEGRATORS: dict[str, Method] = {}
+for _method in (
+    Method("euler", 1, euler, "explicit Euler with the gyroscopic term; q += dq·dt, then normalised"),
+    Method("semi_implicit_euler", 1, semi_implicit_euler,
            "velocities first, then positions; orientation by the exponential map"),
-    Method("implicit_gyroscopic", 2, IMPLICIT_GYROSCOPIC,
+    Method("implicit_gyroscopic", 2, implicit_gyroscopic,
            "half kicks around an implicit-midpoint free rotor: energy and |L| kept at any |ω|·dt"),
-    Method("splitting", 2, SPLITTING, "half kicks around exact principal-axis rotations (McLachlan 1993)"),
-    Method("symmetric_splitting", 2, SYMMETRIC_SPLITTING,
+    Method("splitting", 2, splitting, "half kicks around exact principal-axis rotations (McLachlan 1993)"),
+    Method("symmetric_splitting", 2, symmetric_splitting,
            "half kicks around an exact symmetric top and a one-axis remainder"),
     Method("exact_rotor_splitting", 2, None, "half kicks around the exact free-rotor flow (elliptic functions): "
                                              "exact when torque-free, at any |ω|·dt"),
-    Method("rk4", 4, RK4, "classic fourth-order Runge–Kutta, forces evaluated at every stage"),
+    Method("rk4", 4, rk4, "classic fourth-order Runge–Kutta, forces evaluated at every stage"),
     Method("reference", None, None, "scipy DOP853 at tight tolerances (the accuracy end)"),
-)}
+):
+    _code = None if _method.step is None else sum(m.step is not None for m in INTEGRATORS.values())
+    INTEGRATORS[_method.name] = replace(_method, code=_code)
+del _method, _code
+
+#: The compiled steps, by Method.code.
+COMPILED = tuple(m.step for m in INTEGRATORS.values() if m.step is not None)
 
 
 def get_integrator(name: str) -> Method:

@@ -27,10 +27,12 @@ import hashlib
 import os
 from pathlib import Path
 
-__all__ = ["JIT", "INLINE", "invalidate_stale_cache"]
+__all__ = ["JIT", "INLINE", "LOOP", "invalidate_stale_cache"]
 
 JIT = {"cache": True, "error_model": "numpy"}
 INLINE = {**JIT, "inline": "always"}
+#: For functions built at import (closures, stepping.py): compiled into a cached caller, not cached on their own.
+LOOP = {"error_model": "numpy"}
 
 #: The kernels' folder: the sources the cached machine code is built from (nothing outside it).
 SOURCE_DIR = Path(__file__).resolve().parent

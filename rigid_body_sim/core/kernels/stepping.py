@@ -34,20 +34,7 @@ import numpy as np
 from numba import njit
 
 from .forces import add_wrench
-from .integrators import (
-    EULER,
-    IMPLICIT_GYROSCOPIC,
-    RK4,
-    SEMI_IMPLICIT_EULER,
-    SPLITTING,
-    SYMMETRIC_SPLITTING,
-    euler,
-    implicit_gyroscopic,
-    rk4,
-    semi_implicit_euler,
-    splitting,
-    symmetric_splitting,
-)
+from .integrators import COMPILED
 from .layout import (
     ACTIVE,
     BOUND,
@@ -99,7 +86,7 @@ from .layout import (
     WRENCH_WIDTH,
 )
 from .reduced_models import isotropic_free, kinematic, planar, symmetric_free, torque_free, translation
-from .jit import INLINE, JIT
+from .jit import INLINE, JIT, LOOP
 
 __all__ = ["new_buffers", "advance", "add_pending", "step_reduced", "check_members", "clear_wrenches",
            "integrate"]
@@ -204,46 +191,60 @@ def _checked(i, y, out, p, w, status, dt, limit, worst):
     return _worse(worst, status[i])
 
 
-@njit(**JIT)
-def integrate(method, Y, Ynew, prm, wrenches, bodies, status, dt, limit, k):
-    """Step and check ``bodies`` with the compiled integrator ``method`` (Method.code): the one dispatch.
+def _group_loop(step):
+    """A compiled loop that steps and checks ``bodies`` with the per-body ``step``, inlined into it.
 
     One loop per method rather than a branch per body: each loop body is then straight-line
-    code, which the compiler keeps free of reference counting (jit.py; measured ~70 ns a
-    body otherwise). Returns the worst outcome.
+    code, which the compiler keeps free of reference counting (jit.py; measured ~70 ns a body
+    otherwise). ``step`` is a free variable of the loop, a constant to numba, so ``INLINE``
+    inlines it as it would a global. Not cached on its own (numba keys a closure's cache on
+    its free variables, which a compiled function cannot be pickled stably as): it is compiled
+    into :func:`integrate`, which is.
     """
-    worst = OK
-    if method == RK4:
+
+    @njit(**LOOP)
+    def loop(Y, Ynew, prm, wrenches, bodies, status, dt, limit, k):
+        worst = OK
         for i in bodies:
             y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[i]
-            rk4(y, out, p, w, dt, k)
+            step(y, out, p, w, dt, k)
             worst = _checked(i, y, out, p, w, status, dt, limit, worst)
-    elif method == EULER:
-        for i in bodies:
-            y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[i]
-            euler(y, out, p, w, dt, k)
-            worst = _checked(i, y, out, p, w, status, dt, limit, worst)
-    elif method == SEMI_IMPLICIT_EULER:
-        for i in bodies:
-            y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[i]
-            semi_implicit_euler(y, out, p, w, dt, k)
-            worst = _checked(i, y, out, p, w, status, dt, limit, worst)
-    elif method == IMPLICIT_GYROSCOPIC:
-        for i in bodies:
-            y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[i]
-            implicit_gyroscopic(y, out, p, w, dt, k)
-            worst = _checked(i, y, out, p, w, status, dt, limit, worst)
-    elif method == SPLITTING:
-        for i in bodies:
-            y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[i]
-            splitting(y, out, p, w, dt, k)
-            worst = _checked(i, y, out, p, w, status, dt, limit, worst)
-    elif method == SYMMETRIC_SPLITTING:
-        for i in bodies:
-            y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[i]
-            symmetric_splitting(y, out, p, w, dt, k)
-            worst = _checked(i, y, out, p, w, status, dt, limit, worst)
-    return worst
+        return worst
+
+    return loop
+
+
+def _dispatch_from(loops, code=0):
+    """``dispatch(method, ...)``: runs ``loops[method]``, as a chain of compiled calls from ``code`` on.
+
+    Each link holds one loop and the rest of the chain as free variables (direct calls, no
+    function-typed values); it runs once per group per step, not per body.
+    """
+    if code == len(loops):
+        @njit(**LOOP)
+        def dispatch(method, Y, Ynew, prm, wrenches, bodies, status, dt, limit, k):
+            return OK
+    else:
+        loop, rest = loops[code], _dispatch_from(loops, code + 1)
+
+        @njit(**LOOP)
+        def dispatch(method, Y, Ynew, prm, wrenches, bodies, status, dt, limit, k):
+            if method == code:
+                worst = loop(Y, Ynew, prm, wrenches, bodies, status, dt, limit, k)
+            else:
+                worst = rest(method, Y, Ynew, prm, wrenches, bodies, status, dt, limit, k)
+            return worst
+    return dispatch
+
+
+#: The loops of the compiled integrators, built from integrators.INTEGRATORS (by Method.code).
+_DISPATCH = _dispatch_from(tuple(_group_loop(step) for step in COMPILED))
+
+
+@njit(**JIT)
+def integrate(method, Y, Ynew, prm, wrenches, bodies, status, dt, limit, k):
+    """Step and check ``bodies`` with the compiled integrator ``method`` (Method.code); the worst outcome."""
+    return _DISPATCH(method, Y, Ynew, prm, wrenches, bodies, status, dt, limit, k)
 
 
 @njit(**JIT)
