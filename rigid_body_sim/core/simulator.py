@@ -227,6 +227,8 @@ class Simulator:
         self._views = (State.of_rows(self._Ys[0]), State.of_rows(self._Ys[1]))
         self._wrenches = new_wrench_rows(n)
         self._members = np.zeros(0, dtype=np.int64)  # the moving bodies, grouped by model (_replan)
+        # Set by cancel() from any thread; the compiled step reads it between steps (it holds no GIL).
+        self._cancel = np.zeros(1, dtype=np.int64)
         self._inputs[L.LIMIT] = float(limit)
         self._pending_heads: dict[tuple[str, str], tuple[float, ...]] = {}
         # An applied wrench waits in _inputs[PENDING...] (the one-call fast path); any other goes
@@ -560,8 +562,11 @@ class Simulator:
 
     # ----------------------------------------------------------------- stepping
 
-    def step(self, n: int = 1) -> None:
-        """Advance ``n`` steps of ``dt``; applied wrenches hold for all of them, then clear.
+    def step(self, n: int = 1) -> int:
+        """Advance ``n`` steps of ``dt``; applied wrenches hold for all of them, then clear. Returns the steps done.
+
+        Fewer than ``n`` only when :meth:`cancel` stopped it: then the state is the one after
+        the steps done, and ``time`` and ``step_count`` count exactly those.
 
         The scene's scripted wrenches (``Scene.wrenches``) are added at the start of each step
         whose start time lies in their window (see :meth:`active_scripted_wrenches`), on top of
@@ -585,29 +590,43 @@ class Simulator:
             n = int(n)
         elif n < 0:
             raise ValueError(f"n: expected a whole number of steps ≥ 0, got {n!r}")
-        if self._step_by_step:
-            self._flush_pending()
-            for _ in range(n):
-                self._last_wrenches = self._step_once()
-            self.clear_wrenches()
-            return
-        if not n:
-            self.clear_wrenches()
-            return
-        outcome = stepping.advance(*self._buffers, n)
-        self._pending = False  # advance took the pending wrench
-        if outcome:
-            self.step_count += int(self._control[L.DONE])
-            self._raise_step_failure(outcome)  # the wrenches are kept, for the caller to stop the body and step again
-        self.step_count += n
-        self._last_wrenches = self._wrenches  # spent: they stay for the sensors until something new is applied
+        try:
+            if self._step_by_step:
+                self._flush_pending()
+                done = 0
+                while done < n and not self._cancel[0]:
+                    self._last_wrenches = self._step_once()
+                    done += 1
+                self.clear_wrenches()
+                return done
+            if not n:
+                self.clear_wrenches()
+                return 0
+            done = stepping.advance(*self._buffers, n, self._cancel)
+            self._pending = False  # advance took the pending wrench
+            self.step_count += done
+            if self._control[L.OUTCOME]:
+                self._raise_step_failure(int(self._control[L.OUTCOME]))  # the wrenches are kept, for the caller
+            self._last_wrenches = self._wrenches  # spent: they stay for the sensors until something new is applied
+            return done
+        finally:
+            self._cancel[0] = 0
+
+    def cancel(self) -> None:
+        """Stop the :meth:`step` running in another thread at its next step boundary (or, if none runs, the next one).
+
+        Safe to call from any thread: the compiled step releases the GIL and reads this flag
+        between steps, so a long call (many bodies, many steps) returns within one step of it,
+        with the steps done applied and counted. The flag is cleared when that step returns.
+        """
+        self._cancel[0] = 1
 
     def _step_once(self) -> np.ndarray:
         """One step with the scene's scripted wrenches added, or with a numpy/scipy integrator; its wrench rows."""
         wrenches = self._wrenches_of_this_step()
         if self._method.code is not None:
             stepping.advance(self._Ys, self._prm, wrenches, self._members, self._status, self._control,
-                             self._inputs, 1)
+                             self._inputs, 1, _NEVER)
             self._inputs[L.SPENT] = 0.0  # ``wrenches`` is this step's own array: nothing to drop before the next
         else:
             bodies = stepping.step_reduced(self._Ys, self._prm, wrenches, self._members, self._status,
@@ -756,6 +775,10 @@ class Simulator:
             return self.model.names.index(body)
         except ValueError:
             raise ValueError(f"unknown body {body!r}; bodies are {list(self.model.names)}") from None
+
+
+#: The cancel flag of a single step taken on its own (Simulator._step_once checks the real one between steps).
+_NEVER = np.zeros(1, dtype=np.int64)
 
 
 def _positive(value: Any, name: str) -> float:

@@ -42,7 +42,7 @@ def compile_kernels() -> None:
     for method in INTEGRATORS.values():
         if method.code is not None:
             control[L.METHOD] = method.code
-            advance(Ys, prm, wrenches, members, status, control, inputs, 1)
+            advance(Ys, prm, wrenches, members, status, control, inputs, 1, np.zeros(1, dtype=np.int64))
             integrate(method.code, Ys[0], Ys[1], prm, wrenches, members, status, 0.01, np.inf,
                       np.empty((SCRATCH_ROWS, L.ROW_WIDTH)))
     bodies = step_reduced(Ys, prm, wrenches, members, status, control, inputs)

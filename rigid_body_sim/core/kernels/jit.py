@@ -1,7 +1,8 @@
 """How the core compiles its per-body functions (numba): the options, and the one rule they need.
 
-``JIT``: cached on disk, and IEEE semantics (x/0 is inf or NaN, caught by the step checks)
-rather than Python's ZeroDivisionError.
+``JIT``: cached on disk, IEEE semantics (x/0 is inf or NaN, caught by the step checks)
+rather than Python's ZeroDivisionError, and the GIL released while it runs, so another
+thread (the node's executor) can run, and cancel a long step (stepping.advance).
 
 ``INLINE``: the same, inlined at numba's IR level into the caller, for functions that take
 the state, parameter or wrench rows (arrays): a compiled call with array arguments costs
@@ -29,10 +30,10 @@ from pathlib import Path
 
 __all__ = ["JIT", "INLINE", "LOOP", "invalidate_stale_cache"]
 
-JIT = {"cache": True, "error_model": "numpy"}
+JIT = {"cache": True, "error_model": "numpy", "nogil": True}
 INLINE = {**JIT, "inline": "always"}
 #: For functions built at import (closures, stepping.py): compiled into a cached caller, not cached on their own.
-LOOP = {"error_model": "numpy"}
+LOOP = {"error_model": "numpy", "nogil": True}
 
 #: The kernels' folder: the sources the cached machine code is built from (nothing outside it).
 SOURCE_DIR = Path(__file__).resolve().parent

@@ -341,33 +341,37 @@ def clear_wrenches(wrenches):
 
 
 @njit(**JIT)
-def advance(Ys, prm, wrenches, members, status, control, inputs, n_steps):
+def advance(Ys, prm, wrenches, members, status, control, inputs, n_steps, cancel):
     """Up to ``n_steps`` checked steps of every moving body with the compiled integrator control[METHOD].
 
     Adds the pending wrench first (:func:`add_pending`). Stops at the first step some body
     fails: that step is not applied (the state and its bounds stay in Ys[control[CUR]]),
-    ``status`` says which bodies failed how, and the wrenches are kept. Otherwise, after the
-    last step, the wrenches are spent (inputs[SPENT]): they stay in the rows for the sensors
-    and are dropped before the next step or the next wrench. Reports control[DONE] (steps done) and
-    control[OUTCOME] (OK, NON_FINITE, DIVERGED), and returns the outcome.
+    ``status`` says which bodies failed how, and the wrenches are kept. Stops too, between
+    two steps, once ``cancel[0]`` (an int64 array another thread may set while this runs:
+    the function holds no GIL) is not zero; the steps done stand. Otherwise, and when
+    cancelled, the wrenches are then spent (inputs[SPENT]): they stay in the rows for the
+    sensors and are dropped before the next step or the next wrench. Reports control[DONE]
+    and control[OUTCOME] (OK, NON_FINITE, DIVERGED); returns the number of steps done.
     """
     add_pending(wrenches, prm, inputs)
     k = np.empty((SCRATCH_ROWS, ROW_WIDTH))
     deferred = np.empty(members.shape[0], dtype=np.int64)
     cur = control[CUR]
-    for step in range(n_steps):
-        worst, _ = _step_all(control[METHOD], Ys[cur], Ys[1 - cur], prm, wrenches, members, control, status,
-                             inputs[DT], inputs[LIMIT], k, deferred)
-        if worst != OK:
-            control[DONE] = step
-            control[OUTCOME] = worst
-            return worst
+    done = 0
+    outcome = OK
+    while done < n_steps and cancel[0] == 0:
+        outcome, _ = _step_all(control[METHOD], Ys[cur], Ys[1 - cur], prm, wrenches, members, control, status,
+                               inputs[DT], inputs[LIMIT], k, deferred)
+        if outcome != OK:
+            break
         cur = 1 - cur
         control[CUR] = cur
-    inputs[SPENT] = 1.0
-    control[DONE] = n_steps
-    control[OUTCOME] = OK
-    return OK
+        done += 1
+    if outcome == OK:
+        inputs[SPENT] = 1.0
+    control[DONE] = done
+    control[OUTCOME] = outcome
+    return done
 
 
 @njit(**JIT)
