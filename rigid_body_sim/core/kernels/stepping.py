@@ -191,95 +191,96 @@ def _checked(i, y, out, p, w, status, dt, limit, worst):
     return _worse(worst, status[i])
 
 
-def _group_loop(step):
+def _group_loop(step, when_torque_free=False):
     """A compiled loop that steps and checks ``bodies`` with the per-body ``step``, inlined into it.
 
-    One loop per method rather than a branch per body: each loop body is then straight-line
-    code, which the compiler keeps free of reference counting (jit.py; measured ~70 ns a body
-    otherwise). ``step`` is a free variable of the loop, a constant to numba, so ``INLINE``
-    inlines it as it would a global. Not cached on its own (numba keys a closure's cache on
-    its free variables, which a compiled function cannot be pickled stably as): it is compiled
-    into :func:`integrate`, which is.
-    """
+    One loop per method or model rather than a branch per body: each loop body is then
+    straight-line code, which the compiler keeps free of reference counting (jit.py; measured
+    ~70 ns a body otherwise). ``step`` is a free variable of the loop, a constant to numba, so
+    ``INLINE`` inlines it as it would a global. Not cached on its own (numba keys a closure's
+    cache on its free variables, which a compiled function cannot be pickled stably as): it is
+    compiled into the cached functions that call it.
 
-    @njit(**LOOP)
-    def loop(Y, Ynew, prm, wrenches, bodies, status, dt, limit, k):
-        worst = OK
-        for i in bodies:
-            y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[i]
-            step(y, out, p, w, dt, k)
-            worst = _checked(i, y, out, p, w, status, dt, limit, worst)
-        return worst
+    ``when_torque_free`` (the isotropic and symmetric models): a body under a torque
+    (reduced_models.torque_free) is not the model's: it goes into ``deferred`` for the
+    integrator, which rewrites its row. The model still runs on it (unconditionally, jit.py).
+    Returns (worst outcome, how many were deferred).
+    """
+    if when_torque_free:
+        @njit(**LOOP)
+        def loop(Y, Ynew, prm, wrenches, bodies, status, dt, limit, k, deferred):
+            worst = OK
+            count = 0
+            for i in bodies:
+                y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[i]
+                free = torque_free(w)
+                step(y, out, p, w, dt, k)
+                outcome = check_body(y, out, p, w, dt, limit)
+                if free:
+                    status[i] = outcome
+                    worst = _worse(worst, outcome)
+                else:
+                    deferred[count] = i
+                    count += 1
+            return worst, count
+    else:
+        @njit(**LOOP)
+        def loop(Y, Ynew, prm, wrenches, bodies, status, dt, limit, k, deferred):
+            worst = OK
+            for i in bodies:
+                y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[i]
+                step(y, out, p, w, dt, k)
+                worst = _checked(i, y, out, p, w, status, dt, limit, worst)
+            return worst, 0
 
     return loop
 
 
+@njit(**LOOP)
+def _no_loop(Y, Ynew, prm, wrenches, bodies, status, dt, limit, k, deferred):
+    """The loop of a code with no per-body step (model full: the integrator's; static: never stepped)."""
+    return OK, 0
+
+
 def _dispatch_from(loops, code=0):
-    """``dispatch(method, ...)``: runs ``loops[method]``, as a chain of compiled calls from ``code`` on.
+    """``dispatch(code, ...)``: runs ``loops[code]``, as a chain of compiled calls from ``code`` on.
 
     Each link holds one loop and the rest of the chain as free variables (direct calls, no
     function-typed values); it runs once per group per step, not per body.
     """
     if code == len(loops):
         @njit(**LOOP)
-        def dispatch(method, Y, Ynew, prm, wrenches, bodies, status, dt, limit, k):
-            return OK
+        def dispatch(which, Y, Ynew, prm, wrenches, bodies, status, dt, limit, k, deferred):
+            return OK, 0
     else:
         loop, rest = loops[code], _dispatch_from(loops, code + 1)
 
         @njit(**LOOP)
-        def dispatch(method, Y, Ynew, prm, wrenches, bodies, status, dt, limit, k):
-            if method == code:
-                worst = loop(Y, Ynew, prm, wrenches, bodies, status, dt, limit, k)
+        def dispatch(which, Y, Ynew, prm, wrenches, bodies, status, dt, limit, k, deferred):
+            if which == code:
+                result = loop(Y, Ynew, prm, wrenches, bodies, status, dt, limit, k, deferred)
             else:
-                worst = rest(method, Y, Ynew, prm, wrenches, bodies, status, dt, limit, k)
-            return worst
+                result = rest(which, Y, Ynew, prm, wrenches, bodies, status, dt, limit, k, deferred)
+            return result
     return dispatch
 
 
 #: The loops of the compiled integrators, built from integrators.INTEGRATORS (by Method.code).
-_DISPATCH = _dispatch_from(tuple(_group_loop(step) for step in COMPILED))
+_INTEGRATOR_LOOPS = _dispatch_from(tuple(_group_loop(step) for step in COMPILED))
+
+#: The reduced models' loops, by layout.MODEL_* code.
+_MODEL_STEPS = {MODEL_KINEMATIC: (kinematic, False), MODEL_TRANSLATION: (translation, False),
+                MODEL_PLANAR: (planar, False), MODEL_ISOTROPIC: (isotropic_free, True),
+                MODEL_SYMMETRIC: (symmetric_free, True)}
+_MODEL_LOOPS = _dispatch_from(tuple(_group_loop(*_MODEL_STEPS[code]) if code in _MODEL_STEPS else _no_loop
+                                    for code in range(MODEL_COUNT)))
 
 
 @njit(**JIT)
 def integrate(method, Y, Ynew, prm, wrenches, bodies, status, dt, limit, k):
     """Step and check ``bodies`` with the compiled integrator ``method`` (Method.code); the worst outcome."""
-    return _DISPATCH(method, Y, Ynew, prm, wrenches, bodies, status, dt, limit, k)
-
-
-@njit(**JIT)
-def _step_reduced_group(model, Y, Ynew, prm, wrenches, bodies, status, dt, limit, k, deferred):
-    """Step and check ``bodies``, all of the reduced model ``model``: the one dispatch over models.
-
-    Isotropic and symmetric bodies under a torque (reduced_models.torque_free) are not
-    stepped: they go into ``deferred`` for the integrator. Returns (worst outcome, how many
-    were deferred).
-    """
-    worst = OK
-    count = 0
-    for i in bodies:
-        y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[i]
-        stepped = True
-        if model == MODEL_KINEMATIC:
-            kinematic(y, out, p, w, dt, k)
-        elif model == MODEL_TRANSLATION:
-            translation(y, out, p, w, dt, k)
-        elif model == MODEL_PLANAR:
-            planar(y, out, p, w, dt, k)
-        elif model == MODEL_ISOTROPIC and torque_free(w):
-            isotropic_free(y, out, p, w, dt, k)
-        elif model == MODEL_SYMMETRIC and torque_free(w):
-            symmetric_free(y, out, p, w, dt, k)
-        else:
-            stepped = False
-        outcome = check_body(y, out, p, w, dt, limit)  # unconditionally (jit.py); kept only if stepped
-        if stepped:
-            status[i] = outcome
-            worst = _worse(worst, outcome)
-        else:
-            deferred[count] = i
-            count += 1
-    return worst, count
+    worst, _ = _INTEGRATOR_LOOPS(method, Y, Ynew, prm, wrenches, bodies, status, dt, limit, k, bodies)  # defers none
+    return worst
 
 
 @njit(**JIT)
@@ -301,8 +302,8 @@ def _step_all(method, Y, Ynew, prm, wrenches, members, control, status, dt, limi
                 worst = _worse(worst, integrate(method, Y, Ynew, prm, wrenches, members[start:end], status, dt,
                                                  limit, k))
         elif start < end:
-            outcome, added = _step_reduced_group(model, Y, Ynew, prm, wrenches, members[start:end], status, dt,
-                                                 limit, k, deferred[count:])
+            outcome, added = _MODEL_LOOPS(model, Y, Ynew, prm, wrenches, members[start:end], status, dt,
+                                          limit, k, deferred[count:])
             worst = _worse(worst, outcome)
             if method != HOST_METHOD and added:
                 worst = _worse(worst, integrate(method, Y, Ynew, prm, wrenches, deferred[count:count + added],
