@@ -40,6 +40,7 @@ from .kernels.layout import (
     Q_PB,
     ROW_WIDTH,
     STATE_WIDTH,
+    TOP_DT,
     WRENCH_WIDTH,
 )
 from .kernels.stepping import SCRATCH_ROWS, integrate, new_buffers
@@ -68,6 +69,7 @@ def pack_parameters(model) -> np.ndarray:
     prm[:, MODEL] = MODEL_FULL
     prm[:, PROJECT] = PROJECT_NONE
     prm[:, CACHE_DT] = np.nan
+    prm[:, TOP_DT] = np.nan
     prm[:, Q_PB:Q_PB + 4] = quat_conjugate(np.asarray(model.q_BP, dtype=float).reshape(n, 4))
     if n:
         rows = np.arange(n)
