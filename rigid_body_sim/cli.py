@@ -388,7 +388,7 @@ def _imu_callback(scene: Any, sample_dt: float, imu_path: Path | None, imu_write
                   recorder: Any) -> Any:
     """A sample callback writing the scene's IMUs (core/imu.py), read right after the steps before
     each sample (none at t = 0, before any step), to ``--imu-csv`` and ``--record``."""
-    from .core.imu_bank import ImuBank
+    from .core.imu import ImuBank
 
     bank = ImuBank(scene.imus)
 

@@ -14,8 +14,7 @@ import pytest
 
 from helpers import scene_of
 from rigid_body_sim.core import SceneError, Simulator, load_scene
-from rigid_body_sim.core.imu import ImuChannel, ImuNoise, ImuSpec
-from rigid_body_sim.core.imu_bank import ImuBank
+from rigid_body_sim.core.imu import ImuBank, ImuChannel, ImuNoise, ImuSpec
 
 N_SAMPLES = 20_000
 

@@ -55,7 +55,7 @@ def describe_scene(scene: Scene, model_reduction: bool = True) -> list[dict[str,
       kg·m²/s), both initial
     - ``damping``: ``{"linear": N·s/m, "angular": N·m·s/rad}``
     - ``sites``: ``[{"name", "position_B" (m, from the centre of mass, B axes), "axes", "imu"}]``,
-      ``imu`` None or the site's IMU (core/imu.py: ``rate``, ``seed``, ``orientation``,
+      ``imu`` None or the site's IMU (core/imu_spec.py: ``rate``, ``seed``, ``orientation``,
       ``accelerometer`` and ``gyroscope`` as ``{"noise_density", "bias", "bias_random_walk"}`` or None)
     - ``frames``: every frame a wrench on the body may name
     - ``scripted_wrenches``: ``[{"frame", "force", "torque", "start", "duration"}]`` (duration
