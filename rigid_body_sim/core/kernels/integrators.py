@@ -22,7 +22,7 @@ name                       order  what it is
                                   kick(h/2) (McLachlan 1993; Dullweber, Leimkuhler & McLachlan
                                   1997)
 ``symmetric_splitting``    2      kick(h/2) · exact symmetric top + one-axis remainder ·
-                                  kick(h/2) (free_rotor.py; Fassò 2003)
+                                  kick(h/2) (core/free_rotor.py; Fassò 2003)
 ``exact_rotor_splitting``  2      kick(h/2) · the exact free-rotor flow (Jacobi elliptic
                                   functions) · kick(h/2): exact when torque-free, any |ω|h
                                   (numpy; Celledoni, Fassò, Säfström & Zanna 2008)

@@ -27,7 +27,7 @@ Wrench row (``WRENCH_WIDTH`` floats per body)
                                body-fixed points, which turns with the body.
     ``ACTIVE``                 non-zero if anything was added to the row.
 
-Parameter row (``PRM_WIDTH`` floats per body, ``stepping.pack_parameters``)
+Parameter row (``PRM_WIDTH`` floats per body, ``core/stepping.pack_parameters``)
     Mass properties, damping, gravity as the body's motion allows it, the energy-bound
     constants, the body's reduced model and projection, its plane (planar), its constant twist
     (kinematic), q_PB (principal → body frame) and a cache of the last rotation increment.
@@ -63,7 +63,7 @@ SITE_MOMENT = 18  # 9 columns, M[j, l] at SITE_MOMENT + 3 j + l
 ACTIVE = 27
 WRENCH_WIDTH = 28
 
-#: How a frame's origin and axes relate to its body (forces.parse_frame; forces.add_wrench).
+#: How a frame's origin and axes relate to its body (core/frames.parse_frame; forces.add_wrench).
 FRAME_WORLD = 0  # world origin, world axes
 FRAME_BODY = 1  # centre of mass, body axes
 FRAME_WORLD_ALIGNED = 2  # centre of mass, world axes

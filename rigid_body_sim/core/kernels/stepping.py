@@ -1,11 +1,11 @@
 """The compiled step driver: every moving body, its model or the integrator, then the blow-up checks.
 
 One call of :func:`advance` runs ``n`` steps of every moving body (numba; no Python per step
-or per body). Per step, for each model's group of bodies (reduction.py groups them, so each
+or per body). Per step, for each model's group of bodies (core/reduction.py groups them, so each
 loop is homogeneous and static bodies are never touched), the body's model
 (reduced_models.py) or the integrator (integrators.py, dispatched by integrate) writes the next state into
 the other state buffer; :func:`check_body` then checks it (finite; kinetic energy within the
-bound of simulator.DivergenceError). Only when every body passes does the other buffer become
+bound of core/simulator.DivergenceError). Only when every body passes does the other buffer become
 the current one, so a failed step is never applied.
 
 Buffers (layout.py names every column):
@@ -13,7 +13,7 @@ Buffers (layout.py names every column):
 ``Ys`` : (2, N, ROW_WIDTH)
     The state rows, twice: ``control[CUR]`` says which holds the state.
 ``prm`` : (N, PRM_WIDTH)
-    Per-body constants (:func:`pack_parameters`, then reduction.apply_plan).
+    Per-body constants (core/stepping.pack_parameters, then core/reduction.apply_plan).
 ``wrenches`` : (N, WRENCH_WIDTH)
     Applied wrenches in frame terms (forces.add_wrench); held for every step of the call and
     cleared at its end.
