@@ -22,7 +22,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rigid_body_sim.core import Simulator, closed_form
+from rigid_body_sim.core import Simulator
+from rigid_body_sim.exact import closed_form
 
 REPO = Path(__file__).resolve().parents[1]
 pytestmark = pytest.mark.timeout(600)

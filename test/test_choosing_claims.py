@@ -22,7 +22,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rigid_body_sim.core import Simulator, closed_form, load_scene
+from rigid_body_sim.core import Simulator, load_scene
+from rigid_body_sim.exact import closed_form
 from rigid_body_sim.core.quaternion import quat_conjugate, quat_multiply
 
 CLAIMS = Path(__file__).resolve().parents[1] / "docs" / "choosing_an_integrator.claims.json"

@@ -30,9 +30,10 @@ from helpers import (
     with_spin_step,
 )
 from rigid_body_sim.core import INTEGRATORS, Scene, Simulator, load_scene
-from rigid_body_sim.core import closed_form
-from rigid_body_sim.core.dynamics import derivatives
-from rigid_body_sim.core.forces import add_wrench, new_wrench_rows, parse_frame
+from rigid_body_sim.exact import closed_form
+from rigid_body_sim.core.kernels.dynamics import derivatives
+from rigid_body_sim.core.frames import new_wrench_rows, parse_frame
+from rigid_body_sim.core.kernels.forces import add_wrench
 from rigid_body_sim.core.stepping import pack_parameters
 from rigid_body_sim.core.mass_properties import box_inertia
 from rigid_body_sim.core.quaternion import quat_to_matrix, quat_wxyz_from_xyzw, quat_xyzw_from_wxyz

@@ -34,7 +34,7 @@ import yaml
 from rigid_body_sim.cli import main
 from rigid_body_sim.core import Simulator, load_scene
 from rigid_body_sim.offline.msgdefs import complete_definition
-from rigid_body_sim.paths import default_scene_path
+from rigid_body_sim.package_data import default_scene_path
 
 pytestmark = pytest.mark.ros
 

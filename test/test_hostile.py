@@ -778,7 +778,7 @@ def test_the_recorder_never_blocks_on_a_special_file(tmp_path: Path, target: str
     """Once: ``record_path:=`` a FIFO deadlocked the node (its open blocked under the tick lock).
     McapRecorder, which the node uses, refuses at once and writes nothing into it."""
     from rigid_body_sim.offline.recording import McapRecorder, check_record_path
-    from rigid_body_sim.paths import NotRegularFileError
+    from rigid_body_sim.safe_open import NotRegularFileError
 
     reader = None
     if target.startswith("fifo"):
@@ -806,15 +806,15 @@ def test_the_recorder_never_blocks_on_a_special_file(tmp_path: Path, target: str
 def test_a_path_swapped_to_a_fifo_after_the_check_never_blocks_the_recorder(tmp_path: Path) -> None:
     """check_record_path passes, then the path becomes a FIFO: the open itself refuses it at once."""
     from rigid_body_sim.offline.recording import McapRecorder, check_record_path
-    from rigid_body_sim.paths import NotRegularFileError
+    from rigid_body_sim.safe_open import NotRegularFileError
 
     path = tmp_path / "rec.mcap"
     assert check_record_path(path) is None
     os.mkfifo(path)  # after the check, before the open
     program = textwrap.dedent(f"""\
         from rigid_body_sim.offline.recording import McapRecorder
-        from rigid_body_sim.paths import NotRegularFileError
-        import rigid_body_sim.paths as paths, os
+        from rigid_body_sim.safe_open import NotRegularFileError
+        import os
         real_stat = os.stat
         def stat_says_missing(p, *a, **k):  # the race at its worst: the pre-open check saw no file
             if os.fspath(p) == {str(path)!r}:

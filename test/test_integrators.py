@@ -40,7 +40,7 @@ from helpers import (
     with_spin_step,
 )
 from rigid_body_sim.core import INTEGRATORS, NonFiniteStateError, Simulator, load_scene
-from rigid_body_sim.core import closed_form
+from rigid_body_sim.exact import closed_form
 
 # ----------------------------------------------------------------------------- long torque-free runs
 

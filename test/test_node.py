@@ -12,8 +12,9 @@ import numpy as np
 import pytest
 import yaml
 
-from rigid_body_sim.core import Simulator, closed_form, load_scene
-from rigid_body_sim.paths import default_scene_path
+from rigid_body_sim.core import Simulator, load_scene
+from rigid_body_sim.exact import closed_form
+from rigid_body_sim.package_data import default_scene_path
 from rigid_body_sim.testing import SimHarness
 
 pytestmark = pytest.mark.ros

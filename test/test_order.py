@@ -47,7 +47,8 @@ from helpers import (
     random_unit_quaternion,
     scene_of,
 )
-from rigid_body_sim.core import Simulator, closed_form
+from rigid_body_sim.core import Simulator
+from rigid_body_sim.exact import closed_form
 from rigid_body_sim.core.mass_properties import box_inertia
 from rigid_body_sim.core.quaternion import quat_angle_between, quat_rotate, quat_xyzw_from_wxyz
 

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from rigid_body_sim.core import SceneError, Simulator, describe_scene, load_scene
-from rigid_body_sim.core.closed_form import symmetric_top_flow
+from rigid_body_sim.exact.closed_form import symmetric_top_flow
 from rigid_body_sim.core.quaternion import (
     quat_conjugate,
     quat_from_rotation_vector,

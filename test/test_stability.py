@@ -31,7 +31,7 @@ import pytest
 
 from helpers import EPS, FIXED_STEP_INTEGRATORS, NUMPY_STEPPED_INTEGRATORS, SPLITTING_FAMILY, loglog_slope, scene_of
 from rigid_body_sim.core import DivergenceError, NonFiniteStateError, SceneError, Simulator, load_scene
-from rigid_body_sim.core import closed_form
+from rigid_body_sim.exact import closed_form
 from rigid_body_sim.core.free_rotor import exact_rotor, rotor_pairing, symmetric_split_rotor
 from rigid_body_sim.core.quaternion import quat_angle_between, quat_wxyz_from_xyzw
 from rigid_body_sim.tools import envelope

@@ -5,7 +5,7 @@ requirements-test.txt), then the installed ``rigid_body_sim_node`` publishing a 
 colcon runs from this interpreter's environment, as a ROS installation runs it from the
 system python3 that has rclpy: the installed console scripts get its shebang.
 
-The compiled numba kernels are cached beside the core's sources (rigid_body_sim/core/__pycache__);
+The compiled numba kernels are cached beside the core's sources (rigid_body_sim/core/kernels/__pycache__);
 a fresh installation compiles them once, about 100 s on this machine. So that the default suite
 does not pay that, the checkout's cache is copied beside the installed core (the sources keep
 their modification times, which is what numba checks). The default run builds once and runs the
@@ -55,12 +55,12 @@ def source_files() -> list[Path]:
 
 def copy_kernel_cache(package_dir: Path) -> None:
     """Copy the checkout's compiled numba kernels beside ``package_dir``'s core (same sources),
-    with the stamp of the sources they were compiled from (core/jit.py keeps a cache only with
+    with the stamp of the sources they were compiled from (core/kernels/jit.py keeps a cache only with
     its stamp)."""
-    from rigid_body_sim.core.jit import STAMP_NAME
+    from rigid_body_sim.core.kernels.jit import STAMP_NAME
 
-    cache = ROOT / PACKAGE / "core" / "__pycache__"
-    target = package_dir / "core" / "__pycache__"
+    cache = ROOT / PACKAGE / "core" / "kernels" / "__pycache__"
+    target = package_dir / "core" / "kernels" / "__pycache__"
     target.mkdir(exist_ok=True)
     for path in [*cache.glob("*.nbi"), *cache.glob("*.nbc"), cache / STAMP_NAME]:
         shutil.copy2(path, target / path.name)

@@ -20,7 +20,7 @@ Schema (every key not listed is an error; see README "Scene files")::
         sites:                                                  # optional
           corner: {position: [0.5, 0.3, 0.0]}                   # body frame, from the COM
           nozzle: {position: [0, 0, -0.2], axes: world}         # axes: body (default) | world
-          imu_mount: {position: [0, 0, 0.1], imu: {}}           # an IMU on the site (imu.py; {} = ideal)
+          imu_mount: {position: [0, 0, 0.1], imu: {}}           # an IMU on the site (imu_spec.py; {} = ideal)
     wrenches:                             # optional: scripted wrenches over sim time
       - {body: crate, frame: crate/corner, force: [0, 10, 0], torque: [0, 0, 0], start: 0.5, duration: 0.2}
 
@@ -61,7 +61,7 @@ from typing import Any
 import numpy as np
 
 from ..safe_open import FileTooLargeError, NotRegularFileError, read_regular_file
-from .imu import IMU_CHANNEL_KEYS, IMU_KEYS, ImuChannel, ImuSpec
+from .imu_spec import IMU_CHANNEL_KEYS, IMU_KEYS, ImuChannel, ImuSpec
 from .mass_properties import (
     TRIANGLE_RTOL,
     box_inertia,
@@ -584,7 +584,7 @@ def _check_site_counts(check: _Checker, path: str, sites: Mapping, out: _Bodies)
 
 
 def _imu(check: _Checker, value: Any, path: str) -> ImuSpec:
-    """An ``imu:`` mapping (core/imu.py): every key optional; an empty mapping (or null) is an ideal IMU."""
+    """An ``imu:`` mapping (core/imu_spec.py): every key optional; an empty mapping (or null) is an ideal IMU."""
     if value is None:
         return ImuSpec()
     imu = check.mapping(value, path, IMU_KEYS)

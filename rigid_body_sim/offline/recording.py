@@ -49,7 +49,7 @@ says ``incomplete`` was never closed; one cut anywhere (its writer was killed, t
 up: no footer at its end) is read by :func:`read_recording` up to the last whole record before
 the cut, with ``status`` ``cut short: ...``.
 
-The file is created with :func:`rigid_body_sim.paths.open_for_writing`: never blocking on a FIFO
+The file is created with :func:`rigid_body_sim.safe_open.open_for_writing`: never blocking on a FIFO
 and refusing anything but a regular file (the node's ``record_path`` gets the same checks).
 """
 
@@ -65,7 +65,7 @@ import numpy as np
 from mcap.writer import CompressionType, Writer
 
 from ..core import Simulator
-from ..paths import check_writable_path, open_for_reading, open_for_writing
+from ..safe_open import check_writable_path, open_for_reading, open_for_writing
 from .msgdefs import MSG_TEXT, complete_definition
 from .rundata import MAX_RUN_FILE_BYTES, BodyTrack, RunData, angular_velocity_body
 
@@ -221,7 +221,7 @@ def _xyz(v: np.ndarray) -> dict[str, float]:
 
 def check_record_path(path: str | os.PathLike[str]) -> str | None:
     """Why ``path`` cannot be recorded to, or None: its directory must exist and be writable,
-    and the path must not be a directory, FIFO or device (:func:`rigid_body_sim.paths.check_writable_path`;
+    and the path must not be a directory, FIFO or device (:func:`rigid_body_sim.safe_open.check_writable_path`;
     :class:`McapRecorder` checks the opened file again)."""
     return check_writable_path(path, expected="an .mcap file")
 
@@ -245,7 +245,7 @@ class McapRecorder:
     Raises
     ------
     OSError
-        If the file cannot be created; :class:`rigid_body_sim.paths.NotRegularFileError` if the
+        If the file cannot be created; :class:`rigid_body_sim.safe_open.NotRegularFileError` if the
         path is a FIFO, device or directory (never blocking, nothing written to it).
     """
 

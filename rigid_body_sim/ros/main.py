@@ -131,11 +131,11 @@ def _compile_if_cold() -> None:
 
 def _kernels_cached() -> bool:
     """True if numba's cache holds compiled core kernels, or if where it keeps them is unknown:
-    next to the sources (``core/__pycache__``) unless ``NUMBA_CACHE_DIR`` is set (anything
+    next to the sources (``core/kernels/__pycache__``) unless ``NUMBA_CACHE_DIR`` is set (anything
     compiled under it counts) or the sources are read-only (a per-user directory not guessed here)."""
     from pathlib import Path
 
-    from ..core.jit import CACHE_DIR
+    from ..core.kernels.jit import CACHE_DIR
 
     user_dir = os.environ.get("NUMBA_CACHE_DIR")
     if user_dir:
