@@ -33,8 +33,6 @@ from .layout import (
     F_COM_P,
     F_COM_W,
     F_WORLD,
-    FRAME_BODY,
-    FRAME_SITE_BODY_AXES,
     FRAME_SITE_WORLD_AXES,
     FRAME_WORLD,
     FRAME_WORLD_ALIGNED,

@@ -56,7 +56,6 @@ from .layout import (
     LIMIT,
     MASS,
     METHOD,
-    MODEL,
     MODEL_COUNT,
     MODEL_FULL,
     MODEL_ISOTROPIC,
@@ -74,7 +73,6 @@ from .layout import (
     PENDING_FORCE,
     PENDING_FRAME,
     PENDING_TORQUE,
-    PRM_WIDTH,
     ROW_WIDTH,
     SITE_MOMENT,
     SPENT,
@@ -83,7 +81,6 @@ from .layout import (
     T_WORLD,
     V,
     W,
-    WRENCH_WIDTH,
 )
 from .reduced_models import isotropic_free, kinematic, planar, symmetric_free, torque_free, translation
 from .jit import INLINE, JIT, LOOP
