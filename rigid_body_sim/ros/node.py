@@ -36,7 +36,7 @@ from .endpoints import BodyEndpoints
 from .node_diagnostics import NodeDiagnostics
 from .node_log import StatusLog, log_scene
 from .node_recording import NodeRecording
-from .parameters import BY_NAME, coerce, declare_parameters, problems
+from .parameters import BY_NAME, coerce_parameters, declare_parameters, problems
 from .robot_services import create_robot_services
 from .services import create_services
 from .session import MAX_BATCH_ONLY_BODIES, MAX_BODIES, SimSession, build_simulator
@@ -84,13 +84,14 @@ class RigidBodySimNode(Node):
         self._set_body_names(sim.body_names)
         qos = QoSProfile(depth=QUEUE_DEPTH)
         self._endpoints = BodyEndpoints(self, qos, settings, NodeRecording(
-            self.get_logger(), settings["world_frame"], self.get_namespace(), self.get_fully_qualified_name()))
+            self.get_logger(), settings["frame_prefix"] + settings["world_frame"], self.get_namespace(),
+            self.get_fully_qualified_name()))
         self._endpoints.commit(self._endpoints.prepare(sim.scene, settings["publish_odometry"], keep_state=False))
         self._session = SimSession(sim, settings, self._endpoints, self.get_logger(), max_time_s=MAX_ROS_TIME_S,
                                    on_bodies=self._set_body_names,
                                    on_restart=lambda: self._diagnostics.open_window())
         self._service_handles = create_services(self, self._session) + create_robot_services(self, self._session)
-        self.add_pre_set_parameters_callback(self._coerce_parameters)
+        self.add_pre_set_parameters_callback(coerce_parameters)
         self.add_on_set_parameters_callback(self._prepare_change)
         self.add_post_set_parameters_callback(self._apply_change)
 
@@ -113,16 +114,6 @@ class RigidBodySimNode(Node):
             self.set_parameters([Parameter("body_names", Parameter.Type.STRING_ARRAY, list(names))])
         finally:
             self._pending.internal = False
-
-    def _coerce_parameters(self, parameters: list[Parameter]) -> list[Parameter]:
-        """Pre-set: whole numbers for float parameters are floats (``rate_hz:=200`` means 200.0)."""
-        def as_float(param: Parameter) -> Parameter:
-            spec = BY_NAME.get(param.name)
-            if spec is None or spec.type is not Parameter.Type.DOUBLE:
-                return param
-            value = coerce(spec, param.value)
-            return param if value is param.value else Parameter(param.name, Parameter.Type.DOUBLE, value)
-        return [as_float(param) for param in parameters]
 
     def _prepare_change(self, parameters: list[Parameter]) -> SetParametersResult:
         """On-set: accept or refuse a whole request with the parameter table, then let the session

@@ -37,6 +37,7 @@ __all__ = [
     "BY_NAME",
     "NODE_NAME",
     "coerce",
+    "coerce_parameters",
     "declare_parameters",
     "problem",
     "problems",
@@ -158,6 +159,12 @@ def _check_world_frame(value: str) -> str | None:
     return None
 
 
+def _check_frame_prefix(value: str) -> str | None:
+    if any(c.isspace() for c in value) or value.startswith("/"):
+        return f"frame_prefix must be '' or a frame-name prefix without spaces or a leading '/' (e.g. 'robot1/'), got {value!r}"
+    return None
+
+
 def _check_record_path(value: str) -> str | None:
     if not value:
         return None
@@ -200,6 +207,13 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec("world_frame", _T.STRING, "world",
                   "frame_id of the world: header.frame_id of poses, and of wrenches given in world axes.",
                   read_only=True, constraints="no '/' or spaces", check=_check_world_frame,
+                  takes_effect="start-up only"),
+    ParameterSpec("frame_prefix", _T.STRING, "",
+                  "Put in front of every frame id the node writes (headers of poses, batches, odometry, IMU, "
+                  "markers; child frames; /tf and /tf_static) and expects in wrench, impulse and set_state "
+                  "headers, as robot_state_publisher's frame_prefix: 'sim1/' makes the world 'sim1/world' and "
+                  "body B 'sim1/B'.",
+                  read_only=True, constraints="no spaces or leading '/'", check=_check_frame_prefix,
                   takes_effect="start-up only"),
     ParameterSpec("publish_clock", _T.BOOL, True, "Publish /clock (rosgraph_msgs/Clock) with sim time every tick."),
     ParameterSpec("publish_odometry", _T.BOOL, False,
@@ -248,6 +262,17 @@ def coerce(spec: ParameterSpec, value: Any) -> Any:
     if spec.type is Parameter.Type.DOUBLE and isinstance(value, int) and not isinstance(value, bool):
         return float(value)
     return value
+
+
+def coerce_parameters(parameters: list[Parameter]) -> list[Parameter]:
+    """The node's pre-set callback: whole numbers for float parameters are floats (``rate_hz:=200`` means 200.0)."""
+    def as_float(param: Parameter) -> Parameter:
+        spec = BY_NAME.get(param.name)
+        if spec is None or spec.type is not Parameter.Type.DOUBLE:
+            return param
+        value = coerce(spec, param.value)
+        return param if value is param.value else Parameter(param.name, Parameter.Type.DOUBLE, value)
+    return [as_float(param) for param in parameters]
 
 
 def problem(name: str, value: Any) -> str | None:

@@ -100,8 +100,10 @@ class StatePublishers:
         If a ``qos_overrides`` parameter is not a valid policy value.
     """
 
-    def __init__(self, node: Node, world_frame: str, *, per_body_topics: bool = True, twist_stamped: bool = False):
+    def __init__(self, node: Node, world_frame: str, *, per_body_topics: bool = True, twist_stamped: bool = False,
+                 frame_prefix: str = ""):
         self._node = node
+        self._prefix = frame_prefix  # in front of odometry's child_frame_id (world_frame comes with it)
         self._qos = STATE_QOS
         self._world_frame = world_frame
         self.per_body_topics = per_body_topics
@@ -308,6 +310,6 @@ class StatePublishers:
                     pubs.twist.publish(fill_twist(pubs.twist_msg, velocities[index], rates_world[index]))
             if pubs.odom is not None:
                 state = sim.body_state(body)
-                pubs.odom.publish(fill_odometry(pubs.odom_msg, stamp, world, body, state.position_world,
+                pubs.odom.publish(fill_odometry(pubs.odom_msg, stamp, world, self._prefix + body, state.position_world,
                                                 state.orientation_xyzw, state.linear_velocity_body,
                                                 state.angular_velocity_body))
