@@ -24,7 +24,7 @@ from typing import Any, Iterator
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
-from rcl_interfaces.msg import SetParametersResult
+from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -36,7 +36,7 @@ from .endpoints import BodyEndpoints
 from .node_diagnostics import NodeDiagnostics
 from .node_log import StatusLog, log_scene
 from .node_recording import NodeRecording
-from .parameters import BY_NAME, coerce_parameters, declare_parameters, problems
+from .parameters import BY_NAME, change_problems, coerce_parameters, declare_parameters, misspelt_parameters
 from .robot_services import create_robot_services
 from .services import create_services
 from .session import MAX_BATCH_ONLY_BODIES, MAX_BODIES, SimSession, build_simulator
@@ -80,6 +80,8 @@ class RigidBodySimNode(Node):
         self._tick_loop: TickLoop | None = None  # what destroy_node reads, if construction stops early
         self._pending = threading.local()  # the prepared change of the request being set, per thread
         settings = declare_parameters(self)
+        for warning in misspelt_parameters(self.get_name(), self.get_fully_qualified_name(), kwargs):
+            self.get_logger().warning(warning)
         sim = build_simulator(settings["scene"], settings)
         self._set_body_names(sim.body_names)
         qos = QoSProfile(depth=QUEUE_DEPTH)
@@ -115,6 +117,12 @@ class RigidBodySimNode(Node):
         finally:
             self._pending.internal = False
 
+    def describe_parameter(self, name: str) -> ParameterDescriptor:
+        """The table's full descriptor (type, ranges, read-only) for the node's parameters: what
+        ``describe_parameters`` answers. rclpy keeps them dynamically typed (parameters.py says why)."""
+        spec = BY_NAME.get(name)
+        return spec.descriptor() if spec is not None else super().describe_parameter(name)
+
     def _prepare_change(self, parameters: list[Parameter]) -> SetParametersResult:
         """On-set: accept or refuse a whole request with the parameter table, then let the session
         prepare what is costly (session.py: the change lock is held from here to :meth:`_apply_change`).
@@ -125,7 +133,7 @@ class RigidBodySimNode(Node):
         if stale is not None:  # prepared on this thread, then refused by a later callback: never applied
             self._session.abandon_change(stale)
         values = {p.name: p.value for p in parameters if p.name in BY_NAME}  # the last of a name wins, as in rclpy
-        reason = "; ".join(problems(values))
+        reason = "; ".join(change_problems(values))
         if not reason:
             reason, self._pending.change = self._session.begin_change(values, self._endpoints.open_recorder, parameters)
         return SetParametersResult(successful=not reason, reason=reason or "")
