@@ -197,3 +197,47 @@ def test_body_names_is_read_only_to_clients_and_kept_by_the_node():
         result = harness.set_parameters_atomically(body_names=["x"])
         assert not result.successful and "body_names is read-only: the node sets it" in result.reason
         assert harness.get_parameter("body_names") == list(harness.node.simulator.body_names)
+
+
+@pytest.mark.ros
+def test_a_recording_declares_the_qos_that_qos_overrides_give(tmp_path):
+    """With ``qos_overrides./poses.publisher.*`` (and /clock's), the recording's
+    ``offered_qos_profiles`` says what the publishers really offer, as another participant
+    discovers it; topics without overrides keep the default."""
+    import time
+
+    import rclpy
+    from mcap.reader import make_reader
+    from rclpy.context import Context
+    from rclpy.node import Node
+    from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
+
+    path = tmp_path / "overridden.mcap"
+    overrides = {"qos_overrides./poses.publisher.depth": 5,
+                 "qos_overrides./poses.publisher.durability": "volatile",
+                 "qos_overrides./clock.publisher.reliability": "best_effort",
+                 "per_body_topics": False, "record_path": str(path)}
+    with SimHarness(parameters=overrides) as harness:
+        harness.step(3)
+        context = Context()
+        rclpy.init(context=context)
+        try:  # the QoS another participant discovers
+            observer = Node("qos_observer", context=context)
+            deadline = time.monotonic() + 10.0
+            while not observer.get_publishers_info_by_topic("/poses") and time.monotonic() < deadline:
+                harness.spin_for(0.05)
+            (poses_info,) = observer.get_publishers_info_by_topic("/poses")
+            (clock_info,) = observer.get_publishers_info_by_topic("/clock")
+            assert poses_info.qos_profile.durability == DurabilityPolicy.VOLATILE
+            assert clock_info.qos_profile.reliability == ReliabilityPolicy.BEST_EFFORT
+        finally:
+            rclpy.try_shutdown(context=context)
+    with open(path, "rb") as handle:
+        channels = {c.topic: c for c in make_reader(handle).get_summary().channels.values()}
+    declared = {topic: yaml.safe_load(channels[topic].metadata["offered_qos_profiles"])[0]
+                for topic in ("/poses", "/velocities", "/clock")}
+    assert (declared["/poses"]["history"], declared["/poses"]["depth"], declared["/poses"]["reliability"],
+            declared["/poses"]["durability"]) == ("keep_last", 5, "reliable", "volatile")
+    assert (declared["/clock"]["reliability"], declared["/clock"]["durability"]) == ("best_effort", "transient_local")
+    assert (declared["/velocities"]["depth"], declared["/velocities"]["reliability"],
+            declared["/velocities"]["durability"]) == (1, "reliable", "transient_local")

@@ -76,6 +76,7 @@ class BodyEndpoints:
         self._tf_scene: Scene | None = None  # the scene whose /tf_static was sent last
         self._tf_scene_due: Scene | None = None  # a committed scene whose /tf_static is still to send
         self.recording = recording
+        recording.offered_qos = self.outputs.offered_qos()  # qos_overrides applied: what recordings declare
 
     # ------------------------------------------------------------------ prepare / commit / release
 

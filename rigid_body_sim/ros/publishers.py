@@ -131,6 +131,14 @@ class StatePublishers:
             raise ValueError(f"qos_overrides for {topic!r} rejected: {exc}; expected history keep_last|keep_all, "
                              "depth >= 1, reliability reliable|best_effort, durability volatile|transient_local") from exc
 
+    def offered_qos(self) -> dict[str, tuple[str, int, str, str]]:
+        """(history, depth, reliability, durability) the publishers of :data:`OVERRIDABLE_TOPICS` really
+        offer, ``qos_overrides`` applied (what a recording declares in ``offered_qos_profiles``)."""
+        def policies(qos: QoSProfile) -> tuple[str, int, str, str]:
+            return qos.history.name.lower(), int(qos.depth), qos.reliability.name.lower(), qos.durability.name.lower()
+        return {topic: policies(pub.qos_profile) for topic, pub in
+                zip(OVERRIDABLE_TOPICS, (self._poses_pub, self._velocities_pub, self._clock_pub))}
+
     def _make_cdr(self) -> PoseTwistClockCdr | None:
         """The CDR serializer for pose, twist and /clock, or None (publish message objects) if it
         does not match the middleware's own serialization."""
