@@ -3,8 +3,8 @@
 Every tick the batches ``poses`` and ``velocities`` (all bodies in scene order, batch.py) and, unless
 ``per_body_topics`` is false, per body B (relative names, so namespaces and remaps apply)
 ``B/pose``, ``B/twist``, ``B/odom`` (publishers.py); in ``B/wrench`` and ``B/impulse`` (inputs.py). Also ``/clock``
-each tick, ``/diagnostics`` every ``diagnostics_period`` wall seconds (diagnostics.py), the
-services ``~/reset``, ``~/set_paused`` and ``~/step`` (services.py), and the parameters of
+each tick, ``/tf`` and ``/tf_static`` (tf.py), ``/diagnostics`` every ``diagnostics_period`` wall seconds
+(diagnostics.py), the services ``~/reset``, ``~/reset_world``, ``~/set_paused`` and ``~/step`` (services.py), and the parameters of
 parameters.py. For robot stacks: ``B/S/imu`` per IMU site (imu.py), ``B/set_state``
 (set_state.py), ``~/step_ticks``, ``~/spawn`` and ``~/delete`` (robot_services.py,
 scene_edit.py) and ``markers`` (markers.py). Each physics step advances ``real_time_factor / (rate_hz · substeps)`` s.
