@@ -10,7 +10,35 @@ from rosgraph_msgs.msg import Clock
 
 from rigid_body_sim.testing import SimHarness
 
+from test_session import TICK_S, X0, make_session
+
 pytestmark = pytest.mark.ros
+
+
+def test_session_reset_world_keeps_time_and_restores_the_bodies():
+    """SimSession (no ROS): the bodies' initial state back, time and step count unchanged, the
+    edge told to drop holds (keep_state False) and to publish at the same time; ticks go on from there."""
+    session, io = make_session()
+    session.step_ticks(7)
+    before_s, steps = session.simulator.time, session.simulator.step_count
+    assert not np.allclose(session.simulator.body_state("box").position_world, X0)
+    ok, message = session.reset_world()
+    assert ok and "goes on" in message, message
+    sim = session.simulator
+    assert (sim.time, sim.step_count) == (before_s, steps)
+    fresh = make_session()[0].simulator
+    for body in sim.body_names:
+        assert np.array_equal(sim.body_state(body).position_world, fresh.body_state(body).position_world)
+        assert np.array_equal(sim.body_state(body).orientation_xyzw, fresh.body_state(body).orientation_xyzw)
+        assert np.array_equal(sim.body_state(body).linear_velocity_world, fresh.body_state(body).linear_velocity_world)
+    assert io.named("prepare")[-1] == ("prepare", sim.body_names, False)
+    assert io.named("commit")[-1] == ("commit", sim.body_names, False)
+    assert io.calls[-1] == ("publish", before_s)
+    session.step_ticks(1)
+    assert session.simulator.time == pytest.approx(before_s + TICK_S, abs=1e-12)
+    ok, _ = session.reset()
+    assert ok and session.simulator.time == 0.0
+
 
 
 def _clock_ns(msg: Clock) -> int:

@@ -415,7 +415,7 @@ class SimSession:
         """``~/reset_world`` (as Gazebo's): every body back to the scene's initial pose and twist while
         sim time goes on (/clock does not go back); holds, pending impulses and set_states dropped,
         IMUs afresh, published; (success, message). A body stopped for a non-finite state stays
-        stopped (``~/reset`` restarts it). Clears a fault unless the tick thread died."""
+        stopped, and a fault stays (time did not go back): ``~/reset`` restarts both."""
         try:
             with self.busy_or_locked(holder="~/reset_world"):
                 sim = self.simulator.with_scene(self.simulator.scene)  # same time, step count, dt, integrator
@@ -423,7 +423,6 @@ class SimSession:
                 sim.model_reduction = sim.model_reduction  # re-derives each body's model from that state
                 self.simulator = sim
                 self._io.commit(self._io.prepare(sim.scene, self.settings["publish_odometry"], keep_state=False))
-                self.fault = self.fault if self._failed or sim.time >= self._max_time_s else None
                 self._io.publish(sim, self.settings)
                 time_s = sim.time
         except SessionBusy as busy:
