@@ -121,9 +121,9 @@ def test_problem_names_what_was_wrong_and_what_was_expected():
     assert "out of range" in problem("rate_hz", 0.0) and "0.001" in problem("rate_hz", 0.0)
     assert "finite number" in problem("rate_hz", math.inf)
     # Wrong types in the project's words: the parameter, the type given and the type expected.
-    assert problem("substeps", 2.5) == "substeps must be an integer, got a double (2.5)"
-    assert problem("rate_hz", "fast") == "rate_hz must be a double, got a string ('fast')"
-    assert problem("scene", ["a", "b"]) == "scene must be a string, got a string array (['a', 'b'])"
+    assert problem("substeps", 2.5) == "substeps must be an integer, got a double (2.5): wrong type"
+    assert problem("rate_hz", "fast") == "rate_hz must be a double, got a string ('fast'): wrong type"
+    assert problem("scene", ["a", "b"]) == "scene must be a string, got a string array (['a', 'b']): wrong type"
     assert "one of" in problem("integrator", "RK4")
     assert "bool" in problem("paused", 1)
     assert "not a parameter" in problem("no_such", 1)
@@ -182,7 +182,7 @@ def test_plain_set_parameters_applies_per_parameter_and_atomically_all_or_nothin
     with SimHarness() as harness:
         good, bad = harness.set_parameters(wrench_timeout=2.0, rate_hz="fast")
         assert good.successful and not bad.successful
-        assert bad.reason == "rate_hz must be a double, got a string ('fast')"
+        assert bad.reason == "rate_hz must be a double, got a string ('fast'): wrong type"
         assert harness.get_parameter("wrench_timeout") == 2.0
         result = harness.set_parameters_atomically(wrench_timeout=3.0, rate_hz="fast")
         assert not result.successful and "rate_hz must be a double" in result.reason

@@ -291,7 +291,7 @@ def problem(name: str, value: Any) -> str | None:
     given = _type_name_of(value)
     if given != _TYPE_NAMES[spec.type]:
         shown = value.tolist() if isinstance(value, array.array) else value
-        return f"{name} must be {_with_article(_TYPE_NAMES[spec.type])}, got {_with_article(given)} ({shown!r})"
+        return f"{name} must be {_with_article(_TYPE_NAMES[spec.type])}, got {_with_article(given)} ({shown!r}): wrong type"
     if spec.type is Parameter.Type.DOUBLE and not math.isfinite(value):
         return f"{name} must be a finite double, {spec.expected()}; got {value!r}"
     if spec.range is not None and not spec.range[0] <= value <= spec.range[1]:
