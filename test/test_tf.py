@@ -215,3 +215,35 @@ def test_set_state_takes_prefixed_frame_ids(tmp_path):
         harness.step()
         assert harness.latest_pose("ball").pose.position.x == 5.0
         assert harness.latest_pose("ball").header.frame_id == "sim1/world"
+
+
+def test_imu_frames_carry_the_prefix_and_a_spawn_sends_tf_static_again(tmp_path):
+    """An IMU's header.frame_id is its prefixed site frame, which /tf_static places on its body; a
+    spawned body's sites are sent on /tf_static at once (late joiners get the new set)."""
+    import yaml
+    from sensor_msgs.msg import Imu
+    from tf2_msgs.msg import TFMessage
+
+    from rigid_body_sim.testing import SimHarness
+
+    scene = {"bodies": {"box": {"mass": 1.0, "inertia": {"box": [1.0, 0.6, 0.4]},
+                                "sites": {"imu_link": {"position": [0.0, 0.0, 0.1], "imu": {}}}}}}
+    path = tmp_path / "imu_scene.yaml"
+    path.write_text(yaml.safe_dump(scene))
+    with SimHarness(str(path), {"frame_prefix": "sim1/"}, namespace="ns1") as harness:
+        imus: list = []
+        harness.client.create_subscription(Imu, "box/imu_link/imu", imus.append, 10)
+        harness.spin_until(lambda: harness.client.count_publishers("box/imu_link/imu") > 0, "the IMU publisher")
+        harness.step()
+        harness.spin_until(lambda: bool(imus), "an IMU message")
+        assert imus[-1].header.frame_id == "sim1/box/imu_link"
+
+        assert harness.spawn(crate="{mass: 2.0, inertia: {sphere: 0.2}, sites: {lid: {position: [0, 0, 0.2]}}}"
+                             ).successful
+        static_listener_qos = QoSProfile(depth=100, durability=DurabilityPolicy.TRANSIENT_LOCAL,
+                                         reliability=ReliabilityPolicy.RELIABLE)
+        late: list = []  # joins after the spawn: the latched message is the new scene's
+        harness.client.create_subscription(TFMessage, "/tf_static", late.append, static_listener_qos)
+        harness.spin_until(lambda: bool(late), "/tf_static for a late joiner")
+        assert {(t.header.frame_id, t.child_frame_id) for t in late[-1].transforms} == {
+            ("sim1/box", "sim1/box/imu_link"), ("sim1/crate", "sim1/crate/lid")}
