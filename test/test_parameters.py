@@ -47,6 +47,17 @@ def test_describe_parameters_from_a_client_shows_every_type_range_and_descriptio
                 assert not got.floating_point_range and not got.integer_range, spec.name
             for choice in spec.choices:
                 assert choice in got.additional_constraints, spec.name
+        # What docs/interface.md says of each parameter is what a client is told.
+        docs = {}
+        for line in (ROOT / "docs" / "interface.md").read_text().splitlines():
+            cells = [cell.strip() for cell in line.strip().strip("|").split("|")]
+            if len(cells) == 6 and cells[0].startswith("`") and cells[0].strip("`") in BY_NAME:
+                docs[cells[0].strip("`")] = cells
+        assert set(docs) == set(names)
+        type_names = {1: "bool", 2: "integer", 3: "double", 4: "string", 9: "string array"}
+        for got in descriptors:
+            assert docs[got.name][1] == type_names[got.type], got.name
+            assert (docs[got.name][4] == "read-only") == got.read_only, got.name
         # Every declared parameter is in the table, but rclpy's own two and the standard
         # qos_overrides of the batch and /clock publishers (issue 15).
         future = harness._parameters.list_parameters()
