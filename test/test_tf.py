@@ -247,3 +247,33 @@ def test_imu_frames_carry_the_prefix_and_a_spawn_sends_tf_static_again(tmp_path)
         harness.spin_until(lambda: bool(late), "/tf_static for a late joiner")
         assert {(t.header.frame_id, t.child_frame_id) for t in late[-1].transforms} == {
             ("sim1/box", "sim1/box/imu_link"), ("sim1/crate", "sim1/crate/lid")}
+
+
+def test_tf_never_repeats_a_stamp(tmp_path):
+    """A republish at the same sim time (a reset_world, a spawn) sends no second /tf at that stamp
+    (tf2 would drop it as TF_REPEATED_DATA); the next tick carries the new poses."""
+    from tf2_msgs.msg import TFMessage
+
+    from rigid_body_sim.testing import SimHarness
+
+    with SimHarness(_write_scene(tmp_path)) as harness:
+        heard: list = []
+        harness.client.create_subscription(TFMessage, "/tf", heard.append, TF_QOS)
+        harness.spin_until(lambda: harness.client.count_subscribers("/tf") > 0, "the /tf subscription")
+        for _ in range(3):
+            harness.step()
+        harness.reset_world()
+        harness.spin_for(0.2)
+        harness.step()
+        harness.spin_until(lambda: bool(heard) and _ns(heard[-1]) == round(harness.node.simulator.time * 1e9),
+                           "/tf after the reset_world")
+        stamps = [_ns(msg) for msg in heard]
+        assert stamps == sorted(set(stamps)), stamps
+        box = next(t for t in heard[-1].transforms if t.child_frame_id == "box").transform.translation
+        with harness.node.locked_simulator() as sim:
+            assert [box.x, box.y, box.z] == sim.body_state("box").position_world.tolist()
+
+
+def _ns(msg) -> int:
+    stamp = msg.transforms[0].header.stamp
+    return stamp.sec * 10**9 + stamp.nanosec

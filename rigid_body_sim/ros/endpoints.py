@@ -75,6 +75,7 @@ class BodyEndpoints:
         self.tf = TfPublisher(node, world_frame, prefix) if TF_AVAILABLE else None
         self._tf_scene: Scene | None = None  # the scene whose /tf_static was sent last
         self._tf_scene_due: Scene | None = None  # a committed scene whose /tf_static is still to send
+        self._tf_time: float | None = None  # sim time of the last /tf message
         self.recording = recording
         recording.offered_qos = self.outputs.offered_qos()  # qos_overrides applied: what recordings declare
 
@@ -137,7 +138,10 @@ class BodyEndpoints:
         self._publish_tf(sim)
 
     def _publish_tf(self, sim: Simulator) -> None:
-        """/tf_static if the scene changed since it was last sent, then /tf (only while subscribed)."""
+        """/tf_static if the scene changed since it was last sent, then /tf (only while subscribed),
+        never twice at one sim time: tf2 drops a transform at a stamp it has (TF_REPEATED_DATA) and
+        warns, so a republish at the same time (a spawn, a reset_world, a set_state while paused)
+        shows on /tf from the next tick on."""
         if self.tf is None:
             return
         stamp = None
@@ -145,8 +149,9 @@ class BodyEndpoints:
             stamp = time_msg_from_seconds(sim.time)
             self.tf.set_scene(sim, stamp)
             self._tf_scene, self._tf_scene_due = self._tf_scene_due, None
-        if self.tf.has_subscribers():
+        if sim.time != self._tf_time and self.tf.has_subscribers():
             self.tf.publish(sim, stamp or time_msg_from_seconds(sim.time))
+            self._tf_time = sim.time
 
     def record_state(self, sim: Simulator, settings: Mapping[str, Any]) -> None:
         """Write the state just published, then /clock: with ``per_body_topics`` false the two
