@@ -277,3 +277,28 @@ def test_tf_never_repeats_a_stamp(tmp_path):
 def _ns(msg) -> int:
     stamp = msg.transforms[0].header.stamp
     return stamp.sec * 10**9 + stamp.nanosec
+
+
+def test_a_recording_carries_the_prefixed_frame_ids(tmp_path):
+    """What a prefixed node records is what it publishes and takes: poses in ``sim1/world``, a
+    held wrench in its prefixed frame."""
+    from geometry_msgs.msg import PoseStamped, WrenchStamped
+    from mcap.reader import make_reader
+    from rclpy.serialization import deserialize_message
+
+    from rigid_body_sim.testing import SimHarness
+
+    path = tmp_path / "prefixed.mcap"
+    with SimHarness(_write_scene(tmp_path), {"frame_prefix": "sim1/", "record_path": str(path),
+                                             "wrench_timeout": 0.0}) as harness:
+        harness.publish_wrench("box", force=(0.0, 1.0, 0.0), frame_id="sim1/box/corner")
+        harness.publish_wrench("ball", force=(1.0, 0.0, 0.0), frame_id="sim1/world")
+        harness.step(2)
+    frames: dict[str, set[str]] = {}
+    with open(path, "rb") as handle:
+        for _schema, channel, message in make_reader(handle).iter_messages():
+            kind = {"/box/pose": PoseStamped, "/box/wrench": WrenchStamped, "/ball/wrench": WrenchStamped}.get(
+                channel.topic)
+            if kind is not None:
+                frames.setdefault(channel.topic, set()).add(deserialize_message(message.data, kind).header.frame_id)
+    assert frames == {"/box/pose": {"sim1/world"}, "/box/wrench": {"sim1/box/corner"}, "/ball/wrench": {"sim1/world"}}

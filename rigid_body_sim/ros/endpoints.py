@@ -66,6 +66,7 @@ class BodyEndpoints:
 
     def __init__(self, node: Node, qos: QoSProfile, settings: Mapping[str, Any], recording: NodeRecording):
         world_frame, prefix = settings["world_frame"], settings.get("frame_prefix", "")
+        self._prefix = prefix
         self.outputs = StatePublishers(node, prefix + world_frame, per_body_topics=settings["per_body_topics"],
                                        twist_stamped=settings["twist_stamped"], frame_prefix=prefix)
         self.inputs = WrenchInputs(node, qos, world_frame, prefix)
@@ -116,7 +117,16 @@ class BodyEndpoints:
     def take_wrenches(self, sim: Simulator, wrench_timeout: float) -> None:
         """Hand held wrenches and pending impulses to ``sim``; record them with the scripted ones."""
         held = self.inputs.apply(sim, wrench_timeout)
-        self.recording.write(lambda recorder: recorder.write_wrenches(sim.time, held + sim.active_scripted_wrenches()))
+        self.recording.write(lambda recorder: recorder.write_wrenches(sim.time, self._prefixed(
+            held + sim.active_scripted_wrenches())))
+
+    def _prefixed(self, wrenches: list[tuple[str, str, Any, Any]]) -> list[tuple[str, str, Any, Any]]:
+        """(body, frame, force, torque) with the frame as the node's inputs name it (``"world"``, the
+        recorder's world frame, is prefixed by it)."""
+        if not self._prefix:
+            return wrenches
+        return [(body, frame if frame == "world" else self._prefix + frame, force, torque)
+                for body, frame, force, torque in wrenches]
 
     def publish_tick(self, sim: Simulator, tick_s: float, settings: Mapping[str, Any]) -> None:
         """Sample and publish the IMUs due, then the state (both recorded if recording)."""
