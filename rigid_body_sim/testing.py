@@ -86,6 +86,8 @@ class SimHarness:
         #: True when the node publishes only the batches (``per_body_topics`` false): the harness
         #: then reads ``poses`` and ``velocities`` and answers :meth:`latest_pose` from them.
         self.batched = params.get("per_body_topics", True) is False
+        #: The node's ``frame_prefix``: in front of the default frame_id of :meth:`publish_wrench`.
+        self.frame_prefix = str(params.get("frame_prefix", ""))
         if scene is not None:
             params["scene"] = str(scene)
         params.setdefault("paused", paused)
@@ -118,6 +120,7 @@ class SimHarness:
                 self._create_body_endpoints(body)
             self._step = self.client.create_client(Trigger, f"{self._service_prefix}/step")
             self._reset = self.client.create_client(Trigger, f"{self._service_prefix}/reset")
+            self._reset_world = self.client.create_client(Trigger, f"{self._service_prefix}/reset_world")
             self._set_paused = self.client.create_client(SetBool, f"{self._service_prefix}/set_paused")
             self._robot = {name: self.client.create_client(SetParameters, f"{self._service_prefix}/{name}")
                            for name in ("step_ticks", "spawn", "delete")}
@@ -193,7 +196,7 @@ class SimHarness:
     def _wait_for_connections(self) -> None:
         for (body, topic), pub in self._publishers.items():
             self.spin_until(lambda p=pub: p.get_subscription_count() > 0, f"the node's {body}/{topic} subscription")
-        for client in (self._step, self._reset, self._set_paused, *self._robot.values()):
+        for client in (self._step, self._reset, self._reset_world, self._set_paused, *self._robot.values()):
             self.spin_until(client.service_is_ready, f"service {client.srv_name}")
         self.spin_until(self._parameters.services_are_ready, "the node's parameter services")
         if self.batched:
@@ -214,7 +217,7 @@ class SimHarness:
 
     def _publish(self, body: str, topic: str, force: Sequence[float], torque: Sequence[float], frame_id: str | None) -> None:
         msg = WrenchStamped()
-        msg.header.frame_id = body if frame_id is None else frame_id
+        msg.header.frame_id = self.frame_prefix + body if frame_id is None else frame_id
         msg.header.stamp = self.client.get_clock().now().to_msg()
         msg.wrench.force.x, msg.wrench.force.y, msg.wrench.force.z = (float(v) for v in force)
         msg.wrench.torque.x, msg.wrench.torque.y, msg.wrench.torque.z = (float(v) for v in torque)
@@ -224,7 +227,7 @@ class SimHarness:
 
     def publish_wrench(self, body: str, force: Sequence[float] = (0.0, 0.0, 0.0),
                        torque: Sequence[float] = (0.0, 0.0, 0.0), frame_id: str | None = None) -> None:
-        """Publish a WrenchStamped on ``body/wrench`` (frame_id default: the body) and wait until the node took it."""
+        """Publish a WrenchStamped on ``body/wrench`` (frame_id default: the body, prefixed) and wait until the node took it."""
         self._publish(body, "wrench", force, torque, frame_id)
 
     def publish_impulse(self, body: str, linear: Sequence[float] = (0.0, 0.0, 0.0),
@@ -274,6 +277,13 @@ class SimHarness:
     def reset(self) -> Trigger.Response:
         """Call ``~/reset`` and wait for the republished initial state."""
         response = self._call(self._reset, Trigger.Request())
+        self.wait_for_latest_state()
+        return response
+
+    def reset_world(self) -> Trigger.Response:
+        """Call ``~/reset_world`` (bodies back to their initial state, time goes on) and wait for
+        the republished state."""
+        response = self._call(self._reset_world, Trigger.Request())
         self.wait_for_latest_state()
         return response
 

@@ -116,7 +116,7 @@ def test_node_process_over_dds(tmp_path):
     [
         (["-p", "integrator:=leapfrog"], "integrator must be one of"),
         (["-p", "rate_hz:=-1.0"], "rate_hz out of range"),
-        (["-p", "rate_hz:=fast"], "rate_hz must be a finite number (double)"),
+        (["-p", "rate_hz:=fast"], "rate_hz must be a double, got a string ('fast')"),
         (["-p", "scene:=/nonexistent/scene.yaml"], "cannot read scene file"),
     ],
 )

@@ -91,13 +91,17 @@ def bad_changes(tmp_path) -> list[tuple[str, dict, str]]:
                                                   {"bodies": {"b": {"mass": -1.0, "inertia": {"sphere": 1.0}}}})}, "mass"),
         ("scene empty file", {"scene": _write(tmp_path / "empty.yaml", "")}, "empty file"),
         ("scene over 8 MiB", {"scene": str(huge)}, f"expected at most {MAX_SCENE_BYTES}"),
-        ("rate as text", {"rate_hz": "fast"}, "type"),
-        ("substeps as float", {"substeps": 2.5}, "type"),
-        ("integrator as number", {"integrator": 3}, "type"),
-        ("paused as text", {"paused": "yes"}, "type"),
-        ("scene as number", {"scene": 42}, "type"),
-        ("clock as integer", {"publish_clock": 1}, "type"),
-        ("read-only world frame", {"world_frame": "map"}, "read-only"),
+        ("rate as text", {"rate_hz": "fast"}, "rate_hz must be a double, got a string ('fast')"),
+        ("substeps as float", {"substeps": 2.5}, "substeps must be an integer, got a double (2.5)"),
+        ("integrator as number", {"integrator": 3}, "integrator must be a string, got an integer (3)"),
+        ("paused as text", {"paused": "yes"}, "paused must be a bool, got a string ('yes')"),
+        ("scene as number", {"scene": 42}, "scene must be a string, got an integer (42)"),
+        ("clock as integer", {"publish_clock": 1}, "publish_clock must be a bool, got an integer (1)"),
+        ("rate as a list", {"rate_hz": [1.0, 2.0]}, "rate_hz must be a double, got a double array"),
+        ("read-only world frame", {"world_frame": "map"}, "world_frame is read-only: set at start-up only"),
+        ("read-only frame prefix", {"frame_prefix": "other/"}, "frame_prefix is read-only: set at start-up only"),
+        ("read-only per-body topics", {"per_body_topics": False}, "per_body_topics is read-only"),
+        ("node-owned body names", {"body_names": ["x"]}, "body_names is read-only: the node sets it"),
         ("undeclared parameter", {"no_such_parameter": 1.0}, "undeclared"),
         # All or nothing: a valid scene and substeps with one bad value change nothing.
         ("valid scene with a bad rate", {"scene": scene_b, "substeps": 4, "rate_hz": -1.0}, "rate_hz"),
@@ -141,6 +145,8 @@ def test_bad_parameters_are_refused_whole_and_change_nothing(tmp_path):
             assert not result.successful, f"{label}: accepted"
             assert phrase in result.reason, f"{label}: reason {result.reason!r} does not mention {phrase!r}"
             assert after == before, f"{label}: the refusal changed something"
+            for rclpy_words in ("Wrong parameter type", "Trying to set a read-only", "Min:", "got 'Type."):
+                assert rclpy_words not in result.reason, f"{label}: rclpy's words in {result.reason!r}"
             refusals.append((label, result.reason))
             node.step(2)
         final = snapshot(node)

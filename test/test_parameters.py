@@ -35,7 +35,7 @@ def test_describe_parameters_from_a_client_shows_every_type_range_and_descriptio
             assert got.name == spec.name
             assert got.type == spec.type.value, spec.name
             assert got.description == spec.description and got.description, spec.name
-            assert got.read_only == spec.read_only, spec.name
+            assert got.read_only == (spec.read_only or spec.node_owned), spec.name
             assert not got.dynamic_typing, spec.name
             if spec.type is Parameter.Type.DOUBLE and spec.range is not None:
                 (r,) = got.floating_point_range
@@ -47,6 +47,17 @@ def test_describe_parameters_from_a_client_shows_every_type_range_and_descriptio
                 assert not got.floating_point_range and not got.integer_range, spec.name
             for choice in spec.choices:
                 assert choice in got.additional_constraints, spec.name
+        # What docs/interface.md says of each parameter is what a client is told.
+        docs = {}
+        for line in (ROOT / "docs" / "interface.md").read_text().splitlines():
+            cells = [cell.strip() for cell in line.strip().strip("|").split("|")]
+            if len(cells) == 6 and cells[0].startswith("`") and cells[0].strip("`") in BY_NAME:
+                docs[cells[0].strip("`")] = cells
+        assert set(docs) == set(names)
+        type_names = {1: "bool", 2: "integer", 3: "double", 4: "string", 9: "string array"}
+        for got in descriptors:
+            assert docs[got.name][1] == type_names[got.type], got.name
+            assert (docs[got.name][4] == "read-only") == got.read_only, got.name
         # Every declared parameter is in the table, but rclpy's own two and the standard
         # qos_overrides of the batch and /clock publishers (issue 15).
         future = harness._parameters.list_parameters()
@@ -120,7 +131,10 @@ def test_the_table_is_complete():
 def test_problem_names_what_was_wrong_and_what_was_expected():
     assert "out of range" in problem("rate_hz", 0.0) and "0.001" in problem("rate_hz", 0.0)
     assert "finite number" in problem("rate_hz", math.inf)
-    assert "whole number" in problem("substeps", 2.5)
+    # Wrong types in the project's words: the parameter, the type given and the type expected.
+    assert problem("substeps", 2.5) == "substeps must be an integer, got a double (2.5): wrong type"
+    assert problem("rate_hz", "fast") == "rate_hz must be a double, got a string ('fast'): wrong type"
+    assert problem("scene", ["a", "b"]) == "scene must be a string, got a string array (['a', 'b']): wrong type"
     assert "one of" in problem("integrator", "RK4")
     assert "bool" in problem("paused", 1)
     assert "not a parameter" in problem("no_such", 1)
@@ -141,3 +155,100 @@ def test_docs_table_is_generated_from_the_table():
     for spec in PARAMETERS:
         assert f"| `{spec.name}` |" in markdown_table()
     assert BY_NAME["world_frame"].read_only
+
+
+@pytest.mark.ros
+def test_a_misspelt_start_up_parameter_is_named_with_the_closest_valid_one(tmp_path):
+    """``rate_hx:=200`` (and a misspelt key in a params file): the node process warns, naming it
+    and ``rate_hz``; valid names, rclpy's own and qos_overrides give no warning."""
+    import time
+
+    from rigid_body_sim.testing import start_process, stop_process
+
+    params_file = tmp_path / "params.yaml"
+    params_file.write_text(yaml.safe_dump({"/**": {"ros__parameters": {"wrench_timout": 1.0, "paused": True}}}))
+    log_path = tmp_path / "node.log"
+    process = start_process(["-p", "rate_hx:=200", "-p", "status_period:=0", "-p", "use_sim_time:=false",
+                             "-p", "qos_overrides./poses.publisher.depth:=3", "-p", "other_node:rate_hy:=1",
+                             "--params-file", str(params_file)], log_path)
+    try:
+        deadline = time.monotonic() + 30.0
+        while "scene " not in log_path.read_text():
+            assert process.poll() is None, log_path.read_text()
+            assert time.monotonic() < deadline, log_path.read_text()
+            time.sleep(0.05)
+    finally:
+        assert stop_process(process) == 0, log_path.read_text()
+    log = log_path.read_text()
+    warnings = [line for line in log.splitlines() if "unknown start-up parameter" in line]
+    assert any("WARN" in line and "'rate_hx'" in line and "did you mean 'rate_hz'?" in line for line in warnings), log
+    assert any("'wrench_timout'" in line and "did you mean 'wrench_timeout'?" in line for line in warnings), log
+    assert len(warnings) == 2, warnings  # not use_sim_time, qos_overrides or another node's rate_hy
+
+
+@pytest.mark.ros
+def test_plain_set_parameters_applies_per_parameter_and_atomically_all_or_nothing():
+    """rclpy's semantics, as docs/interface.md says: set_parameters takes each parameter on its
+    own (a bad one does not stop a good one), set_parameters_atomically all or none."""
+    with SimHarness() as harness:
+        good, bad = harness.set_parameters(wrench_timeout=2.0, rate_hz="fast")
+        assert good.successful and not bad.successful
+        assert bad.reason == "rate_hz must be a double, got a string ('fast'): wrong type"
+        assert harness.get_parameter("wrench_timeout") == 2.0
+        result = harness.set_parameters_atomically(wrench_timeout=3.0, rate_hz="fast")
+        assert not result.successful and "rate_hz must be a double" in result.reason
+        assert harness.get_parameter("wrench_timeout") == 2.0 and harness.get_parameter("rate_hz") == 100.0
+
+
+@pytest.mark.ros
+def test_body_names_is_read_only_to_clients_and_kept_by_the_node():
+    with SimHarness() as harness:
+        (descriptor,) = describe(harness, ["body_names"])
+        assert descriptor.read_only
+        result = harness.set_parameters_atomically(body_names=["x"])
+        assert not result.successful and "body_names is read-only: the node sets it" in result.reason
+        assert harness.get_parameter("body_names") == list(harness.node.simulator.body_names)
+
+
+@pytest.mark.ros
+def test_a_recording_declares_the_qos_that_qos_overrides_give(tmp_path):
+    """With ``qos_overrides./poses.publisher.*`` (and /clock's), the recording's
+    ``offered_qos_profiles`` says what the publishers really offer, as another participant
+    discovers it; topics without overrides keep the default."""
+    import time
+
+    import rclpy
+    from mcap.reader import make_reader
+    from rclpy.context import Context
+    from rclpy.node import Node
+    from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
+
+    path = tmp_path / "overridden.mcap"
+    overrides = {"qos_overrides./poses.publisher.depth": 5,
+                 "qos_overrides./poses.publisher.durability": "volatile",
+                 "qos_overrides./clock.publisher.reliability": "best_effort",
+                 "per_body_topics": False, "record_path": str(path)}
+    with SimHarness(parameters=overrides) as harness:
+        harness.step(3)
+        context = Context()
+        rclpy.init(context=context)
+        try:  # the QoS another participant discovers
+            observer = Node("qos_observer", context=context)
+            deadline = time.monotonic() + 10.0
+            while not observer.get_publishers_info_by_topic("/poses") and time.monotonic() < deadline:
+                harness.spin_for(0.05)
+            (poses_info,) = observer.get_publishers_info_by_topic("/poses")
+            (clock_info,) = observer.get_publishers_info_by_topic("/clock")
+            assert poses_info.qos_profile.durability == DurabilityPolicy.VOLATILE
+            assert clock_info.qos_profile.reliability == ReliabilityPolicy.BEST_EFFORT
+        finally:
+            rclpy.try_shutdown(context=context)
+    with open(path, "rb") as handle:
+        channels = {c.topic: c for c in make_reader(handle).get_summary().channels.values()}
+    declared = {topic: yaml.safe_load(channels[topic].metadata["offered_qos_profiles"])[0]
+                for topic in ("/poses", "/velocities", "/clock")}
+    assert (declared["/poses"]["history"], declared["/poses"]["depth"], declared["/poses"]["reliability"],
+            declared["/poses"]["durability"]) == ("keep_last", 5, "reliable", "volatile")
+    assert (declared["/clock"]["reliability"], declared["/clock"]["durability"]) == ("best_effort", "transient_local")
+    assert (declared["/velocities"]["depth"], declared["/velocities"]["reliability"],
+            declared["/velocities"]["durability"]) == (1, "reliable", "transient_local")

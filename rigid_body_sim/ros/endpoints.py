@@ -7,7 +7,10 @@ needs beyond what exists, without the session's lock; :meth:`BodyEndpoints.commi
 under the lock; :meth:`BodyEndpoints.release` destroys what was replaced, after the lock. The
 ticks so wait only for the swap. :class:`BodyEndpoints` is also the session's edge
 (:class:`~rigid_body_sim.ros.session.BodyIO`): it takes the arrived inputs for a tick and
-publishes (and records) the state after it, with the markers.
+publishes (and records) the state after it, with the markers and, where tf2_msgs is importable,
+``/tf`` (tf.py; its latched ``/tf_static`` is sent again whenever the scene changes).
+
+Every frame id written or accepted carries the node's ``frame_prefix`` (``""``: none).
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ from rclpy.qos import QoSProfile
 from ..core import Scene, Simulator
 from ..core.imu import ImuSample
 from ..offline.recording import McapRecorder
+from .conversions import time_msg_from_seconds
 from .imu import ImuChange, ImuPublishers
 from .inputs import InputChange, WrenchInputs
 from .markers import MarkerPublisher
@@ -28,6 +32,7 @@ from .node_recording import NodeRecording
 from .publishers import PublisherChange, StatePublishers
 from .session import physics_dt
 from .set_state import SetStateChange, SetStateInputs
+from .tf import TF_AVAILABLE, TfPublisher
 
 __all__ = ["BodyEndpoints", "EndpointChange"]
 
@@ -41,6 +46,7 @@ class EndpointChange:
     imus: ImuChange
     set_state: SetStateChange
     keep_state: bool
+    scene: Scene | None = None
 
 
 class BodyEndpoints:
@@ -53,20 +59,26 @@ class BodyEndpoints:
     qos : QoSProfile
         Of subscriptions, IMU and marker publishers (state publishers: publishers.STATE_QOS).
     settings : mapping
-        ``world_frame``, ``per_body_topics``, ``twist_stamped`` (fixed for the node's life).
+        ``world_frame``, ``frame_prefix``, ``per_body_topics``, ``twist_stamped`` (fixed for the node's life).
     recording : NodeRecording
         Where published state, wrenches and IMU samples are recorded (if it records).
     """
 
     def __init__(self, node: Node, qos: QoSProfile, settings: Mapping[str, Any], recording: NodeRecording):
-        world_frame = settings["world_frame"]
-        self.outputs = StatePublishers(node, world_frame, per_body_topics=settings["per_body_topics"],
-                                       twist_stamped=settings["twist_stamped"])
-        self.inputs = WrenchInputs(node, qos, world_frame)
-        self.imus = ImuPublishers(node, qos)
-        self.set_state = SetStateInputs(node, qos, world_frame, self.inputs)
-        self.markers = MarkerPublisher(node, qos, world_frame)
+        world_frame, prefix = settings["world_frame"], settings.get("frame_prefix", "")
+        self._prefix = prefix
+        self.outputs = StatePublishers(node, prefix + world_frame, per_body_topics=settings["per_body_topics"],
+                                       twist_stamped=settings["twist_stamped"], frame_prefix=prefix)
+        self.inputs = WrenchInputs(node, qos, world_frame, prefix)
+        self.imus = ImuPublishers(node, qos, prefix)
+        self.set_state = SetStateInputs(node, qos, world_frame, self.inputs, prefix)
+        self.markers = MarkerPublisher(node, qos, prefix + world_frame)
+        self.tf = TfPublisher(node, world_frame, prefix) if TF_AVAILABLE else None
+        self._tf_scene: Scene | None = None  # the scene whose /tf_static was sent last
+        self._tf_scene_due: Scene | None = None  # a committed scene whose /tf_static is still to send
+        self._tf_time: float | None = None  # sim time of the last /tf message
         self.recording = recording
+        recording.offered_qos = self.outputs.offered_qos()  # qos_overrides applied: what recordings declare
 
     # ------------------------------------------------------------------ prepare / commit / release
 
@@ -76,7 +88,7 @@ class BodyEndpoints:
         IMUs kept their noise state (spawn, delete, odometry on/off); without, all start afresh."""
         return EndpointChange(self.outputs.prepare(scene.body_names, publish_odometry), self.inputs.prepare(scene),
                               self.imus.prepare(scene, keep_state=keep_state),
-                              self.set_state.prepare(scene.body_names), keep_state)
+                              self.set_state.prepare(scene.body_names), keep_state, scene)
 
     def commit(self, change: EndpointChange) -> None:
         """Swap in a prepared change (hold the session's lock)."""
@@ -86,6 +98,8 @@ class BodyEndpoints:
         self.set_state.commit(change.set_state)
         if not change.keep_state:
             self.set_state.clear()
+        if change.scene is not None and change.scene is not self._tf_scene:
+            self._tf_scene_due = change.scene  # sent with the next publish, at the sim time then
 
     def release(self, change: EndpointChange) -> None:
         """Destroy the endpoints ``change`` replaced (after :meth:`commit`, without the lock)."""
@@ -103,7 +117,16 @@ class BodyEndpoints:
     def take_wrenches(self, sim: Simulator, wrench_timeout: float) -> None:
         """Hand held wrenches and pending impulses to ``sim``; record them with the scripted ones."""
         held = self.inputs.apply(sim, wrench_timeout)
-        self.recording.write(lambda recorder: recorder.write_wrenches(sim.time, held + sim.active_scripted_wrenches()))
+        self.recording.write(lambda recorder: recorder.write_wrenches(sim.time, self._prefixed(
+            held + sim.active_scripted_wrenches())))
+
+    def _prefixed(self, wrenches: list[tuple[str, str, Any, Any]]) -> list[tuple[str, str, Any, Any]]:
+        """(body, frame, force, torque) with the frame as the node's inputs name it (``"world"``, the
+        recorder's world frame, is prefixed by it)."""
+        if not self._prefix:
+            return wrenches
+        return [(body, frame if frame == "world" else self._prefix + frame, force, torque)
+                for body, frame, force, torque in wrenches]
 
     def publish_tick(self, sim: Simulator, tick_s: float, settings: Mapping[str, Any]) -> None:
         """Sample and publish the IMUs due, then the state (both recorded if recording)."""
@@ -111,16 +134,34 @@ class BodyEndpoints:
         self.publish(sim, settings)
 
     def publish(self, sim: Simulator, settings: Mapping[str, Any]) -> None:
-        """Publish the state (and /clock), the markers when due, and record the state."""
+        """Publish the state (and /clock), /tf, the markers when due, and record the state."""
         self.outputs.publish(sim, settings["publish_clock"])
+        self._publish_tf(sim)
         self.markers.publish(sim, settings["marker_rate_hz"], lambda: self.inputs.snapshot()[0],
                              settings["marker_force_scale"] if settings["marker_wrenches"] else None)
         if self.recording.recorder is not None:
             self.record_state(sim, settings)
 
     def publish_bodies(self, sim: Simulator) -> None:
-        """Publish the bodies' state only (no /clock, markers or recording)."""
+        """Publish the bodies' state (and their /tf) only (no /clock, markers or recording)."""
         self.outputs.publish(sim, False)
+        self._publish_tf(sim)
+
+    def _publish_tf(self, sim: Simulator) -> None:
+        """/tf_static if the scene changed since it was last sent, then /tf (only while subscribed),
+        never twice at one sim time: tf2 drops a transform at a stamp it has (TF_REPEATED_DATA) and
+        warns, so a republish at the same time (a spawn, a reset_world, a set_state while paused)
+        shows on /tf from the next tick on."""
+        if self.tf is None:
+            return
+        stamp = None
+        if self._tf_scene_due is not None:
+            stamp = time_msg_from_seconds(sim.time)
+            self.tf.set_scene(sim, stamp)
+            self._tf_scene, self._tf_scene_due = self._tf_scene_due, None
+        if sim.time != self._tf_time and self.tf.has_subscribers():
+            self.tf.publish(sim, stamp or time_msg_from_seconds(sim.time))
+            self._tf_time = sim.time
 
     def record_state(self, sim: Simulator, settings: Mapping[str, Any]) -> None:
         """Write the state just published, then /clock: with ``per_body_topics`` false the two

@@ -37,10 +37,10 @@ class ImuChange:
     stale: list[Any]
 
 
-def fill_imu(msg: Imu, sample: ImuSample) -> Imu:
-    """Fill ``msg`` from ``sample`` (frame_id = the site's name ``<body>/<site>``)."""
+def fill_imu(msg: Imu, sample: ImuSample, frame_prefix: str = "") -> Imu:
+    """Fill ``msg`` from ``sample`` (frame_id = ``frame_prefix`` + the site's name ``<body>/<site>``)."""
     msg.header.stamp = time_msg_from_seconds(sample.time)
-    msg.header.frame_id = sample.site
+    msg.header.frame_id = frame_prefix + sample.site
     o = msg.orientation
     if sample.orientation_xyzw is not None:
         o.x, o.y, o.z, o.w = (float(v) for v in sample.orientation_xyzw)
@@ -61,10 +61,13 @@ class ImuPublishers:
     ----------
     node : rclpy.node.Node
     qos : QoSProfile
+    frame_prefix : str
+        In front of every header.frame_id (the node's ``frame_prefix``).
     """
 
-    def __init__(self, node: Node, qos: QoSProfile):
+    def __init__(self, node: Node, qos: QoSProfile, frame_prefix: str = ""):
         self._node = node
+        self._prefix = frame_prefix
         self._qos = qos
         self.bank = ImuBank({})
         self.publishers: dict[str, Any] = {}
@@ -99,6 +102,6 @@ class ImuPublishers:
         for sample in self.bank.sample(sim, tick_s):
             if sample.site.split("/", 1)[0] in stopped:
                 continue
-            self.publishers[sample.site].publish(fill_imu(self._msg, sample))
+            self.publishers[sample.site].publish(fill_imu(self._msg, sample, self._prefix))
             if record is not None:
                 record(sample)

@@ -80,13 +80,17 @@ class WrenchInputs:
     qos : QoSProfile
         Of every subscription.
     world_frame : str
-        The header.frame_id that means the world.
+        The name of the world frame (without the prefix).
+    frame_prefix : str
+        In front of every accepted header.frame_id (the node's ``frame_prefix``): with ``sim1/``,
+        ``sim1/world`` and ``sim1/B/site`` are accepted, ``world`` and ``B/site`` are unknown frames.
     """
 
-    def __init__(self, node: Node, qos: QoSProfile, world_frame: str):
+    def __init__(self, node: Node, qos: QoSProfile, world_frame: str, frame_prefix: str = ""):
         self._node = node
         self._qos = qos
-        self._world_frame = world_frame
+        self._world_frame = frame_prefix + world_frame
+        self._prefix = frame_prefix
         self._lock = threading.Lock()  # guards bodies' frames in use, holds, pending impulses, counters
         self.bodies: dict[str, BodyInputs] = {}
         self.holds: dict[tuple[str, str], _Hold] = {}
@@ -103,7 +107,7 @@ class WrenchInputs:
         bodies: dict[str, BodyInputs] = {}
         for body in sim.body_names:
             frames = {self._world_frame: "world"}
-            frames.update({f: f for f in sim.frames_of(body) if f != "world"})
+            frames.update({self._prefix + f: f for f in sim.frames_of(body) if f != "world"})
             old = self.bodies.get(body)
             if old is not None:
                 bodies[body] = BodyInputs(old.wrench, old.impulse, frames)

@@ -1,6 +1,6 @@
 """``markers`` (visualization_msgs/MarkerArray): the scene's bodies, sites and held wrenches in ``world_frame``.
 
-There is no tf2 on PyPI, so no /tf: every marker is placed in ``world_frame`` directly, and RViz
+Every marker is placed in ``world_frame`` directly (no /tf needed, though the node publishes it), and RViz
 or Foxglove shows the scene with the fixed frame set to it. Per body B (namespace ``B``):
 
 - id 0, its shape from the inertia declaration: ``box: [a, b, c]`` a CUBE of those edges along

@@ -3,8 +3,8 @@
 Every tick the batches ``poses`` and ``velocities`` (all bodies in scene order, batch.py) and, unless
 ``per_body_topics`` is false, per body B (relative names, so namespaces and remaps apply)
 ``B/pose``, ``B/twist``, ``B/odom`` (publishers.py); in ``B/wrench`` and ``B/impulse`` (inputs.py). Also ``/clock``
-each tick, ``/diagnostics`` every ``diagnostics_period`` wall seconds (diagnostics.py), the
-services ``~/reset``, ``~/set_paused`` and ``~/step`` (services.py), and the parameters of
+each tick, ``/tf`` and ``/tf_static`` (tf.py), ``/diagnostics`` every ``diagnostics_period`` wall seconds
+(diagnostics.py), the services ``~/reset``, ``~/reset_world``, ``~/set_paused`` and ``~/step`` (services.py), and the parameters of
 parameters.py. For robot stacks: ``B/S/imu`` per IMU site (imu.py), ``B/set_state``
 (set_state.py), ``~/step_ticks``, ``~/spawn`` and ``~/delete`` (robot_services.py,
 scene_edit.py) and ``markers`` (markers.py). Each physics step advances ``real_time_factor / (rate_hz · substeps)`` s.
@@ -24,7 +24,7 @@ from typing import Any, Iterator
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticArray
-from rcl_interfaces.msg import SetParametersResult
+from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -37,7 +37,7 @@ from .file_access import change_refusal
 from .node_diagnostics import NodeDiagnostics
 from .node_log import StatusLog, log_scene
 from .node_recording import NodeRecording
-from .parameters import BY_NAME, coerce, declare_parameters, problems
+from .parameters import BY_NAME, change_problems, coerce_parameters, declare_parameters, misspelt_parameters
 from .robot_services import create_robot_services
 from .services import create_services
 from .session import MAX_BATCH_ONLY_BODIES, MAX_BODIES, SimSession, build_simulator
@@ -64,8 +64,6 @@ class RigidBodySimNode(Node):
         Call :meth:`start_ticking` at the end of the constructor (default): open the recording,
         publish the initial state, start the tick thread. ``rigid_body_sim_node`` passes False
         and calls it once the executor is set up.
-    on_created : object
-        Accepted and ignored (the entry point of an earlier start-up design still passes it).
 
     Raises
     ------
@@ -75,24 +73,25 @@ class RigidBodySimNode(Node):
         If start-up parameters are invalid (the message says which and what was expected).
     """
 
-    def __init__(self, node_name: str = "rigid_body_sim", *, start_ticking: bool = True, on_created: Any = None,
-                 **kwargs: Any):
+    def __init__(self, node_name: str = "rigid_body_sim", *, start_ticking: bool = True, **kwargs: Any):
         super().__init__(node_name, **kwargs)
         self._tick_loop: TickLoop | None = None  # what destroy_node reads, if construction stops early
         self._pending = threading.local()  # the prepared change of the request being set, per thread
         settings = declare_parameters(self)
+        for warning in misspelt_parameters(self.get_name(), self.get_fully_qualified_name(), kwargs):
+            self.get_logger().warning(warning)
         sim = build_simulator(settings["scene"], settings)
         self._set_body_names(sim.body_names)
         qos = QoSProfile(depth=QUEUE_DEPTH)
         self._endpoints = BodyEndpoints(self, qos, settings, NodeRecording(
-            self.get_logger(), settings["world_frame"], self.get_namespace(), self.get_fully_qualified_name(),
-            settings["record_overwrite"]))
+            self.get_logger(), settings["frame_prefix"] + settings["world_frame"], self.get_namespace(),
+            self.get_fully_qualified_name(), settings["record_overwrite"]))
         self._endpoints.commit(self._endpoints.prepare(sim.scene, settings["publish_odometry"], keep_state=False))
         self._session = SimSession(sim, settings, self._endpoints, self.get_logger(), max_time_s=MAX_ROS_TIME_S,
                                    on_bodies=self._set_body_names,
                                    on_restart=lambda: self._diagnostics.open_window())
         self._service_handles = create_services(self, self._session) + create_robot_services(self, self._session)
-        self.add_pre_set_parameters_callback(self._coerce_parameters)
+        self.add_pre_set_parameters_callback(coerce_parameters)
         self.add_on_set_parameters_callback(self._prepare_change)
         self.add_post_set_parameters_callback(self._apply_change)
 
@@ -116,15 +115,11 @@ class RigidBodySimNode(Node):
         finally:
             self._pending.internal = False
 
-    def _coerce_parameters(self, parameters: list[Parameter]) -> list[Parameter]:
-        """Pre-set: whole numbers for float parameters are floats (``rate_hz:=200`` means 200.0)."""
-        def as_float(param: Parameter) -> Parameter:
-            spec = BY_NAME.get(param.name)
-            if spec is None or spec.type is not Parameter.Type.DOUBLE:
-                return param
-            value = coerce(spec, param.value)
-            return param if value is param.value else Parameter(param.name, Parameter.Type.DOUBLE, value)
-        return [as_float(param) for param in parameters]
+    def describe_parameter(self, name: str) -> ParameterDescriptor:
+        """The table's full descriptor (type, ranges, read-only) for the node's parameters: what
+        ``describe_parameters`` answers. rclpy keeps them dynamically typed (parameters.py says why)."""
+        spec = BY_NAME.get(name)
+        return spec.descriptor() if spec is not None else super().describe_parameter(name)
 
     def _prepare_change(self, parameters: list[Parameter]) -> SetParametersResult:
         """On-set: accept or refuse a whole request with the parameter table, then let the session
@@ -136,7 +131,7 @@ class RigidBodySimNode(Node):
         if stale is not None:  # prepared on this thread, then refused by a later callback: never applied
             self._session.abandon_change(stale)
         values = {p.name: p.value for p in parameters if p.name in BY_NAME}  # the last of a name wins, as in rclpy
-        reason = "; ".join(problems(values))
+        reason = "; ".join(change_problems(values))
         if not reason:  # a peer's scene or record_path only inside scene_dirs / record_dirs (file_access.py)
             reason = change_refusal(values, {**self._session.settings, **values}, self._session.simulator,
                                     self._endpoints.recording) or ""

@@ -33,7 +33,8 @@ from rclpy.serialization import serialize_message
 from ..core import Simulator
 from ..offline.msgdefs import complete_definition
 from ..offline.recording import (BODY_NAMES_KEY, CHUNK_SIZE, METADATA_NAME, SCENE_ATTACHMENT, STATUS_INCOMPLETE,
-                                 STATUS_METADATA_NAME, McapRecorder, channel_metadata, stamp_ns)
+                                 QOS_KEY, STATUS_METADATA_NAME, McapRecorder, channel_metadata, offered_qos_profiles,
+                                 stamp_ns)
 from ..safe_open import open_for_writing
 from .cdr import PoseTwistClockCdr
 from .file_access import RecordTargets
@@ -61,8 +62,14 @@ class FlushingRecorder(McapRecorder):
     """
 
     def __init__(self, path: str | os.PathLike[str], *, world_frame: str = "world", namespace: str = "/",
-                 metadata: Mapping[str, str] | None = None, scene_text: str | None = None):
+                 metadata: Mapping[str, str] | None = None, scene_text: str | None = None,
+                 offered_qos: Mapping[str, tuple[str, int, str, str]] | None = None):
         self.path = Path(path)
+        # ``offered_qos_profiles`` of the topics whose publishers qos_overrides changed (topic names
+        # relative to the namespace, or absolute); every other topic's is the default (topic_qos).
+        prefix = namespace.rstrip("/") + "/"
+        self._offered_qos = {topic if topic.startswith("/") else prefix + topic: {QOS_KEY: offered_qos_profiles(*qos)}
+                             for topic, qos in (offered_qos or {}).items()}
         self.world_frame = world_frame
         self._prefix = namespace.rstrip("/") + "/"
         self._file = open_for_writing(self.path, expected="an .mcap file")
@@ -117,7 +124,7 @@ class FlushingRecorder(McapRecorder):
                 names = {BODY_NAMES_KEY: json.dumps(list(key))}
                 channels = self._batch_channels[key] = tuple(
                     self._writer.register_channel(f"{self._prefix}{topic}", "cdr", self._schema(schema)[0],
-                                                  channel_metadata(f"{self._prefix}{topic}", names))
+                                                  self._metadata(f"{self._prefix}{topic}", names))
                     for topic, schema in (("poses", "geometry_msgs/msg/PoseArray"),
                                           ("velocities", "sensor_msgs/msg/PointCloud2")))
             self._batch_names, self._batch_ids = body_names, channels
@@ -149,8 +156,12 @@ class FlushingRecorder(McapRecorder):
             if self._file is None:
                 raise ValueError(f"recording {self.path} is closed")
             channel = self._channel_ids[topic] = self._writer.register_channel(topic, "cdr", self._schema(schema)[0],
-                                                                               channel_metadata(topic))
+                                                                               self._metadata(topic))
         self._add(channel, data, ns)
+
+    def _metadata(self, topic: str, extra: Mapping[str, str] | None = None) -> dict[str, str]:
+        """``topic``'s channel metadata, with the QoS its publisher really offers."""
+        return channel_metadata(topic, {**(extra or {}), **self._offered_qos.get(topic, {})})
 
     def _add(self, channel: int, data: bytes, ns: int) -> None:
         if self._file is None:
@@ -190,6 +201,9 @@ class NodeRecording:
         self._node_name = node_name
         self.recorder: McapRecorder | None = None
         self.targets = RecordTargets(overwrite)
+        #: (history, depth, reliability, durability) by topic of the publishers whose QoS
+        #: qos_overrides may change (StatePublishers.offered_qos), declared in each recording.
+        self.offered_qos: Mapping[str, tuple[str, int, str, str]] = {}
 
     def open(self, path: str, sim: Simulator, *, dt: float | None = None, integrator: str | None = None) -> McapRecorder:
         """A new recorder at ``path`` for ``sim`` (not yet the current one).
@@ -208,7 +222,8 @@ class NodeRecording:
         recorder = FlushingRecorder(
             path, world_frame=self._world_frame, namespace=self._namespace, scene_text=scene_text,
             metadata={"scene": str(sim.scene.source), "integrator": integrator or sim.integrator,
-                      "dt": repr(sim.dt if dt is None else dt), "node": self._node_name})
+                      "dt": repr(sim.dt if dt is None else dt), "node": self._node_name},
+            offered_qos=self.offered_qos)
         self._logger.info(f"recording to {path}")
         return recorder
 

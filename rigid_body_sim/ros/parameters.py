@@ -15,6 +15,8 @@ value is acceptable.
 
 from __future__ import annotations
 
+import array
+import difflib
 import json
 import math
 import sys
@@ -37,12 +39,15 @@ __all__ = [
     "BY_NAME",
     "NODE_NAME",
     "coerce",
+    "coerce_parameters",
     "declare_parameters",
     "namespace_problem",
     "MIN_DIAGNOSTICS_PERIOD_S",
     "MAX_MARKER_RATE_HZ",
     "problem",
     "problems",
+    "change_problems",
+    "misspelt_parameters",
     "params_yaml",
     "markdown_table",
 ]
@@ -132,7 +137,7 @@ class ParameterSpec:
         """The full ParameterDescriptor: type, description, constraints, range, read_only."""
         descriptor = ParameterDescriptor(name=self.name, type=self.type.value, description=self.description,
                                          additional_constraints=self.additional_constraints(),
-                                         read_only=self.read_only, dynamic_typing=False)
+                                         read_only=self.read_only or self.node_owned, dynamic_typing=False)
         if self.range is not None and self.type is Parameter.Type.DOUBLE:
             descriptor.floating_point_range = [FloatingPointRange(from_value=float(self.range[0]),
                                                                   to_value=float(self.range[1]), step=0.0)]
@@ -189,6 +194,12 @@ def _check_world_frame(value: str) -> str | None:
     return None
 
 
+def _check_frame_prefix(value: str) -> str | None:
+    if any(c.isspace() for c in value) or value.startswith("/"):
+        return f"frame_prefix must be '' or a frame-name prefix without spaces or a leading '/' (e.g. 'robot1/'), got {value!r}"
+    return None
+
+
 def _check_record_path(value: str) -> str | None:
     # Only the text here: the file system is looked at once the path is known to be inside
     # record_dirs (file_access.py), so a refusal never tells whether a path elsewhere exists.
@@ -222,6 +233,13 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec("world_frame", _T.STRING, "world",
                   "frame_id of the world: header.frame_id of poses, and of wrenches given in world axes.",
                   read_only=True, constraints="no '/' or spaces", check=_check_world_frame,
+                  takes_effect="start-up only"),
+    ParameterSpec("frame_prefix", _T.STRING, "",
+                  "Put in front of every frame id the node writes (headers of poses, batches, odometry, IMU, "
+                  "markers; child frames; /tf and /tf_static) and expects in wrench, impulse and set_state "
+                  "headers, as robot_state_publisher's frame_prefix: 'sim1/' makes the world 'sim1/world' and "
+                  "body B 'sim1/B'.",
+                  read_only=True, constraints="no spaces or leading '/'", check=_check_frame_prefix,
                   takes_effect="start-up only"),
     ParameterSpec("publish_clock", _T.BOOL, True, "Publish /clock (rosgraph_msgs/Clock) with sim time every tick."),
     ParameterSpec("publish_odometry", _T.BOOL, False,
@@ -292,6 +310,17 @@ def coerce(spec: ParameterSpec, value: Any) -> Any:
     return value
 
 
+def coerce_parameters(parameters: list[Parameter]) -> list[Parameter]:
+    """The node's pre-set callback: whole numbers for float parameters are floats (``rate_hz:=200`` means 200.0)."""
+    def as_float(param: Parameter) -> Parameter:
+        spec = BY_NAME.get(param.name)
+        if spec is None or spec.type is not Parameter.Type.DOUBLE:
+            return param
+        value = coerce(spec, param.value)
+        return param if value is param.value else Parameter(param.name, Parameter.Type.DOUBLE, value)
+    return [as_float(param) for param in parameters]
+
+
 def problem(name: str, value: Any) -> str | None:
     """Why ``value`` is not acceptable for parameter ``name`` (type, finiteness, range, choices,
     constraints), or None. Call it with coerced values (:func:`coerce`)."""
@@ -301,15 +330,12 @@ def problem(name: str, value: Any) -> str | None:
     if spec.node_owned:
         return (f"{name} is read-only: the node sets it (the scene's body names in scene order); "
                 f"got a request to set it to {value!r}")
-    ok_type = {
-        Parameter.Type.BOOL: isinstance(value, bool),
-        Parameter.Type.INTEGER: isinstance(value, int) and not isinstance(value, bool),
-        Parameter.Type.DOUBLE: isinstance(value, float) and math.isfinite(value),
-        Parameter.Type.STRING: isinstance(value, str),
-        Parameter.Type.STRING_ARRAY: isinstance(value, (list, tuple)) and all(isinstance(v, str) for v in value),
-    }[spec.type]
-    if not ok_type:
-        return f"{name} must be {spec.expected()}; got {value!r} ({type(value).__name__})"
+    given = _type_name_of(value)
+    if given != _TYPE_NAMES[spec.type]:
+        shown = value.tolist() if isinstance(value, array.array) else value
+        return f"{name} must be {_with_article(_TYPE_NAMES[spec.type])}, got {_with_article(given)} ({shown!r}): wrong type"
+    if spec.type is Parameter.Type.DOUBLE and not math.isfinite(value):
+        return f"{name} must be a finite double, {spec.expected()}; got {value!r}"
     if spec.range is not None and not spec.range[0] <= value <= spec.range[1]:
         return f"{name} out of range: must be {spec.expected()}; got {value!r}"
     if spec.choices and value not in spec.choices:
@@ -317,6 +343,40 @@ def problem(name: str, value: Any) -> str | None:
     if spec.check is not None:
         return spec.check(value)
     return None
+
+
+def _type_name_of(value: Any) -> str:
+    """The ROS parameter type of a Python value, in the words of :data:`_TYPE_NAMES`."""
+    if value is None:
+        return "unset value"
+    if isinstance(value, bool):
+        return "bool"
+    if isinstance(value, int):
+        return "integer"
+    if isinstance(value, float):
+        return "double"
+    if isinstance(value, str):
+        return "string"
+    if isinstance(value, (bytes, bytearray)) or (isinstance(value, (list, tuple)) and value
+                                                 and all(isinstance(v, bytes) for v in value)):
+        return "byte array"
+    if isinstance(value, array.array):
+        return "double array" if value.typecode in "fd" else "integer array"
+    if isinstance(value, (list, tuple)):
+        kinds = {_type_name_of(v) for v in value}
+        return f"{kinds.pop()} array" if len(kinds) == 1 else ("string array" if not value else "mixed array")
+    return type(value).__name__
+
+
+def _with_article(words: str) -> str:
+    return f"{'an' if words[0] in 'aeiou' else 'a'} {words}"
+
+
+def change_problems(values: Mapping[str, Any]) -> list[str]:
+    """:func:`problems` of a change at run time, read-only parameters refused first."""
+    read_only = [f"{name} is read-only: set at start-up only (--ros-args -p {name}:=...); got a request to set "
+                 f"it to {values[name]!r}" for name in values if name in BY_NAME and BY_NAME[name].read_only]
+    return read_only + problems(values)
 
 
 def problems(values: Mapping[str, Any]) -> list[str]:
@@ -344,10 +404,13 @@ def declare_parameters(node: Node) -> dict[str, Any]:
     """Declare every parameter of :data:`PARAMETERS` on ``node`` with its full descriptor; return
     the start-up values (overrides from ``--ros-args``, params files or ``parameter_overrides``).
 
-    Each parameter is first declared dynamically typed, so that a whole number given for a
-    float parameter (``-p rate_hz:=200``, or ``rate_hz: 200`` in a params file) is accepted and
-    converted, and so that every bad start-up value is reported at once in this module's words;
-    then :meth:`rclpy.node.Node.set_descriptor` gives it its full, statically typed descriptor.
+    Each parameter is declared dynamically typed, without ranges and writable, so that a whole
+    number given for a float parameter (``-p rate_hz:=200``, or ``rate_hz: 200`` in a params
+    file) is accepted and converted, and so that every refusal, at start-up or later (wrong type,
+    out of range, read-only), is this module's, in its words (the node's on-set callback checks
+    every change with :func:`change_problems`). What clients are told is the full, statically
+    typed descriptor (:meth:`ParameterSpec.descriptor`): the node answers ``describe_parameters``
+    with it.
 
     Raises
     ------
@@ -358,7 +421,8 @@ def declare_parameters(node: Node) -> dict[str, Any]:
     reasons = [namespace_problem(node.get_namespace())]
     for spec in PARAMETERS:
         if spec.node_owned:  # declared without a value; an override from outside is refused
-            declared = node.declare_parameter(spec.name, spec.type, spec.descriptor())
+            declared = node.declare_parameter(spec.name, spec.type, ParameterDescriptor(
+                description=spec.description, type=spec.type.value))
             if declared.type_ is not Parameter.Type.NOT_SET:
                 reasons.append(problem(spec.name, declared.value))
             continue
@@ -372,12 +436,73 @@ def declare_parameters(node: Node) -> dict[str, Any]:
             reasons.append(f"record_path rejected: {unwritable}")
     if reasons:
         raise ValueError("; ".join(reasons))
-    for spec in PARAMETERS:
-        if spec.node_owned:
-            continue
-        value = Parameter(spec.name, spec.type, values[spec.name]).get_parameter_value()
-        node.set_descriptor(spec.name, spec.descriptor(), alternative_value=value)
+    whole = [Parameter(spec.name, spec.type, values[spec.name]) for spec in PARAMETERS
+             if spec.type is Parameter.Type.DOUBLE and type(node.get_parameter(spec.name).value) is not float]
+    if whole:  # stored as given; the node's value is the float (before its callbacks are added)
+        node.set_parameters(whole)
     return values
+
+
+#: Parameters every rclpy node has besides the table's.
+_ROS_PARAMETERS = ("use_sim_time", "start_type_description_service")
+
+
+def misspelt_parameters(node_name: str, fully_qualified_name: str, node_kwargs: Mapping[str, Any]) -> list[str]:
+    """A warning for every start-up parameter given to this node that it does not have, naming the
+    closest valid one (:mod:`difflib`): ``rate_hx:=200`` → ``rate_hz``.
+
+    Read are the arguments the node reads (``-p [node:]name:=value`` and ``--params-file FILE``
+    inside ``--ros-args``: its ``cli_args`` and, unless ``use_global_arguments`` is false, the
+    process's) and its ``parameter_overrides`` (``node_kwargs``: the keyword arguments of
+    :class:`rclpy.node.Node`). ``qos_overrides.*`` and rclpy's own parameters are valid.
+    """
+    args = list(node_kwargs.get("cli_args") or []) + (sys.argv if node_kwargs.get("use_global_arguments", True)
+                                                        else [])
+    targets = {node_name, fully_qualified_name, fully_qualified_name.lstrip("/"), "/**", "**"}
+    names: list[str] = [param.name for param in node_kwargs.get("parameter_overrides") or ()]
+    in_ros, items = False, iter(args)
+    for arg in items:
+        if arg in ("--ros-args", "--"):
+            in_ros = arg == "--ros-args"
+        elif in_ros and arg in ("-p", "--param"):
+            target, sep, name = next(items, "").split(":=", 1)[0].rpartition(":")
+            if not sep or target in targets:
+                names.append(name)
+        elif in_ros and arg == "--params-file":
+            names += _params_file_names(next(items, ""), targets)
+    warnings = []
+    for name in dict.fromkeys(names):
+        if name in BY_NAME or name in _ROS_PARAMETERS or name.startswith("qos_overrides."):
+            continue
+        close = difflib.get_close_matches(name, list(BY_NAME) + list(_ROS_PARAMETERS), n=1, cutoff=0.6)
+        hint = f"did you mean {close[0]!r}?" if close else f"this node's parameters are {list(BY_NAME)}"
+        warnings.append(f"unknown start-up parameter {name!r} ignored: {hint}")
+    return warnings
+
+
+def _params_file_names(path: str, targets: set[str]) -> list[str]:
+    """Parameter names a ROS 2 params file gives any of ``targets`` (nothing if it cannot be read:
+    rcl reports that file itself)."""
+    try:
+        import yaml
+
+        with open(path, encoding="utf-8") as handle:
+            data = yaml.safe_load(handle)
+    except (OSError, ValueError, ImportError):
+        return []
+    names: list[str] = []
+    for key, section in (data or {}).items() if isinstance(data, dict) else ():
+        if str(key) in targets and isinstance(section, dict) and isinstance(section.get("ros__parameters"), dict):
+            names += _flatten(section["ros__parameters"])
+    return names
+
+
+def _flatten(tree: dict, prefix: str = "") -> list[str]:
+    names: list[str] = []
+    for key, value in tree.items():
+        name = f"{prefix}{key}"
+        names += _flatten(value, name + ".") if isinstance(value, dict) else [name]
+    return names
 
 
 # ---------------------------------------------------------------------- generated documents

@@ -100,8 +100,10 @@ class StatePublishers:
         If a ``qos_overrides`` parameter is not a valid policy value.
     """
 
-    def __init__(self, node: Node, world_frame: str, *, per_body_topics: bool = True, twist_stamped: bool = False):
+    def __init__(self, node: Node, world_frame: str, *, per_body_topics: bool = True, twist_stamped: bool = False,
+                 frame_prefix: str = ""):
         self._node = node
+        self._prefix = frame_prefix  # in front of odometry's child_frame_id (world_frame comes with it)
         self._qos = STATE_QOS
         self._world_frame = world_frame
         self.per_body_topics = per_body_topics
@@ -128,6 +130,14 @@ class StatePublishers:
         except (InvalidQosOverridesError, RuntimeError, ValueError) as exc:
             raise ValueError(f"qos_overrides for {topic!r} rejected: {exc}; expected history keep_last|keep_all, "
                              "depth >= 1, reliability reliable|best_effort, durability volatile|transient_local") from exc
+
+    def offered_qos(self) -> dict[str, tuple[str, int, str, str]]:
+        """(history, depth, reliability, durability) the publishers of :data:`OVERRIDABLE_TOPICS` really
+        offer, ``qos_overrides`` applied (what a recording declares in ``offered_qos_profiles``)."""
+        def policies(qos: QoSProfile) -> tuple[str, int, str, str]:
+            return qos.history.name.lower(), int(qos.depth), qos.reliability.name.lower(), qos.durability.name.lower()
+        return {topic: policies(pub.qos_profile) for topic, pub in
+                zip(OVERRIDABLE_TOPICS, (self._poses_pub, self._velocities_pub, self._clock_pub))}
 
     def _make_cdr(self) -> PoseTwistClockCdr | None:
         """The CDR serializer for pose, twist and /clock, or None (publish message objects) if it
@@ -308,6 +318,6 @@ class StatePublishers:
                     pubs.twist.publish(fill_twist(pubs.twist_msg, velocities[index], rates_world[index]))
             if pubs.odom is not None:
                 state = sim.body_state(body)
-                pubs.odom.publish(fill_odometry(pubs.odom_msg, stamp, world, body, state.position_world,
+                pubs.odom.publish(fill_odometry(pubs.odom_msg, stamp, world, self._prefix + body, state.position_world,
                                                 state.orientation_xyzw, state.linear_velocity_body,
                                                 state.angular_velocity_body))

@@ -1,7 +1,10 @@
 """The node's services (relative to the node's name):
 
 ``~/reset`` (std_srvs/Trigger)
-    Back to the scene's initial state at t = 0; held wrenches and pending impulses dropped.
+    Back to the scene's initial state at t = 0 (``/clock`` too); held wrenches and pending impulses dropped.
+``~/reset_world`` (std_srvs/Trigger)
+    The bodies back to the scene's initial state while sim time goes on (as Gazebo's
+    reset_world: ``/clock`` does not go back); held wrenches and pending impulses dropped.
 ``~/set_paused`` (std_srvs/SetBool)
     Sets the ``paused`` parameter (through the parameter machinery, so it is validated and
     announced on /parameter_events like any other change).
@@ -10,7 +13,7 @@
 
 Each handler is a few lines over a method of the node's :class:`~rigid_body_sim.ros.session.SimSession`,
 which does the work under its lock; a tick (or another request) that keeps the simulator longer
-than ``BUSY_WAIT_S`` (session.py) makes ``~/reset`` and ``~/step`` refuse, saying which and for
+than ``BUSY_WAIT_S`` (session.py) makes ``~/reset``, ``~/reset_world`` and ``~/step`` refuse, saying which and for
 how long, rather than wait.
 """
 
@@ -32,6 +35,10 @@ def create_services(node: Node, session: SimSession) -> list:
         response.success, response.message = session.reset()
         return response
 
+    def on_reset_world(_request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
+        response.success, response.message = session.reset_world()
+        return response
+
     def on_set_paused(request: SetBool.Request, response: SetBool.Response) -> SetBool.Response:
         result = node.set_parameters([Parameter("paused", Parameter.Type.BOOL, bool(request.data))])[0]
         response.success = result.successful
@@ -44,6 +51,7 @@ def create_services(node: Node, session: SimSession) -> list:
 
     return [
         node.create_service(Trigger, "~/reset", on_reset),
+        node.create_service(Trigger, "~/reset_world", on_reset_world),
         node.create_service(SetBool, "~/set_paused", on_set_paused),
         node.create_service(Trigger, "~/step", on_step),
     ]

@@ -4,7 +4,7 @@ Nothing here knows ROS (no rclpy, no message types): what a session does at its 
 wrenches and set_states that arrived, publish and record the state, make and destroy per-body
 endpoints) goes through one object with the :class:`BodyIO` methods, which the node gives as
 its :class:`~rigid_body_sim.ros.endpoints.BodyEndpoints` and a test as a plain recorder. So the
-tick, ``~/step``, ``~/step_ticks``, ``~/reset``, ``~/spawn`` and ``~/delete`` can be run and
+tick, ``~/step``, ``~/step_ticks``, ``~/reset``, ``~/reset_world``, ``~/spawn`` and ``~/delete`` can be run and
 checked without DDS (test/test_session.py).
 
 One re-entrant lock (:class:`SessionLock`) guards the simulator, the settings and the fault
@@ -410,6 +410,24 @@ class SimSession:
         except SessionBusy as busy:
             return False, f"refused: {busy}"
         return True, "reset to the scene's initial state at t = 0 s; held wrenches cleared"
+
+    def reset_world(self) -> tuple[bool, str]:
+        """``~/reset_world`` (as Gazebo's): every body back to the scene's initial pose and twist while
+        sim time goes on (/clock does not go back); holds, pending impulses and set_states dropped,
+        IMUs afresh, published; (success, message). A body stopped for a non-finite state stays
+        stopped, and a fault stays (time did not go back): ``~/reset`` restarts both."""
+        try:
+            with self.busy_or_locked(holder="~/reset_world"):
+                sim = self.simulator.with_scene(self.simulator.scene)  # same time, step count, dt, integrator
+                sim.state = sim.scene.initial_state
+                sim.model_reduction = sim.model_reduction  # re-derives each body's model from that state
+                self.simulator = sim
+                self._io.commit(self._io.prepare(sim.scene, self.settings["publish_odometry"], keep_state=False))
+                self._io.publish(sim, self.settings)
+                time_s = sim.time
+        except SessionBusy as busy:
+            return False, f"refused: {busy}"
+        return True, f"bodies back to the scene's initial state; sim time goes on at t = {time_s:.9f} s"
 
     def edit(self, spawn: Mapping[str, str], delete: list[str]) -> tuple[bool, str]:
         """``~/spawn`` and ``~/delete``: add bodies (name → definition in the scene file's YAML form)

@@ -92,14 +92,19 @@ class SetStateInputs:
     node : rclpy.node.Node
     qos : QoSProfile
     world_frame : str
+        Without the prefix.
     inputs : WrenchInputs
         Whose counters (accepted, rejected by reason; ``/diagnostics``) count these messages too.
+    frame_prefix : str
+        In front of the accepted frame ids (the node's ``frame_prefix``): ``header.frame_id`` must be
+        the prefixed world frame, ``child_frame_id`` the prefixed body name or world frame.
     """
 
-    def __init__(self, node: Node, qos: QoSProfile, world_frame: str, inputs: Any):
+    def __init__(self, node: Node, qos: QoSProfile, world_frame: str, inputs: Any, frame_prefix: str = ""):
         self._node = node
         self._qos = qos
-        self._world_frame = world_frame
+        self._world_frame = frame_prefix + world_frame
+        self._prefix = frame_prefix
         self._inputs = inputs
         self._lock = threading.Lock()
         self.subscriptions: dict[str, Any] = {}
@@ -129,7 +134,7 @@ class SetStateInputs:
     def on_set_state(self, body: str, msg: Odometry) -> None:
         """``<body>/set_state``: validate, then keep it for the next tick (replacing an earlier one)."""
         try:
-            state = state_from_odometry(msg, body, self._world_frame)
+            state = state_from_odometry(msg, self._prefix + body, self._world_frame)
         except RejectedMessage as rejection:
             self._inputs.count_rejection(body, "set_state", rejection)
             return

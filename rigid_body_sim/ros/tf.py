@@ -102,6 +102,10 @@ class TfPublisher:
                 statics.append(_transform(self._body_frames[body], child, stamp, p_B, (0.0, 0.0, 0.0, 1.0)))
         self._tf_static.publish(TFMessage(transforms=statics))
 
+    def has_subscribers(self) -> bool:
+        """Whether anybody subscribes to /tf (else :meth:`publish` sends nothing; build no stamp for it)."""
+        return self._tf.get_subscription_count() > 0
+
     def publish(self, sim: Any, stamp: Any) -> bool:
         """Send every moving frame's transform at ``stamp`` on /tf; nothing while nobody subscribes.
 
