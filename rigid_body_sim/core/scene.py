@@ -81,9 +81,8 @@ from .quaternion import (
 from .scene_yaml import YamlReadError, key_text, read_yaml
 
 # --- contact (core/contact/scene_keys.py): the keys ground, material, collision -----------------
-from .contact.scene_keys import BODY_KEYS as CONTACT_BODY_KEYS
 from .contact.scene_keys import TOP_KEYS as CONTACT_TOP_KEYS
-from .contact.scene_keys import ContactSpec, read_contact
+from .contact.scene_keys import ContactSpec, read_contact, without_contact_keys
 # --- end contact
 
 __all__ = ["Scene", "SceneError", "ScriptedWrench", "load_scene", "load_scene_text", "WORLD_FRAME",
@@ -130,7 +129,7 @@ _RESERVED_SITE_NAMES = {"world_aligned"}
 _INERTIA_KINDS = ("box", "sphere", "cylinder", "principal", "tensor")
 _TOP_KEYS = ("gravity", "bodies", "wrenches", "energy_growth_limit") + CONTACT_TOP_KEYS  # contact: ground
 _WRENCH_KEYS = ("body", "frame", "force", "torque", "start", "duration")
-_BODY_KEYS = ("mass", "inertia", "pose", "twist", "damping", "sites", "motion") + CONTACT_BODY_KEYS  # contact
+_BODY_KEYS = ("mass", "inertia", "pose", "twist", "damping", "sites", "motion")
 _IDENTITY = (1.0, 0.0, 0.0, 0.0)
 _PLAIN_NUMBERS = frozenset((float, int))
 _NO_KEY = object()  # _show: an item of a list, not of a mapping
@@ -482,7 +481,7 @@ def _read_body(check: _Checker, index: int, raw_name: Any, raw_body: Any, out: _
     """Check one body of the ``bodies`` mapping and append what it declares to ``out``."""
     name = check.name(raw_name, "bodies", _RESERVED_BODY_NAMES)
     path = f"bodies.{name}"
-    body = check.mapping(raw_body, path, _BODY_KEYS, required=("mass", "inertia"))
+    body = check.mapping(without_contact_keys(raw_body), path, _BODY_KEYS, required=("mass", "inertia"))  # contact
     mass = check.number(body["mass"], f"{path}.mass", minimum=0.0, strict=True, scale=True, unit="kg")
     principal, q_BP, inertia_path = _inertia(check, body["inertia"], f"{path}.inertia", mass)
 

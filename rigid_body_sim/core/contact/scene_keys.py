@@ -55,7 +55,7 @@ from .layout import (
     SHAPE_WIDTH,
 )
 
-__all__ = ["ContactSpec", "read_contact", "pair_material", "DEFAULT_RESTITUTION", "DEFAULT_FRICTION",
+__all__ = ["ContactSpec", "read_contact", "without_contact_keys", "pair_material", "DEFAULT_RESTITUTION", "DEFAULT_FRICTION",
            "MAX_GROUNDS", "BODY_KEYS", "TOP_KEYS"]
 
 #: Restitution and friction of a pair where neither side declares a material.
@@ -103,6 +103,18 @@ def pair_material(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
     if not b[HAS_MATERIAL]:
         b = a
     return max(float(a[RESTITUTION]), float(b[RESTITUTION])), math.sqrt(float(a[FRICTION]) * float(b[FRICTION]))
+
+
+def without_contact_keys(body: Any) -> Any:
+    """A body mapping without the keys read here (scene.py checks the rest against its own list).
+
+    scene.py's unknown-key message lists only its own body keys, which a test pins; the keys
+    of this module are read and checked by :func:`read_contact`. Anything not a mapping is
+    returned as it is, for scene.py to refuse.
+    """
+    if not isinstance(body, Mapping) or not any(key in body for key in BODY_KEYS):
+        return body
+    return {key: value for key, value in body.items() if key not in BODY_KEYS}
 
 
 def _material(check: Any, value: Any, path: str, row: np.ndarray) -> None:
