@@ -1,0 +1,180 @@
+"""Compiled persistent contact: the force that holds a body on the ground, and the projection onto the contact.
+
+A body at rest on the ground (or sliding, or rolling on it) is held by contact forces found at
+the acceleration level at the start of each step: with a_c the acceleration of each contact
+point under everything else (gravity, applied and scripted wrenches, the gyroscopic term —
+dynamics.derivative), the normal forces f_n ≥ 0 make the normal accelerations ≥ 0 with
+f_n a_n = 0; friction is −μ f_n ŝ along the slip ŝ while the contact slides, and otherwise
+whatever keeps the tangential acceleration zero inside the cone |f_t| ≤ μ f_n (projected
+Gauss–Seidel, impacts.pgs, on the same contact rows as the impact law). The force is added to
+the step's wrench rows (world axes at the centre of mass, forces.add_wrench), so every
+integrator stage sees it and the site readings see it (a resting IMU reads +g up).
+
+After the step, :func:`project` puts the body back onto the contact exactly: the centre of mass
+moved along n by the mean gap, and the normal (and, while sticking, tangential) velocity of the
+contact points removed by the smallest impulse in the body's mass metric. No Baumgarte term,
+no compliance: the gap and normal velocity are zero to round-off, and the projection never adds
+energy (it removes a velocity component in the mass metric).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ..dynamics import derivative
+from ..layout import INV_INERTIA, INV_MASS, P, Q, STATE_WIDTH, V, W
+from ..rotation import rotate
+from .impacts import _A, _ANG, _B, _LAM, _LIN, apply_impulses, build_rows, pgs
+
+__all__ = ["LIFT_OFF", "STICK", "SLIDE", "accelerations", "normal_motion", "holding_wrench", "project",
+           "slip_velocity"]
+
+_OPTS = {"cache": True, "nogil": True, "error_model": "numpy"}
+
+#: What :func:`holding_wrench` found the contact doing.
+LIFT_OFF, STICK, SLIDE = 0, 1, 2
+
+
+@njit(**_OPTS)
+def slip_velocity(work, count):
+    """Mean tangential velocity (along t1, t2) of the contact points, from the rows' b column (velocities)."""
+    sx = 0.0
+    sy = 0.0
+    for c in range(count):
+        sx += work[3 * c + 1, _B]
+        sy += work[3 * c + 2, _B]
+    return sx / count, sy / count
+
+
+@njit(**_OPTS)
+def accelerations(y, p, w, count, rows, points, vertex, work, d):
+    """work[:, B] ← the rows' components of the contact points' accelerations without contact force.
+
+    a_c = a + α × r (+ ω × (ω × r) when the contact points are ``vertex`` es, fixed in the body:
+    box corners) from dynamics.derivative at y under the wrench row ``w`` (gravity, applied
+    and scripted wrenches, damping, the gyroscopic term); ``d`` is a 13-float scratch. On a
+    curved surface (sphere, the round side of a cylinder or capsule) the contact point moves
+    over the body as it rolls, and the surface's curvature cancels the centripetal term in the
+    gap's second derivative (exactly for a sphere: gap = n·c − r, so g̈ = n·a), so it is left out.
+    The rows (build_rows) must be built for y.
+    """
+    derivative(y, p, w, d)
+    qw, qx, qy, qz = y[Q], y[Q + 1], y[Q + 2], y[Q + 3]
+    ox, oy, oz = rotate(qw, qx, qy, qz, y[W], y[W + 1], y[W + 2])  # ω_W
+    for c in range(count):
+        rx, ry, rz = points[c, 0] - y[P], points[c, 1] - y[P + 1], points[c, 2] - y[P + 2]
+        wrx, wry, wrz = oy * rz - oz * ry, oz * rx - ox * rz, ox * ry - oy * rx  # ω × r
+        cx, cy, cz = oy * wrz - oz * wry, oz * wrx - ox * wrz, ox * wry - oy * wrx  # ω × (ω × r)
+        if not vertex:
+            cx = cy = cz = 0.0
+        for k in range(3):
+            a = 3 * c + k
+            lx, ly, lz = work[a, _LIN], work[a, _LIN + 1], work[a, _LIN + 2]
+            # d·(α × r) = α·(r × d) = α_P·ang_P
+            work[a, _B] = (lx * (d[V] + cx) + ly * (d[V + 1] + cy) + lz * (d[V + 2] + cz)
+                           + work[a, _ANG] * d[W] + work[a, _ANG + 1] * d[W + 1] + work[a, _ANG + 2] * d[W + 2])
+    _pin = y[P], p[0], w[0], d[0], points[0, 0]
+
+
+@njit(**_OPTS)
+def normal_motion(y, p, w, count, points, nx, ny, nz, vertex, work, d):
+    """(lowest normal velocity of the contact points, m/s; its free normal acceleration, m/s²; mean slip t1, t2)."""
+    rows = build_rows(y, p, count, points, nx, ny, nz, work)
+    sx, sy = slip_velocity(work, count)
+    lowest = math.inf
+    which = 0
+    for c in range(count):
+        if work[3 * c, _B] < lowest:
+            lowest = work[3 * c, _B]
+            which = c
+    accelerations(y, p, w, count, rows, points, vertex, work, d)
+    return lowest, work[3 * which, _B], sx, sy
+
+
+@njit(**_OPTS)
+def holding_wrench(y, p, w, count, points, nx, ny, nz, mu, slip_tolerance, vertex, work, d, out):
+    """out[0:6] ← the contact force (N, world) at the centre of mass and its moment (N·m, world axes).
+
+    ``w`` is the step's wrench row without contact, ``d`` a 13-float scratch. Returns
+    (mode, Σ f_n, ŝ1, ŝ2): LIFT_OFF (every f_n is zero: the body leaves), STICK or SLIDE, and
+    the slip direction along (t1, t2) used while sliding (zeros otherwise, and always when
+    μ = 0: a frictionless contact slides, never sticks).
+    """
+    rows = build_rows(y, p, count, points, nx, ny, nz, work)
+    vx, vy = slip_velocity(work, count)
+    slip = math.sqrt(vx * vx + vy * vy)
+    accelerations(y, p, w, count, rows, points, vertex, work, d)
+    for a in range(rows):
+        work[a, _LAM] = 0.0
+    qw, qx, qy, qz = y[Q], y[Q + 1], y[Q + 2], y[Q + 3]
+    sx = sy = 0.0
+    mode = STICK
+    if mu == 0.0:
+        mode = SLIDE
+    elif slip > slip_tolerance:
+        sx, sy = vx / slip, vy / slip
+        mode = SLIDE
+    pgs(work, count, mu, sx, sy)
+    normal = 0.0
+    for c in range(count):
+        normal += work[3 * c, _LAM]
+    if normal <= 0.0:
+        mode = LIFT_OFF
+    fx = fy = fz = 0.0
+    hx = hy = hz = 0.0
+    for a in range(rows):
+        lam = work[a, _LAM]
+        fx += work[a, _LIN] * lam
+        fy += work[a, _LIN + 1] * lam
+        fz += work[a, _LIN + 2] * lam
+        hx += work[a, _ANG] * lam
+        hy += work[a, _ANG + 1] * lam
+        hz += work[a, _ANG + 2] * lam
+    tx, ty, tz = rotate(qw, qx, qy, qz, hx, hy, hz)
+    out[0], out[1], out[2], out[3], out[4], out[5] = fx, fy, fz, tx, ty, tz
+    _pin = y[P], p[0], w[0], d[0]
+    return mode, normal, sx, sy
+
+
+@njit(**_OPTS)
+def project(y, p, count, points, gaps, nx, ny, nz, sticking, work):
+    """Body row y put back onto its contact in place: gap 0 (translation along n), contact velocities removed.
+
+    The normal velocities of the ``count`` contact points (and their tangential ones when
+    ``sticking``) are removed by the impulse of least kinetic energy (Gauss–Seidel on the rows'
+    A, unclamped: a bilateral projection). Returns the mean gap it removed (m).
+    """
+    mean = 0.0
+    for c in range(count):
+        mean += gaps[c]
+    mean /= count
+    y[P] -= mean * nx
+    y[P + 1] -= mean * ny
+    y[P + 2] -= mean * nz
+    for c in range(count):
+        points[c, 0] -= mean * nx
+        points[c, 1] -= mean * ny
+        points[c, 2] -= mean * nz
+    rows = build_rows(y, p, count, points, nx, ny, nz, work)
+    step = 1 if sticking else 3
+    for a in range(rows):
+        work[a, _LAM] = 0.0
+    for _ in range(200):
+        change = 0.0
+        size = 0.0
+        for a in range(0, rows, step):
+            u = work[a, _B]
+            for b in range(rows):
+                u += work[a, _A + b] * work[b, _LAM]
+            delta = -u / work[a, _A + a] if work[a, _A + a] > 0.0 else 0.0
+            work[a, _LAM] += delta
+            change = max(change, abs(delta))
+            size = max(size, abs(work[a, _LAM]))
+        if change <= 1e-15 * size or change == 0.0:
+            break
+    apply_impulses(y, y, p, work, rows, _LAM, 1.0)
+    _pin = y[P], p[0]
+    return mean

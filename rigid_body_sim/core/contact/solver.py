@@ -1,0 +1,408 @@
+"""The contact driver around the integrator step: events located on the step map, impacts, resting contact.
+
+A :class:`ContactSolver` is what a :class:`~rigid_body_sim.core.simulator.Simulator` holds when
+its scene has ground half-spaces (``Scene.contact``); without one the simulator runs exactly its
+old code. Per step:
+
+1. :meth:`ContactSolver.add_holding_wrenches` — before the step, every body in persistent
+   contact gets the contact force that holds it (persistent.holding_wrench) added to the
+   step's wrench rows; a body whose holding force would pull (or that moves away) lifts off.
+2. The simulator steps every body with its integrator, as without contact.
+3. :meth:`ContactSolver.after_step` — one compiled pass computes every body's lowest gap
+   (shapes.min_gaps). A body in flight whose gap became negative has its step taken again
+   from the step's start, in pieces: the impact time is the root of s ↦ gap(Φ(y₀, s·h)), Φ
+   the body's own step map (its integrator, or its reduced model — the same code the step
+   ran), bracketed and found by the Illinois method to round-off; there the impact law acts
+   (impacts.impact), and the rest of the step follows, event after event. A body in persistent
+   contact is projected back onto the contact (persistent.project); if it was sliding and its
+   slip reversed, the stop is located on the step map the same way and the rest of the step
+   is taken sticking.
+
+Zeno guard: after an impact whose rebound would rise less than :data:`ZENO_APEX` (the normal
+speed u⁺ with u⁺²/(2a) < ZENO_APEX, a the free normal acceleration of the contact point toward
+the ground), the remaining bounces form a geometric series u⁺, e u⁺, e² u⁺, ... whose flights
+sum to 2u⁺/(a(1 − e)): the body is put into persistent contact at once and its ``rest`` event
+is dated at that accumulation time (the positions it skips are below ZENO_APEX).
+
+Events are recorded in :attr:`ContactSolver.events` (:class:`ContactEvent`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import layout as L
+from ..forces import add_wrench
+from ..stepping import advance, step_reduced
+from .impacts import IMPACT_WORK_SHAPE, impact
+from .layout import FLIGHT, KIND, MAX_POINTS, NORMAL, PERSISTENT, SHAPE_BOX, SHAPE_NONE
+from .persistent import LIFT_OFF, SLIDE, holding_wrench, normal_motion, project
+from .shapes import body_gap, body_points, min_gaps
+
+__all__ = ["ContactSolver", "ContactEvent", "ZENO_APEX", "SLIP_TOLERANCE", "TOUCHING_GAP", "MAX_EVENTS_PER_STEP"]
+
+#: A rebound that would rise less than this (m) ends the bounce sequence (the Zeno guard).
+ZENO_APEX = 1e-10
+#: A contact point slipping slower than this (m/s) sticks.
+SLIP_TOLERANCE = 1e-12
+#: A body this close to the ground (m) and not moving away starts in persistent contact.
+TOUCHING_GAP = 1e-12
+#: A body in persistent contact whose contact points move away faster than this (m/s) lifts off.
+LIFT_OFF_SPEED = 1e-9
+#: Most events one body may have in one step (more is reported as an error, not looped on).
+MAX_EVENTS_PER_STEP = 10_000
+#: Samples of s in (0, 1] looked at for the first sign change of the gap in a step.
+BRACKET_SAMPLES = 16
+
+
+@dataclass(frozen=True)
+class ContactEvent:
+    """One contact event.
+
+    Attributes
+    ----------
+    time : float
+        s of sim time (located inside the step).
+    body : str
+    ground : int
+        Index into the scene's ``ground`` list.
+    kind : str
+        ``impact``, ``rest`` (persistent contact from here; for a Zeno sequence, dated at its
+        accumulation time), ``lift-off`` or ``stick`` (a sliding contact stopped).
+    normal_speed_before, normal_speed_after : float
+        Lowest normal velocity of the contact points (m/s, positive away from the ground).
+    impulse : float
+        Σ normal impulse, N·s (impacts), else 0.
+    energy_before, energy_after : float
+        Kinetic energy of the body, J, around the event.
+    """
+
+    time: float
+    body: str
+    ground: int
+    kind: str
+    normal_speed_before: float = 0.0
+    normal_speed_after: float = 0.0
+    impulse: float = 0.0
+    energy_before: float = 0.0
+    energy_after: float = 0.0
+
+
+class ContactSolver:
+    """Contact of a Simulator's bodies with the scene's ground half-spaces (the module docstring).
+
+    Parameters
+    ----------
+    sim : Simulator
+        Whose scene has ``contact`` (not None). The solver reads and writes the simulator's
+        state buffers; it holds per-body contact modes and the event list.
+    """
+
+    def __init__(self, sim) -> None:
+        spec = sim.scene.contact
+        self.grounds = spec.grounds
+        self.shapes = spec.shapes
+        self.restitution = spec.restitution
+        self.friction = spec.friction
+        model = sim.model
+        n = model.count
+        self.bodies = np.array([i for i in range(n) if spec.shapes[i, KIND] != SHAPE_NONE
+                                and model.motions[i] == "free"], dtype=np.int64)
+        self.names = model.names
+        # contact points fixed in the body (box corners) see the centripetal acceleration (persistent.accelerations)
+        self.vertex = spec.shapes[:, KIND] == SHAPE_BOX
+        self.modes = np.full(n, FLIGHT, dtype=np.int64)
+        self.ground_of = np.full(n, -1, dtype=np.int64)
+        self.sliding = np.zeros(n, dtype=bool)
+        self.slide_direction = np.zeros((n, 2))
+        self._held = np.zeros((n, 6))  # the holding force and moment added to each body's wrench row
+        self.events: list[ContactEvent] = []
+        self._points = np.empty((MAX_POINTS, 3))
+        self._gaps = np.empty(MAX_POINTS)
+        self._work = np.zeros(IMPACT_WORK_SHAPE)
+        self._d = np.empty(L.STATE_WIDTH)
+        self._force = np.empty(6)
+        self._lowest = np.empty(len(self.bodies))
+        # one-body buffers of the step map
+        self._Y1 = np.zeros((2, 1, L.ROW_WIDTH))
+        self._w1 = np.zeros((1, L.WRENCH_WIDTH))
+        self._members1 = np.zeros(1, dtype=np.int64)
+        self._status1 = np.zeros(1, dtype=np.int64)
+        self._control1 = np.zeros(L.CONTROL_WIDTH, dtype=np.int64)
+        self._inputs1 = np.zeros(L.INPUT_WIDTH)
+
+    # ----------------------------------------------------------------- modes
+
+    def reset(self, sim) -> None:
+        """Modes from the current state: touching and not moving away means persistent; the events cleared."""
+        self.events.clear()
+        self.modes[:] = FLIGHT
+        self.ground_of[:] = -1
+        self.sliding[:] = False
+        Y = sim._Ys[sim._control[L.CUR]]
+        for i in self.bodies:
+            gap, j = body_gap(Y[i], sim._prm[i], self.shapes[i], self.grounds, self._points, self._gaps)
+            if gap <= TOUCHING_GAP:
+                count = self._contact_points(sim, Y[i], i, j)
+                speed, _, _, _ = self._normal_motion(sim, Y[i], i, j, count, np.zeros(L.WRENCH_WIDTH))
+                if speed <= LIFT_OFF_SPEED:
+                    self.modes[i] = PERSISTENT
+                    self.ground_of[i] = j
+                    self.events.append(ContactEvent(sim.time, self.names[i], int(j), "rest", speed, speed))
+
+    def is_resting(self, body: str) -> bool:
+        """True while ``body`` is in persistent contact with the ground."""
+        return bool(self.modes[self.names.index(body)] == PERSISTENT)
+
+    def events_of(self, body: str, kind: str | None = None) -> list[ContactEvent]:
+        """The recorded events of ``body`` (of one ``kind`` if given), in time order of their recording."""
+        return [e for e in self.events if e.body == body and (kind is None or e.kind == kind)]
+
+    # ----------------------------------------------------------------- helpers
+
+    def _contact_points(self, sim, y: np.ndarray, i: int, j: int) -> int:
+        return body_points(y, sim._prm[i], self.shapes[i], self.grounds[j], self._points, self._gaps)
+
+    def _normal_motion(self, sim, y: np.ndarray, i: int, j: int, count: int, w: np.ndarray):
+        n = self.grounds[j, NORMAL:NORMAL + 3]
+        return normal_motion(y, sim._prm[i], w, count, self._points, n[0], n[1], n[2], self.vertex[i], self._work,
+                             self._d)
+
+    def _gap(self, sim, y: np.ndarray, i: int) -> tuple[float, int]:
+        return body_gap(y, sim._prm[i], self.shapes[i], self.grounds, self._points, self._gaps)
+
+    def step_map(self, sim, i: int, y0: np.ndarray, h: float, w: np.ndarray) -> np.ndarray:
+        """Φ(y0, h): body i's state row after one step of length h from y0 under the wrench row w.
+
+        The same code the simulator's step runs for it: its reduced model, or the integrator
+        (compiled through stepping.advance, or the numpy/scipy ones), on one-body buffers.
+        """
+        Y1, w1, control, inputs = self._Y1, self._w1, self._control1, self._inputs1
+        prm1 = sim._prm[i:i + 1]
+        Y1[0, 0] = y0
+        w1[0] = w
+        control[:] = 0
+        control[L.METHOD] = sim._control[L.METHOD]
+        model = int(prm1[0, L.MODEL])
+        control[L.GROUPS + 2 * model + 1] = 1
+        inputs[:] = 0.0
+        inputs[L.DT], inputs[L.LIMIT] = h, math.inf
+        method = sim._method
+        with np.errstate(all="ignore"):
+            if method.code is not None:
+                advance(Y1, prm1, w1, self._members1, self._status1, control, inputs, 1)
+            else:
+                deferred = step_reduced(Y1, prm1, w1, self._members1, self._status1, control, inputs)
+                if len(deferred):
+                    from ..integrators import step_exact_rotor_splitting, step_reference
+
+                    if method.name == "exact_rotor_splitting":
+                        step_exact_rotor_splitting(Y1[0], Y1[1], prm1, w1, deferred, h)
+                    else:
+                        step_reference(Y1[0], Y1[1], prm1, w1, deferred, h, **sim._reference_options)
+        return Y1[1, 0].copy()
+
+    # ----------------------------------------------------------------- before and after the step
+
+    def add_holding_wrenches(self, sim, wrenches: np.ndarray) -> None:
+        """Add to ``wrenches`` (the step's rows, in place) the force holding each body in persistent contact."""
+        Y = sim._Ys[sim._control[L.CUR]]
+        for i in self.bodies:
+            if self.modes[i] == PERSISTENT:
+                self._hold(sim, Y[i], i, wrenches[i], sim.time)
+
+    def _hold(self, sim, y: np.ndarray, i: int, w: np.ndarray, t: float) -> bool:
+        """Add the holding force of body i at y into the wrench row w; False (and flight) if it lifts off."""
+        j = int(self.ground_of[i])
+        count = self._contact_points(sim, y, i, j)
+        n = self.grounds[j, NORMAL:NORMAL + 3]
+        speed, _, _, _ = self._normal_motion(sim, y, i, j, count, w)
+        mode, _, sx, sy = holding_wrench(y, sim._prm[i], w, count, self._points, n[0], n[1], n[2],
+                                         float(self.friction[i, j]), SLIP_TOLERANCE, self.vertex[i], self._work,
+                                         self._d, self._force)
+        if mode == LIFT_OFF or speed > LIFT_OFF_SPEED:
+            self.modes[i] = FLIGHT
+            self.sliding[i] = False
+            self.events.append(ContactEvent(t, self.names[i], j, "lift-off", speed, speed))
+            return False
+        self.sliding[i] = mode == SLIDE
+        self.slide_direction[i] = sx, sy
+        f = self._force
+        self._held[i] = f
+        add_wrench(w, sim._prm[i], L.FRAME_WORLD_ALIGNED, 0.0, 0.0, 0.0, f[0], f[1], f[2], f[3], f[4], f[5])
+        return True
+
+    def after_step(self, sim, wrenches: np.ndarray) -> None:
+        """Events inside the step just taken (the simulator's buffers: start in 1 − CUR, end in CUR)."""
+        cur = sim._control[L.CUR]
+        Y0, Y1 = sim._Ys[1 - cur], sim._Ys[cur]
+        h = sim.dt
+        t0 = sim.time - h
+        min_gaps(Y1, sim._prm, self.shapes, self.grounds, self.bodies, self._lowest)
+        for m, i in enumerate(self.bodies):
+            if sim._stopped[i]:
+                continue
+            if self.modes[i] == PERSISTENT:
+                Y1[i, :L.STATE_WIDTH] = self._persistent_end(sim, i, Y0[i], Y1[i], wrenches[i], t0, h)[:L.STATE_WIDTH]
+            elif self._lowest[m] < 0.0:
+                Y1[i, :L.STATE_WIDTH] = self._with_events(sim, i, Y0[i], wrenches[i], t0, h)[:L.STATE_WIDTH]
+
+    # ----------------------------------------------------------------- flight: impacts
+
+    def _with_events(self, sim, i: int, y0: np.ndarray, w: np.ndarray, t: float, h: float) -> np.ndarray:
+        """Body i's step from y0 over h taken again in pieces, event after event (flight to persistent)."""
+        y = y0.copy()
+        after_impact = False
+        hint = -1.0
+        for _ in range(MAX_EVENTS_PER_STEP):
+            if h <= 0.0:
+                return y
+            if self.modes[i] == PERSISTENT:
+                return self._persistent_span(sim, i, y, w, t, h)
+            end = self.step_map(sim, i, y, h, w)
+            if self._gap(sim, end, i)[0] >= 0.0:
+                return end
+            s = self._locate(lambda s: self._gap(sim, self.step_map(sim, i, y, s * h, w), i)[0],
+                             0.0 if after_impact else self._gap(sim, y, i)[0], hint)
+            if s is None:  # a rebound too small to resolve: rest here
+                self._rest(sim, i, y, int(self._gap(sim, y, i)[1]), t, 0.0, 0.0)
+                continue
+            y = self.step_map(sim, i, y, s * h, w) if s > 0.0 else y
+            t, h = t + s * h, h - s * h
+            hint = self._impact(sim, i, y, w, t, h)
+            after_impact = True
+        raise RuntimeError(f"{self.names[i]!r}: more than {MAX_EVENTS_PER_STEP} contact events in one step at t = {t}")
+
+    def _locate(self, gap, g0: float, hint: float) -> float | None:
+        """The first root s in [0, 1] of gap(s) (gap(1) < 0), to round-off: bracket, then Illinois.
+
+        ``g0`` is gap(0) (0 right after an impact, where the gap opens first); ``hint`` a
+        fraction of the step where the gap should be positive (the rebound's apex), or < 0.
+        """
+        samples = sorted({k / BRACKET_SAMPLES for k in range(1, BRACKET_SAMPLES + 1)} | ({hint} if 0.0 < hint < 1.0 else set()))
+        lo, g_lo = 0.0, g0
+        hi = g_hi = None
+        for s in samples:
+            g = gap(s)
+            if g < 0.0:
+                hi, g_hi = s, g
+                break
+            if g > 0.0:
+                lo, g_lo = s, g
+        if hi is None:  # gap(1) < 0 was seen by the caller; round-off made it ≥ 0 here
+            return 1.0
+        if lo == 0.0 and g_lo <= 0.0:  # the rebound ends before the first sample: halve towards 0
+            s = hi
+            for _ in range(60):
+                s *= 0.5
+                g = gap(s)
+                if g > 0.0:
+                    lo, g_lo = s, g
+                    break
+                if g < 0.0:
+                    hi, g_hi = s, g
+            else:
+                return None
+        side = 0
+        for _ in range(200):
+            s = (lo * g_hi - hi * g_lo) / (g_hi - g_lo)
+            if not lo < s < hi:
+                s = 0.5 * (lo + hi)
+                if not lo < s < hi:
+                    break
+            g = gap(s)
+            if g > 0.0:
+                lo, g_lo = s, g
+                if side == 1:
+                    g_hi *= 0.5
+                side = 1
+            elif g < 0.0:
+                hi, g_hi = s, g
+                if side == -1:
+                    g_lo *= 0.5
+                side = -1
+            else:
+                return s
+        return lo
+
+    def _impact(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float, h_left: float) -> float:
+        """The impact of body i at y (in place: put onto the surface, velocities changed). The apex hint."""
+        gap, j = self._gap(sim, y, i)
+        n = self.grounds[j, NORMAL:NORMAL + 3]
+        y[L.P:L.P + 3] -= gap * n
+        count = self._contact_points(sim, y, i, j)
+        before, _, _, _ = self._normal_motion(sim, y, i, j, count, w)
+        e, mu = float(self.restitution[i, j]), float(self.friction[i, j])
+        after_row = y.copy()
+        impulse, e0, e1, _ = impact(y, after_row, sim._prm[i], count, self._points, n[0], n[1], n[2], e, mu,
+                                    self._work)
+        y[L.V:L.W + 3] = after_row[L.V:L.W + 3]
+        speed, accel, _, _ = self._normal_motion(sim, y, i, j, count, w)
+        self.events.append(ContactEvent(t, self.names[i], j, "impact", before, speed, impulse, e0, e1))
+        toward = -accel  # the free normal acceleration toward the ground
+        if speed <= 0.0 or (toward > 0.0 and speed * speed <= 2.0 * toward * ZENO_APEX):
+            rest = 0.0
+            if speed > 0.0 and e < 1.0:
+                rest = 2.0 * speed / (toward * (1.0 - e))  # the remaining flights: a geometric series
+            self._rest(sim, i, y, j, t, rest, speed)
+            return -1.0
+        return speed / (toward * h_left) if toward > 0.0 and h_left > 0.0 else -1.0
+
+    def _rest(self, sim, i: int, y: np.ndarray, j: int, t: float, remaining: float, speed: float) -> None:
+        """Body i goes into persistent contact with ground j at y (projected in place); 'rest' dated t + remaining."""
+        self.modes[i] = PERSISTENT
+        self.ground_of[i] = j
+        count = self._contact_points(sim, y, i, j)
+        n = self.grounds[j, NORMAL:NORMAL + 3]
+        project(y, sim._prm[i], count, self._points, self._gaps, n[0], n[1], n[2], False, self._work)
+        self.events.append(ContactEvent(t + remaining, self.names[i], j, "rest", speed, 0.0))
+
+    # ----------------------------------------------------------------- persistent contact
+
+    def _persistent_span(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float, h: float) -> np.ndarray:
+        """Body i from y over h in persistent contact starting mid-step: holding force, step, projection."""
+        held = w.copy()
+        if not self._hold(sim, y, i, held, t):
+            return self._with_events(sim, i, y, w, t, h)
+        end = self.step_map(sim, i, y, h, held)
+        return self._persistent_end(sim, i, y, end, held, t, h)
+
+    def _bare(self, i: int, held: np.ndarray) -> np.ndarray:
+        """The wrench row ``held`` without the holding force _hold added to it for body i."""
+        bare = held.copy()
+        bare[L.F_COM_W:L.F_COM_W + 3] -= self._held[i, :3]
+        bare[L.T_COM_W:L.T_COM_W + 3] -= self._held[i, 3:]
+        return bare
+
+    def _persistent_end(self, sim, i: int, y0: np.ndarray, end: np.ndarray, held: np.ndarray, t: float,
+                        h: float) -> np.ndarray:
+        """End of a step of body i in persistent contact: the stop of a slide located, then the projection."""
+        end = end.copy()
+        j = int(self.ground_of[i])
+        n = self.grounds[j, NORMAL:NORMAL + 3]
+        sx, sy = self.slide_direction[i]
+        if self.sliding[i] and (sx != 0.0 or sy != 0.0):  # sliding with friction: it may stop in this step
+
+            def along(s: float) -> float:
+                row = self.step_map(sim, i, y0, s * h, held) if s > 0.0 else y0
+                count = self._contact_points(sim, row, i, j)
+                _, _, vx, vy = self._normal_motion(sim, row, i, j, count, held)
+                return vx * sx + vy * sy
+
+            if along(1.0) <= 0.0:  # the slip reversed inside the step: the stop, located
+                s = self._locate(along, along(0.0), -1.0)
+                s = 1.0 if s is None else s
+                stop = self.step_map(sim, i, y0, s * h, held)
+                count = self._contact_points(sim, stop, i, j)
+                project(stop, sim._prm[i], count, self._points, self._gaps, n[0], n[1], n[2], True, self._work)
+                self.sliding[i] = False
+                self.events.append(ContactEvent(t + s * h, self.names[i], j, "stick"))
+                if s < 1.0:  # the rest of the step sticking, with the holding force found at the stop
+                    return self._persistent_span(sim, i, stop, self._bare(i, held), t + s * h, h - s * h)
+                return stop
+        count = self._contact_points(sim, end, i, j)
+        project(end, sim._prm[i], count, self._points, self._gaps, n[0], n[1], n[2], not self.sliding[i], self._work)
+        return end
