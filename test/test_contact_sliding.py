@@ -77,3 +77,54 @@ def test_sliding_friction_force_is_mu_m_g_and_the_imu_reads_it():
     # specific force = (contact force)/m: −μ g along x, +g up
     assert sim.site_readings().specific_force[0] == pytest.approx([-MU * G, 0.0, G], rel=1e-12, abs=1e-12)
     assert sim.state.v_WC_W[0, 0] == pytest.approx(V0 - MU * G * 0.1, rel=1e-12)
+
+
+@pytest.mark.parametrize("integrator, reduction", [("rk4", False), ("rk4", True), ("reference", False)])
+def test_ball_slides_then_rolls_at_the_closed_form_time_and_speed(integrator, reduction):
+    """Solid ball (k² = 2/5) launched at v0 without spin, μ = 0.3: rolls from t = k² v0/((1 + k²) μ g)
+    at v = v0/(1 + k²), having slid (v0² − v²)/(2μg); then rolls on at v, without slip."""
+    mu, r, k2 = 0.3, 0.1, 0.4
+    data = {"gravity": [0.0, 0.0, -G],
+            "ground": [{"normal": [0, 0, 1], "material": {"restitution": 0.0, "friction": mu}}],
+            "bodies": {"ball": {"mass": 1.0, "inertia": {"sphere": r}, "pose": {"position": [0.0, 0.0, r]},
+                                "twist": {"linear": [V0, 0.0, 0.0]}}}}
+    sim = Simulator(load_scene(data), integrator=integrator, dt=1e-2, model_reduction=reduction)
+    sim.step(50)
+    t_roll, v_roll = k2 * V0 / ((1.0 + k2) * mu * G), V0 / (1.0 + k2)
+    assert sim.contact.events_of("ball", "stick")[0].time == pytest.approx(t_roll, rel=1e-9)
+    assert sim.state.v_WC_W[0] == pytest.approx([v_roll, 0.0, 0.0], rel=1e-12, abs=1e-12)
+    slid = (V0 * V0 - v_roll * v_roll) / (2.0 * mu * G)
+    assert sim.state.p_WC_W[0, 0] == pytest.approx(slid + v_roll * (sim.time - t_roll), rel=1e-9)
+    w_W = sim.angular_velocities_world()[0]
+    assert w_W == pytest.approx([0.0, v_roll / r, 0.0], rel=1e-12, abs=1e-12)  # rolling: v = ω r
+    assert sim.state.p_WC_W[0, 2] == pytest.approx(r, abs=1e-12)
+
+
+def test_box_at_rest_on_an_incline_inside_the_friction_cone_does_not_move():
+    """20° incline, μ = 0.5 > tan 20°: no motion at all (peers creep 1e-7 to 1e-3 m/s)."""
+    theta = math.radians(20.0)
+    n = [0.0, -math.sin(theta), math.cos(theta)]
+    q_xyzw = [math.sin(theta / 2.0), 0.0, 0.0, math.cos(theta / 2.0)]  # body z along n
+    data = {"gravity": [0.0, 0.0, -G],
+            "ground": [{"normal": n, "material": {"restitution": 0.0, "friction": 0.5}}],
+            "bodies": {"crate": {"mass": 1.0, "inertia": {"box": [0.2, 0.2, 0.2]},
+                                 "pose": {"position": [0.1 * c for c in n], "orientation": q_xyzw}}}}
+    sim = Simulator(load_scene(data), integrator="rk4", dt=1e-2)
+    assert sim.contact.is_resting("crate")
+    start = sim.state.p_WC_W[0].copy()
+    for _ in range(1000):
+        sim.step()
+        assert np.linalg.norm(sim.state.v_WC_W[0]) <= 1e-12
+    assert np.linalg.norm(sim.state.p_WC_W[0] - start) <= 1e-12
+    assert [e.kind for e in sim.contact.events] == ["rest"]
+
+
+def test_a_resting_body_lifted_by_set_body_state_falls_again():
+    sim = Simulator(sliding_scene(direction=(0.0, 0.0, 0.0)), integrator="rk4", dt=1e-2)
+    assert sim.contact.is_resting("crate")
+    sim.set_body_state("crate", position_world=[0.0, 0.0, 0.6])  # 0.5 m up
+    sim.step(50)
+    impacts = sim.contact.events_of("crate", "impact")
+    assert impacts[0].time == pytest.approx(math.sqrt(2.0 * 0.5 / G), rel=1e-9)
+    assert sim.contact.is_resting("crate")  # e = 0: at rest at once
+    assert sim.state.p_WC_W[0] == pytest.approx([0.0, 0.0, 0.1], abs=1e-12)

@@ -219,11 +219,12 @@ class ContactSolver:
         j = int(self.ground_of[i])
         count = self._contact_points(sim, y, i, j)
         n = self.grounds[j, NORMAL:NORMAL + 3]
+        lowest = float(self._gaps[:count].min())  # set_body_state may have moved it off the ground
         speed, _, _, _ = self._normal_motion(sim, y, i, j, count, w)
         mode, _, sx, sy = holding_wrench(y, sim._prm[i], w, count, self._points, n[0], n[1], n[2],
                                          float(self.friction[i, j]), SLIP_TOLERANCE, self.vertex[i], self._work,
                                          self._d, self._force)
-        if mode == LIFT_OFF or speed > LIFT_OFF_SPEED:
+        if mode == LIFT_OFF or speed > LIFT_OFF_SPEED or lowest > TOUCHING_GAP:
             self.modes[i] = FLIGHT
             self.sliding[i] = False
             self.events.append(ContactEvent(t, self.names[i], j, "lift-off", speed, speed))
