@@ -10,9 +10,10 @@ Gauss–Seidel, impacts.pgs, on the same contact rows as the impact law). The fo
 the step's wrench rows (world axes at the centre of mass, forces.add_wrench), so every
 integrator stage sees it and the site readings see it (a resting IMU reads +g up).
 
-After the step, :func:`project` puts the body back onto the contact exactly: the centre of mass
-moved along n by the mean gap, and the normal (and, while sticking, tangential) velocity of the
-contact points removed by the smallest impulse in the body's mass metric. No Baumgarte term,
+After the step, :func:`project` puts the body back onto the contact exactly: the smallest
+displacement in the body's mass metric that closes the gaps of the touching features, and the
+normal (and, while sticking, tangential) velocity of the contact points removed by the smallest
+impulse in the same metric. No Baumgarte term,
 no compliance: the gap and normal velocity are zero to round-off, and the projection never adds
 energy (it removes a velocity component in the mass metric).
 """
@@ -21,16 +22,17 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 from numba import njit
 
 from ..dynamics import derivative
-from ..layout import INV_INERTIA, INV_MASS, P, Q, STATE_WIDTH, V, W
-from ..rotation import rotate
+from ..layout import INV_INERTIA, INV_MASS, P, Q, V, W
+from ..rotation import exp_map, normalise, qmul, rotate
 from .impacts import _A, _ANG, _B, _LAM, _LIN, apply_impulses, build_rows, pgs
+from .layout import NORMAL
+from .shapes import feature_points
 
 __all__ = ["LIFT_OFF", "STICK", "SLIDE", "accelerations", "normal_motion", "holding_wrench", "project",
-           "slip_velocity"]
+           "normal_speeds", "slip_velocity"]
 
 _OPTS = {"cache": True, "nogil": True, "error_model": "numpy"}
 
@@ -140,26 +142,8 @@ def holding_wrench(y, p, w, count, points, nx, ny, nz, mu, slip_tolerance, verte
 
 
 @njit(**_OPTS)
-def project(y, p, count, points, gaps, nx, ny, nz, sticking, work):
-    """Body row y put back onto its contact in place: gap 0 (translation along n), contact velocities removed.
-
-    The normal velocities of the ``count`` contact points (and their tangential ones when
-    ``sticking``) are removed by the impulse of least kinetic energy (Gauss–Seidel on the rows'
-    A, unclamped: a bilateral projection). Returns the mean gap it removed (m).
-    """
-    mean = 0.0
-    for c in range(count):
-        mean += gaps[c]
-    mean /= count
-    y[P] -= mean * nx
-    y[P + 1] -= mean * ny
-    y[P + 2] -= mean * nz
-    for c in range(count):
-        points[c, 0] -= mean * nx
-        points[c, 1] -= mean * ny
-        points[c, 2] -= mean * nz
-    rows = build_rows(y, p, count, points, nx, ny, nz, work)
-    step = 1 if sticking else 3
+def _solve_normal_rows(work, rows, step):
+    """Gauss–Seidel (unclamped: bilateral) on the rows 0, step, 2 step, ... for λ with (A λ)_a = −b_a."""
     for a in range(rows):
         work[a, _LAM] = 0.0
     for _ in range(200):
@@ -175,6 +159,63 @@ def project(y, p, count, points, gaps, nx, ny, nz, sticking, work):
             size = max(size, abs(work[a, _LAM]))
         if change <= 1e-15 * size or change == 0.0:
             break
-    apply_impulses(y, y, p, work, rows, _LAM, 1.0)
-    _pin = y[P], p[0]
-    return mean
+
+
+@njit(**_OPTS)
+def project(y, p, shape, ground, mask, sticking, points, gaps, owners, work):
+    """Body row y put back onto its contact in place: the tracked features' gaps 0, their contact velocities removed.
+
+    Positions: the smallest displacement in the body's mass metric (translation and rotation,
+    M⁻¹ Jᵀ λ with J M⁻¹ Jᵀ λ = −gap over the normal rows) that closes the gaps of the features
+    in ``mask`` (shapes.feature_points), twice (the second pass takes the first's round-off).
+    Velocities: the normal velocities of the contact points (and their tangential ones when
+    ``sticking``) removed by the impulse of least kinetic energy (the same solve on
+    velocities). Never adds energy. Returns the number of contact points.
+    """
+    nx, ny, nz = ground[NORMAL], ground[NORMAL + 1], ground[NORMAL + 2]
+    inv_m = p[INV_MASS]
+    count = 0
+    for _ in range(2):
+        count = feature_points(y, p, shape, ground, mask, points, gaps, owners)
+        if count == 0:
+            break
+        rows = build_rows(y, p, count, points, nx, ny, nz, work)
+        for c in range(count):
+            work[3 * c, _B] = gaps[c]
+        _solve_normal_rows(work, rows, 3)
+        dx = dy = dz = 0.0
+        rx = ry = rz = 0.0
+        for a in range(0, rows, 3):
+            lam = work[a, _LAM]
+            dx += work[a, _LIN] * lam * inv_m
+            dy += work[a, _LIN + 1] * lam * inv_m
+            dz += work[a, _LIN + 2] * lam * inv_m
+            rx += work[a, _ANG] * lam * p[INV_INERTIA]
+            ry += work[a, _ANG + 1] * lam * p[INV_INERTIA + 1]
+            rz += work[a, _ANG + 2] * lam * p[INV_INERTIA + 2]
+        y[P] += dx
+        y[P + 1] += dy
+        y[P + 2] += dz
+        if rx != 0.0 or ry != 0.0 or rz != 0.0:
+            e = exp_map(rx, ry, rz)  # a rotation by Δθ in principal axes: q ← q ⊗ exp(Δθ)
+            qw, qx, qy, qz = qmul(y[Q], y[Q + 1], y[Q + 2], y[Q + 3], e[0], e[1], e[2], e[3])
+            y[Q], y[Q + 1], y[Q + 2], y[Q + 3] = normalise(qw, qx, qy, qz)
+    if count > 0:
+        count = feature_points(y, p, shape, ground, mask, points, gaps, owners)
+        rows = build_rows(y, p, count, points, nx, ny, nz, work)
+        _solve_normal_rows(work, rows, 1 if sticking else 3)
+        apply_impulses(y, y, p, work, rows, _LAM, 1.0)
+    _pin = y[P], p[0], shape[0], ground[0], points[0, 0], gaps[0], owners[0]
+    return count
+
+
+@njit(**_OPTS)
+def normal_speeds(y, p, count, points, nx, ny, nz, work):
+    """(lowest, highest) normal velocity of the contact points, m/s (positive away from the ground)."""
+    build_rows(y, p, count, points, nx, ny, nz, work)
+    lowest = math.inf
+    highest = -math.inf
+    for c in range(count):
+        lowest = min(lowest, work[3 * c, _B])
+        highest = max(highest, work[3 * c, _B])
+    return lowest, highest

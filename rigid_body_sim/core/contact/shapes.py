@@ -37,7 +37,7 @@ from .layout import (
 )
 
 __all__ = ["FEATURE_BAND", "sphere_points", "box_points", "cylinder_points", "capsule_points", "shape_points",
-           "body_points", "body_gap", "min_gaps", "GROUND_WIDTH"]
+           "body_points", "body_gap", "min_gaps", "MAX_FEATURES", "feature_gaps", "feature_points"]
 
 #: Points within this fraction of the shape's largest dimension of the lowest one are in contact together.
 FEATURE_BAND = 1e-9
@@ -186,3 +186,119 @@ def min_gaps(Y, prm, shapes, grounds, bodies, out):
     for m in range(bodies.shape[0]):
         i = bodies[m]
         out[m], _ = body_gap(Y[i], prm[i], shapes[i], grounds, points, gaps)
+
+
+# ----------------------------------------------------------------------------- features (persistent contact)
+# A feature is what can touch the plane: the sphere's surface (1), a box corner (8), a capsule's
+# end sphere (2), a cylinder's rim (2). Persistent contact tracks which features touch, so that
+# another feature reaching the ground is an event even while the body rests or pivots.
+
+#: Most features a shape has (the box's corners).
+MAX_FEATURES = 8
+
+
+@njit(**_OPTS)
+def feature_gaps(y, p, shape, ground, gaps):
+    """gaps[k] ← the gap of feature k of one body against one ground row; returns the number of features."""
+    qw, qx, qy, qz = qmul(y[Q], y[Q + 1], y[Q + 2], y[Q + 3], p[Q_PB], p[Q_PB + 1], p[Q_PB + 2], p[Q_PB + 3])
+    nx, ny, nz = ground[NORMAL], ground[NORMAL + 1], ground[NORMAL + 2]
+    base = nx * y[P] + ny * y[P + 1] + nz * y[P + 2] - ground[OFFSET]
+    kind = int(shape[KIND])
+    a0, a1, a2 = shape[DIMS], shape[DIMS + 1], shape[DIMS + 2]
+    count = 0
+    if kind == SHAPE_SPHERE:
+        gaps[0] = base - a0
+        count = 1
+    elif kind == SHAPE_BOX:
+        for corner in range(8):
+            sx = 1.0 if corner & 1 else -1.0
+            sy = 1.0 if corner & 2 else -1.0
+            sz = 1.0 if corner & 4 else -1.0
+            ox, oy, oz = rotate(qw, qx, qy, qz, sx * a0, sy * a1, sz * a2)
+            gaps[corner] = base + nx * ox + ny * oy + nz * oz
+        count = 8
+    elif kind == SHAPE_CAPSULE or kind == SHAPE_CYLINDER:
+        ux, uy, uz = rotate(qw, qx, qy, qz, 0.0, 0.0, 1.0)
+        cos_a = nx * ux + ny * uy + nz * uz
+        radial = a0
+        if kind == SHAPE_CYLINDER:
+            radial = a0 * math.sqrt(max(0.0, 1.0 - cos_a * cos_a))
+        gaps[0] = base - a1 * cos_a - radial
+        gaps[1] = base + a1 * cos_a - radial
+        count = 2
+    _pin = y[P], p[0], shape[0], ground[0], gaps[0]
+    return count
+
+
+@njit(**_OPTS)
+def feature_points(y, p, shape, ground, mask, points, gaps, owners):
+    """The contact points (world), gaps and features (``owners``) of the features in the bit ``mask``.
+
+    Returns how many points (≤ MAX_POINTS; a cylinder standing on an end gives 4 for its rim).
+    """
+    qw, qx, qy, qz = qmul(y[Q], y[Q + 1], y[Q + 2], y[Q + 3], p[Q_PB], p[Q_PB + 1], p[Q_PB + 2], p[Q_PB + 3])
+    nx, ny, nz = ground[NORMAL], ground[NORMAL + 1], ground[NORMAL + 2]
+    cx, cy, cz = y[P], y[P + 1], y[P + 2]
+    base = nx * cx + ny * cy + nz * cz - ground[OFFSET]
+    kind = int(shape[KIND])
+    a0, a1, a2 = shape[DIMS], shape[DIMS + 1], shape[DIMS + 2]
+    count = 0
+    if kind == SHAPE_SPHERE and mask & 1:
+        count = sphere_points(cx, cy, cz, a0, nx, ny, nz, ground[OFFSET], points, gaps)
+        owners[0] = 0
+    elif kind == SHAPE_BOX:
+        for corner in range(8):
+            if mask & (1 << corner) and count < MAX_POINTS:
+                sx = 1.0 if corner & 1 else -1.0
+                sy = 1.0 if corner & 2 else -1.0
+                sz = 1.0 if corner & 4 else -1.0
+                ox, oy, oz = rotate(qw, qx, qy, qz, sx * a0, sy * a1, sz * a2)
+                points[count, 0], points[count, 1], points[count, 2] = cx + ox, cy + oy, cz + oz
+                gaps[count] = base + nx * ox + ny * oy + nz * oz
+                owners[count] = corner
+                count += 1
+    elif kind == SHAPE_CAPSULE:
+        ux, uy, uz = rotate(qw, qx, qy, qz, 0.0, 0.0, 1.0)
+        cos_a = nx * ux + ny * uy + nz * uz
+        for end in range(2):
+            if mask & (1 << end):
+                side = -1.0 if end == 0 else 1.0
+                points[count, 0] = cx + side * a1 * ux - a0 * nx
+                points[count, 1] = cy + side * a1 * uy - a0 * ny
+                points[count, 2] = cz + side * a1 * uz - a0 * nz
+                gaps[count] = base + side * a1 * cos_a - a0
+                owners[count] = end
+                count += 1
+    elif kind == SHAPE_CYLINDER:
+        ux, uy, uz = rotate(qw, qx, qy, qz, 0.0, 0.0, 1.0)
+        cos_a = nx * ux + ny * uy + nz * uz
+        px, py, pz = nx - cos_a * ux, ny - cos_a * uy, nz - cos_a * uz
+        across = math.sqrt(px * px + py * py + pz * pz)
+        band = FEATURE_BAND * max(a0, a1)
+        for end in range(2):
+            if mask & (1 << end):
+                side = -1.0 if end == 0 else 1.0
+                if a0 * across <= band:  # standing on this end: four rim points
+                    e1x, e1y, e1z = rotate(qw, qx, qy, qz, 1.0, 0.0, 0.0)
+                    e2x, e2y, e2z = rotate(qw, qx, qy, qz, 0.0, 1.0, 0.0)
+                    for k in range(4):
+                        if count < MAX_POINTS:
+                            c = (1.0, 0.0, -1.0, 0.0)[k]
+                            s = (0.0, 1.0, 0.0, -1.0)[k]
+                            ox = side * a1 * ux + a0 * (c * e1x + s * e2x)
+                            oy = side * a1 * uy + a0 * (c * e1y + s * e2y)
+                            oz = side * a1 * uz + a0 * (c * e1z + s * e2z)
+                            points[count, 0], points[count, 1], points[count, 2] = cx + ox, cy + oy, cz + oz
+                            gaps[count] = base + nx * ox + ny * oy + nz * oz
+                            owners[count] = end
+                            count += 1
+                elif count < MAX_POINTS:
+                    rx, ry, rz = px / across, py / across, pz / across
+                    points[count, 0] = cx + side * a1 * ux - a0 * rx
+                    points[count, 1] = cy + side * a1 * uy - a0 * ry
+                    points[count, 2] = cz + side * a1 * uz - a0 * rz
+                    gaps[count] = base + side * a1 * cos_a - a0 * across
+                    owners[count] = end
+                    count += 1
+    _pin = y[P], p[0], shape[0], ground[0], points[0, 0], gaps[0], owners[0]
+    return count

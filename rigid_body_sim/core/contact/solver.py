@@ -37,10 +37,10 @@ import numpy as np
 from .. import layout as L
 from ..forces import add_wrench
 from ..stepping import advance, step_reduced
-from .impacts import IMPACT_WORK_SHAPE, impact
-from .layout import FLIGHT, KIND, MAX_POINTS, NORMAL, PERSISTENT, SHAPE_BOX, SHAPE_NONE
-from .persistent import LIFT_OFF, SLIDE, holding_wrench, normal_motion, project
-from .shapes import body_gap, body_points, min_gaps
+from .impacts import _LAM, IMPACT_WORK_SHAPE, impact
+from .layout import DIMS, FLIGHT, KIND, MAX_POINTS, NORMAL, PERSISTENT, SHAPE_BOX, SHAPE_NONE
+from .persistent import LIFT_OFF, SLIDE, holding_wrench, normal_motion, normal_speeds, project
+from .shapes import FEATURE_BAND, MAX_FEATURES, body_gap, body_points, feature_gaps, feature_points, min_gaps
 
 __all__ = ["ContactSolver", "ContactEvent", "ZENO_APEX", "SLIP_TOLERANCE", "TOUCHING_GAP", "MAX_EVENTS_PER_STEP"]
 
@@ -119,6 +119,12 @@ class ContactSolver:
         self.sliding = np.zeros(n, dtype=bool)
         self.slide_direction = np.zeros((n, 2))
         self._held = np.zeros((n, 6))  # the holding force and moment added to each body's wrench row
+        # the features (shapes.feature_gaps) touching the ground in persistent contact, as bits
+        self.tracked = np.zeros(n, dtype=np.int64)
+        self._band = FEATURE_BAND * spec.shapes[:, DIMS:DIMS + 3].max(axis=1)  # m: "touching together"
+        self._features = np.empty(MAX_FEATURES)
+        self._owners = np.zeros(MAX_POINTS, dtype=np.int64)
+        self.pressed = np.zeros(n, dtype=np.int64)  # the tracked features the holding force pushes on, as bits
         self.events: list[ContactEvent] = []
         self._points = np.empty((MAX_POINTS, 3))
         self._gaps = np.empty(MAX_POINTS)
@@ -151,6 +157,7 @@ class ContactSolver:
                 if speed <= LIFT_OFF_SPEED:
                     self.modes[i] = PERSISTENT
                     self.ground_of[i] = j
+                    self.tracked[i] = self._touching(sim, Y[i], i, j)
                     self.events.append(ContactEvent(sim.time, self.names[i], int(j), "rest", speed, speed))
 
     def is_resting(self, body: str) -> bool:
@@ -165,6 +172,42 @@ class ContactSolver:
 
     def _contact_points(self, sim, y: np.ndarray, i: int, j: int) -> int:
         return body_points(y, sim._prm[i], self.shapes[i], self.grounds[j], self._points, self._gaps)
+
+    def _touching(self, sim, y: np.ndarray, i: int, j: int) -> int:
+        """The features of body i within its band of the lowest one against ground j, as bits."""
+        count = feature_gaps(y, sim._prm[i], self.shapes[i], self.grounds[j], self._features)
+        gaps = self._features[:count]
+        return int(sum(1 << k for k in np.flatnonzero(gaps <= gaps.min() + self._band[i])))
+
+    def _tracked_points(self, sim, y: np.ndarray, i: int, mask: int | None = None) -> int:
+        """Contact points (self._points, self._gaps) of body i's tracked features (or of ``mask``)."""
+        j = int(self.ground_of[i])
+        return feature_points(y, sim._prm[i], self.shapes[i], self.grounds[j],
+                              int(self.tracked[i]) if mask is None else mask, self._points, self._gaps, self._owners)
+
+    def _untracked_gap(self, sim, y: np.ndarray, i: int) -> float:
+        """The lowest gap of body i's features that are not tracked (inf if every one is)."""
+        j = int(self.ground_of[i])
+        count = feature_gaps(y, sim._prm[i], self.shapes[i], self.grounds[j], self._features)
+        mask = int(self.tracked[i])
+        free = [self._features[k] for k in range(count) if not mask & (1 << k)]
+        return min(free) if free else math.inf
+
+    def _settle(self, sim, y: np.ndarray, i: int, sticking: bool) -> None:
+        """Project body i onto its tracked features, adding every feature the projection leaves touching (≤ band)."""
+        j = int(self.ground_of[i])
+        for _ in range(4):
+            self._project(sim, y, i, sticking)
+            count = feature_gaps(y, sim._prm[i], self.shapes[i], self.grounds[j], self._features)
+            more = sum(1 << k for k in range(count) if self._features[k] <= self._band[i]) & ~int(self.tracked[i])
+            if not more:
+                break
+            self.tracked[i] = int(self.tracked[i]) | more
+
+    def _project(self, sim, y: np.ndarray, i: int, sticking: bool) -> None:
+        j = int(self.ground_of[i])
+        project(y, sim._prm[i], self.shapes[i], self.grounds[j], int(self.tracked[i]), sticking, self._points,
+                self._gaps, self._owners, self._work)
 
     def _normal_motion(self, sim, y: np.ndarray, i: int, j: int, count: int, w: np.ndarray):
         n = self.grounds[j, NORMAL:NORMAL + 3]
@@ -217,20 +260,22 @@ class ContactSolver:
     def _hold(self, sim, y: np.ndarray, i: int, w: np.ndarray, t: float) -> bool:
         """Add the holding force of body i at y into the wrench row w; False (and flight) if it lifts off."""
         j = int(self.ground_of[i])
-        count = self._contact_points(sim, y, i, j)
+        count = self._tracked_points(sim, y, i)
         n = self.grounds[j, NORMAL:NORMAL + 3]
-        lowest = float(self._gaps[:count].min())  # set_body_state may have moved it off the ground
+        lowest = float(self._gaps[:count].min()) if count else math.inf  # set_body_state may have lifted it
         speed, _, _, _ = self._normal_motion(sim, y, i, j, count, w)
         mode, _, sx, sy = holding_wrench(y, sim._prm[i], w, count, self._points, n[0], n[1], n[2],
                                          float(self.friction[i, j]), SLIP_TOLERANCE, self.vertex[i], self._work,
                                          self._d, self._force)
-        if mode == LIFT_OFF or speed > LIFT_OFF_SPEED or lowest > TOUCHING_GAP:
+        if count == 0 or mode == LIFT_OFF or speed > LIFT_OFF_SPEED or lowest > TOUCHING_GAP:
             self.modes[i] = FLIGHT
             self.sliding[i] = False
             self.events.append(ContactEvent(t, self.names[i], j, "lift-off", speed, speed))
             return False
         self.sliding[i] = mode == SLIDE
         self.slide_direction[i] = sx, sy
+        lam = self._work[0:3 * count:3, _LAM]  # the normal forces of the points, in the order of _tracked_points
+        self.pressed[i] = int(sum(1 << int(self._owners[c]) for c in range(count) if lam[c] > 0.0))
         f = self._force
         self._held[i] = f
         add_wrench(w, sim._prm[i], L.FRAME_WORLD_ALIGNED, 0.0, 0.0, 0.0, f[0], f[1], f[2], f[3], f[4], f[5])
@@ -356,9 +401,8 @@ class ContactSolver:
         """Body i goes into persistent contact with ground j at y (projected in place); 'rest' dated t + remaining."""
         self.modes[i] = PERSISTENT
         self.ground_of[i] = j
-        count = self._contact_points(sim, y, i, j)
-        n = self.grounds[j, NORMAL:NORMAL + 3]
-        project(y, sim._prm[i], count, self._points, self._gaps, n[0], n[1], n[2], False, self._work)
+        self.tracked[i] = self._touching(sim, y, i, j)
+        self._settle(sim, y, i, False)
         self.events.append(ContactEvent(t + remaining, self.names[i], j, "rest", speed, 0.0))
 
     # ----------------------------------------------------------------- persistent contact
@@ -380,16 +424,20 @@ class ContactSolver:
 
     def _persistent_end(self, sim, i: int, y0: np.ndarray, end: np.ndarray, held: np.ndarray, t: float,
                         h: float) -> np.ndarray:
-        """End of a step of body i in persistent contact: the stop of a slide located, then the projection."""
+        """End of a step of body i in persistent contact, from y0 over h under ``held`` (with the holding force).
+
+        In order: the stop of a slide, or another feature reaching the ground (each located on
+        the step map, the rest of the step taken from there); tracked features that moved off
+        the ground dropped (none left: lift-off); then the projection onto the contact.
+        """
         end = end.copy()
         j = int(self.ground_of[i])
-        n = self.grounds[j, NORMAL:NORMAL + 3]
         sx, sy = self.slide_direction[i]
         if self.sliding[i] and (sx != 0.0 or sy != 0.0):  # sliding with friction: it may stop in this step
 
             def along(s: float) -> float:
                 row = self.step_map(sim, i, y0, s * h, held) if s > 0.0 else y0
-                count = self._contact_points(sim, row, i, j)
+                count = self._tracked_points(sim, row, i)
                 _, _, vx, vy = self._normal_motion(sim, row, i, j, count, held)
                 return vx * sx + vy * sy
 
@@ -397,13 +445,54 @@ class ContactSolver:
                 s = self._locate(along, along(0.0), -1.0)
                 s = 1.0 if s is None else s
                 stop = self.step_map(sim, i, y0, s * h, held)
-                count = self._contact_points(sim, stop, i, j)
-                project(stop, sim._prm[i], count, self._points, self._gaps, n[0], n[1], n[2], True, self._work)
+                self._project(sim, stop, i, True)
                 self.sliding[i] = False
                 self.events.append(ContactEvent(t + s * h, self.names[i], j, "stick"))
                 if s < 1.0:  # the rest of the step sticking, with the holding force found at the stop
                     return self._persistent_span(sim, i, stop, self._bare(i, held), t + s * h, h - s * h)
                 return stop
-        count = self._contact_points(sim, end, i, j)
-        project(end, sim._prm[i], count, self._points, self._gaps, n[0], n[1], n[2], not self.sliding[i], self._work)
+        if self._untracked_gap(sim, end, i) < 0.0:  # another feature reached the ground: an impact
+            g0 = self._untracked_gap(sim, y0, i)
+            s = 0.0 if g0 <= 0.0 else self._locate(
+                lambda s: self._untracked_gap(sim, self.step_map(sim, i, y0, s * h, held), i), g0, -1.0)
+            s = 0.0 if s is None else s
+            hit = self.step_map(sim, i, y0, s * h, held) if s > 0.0 else y0.copy()
+            return self._landing(sim, i, hit, self._bare(i, held), t + s * h, h - s * h)
+        count = feature_gaps(end, sim._prm[i], self.shapes[i], self.grounds[j], self._features)
+        tracked, pressed = int(self.tracked[i]), int(self.pressed[i])
+        let_go = sum(1 << k for k in range(count)
+                     if tracked & (1 << k) and not pressed & (1 << k) and self._features[k] > self._band[i])
+        if let_go:  # features the holding force did not push on, and that moved off the ground
+            self.tracked[i] = tracked & ~let_go
+            if not self.tracked[i]:
+                self.modes[i] = FLIGHT
+                self.sliding[i] = False
+                self.events.append(ContactEvent(t + h, self.names[i], j, "lift-off"))
+                return end
+        self._project(sim, end, i, not self.sliding[i])
         return end
+
+    def _landing(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float, h: float) -> np.ndarray:
+        """A feature of body i, in persistent contact, reaches the ground at y: the impact of every touching
+        feature together, then the rest h of the step (persistent, or in flight if it bounces off)."""
+        j = int(self.ground_of[i])
+        n = self.grounds[j, NORMAL:NORMAL + 3]
+        mask = int(self.tracked[i]) | self._touching(sim, y, i, j)
+        count = self._tracked_points(sim, y, i, mask)
+        before, _, _, _ = self._normal_motion(sim, y, i, j, count, w)
+        e, mu = float(self.restitution[i, j]), float(self.friction[i, j])
+        after_row = y.copy()
+        impulse, e0, e1, _ = impact(y, after_row, sim._prm[i], count, self._points, n[0], n[1], n[2], e, mu,
+                                    self._work)
+        y = after_row
+        _, highest = normal_speeds(y, sim._prm[i], count, self._points, n[0], n[1], n[2], self._work)
+        _, accel, _, _ = self._normal_motion(sim, y, i, j, count, w)
+        self.events.append(ContactEvent(t, self.names[i], j, "impact", before, highest, impulse, e0, e1))
+        toward = -accel
+        if highest <= LIFT_OFF_SPEED or (toward > 0.0 and highest * highest <= 2.0 * toward * ZENO_APEX):
+            self.tracked[i] = mask
+            self._settle(sim, y, i, False)
+            return self._persistent_span(sim, i, y, w, t, h) if h > 0.0 else y
+        self.modes[i] = FLIGHT
+        self.sliding[i] = False
+        return self._with_events(sim, i, y, w, t, h) if h > 0.0 else y
