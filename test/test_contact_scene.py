@@ -164,3 +164,16 @@ def test_example_scenes_load():
     for path in sorted(CONFIG.glob("contact_*.yaml")):
         scene = load_scene(path)
         assert scene.contact is not None, path
+
+
+def test_a_ground_without_moving_collision_shapes_runs_without_contact():
+    data = scene_dict()
+    for body in data["bodies"].values():
+        body["collision"] = "none"
+    scene = load_scene(data)
+    assert scene.contact is not None and scene.contact.bodies.size == 0
+    assert Simulator(scene, "rk4", 0.01).contact is None
+    data = scene_dict()
+    data["bodies"] = {"wall": {"mass": 1.0, "inertia": {"box": [1, 1, 1]}, "motion": "static",
+                               "pose": {"position": [0.0, 0.0, 0.5]}}}
+    assert Simulator(load_scene(data), "rk4", 0.01).contact is None

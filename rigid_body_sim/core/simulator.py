@@ -235,10 +235,11 @@ class Simulator:
         # their own rows, which user wrenches never touch, whenever the active set changes.
         self._script = tuple((parse_frame(scene, w.body, w.frame), w.force, w.torque, w.start, w.end)
                              for w in scene.wrenches)
-        # --- contact (core/contact): a ContactSolver only when the scene has ground half-spaces;
-        # None otherwise, and then every step runs exactly the code it ran before contact existed.
+        # --- contact (core/contact): a ContactSolver only when the scene has ground half-spaces and a
+        # moving body with a collision shape; None otherwise, and then every step runs exactly the
+        # code it ran before contact existed.
         self.contact = None
-        if scene.contact is not None:
+        if scene.contact is not None and scene.contact.bodies.size:
             from .contact.solver import ContactSolver
 
             self.contact = ContactSolver(self)
@@ -839,3 +840,11 @@ def compile_kernels() -> None:
 
     for name in INTEGRATORS:  # tools/envelope.py and the tests step bodies without the checks too
         unchecked_steps(name, scene.model, scene.initial_state, 0.01, 1)
+    # --- contact (core/contact): a ball bouncing to rest and a box sliding to a stop compile its kernels
+    ground = [{"normal": [0.0, 0.0, 1.0], "material": {"restitution": 0.5, "friction": 0.5}}]
+    contact = load_scene({"gravity": [0.0, 0.0, -9.81], "ground": ground, "bodies": {
+        "ball": {"mass": 1.0, "inertia": {"sphere": 0.1}, "pose": {"position": [0.0, 0.0, 0.2]}},
+        "crate": {"mass": 1.0, "inertia": {"box": [0.2, 0.2, 0.2]}, "pose": {"position": [1.0, 0.0, 0.1]},
+                  "twist": {"linear": [1.0, 0.0, 0.0]}}}})
+    Simulator(contact, integrator="rk4", dt=0.01).step(60)
+    # --- end contact

@@ -83,12 +83,17 @@ class ContactSpec:
         Each body's collision shape (body frame B, at the centre of mass) and material.
     restitution, friction : ndarray, shape (N, G)
         The pair coefficients of body i against ground j (:func:`pair_material`).
+    bodies : ndarray of int, shape (M,)
+        The bodies contact acts on: motion ``free`` and a collision shape. None of them: the
+        scene has no collision geometry that can touch anything, and a Simulator runs without
+        contact (exactly its code and cost without a ground).
     """
 
     grounds: np.ndarray
     shapes: np.ndarray
     restitution: np.ndarray
     friction: np.ndarray
+    bodies: np.ndarray
 
 
 def pair_material(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
@@ -215,9 +220,11 @@ def read_contact(check: Any, top: Mapping, model: Any, state: Any) -> ContactSpe
         for j in range(g):
             restitution[i, j], friction[i, j] = pair_material(shapes[i], grounds[j])
     _check_not_inside(check, model, state, shapes, grounds)
-    for array in (grounds, shapes, restitution, friction):
+    bodies = np.array([i for i in range(n) if shapes[i, KIND] != SHAPE_NONE and model.motions[i] == "free"],
+                      dtype=np.int64)
+    for array in (grounds, shapes, restitution, friction, bodies):
         array.flags.writeable = False
-    return ContactSpec(grounds, shapes, restitution, friction)
+    return ContactSpec(grounds, shapes, restitution, friction, bodies)
 
 
 def _check_not_inside(check: Any, model: Any, state: Any, shapes: np.ndarray, grounds: np.ndarray) -> None:

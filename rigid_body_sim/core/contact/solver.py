@@ -38,7 +38,7 @@ from .. import layout as L
 from ..forces import add_wrench
 from ..stepping import advance, step_reduced
 from .impacts import _LAM, IMPACT_WORK_SHAPE, impact
-from .layout import DIMS, FLIGHT, KIND, MAX_POINTS, NORMAL, PERSISTENT, SHAPE_BOX, SHAPE_NONE
+from .layout import DIMS, FLIGHT, KIND, MAX_POINTS, NORMAL, PERSISTENT, SHAPE_BOX
 from .persistent import LIFT_OFF, SLIDE, holding_wrench, normal_motion, normal_speeds, project
 from .shapes import FEATURE_BAND, MAX_FEATURES, body_gap, body_points, feature_gaps, feature_points, min_gaps
 
@@ -109,8 +109,7 @@ class ContactSolver:
         self.friction = spec.friction
         model = sim.model
         n = model.count
-        self.bodies = np.array([i for i in range(n) if spec.shapes[i, KIND] != SHAPE_NONE
-                                and model.motions[i] == "free"], dtype=np.int64)
+        self.bodies = np.array(spec.bodies, dtype=np.int64)  # free bodies with a collision shape
         self.names = model.names
         # contact points fixed in the body (box corners) see the centripetal acceleration (persistent.accelerations)
         self.vertex = spec.shapes[:, KIND] == SHAPE_BOX
