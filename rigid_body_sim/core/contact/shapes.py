@@ -190,8 +190,10 @@ def min_gaps(Y, prm, shapes, grounds, bodies, out):
 
 # ----------------------------------------------------------------------------- features (persistent contact)
 # A feature is what can touch the plane: the sphere's surface (1), a box corner (8), a capsule's
-# end sphere (2), a cylinder's rim (2). Persistent contact tracks which features touch, so that
-# another feature reaching the ground is an event even while the body rests or pivots.
+# end sphere (2); a cylinder has its two rims' lowest points (0, 1) and their highest points
+# (2, 3): rim k's highest point reaching the ground is the end face k landing flat, after which
+# the face touches along its whole rim (4 rim points). Persistent contact tracks which features
+# touch, so that another feature reaching the ground is an event even while the body rests or pivots.
 
 #: Most features a shape has (the box's corners).
 MAX_FEATURES = 8
@@ -221,11 +223,15 @@ def feature_gaps(y, p, shape, ground, gaps):
         ux, uy, uz = rotate(qw, qx, qy, qz, 0.0, 0.0, 1.0)
         cos_a = nx * ux + ny * uy + nz * uz
         radial = a0
+        count = 2
         if kind == SHAPE_CYLINDER:
-            radial = a0 * math.sqrt(max(0.0, 1.0 - cos_a * cos_a))
+            px, py, pz = nx - cos_a * ux, ny - cos_a * uy, nz - cos_a * uz
+            radial = a0 * math.sqrt(px * px + py * py + pz * pz)
+            gaps[2] = base - a1 * cos_a + radial
+            gaps[3] = base + a1 * cos_a + radial
+            count = 4
         gaps[0] = base - a1 * cos_a - radial
         gaps[1] = base + a1 * cos_a - radial
-        count = 2
     _pin = y[P], p[0], shape[0], ground[0], gaps[0]
     return count
 
@@ -276,9 +282,9 @@ def feature_points(y, p, shape, ground, mask, points, gaps, owners):
         across = math.sqrt(px * px + py * py + pz * pz)
         band = FEATURE_BAND * max(a0, a1)
         for end in range(2):
-            if mask & (1 << end):
+            if mask & (1 << end) or mask & (4 << end):
                 side = -1.0 if end == 0 else 1.0
-                if a0 * across <= band:  # standing on this end: four rim points
+                if a0 * across <= band or mask & (4 << end):  # standing on this end face: four rim points
                     e1x, e1y, e1z = rotate(qw, qx, qy, qz, 1.0, 0.0, 0.0)
                     e2x, e2y, e2z = rotate(qw, qx, qy, qz, 0.0, 1.0, 0.0)
                     for k in range(4):
