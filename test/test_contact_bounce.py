@@ -178,4 +178,4 @@ def test_collision_none_falls_through():
     sim = Simulator(load_scene(data), integrator="rk4", dt=1e-2)
     sim.step(100)
     assert sim.state.p_WC_W[0, 2] == pytest.approx(0.5 - 0.5 * G * 1.0, rel=1e-12)
-    assert sim.contact.events == []
+    assert sim.contact is None  # nothing can touch the ground: the simulator runs without contact

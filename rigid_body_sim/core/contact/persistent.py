@@ -25,13 +25,13 @@ import math
 from numba import njit
 
 from ..dynamics import derivative
-from ..layout import INV_INERTIA, INV_MASS, P, Q, V, W
+from ..layout import INV_INERTIA, INV_MASS, P, Q, Q_PB, V, W
 from ..rotation import exp_map, normalise, qmul, rotate
 from .impacts import _A, _ANG, _B, _LAM, _LIN, apply_impulses, build_rows, pgs
-from .layout import NORMAL
-from .shapes import feature_points
+from .layout import DIMS, KIND, NORMAL, SHAPE_CAPSULE, SHAPE_CYLINDER, SHAPE_SPHERE
+from .shapes import FEATURE_BAND, feature_points
 
-__all__ = ["LIFT_OFF", "STICK", "SLIDE", "accelerations", "normal_motion", "holding_wrench", "project",
+__all__ = ["LIFT_OFF", "STICK", "SLIDE", "accelerations", "normal_bias", "normal_motion", "holding_wrench", "project",
            "normal_speeds", "slip_velocity"]
 
 _OPTS = {"cache": True, "nogil": True, "error_model": "numpy"}
@@ -52,7 +52,7 @@ def slip_velocity(work, count):
 
 
 @njit(**_OPTS)
-def accelerations(y, p, w, count, rows, points, vertex, work, d):
+def accelerations(y, p, w, count, rows, points, bias, rdot, work, d):
     """work[:, B] ← the rows' components of the contact points' accelerations without contact force.
 
     a_c = a + α × r (+ ω × (ω × r) when the contact points are ``vertex`` es, fixed in the body:
@@ -61,6 +61,8 @@ def accelerations(y, p, w, count, rows, points, vertex, work, d):
     curved surface (sphere, the round side of a cylinder or capsule) the contact point moves
     over the body as it rolls, and the surface's curvature cancels the centripetal term in the
     gap's second derivative (exactly for a sphere: gap = n·c − r, so g̈ = n·a), so it is left out.
+    The normal rows take ``bias[c]`` instead: the velocity-product part of the second
+    derivative of each contact's gap function (:func:`normal_bias`, exact for every shape).
     The rows (build_rows) must be built for y.
     """
     derivative(y, p, w, d)
@@ -68,21 +70,21 @@ def accelerations(y, p, w, count, rows, points, vertex, work, d):
     ox, oy, oz = rotate(qw, qx, qy, qz, y[W], y[W + 1], y[W + 2])  # ω_W
     for c in range(count):
         rx, ry, rz = points[c, 0] - y[P], points[c, 1] - y[P + 1], points[c, 2] - y[P + 2]
-        wrx, wry, wrz = oy * rz - oz * ry, oz * rx - ox * rz, ox * ry - oy * rx  # ω × r
-        cx, cy, cz = oy * wrz - oz * wry, oz * wrx - ox * wrz, ox * wry - oy * wrx  # ω × (ω × r)
-        if not vertex:
-            cx = cy = cz = 0.0
+        wrx, wry, wrz = rdot[c, 0], rdot[c, 1], rdot[c, 2]  # how the contact point moves (ω × r for a body point)
+        cx, cy, cz = oy * wrz - oz * wry, oz * wrx - ox * wrz, ox * wry - oy * wrx  # ω × that
         for k in range(3):
             a = 3 * c + k
             lx, ly, lz = work[a, _LIN], work[a, _LIN + 1], work[a, _LIN + 2]
             # d·(α × r) = α·(r × d) = α_P·ang_P
             work[a, _B] = (lx * (d[V] + cx) + ly * (d[V + 1] + cy) + lz * (d[V + 2] + cz)
                            + work[a, _ANG] * d[W] + work[a, _ANG + 1] * d[W + 1] + work[a, _ANG + 2] * d[W + 2])
-    _pin = y[P], p[0], w[0], d[0], points[0, 0]
+            if k == 0:  # the normal row: n·a + α·(r × n) + the gap's own velocity-product term
+                work[a, _B] += bias[c] - (lx * cx + ly * cy + lz * cz)
+    _pin = y[P], p[0], w[0], d[0], points[0, 0], bias[0], rdot[0, 0]
 
 
 @njit(**_OPTS)
-def normal_motion(y, p, w, count, points, nx, ny, nz, vertex, work, d):
+def normal_motion(y, p, w, count, points, nx, ny, nz, bias, rdot, work, d):
     """(lowest normal velocity of the contact points, m/s; its free normal acceleration, m/s²; mean slip t1, t2)."""
     rows = build_rows(y, p, count, points, nx, ny, nz, work)
     sx, sy = slip_velocity(work, count)
@@ -92,12 +94,73 @@ def normal_motion(y, p, w, count, points, nx, ny, nz, vertex, work, d):
         if work[3 * c, _B] < lowest:
             lowest = work[3 * c, _B]
             which = c
-    accelerations(y, p, w, count, rows, points, vertex, work, d)
+    accelerations(y, p, w, count, rows, points, bias, rdot, work, d)
     return lowest, work[3 * which, _B], sx, sy
 
 
 @njit(**_OPTS)
-def holding_wrench(y, p, w, count, points, nx, ny, nz, mu, slip_tolerance, vertex, work, d, out):
+def normal_bias(y, p, shape, ground, mask, count, points, owners, bias, rdot):
+    """bias[c] ← the velocity-product term of the second derivative of contact c's gap (m/s²).
+
+    g̈ = n·a + α·(r × n) + bias, from each feature's gap function: a box corner or a point of a
+    flat face is a point of the body, bias = n·(ω × (ω × r)); a sphere's gap n·c − r has none;
+    a capsule end's gap n·(c ± h u) − r gives n·(ω × (ω × (± h u))); a cylinder rim's lowest
+    point, gap n·c + f(n·u) with f(x) = ±h x − r √(1 − x²), gives f'(x) n·(ω × (ω × u)) +
+    f''(x) (n·(ω × u))² (the rim's curvature: the contact point moves along the rim as it rolls).
+    ``owners`` are the features of the points (shapes.feature_points).
+
+    rdot[c] ← the world velocity of contact c's point relative to the centre of mass: ω × r for
+    a point of the body, 0 for a sphere's (it stays below the centre), ± h ω × u for a
+    capsule's, and the rim point's own motion for a cylinder's. The tangential rows use
+    ω × rdot, so that a rolling contact keeps its contact point at rest (d/dt (v + ω × r)).
+    """
+    kind = int(shape[KIND])
+    nx, ny, nz = ground[NORMAL], ground[NORMAL + 1], ground[NORMAL + 2]
+    qw, qx, qy, qz = y[Q], y[Q + 1], y[Q + 2], y[Q + 3]
+    ox, oy, oz = rotate(qw, qx, qy, qz, y[W], y[W + 1], y[W + 2])  # ω_W
+    bw, bx, by, bz = qmul(qw, qx, qy, qz, p[Q_PB], p[Q_PB + 1], p[Q_PB + 2], p[Q_PB + 3])  # q_WB
+    ux, uy, uz = rotate(bw, bx, by, bz, 0.0, 0.0, 1.0)  # the axis of a capsule or cylinder
+    cos_a = nx * ux + ny * uy + nz * uz
+    a0, a1 = shape[DIMS], shape[DIMS + 1]
+    for c in range(count):
+        end = owners[c]
+        side = -1.0 if end % 2 == 0 else 1.0
+        face = kind == SHAPE_CYLINDER and (mask & (4 << (end % 2)) or a0 * a0 * (1.0 - cos_a * cos_a)
+                                           <= (FEATURE_BAND * max(a0, a1)) ** 2)
+        if kind == SHAPE_SPHERE:
+            rx, ry, rz = 0.0, 0.0, 0.0
+        elif kind == SHAPE_CAPSULE or (kind == SHAPE_CYLINDER and not face):
+            rx, ry, rz = side * a1 * ux, side * a1 * uy, side * a1 * uz
+        else:
+            rx, ry, rz = points[c, 0] - y[P], points[c, 1] - y[P + 1], points[c, 2] - y[P + 2]
+        wrx, wry, wrz = oy * rz - oz * ry, oz * rx - ox * rz, ox * ry - oy * rx
+        b = nx * (oy * wrz - oz * wry) + ny * (oz * wrx - ox * wrz) + nz * (ox * wry - oy * wrx)
+        if kind == SHAPE_SPHERE or kind == SHAPE_CAPSULE or kind == SHAPE_CYLINDER and not face:
+            rdot[c, 0], rdot[c, 1], rdot[c, 2] = wrx, wry, wrz  # ω × (centre of the end, or 0 for a sphere)
+        else:  # a point of the body
+            px, py, pz = points[c, 0] - y[P], points[c, 1] - y[P + 1], points[c, 2] - y[P + 2]
+            rdot[c, 0], rdot[c, 1], rdot[c, 2] = oy * pz - oz * py, oz * px - ox * pz, ox * py - oy * px
+        if kind == SHAPE_CYLINDER and not face:  # − r √(1 − x²): f' = r x / s, f'' = r / s³
+            sin2 = max(1.0 - cos_a * cos_a, 1e-300)
+            sin_a = math.sqrt(sin2)
+            wux, wuy, wuz = oy * uz - oz * uy, oz * ux - ox * uz, ox * uy - oy * ux  # ω × u
+            rate = nx * wux + ny * wuy + nz * wuz  # d(n·u)/dt
+            uu = nx * (oy * wuz - oz * wuy) + ny * (oz * wux - ox * wuz) + nz * (ox * wuy - oy * wux)
+            b += a0 * cos_a / sin_a * uu + a0 / (sin2 * sin_a) * rate * rate
+            # the rim point is − r ρ from the end's centre, ρ = (n − x u)/s: add − r dρ/dt
+            ds = -cos_a * rate / sin_a
+            for j in range(3):
+                nj = (nx, ny, nz)[j]
+                uj = (ux, uy, uz)[j]
+                wuj = (wux, wuy, wuz)[j]
+                drho = (-rate * uj - cos_a * wuj) / sin_a - (nj - cos_a * uj) * ds / sin2
+                rdot[c, j] -= a0 * drho
+        bias[c] = b
+    _pin = y[P], p[0], shape[0], ground[0], points[0, 0], owners[0], bias[0], rdot[0, 0]
+
+
+@njit(**_OPTS)
+def holding_wrench(y, p, w, count, points, nx, ny, nz, mu, slip_tolerance, bias, rdot, work, d, out):
     """out[0:6] ← the contact force (N, world) at the centre of mass and its moment (N·m, world axes).
 
     ``w`` is the step's wrench row without contact, ``d`` a 13-float scratch. Returns
@@ -108,7 +171,7 @@ def holding_wrench(y, p, w, count, points, nx, ny, nz, mu, slip_tolerance, verte
     rows = build_rows(y, p, count, points, nx, ny, nz, work)
     vx, vy = slip_velocity(work, count)
     slip = math.sqrt(vx * vx + vy * vy)
-    accelerations(y, p, w, count, rows, points, vertex, work, d)
+    accelerations(y, p, w, count, rows, points, bias, rdot, work, d)
     for a in range(rows):
         work[a, _LAM] = 0.0
     qw, qx, qy, qz = y[Q], y[Q + 1], y[Q + 2], y[Q + 3]

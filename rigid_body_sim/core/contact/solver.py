@@ -39,7 +39,7 @@ from ..forces import add_wrench
 from ..stepping import advance, step_reduced
 from .impacts import _LAM, IMPACT_WORK_SHAPE, impact
 from .layout import DIMS, FLIGHT, KIND, MAX_POINTS, NORMAL, PERSISTENT, SHAPE_BOX
-from .persistent import LIFT_OFF, SLIDE, holding_wrench, normal_motion, normal_speeds, project
+from .persistent import LIFT_OFF, SLIDE, holding_wrench, normal_bias, normal_motion, normal_speeds, project
 from .shapes import FEATURE_BAND, MAX_FEATURES, body_gap, body_points, feature_gaps, feature_points, min_gaps
 
 __all__ = ["ContactSolver", "ContactEvent", "ZENO_APEX", "SLIP_TOLERANCE", "TOUCHING_GAP", "MAX_EVENTS_PER_STEP"]
@@ -123,6 +123,8 @@ class ContactSolver:
         self._band = FEATURE_BAND * spec.shapes[:, DIMS:DIMS + 3].max(axis=1)  # m: "touching together"
         self._features = np.empty(MAX_FEATURES)
         self._owners = np.zeros(MAX_POINTS, dtype=np.int64)
+        self._bias = np.zeros(MAX_POINTS)
+        self._rdot = np.zeros((MAX_POINTS, 3))
         self.pressed = np.zeros(n, dtype=np.int64)  # the tracked features the holding force pushes on, as bits
         self.events: list[ContactEvent] = []
         self._points = np.empty((MAX_POINTS, 3))
@@ -208,10 +210,23 @@ class ContactSolver:
         project(y, sim._prm[i], self.shapes[i], self.grounds[j], int(self.tracked[i]), sticking, self._points,
                 self._gaps, self._owners, self._work)
 
-    def _normal_motion(self, sim, y: np.ndarray, i: int, j: int, count: int, w: np.ndarray):
+    def _normal_motion(self, sim, y: np.ndarray, i: int, j: int, count: int, w: np.ndarray, mask: int | None = None):
+        """(lowest normal speed, its free normal acceleration, mean slip) of the points in self._points.
+
+        With ``mask`` (the points are those of feature_points, with their owners) the normal
+        accelerations carry each gap's exact velocity-product term (persistent.normal_bias);
+        without, the points' own centripetal acceleration for a box, none for the round shapes.
+        """
         n = self.grounds[j, NORMAL:NORMAL + 3]
-        return normal_motion(y, sim._prm[i], w, count, self._points, n[0], n[1], n[2], self.vertex[i], self._work,
-                             self._d)
+        if mask is None:
+            self._owners[:] = 0
+        normal_bias(y, sim._prm[i], self.shapes[i], self.grounds[j], 0 if mask is None else mask, count,
+                    self._points, self._owners, self._bias, self._rdot)
+        if mask is None and not self.vertex[i]:
+            self._bias[:] = 0.0
+            self._rdot[:] = 0.0
+        return normal_motion(y, sim._prm[i], w, count, self._points, n[0], n[1], n[2], self._bias, self._rdot,
+                             self._work, self._d)
 
     def _gap(self, sim, y: np.ndarray, i: int) -> tuple[float, int]:
         return body_gap(y, sim._prm[i], self.shapes[i], self.grounds, self._points, self._gaps)
@@ -262,10 +277,10 @@ class ContactSolver:
         count = self._tracked_points(sim, y, i)
         n = self.grounds[j, NORMAL:NORMAL + 3]
         lowest = float(self._gaps[:count].min()) if count else math.inf  # set_body_state may have lifted it
-        speed, _, _, _ = self._normal_motion(sim, y, i, j, count, w)
+        speed, _, _, _ = self._normal_motion(sim, y, i, j, count, w, int(self.tracked[i]))
         mode, _, sx, sy = holding_wrench(y, sim._prm[i], w, count, self._points, n[0], n[1], n[2],
-                                         float(self.friction[i, j]), SLIP_TOLERANCE, self.vertex[i], self._work,
-                                         self._d, self._force)
+                                         float(self.friction[i, j]), SLIP_TOLERANCE, self._bias, self._rdot,
+                                         self._work, self._d, self._force)
         if count == 0 or mode == LIFT_OFF or speed > LIFT_OFF_SPEED or lowest > TOUCHING_GAP:
             self.modes[i] = FLIGHT
             self.sliding[i] = False
@@ -437,7 +452,7 @@ class ContactSolver:
             def along(s: float) -> float:
                 row = self.step_map(sim, i, y0, s * h, held) if s > 0.0 else y0
                 count = self._tracked_points(sim, row, i)
-                _, _, vx, vy = self._normal_motion(sim, row, i, j, count, held)
+                _, _, vx, vy = self._normal_motion(sim, row, i, j, count, held, int(self.tracked[i]))
                 return vx * sx + vy * sy
 
             if along(1.0) <= 0.0:  # the slip reversed inside the step: the stop, located
@@ -478,14 +493,14 @@ class ContactSolver:
         n = self.grounds[j, NORMAL:NORMAL + 3]
         mask = int(self.tracked[i]) | self._touching(sim, y, i, j)
         count = self._tracked_points(sim, y, i, mask)
-        before, _, _, _ = self._normal_motion(sim, y, i, j, count, w)
+        before, _, _, _ = self._normal_motion(sim, y, i, j, count, w, mask)
         e, mu = float(self.restitution[i, j]), float(self.friction[i, j])
         after_row = y.copy()
         impulse, e0, e1, _ = impact(y, after_row, sim._prm[i], count, self._points, n[0], n[1], n[2], e, mu,
                                     self._work)
         y = after_row
         _, highest = normal_speeds(y, sim._prm[i], count, self._points, n[0], n[1], n[2], self._work)
-        _, accel, _, _ = self._normal_motion(sim, y, i, j, count, w)
+        _, accel, _, _ = self._normal_motion(sim, y, i, j, count, w, mask)
         self.events.append(ContactEvent(t, self.names[i], j, "impact", before, highest, impulse, e0, e1))
         toward = -accel
         if highest <= LIFT_OFF_SPEED or (toward > 0.0 and highest * highest <= 2.0 * toward * ZENO_APEX):
