@@ -37,6 +37,7 @@ import numpy as np
 from .. import layout as L
 from ..forces import add_wrench
 from ..stepping import advance, step_reduced
+from .batch import OK, hold_all, settle_all
 from .impacts import _LAM, IMPACT_WORK_SHAPE, impact
 from .layout import DIMS, FLIGHT, KIND, MAX_POINTS, NORMAL, PERSISTENT, SHAPE_BOX
 from .persistent import LIFT_OFF, SLIDE, holding_wrench, normal_bias, normal_motion, normal_speeds, project
@@ -124,6 +125,7 @@ class ContactSolver:
         self._features = np.empty(MAX_FEATURES)
         self._owners = np.zeros(MAX_POINTS, dtype=np.int64)
         self._bias = np.zeros(MAX_POINTS)
+        self._status = np.zeros(n, dtype=np.int64)  # batch.OK / TO_SOLVER of each body after a compiled pass
         self._rdot = np.zeros((MAX_POINTS, 3))
         self.pressed = np.zeros(n, dtype=np.int64)  # the tracked features the holding force pushes on, as bits
         self.events: list[ContactEvent] = []
@@ -267,9 +269,14 @@ class ContactSolver:
     def add_holding_wrenches(self, sim, wrenches: np.ndarray) -> None:
         """Add to ``wrenches`` (the step's rows, in place) the force holding each body in persistent contact."""
         Y = sim._Ys[sim._control[L.CUR]]
-        for i in self.bodies:
-            if self.modes[i] == PERSISTENT:
-                self._hold(sim, Y[i], i, wrenches[i], sim.time)
+        resting = self.bodies[(self.modes[self.bodies] == PERSISTENT) & ~sim._stopped[self.bodies]]
+        if not resting.size:
+            return
+        hold_all(Y, sim._prm, wrenches, self.shapes, self.grounds, resting, self.ground_of, self.tracked, self.friction,
+                 SLIP_TOLERANCE, LIFT_OFF_SPEED, TOUCHING_GAP, self._held, self.pressed, self.sliding,
+                 self.slide_direction, self._status)
+        for i in resting[self._status[resting] != OK]:  # lifting off: the solver says so and records it
+            self._hold(sim, Y[i], i, wrenches[i], sim.time)
 
     def _hold(self, sim, y: np.ndarray, i: int, w: np.ndarray, t: float) -> bool:
         """Add the holding force of body i at y into the wrench row w; False (and flight) if it lifts off."""
@@ -302,12 +309,19 @@ class ContactSolver:
         h = sim.dt
         t0 = sim.time - h
         min_gaps(Y1, sim._prm, self.shapes, self.grounds, self.bodies, self._lowest)
-        for m, i in enumerate(self.bodies):
+        moving = ~sim._stopped[self.bodies]
+        resting = self.bodies[(self.modes[self.bodies] == PERSISTENT) & moving]
+        settle_all(Y1, sim._prm, self.shapes, self.grounds, resting, self.ground_of, self.tracked, self.pressed,
+                   self.sliding, self.slide_direction, self._band, self._status)
+        # only the bodies with an event in the step are looked at in Python
+        busy = np.concatenate((resting[self._status[resting] != OK],
+                               self.bodies[(self.modes[self.bodies] == FLIGHT) & moving & (self._lowest < 0.0)]))
+        for i in busy:
             if sim._stopped[i]:
                 continue
             if self.modes[i] == PERSISTENT:
                 Y1[i, :L.STATE_WIDTH] = self._persistent_end(sim, i, Y0[i], Y1[i], wrenches[i], t0, h)[:L.STATE_WIDTH]
-            elif self._lowest[m] < 0.0:
+            else:
                 Y1[i, :L.STATE_WIDTH] = self._with_events(sim, i, Y0[i], wrenches[i], t0, h)[:L.STATE_WIDTH]
 
     # ----------------------------------------------------------------- flight: impacts
