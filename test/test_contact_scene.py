@@ -11,17 +11,14 @@ import copy
 import math
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 from rigid_body_sim.core import SceneError, Simulator, load_scene
 from rigid_body_sim.core.contact.layout import (
     DIMS,
-    FRICTION,
     KIND,
     NORMAL,
     OFFSET,
-    RESTITUTION,
     SHAPE_BOX,
     SHAPE_CAPSULE,
     SHAPE_CYLINDER,

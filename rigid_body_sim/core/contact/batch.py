@@ -16,7 +16,7 @@ from numba import njit
 
 from ..forces import add_wrench
 from ..layout import FRAME_WORLD_ALIGNED, STATE_WIDTH
-from .impacts import _B, _LAM, IMPACT_WORK_SHAPE, build_rows
+from .impacts import _LAM, IMPACT_WORK_SHAPE, build_rows
 from .layout import MAX_POINTS, NORMAL
 from .persistent import LIFT_OFF, SLIDE, holding_wrench, normal_bias, normal_motion, project, slip_velocity
 from .shapes import MAX_FEATURES, feature_gaps, feature_points

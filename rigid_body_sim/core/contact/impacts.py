@@ -30,7 +30,7 @@ import math
 from numba import njit
 
 from ..layout import INERTIA, INV_INERTIA, INV_MASS, MASS, P, Q, V, W
-from ..rotation import rotate, rotate_back
+from ..rotation import rotate_back
 from .layout import MAX_POINTS
 
 __all__ = ["IMPACT_WORK_SHAPE", "PGS_MAX_SWEEPS", "PGS_TOLERANCE", "tangents", "build_rows", "pgs",

@@ -24,7 +24,6 @@ from ..layout import P, Q, Q_PB
 from ..rotation import qmul, rotate
 from .layout import (
     DIMS,
-    GROUND_WIDTH,
     KIND,
     MAX_POINTS,
     NORMAL,
