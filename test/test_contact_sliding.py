@@ -128,3 +128,25 @@ def test_a_resting_body_lifted_by_set_body_state_falls_again():
     assert impacts[0].time == pytest.approx(math.sqrt(2.0 * 0.5 / G), rel=1e-9)
     assert sim.contact.is_resting("crate")  # e = 0: at rest at once
     assert sim.state.p_WC_W[0] == pytest.approx([0.0, 0.0, 0.1], abs=1e-12)
+
+
+def test_a_ball_sliding_on_the_floor_bounces_off_a_wall():
+    """Two half-spaces: a frictionless floor (e 0) and a wall x ≤ 1 (e 1). The ball, resting on the
+    floor and sliding at v0 toward the wall, reaches it when x + r = 1 (t = (1 − r)/v0), comes back
+    at −v0 and stays on the floor."""
+    r = 0.1
+    data = {"gravity": [0.0, 0.0, -G],
+            "ground": [{"normal": [0, 0, 1], "material": {"restitution": 0.0, "friction": 0.0}},
+                       {"normal": [-2, 0, 0], "offset": -1.0, "material": {"restitution": 1.0, "friction": 0.0}}],
+            "bodies": {"ball": {"mass": 1.0, "inertia": {"sphere": r}, "pose": {"position": [0.0, 0.0, r]},
+                                "twist": {"linear": [V0, 0.0, 0.0]}}}}
+    sim = Simulator(load_scene(data), integrator="rk4", dt=1e-2)
+    assert sim.contact.is_resting("ball")
+    sim.step(100)
+    hits = sim.contact.events_of("ball", "impact")
+    assert len(hits) == 1 and hits[0].ground == 1
+    t_hit = (1.0 - r) / V0
+    assert hits[0].time == pytest.approx(t_hit, rel=1e-12)
+    assert sim.state.v_WC_W[0] == pytest.approx([-V0, 0.0, 0.0], rel=1e-12, abs=1e-12)
+    assert sim.state.p_WC_W[0] == pytest.approx([1.0 - r - V0 * (sim.time - t_hit), 0.0, r], rel=1e-12, abs=1e-12)
+    assert sim.contact.is_resting("ball")

@@ -19,7 +19,7 @@ from ..layout import FRAME_WORLD_ALIGNED, STATE_WIDTH
 from .impacts import _LAM, IMPACT_WORK_SHAPE, build_rows
 from .layout import MAX_POINTS, NORMAL
 from .persistent import LIFT_OFF, SLIDE, holding_wrench, normal_bias, normal_motion, project, slip_velocity
-from .shapes import MAX_FEATURES, feature_gaps, feature_points
+from .shapes import MAX_FEATURES, body_points, feature_gaps, feature_points
 
 __all__ = ["OK", "TO_SOLVER", "hold_all", "settle_all"]
 
@@ -78,9 +78,9 @@ def hold_all(Y, prm, wrenches, shapes, grounds, bodies, ground_of, tracked, fric
 def settle_all(Y, prm, shapes, grounds, bodies, ground_of, tracked, pressed, sliding, slide_direction, band, status):
     """Project each body in persistent contact back onto it (persistent.project), unless its step had an event.
 
-    Flagged for the solver instead: a slide whose slip reversed in the step, a feature not
-    tracked that is now below the ground, a tracked feature the holding force did not push on
-    that moved off.
+    Flagged for the solver instead: a slide whose slip reversed in the step, another ground
+    reached, a feature not tracked that is now below the ground, a tracked feature the holding
+    force did not push on that moved off.
     """
     points = np.empty((MAX_POINTS, 3))
     gaps = np.empty(MAX_POINTS)
@@ -101,6 +101,14 @@ def settle_all(Y, prm, shapes, grounds, bodies, ground_of, tracked, pressed, sli
             if vx * sx + vy * sy <= 0.0:
                 status[i] = TO_SOLVER
                 continue
+        for jj in range(grounds.shape[0]):  # another half-space reached: an impact for the solver
+            if jj != j and status[i] == OK:
+                count = body_points(y, p, shapes[i], grounds[jj], points, gaps)
+                for c in range(count):
+                    if gaps[c] < 0.0:
+                        status[i] = TO_SOLVER
+        if status[i] != OK:
+            continue
         count = feature_gaps(y, p, shapes[i], ground, features)
         for k in range(count):
             inside = not tracked[i] & (1 << k) and features[k] < 0.0

@@ -479,6 +479,15 @@ class ContactSolver:
                 if s < 1.0:  # the rest of the step sticking, with the holding force found at the stop
                     return self._persistent_span(sim, i, stop, self._bare(i, held), t + s * h, h - s * h)
                 return stop
+        if self._other_gap(sim, end, i)[0] < 0.0:  # another half-space reached: an impact against it alone
+            g0 = self._other_gap(sim, y0, i)[0]
+            s = 0.0 if g0 <= 0.0 else self._locate(
+                lambda s: self._other_gap(sim, self.step_map(sim, i, y0, s * h, held), i)[0], g0, -1.0)
+            s = 0.0 if s is None else s
+            hit = self.step_map(sim, i, y0, s * h, held) if s > 0.0 else y0.copy()
+            self._side_impact(sim, i, hit, held, t + s * h)
+            self._project(sim, hit, i, False)
+            return self._persistent_span(sim, i, hit, self._bare(i, held), t + s * h, h - s * h) if s < 1.0 else hit
         if self._untracked_gap(sim, end, i) < 0.0:  # another feature reached the ground: an impact
             g0 = self._untracked_gap(sim, y0, i)
             s = 0.0 if g0 <= 0.0 else self._locate(
@@ -499,6 +508,34 @@ class ContactSolver:
                 return end
         self._project(sim, end, i, not self.sliding[i])
         return end
+
+    def _other_gap(self, sim, y: np.ndarray, i: int) -> tuple[float, int]:
+        """(lowest gap, ground) of body i against the half-spaces other than the one it rests on."""
+        lowest, which = math.inf, -1
+        for jj in range(len(self.grounds)):
+            if jj != self.ground_of[i]:
+                count = body_points(y, sim._prm[i], self.shapes[i], self.grounds[jj], self._points, self._gaps)
+                if count and self._gaps[:count].min() < lowest:
+                    lowest, which = float(self._gaps[:count].min()), jj
+        return lowest, which
+
+    def _side_impact(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float) -> None:
+        """Body i, resting on its ground, hits another half-space at y: the impact against that one (in place).
+
+        The two contacts are not solved together yet: the resting contact is projected again
+        afterwards (for a wall at right angles to a frictionless floor this is exact).
+        """
+        gap, jj = self._other_gap(sim, y, i)
+        n = self.grounds[jj, NORMAL:NORMAL + 3]
+        y[L.P:L.P + 3] -= gap * n
+        count = body_points(y, sim._prm[i], self.shapes[i], self.grounds[jj], self._points, self._gaps)
+        before, _ = normal_speeds(y, sim._prm[i], count, self._points, n[0], n[1], n[2], self._work)
+        after_row = y.copy()
+        impulse, e0, e1, _ = impact(y, after_row, sim._prm[i], count, self._points, n[0], n[1], n[2],
+                                    float(self.restitution[i, jj]), float(self.friction[i, jj]), self._work)
+        y[L.V:L.W + 3] = after_row[L.V:L.W + 3]
+        after, _ = normal_speeds(y, sim._prm[i], count, self._points, n[0], n[1], n[2], self._work)
+        self.events.append(ContactEvent(t, self.names[i], jj, "impact", before, after, impulse, e0, e1))
 
     def _landing(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float, h: float) -> np.ndarray:
         """A feature of body i, in persistent contact, reaches the ground at y: the impact of every touching
