@@ -208,7 +208,7 @@ class Scene:
     energy_growth_limit: float = DEFAULT_ENERGY_GROWTH_LIMIT
     text: str | None = None
     imus: Mapping[str, ImuSpec] = field(default_factory=dict)
-    contact: ContactSpec | None = None  # contact (core/contact)
+    contact: ContactSpec | None = field(default=None, compare=False)  # contact (core/contact)
 
     @property
     def body_names(self) -> tuple[str, ...]:

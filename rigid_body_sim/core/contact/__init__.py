@@ -20,6 +20,8 @@ impacts
     Compiled impact law for one or several simultaneous contacts, with Coulomb friction.
 persistent
     Compiled holding force of a persistent contact and the projection onto the contact manifold.
+batch
+    The compiled passes over every body in persistent contact (holding forces, projection).
 solver
     :class:`~rigid_body_sim.core.contact.solver.ContactSolver`, the driver a Simulator holds when its
     scene has collision geometry.

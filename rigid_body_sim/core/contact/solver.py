@@ -6,7 +6,8 @@ old code. Per step:
 
 1. :meth:`ContactSolver.add_holding_wrenches` — before the step, every body in persistent
    contact gets the contact force that holds it (persistent.holding_wrench) added to the
-   step's wrench rows; a body whose holding force would pull (or that moves away) lifts off.
+   step's wrench rows, in one compiled pass (batch.hold_all); a body whose holding force would
+   pull (or that moves away) lifts off.
 2. The simulator steps every body with its integrator, as without contact.
 3. :meth:`ContactSolver.after_step` — one compiled pass computes every body's lowest gap
    (shapes.min_gaps). A body in flight whose gap became negative has its step taken again
@@ -14,9 +15,18 @@ old code. Per step:
    the body's own step map (its integrator, or its reduced model — the same code the step
    ran), bracketed and found by the Illinois method to round-off; there the impact law acts
    (impacts.impact), and the rest of the step follows, event after event. A body in persistent
-   contact is projected back onto the contact (persistent.project); if it was sliding and its
-   slip reversed, the stop is located on the step map the same way and the rest of the step
-   is taken sticking.
+   contact is projected back onto the contact (persistent.project, compiled pass
+   batch.settle_all) unless its step had an event, located on the step map the same way: its
+   slide stopped (the rest of the step sticking), another of its features reached the ground
+   (an impact of all touching features together, :meth:`ContactSolver._landing`), another
+   half-space was reached, or a feature the holding force did not push on moved off.
+
+Persistent contact tracks *features* (shapes.feature_gaps: box corners, capsule ends, cylinder
+rims), so resting on a face, pivoting on an edge or rolling on a rim are one mechanism. The
+holding force is found at the start of each step and held over it (zero-order hold): exact
+for resting and sliding at constant force (the closed-form tests), first order in time where
+the contact point moves over a curved rim while the body turns fast (a disk rolling on its
+edge, Euler's disk): there the energy can drift up, which the tests do not cover yet.
 
 Zeno guard: after an impact whose rebound would rise less than :data:`ZENO_APEX` (the normal
 speed u⁺ with u⁺²/(2a) < ZENO_APEX, a the free normal acceleration of the contact point toward
