@@ -157,7 +157,8 @@ def test_gap_accelerations_match_finite_differences_of_the_gap_functions():
                                       owners)
             if n_points != 1:
                 continue
-            normal_bias(y, prm[0], spec.shapes[0], spec.grounds[0], 1 << feature, 1, points, owners, bias, rdot)
+            normal_bias(y, prm[0], spec.shapes[0], spec.grounds[0], 1 << feature, 1, points, owners, bias, rdot,
+                        np.zeros((4, 3)))
             predicted = d[9] + alpha_W @ np.cross(points[0] - y[:3], [0.0, 0.0, 1.0]) + bias[0]
             differenced = (gaps[2, feature] - 2.0 * gaps[1, feature] + gaps[0, feature]) / h**2
             assert predicted == pytest.approx(differenced, abs=1e-6), (inertia, collision, feature)

@@ -14,11 +14,19 @@ import math
 import numpy as np
 from numba import njit
 
-from ..forces import add_wrench
-from ..layout import FRAME_WORLD_ALIGNED, STATE_WIDTH
+from ..layout import STATE_WIDTH
 from .impacts import _LAM, IMPACT_WORK_SHAPE, build_rows
 from .layout import MAX_POINTS, NORMAL
-from .persistent import LIFT_OFF, SLIDE, holding_wrench, normal_bias, normal_motion, project, slip_velocity
+from .persistent import (
+    LIFT_OFF,
+    SLIDE,
+    add_contact_wrench,
+    holding_wrench,
+    normal_bias,
+    normal_motion,
+    project,
+    slip_velocity,
+)
 from .shapes import MAX_FEATURES, body_points, feature_gaps, feature_points
 
 __all__ = ["OK", "TO_SOLVER", "hold_all", "settle_all"]
@@ -31,13 +39,17 @@ OK, TO_SOLVER = 0, 1
 
 @njit(**_OPTS)
 def hold_all(Y, prm, wrenches, shapes, grounds, bodies, ground_of, tracked, friction, slip_tolerance,
-             lift_off_speed, touching_gap, held, pressed, sliding, slide_direction, status):
-    """Add each body's holding force (persistent.holding_wrench) to its wrench row; flag the ones that lift off."""
+             lift_off_speed, touching_gap, bare, pressed, sliding, slide_direction, status):
+    """Add each body's holding force (persistent.holding_wrench) to its wrench row; flag the ones that lift off.
+
+    ``bare[i]`` keeps body i's wrench row as it was before (for a step taken again in pieces).
+    """
     points = np.empty((MAX_POINTS, 3))
     gaps = np.empty(MAX_POINTS)
     owners = np.zeros(MAX_POINTS, dtype=np.int64)
     bias = np.empty(MAX_POINTS)
     rdot = np.empty((MAX_POINTS, 3))
+    anchors = np.empty((MAX_POINTS, 3))
     work = np.zeros(IMPACT_WORK_SHAPE)
     d = np.empty(STATE_WIDTH)
     force = np.empty(6)
@@ -54,7 +66,7 @@ def hold_all(Y, prm, wrenches, shapes, grounds, bodies, ground_of, tracked, fric
         lowest = math.inf
         for c in range(count):
             lowest = min(lowest, gaps[c])
-        normal_bias(y, p, shapes[i], ground, tracked[i], count, points, owners, bias, rdot)
+        normal_bias(y, p, shapes[i], ground, tracked[i], count, points, owners, bias, rdot, anchors)
         speed, _, _, _ = normal_motion(y, p, w, count, points, nx, ny, nz, bias, rdot, work, d)
         mode, _, sx, sy = holding_wrench(y, p, w, count, points, nx, ny, nz, friction[i, j], slip_tolerance, bias,
                                          rdot, work, d, force)
@@ -68,10 +80,9 @@ def hold_all(Y, prm, wrenches, shapes, grounds, bodies, ground_of, tracked, fric
             if work[3 * c, _LAM] > 0.0:
                 bits |= 1 << owners[c]
         pressed[i] = bits
-        for k in range(6):
-            held[i, k] = force[k]
-        add_wrench(w, p, FRAME_WORLD_ALIGNED, 0.0, 0.0, 0.0, force[0], force[1], force[2], force[3], force[4],
-                   force[5])
+        for k in range(w.shape[0]):
+            bare[i, k] = w[k]
+        add_contact_wrench(w, y, p, count, points, anchors, work)
 
 
 @njit(**_OPTS)

@@ -25,13 +25,14 @@ import math
 from numba import njit
 
 from ..dynamics import derivative
-from ..layout import INV_INERTIA, INV_MASS, P, Q, Q_PB, V, W
-from ..rotation import exp_map, normalise, qmul, rotate
+from ..forces import add_wrench
+from ..layout import FRAME_SITE_WORLD_AXES, INV_INERTIA, INV_MASS, P, Q, Q_PB, V, W
+from ..rotation import exp_map, normalise, qmul, rotate, rotate_back
 from .impacts import _A, _ANG, _B, _LAM, _LIN, apply_impulses, build_rows, pgs
 from .layout import DIMS, KIND, NORMAL, SHAPE_CAPSULE, SHAPE_CYLINDER, SHAPE_SPHERE
 from .shapes import FEATURE_BAND, feature_points
 
-__all__ = ["LIFT_OFF", "STICK", "SLIDE", "accelerations", "normal_bias", "normal_motion", "holding_wrench", "project",
+__all__ = ["LIFT_OFF", "STICK", "SLIDE", "add_contact_wrench", "accelerations", "normal_bias", "normal_motion", "holding_wrench", "project",
            "normal_speeds", "slip_velocity"]
 
 _OPTS = {"cache": True, "nogil": True, "error_model": "numpy"}
@@ -99,7 +100,7 @@ def normal_motion(y, p, w, count, points, nx, ny, nz, bias, rdot, work, d):
 
 
 @njit(**_OPTS)
-def normal_bias(y, p, shape, ground, mask, count, points, owners, bias, rdot):
+def normal_bias(y, p, shape, ground, mask, count, points, owners, bias, rdot, anchors):
     """bias[c] ← the velocity-product term of the second derivative of contact c's gap (m/s²).
 
     g̈ = n·a + α·(r × n) + bias, from each feature's gap function: a box corner or a point of a
@@ -113,6 +114,9 @@ def normal_bias(y, p, shape, ground, mask, count, points, owners, bias, rdot):
     a point of the body, 0 for a sphere's (it stays below the centre), ± h ω × u for a
     capsule's, and the rim point's own motion for a cylinder's. The tangential rows use
     ω × rdot, so that a rolling contact keeps its contact point at rest (d/dt (v + ω × r)).
+    anchors[c] ← the body-fixed point (from the centre of mass, world axes) contact c's feature
+    hangs on: the point itself for a box corner or a face point, the end's centre for a capsule
+    or a cylinder rim, the centre for a sphere.
     """
     kind = int(shape[KIND])
     nx, ny, nz = ground[NORMAL], ground[NORMAL + 1], ground[NORMAL + 2]
@@ -133,6 +137,7 @@ def normal_bias(y, p, shape, ground, mask, count, points, owners, bias, rdot):
             rx, ry, rz = side * a1 * ux, side * a1 * uy, side * a1 * uz
         else:
             rx, ry, rz = points[c, 0] - y[P], points[c, 1] - y[P + 1], points[c, 2] - y[P + 2]
+        anchors[c, 0], anchors[c, 1], anchors[c, 2] = rx, ry, rz
         wrx, wry, wrz = oy * rz - oz * ry, oz * rx - ox * rz, ox * ry - oy * rx
         b = nx * (oy * wrz - oz * wry) + ny * (oz * wrx - ox * wrz) + nz * (ox * wry - oy * wrx)
         if kind == SHAPE_SPHERE or kind == SHAPE_CAPSULE or kind == SHAPE_CYLINDER and not face:
@@ -156,7 +161,7 @@ def normal_bias(y, p, shape, ground, mask, count, points, owners, bias, rdot):
                 drho = (-rate * uj - cos_a * wuj) / sin_a - (nj - cos_a * uj) * ds / sin2
                 rdot[c, j] -= a0 * drho
         bias[c] = b
-    _pin = y[P], p[0], shape[0], ground[0], points[0, 0], owners[0], bias[0], rdot[0, 0]
+    _pin = y[P], p[0], shape[0], ground[0], points[0, 0], owners[0], bias[0], rdot[0, 0], anchors[0, 0]
 
 
 @njit(**_OPTS)
@@ -202,6 +207,34 @@ def holding_wrench(y, p, w, count, points, nx, ny, nz, mu, slip_tolerance, bias,
     out[0], out[1], out[2], out[3], out[4], out[5] = fx, fy, fz, tx, ty, tz
     _pin = y[P], p[0], w[0], d[0]
     return mode, normal, sx, sy
+
+
+@njit(**_OPTS)
+def add_contact_wrench(w, y, p, count, points, anchors, work):
+    """Add to wrench row ``w`` the contact forces of the multipliers in ``work`` (after holding_wrench).
+
+    Each contact's force f (world axes) goes in at the body-fixed point its feature hangs on
+    (``anchors``, from the centre of mass, normal_bias: a box corner itself, a capsule or
+    cylinder end's centre, a sphere's centre) as a world-axes force at a body point
+    (forces.add_wrench, FRAME_SITE_WORLD_AXES), so its moment turns with the body at every
+    integrator stage (a pivot's force then does no work), plus the moment of the rest of the
+    lever, (point − anchor) × f, which stays in world axes as the point stays below its anchor.
+    """
+    qw, qx, qy, qz = y[Q], y[Q + 1], y[Q + 2], y[Q + 3]
+    for c in range(count):
+        gx = gy = gz = 0.0
+        for k in range(3):
+            a = 3 * c + k
+            lam = work[a, _LAM]
+            gx += work[a, _LIN] * lam
+            gy += work[a, _LIN + 1] * lam
+            gz += work[a, _LIN + 2] * lam
+        ax, ay, az = anchors[c, 0], anchors[c, 1], anchors[c, 2]
+        lx, ly, lz = points[c, 0] - y[P] - ax, points[c, 1] - y[P + 1] - ay, points[c, 2] - y[P + 2] - az
+        r = rotate_back(qw, qx, qy, qz, ax, ay, az)
+        add_wrench(w, p, FRAME_SITE_WORLD_AXES, r[0], r[1], r[2], gx, gy, gz,
+                   ly * gz - lz * gy, lz * gx - lx * gz, lx * gy - ly * gx)
+    _pin = w[0], y[P], p[0], points[0, 0], anchors[0, 0], work[0, 0]
 
 
 @njit(**_OPTS)

@@ -45,12 +45,20 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import layout as L
-from ..forces import add_wrench
 from ..stepping import advance, step_reduced
 from .batch import OK, hold_all, settle_all
 from .impacts import _LAM, IMPACT_WORK_SHAPE, impact
 from .layout import DIMS, FLIGHT, KIND, MAX_POINTS, NORMAL, PERSISTENT, SHAPE_BOX
-from .persistent import LIFT_OFF, SLIDE, holding_wrench, normal_bias, normal_motion, normal_speeds, project
+from .persistent import (
+    LIFT_OFF,
+    SLIDE,
+    add_contact_wrench,
+    holding_wrench,
+    normal_bias,
+    normal_motion,
+    normal_speeds,
+    project,
+)
 from .shapes import FEATURE_BAND, MAX_FEATURES, body_gap, body_points, feature_gaps, feature_points, min_gaps
 
 __all__ = ["ContactSolver", "ContactEvent", "ZENO_APEX", "SLIP_TOLERANCE", "TOUCHING_GAP", "MAX_EVENTS_PER_STEP"]
@@ -128,7 +136,8 @@ class ContactSolver:
         self.ground_of = np.full(n, -1, dtype=np.int64)
         self.sliding = np.zeros(n, dtype=bool)
         self.slide_direction = np.zeros((n, 2))
-        self._held = np.zeros((n, 6))  # the holding force and moment added to each body's wrench row
+        self._bare_rows = np.zeros((n, L.WRENCH_WIDTH))  # each body's wrench row before its holding force
+        self._anchors = np.zeros((MAX_POINTS, 3))  # normal_bias: the body points the contact forces act at
         # the features (shapes.feature_gaps) touching the ground in persistent contact, as bits
         self.tracked = np.zeros(n, dtype=np.int64)
         self._band = FEATURE_BAND * spec.shapes[:, DIMS:DIMS + 3].max(axis=1)  # m: "touching together"
@@ -233,7 +242,7 @@ class ContactSolver:
         if mask is None:
             self._owners[:] = 0
         normal_bias(y, sim._prm[i], self.shapes[i], self.grounds[j], 0 if mask is None else mask, count,
-                    self._points, self._owners, self._bias, self._rdot)
+                    self._points, self._owners, self._bias, self._rdot, self._anchors)
         if mask is None and not self.vertex[i]:
             self._bias[:] = 0.0
             self._rdot[:] = 0.0
@@ -283,8 +292,8 @@ class ContactSolver:
         if not resting.size:
             return
         hold_all(Y, sim._prm, wrenches, self.shapes, self.grounds, resting, self.ground_of, self.tracked, self.friction,
-                 SLIP_TOLERANCE, LIFT_OFF_SPEED, TOUCHING_GAP, self._held, self.pressed, self.sliding,
-                 self.slide_direction, self._status)
+                 SLIP_TOLERANCE, LIFT_OFF_SPEED, TOUCHING_GAP, self._bare_rows, self.pressed,
+                 self.sliding, self.slide_direction, self._status)
         for i in resting[self._status[resting] != OK]:  # lifting off: the solver says so and records it
             self._hold(sim, Y[i], i, wrenches[i], sim.time)
 
@@ -307,9 +316,8 @@ class ContactSolver:
         self.slide_direction[i] = sx, sy
         lam = self._work[0:3 * count:3, _LAM]  # the normal forces of the points, in the order of _tracked_points
         self.pressed[i] = int(sum(1 << int(self._owners[c]) for c in range(count) if lam[c] > 0.0))
-        f = self._force
-        self._held[i] = f
-        add_wrench(w, sim._prm[i], L.FRAME_WORLD_ALIGNED, 0.0, 0.0, 0.0, f[0], f[1], f[2], f[3], f[4], f[5])
+        self._bare_rows[i] = w
+        add_contact_wrench(w, y, sim._prm[i], count, self._points, self._anchors, self._work)
         return True
 
     def after_step(self, sim, wrenches: np.ndarray) -> None:
@@ -455,10 +463,7 @@ class ContactSolver:
 
     def _bare(self, i: int, held: np.ndarray) -> np.ndarray:
         """The wrench row ``held`` without the holding force _hold added to it for body i."""
-        bare = held.copy()
-        bare[L.F_COM_W:L.F_COM_W + 3] -= self._held[i, :3]
-        bare[L.T_COM_W:L.T_COM_W + 3] -= self._held[i, 3:]
-        return bare
+        return self._bare_rows[i].copy()
 
     def _persistent_end(self, sim, i: int, y0: np.ndarray, end: np.ndarray, held: np.ndarray, t: float,
                         h: float) -> np.ndarray:
