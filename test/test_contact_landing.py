@@ -13,6 +13,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from rigid_body_sim.core import Simulator, load_scene
 from rigid_body_sim.core.contact.shapes import MAX_FEATURES, feature_gaps
@@ -162,3 +164,34 @@ def test_gap_accelerations_match_finite_differences_of_the_gap_functions():
             predicted = d[9] + alpha_W @ np.cross(points[0] - y[:3], [0.0, 0.0, 1.0]) + bias[0]
             differenced = (gaps[2, feature] - 2.0 * gaps[1, feature] + gaps[0, feature]) / h**2
             assert predicted == pytest.approx(differenced, abs=1e-6), (inertia, collision, feature)
+
+
+@settings(max_examples=25, deadline=None, derandomize=True, database=None)
+@given(seed=st.integers(0, 2**32 - 1), kind=st.sampled_from(["box", "sphere", "capsule", "cylinder"]),
+       e=st.sampled_from([0.0, 0.3, 0.8]), mu=st.sampled_from([0.0, 0.3, 1.0]), tilted=st.booleans())
+def test_random_throws_never_sink_and_no_impact_gains_energy(seed, kind, e, mu, tilted):
+    """Any shape thrown tumbling onto a (possibly tilted) ground: after every step no feature is
+    inside the ground (beyond round-off), and no impact ends with more kinetic energy than it began with."""
+    rng = np.random.default_rng(seed)
+    inertia, collision = {"box": {"box": rng.uniform(0.02, 0.3, 3).tolist()}, "sphere": {"sphere": 0.1},
+                          "capsule": {"cylinder": [0.05, 0.4]}, "cylinder": {"cylinder": [0.06, 0.3]}}[kind], None
+    if kind == "capsule":
+        collision = {"capsule": [0.05, float(rng.uniform(0.05, 0.4))]}
+    q = rng.normal(size=4)
+    q /= np.linalg.norm(q)
+    normal = [0.0, 0.0, 1.0] + (0.3 * rng.normal(size=3) if tilted else np.zeros(3))
+    body = {"mass": 1.0, "inertia": inertia, "pose": {"position": [0.0, 0.0, 1.5], "orientation": q.tolist()},
+            "twist": {"linear": rng.normal(size=3).tolist(), "angular": (3.0 * rng.normal(size=3)).tolist()}}
+    if collision:
+        body["collision"] = collision
+    data = {"gravity": [0.0, 0.0, -G], "bodies": {"b": body},
+            "ground": [{"normal": list(normal), "material": {"restitution": e, "friction": mu}}]}
+    sim = Simulator(load_scene(data), integrator="rk4", dt=1e-3, model_reduction=False)
+    contact, gaps = sim.contact, np.empty(MAX_FEATURES)
+    for _ in range(1500):
+        sim.step()
+        y = sim._Ys[sim._control[0]][0]
+        count = feature_gaps(y, sim._prm[0], contact.shapes[0], contact.grounds[0], gaps)
+        assert gaps[:count].min() >= -1e-12
+    for event in contact.events_of("b", "impact"):
+        assert event.energy_after <= event.energy_before * (1.0 + 1e-12)
