@@ -1,9 +1,11 @@
 # rigid_body_sim: set-up, run and test in a local virtualenv (.venv) with pinned wheels.
 #
 #   make run        set up if needed, then run rigid_body_sim_node on the default scene
-#   make test       set up if needed, then pytest (slow tests excluded)   <- what CI runs
-#   make test-slow  set up if needed, then pytest -m slow (long stability/soak runs)
+#   make test       set up if needed, then pytest (slow tests excluded; a budget of ~3 min)  <- what CI runs
+#   make test-slow  set up if needed, then pytest -m slow (soak, statistics, repeated runs:
+#                   1e5-1e6 steps, the 100,000-message DDS fuzz, colcon test, environment probes)
 #   make venv       only the set-up: .venv with Python 3.11, pinned requirements, package -e
+#   make foxglove-deps  Node.js (apt if missing) and the pinned npm modules of test/foxglove (Foxglove's readers)
 #   make clean      remove caches and build output (keeps .venv); make distclean also .venv
 #
 # Variables: PYTHON=/path/to/python3.11, PYTEST_ARGS="-k foo -x", RUN_ARGS="--ros-args ...",
@@ -32,12 +34,13 @@ RUN_ARGS ?=
 # ROS_LOCALHOST_ONLY; ROS_AUTOMATIC_DISCOVERY_RANGE is the variable it reads).
 export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
 
-.PHONY: venv run test test-slow clean distclean
+.PHONY: venv run test test-slow clean distclean foxglove-deps
 
 venv: $(STAMP)
 
 # The venv is (re)provisioned when a pin, the build script or the manifest changes.
-$(STAMP): requirements.txt requirements-test.txt setup.py setup.cfg package.xml
+$(STAMP): requirements.txt requirements-test.txt setup.py setup.cfg package.xml \
+		tools/ros_interfaces/build.py $(wildcard tools/ros_interfaces/*/msg/*.msg)
 	@say() { printf '[make venv] %s\n' "$$*"; }
 	die() { printf '[make venv] ERROR: %s\n' "$$*" >&2; exit 1; }
 	is_py311() { "$$1" -c 'import sys; sys.exit(sys.version_info[:2] != (3, 11))' 2>/dev/null; }
@@ -72,19 +75,44 @@ $(STAMP): requirements.txt requirements-test.txt setup.py setup.cfg package.xml
 	say "installing pinned requirements (pip $(PIP_VERSION), requirements-test.txt)"
 	$(PIP) install "pip==$(PIP_VERSION)"
 	$(PIP) install -r requirements-test.txt
+	# tf2_msgs has no wheel on PyPI: build it from its message definition (needs gcc and g++).
+	command -v g++ >/dev/null || apt_install gcc g++ || die "no C/C++ compiler: install gcc and g++ (Debian: apt-get install gcc g++)"
+	say "building tf2_msgs from its message definition (tools/ros_interfaces)"
+	$(VENV_PY) tools/ros_interfaces/build.py tf2_msgs 2>&1 | grep -v -e 'duplicate entry point' -e '^Reading input' -e '^Writing output' || true
+	$(VENV_PY) -c 'import tf2_msgs.msg' || die "tf2_msgs did not build (tools/ros_interfaces/build.py)"
 	say "installing rigid_body_sim in editable mode"
 	$(PIP) install --no-deps -e .
 	$(PIP) check >/dev/null || { $(PIP) check; die "pip check found inconsistent dependencies"; }
-	say "compiling the numba kernels once (cached in rigid_body_sim/core/__pycache__; about a minute)"
-	$(VENV_PY) -c 'from rigid_body_sim.core.simulator import compile_kernels; compile_kernels()'
+	say "compiling the numba kernels once (cached in rigid_body_sim/core/kernels/__pycache__; about a minute)"
+	$(VENV_PY) -c 'from rigid_body_sim.core.kernels.compile import compile_kernels; compile_kernels()'
 	touch "$@"
 	say "ready: $(VENV) ($$($(VENV_PY) -V 2>&1))"
 
 run: $(STAMP)
 	exec $(VENV)/bin/rigid_body_sim_node $(RUN_ARGS)
 
+# Foxglove's own readers (@mcap/core, @mcap/support, @foxglove/rosmsg, @foxglove/rosmsg2-serialization), pinned
+# in test/foxglove/package-lock.json, for test/test_foxglove_readers.py. Node.js and npm come from apt if missing.
+FOXGLOVE_DIR := test/foxglove
+FOXGLOVE_STAMP := $(FOXGLOVE_DIR)/node_modules/.package-lock.json
+foxglove-deps: $(FOXGLOVE_STAMP)
+
+$(FOXGLOVE_STAMP): $(FOXGLOVE_DIR)/package.json $(FOXGLOVE_DIR)/package-lock.json
+	@say() { printf '[make foxglove-deps] %s\n' "$$*"; }
+	die() { printf '[make foxglove-deps] ERROR: %s\n' "$$*" >&2; exit 1; }
+	if ! command -v node >/dev/null || ! command -v npm >/dev/null; then
+	  command -v apt-get >/dev/null && [ "$$(id -u)" = 0 ] \
+	    || die "node and npm are needed for the Foxglove reader test: install Node.js >= 18 (Debian: apt-get install nodejs npm)"
+	  say "installing Debian packages: nodejs npm (apt-get update first)"
+	  export DEBIAN_FRONTEND=noninteractive
+	  apt-get update -qq && apt-get install -y -qq --no-install-recommends nodejs npm >/dev/null
+	fi
+	say "installing the pinned npm modules of $(FOXGLOVE_DIR) (node $$(node --version))"
+	npm ci --prefix "$(FOXGLOVE_DIR)" --no-audit --no-fund --ignore-scripts --loglevel=error
+	touch "$@"
+
 # --foreground: Ctrl-C still reaches pytest; SIGINT first so pytest prints its summary.
-test: $(STAMP)
+test: $(STAMP) $(FOXGLOVE_STAMP)
 	timeout --foreground -s INT -k 60 $(TEST_TIMEOUT_S) $(VENV_PY) -m pytest $(PYTEST_ARGS)
 
 test-slow: $(STAMP)
@@ -114,14 +142,14 @@ envelope: $(STAMP)
 # profile and node timing. Every figure is a median of >= 5 samples with its min-max.
 # bench: quick mode (fewer sizes, a few minutes); bench-full: every size up to 1e5, 20 s node windows.
 # Into the default BENCH_OUT they also write docs/choosing_an_integrator.md (+ .claims.json) and the
-# README's generated "Speed and accuracy" table, so README, docs and results.md come from one run.
+# generated block of docs/performance.md, so the docs and results.md come from one run.
 # BENCH_BASELINE=<git rev>: also time that revision's core beside this one at N = 1e4 (core_compare.py).
 BENCH_OUT ?= benchmarks/results
 BENCH_ARGS ?=
 BENCH_BASELINE ?=
 BENCH_DEFAULT_OUT := $(filter benchmarks/results,$(BENCH_OUT))
 BENCH_FLAGS = --out $(BENCH_OUT) --docs $(if $(BENCH_DEFAULT_OUT),docs,$(BENCH_OUT)) \
-	$(if $(BENCH_DEFAULT_OUT),--readme README.md) $(if $(BENCH_BASELINE),--baseline-core $(BENCH_BASELINE)) $(BENCH_ARGS)
+	$(if $(BENCH_DEFAULT_OUT),--performance docs/performance.md) $(if $(BENCH_BASELINE),--baseline-core $(BENCH_BASELINE)) $(BENCH_ARGS)
 .PHONY: bench bench-full bench-deps
 bench-deps: $(STAMP)
 	$(PIP) install -r requirements-bench.txt
@@ -132,10 +160,10 @@ bench-full: bench-deps
 	$(VENV_PY) -m pytest -q -m bench
 	$(VENV_PY) -m benchmarks.run --full $(BENCH_FLAGS)
 
-# The node with batched output (issue 15): 1, 100, 1000, 10000 bodies at 100 Hz and 100 at 1 kHz, rk4, 1 substep,
+# The node with batched output: 1, 100, 1000, 10000 bodies at 100 Hz and 100 at 1 kHz, rk4, 1 substep,
 # per_body_topics false, a `poses` subscriber in another process; sim/wall, ticks delivered, CPU per tick, RSS,
 # start to first poses, stop time (medians of 5 runs of 10 s; BENCH_NODE_ARGS=--quick for 3 runs of 5 s).
-# Writes benchmarks/results/node_batch.md (the README's "Many bodies" figures come from it).
+# Writes benchmarks/results/node_batch.md (linked from docs/performance.md).
 BENCH_NODE_ARGS ?=
 .PHONY: bench-node
 bench-node: $(STAMP)

@@ -16,7 +16,11 @@ setup(
     version=version,
     # Only the package itself: benchmarks/, test/ and tools of this repository stay out of the
     # user's environment (a test checks what a colcon install contains).
-    packages=find_packages(include=[package_name, package_name + ".*"]),
+    packages=find_packages(include=[package_name, package_name + ".*"]) + [package_name + ".config"],
+    # config/ is also the package data of rigid_body_sim.config: the default scene is found with
+    # importlib.resources wherever the package is installed (rigid_body_sim/package_data.py).
+    package_dir={package_name + ".config": "config"},
+    package_data={package_name + ".config": ["*.yaml"]},
     # Its data: the manifest, the ament index marker, and config/ (scenes, params.yaml).
     data_files=[
         ("share/ament_index/resource_index/packages", ["resource/" + package_name]),

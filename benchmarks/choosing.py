@@ -173,7 +173,7 @@ named below; compare them only with each other.
 - **Not for tumbling bodies:** {', '.join(f'`{n}`' for n in first_order)} — first order, with |ω|·h
   limits near 1e-3 (stability.md); they are here for comparison with textbook and game-engine loops.
 - **Spheres, cubes, cylinders, static and kinematic bodies** get exact reduced models
-  whatever the integrator (README "Motions and model reduction").
+  whatever the integrator ([scenes.md](scenes.md), "Motions and model reduction").
 
 ## Choosing the step
 

@@ -1,4 +1,4 @@
-"""Node benchmark with batched output (issue 15): 1, 100, 1000, 10 000 bodies over DDS.
+"""Node benchmark with batched output: 1, 100, 1000, 10 000 bodies over DDS.
 
 For each (bodies, rate_hz) and each repeat, ``rigid_body_sim_node`` runs as a subprocess on N
 free asymmetric bodies (random poses and spins, no gravity), rk4, 1 substep,
@@ -46,7 +46,7 @@ REPO = Path(__file__).resolve().parent.parent
 NODE = REPO / ".venv" / "bin" / "rigid_body_sim_node"
 DOMAIN_ID = 78
 SETTLE_S = 2.0
-#: (bodies, rate_hz, recording): the issue's points, and 1000 bodies recording (``record_path``).
+#: (bodies, rate_hz, recording): the target sizes and rates, and 1000 bodies recording (``record_path``).
 CASES = ((1, 100.0, False), (100, 100.0, False), (1000, 100.0, False), (1000, 100.0, True), (10_000, 100.0, False),
          (100, 1000.0, False))
 
@@ -161,7 +161,7 @@ def _median_row(rows: list[dict]) -> dict:
 
 
 def markdown(rows: list[dict]) -> str:
-    """The README table."""
+    """The table of node_batch.md."""
     lines = ["| bodies | rate (Hz) | recording | sim/wall | ticks delivered to a `poses` subscriber | CPU per tick (ms) | CPU share (cores) "
              "| RSS (MB) | start to first `poses` (s) | SIGINT to exit (s), exit status |",
              "|---|---|---|---|---|---|---|---|---|---|"]

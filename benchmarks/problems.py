@@ -21,7 +21,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigid_body_sim.core import closed_form, load_scene
+from rigid_body_sim.core import load_scene
+from rigid_body_sim.exact import closed_form
 from rigid_body_sim.core.quaternion import quat_conjugate, quat_multiply
 
 # top

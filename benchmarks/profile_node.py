@@ -74,12 +74,12 @@ def profile_spin(bodies: int = 100, rate_hz: float = 100.0, seconds: float = 4.0
         executor = SingleThreadedExecutor(context=node.context)
         executor.add_node(node)
         profiler = cProfile.Profile()
-        t0, s0 = time.monotonic(), node._sim.step_count
+        t0, s0 = time.monotonic(), node.simulator.step_count
         profiler.enable()
         while time.monotonic() - t0 < seconds:
             executor.spin_once(timeout_sec=0.1)
         profiler.disable()
-        rate = (node._sim.step_count - s0) / seconds
+        rate = (node.simulator.step_count - s0) / seconds
         executor.shutdown()
     out = io.StringIO()
     out.write(f"{bodies} bodies at rate_hz {rate_hz}, in-process, no subscribers: {rate:.1f} ticks/s under cProfile\n")

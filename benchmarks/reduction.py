@@ -6,7 +6,7 @@ Scenes of N bodies, no gravity, nothing applied, each moving body with a random 
 * ``crate``: a 1.0 × 0.5 × 0.5 m box — symmetric, the exact symmetric-top flow;
 * ``box``: a 1.0 × 0.6 × 0.4 m box — full: the integrator either way;
 * ``wall``: 1.0 × 1.0 × 0.1 m, ``motion: static`` — never stepped;
-* ``mixed``: sphere, box, wall repeating (the scene of issue 6).
+* ``mixed``: sphere, box, wall repeating.
 
 For each scene and integrator, seconds per ``sim.step(k)`` (batched), median of ≥ 5 interleaved
 samples (min–max), of:
@@ -15,7 +15,7 @@ samples (min–max), of:
 * ``full``: ``model_reduction=False`` on the scene **without its static bodies** — the fair
   baseline: any engine skips a body that cannot move, reduction or not;
 * ``full, statics stepped``: ``model_reduction=False`` on the whole scene, which integrates the
-  walls too (what issue 6's 2.17× was measured against; shown to correct it).
+  walls too (an unfair baseline, shown beside the fair one for comparison).
 
 The gain is full / reduced (time per step of the same scene's moving bodies). A scene of walls
 only has no fair baseline (nothing to step); its row gives the cost of skipping them.

@@ -4,12 +4,13 @@ Writes to DIR: results.md (every table, the targets met or not, the machine), th
 apply_cost.csv, site_force.csv, work_precision.csv, reduction.csv, node_timing.csv,
 targets.csv, core_compare.csv (with ``--baseline-core``), the plots, and profile_kernels.txt;
 to ``--docs``: choosing_an_integrator.md and its claims (benchmarks/choosing.py); with
-``--readme``: the generated block of the README's "Speed and accuracy" section (between
-``<!-- bench:begin -->`` and ``<!-- bench:end -->``), the same text as results.md's headline.
+``--performance``: the generated block of docs/performance.md (between ``<!-- bench:begin -->``
+and ``<!-- bench:end -->``): the provenance, the machine, the per-integrator table and the
+per-frame cost tables of results.md, from the same run (the targets table stays in results.md).
 
 Quick and full modes differ in the sizes swept and the seconds per sample, not in the number
 of repeats (≥ 5 everywhere). ``--parts`` runs a subset (while developing): it writes results_partial.md,
-which says which parts are missing, and never touches results.md or the README.
+which says which parts are missing, and never touches results.md or docs/performance.md.
 """
 
 from __future__ import annotations
@@ -36,7 +37,7 @@ from . import problems as P  # noqa: E402
 from .timing import MIN_REPEATS  # noqa: E402
 
 PARTS = ("throughput", "apply", "work", "reduction", "profile", "node")
-README_BEGIN, README_END = "<!-- bench:begin -->", "<!-- bench:end -->"
+BLOCK_BEGIN, BLOCK_END = "<!-- bench:begin -->", "<!-- bench:end -->"
 
 
 @dataclass(frozen=True)
@@ -117,8 +118,8 @@ def provenance(mode: Mode) -> str:
             f"{datetime.date.today().isoformat()}, {machine.one_line()}")
 
 
-def _target(rows: list[dict], issue: str, comparison: str, goal: str, measured: str, met: bool | None) -> None:
-    rows.append({"issue": issue, "comparison": comparison, "target": goal, "measured": measured,
+def _target(rows: list[dict], comparison: str, goal: str, measured: str, met: bool | None) -> None:
+    rows.append({"comparison": comparison, "target": goal, "measured": measured,
                  "met": "—" if met is None else ("met" if met else "NOT met")})
 
 
@@ -228,15 +229,15 @@ def section_throughput(tp: list[dict], targets: list[dict], compare: list[dict])
 
     ours = {name: at.get(("rigid_body_sim", name, "batched")) for name in ("euler", "rk4", "semi_implicit_euler")}
     r_euler = ratio(ours["euler"], floor["euler"])
-    _target(targets, "17", f"N = {n_max:g}, batched: our `euler` `step(n)` vs the plain numba loop of the same step (time ratio)",
+    _target(targets, f"N = {n_max:g}, batched: our `euler` `step(n)` vs the plain numba loop of the same step (time ratio)",
             "≤ 3 (goal 2)", f"{_fmt(r_euler)}×", r_euler <= 3.0 if math.isfinite(r_euler) else None)
     r_rk4 = ratio(ours["rk4"], floor["rk4"])
-    _target(targets, "17", f"N = {n_max:g}, batched: our `rk4` `step(n)` vs the plain numba rk4 loop (time ratio)",
+    _target(targets, f"N = {n_max:g}, batched: our `rk4` `step(n)` vs the plain numba rk4 loop (time ratio)",
             "≤ 3", f"{_fmt(r_rk4)}×", r_rk4 <= 3.0 if math.isfinite(r_rk4) else None)
     mj = at.get(("mujoco", "Euler", "batched"))
     sie = ours["semi_implicit_euler"]
     speed = sie["body_steps_per_s"] / mj["body_steps_per_s"] if sie and mj else math.nan
-    _target(targets, "17", f"N = {n_max:g}: our `semi_implicit_euler` `step(n)` vs MuJoCo `Euler` `mj_step(m, d, nstep=n)` "
+    _target(targets, f"N = {n_max:g}: our `semi_implicit_euler` `step(n)` vs MuJoCo `Euler` `mj_step(m, d, nstep=n)` "
             "(body-steps/s ratio)", "≥ 3", f"{_fmt(speed)}×", speed >= 3.0 if math.isfinite(speed) else None)
     diy = at.get(("numpy loop", "euler", "per-step")) or next(
         (r for r in sorted(tp, key=lambda r: -r["bodies"]) if r["system"] == "numpy loop" and r["integrator"] == "euler"),
@@ -255,18 +256,18 @@ def section_throughput(tp: list[dict], targets: list[dict], compare: list[dict])
                                     (f"{compare[0]['baseline']}, body-steps/s", lambda r: _range(r, "base_body_steps_per_s")),
                                     ("this / baseline", "ratio")]))
         worst = min(compare, key=lambda r: r["ratio"])
-        _target(targets, "13", f"N = {compare[0]['bodies']:g}, `step(n)`, every integrator: this checkout's core vs "
+        _target(targets, f"N = {compare[0]['bodies']:g}, `step(n)`, every integrator: this checkout's core vs "
                 f"{compare[0]['baseline']}'s, interleaved in one run (body-steps/s ratio)", "≥ 1 (must not fall; ≥ 0.9 "
                 "counts as held: the same core against itself gave 0.88–1.12 on the loaded machine)",
                 f"lowest {_fmt(worst['ratio'])} ({worst['integrator']})", worst["ratio"] >= 0.9)
     else:
-        _target(targets, "13", f"N = {n_max:g} throughput per integrator must not fall after the rewrite",
+        _target(targets, f"N = {n_max:g} throughput per integrator must not fall after the rewrite",
                 "≥ the baseline core's", "not measured in this run (pass `--baseline-core REV`)", None)
     return text
 
 
 def apply_tables(frames: list[dict], sites: list[dict], level: str = "###") -> str:
-    """The two tables of what a force costs from Python (results.md and the README's block)."""
+    """The two tables of what a force costs from Python (results.md and docs/performance.md's block)."""
     return (f"{level} (i) Per frame, µs, median (min–max); integrator rk4 / MuJoCo RK4\n\n"
             + _table(frames, [("call", "function"), ("frame", "frame"),
                               ("one call", lambda r: _range(r, "call_us")),
@@ -294,12 +295,12 @@ def section_apply(frames: list[dict], sites: list[dict], targets: list[dict]) ->
     if ours:
         worst = max(ours, key=lambda r: max(r["call_vs_world"], r["apply_step_vs_world"]))
         worst_ratio = max(worst["call_vs_world"], worst["apply_step_vs_world"])
-        _target(targets, "13", "`apply_force_at_point` / `apply_wrench` in `<body>/world_aligned`, `<body>`, a site (body "
+        _target(targets, "`apply_force_at_point` / `apply_wrench` in `<body>/world_aligned`, `<body>`, a site (body "
                 "axes), a site (world axes) vs the `world` frame: the call alone and call + `step(1)` (time ratio)",
                 "≤ 1.5", f"worst {_fmt(worst_ratio)}× ({worst['function']}, {worst['frame']})", worst_ratio <= 1.5)
     for r in sites:
         if "ratio" in r:
-            _target(targets, "13", f"1 body, new site force every step: our `{r['integrator']}` apply + `step(1)` vs MuJoCo "
+            _target(targets, f"1 body, new site force every step: our `{r['integrator']}` apply + `step(1)` vs MuJoCo "
                     f"`{r['mujoco']}` `d.ctrl[0] = f; mj_step(m, d)` with a site motor (time ratio)", "≤ 0.5",
                     f"{_fmt(r['ratio'])}× ({r['ours_us']:.3g} vs {r['mujoco_us']:.3g} µs)", r["ratio"] <= 0.5)
     return text
@@ -344,7 +345,7 @@ def section_work(wp: list[dict], targets: list[dict]) -> str:
     theirs = work_precision.cost_at_error(wp, "top", "mujoco", "RK4", 1e-6) if mjm.available() else None
     if theirs:
         r = ours["time_s"] / theirs["time_s"]
-        _target(targets, "17", "torque-free top to 1e-6 rad: our `rk4` `step(n)` vs MuJoCo `RK4` `mj_step(m, d, nstep=n)` "
+        _target(targets, "torque-free top to 1e-6 rad: our `rk4` `step(n)` vs MuJoCo `RK4` `mj_step(m, d, nstep=n)` "
                 "(wall-time ratio, interpolated)", "≤ 0.5 (goal 0.2)",
                 f"{_fmt(r)}× ({ours['time_s'] * 1e3:.3g} vs {theirs['time_s'] * 1e3:.3g} ms)",
                 r <= 0.5 if math.isfinite(r) else False)
@@ -352,7 +353,7 @@ def section_work(wp: list[dict], targets: list[dict]) -> str:
                       math.nan)
         e_mj = next((e for h, _t, e in work_precision.curve(wp, "box", "mujoco", "RK4") if abs(h - 1e-3) < 1e-12), math.nan)
         q = e_ours / e_mj
-        _target(targets, "17", "box, 10 N fixed in the body at a corner site, h = 1 ms: our `rk4` COM error vs MuJoCo `RK4` "
+        _target(targets, "box, 10 N fixed in the body at a corner site, h = 1 ms: our `rk4` COM error vs MuJoCo `RK4` "
                 "with a site motor (error ratio)", "≤ 10", f"{_fmt(q)}× ({_fmt(e_ours)} m vs {_fmt(e_mj)} m)",
                 q <= 10 if math.isfinite(q) else False)
         worst = -math.inf
@@ -372,7 +373,7 @@ def section_work(wp: list[dict], targets: list[dict]) -> str:
             worst = max(worst, ratio)
             detail.append(f"{g:g} m: {_fmt(ratio) if math.isfinite(ratio) else 'ours not reached'}"
                           + (f" ({n_ours} vs {n_mj})" if n_ours and n_mj else ""))
-        _target(targets, "17", "box (body-fixed force at a site): our cheapest vs MuJoCo's cheapest (`nstep`, site motor) "
+        _target(targets, "box (body-fixed force at a site): our cheapest vs MuJoCo's cheapest (`nstep`, site motor) "
                 "at every accuracy 1e-3 … 1e-9 m (wall-time ratio)", "≤ 1 at each",
                 "; ".join(detail), bool(worst <= 1.0))
     return text
@@ -389,8 +390,8 @@ def section_reduction(red: list[dict], targets: list[dict]) -> str:
                            ("models", "models")]))
     mixed = next((r for r in red if r["scene"] == "mixed" and r["integrator"] == "rk4"), None)
     if mixed:
-        _target(targets, "6", f"mixed scene of {mixed['bodies']:g} bodies (sphere, box, static wall), `rk4`: reduced vs the full "
-                "model that skips static bodies (time ratio)", "≥ 2 (issue 6's target, re-measured fairly)",
+        _target(targets, f"mixed scene of {mixed['bodies']:g} bodies (sphere, box, static wall), `rk4`: reduced vs the full "
+                "model that skips static bodies (time ratio)", "≥ 2 (against the fair baseline)",
                 f"{_fmt(mixed['gain'])}× ({_fmt(mixed.get('gain_vs_statics_stepped'))}× against a baseline that steps the walls)",
                 mixed["gain"] >= 2.0)
     return text
@@ -415,13 +416,13 @@ def section_node(node_rows: list[dict], targets: list[dict], seconds: float) -> 
         if r.get("rate_hz") == 1000.0 and r.get("bodies") == 1 and "sim_wall" in r:
             worst_p99 = r.get("node_late_p99_ms_max", math.nan)
             sim_wall = r.get("node_sim_wall", r["sim_wall"])
-            _target(targets, "5", f"node at 1 kHz, 1 body, {r['seconds']:g} s: sim/wall and p99 tick lateness (the node's "
+            _target(targets, f"node at 1 kHz, 1 body, {r['seconds']:g} s: sim/wall and p99 tick lateness (the node's "
                     "own /diagnostics; lateness: its worst 1-s window)", "≥ 0.999 and < 0.5 ms",
                     f"sim/wall {sim_wall:.4g}; p99 {_fmt(worst_p99)} ms (seen by the listener over DDS: sim/wall "
                     f"{r['sim_wall']:.4g}, p99 lateness {_fmt(r['late_p99_ms'])} ms)",
                     sim_wall >= 0.999 and worst_p99 < 0.5)
         if r.get("rate_hz") == 100.0 and r.get("bodies") == 100 and "pose_every_tick_frac" in r:
-            _target(targets, "5", f"node, 100 bodies at 100 Hz, {r['seconds']:g} s: pose and twist of every body every tick",
+            _target(targets, f"node, 100 bodies at 100 Hz, {r['seconds']:g} s: pose and twist of every body every tick",
                     "every tick", f"pose on {r['pose_every_tick_frac']:.4g} of ticks, twist/tick min "
                     f"{r['twist_per_tick_min']:.4g}, {r['achieved_hz']:.4g} Hz",
                     r["pose_every_tick_frac"] >= 1.0 and r["twist_per_tick_min"] >= 0.999 and r["watched_bodies"] == 100)
@@ -482,18 +483,28 @@ def per_integrator(wp: list[dict], sites: list[dict], tp: list[dict]) -> str:
 
 def headline(targets: list[dict], prov: str, machine_text: str, summary: str) -> str:
     return (f"From {prov}.\n\nMachine:\n\n{machine_text}\n"
-            + _table(targets, [("issue", "issue"), ("what is compared with what", "comparison"), ("target", "target"),
+            + _table(targets, [("what is compared with what", "comparison"), ("target", "target"),
                                ("measured (medians of ≥ 5)", "measured"), ("met", "met")])
             + ("\n" + summary if summary else ""))
 
 
-def update_readme(path: Path, block: str) -> None:
+def performance_block(prov: str, machine_text: str, summary: str, frames: list[dict], sites: list[dict]) -> str:
+    """docs/performance.md's generated block: results.md's headline without its targets table, and the
+    per-frame cost tables one heading level down (each part is text of results.md, from the same run)."""
+    return (f"From {prov}.\n\nMachine:\n\n{machine_text}\n" + summary
+            + "\n**What a force costs from Python**, this run "
+            "(how: [results.md](../benchmarks/results/results.md#what-a-force-costs-from-python)):\n\n"
+            + apply_tables(frames, sites, level="####"))
+
+
+def update_block(path: Path, block: str) -> None:
+    """Replace the text between the bench markers of ``path`` (docs/performance.md) with ``block``."""
     text = path.read_text()
-    if README_BEGIN not in text or README_END not in text:
-        raise SystemExit(f"{path}: no {README_BEGIN} … {README_END} block to update")
-    head, rest = text.split(README_BEGIN, 1)
-    _old, tail = rest.split(README_END, 1)
-    path.write_text(f"{head}{README_BEGIN}\n{block}{README_END}{tail}")
+    if BLOCK_BEGIN not in text or BLOCK_END not in text:
+        raise SystemExit(f"{path}: no {BLOCK_BEGIN} … {BLOCK_END} block to update")
+    head, rest = text.split(BLOCK_BEGIN, 1)
+    _old, tail = rest.split(BLOCK_END, 1)
+    path.write_text(f"{head}{BLOCK_BEGIN}\n{block}{BLOCK_END}{tail}")
 
 
 # ----------------------------------------------------------------------------- main
@@ -507,7 +518,8 @@ def main(argv=None) -> int:
     mode_group.add_argument("--smoke", action="store_true", help="tiny sizes: only checks that the code runs")
     parser.add_argument("--out", default="benchmarks/results", help="output directory")
     parser.add_argument("--docs", default="docs", help="where choosing_an_integrator.md and its claims go")
-    parser.add_argument("--readme", default="", help="update this README's generated block (e.g. README.md)")
+    parser.add_argument("--performance", default="",
+                        help="update the generated block of this page (docs/performance.md)")
     parser.add_argument("--parts", default=",".join(PARTS), help=f"comma-separated subset of {','.join(PARTS)}")
     parser.add_argument("--node-configs", default="", help="e.g. 1000x1,100x100 (rate_hz x bodies)")
     parser.add_argument("--baseline-core", default="", help="a git revision whose core is timed beside this one")
@@ -593,13 +605,12 @@ def main(argv=None) -> int:
           + (f"Parts not run in this run: {', '.join(missing)}.\n\n" if missing else "")
           + "## Headline: every target, each row one comparison\n\n" + head + "\n" + "\n".join(sections)
           + f"\nRun time: {elapsed:.0f} s.\n")
-    # A partial run (--parts) never overwrites the complete results.md the README is checked against.
+    # A partial run (--parts) never overwrites the complete results.md docs/performance.md is checked against.
     (out / ("results_partial.md" if missing else "results.md")).write_text(md)
-    if args.readme and not missing:
-        update_readme(Path(args.readme), head + "\n**What a force costs from Python**, this run "
-                      "(how: [results.md](benchmarks/results/results.md#what-a-force-costs-from-python)):\n\n"
-                      + apply_tables(frames, sites, level="####"))
-        log(f"  updated {args.readme}")
+    if args.performance and not missing:
+        update_block(Path(args.performance),
+                     performance_block(prov, machine_text, per_integrator(wp, sites, tp), frames, sites))
+        log(f"  updated {args.performance}")
     log(f"done in {elapsed:.0f} s: {out}")
     return 0
 

@@ -42,7 +42,7 @@ MUJOCO_MAX_BODIES = 65533
 #: Largest N for the numpy/scipy integrators and the do-it-yourself loop (seconds per step beyond).
 MAX_BODIES_REFERENCE = 100
 MAX_BODIES_NUMPY_LOOP = 1000
-#: The N of the headline figures (the issues' targets are at N = 1e4; MuJoCo has no point at 1e5).
+#: The N of the headline figures (the targets are at N = 1e4; MuJoCo has no point at 1e5).
 HEADLINE_BODIES = 10_000
 #: No sample takes more steps than this from the initial state (explicit Euler gains energy every step).
 MAX_STEPS_PER_SAMPLE = 200_000

@@ -16,7 +16,9 @@ file); 0 when stopped by a signal, Ctrl-C (SIGINT) or SIGTERM, or when the reade
 goes away (``describe ... | head``): a stop asked for is not a failure. An interrupted ``run``
 closes its files properly and ends them with a status saying where it stopped (``interrupted
 by SIGTERM at t = ... s``; a complete run's status says ``complete``), and says so on stderr:
-the files, not the exit code, tell a cut-short run from a whole one.
+the files, not the exit code, tell a cut-short run from a whole one. Before ``run`` opens its
+files, and in the other commands, a signal ends the command at once (status 0, one line on
+stderr; :mod:`rigid_body_sim.signals`).
 No error ends in a traceback. This module only parses arguments and prints: the work is in
 :mod:`rigid_body_sim.offline` and :mod:`rigid_body_sim.core`. ``check`` imports the scene
 loader only (not the compiled simulator), so it is quick and small.
@@ -25,18 +27,20 @@ loader only (not the compiled simulator), so it is quick and small.
 from __future__ import annotations
 
 import argparse
+import errno
 import json
 import math
 import os
 import signal
+import stat
 import sys
-import threading
-from contextlib import ExitStack, contextmanager
+from contextlib import ExitStack
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Iterator, Sequence
 
 from .core import SceneError, load_scene
-from .paths import check_writable_path, open_for_reading, same_file
+from .safe_open import check_writable_path, open_for_reading, same_file
+from .signals import TwoPhaseSignals
 
 if TYPE_CHECKING:
     from .core import Scene
@@ -58,7 +62,7 @@ class _Failure(Exception):
 
 
 class _Interrupted(KeyboardInterrupt):
-    """SIGINT or SIGTERM arrived (raised by the handler :func:`_signals_interrupt` installs)."""
+    """SIGINT or SIGTERM stopped a run between two samples (raised by :func:`_run`)."""
 
     def __init__(self, signum: int):
         super().__init__(signal.Signals(signum).name)
@@ -70,50 +74,6 @@ class _WriteError(OSError):
 
     def __init__(self, path: Path, error: OSError):
         super().__init__(error.errno, error.strerror or str(error), str(path))
-
-
-class _Signals:
-    """SIGINT and SIGTERM while a command runs: raised as :class:`_Interrupted` at once, or, inside
-    :meth:`deferred`, only recorded (a run then stops between two samples, never inside a
-    write). A second signal while cleaning up is ignored."""
-
-    def __init__(self) -> None:
-        self.signum: int | None = None
-        self._defer = False
-
-    def handler(self, signum: int, frame: Any) -> None:
-        if self.signum is not None:
-            return
-        self.signum = signum
-        if not self._defer:
-            raise _Interrupted(signum)
-
-    def pending(self) -> bool:
-        return self.signum is not None
-
-    @contextmanager
-    def deferred(self) -> Iterator[None]:
-        self._defer = True
-        try:
-            yield
-        finally:
-            self._defer = False
-
-
-@contextmanager
-def _signals_interrupt() -> Iterator[_Signals]:
-    """Handle SIGTERM like Ctrl-C (so files are closed and marked). Only in the main thread
-    (where Python runs signal handlers); elsewhere the defaults stay."""
-    signals = _Signals()
-    if threading.current_thread() is not threading.main_thread():
-        yield signals
-        return
-    previous = {sig: signal.signal(sig, signals.handler) for sig in (signal.SIGINT, signal.SIGTERM)}
-    try:
-        yield signals
-    finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
 
 
 class _IntegratorNames:
@@ -211,8 +171,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     command = {"run": _run, "plot": _plot, "describe": _describe, "check": _check}[args.command]
-    with _signals_interrupt() as signals:
-        args.signals = signals
+    # Phase 1 (nothing written yet): a signal exits 0 at once; ``run`` switches to phase 2 before
+    # it opens its outputs, so that a signal then stops it between two samples.
+    args.signals = TwoPhaseSignals(f"{PROG} {args.command}", during="")
+    try:
         try:
             return command(args, args.command_parser)
         except (SceneError, _Failure) as exc:
@@ -228,13 +190,66 @@ def main(argv: Sequence[str] | None = None) -> int:
             os.dup2(devnull, sys.stdout.fileno())  # so that flushing stdout at exit fails no more
             os.close(devnull)
             return 0
+    finally:
+        args.signals.restore()
+
+
+#: What a path is when looking it up fails with this errno (the lookup, not the file, is the problem).
+_PATH_ERRNOS = {
+    errno.ELOOP: "is a symbolic link loop (or goes through one)",
+    errno.ENAMETOOLONG: "is too long a name for the file system",
+    errno.ENOTDIR: "goes through something that is not a directory",
+    errno.EISDIR: "is a directory",
+    errno.EACCES: "cannot be reached (permission denied on a directory of it)",
+    errno.EOVERFLOW: "cannot be examined (value too large)",
+}
+
+
+def _path_error(value: str, expected: str) -> str | None:
+    """Why ``value`` cannot even be looked up as the path of ``expected`` to write (a symlink loop,
+    a name too long, a component that is not a directory...), as one line naming it, or None."""
+    try:
+        os.stat(value)
+    except FileNotFoundError:
+        return None  # a new file (its directory is checked by check_writable_path)
+    except ValueError:  # an embedded NUL byte
+        return f"{value!r} contains a NUL byte; expected the path of {expected} to write"
+    except OSError as exc:
+        what = _PATH_ERRNOS.get(exc.errno or 0, f"cannot be looked up ({exc.strerror or exc})")
+        return f"{value!r} {what}; expected the path of {expected} to write"
+    return None
+
+
+def _input_path(parser: argparse.ArgumentParser, argument: str, value: str | None, expected: str) -> None:
+    """A usage error naming ``argument`` if ``value`` cannot name a file to read at all: a symlink
+    loop, a name too long, a component that is not a directory, or a directory itself. A missing
+    or unreadable file, a FIFO or a device stays the reader's error (exit 1)."""
+    if value is None:
+        return
+    try:
+        mode = os.stat(value).st_mode
+    except (OSError, ValueError) as exc:
+        code = getattr(exc, "errno", None)
+        if code in (errno.ELOOP, errno.ENAMETOOLONG, errno.ENOTDIR):
+            parser.error(f"argument {argument}: {value!r} {_PATH_ERRNOS[code]}; expected {expected}")
+        return
+    if stat.S_ISDIR(mode):
+        parser.error(f"argument {argument}: {value!r} is a directory; expected {expected}")
+
+
+def _same_file(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
+    """:func:`same_file`, False where a path cannot be resolved at all (a symlink loop: never the other file)."""
+    try:
+        return same_file(a, b)
+    except (OSError, RuntimeError, ValueError):
+        return False
 
 
 def _output_path(parser: argparse.ArgumentParser, option: str, value: str | None, expected: str) -> Path | None:
     """``value`` as the path of a regular file that can be written (else a usage error naming ``option``)."""
     if value is None:
         return None
-    problem = check_writable_path(value, expected=expected)
+    problem = _path_error(value, expected) or check_writable_path(value, expected=expected)
     if problem is not None:
         parser.error(f"argument {option}: {problem}")
     return Path(value)
@@ -246,10 +261,10 @@ def _refuse_one_file(parser: argparse.ArgumentParser, paths: list[tuple[str, Pat
     outputs = [(option, path) for option, path in paths if path is not None]
     for i, (option, path) in enumerate(outputs):
         for other, other_path in outputs[:i]:
-            if same_file(path, other_path):
+            if _same_file(path, other_path):
                 parser.error(f"argument {option}: {str(path)!r} is the same file as {other}; expected another path")
         for what, source in inputs:
-            if same_file(path, source):
+            if _same_file(path, source):
                 parser.error(f"argument {option}: {str(path)!r} is {what}; expected another path")
 
 
@@ -257,6 +272,7 @@ def _refuse_one_file(parser: argparse.ArgumentParser, paths: list[tuple[str, Pat
 
 
 def _run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    _input_path(parser, "SCENE", args.scene, "a scene YAML file")
     csv_path = _output_path(parser, "--csv", args.csv, "a CSV file")
     record_path = _output_path(parser, "--record", args.record, "an .mcap file")
     imu_path = _output_path(parser, "--imu-csv", args.imu_csv, "a CSV file")
@@ -279,6 +295,7 @@ def _run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     meta = {"scene": str(Path(args.scene).resolve()), "integrator": args.integrator, "dt": repr(args.dt),
             "duration": repr(args.duration), "sample_every_steps": str(every), "version": _version(),
             "model_reduction": str(not args.no_reduction)}
+    stop = args.signals.switch_to_orderly()  # from here a signal only asks the run to stop between samples
     csv_writer, recorder = _open_outputs(parser, csv_path, record_path, sim, meta, scene.text)
     outputs = [(path, writer) for path, writer in ((csv_path, csv_writer), (record_path, recorder)) if writer]
     callbacks = []
@@ -300,11 +317,10 @@ def _run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         if bar is not None:
             stack.callback(bar.close)
         try:
-            with args.signals.deferred():
-                summary = run_offline(sim, args.duration, sample_every=every, on_sample=callbacks,
-                                      progress=bar.update if bar is not None else None, stop=args.signals.pending)
+            summary = run_offline(sim, args.duration, sample_every=every, on_sample=callbacks,
+                                  progress=bar.update if bar is not None else None, stop=stop.is_set)
             if summary.stopped:
-                raise _Interrupted(args.signals.signum or signal.SIGINT)
+                raise _Interrupted(args.signals.signum)
             end = f"complete: {summary.steps} steps, t = {summary.sim_time:.9g} s"
         except NonFiniteStateError as exc:
             end = f"failed at t = {sim.time:.9g} s ({sim.step_count} steps): {exc}"
@@ -476,6 +492,8 @@ def _version() -> str:
 
 
 def _plot(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    _input_path(parser, "RUN", args.run, "a CSV file or an MCAP recording")
+    _input_path(parser, "--scene", args.scene, "a scene YAML file")
     run_path = Path(args.run)
     try:
         with open_for_reading(run_path, expected="a CSV file or an MCAP recording") as f:
@@ -487,13 +505,16 @@ def _plot(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         assert out is not None
     else:
         out = run_path.with_suffix(".png")
+        problem = _path_error(str(out), "a PNG file")
+        if problem is not None:
+            parser.error(f"argument --output: the default {problem}; pass --output")
     _refuse_one_file(parser, [("--output", out)], [("the run file itself", args.run)])
 
     from .offline.rundata import with_derived_quantities
 
     scene_text = None
     try:
-        if head == _MCAP_MAGIC:
+        if head and _MCAP_MAGIC.startswith(head):  # an MCAP file, or one cut inside its magic
             from .offline.recording import read_recording
 
             data, scene_text = read_recording(run_path)
@@ -525,8 +546,8 @@ def _plot(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
 
     targets = [out if len(bodies) == 1 else out.with_name(f"{out.stem}_{body}{out.suffix or '.png'}") for body in bodies]
     for target in targets:
-        problem = check_writable_path(target, expected="a PNG file")
-        if problem is not None or same_file(target, run_path):
+        problem = _path_error(str(target), "a PNG file") or check_writable_path(target, expected="a PNG file")
+        if problem is not None or _same_file(target, run_path):
             raise _Failure(f"cannot write {target}: {problem or 'it is the run file itself'}")
     for body, target in zip(bodies, targets):
         try:
@@ -564,6 +585,7 @@ def _plot_scene(args: argparse.Namespace, data: Any, scene_text: str | None) -> 
 def _describe(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from .core import describe_scene
 
+    _input_path(parser, "SCENE", args.scene, "a scene YAML file")
     scene = load_scene(args.scene)
     bodies = describe_scene(scene, model_reduction=not args.no_reduction)
     if args.json:
@@ -605,6 +627,7 @@ def _describe(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
 
 
 def _check(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    _input_path(parser, "SCENE", args.scene, "a scene YAML file")
     scene = load_scene(args.scene)
     count = len(scene.body_names)
     print(f"{scene.source}: ok ({count} bod{'y' if count == 1 else 'ies'}: {', '.join(scene.body_names)}; "

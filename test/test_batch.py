@@ -1,4 +1,4 @@
-"""Batched state over ROS (issue 15): ``poses`` and ``velocities`` against the simulator, the
+"""Batched state over ROS: ``poses`` and ``velocities`` against the simulator, the
 ``body_names`` parameter, ``per_body_topics``, TwistStamped, QoS overrides and late joiners.
 
 The node runs as a separate process (its console script) on this session's private
@@ -29,6 +29,7 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import PointCloud2
 from std_srvs.srv import Trigger
 
+from helpers import free_bodies_scene
 from rigid_body_sim.core import Simulator, load_scene
 from rigid_body_sim.ros.batch import VELOCITY_FIELDS, VELOCITY_POINT_STEP
 from rigid_body_sim.testing import start_process, stop_process
@@ -36,20 +37,6 @@ from rigid_body_sim.testing import start_process, stop_process
 pytestmark = pytest.mark.ros
 
 N_BODIES = 7
-
-
-def free_bodies_scene(n: int, seed: int = 0) -> dict:
-    """``n`` free asymmetric bodies at distinct poses, spinning and moving, no gravity."""
-    rng = np.random.default_rng(seed)
-    bodies = {}
-    for k in range(n):
-        q = rng.normal(size=4)
-        q /= np.linalg.norm(q)
-        bodies[f"b{k}"] = {"mass": float(1.0 + rng.random()),
-                           "inertia": {"box": [float(0.5 + rng.random()), float(0.3 + rng.random()), float(0.2 + rng.random())]},
-                           "pose": {"position": rng.normal(size=3).tolist(), "orientation": q.tolist()},
-                           "twist": {"linear": rng.normal(size=3).tolist(), "angular": (3 * rng.normal(size=3)).tolist()}}
-    return {"bodies": bodies}
 
 
 def cloud_points(msg: PointCloud2) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -189,27 +176,6 @@ def test_batches_match_simulator_and_body_names(tmp_path, scene_file):
         assert stop_process(process) == 0
 
 
-def test_per_body_topics_false_has_only_batches(tmp_path, scene_file):
-    """per_body_topics:=false: no B/pose, B/twist publishers exist (graph query), inputs stay."""
-    process = run_node(tmp_path, scene_file, "-p", "per_body_topics:=false")
-    peer = Peer()
-    try:
-        poses: list[PoseArray] = []
-        peer.node.create_subscription(PoseArray, "/poses", poses.append,
-                                      QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
-        peer.spin_until(lambda: poses, "poses")
-        assert len(poses[-1].poses) == N_BODIES
-        peer.spin_until(lambda: peer.node.count_subscribers("/b0/wrench") == 1, "the wrench subscription of b0")
-        topics = {name for name, _types in peer.node.get_topic_names_and_types()}
-        publishers = {t: peer.node.count_publishers(t) for t in topics}
-        per_body = [t for t, count in publishers.items() if count and t.rsplit("/", 1)[-1] in ("pose", "twist", "odom")]
-        assert per_body == []
-        assert publishers["/poses"] == 1 and publishers["/velocities"] == 1
-    finally:
-        peer.close()
-        assert stop_process(process) == 0
-
-
 def test_qos_overrides_take_effect(tmp_path, scene_file):
     """qos_overrides./poses.publisher.* change the endpoint the graph reports; a volatile best-effort
     publisher no longer latches, a bad value is refused at start-up with exit 2."""
@@ -246,7 +212,7 @@ def test_body_names_follow_a_scene_change(tmp_path):
     scene = free_bodies_scene(2, seed=1)
     scene["bodies"] = {f"other{k}": body for k, body in enumerate(scene["bodies"].values())}
     second.write_text(yaml.safe_dump(scene))
-    with SimHarness(scene=first) as harness:
+    with SimHarness(scene=first, parameters={"scene_dirs": [str(tmp_path)]}) as harness:
         assert harness.get_parameter("body_names") == ["b0", "b1", "b2"]
         (result,) = harness.set_parameters(scene=str(second))
         assert result.successful, result.reason
@@ -255,10 +221,12 @@ def test_body_names_follow_a_scene_change(tmp_path):
             assert list(sim.body_names) == ["other0", "other1"]
 
 
-def test_recording_with_per_body_topics_false_holds_the_published_batches(tmp_path, scene_file):
-    """per_body_topics:=false with record_path: the recording holds poses, velocities and /clock only,
-    two batch messages a tick with the scene order in their channel metadata, and read_recording
-    gives back exactly what a subscriber received at every stamp (t = 0 and 3 ~/step ticks)."""
+def test_per_body_topics_false_publishes_and_records_only_the_batches(tmp_path, scene_file):
+    """per_body_topics:=false (one node process for both checks): no B/pose, B/twist or B/odom
+    publisher exists (graph query) while the inputs stay; with record_path, the recording holds
+    poses, velocities and /clock only, two batch messages a tick with the scene order in their
+    channel metadata, and read_recording gives back exactly what a subscriber received at every
+    stamp (t = 0 and 3 ~/step ticks)."""
     from mcap.reader import make_reader
 
     from rigid_body_sim.offline.recording import BODY_NAMES_KEY, read_recording
@@ -273,6 +241,13 @@ def test_recording_with_per_body_topics_false_holds_the_published_batches(tmp_pa
         peer.node.create_subscription(PoseArray, "/poses", poses.append, latched)
         peer.node.create_subscription(PointCloud2, "/velocities", clouds.append, latched)
         peer.spin_until(lambda: poses and clouds, "the latched initial state")
+        assert len(poses[-1].poses) == N_BODIES
+        peer.spin_until(lambda: peer.node.count_subscribers("/b0/wrench") == 1, "the wrench subscription of b0")
+        topics = {name for name, _types in peer.node.get_topic_names_and_types()}
+        publishers = {t: peer.node.count_publishers(t) for t in topics}
+        per_body = [t for t, count in publishers.items() if count and t.rsplit("/", 1)[-1] in ("pose", "twist", "odom")]
+        assert per_body == []
+        assert publishers["/poses"] == 1 and publishers["/velocities"] == 1
         names = peer.get_parameter("body_names")
         for _ in range(3):
             assert peer.call(Trigger, "/rigid_body_sim/step", Trigger.Request()).success

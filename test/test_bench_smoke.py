@@ -6,7 +6,8 @@
 * MuJoCo's site motor pushes the box as the closed form does (when MuJoCo is installed): the
   mapping of "a force fixed in the body at a site" onto MuJoCo is the same physical input.
 * ``python -m benchmarks.run --smoke`` writes every file with every part but the node (tiny
-  sizes; the node part needs DDS and is exercised by the node tests).
+  sizes; the node part needs DDS and is exercised by the node tests): two parts in the default
+  run, all of them in the slow run (about 40 s on a loaded 2-core machine).
 
 The package never imports benchmarks/ (test_core_purity-style check below).
 """
@@ -21,7 +22,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rigid_body_sim.core import Simulator, closed_form
+from rigid_body_sim.core import Simulator
+from rigid_body_sim.exact import closed_form
 
 REPO = Path(__file__).resolve().parents[1]
 pytestmark = pytest.mark.timeout(600)
@@ -67,18 +69,35 @@ def test_mujoco_site_motor_is_a_force_fixed_in_the_body():
     mujoco.mj_step(m, d, nstep=steps)
     _q, _w, _v, p_ref = closed_form.box_body_fixed_force(P.BOX_MASS, P.box_inertia()[2], P.BOX_FORCE_S, P.BOX_SITE_B,
                                                         np.array([steps * h]))
-    # RK4 at h = 1 ms over 0.5 s: fourth order, error ~1e-12 m (issue 13 saw 4.9e-12 m over 1 s)
+    # RK4 at h = 1 ms over 0.5 s: fourth order, error ~1e-12 m (4.9e-12 m was seen over 1 s)
     assert np.linalg.norm(d.qpos[0:3] - p_ref[0]) < 1e-9
 
 
-def test_bench_smoke_run_writes_every_file(tmp_path):
+def _bench_smoke(tmp_path: Path, parts: str) -> tuple[Path, Path]:
     out, docs = tmp_path / "results", tmp_path / "docs"
     docs.mkdir()
     (docs / "stability.md").write_text((REPO / "docs" / "stability.md").read_text())
-    parts = "throughput,apply,work,reduction,profile"
     proc = subprocess.run([sys.executable, "-m", "benchmarks.run", "--smoke", "--out", str(out), "--docs", str(docs),
                            "--parts", parts], cwd=REPO, capture_output=True, text=True, timeout=540)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    return out, docs
+
+
+def test_bench_smoke_run_writes_the_files_of_its_parts(tmp_path):
+    """The default run's representative: the two quickest parts in one --smoke run (the slow run
+    below runs every part but the node)."""
+    out, _docs = _bench_smoke(tmp_path, "throughput,apply")
+    for name in ("results_partial.md", "throughput.csv", "apply_cost.csv", "site_force.csv", "targets.csv",
+                 "throughput.png"):
+        assert (out / name).stat().st_size > 0, name
+    results = (out / "results_partial.md").read_text()
+    assert "Parts not run in this run: work, reduction, profile, node" in results
+    assert "plain numba loop" in results
+
+
+@pytest.mark.slow
+def test_bench_smoke_run_writes_every_file(tmp_path):
+    out, docs = _bench_smoke(tmp_path, "throughput,apply,work,reduction,profile")
     for name in ("results_partial.md", "throughput.csv", "apply_cost.csv", "site_force.csv", "work_precision.csv",
                  "reduction.csv", "targets.csv", "throughput.png", "work_precision_top.png", "work_precision_box.png",
                  "profile_kernels.txt"):
@@ -99,14 +118,18 @@ def test_the_package_never_imports_benchmarks():
     assert offenders == []
 
 
-def test_readme_speed_table_is_the_one_in_results_md():
-    """The README's generated block is results.md's headline, from the same run (make bench writes both)."""
-    readme = (REPO / "README.md").read_text()
-    block = readme.split("<!-- bench:begin -->", 1)[1].split("<!-- bench:end -->", 1)[0].strip()
-    assert block, "the README's benchmark block is empty: run `make bench`"
+def test_performance_page_block_is_the_one_in_results_md():
+    """docs/performance.md's generated block is text of results.md, from the same run (make bench writes both):
+    the provenance and machine, the per-integrator table, and the per-frame cost tables one heading level down."""
+    page = (REPO / "docs" / "performance.md").read_text()
+    block = page.split("<!-- bench:begin -->", 1)[1].split("<!-- bench:end -->", 1)[0].strip()
+    assert block, "docs/performance.md's benchmark block is empty: run `make bench`"
     results = (REPO / "benchmarks" / "results" / "results.md").read_text()
     head, marker, costs = block.partition("**What a force costs from Python**")
-    assert marker, "the README's block lacks the per-frame cost tables: run `make bench`"
-    assert head.strip() in results
+    assert marker, "the block lacks the per-frame cost tables: run `make bench`"
+    machine, per_integrator_marker, per_integrator = head.partition("Per integrator, this run")
+    assert per_integrator_marker, "the block lacks the per-integrator table: run `make bench`"
+    assert machine.strip() in results
+    assert (per_integrator_marker + per_integrator).strip() in results
     tables = costs.split("\n", 2)[2].strip()  # after the one-line lead-in: the two tables, one heading level down
     assert tables.replace("\n#### ", "\n### ").replace("#### ", "### ", 1) in results

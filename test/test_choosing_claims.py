@@ -5,12 +5,12 @@ accuracy statement of the page in a checkable form, with each problem's definiti
 (benchmarks/choosing.py). This test re-measures each claim with the public core API against
 the closed forms (``closed_form.asymmetric_top``, ``closed_form.box_body_fixed_force``) — never
 against the numbers the benchmark wrote — and uses nothing from benchmarks/. Speed figures are
-not claims (no wall-clock assertions).
+not claims (no wall-clock assertions). The page's order claims are checked in test_order.py,
+beside the measurement of every method's order on the same box.
 
 Tolerances: a claim says an error is below (or above) an accuracy goal at a given h; the same
 compiled code recomputes it, and only the closed forms' numpy/BLAS paths differ between CPUs
-(relative 1e-12 at most), so the goal is compared with a relative slack of 1e-9. An observed
-order is claimed with its own tolerance (0.3, the convention of the order tests).
+(relative 1e-12 at most), so the goal is compared with a relative slack of 1e-9.
 """
 
 from __future__ import annotations
@@ -22,7 +22,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rigid_body_sim.core import Simulator, closed_form, load_scene
+from rigid_body_sim.core import Simulator, load_scene
+from rigid_body_sim.exact import closed_form
 from rigid_body_sim.core.quaternion import quat_conjugate, quat_multiply
 
 CLAIMS = Path(__file__).resolve().parents[1] / "docs" / "choosing_an_integrator.claims.json"
@@ -90,12 +91,3 @@ def test_accuracy_goal_claims_hold(claim):
         assert error <= claim["max_error"] * (1 + SLACK), claim
     else:
         assert error > claim["min_error"] * (1 - SLACK), claim
-
-
-@pytest.mark.parametrize("claim", [c for c in _claims() if c["kind"] == "order"],
-                         ids=lambda c: f"{c['problem']}-{c['integrator']}-order")
-def test_order_claims_hold(claim):
-    coarse = measured_error(claim["problem"], claim["integrator"], claim["h_coarse"])
-    fine = measured_error(claim["problem"], claim["integrator"], claim["h_fine"])
-    order = math.log(coarse / fine) / math.log(claim["h_coarse"] / claim["h_fine"])
-    assert abs(order - claim["order"]) <= claim["tolerance"], (order, claim)

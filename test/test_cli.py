@@ -22,7 +22,7 @@ from rigid_body_sim import cli
 from rigid_body_sim.cli import main
 from rigid_body_sim.core import Simulator, describe_scene, load_scene
 from rigid_body_sim.offline.csv_io import COLUMNS, read_csv
-from rigid_body_sim.paths import default_scene_path
+from rigid_body_sim.package_data import default_scene_path
 
 REPO = Path(__file__).resolve().parents[1]
 PHONE = REPO / "config" / "tumbling_phone.yaml"

@@ -1,4 +1,4 @@
-"""Check the exact references in ``rigid_body_sim.core.closed_form`` against an independent solver.
+"""Check the exact references in ``rigid_body_sim.exact.closed_form`` against an independent solver.
 
 The independent solution is written here, not taken from the package: Euler's equations
 ``I w' = τ − w × (I w)``, the kinematics ``q' = ½ q ⊗ (0, w)`` with the Hamilton product
@@ -25,7 +25,7 @@ import pytest
 from scipy import special
 from scipy.integrate import solve_ivp
 
-from rigid_body_sim.core import closed_form as cf
+from rigid_body_sim.exact import closed_form as cf
 from rigid_body_sim.core.quaternion import quat_angle_between, quat_from_rotation_vector
 
 ODE_TOL = 1e-9  # rad/s and rad; see the module docstring

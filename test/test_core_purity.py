@@ -23,7 +23,7 @@ CORE_FILES = sorted(CORE.rglob("*.py"))
 
 #: Third-party top-level packages the core may import (convention 1: numpy and scipy; PyYAML,
 #: deferred, to read scene files; numba, only in the compiled per-body modules listed in
-#: COMPILED_MODULES, which earned it by the figures of issue 5). Everything else must be the standard library or the core.
+#: core/kernels/, which earned it by the measured per-body cost). Everything else must be the standard library or the core.
 ALLOWED_THIRD_PARTY = {"numpy", "scipy", "yaml", "numba"}
 
 
@@ -52,7 +52,8 @@ def _imports(path: Path) -> list[tuple[int, str]]:
 
 def test_the_core_has_modules_to_check() -> None:
     names = {p.name for p in CORE_FILES}
-    assert {"__init__.py", "quaternion.py", "dynamics.py", "integrators.py", "simulator.py", "scene.py"} <= names
+    assert {"__init__.py", "quaternion.py", "dynamics.py", "integrators.py", "simulator.py", "scene.py", "layout.py",
+            "stepping.py"} <= names
 
 
 @pytest.mark.parametrize("path", CORE_FILES, ids=[str(p.relative_to(CORE)) for p in CORE_FILES])
@@ -94,7 +95,8 @@ def test_the_static_check_sees_deferred_and_aliased_imports(tmp_path: Path) -> N
 
 def test_no_ros_module_is_loaded_by_importing_the_core() -> None:
     modules = ["rigid_body_sim.core"] + [
-        "rigid_body_sim.core." + p.stem for p in CORE_FILES if p.parent == CORE and p.stem != "__init__"
+        "rigid_body_sim.core." + ".".join(p.relative_to(CORE).with_suffix("").parts).removesuffix(".__init__")
+        for p in CORE_FILES if p != CORE / "__init__.py"
     ]
     program = (
         "import importlib, json, sys\n"
@@ -113,23 +115,55 @@ def test_no_ros_module_is_loaded_by_importing_the_core() -> None:
     assert set(modules) <= set(loaded)
     ros = [m for m in loaded if _is_ros(m)]
     assert not ros, f"importing the core loaded ROS modules: {ros}"
+    references = [m for m in loaded if m.startswith("rigid_body_sim.exact")]
+    assert not references, f"stepping the core loaded the exact references: {references}"
 
 
-#: The modules whose per-body functions are compiled with numba: the rows' algebra, the
-#: forces, the dynamics, the integrators, the reduced models and the step driver.
-COMPILED_MODULES = ["dynamics.py", "forces.py", "integrators.py", "reduced_models.py", "rotation.py", "sensors.py",
-                    "stepping.py"]
+#: Where every compiled (numba) module lives: the one folder the kernel cache depends on (kernels/jit.py).
+KERNELS = CORE / "kernels"
 
 
-def test_numba_only_in_the_compiled_modules() -> None:
-    users = sorted(path.name for path in CORE_FILES
+def test_numba_only_under_kernels() -> None:
+    users = sorted(str(path.relative_to(CORE)) for path in CORE_FILES
                    if any(module.split(".")[0] == "numba" for _line, module in _imports(path)))
-    assert users == COMPILED_MODULES, f"numba is imported outside {COMPILED_MODULES}: {users}"
+    outside = [name for name in users if not name.startswith("kernels/")]
+    assert users and not outside, f"numba is imported outside core/kernels/: {outside}"
 
 
-def test_numba_cache_is_dropped_when_any_core_source_changes(tmp_path: Path) -> None:
-    """numba checks a cached function against its own file only; the core's guard checks them all."""
-    from rigid_body_sim.core.jit import STAMP_NAME, invalidate_stale_cache
+def _relative_targets(path: Path) -> list[tuple[int, tuple[str, ...]]]:
+    """(line, imported module as name parts) of every import of the package in ``path``, relative ones resolved."""
+    return _relative_targets_of_text(path, path.read_text(encoding="utf-8"))
+
+
+def _relative_targets_of_text(path: Path, text: str) -> list[tuple[int, tuple[str, ...]]]:
+    package = path.relative_to(REPO).with_suffix("").parts[:-1]
+    found = []
+    for node in ast.walk(ast.parse(text)):
+        if isinstance(node, ast.ImportFrom) and node.level:
+            base = package[:len(package) - node.level + 1]
+            if node.module:
+                found.append((node.lineno, base + tuple(node.module.split("."))))
+            else:
+                found.extend((node.lineno, base + (alias.name,)) for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("rigid_body_sim"):
+            found.append((node.lineno, tuple(node.module.split("."))))
+        elif isinstance(node, ast.Import):
+            found.extend((node.lineno, tuple(a.name.split("."))) for a in node.names if a.name.startswith("rigid_body_sim"))
+    return found
+
+
+@pytest.mark.parametrize("path", sorted(KERNELS.rglob("*.py")), ids=lambda p: str(p.relative_to(KERNELS)))
+def test_kernels_import_nothing_else_of_the_package(path: Path) -> None:
+    """What the compiled code is built from is all under kernels/, so the cache's stamp of that folder covers it."""
+    inside = KERNELS.relative_to(REPO).parts
+    foreign = [f"{path.name}:{line}: {'.'.join(target)}" for line, target in _relative_targets(path)
+               if target[:len(inside)] != inside]
+    assert not foreign, f"core/kernels/ imports only itself: {foreign}"
+
+
+def test_numba_cache_is_dropped_when_any_kernel_source_changes(tmp_path: Path) -> None:
+    """numba checks a cached function against its own file only; the kernels' guard checks them all."""
+    from rigid_body_sim.core.kernels.jit import STAMP_NAME, invalidate_stale_cache
 
     sources, cache = tmp_path / "core", tmp_path / "core" / "__pycache__"
     sources.mkdir()
@@ -151,3 +185,27 @@ def test_numba_cache_is_dropped_when_any_core_source_changes(tmp_path: Path) -> 
     (sources / "integrators.py").write_text("A = 3\n")  # a module stepping.advance inlines
     assert invalidate_stale_cache(sources, cache)
     assert not any(p.exists() for p in cached)
+
+
+#: Where the exact references may be imported: the references themselves and the offline plots'
+#: "error against the closed form" (tests and benchmarks live outside the package).
+REFERENCE_USERS = ("exact", "offline")
+
+
+@pytest.mark.parametrize("path", sorted((REPO / "rigid_body_sim").rglob("*.py")),
+                         ids=lambda p: str(p.relative_to(REPO / "rigid_body_sim")))
+def test_production_never_imports_the_references(path: Path) -> None:
+    """The oracle and the code it checks share nothing: no production module imports rigid_body_sim.exact."""
+    if path.relative_to(REPO / "rigid_body_sim").parts[0] in REFERENCE_USERS:
+        return
+    used = [f"{path.name}:{line}: {'.'.join(target)}" for line, target in _relative_targets(path)
+            if target[:2] == ("rigid_body_sim", "exact") or target[-1] == "closed_form"]
+    assert not used, f"production code imports the exact references: {used}"
+
+
+def test_the_reference_check_resolves_relative_imports() -> None:
+    """The checker itself: ``from ..exact import closed_form`` inside a function is found."""
+    fake = REPO / "rigid_body_sim" / "core" / "sample.py"
+    found = [target for _line, target in _relative_targets_of_text(
+        fake, "def f():\n    from ..exact import closed_form\n    from .kernels import layout\n")]
+    assert found == [("rigid_body_sim", "exact"), ("rigid_body_sim", "core", "kernels")]

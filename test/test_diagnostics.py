@@ -165,3 +165,52 @@ def test_tick_window_p99_and_missed_ticks_given_by_the_caller():
     assert window.missed_ticks == 0  # the caller said none were skipped, whatever the lateness
     window.record(now - 60_000_000, 10_000_000, missed=6)
     assert window.missed_ticks == 6
+
+
+def test_tick_window_opens_at_the_first_tick_not_at_start_up():
+    window = TickWindow(sim_time=0.0)
+    assert window.elapsed_s() == 0.0  # no tick yet: nothing to measure, nothing behind
+    time.sleep(0.3)  # start-up: imports, compile, endpoints
+    period = 10_000_000
+    first_due = time.monotonic_ns()
+    for k in range(10):  # ten ticks on schedule, 10 ms apart
+        while time.monotonic_ns() < first_due + k * period:
+            time.sleep(0.0005)
+        window.record(first_due + k * period, period)
+    # The window is the 90 ms (and change) since the first tick, not the 390 ms since it was built.
+    assert 0.09 <= window.elapsed_s() < 0.25
+    assert window.opened_ns == first_due
+
+
+def test_a_healthy_start_is_ok_from_the_first_message(tmp_path):
+    """The node as a process: its first /diagnostics message says OK with a real-time factor near 1,
+    whatever the start-up (imports, scene, endpoints) took before the first tick."""
+    import rclpy
+    from rclpy.context import Context
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.node import Node
+
+    from rigid_body_sim.testing import start_process, stop_process
+
+    process = start_process(["-p", "diagnostics_period:=1.0", "-p", "paused:=false"], tmp_path / "node.log")
+    context = Context()
+    rclpy.init(context=context)
+    executor = SingleThreadedExecutor(context=context)
+    peer = Node("diagnostics_listener", context=context)
+    executor.add_node(peer)
+    received: list[DiagnosticArray] = []
+    try:
+        peer.create_subscription(DiagnosticArray, "/diagnostics", received.append, 10)
+        deadline = time.monotonic() + 60.0
+        while not received and time.monotonic() < deadline and process.poll() is None:
+            executor.spin_once(timeout_sec=0.1)
+        assert received, f"no /diagnostics message; node log:\n{(tmp_path / 'node.log').read_text()}"
+        statuses = by_name(received[0])
+        sim = status_values(statuses[SIM])
+        assert level_name(statuses[SIM]) == "OK", statuses[SIM].message
+        assert float(sim["real-time factor measured"]) > 0.9, sim
+    finally:
+        executor.shutdown()
+        peer.destroy_node()
+        rclpy.try_shutdown(context=context)
+        assert stop_process(process) == 0

@@ -4,7 +4,7 @@ Statically, over every module of the package: no attribute with a leading unders
 anything but ``self``/``cls`` (``node._parameter_overrides``...), no import of a module whose
 path has a private part (``rclpy.impl.implementation_singleton``'s ``_rclpy``...), and none of
 the known undocumented entry points (numba's ``Dispatcher.overloads`` / ``entry_point``)
-anywhere. The compiled core reaches numba only through ``numba.njit`` (core/jit.py); no module
+anywhere. The compiled core reaches numba only through ``numba.njit`` (core/kernels/jit.py); no module
 is exempt.
 """
 

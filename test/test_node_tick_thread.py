@@ -105,7 +105,7 @@ def test_tick_thread_counts_only_skipped_ticks_as_missed():
         node = sim.node
         sim.spin_for(0.2)
         node.diagnostics()  # a fresh window
-        with node._lock:  # the tick thread waits here: a 0.3 s stall, 30 periods
+        with node.locked_simulator():  # the tick thread waits here: a 0.3 s stall, 30 periods
             time.sleep(0.3)
         sim.spin_for(0.3)
         values = {kv.key: kv.value for kv in node.diagnostics().status[0].values}
@@ -118,8 +118,45 @@ def test_an_error_in_the_tick_thread_reaches_the_executor():
         def broken() -> None:
             raise RuntimeError("broken tick")
 
-        sim.node._advance_one_tick_locked = broken
+        sim.node.session.advance = broken
         with pytest.raises(RuntimeError, match="broken tick"):
             sim.spin_for(1.0)
         assert not sim.node._tick_loop.alive
         assert isinstance(sim.node.tick_failure, RuntimeError)
+
+
+def test_ticks_that_overrun_their_period_let_resets_and_parameter_changes_in():
+    """One body with so many substeps that every tick runs longer than its period, so the tick
+    thread starts the next tick the moment one ends. A ~/reset or parameter change waiting for
+    the simulator still gets it after at most the tick under way (BUSY_WAIT_S is 1 s; a tick here
+    takes up to 0.2 s), instead of losing the lock to tick after tick and being refused as busy
+    (session.SessionLock; test_session.py checks the order itself)."""
+    tick_s = 0.2  # wall seconds a tick should take
+    with SimHarness(parameters={"integrator": "rk4", "model_reduction": False, "substeps": 1000,
+                                "diagnostics_period": 0.0}) as sim:
+        node = sim.node
+        node.advance_one_tick()  # the first loads the compiled step
+        start = time.perf_counter()
+        node.advance_one_tick()
+        per_substep = (time.perf_counter() - start) / 1000
+        substeps = int(min(100_000, max(1000, tick_s / per_substep)))
+        period = min(0.01, substeps * per_substep / 4)  # s: a quarter of a tick at most
+        assert sim.set_parameters_atomically(substeps=substeps, rate_hz=1.0 / period).successful
+        assert sim.set_paused(False).success
+        sim.spin_for(2 * substeps * per_substep)  # ticking back to back
+        answered = []
+        for k in range(4):
+            start = time.monotonic()
+            reset = sim.reset()
+            answered.append(time.monotonic() - start)
+            assert reset.success, reset.message
+            start = time.monotonic()
+            change = sim.set_parameters_atomically(real_time_factor=1.0 + 0.5 * k)
+            answered.append(time.monotonic() - start)
+            assert change.successful, change.reason
+        assert node.simulator.dt == pytest.approx(2.5 * period / substeps, rel=1e-12)  # the last change is in
+        # The ticks really overran: the node went on ticking back to back between the requests.
+        sim.spin_for(3 * substeps * per_substep)
+        values = {kv.key: kv.value for kv in node.diagnostics().status[0].values}
+        assert float(values["tick lateness max [ms]"]) > 1e3 * period, values
+        assert max(answered) < 1.0 + 4 * substeps * per_substep, answered

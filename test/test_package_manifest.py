@@ -5,7 +5,7 @@ package.xml (a rosdep key) and to an ``install_requires`` name of setup.py, and 
 dependency must be used. The rosdep keys were looked up in ros/rosdistro (rosdep/python.yaml
 and kilted/distribution.yaml, commit 8468e88, August 2026; ``rosdep update`` cannot reach
 the index from these machines); :data:`ROSDEP_KEYS` records where each one is defined. The one
-import with no key of its own, ``mcap``, is named in the README with how it gets installed.
+import with no key of its own, ``mcap``, is named in docs/workspace.md with how it gets installed.
 """
 
 from __future__ import annotations
@@ -103,10 +103,8 @@ def test_every_key_was_looked_up():
     assert manifest_dependencies("test_depend") == ["python3-pytest", "python3-hypothesis"]
 
 
-def test_readme_names_the_import_without_a_key():
-    readme = (ROOT / "README.md").read_text()
-    section = readme[readme.index("## In a ROS 2 workspace"):]
-    section = section[:section.index("\n## ", 1)]
+def test_workspace_page_names_the_import_without_a_key():
+    section = (ROOT / "docs" / "workspace.md").read_text()
     for module, (key, pip_name) in MODULES.items():
         if key is None:
             assert f"`{pip_name}`" in section, module

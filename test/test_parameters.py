@@ -1,6 +1,6 @@
 """The node's parameters from one table (rigid_body_sim/ros/parameters.py): what a client sees
 through ``describe_parameters``, refusals of out-of-range values with a reason (all or nothing),
-and the files generated from the table (config/params.yaml, the README's table).
+and the files generated from the table (config/params.yaml, the table in docs/interface.md).
 """
 
 from __future__ import annotations
@@ -132,12 +132,12 @@ def test_params_yaml_is_generated_from_the_table():
     assert loaded == {spec.name: spec.default for spec in PARAMETERS if spec.default is not None}
 
 
-def test_readme_table_is_generated_from_the_table():
-    readme = (ROOT / "README.md").read_text()
-    begin = readme.index("<!-- parameters:begin")
-    begin = readme.index("\n", begin) + 1
-    end = readme.index("<!-- parameters:end -->")
-    assert readme[begin:end] == markdown_table()
+def test_docs_table_is_generated_from_the_table():
+    page = (ROOT / "docs" / "interface.md").read_text()
+    begin = page.index("<!-- parameters:begin")
+    begin = page.index("\n", begin) + 1
+    end = page.index("<!-- parameters:end -->")
+    assert page[begin:end] == markdown_table()
     for spec in PARAMETERS:
         assert f"| `{spec.name}` |" in markdown_table()
     assert BY_NAME["world_frame"].read_only

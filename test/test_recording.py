@@ -26,7 +26,7 @@ from mcap_ros2.decoder import DecoderFactory
 
 from rigid_body_sim.cli import main
 from rigid_body_sim.core import Simulator, load_scene
-from rigid_body_sim.offline.msgdefs import MSG_TEXT, complete_definition
+from rigid_body_sim.offline.msgdefs import MSG_TEXT, complete_definition, dependencies
 from rigid_body_sim.offline.recording import METADATA_NAME, SCENE_ATTACHMENT
 
 SCENE = {
@@ -122,29 +122,36 @@ def _significant(text: str) -> list[str]:
 
 @pytest.mark.parametrize("type_name", sorted(MSG_TEXT))
 def test_definitions_are_the_installed_msg_files(type_name: str) -> None:
+    """Byte for byte the .msg file the ROS wheels install (what rosbag2 copies into a schema)."""
     package, _, name = type_name.split("/")
     path = Path(sys.prefix, "share", package, "msg", f"{name}.msg")
-    if not path.is_file():
-        pytest.skip(f"{path} is not installed (the ROS wheels install it)")
-    text, dependencies = MSG_TEXT[type_name]
-    assert _significant(text) == _significant(path.read_text(encoding="utf-8"))
+    assert path.is_file(), f"{path} is not installed (the ROS wheels install it)"
+    assert MSG_TEXT[type_name] == path.read_text(encoding="utf-8")
     primitive = {"bool", "byte", "char", "float32", "float64", "int8", "uint8", "int16", "uint16", "int32", "uint32",
                  "int64", "uint64", "string", "wstring"}
     used = set()
-    for line in _significant(text):
+    for line in _significant(MSG_TEXT[type_name]):
         field_type = line.split()[0].split("[", 1)[0]  # float64[9] is an array of float64
         if field_type not in primitive:
             pkg, _, msg = field_type.rpartition("/")
-            used.add(f"{pkg or package}/msg/{msg}")
-    assert used == set(dependencies)
+            used.add(f"{pkg or package}/{msg}")
+    assert dependencies(type_name) == sorted(used)
 
 
-def test_complete_definition_has_each_dependency_once() -> None:
+def test_complete_definition_is_rosbag2s() -> None:
+    """rosbag2's order (depth first, sorted per file, each type once) and its ``MSG: pkg/Type`` lines."""
     text = complete_definition("geometry_msgs/msg/PoseStamped")
     assert re.findall(r"^MSG: (\S+)$", text, flags=re.M) == [
-        "std_msgs/msg/Header", "builtin_interfaces/msg/Time", "geometry_msgs/msg/Pose",
-        "geometry_msgs/msg/Point", "geometry_msgs/msg/Quaternion"]
-    assert text.count("=" * 80 + "\n") == 5
+        "geometry_msgs/Pose", "geometry_msgs/Point", "geometry_msgs/Quaternion", "std_msgs/Header",
+        "builtin_interfaces/Time"]
+    assert text.count("\n" + "=" * 80 + "\n") == 5
+    assert text.startswith(MSG_TEXT["geometry_msgs/msg/PoseStamped"] + "\n" + "=" * 80 + "\nMSG: geometry_msgs/Pose\n")
+    imu = complete_definition("sensor_msgs/msg/Imu")
+    assert re.findall(r"^MSG: (\S+)$", imu, flags=re.M) == [
+        "geometry_msgs/Quaternion", "geometry_msgs/Vector3", "std_msgs/Header", "builtin_interfaces/Time"]
+    cloud = complete_definition("sensor_msgs/msg/PointCloud2")
+    assert re.findall(r"^MSG: (\S+)$", cloud, flags=re.M) == [
+        "sensor_msgs/PointField", "std_msgs/Header", "builtin_interfaces/Time"]
     with pytest.raises(KeyError, match="known types are"):
         complete_definition("sensor_msgs/msg/LaserScan")
 
@@ -259,7 +266,7 @@ def test_record_path_changes_at_runtime_and_bad_paths_are_rejected(tmp_path: Pat
     from rigid_body_sim.testing import SimHarness
 
     first, second = tmp_path / "first.mcap", tmp_path / "second.mcap"
-    with SimHarness() as harness:
+    with SimHarness(parameters={"record_dirs": [str(tmp_path)]}) as harness:
         assert harness.get_parameter("record_path") == ""
         assert harness.set_parameters(record_path=str(first))[0].successful
         harness.step(2)
@@ -268,7 +275,8 @@ def test_record_path_changes_at_runtime_and_bad_paths_are_rejected(tmp_path: Pat
         harness.step(3)
         result = harness.set_parameters(record_path=str(tmp_path / "missing" / "x.mcap"))[0]
         assert not result.successful and "does not exist" in result.reason
-        result = harness.set_parameters(record_path=str(tmp_path))[0]
+        (tmp_path / "directory.mcap").mkdir()
+        result = harness.set_parameters(record_path=str(tmp_path / "directory.mcap"))[0]
         assert not result.successful and "is a directory" in result.reason
         assert harness.get_parameter("record_path") == str(second)
         assert harness.set_parameters(record_path="")[0].successful
@@ -308,3 +316,105 @@ def test_node_process_finishes_its_recording_on_ctrl_c(tmp_path: Path) -> None:
     times = [stamp(p.header) for _s, _m, p in by_topic(recording, "/box/pose")]
     assert len(times) > 10 and times == sorted(times)
     assert "recording finished" in log_path.read_text()
+
+
+# --------------------------------------------------------------------------- CLI paths that cannot name a file
+
+
+def _cli_error(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str]:
+    capsys.readouterr()
+    try:
+        code = main(argv)
+    except SystemExit as exc:  # argparse's usage errors
+        code = exc.code
+    return code, capsys.readouterr().err
+
+
+@pytest.mark.parametrize("kind", ["loop", "through-loop", "too-long", "not-a-directory", "directory"])
+@pytest.mark.parametrize("option", ["--csv", "--record", "--imu-csv", "SCENE", "plot RUN", "plot --output",
+                                    "plot --scene"])
+def test_paths_that_cannot_name_a_file_are_usage_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                                        kind: str, option: str) -> None:
+    """A symlink loop (ELOOP), a name too long (ENAMETOOLONG), a file used as a directory
+    (ENOTDIR), a directory for a file: exit 2 with one error line naming the path and what was
+    expected, never a traceback."""
+    scene = tmp_path / "scene.yaml"
+    scene.write_text(yaml.safe_dump(SCENE), encoding="utf-8")
+    record = tmp_path / "run.mcap"
+    assert main(["run", str(scene), "-T", "0.02", "--record", str(record), "-q"]) == 0
+    (tmp_path / "loop_a").symlink_to(tmp_path / "loop_b")
+    (tmp_path / "loop_b").symlink_to(tmp_path / "loop_a")
+    path = {"loop": str(tmp_path / "loop_a"), "through-loop": str(tmp_path / "loop_a" / "x.out"),
+            "too-long": str(tmp_path / ("n" * 300)), "not-a-directory": str(scene / "x.out"),
+            "directory": str(tmp_path)}[kind]
+    argv = {"--csv": ["run", str(scene), "-T", "0.02", "--csv", path],
+            "--record": ["run", str(scene), "-T", "0.02", "--record", path],
+            "--imu-csv": ["run", str(scene), "-T", "0.02", "--imu-csv", path],
+            "SCENE": ["run", path, "-T", "0.02", "--csv", str(tmp_path / "out.csv")],
+            "plot RUN": ["plot", path],
+            "plot --output": ["plot", str(record), "-o", path],
+            "plot --scene": ["plot", str(record), "--scene", path, "-o", str(tmp_path / "p.png")]}[option]
+    code, err = _cli_error(argv, capsys)
+    assert code == 2, err
+    assert "Traceback" not in err
+    errors = [line for line in err.splitlines() if line.startswith("rigid-body-sim")]
+    assert len(errors) == 1 and " error: argument " in errors[0], err
+    assert repr(path) in errors[0] and "; expected " in errors[0], err
+    assert not (tmp_path / "out.csv").exists()
+
+
+@pytest.mark.ros  # rclpy's serializer is the reference
+def test_cdr_encoder_writes_the_bytes_rclpy_writes() -> None:
+    """The offline writer's CDR, from the .msg definitions, has the middleware's layout and decodes,
+    by rclpy's type support, to the very message."""
+    from geometry_msgs.msg import PoseArray, PoseStamped, Twist, WrenchStamped
+    from rclpy.serialization import deserialize_message, serialize_message
+    from rosgraph_msgs.msg import Clock
+    from sensor_msgs.msg import Imu, PointCloud2
+
+    from rigid_body_sim.offline.recording import CdrEncoder
+
+    stamp = {"sec": 12, "nanosec": 345_678_901}
+    q = {"x": 0.1, "y": -0.2, "z": 0.3, "w": 0.9273618495495703}
+    v = {"x": 1.5, "y": -2.25, "z": 1e-300}
+    pose = {"position": {"x": 1.0, "y": 2.0, "z": -3.5}, "orientation": q}
+    messages = {
+        "geometry_msgs/msg/PoseStamped": (PoseStamped, {"header": {"stamp": stamp, "frame_id": "world"}, "pose": pose}),
+        "geometry_msgs/msg/Twist": (Twist, {"linear": v, "angular": {"x": 0.0, "y": 7.0, "z": -0.5}}),
+        "geometry_msgs/msg/WrenchStamped": (WrenchStamped, {"header": {"stamp": stamp, "frame_id": "box/corner"},
+                                                            "wrench": {"force": v, "torque": v}}),
+        "rosgraph_msgs/msg/Clock": (Clock, {"clock": stamp}),
+        "sensor_msgs/msg/Imu": (Imu, {"header": {"stamp": stamp, "frame_id": "b/s"}, "orientation": q,
+                                      "orientation_covariance": [float(k) for k in range(9)], "angular_velocity": v,
+                                      "angular_velocity_covariance": [0.5] * 9, "linear_acceleration": v,
+                                      "linear_acceleration_covariance": [-1.0] + [0.0] * 8}),
+        "geometry_msgs/msg/PoseArray": (PoseArray, {"header": {"stamp": stamp, "frame_id": "w"}, "poses": [pose] * 3}),
+        "sensor_msgs/msg/PointCloud2": (PointCloud2, {
+            "header": {"stamp": stamp, "frame_id": "w"}, "height": 1, "width": 2,
+            "fields": [{"name": "vx", "offset": 0, "datatype": 8, "count": 1},
+                       {"name": "stopped", "offset": 8, "datatype": 2, "count": 1}],
+            "is_bigendian": False, "point_step": 9, "row_step": 18, "data": bytes(range(18)), "is_dense": True}),
+    }
+    encoder = CdrEncoder()
+    for type_name, (msg_type, fields) in messages.items():
+        message = _ros_message(msg_type, fields)
+        ours, theirs = encoder.encode(type_name, fields), serialize_message(message)
+        # same layout (the middleware leaves its alignment padding unset, so compare all else)
+        assert len(ours) == len(theirs) and ours[:4] == theirs[:4], type_name
+        assert deserialize_message(ours, msg_type) == message, type_name
+        differing = [i for i in range(len(ours)) if ours[i] != theirs[i]]
+        assert all(ours[i] == 0 for i in differing) and len(differing) < 8, (type_name, differing)  # padding only
+
+
+def _ros_message(msg_type: Any, fields: dict[str, Any]) -> Any:
+    msg = msg_type()
+    for name, value in fields.items():
+        current = getattr(msg, name)
+        if isinstance(value, dict):
+            value = _ros_message(type(current), value)
+        elif isinstance(value, list) and value and isinstance(value[0], dict):
+            element = type(msg).SLOT_TYPES[list(msg.get_fields_and_field_types()).index(name)].value_type
+            module = __import__(f"{element.namespaces[0]}.msg", fromlist=[element.name])
+            value = [_ros_message(getattr(module, element.name), item) for item in value]
+        setattr(msg, name, value)
+    return msg

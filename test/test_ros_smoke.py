@@ -1,11 +1,13 @@
-"""Feasibility probe for ROS 2 from PyPI wheels: rclpy, our message types, DDS on loopback.
+"""Our ROS set-up from PyPI wheels: the bootstrapped venv, the session's private domain, DDS on loopback.
 
-These tests pin down what the node relies on: rclpy imports inside the venv (through the
-ros-wheels-bootstrapper re-exec), a node on a private ``Context`` with a private domain id
-talks to itself through ``SingleThreadedExecutor`` and ``EventsExecutor``, another process
-on the same domain reaches us over DDS, and the message and service types we use import and
-round-trip. Measured times are printed (``pytest -s -m ros -k smoke``) and recorded in
-docs/ros_notes.md.
+The default run checks what this project sets up: rclpy imports inside the venv (through the
+ros-wheels-bootstrapper re-exec) with discovery kept on loopback, and a private ``Context``
+carries the domain id conftest.py claimed for the session. The slow run (``make test-slow``)
+keeps the environment probes: two domains do not talk (what that claim relies on), another
+process on the same domain reaches us over loopback, and the service and message types we use
+round-trip. What rclpy itself guarantees (init on a private context, in-process round trips
+through each executor) is rclpy's to test, not ours. Measured times are printed
+(``pytest -s -m slow -k smoke``) and recorded in docs/ros_notes.md.
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ import time
 from collections.abc import Callable, Iterator
 
 import pytest
-import rclpy  # a missing or broken rclpy fails the run; it is never skipped
+import rclpy  # noqa: F401  (a missing or broken rclpy fails the run; it is never skipped)
 from rclpy.context import Context
 from rclpy.executors import Executor, SingleThreadedExecutor
 from rclpy.node import Node
@@ -54,16 +56,6 @@ def context(ros_domain_id: int) -> Iterator[Context]:
     ctx.try_shutdown()
 
 
-def _pose(x: float) -> "geometry_msgs.msg.PoseStamped":  # noqa: F821
-    from geometry_msgs.msg import PoseStamped
-
-    msg = PoseStamped()
-    msg.header.frame_id = "world"
-    msg.pose.position.x = x
-    msg.pose.orientation.w = 1.0
-    return msg
-
-
 def test_rclpy_imports_inside_bootstrapped_venv() -> None:
     # The bootstrapper's .pth re-executes the interpreter once with LD_LIBRARY_PATH set.
     assert os.environ.get("_ROS_WHEELS_BOOTSTRAP_COMPLETE") == "1"
@@ -78,44 +70,7 @@ def test_private_context_carries_its_domain_id(context: Context, ros_domain_id: 
     assert context.get_domain_id() == ros_domain_id
 
 
-def test_rclpy_init_accepts_context_and_domain_id(ros_domain_id: int) -> None:
-    ctx = Context()
-    rclpy.init(context=ctx, domain_id=ros_domain_id)
-    try:
-        assert ctx.get_domain_id() == ros_domain_id
-        assert not rclpy.ok()  # the global default context is untouched
-    finally:
-        rclpy.try_shutdown(context=ctx)
-    assert not ctx.ok()
-
-
-def _executors() -> list[type[Executor]]:
-    from rclpy.experimental import EventsExecutor
-
-    return [SingleThreadedExecutor, EventsExecutor]
-
-
-@pytest.mark.parametrize("executor_cls", _executors(), ids=lambda c: c.__name__)
-def test_pose_round_trip_in_process(context: Context, executor_cls: type[Executor]) -> None:
-    from geometry_msgs.msg import PoseStamped
-
-    node = Node("smoke_in_process", context=context)
-    received: list[PoseStamped] = []
-    pub = node.create_publisher(PoseStamped, "smoke/pose", 10)
-    node.create_subscription(PoseStamped, "smoke/pose", received.append, 10)
-    executor = executor_cls(context=context)
-    executor.add_node(node)
-    try:
-        pub.publish(_pose(1.25))
-        elapsed = spin_until(executor, lambda: bool(received), timeout_s=5.0)
-        print(f"\n{executor_cls.__name__}: in-process PoseStamped after {elapsed * 1e3:.1f} ms")
-        assert received[0].pose.position.x == 1.25
-        assert received[0].header.frame_id == "world"
-    finally:
-        executor.shutdown()
-        node.destroy_node()
-
-
+@pytest.mark.slow
 def test_separate_domains_do_not_talk(ros_domain_id: int) -> None:
     """Two contexts in one process, different domain ids: no message crosses."""
     from std_msgs.msg import String
@@ -146,6 +101,7 @@ def test_separate_domains_do_not_talk(ros_domain_id: int) -> None:
         ctx_b.try_shutdown()
 
 
+@pytest.mark.slow
 def test_services_and_other_message_types(context: Context) -> None:
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
     from nav_msgs.msg import Odometry
@@ -236,6 +192,7 @@ _PUBLISHER_SCRIPT = textwrap.dedent(
 )
 
 
+@pytest.mark.slow
 def test_pose_from_another_process_over_loopback(context: Context) -> None:
     from geometry_msgs.msg import PoseStamped
 

@@ -1,4 +1,4 @@
-"""Soak (issue 7): 10⁶ physics steps through the node with wrenches and parameters changing (slow;
+"""Soak: 10⁶ physics steps through the node with wrenches and parameters changing (slow;
 ``test_soak_short`` runs 3,000 of them, with a parameter change every 5 ticks, in the default suite).
 
 The node runs in-process under the harness, paused, and advances through ``~/step`` with 50 to

@@ -5,12 +5,12 @@ requirements-test.txt), then the installed ``rigid_body_sim_node`` publishing a 
 colcon runs from this interpreter's environment, as a ROS installation runs it from the
 system python3 that has rclpy: the installed console scripts get its shebang.
 
-The compiled numba kernels are cached beside the core's sources (rigid_body_sim/core/__pycache__);
+The compiled numba kernels are cached beside the core's sources (rigid_body_sim/core/kernels/__pycache__);
 a fresh installation compiles them once, about 100 s on this machine. So that the default suite
 does not pay that, the checkout's cache is copied beside the installed core (the sources keep
-their modification times, which is what numba checks); ``test_cold_installed_node_compiles_and_publishes``
-(slow) runs a fresh installation cold, and ``test_colcon_test_runs_the_whole_suite`` (slow) runs
-every test through ``colcon test``:
+their modification times, which is what numba checks). The default run builds once and runs the
+installed node; the slow run (``make test-slow``) adds ``colcon test`` on a few files and on the
+whole suite, and a fresh installation started cold (``test_cold_installed_node_compiles_and_publishes``):
 
     .venv/bin/python -m pytest -m slow test/test_workspace.py
 """
@@ -18,6 +18,7 @@ every test through ``colcon test``:
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -54,12 +55,12 @@ def source_files() -> list[Path]:
 
 def copy_kernel_cache(package_dir: Path) -> None:
     """Copy the checkout's compiled numba kernels beside ``package_dir``'s core (same sources),
-    with the stamp of the sources they were compiled from (core/jit.py keeps a cache only with
+    with the stamp of the sources they were compiled from (core/kernels/jit.py keeps a cache only with
     its stamp)."""
-    from rigid_body_sim.core.jit import STAMP_NAME
+    from rigid_body_sim.core.kernels.jit import STAMP_NAME
 
-    cache = ROOT / PACKAGE / "core" / "__pycache__"
-    target = package_dir / "core" / "__pycache__"
+    cache = ROOT / PACKAGE / "core" / "kernels" / "__pycache__"
+    target = package_dir / "core" / "kernels" / "__pycache__"
     target.mkdir(exist_ok=True)
     for path in [*cache.glob("*.nbi"), *cache.glob("*.nbc"), cache / STAMP_NAME]:
         shutil.copy2(path, target / path.name)
@@ -157,11 +158,13 @@ def test_installed_node_publishes_a_pose(built, tmp_path):
     copy_kernel_cache(site_packages(built) / PACKAGE)
     pose, text = run_installed_node_until_a_pose(built, tmp_path / "node.log", timeout=120.0)
     assert pose.header.frame_id == "world"
-    installed_scene = built / "install" / PACKAGE / "share" / PACKAGE / "config" / "default_scene.yaml"
-    assert f"scene {installed_scene}:" in text  # the installed copy, found through the ament index
+    # The installed copy (package data of the installed package), not the source tree's.
+    installed = re.search(r"scene (\S+default_scene\.yaml):", text)
+    assert installed and Path(installed.group(1)).is_relative_to(built / "install" / PACKAGE), text
     assert "Traceback" not in text
 
 
+@pytest.mark.slow
 def test_colcon_test_runs_the_package_tests(built):
     """``colcon test`` finds pytest (setup.py's ``test`` extra) and runs the package's tests from the
     workspace; here a fast subset, the whole suite in the slow test below."""

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from .dynamics import angular_momentum_W, kinetic_energy
+from .mechanics import angular_momentum_W, kinetic_energy
 from .quaternion import quat_conjugate, quat_multiply, quat_rotate, quat_to_matrix, quat_xyzw_from_wxyz
 from .reduction import plan_models
 from .scene import Scene
@@ -55,7 +55,7 @@ def describe_scene(scene: Scene, model_reduction: bool = True) -> list[dict[str,
       kg·m²/s), both initial
     - ``damping``: ``{"linear": N·s/m, "angular": N·m·s/rad}``
     - ``sites``: ``[{"name", "position_B" (m, from the centre of mass, B axes), "axes", "imu"}]``,
-      ``imu`` None or the site's IMU (core/imu.py: ``rate``, ``seed``, ``orientation``,
+      ``imu`` None or the site's IMU (core/imu_spec.py: ``rate``, ``seed``, ``orientation``,
       ``accelerometer`` and ``gyroscope`` as ``{"noise_density", "bias", "bias_random_walk"}`` or None)
     - ``frames``: every frame a wrench on the body may name
     - ``scripted_wrenches``: ``[{"frame", "force", "torque", "start", "duration"}]`` (duration

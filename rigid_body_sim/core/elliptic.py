@@ -1,7 +1,7 @@
 """Jacobi elliptic functions and Legendre's elliptic integrals, to full precision near m = 1.
 
 The shared elliptic helpers of the torque-free rotor (free_rotor.py) and of its closed-form
-reference (closed_form.py), vectorised over numpy arrays (every argument broadcasts). The
+reference (rigid_body_sim/exact/closed_form.py), vectorised over numpy arrays (every argument broadcasts). The
 parameter is always given as ``m_c = 1 − m`` (with ``m`` where a formula needs it), because
 the interesting motions sit near the separatrix, m → 1, where ``1 − m`` cannot be recovered
 from m. Amplitudes are passed as the triple ``(sin β, cos β, Δ = √(1 − m sin²β))`` where the

@@ -24,10 +24,13 @@ from dataclasses import dataclass
 
 import numpy as np
 from . import elliptic
-from .closed_form import EQUAL_MOMENTS_RTOL, symmetric_top_flow
-from .quaternion import quat_conjugate, quat_from_matrix, quat_from_rotation_vector, quat_multiply
+from .quaternion import quat_conjugate, quat_from_matrix, quat_from_rotation_vector, quat_multiply, quat_rotate
 
-__all__ = ["symmetric_split_rotor", "exact_rotor", "rotor_pairing"]
+__all__ = ["symmetric_split_rotor", "exact_rotor", "rotor_pairing", "EQUAL_MOMENTS_RTOL"]
+
+#: Two principal moments this close (relative) count as equal: the body is a symmetric top
+#: (reduction.py uses the same threshold for the symmetric and isotropic models).
+EQUAL_MOMENTS_RTOL = 1e-12
 
 #: Smallest m_c = 1 − m used: a body exactly on the separatrix (m = 1, period → ∞) is
 #: integrated as one a hair inside it, period 4 K(1 − m_c) ≈ 4·347 in u; the two agree to
@@ -150,7 +153,7 @@ def symmetric_split_rotor(inertia_P: np.ndarray, q_WP: np.ndarray, L_P: np.ndarr
 
     ``H = H_top + H_rem`` with, per body (axes from :func:`rotor_pairing`),
 
-        H_top = |L|²/(2 I_t) + ½ (1/I_s − 1/I_t) L_s²      (exact: closed_form.symmetric_top_flow)
+        H_top = |L|²/(2 I_t) + ½ (1/I_s − 1/I_t) L_s²      (exact: :func:`_top_flow`)
         H_rem = ½ (1/I_k − 1/I_t) L_k²                     (exact: a rotation about axis k)
 
     composed as rem(h/2) · top(h) · rem(h/2). Every stage is an exact rotation, so |L| and
@@ -178,11 +181,25 @@ def symmetric_split_rotor(inertia_P: np.ndarray, q_WP: np.ndarray, L_P: np.ndarr
     return _symmetric_split(pairing, q_WP, L_P, h)
 
 
+def _top_flow(q: np.ndarray, L: np.ndarray, inv_inertia_t: np.ndarray, e_axis: np.ndarray, c_axis: np.ndarray,
+              t: float) -> tuple[np.ndarray, np.ndarray]:
+    """Exact flow over ``t`` of |L|²/(2 I_t) + ½ c L_a² (a = ``e_axis``), per body: (q, L) after it.
+
+    The two terms commute (|L|² is a Casimir): the body turns about L at |L|/I_t (L fixed in
+    the body's axes), then about e_a at c L_a, which turns L in the body's axes backwards.
+    The compiled twin is kernels/integrators.top_flow; the tests' reference is the closed
+    form of rigid_body_sim.exact (neither is imported here).
+    """
+    turn = quat_from_rotation_vector((c_axis * np.sum(L * e_axis, axis=-1) * t)[:, None] * e_axis)
+    cone = quat_from_rotation_vector((inv_inertia_t * t)[:, None] * L)
+    return quat_multiply(quat_multiply(q, cone), turn), quat_rotate(quat_conjugate(turn), L)
+
+
 def _symmetric_split(pairing: _Pairing, q: np.ndarray, L: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
     zero = np.zeros_like(pairing.c_k)
-    q, L = symmetric_top_flow(q, L, zero, pairing.e_k, pairing.c_k, 0.5 * h)
-    q, L = symmetric_top_flow(q, L, pairing.inv_inertia_t, pairing.e_s, pairing.c_s, h)
-    return symmetric_top_flow(q, L, zero, pairing.e_k, pairing.c_k, 0.5 * h)
+    q, L = _top_flow(q, L, zero, pairing.e_k, pairing.c_k, 0.5 * h)
+    q, L = _top_flow(q, L, pairing.inv_inertia_t, pairing.e_s, pairing.c_s, h)
+    return _top_flow(q, L, zero, pairing.e_k, pairing.c_k, 0.5 * h)
 
 
 # ----------------------------------------------------------------------------- exact flow
@@ -193,7 +210,7 @@ def exact_rotor(inertia_P: np.ndarray, q_WP: np.ndarray, L_P: np.ndarray, h: flo
     """The exact torque-free motion over ``h`` (Euler–Poinsot), for any step size.
 
     Per body, in sorted axes (I1 < I2 < I3) and with the notation of
-    :func:`~rigid_body_sim.core.closed_form.asymmetric_top_body_rates` (same formulas,
+    :func:`~rigid_body_sim.exact.closed_form.asymmetric_top_body_rates` (same formulas,
     vectorised, on L/|L| so that no intermediate overflows):
 
     * ``L_P(h)``: Jacobi sn, cn, dn at ``u0 + ν h``, with ``u0 = F(am u0 | m)`` from the

@@ -1,8 +1,12 @@
-"""IMU sensor models on sites: what a scene declares under ``imu:``, and the noise added to ideal readings.
+"""IMU sensor models on sites at run time: the noise added to ideal readings, and the sampler of a simulation.
 
-The ideal readings (specific force and angular velocity in the site's axes) come from
-:meth:`Simulator.site_readings` (sensors.py). This module adds what a real IMU adds, with the
-discrete-time model of Kalibr and Gazebo, per axis and per sample of interval Δt (s):
+What a scene declares (:class:`~rigid_body_sim.core.imu_spec.ImuSpec`, the ``imu:`` keys) is
+core/imu_spec.py, which scene.py reads; this module is what uses it while a simulation runs,
+and nothing here is imported by the scene or the Simulator. :class:`ImuBank` samples the IMUs
+that are due after a tick (node, ros/imu.py) or an output step (CLI): the ideal readings
+(specific force and angular velocity in the site's axes) from :meth:`Simulator.site_readings`
+(kernels/sensors.py), plus what a real IMU adds (:class:`ImuNoise`), with the discrete-time
+model of Kalibr and Gazebo, per axis and per sample of interval Δt (s):
 
     b_k   = b_{k-1} + σ_b · √Δt · N(0, 1)           (bias random walk; b_0 = ``bias``)
     y_k   = ideal_k + b_k + σ_n / √Δt · N(0, 1)     (white noise of density σ_n)
@@ -12,15 +16,6 @@ discrete-time model of Kalibr and Gazebo, per axis and per sample of interval Δ
 variance of one sample's white noise, σ_n²/Δt, is the covariance a sensor_msgs/Imu carries.
 Random numbers come from numpy's PCG64 seeded by (``seed``, the site's name), so a run repeats
 exactly and two IMUs with the same seed still have independent noise.
-
-Scene form (under a site; every key optional, an empty mapping is an ideal IMU)::
-
-    imu:
-      rate: 200.0          # Hz of sim time; absent = one sample per output step (node tick)
-      seed: 7              # integer ≥ 0, default 0
-      orientation: true    # false: the message says it has no orientation (covariance[0] = -1)
-      accelerometer: {noise_density: 2.0e-3, bias: [0.02, 0, 0], bias_random_walk: 3.0e-3}
-      gyroscope: {noise_density: 1.7e-4, bias: 0.001, bias_random_walk: 2.0e-5}
 """
 
 from __future__ import annotations
@@ -32,60 +27,12 @@ from typing import TYPE_CHECKING, Mapping
 
 import numpy as np
 
+from .imu_spec import ImuChannel, ImuSpec
+
 if TYPE_CHECKING:
     from .simulator import Simulator
 
-__all__ = ["ImuChannel", "ImuSpec", "ImuNoise", "ImuSample", "ImuBank", "IMU_KEYS", "IMU_CHANNEL_KEYS"]
-
-#: Keys of an ``imu:`` mapping and of its ``accelerometer`` / ``gyroscope`` mappings.
-IMU_KEYS = ("rate", "seed", "orientation", "accelerometer", "gyroscope")
-IMU_CHANNEL_KEYS = ("noise_density", "bias", "bias_random_walk")
-
-
-@dataclass(frozen=True)
-class ImuChannel:
-    """Noise of one triad (accelerometer or gyroscope), per axis, in the sensor's axes.
-
-    Attributes
-    ----------
-    noise_density : float
-        σ_n: white-noise density (m/s²/√Hz or rad/s/√Hz), ≥ 0.
-    bias : tuple of 3 float
-        Turn-on bias b_0 (m/s² or rad/s).
-    bias_random_walk : float
-        σ_b: bias random-walk density (m/s³/√Hz or rad/s²/√Hz), ≥ 0.
-    """
-
-    noise_density: float = 0.0
-    bias: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    bias_random_walk: float = 0.0
-
-    @property
-    def ideal(self) -> bool:
-        return self.noise_density == 0.0 and self.bias_random_walk == 0.0 and not any(self.bias)
-
-
-@dataclass(frozen=True)
-class ImuSpec:
-    """An IMU declared on a site.
-
-    Attributes
-    ----------
-    rate : float or None
-        Samples per second of sim time; None: one per output step.
-    seed : int
-        Seed of its noise (with the site's name).
-    orientation : bool
-        Whether its messages carry the orientation of the sensor frame.
-    accelerometer, gyroscope : ImuChannel or None
-        The noise of each triad; None when the scene declares none (an ideal triad).
-    """
-
-    rate: float | None = None
-    seed: int = 0
-    orientation: bool = True
-    accelerometer: ImuChannel | None = None
-    gyroscope: ImuChannel | None = None
+__all__ = ["ImuNoise", "ImuSample", "ImuBank", "NOT_PROVIDED", "noise_covariance"]
 
 
 class ImuNoise:
@@ -168,7 +115,8 @@ class ImuSample:
     covariances: tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...]]
 
 
-def _diagonal(variance: float) -> tuple[float, ...]:
+def noise_covariance(variance: float) -> tuple[float, ...]:
+    """The row-major 3×3 covariance of three independent axes of equal ``variance``."""
     return (variance, 0.0, 0.0, 0.0, variance, 0.0, 0.0, 0.0, variance)
 
 
@@ -184,7 +132,7 @@ class ImuBank:
         spawned or deleted at run time does not restart the other IMUs' noise).
     """
 
-    def __init__(self, imus: Mapping[str, ImuSpec], previous: "ImuBank | None" = None):
+    def __init__(self, imus: Mapping[str, ImuSpec], previous: ImuBank | None = None):
         self.noise: dict[str, ImuNoise] = {}  # by site
         #: Sim time (s) of the next sample of each IMU with a rate (None: at the next call).
         self.next_due_s: dict[str, float | None] = {}
@@ -198,7 +146,7 @@ class ImuBank:
                 self.next_due_s[site] = None
         self.sites = tuple(self.noise)
 
-    def sample(self, sim: "Simulator", step_dt: float) -> list[ImuSample]:
+    def sample(self, sim: Simulator, step_dt: float) -> list[ImuSample]:
         """The samples due at ``sim.time``, read right after the step(s) just taken.
 
         An IMU without ``rate`` samples at every call, Δt = ``step_dt`` (s of sim time, the
@@ -232,8 +180,8 @@ class ImuBank:
                 self.next_due_s[site] = next_due
             force, rate = noise.sample(readings.specific_force[k], readings.angular_velocity[k], dt)
             covariances = ((0.0,) * 9 if spec.orientation else NOT_PROVIDED,
-                           _diagonal(ImuNoise.variance(spec.gyroscope, dt)),
-                           _diagonal(ImuNoise.variance(spec.accelerometer, dt)))
+                           noise_covariance(ImuNoise.variance(spec.gyroscope, dt)),
+                           noise_covariance(ImuNoise.variance(spec.accelerometer, dt)))
             out.append(ImuSample(site, t, readings.orientation_xyzw[k].copy() if spec.orientation else None,
                                  rate, force, covariances))
         return out

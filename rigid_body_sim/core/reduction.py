@@ -34,8 +34,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import layout as L
-from .closed_form import EQUAL_MOMENTS_RTOL
+from .kernels import layout as L
+from .free_rotor import EQUAL_MOMENTS_RTOL
 from .model import BodyModel, State
 from .quaternion import quat_rotate, quat_to_matrix
 
@@ -190,6 +190,7 @@ def apply_plan(prm: np.ndarray, model: BodyModel, initial: State, state: State, 
         prm[b, L.KINEMATIC_W:L.KINEMATIC_W + 3] = quat_rotate(state.q_WP[b], state.w_WP_P[b])
     prm[:, L.GRAVITY:L.GRAVITY + 3] = g
     prm[:, L.CACHE_DT] = np.nan  # no cached rotation increment
+    prm[:, L.TOP_DT] = np.nan  # nor symmetric-top increments
     # |m g| as m |g| with a hypot-style norm: no sum of squares to overflow
     prm[:, L.GRAVITY_BUDGET_RATE] = model.mass * np.hypot(np.hypot(g[:, 0], g[:, 1]), g[:, 2]) * prm[:, L.BUDGET_FORCE]
     moving = np.flatnonzero(codes != L.MODEL_STATIC)

@@ -20,7 +20,7 @@ Schema (every key not listed is an error; see README "Scene files")::
         sites:                                                  # optional
           corner: {position: [0.5, 0.3, 0.0]}                   # body frame, from the COM
           nozzle: {position: [0, 0, -0.2], axes: world}         # axes: body (default) | world
-          imu_mount: {position: [0, 0, 0.1], imu: {}}           # an IMU on the site (imu.py; {} = ideal)
+          imu_mount: {position: [0, 0, 0.1], imu: {}}           # an IMU on the site (imu_spec.py; {} = ideal)
     ground:                               # optional: static half-spaces n·x ≥ offset, and per body
       - {normal: [0, 0, 1], offset: 0.0}  # material/collision keys: core/contact/scene_keys.py
     wrenches:                             # optional: scripted wrenches over sim time
@@ -38,7 +38,7 @@ Limits, for scenes from users (issue 18: a scene must never hang, exhaust memory
 then fail to run). Files are read as YAML 1.2 by :mod:`~rigid_body_sim.core.scene_yaml`
 (aliases counted as what they expand to, no recursion, no tags beyond the core ones), at most
 :data:`MAX_SCENE_BYTES`, from a regular file opened without blocking
-(:func:`rigid_body_sim.paths.read_regular_file`). A scene has at most :data:`MAX_BODIES`
+(:func:`rigid_body_sim.safe_open.read_regular_file`). A scene has at most :data:`MAX_BODIES`
 bodies and :data:`MAX_SCRIPTED_WRENCHES` scripted wrenches. Every number is finite; masses,
 the lengths of inertia shapes and principal moments are normal floats (≥ :data:`MIN_POSITIVE`,
 so that 1/m and 1/I exist: a subnormal mass used to fail at step 0), and what the dynamics
@@ -62,8 +62,8 @@ from typing import Any
 
 import numpy as np
 
-from ..paths import FileTooLargeError, NotRegularFileError, read_regular_file
-from .imu import IMU_CHANNEL_KEYS, IMU_KEYS, ImuChannel, ImuSpec
+from ..safe_open import FileTooLargeError, NotRegularFileError, read_regular_file
+from .imu_spec import IMU_CHANNEL_KEYS, IMU_KEYS, ImuChannel, ImuSpec
 from .mass_properties import (
     TRIANGLE_RTOL,
     box_inertia,
@@ -88,7 +88,7 @@ from .contact.scene_keys import ContactSpec, read_contact, without_contact_keys
 __all__ = ["Scene", "SceneError", "ScriptedWrench", "load_scene", "load_scene_text", "WORLD_FRAME",
            "ORIENTATION_TOLERANCE", "DEFAULT_ENERGY_GROWTH_LIMIT", "MAX_SCENE_BYTES", "MAX_BODIES",
            "MAX_SCRIPTED_WRENCHES", "MAX_NAME_LENGTH", "MAX_NAMESPACE_LENGTH", "MIN_POSITIVE",
-           "MAX_NORM"]
+           "MAX_NORM", "MAX_SCENE_TEXT_CHARS", "MAX_SITES_PER_BODY", "MAX_SITES", "MAX_IMUS_PER_BODY", "MAX_IMUS"]
 
 #: Name of the world frame in the core's frame rule.
 WORLD_FRAME = "world"
@@ -115,6 +115,19 @@ MAX_NAME_LENGTH = 63
 #: Characters left for the node's namespace (with its leading "/") and a topic suffix of up to
 #: 16 characters after the longest body and site names: 247 − (3 · 1 + 2 · 63 + 16).
 MAX_NAMESPACE_LENGTH = 247 - (3 + 2 * MAX_NAME_LENGTH + 16)
+#: Longest scene text (characters) :func:`load_scene_text` takes: a scene file's bytes written out
+#: again as JSON (a spawn or delete edits the running scene's text), with room for what a spawn adds.
+MAX_SCENE_TEXT_CHARS = 2 * MAX_SCENE_BYTES
+#: Most sites one body may declare, and most in a scene: each is a row of every step's site
+#: kinematics and a marker, and a spawn request is checked and built while the node waits.
+MAX_SITES_PER_BODY = 1_000
+MAX_SITES = 100_000
+#: Most IMUs one body may carry, and most in a scene. Each IMU is a ROS publisher, created while
+#: the node's executor waits, and a message every tick: one spawned body with 20,000 IMUs held the
+#: executor for 6.6-11.8 s; a spawn of 928 IMUs (16 bodies) took 1.9 s on the loaded 2-core test
+#: machine, so 256 keep a spawn or scene change to about half a second.
+MAX_IMUS_PER_BODY = 64
+MAX_IMUS = 256
 #: Smallest mass (kg), inertia-shape length (m) and principal moment (kg·m²): the smallest
 #: normal float64. Below it 1/m and 1/I overflow and the first step is not finite.
 MIN_POSITIVE = sys.float_info.min
@@ -268,6 +281,9 @@ def load_scene_text(text: str, source: str = "<text>") -> Scene:
     SceneError
         As :func:`load_scene`.
     """
+    if len(text) > MAX_SCENE_TEXT_CHARS:
+        raise SceneError(f"{source}: expected a scene text of at most {MAX_SCENE_TEXT_CHARS:,} characters "
+                         f"(MAX_SCENE_TEXT_CHARS), got {len(text):,}")
     try:
         data = read_yaml(text[1:] if text.startswith("\ufeff") else text)
     except YamlReadError as exc:
@@ -531,6 +547,7 @@ def _read_body(check: _Checker, index: int, raw_name: Any, raw_body: Any, out: _
     if sites is not None:
         if not isinstance(sites, Mapping):
             check.fail(f"{path}.sites", "a mapping of site names to {position: [x, y, z], axes: body|world}", sites)
+        _check_site_counts(check, path, sites, out)
         for raw_site, raw_spec in sites.items():
             site = check.name(raw_site, f"{path}.sites", _RESERVED_SITE_NAMES)
             spath = f"{path}.sites.{site}"
@@ -562,8 +579,26 @@ def _read_body(check: _Checker, index: int, raw_name: Any, raw_body: Any, out: _
     out.sites_of[name] = tuple(body_sites)
 
 
+def _check_site_counts(check: _Checker, path: str, sites: Mapping, out: _Bodies) -> None:
+    """The limits on sites and IMUs (:data:`MAX_SITES_PER_BODY`, :data:`MAX_IMUS_PER_BODY`,
+    :data:`MAX_SITES`, :data:`MAX_IMUS`), checked before any site is read."""
+    imus = sum(1 for spec in sites.values() if isinstance(spec, Mapping) and "imu" in spec)
+    if imus > MAX_IMUS_PER_BODY:
+        check.fail(f"{path}.sites", f"at most {MAX_IMUS_PER_BODY:,} sites with an imu on a body (MAX_IMUS_PER_BODY: "
+                   f"each IMU is a ROS publisher), got {imus:,}", show_got=False)
+    if len(sites) > MAX_SITES_PER_BODY:
+        check.fail(f"{path}.sites", f"at most {MAX_SITES_PER_BODY:,} sites on a body (MAX_SITES_PER_BODY), "
+                   f"got {len(sites):,}", show_got=False)
+    if len(out.site_names) + len(sites) > MAX_SITES:
+        check.fail(f"{path}.sites", f"at most {MAX_SITES:,} sites in a scene (MAX_SITES), got "
+                   f"{len(out.site_names) + len(sites):,} up to this body", show_got=False)
+    if len(out.imus) + imus > MAX_IMUS:
+        check.fail(f"{path}.sites", f"at most {MAX_IMUS:,} IMUs in a scene (MAX_IMUS: each IMU is a ROS publisher), "
+                   f"got {len(out.imus) + imus:,} up to this body", show_got=False)
+
+
 def _imu(check: _Checker, value: Any, path: str) -> ImuSpec:
-    """An ``imu:`` mapping (core/imu.py): every key optional; an empty mapping (or null) is an ideal IMU."""
+    """An ``imu:`` mapping (core/imu_spec.py): every key optional; an empty mapping (or null) is an ideal IMU."""
     if value is None:
         return ImuSpec()
     imu = check.mapping(value, path, IMU_KEYS)

@@ -23,11 +23,15 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from . import layout as L
-from . import reduction, sensors, stepping
-from .dynamics import angular_momentum_W, impulse_response, kinetic_energy, linear_momentum_W, potential_energy
-from .forces import add_wrench, new_wrench_rows, parse_frame, project_twist
+from . import reduction
+from .frames import new_wrench_rows, parse_frame
 from .integrators import INTEGRATORS, Method, get_integrator, step_exact_rotor_splitting, step_reference
+from .kernels import layout as L
+from .kernels import sensors, stepping
+from .kernels.compile import compile_kernels  # noqa: F401  (ros/main.py imports it from here)
+from .kernels.dynamics import impulse_response
+from .kernels.forces import add_wrench, project_twist
+from .mechanics import angular_momentum_W, kinetic_energy, linear_momentum_W, potential_energy
 from .model import State
 from .quaternion import (
     quat_conjugate,
@@ -37,6 +41,7 @@ from .quaternion import (
     quat_xyzw_from_wxyz,
 )
 from .scene import ORIENTATION_TOLERANCE, Scene
+from .stepping import pack_parameters
 
 __all__ = ["Simulator", "BodyState", "SiteReadings", "NonFiniteStateError", "DivergenceError",
            "SCRIPT_TIME_TOLERANCE"]
@@ -217,11 +222,13 @@ class Simulator:
         # The buffers of the compiled step (stepping.py; layout.py names their columns): two
         # state buffers (the state is _Ys[_control[CUR]]), per-body parameters, status, step
         # controls and inputs, and the applied wrenches in their frames' terms.
-        self._prm = stepping.pack_parameters(self.model)
+        self._prm = pack_parameters(self.model)
         self._Ys, self._status, self._control, self._inputs = stepping.new_buffers(n)
         self._views = (State.of_rows(self._Ys[0]), State.of_rows(self._Ys[1]))
         self._wrenches = new_wrench_rows(n)
         self._members = np.zeros(0, dtype=np.int64)  # the moving bodies, grouped by model (_replan)
+        # Set by cancel() from any thread; the compiled step reads it between steps (it holds no GIL).
+        self._cancel = np.zeros(1, dtype=np.int64)
         self._inputs[L.LIMIT] = float(limit)
         self._pending_heads: dict[tuple[str, str], tuple[float, ...]] = {}
         # An applied wrench waits in _inputs[PENDING...] (the one-call fast path); any other goes
@@ -566,8 +573,11 @@ class Simulator:
 
     # ----------------------------------------------------------------- stepping
 
-    def step(self, n: int = 1) -> None:
-        """Advance ``n`` steps of ``dt``; applied wrenches hold for all of them, then clear.
+    def step(self, n: int = 1) -> int:
+        """Advance ``n`` steps of ``dt``; applied wrenches hold for all of them, then clear. Returns the steps done.
+
+        Fewer than ``n`` only when :meth:`cancel` stopped it: then the state is the one after
+        the steps done, and ``time`` and ``step_count`` count exactly those.
 
         The scene's scripted wrenches (``Scene.wrenches``) are added at the start of each step
         whose start time lies in their window (see :meth:`active_scripted_wrenches`), on top of
@@ -591,22 +601,36 @@ class Simulator:
             n = int(n)
         elif n < 0:
             raise ValueError(f"n: expected a whole number of steps ≥ 0, got {n!r}")
-        if self._step_by_step:
-            self._flush_pending()
-            for _ in range(n):
-                self._last_wrenches = self._step_once()
-            self.clear_wrenches()
-            return
-        if not n:
-            self.clear_wrenches()
-            return
-        outcome = stepping.advance(*self._buffers, n)
-        self._pending = False  # advance took the pending wrench
-        if outcome:
-            self.step_count += int(self._control[L.DONE])
-            self._raise_step_failure(outcome)  # the wrenches are kept, for the caller to stop the body and step again
-        self.step_count += n
-        self._last_wrenches = self._wrenches  # spent: they stay for the sensors until something new is applied
+        try:
+            if self._step_by_step:
+                self._flush_pending()
+                done = 0
+                while done < n and not self._cancel[0]:
+                    self._last_wrenches = self._step_once()
+                    done += 1
+                self.clear_wrenches()
+                return done
+            if not n:
+                self.clear_wrenches()
+                return 0
+            done = stepping.advance(*self._buffers, n, self._cancel)
+            self._pending = False  # advance took the pending wrench
+            self.step_count += done
+            if self._control[L.OUTCOME]:
+                self._raise_step_failure(int(self._control[L.OUTCOME]))  # the wrenches are kept, for the caller
+            self._last_wrenches = self._wrenches  # spent: they stay for the sensors until something new is applied
+            return done
+        finally:
+            self._cancel[0] = 0
+
+    def cancel(self) -> None:
+        """Stop the :meth:`step` running in another thread at its next step boundary (or, if none runs, the next one).
+
+        Safe to call from any thread: the compiled step releases the GIL and reads this flag
+        between steps, so a long call (many bodies, many steps) returns within one step of it,
+        with the steps done applied and counted. The flag is cleared when that step returns.
+        """
+        self._cancel[0] = 1
 
     def _step_once(self) -> np.ndarray:
         """One step with the scene's scripted wrenches added, or with a numpy/scipy integrator; its wrench rows."""
@@ -615,7 +639,7 @@ class Simulator:
             self.contact.add_holding_wrenches(self, wrenches)
         if self._method.code is not None:
             stepping.advance(self._Ys, self._prm, wrenches, self._members, self._status, self._control,
-                             self._inputs, 1)
+                             self._inputs, 1, _NEVER)
             self._inputs[L.SPENT] = 0.0  # ``wrenches`` is this step's own array: nothing to drop before the next
         else:
             bodies = stepping.step_reduced(self._Ys, self._prm, wrenches, self._members, self._status,
@@ -768,6 +792,10 @@ class Simulator:
             raise ValueError(f"unknown body {body!r}; bodies are {list(self.model.names)}") from None
 
 
+#: The cancel flag of a single step taken on its own (Simulator._step_once checks the real one between steps).
+_NEVER = np.zeros(1, dtype=np.int64)
+
+
 def _positive(value: Any, name: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
         raise ValueError(f"{name}: expected a finite number > 0, got {value!r}")
@@ -806,45 +834,3 @@ def _vector3(value: Any, name: str) -> np.ndarray:
     if v.shape != (3,) or not np.all(np.isfinite(v)):
         raise ValueError(f"{name}: expected 3 finite numbers, got {value!r}")
     return v
-
-
-def compile_kernels() -> None:
-    """Compile (or load from numba's cache) every compiled function the core uses: ~2 CPU-minutes once per checkout.
-
-    ``make venv`` runs it, so that neither the first node start nor the first test pays it.
-    Steps a scene with a body of every model, with and without a wrench, with every integrator.
-    """
-    from .scene import load_scene
-
-    def spec(inertia: dict, motion: str = "free", **twist: list) -> dict:
-        return {"mass": 1.0, "inertia": inertia, "motion": motion, "twist": twist,
-                "sites": {"s": {"position": [0.1, 0.0, 0.0], "axes": "world"}}}
-
-    box = {"box": [1.0, 0.6, 0.4]}
-    scene = load_scene({"gravity": [0.0, 0.0, -9.81], "bodies": {
-        "full": spec(box, angular=[0.3, 1.0, 0.2]), "ball": spec({"sphere": 0.1}, angular=[1.0, 0.0, 0.0]),
-        "can": spec({"cylinder": [0.1, 0.5]}, angular=[1.0, 0.0, 3.0]), "wall": spec(box, "static"),
-        "belt": spec(box, "kinematic", linear=[1.0, 0.0, 0.0]), "puck": spec(box, "planar"),
-        "sat": spec(box, "rotation_only"), "cart": spec(box, "translation_only")}})
-    for name in INTEGRATORS:
-        sim = Simulator(scene, integrator=name, dt=0.01)
-        sim.step(1)
-        sim.apply_force_at_point("full", [0.0, 1.0, 0.0], [0.5, 0.3, 0.0], frame="full")
-        sim.apply_wrench("ball", torque=[0.0, 0.0, 0.1], frame="ball/s")
-        sim.step(2)
-        sim.apply_impulse("can", linear=[0.1, 0.0, 0.0])
-        sim.set_body_state("puck", linear_velocity_world=[0.1, 0.2, 0.0])
-        sim.apply_wrench("puck", force=[0.0, 1.0, 0.0], frame="puck/s")  # a planar body under a turning force
-        sim.step(1)
-    from .stepping import unchecked_steps
-
-    for name in INTEGRATORS:  # tools/envelope.py and the tests step bodies without the checks too
-        unchecked_steps(name, scene.model, scene.initial_state, 0.01, 1)
-    # --- contact (core/contact): a ball bouncing to rest and a box sliding to a stop compile its kernels
-    ground = [{"normal": [0.0, 0.0, 1.0], "material": {"restitution": 0.5, "friction": 0.5}}]
-    contact = load_scene({"gravity": [0.0, 0.0, -9.81], "ground": ground, "bodies": {
-        "ball": {"mass": 1.0, "inertia": {"sphere": 0.1}, "pose": {"position": [0.0, 0.0, 0.2]}},
-        "crate": {"mass": 1.0, "inertia": {"box": [0.2, 0.2, 0.2]}, "pose": {"position": [1.0, 0.0, 0.1]},
-                  "twist": {"linear": [1.0, 0.0, 0.0]}}}})
-    Simulator(contact, integrator="rk4", dt=0.01).step(60)
-    # --- end contact

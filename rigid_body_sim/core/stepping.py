@@ -1,132 +1,57 @@
-"""The compiled step driver: every moving body, its model or the integrator, then the blow-up checks.
+"""The host side of the compiled step driver (kernels/stepping.py): its parameter rows, and steps without checks.
 
-One call of :func:`advance` runs ``n`` steps of every moving body (numba; no Python per step
-or per body). Per step, for each model's group of bodies (reduction.py groups them, so each
-loop is homogeneous and static bodies are never touched), the body's model
-(reduced_models.py) or the integrator (integrators.py, dispatched by _integrate) writes the next state into
-the other state buffer; :func:`check_body` then checks it (finite; kinetic energy within the
-bound of simulator.DivergenceError). Only when every body passes does the other buffer become
-the current one, so a failed step is never applied.
-
-Buffers (layout.py names every column):
-
-``Ys`` : (2, N, ROW_WIDTH)
-    The state rows, twice: ``control[CUR]`` says which holds the state.
-``prm`` : (N, PRM_WIDTH)
-    Per-body constants (:func:`pack_parameters`, then reduction.apply_plan).
-``wrenches`` : (N, WRENCH_WIDTH)
-    Applied wrenches in frame terms (forces.add_wrench); held for every step of the call and
-    cleared at its end.
-``members`` : (M,) int64
-    The moving bodies, grouped by model; ``control[GROUPS + 2c : GROUPS + 2c + 2]`` is the
-    [start, end) of model c's group.
-``status`` : (N,) int64
-    Each body's outcome of the last step checked.
-``control`` : (CONTROL_WIDTH,) int64, ``inputs`` : (INPUT_WIDTH,) float64
-    The current buffer, the method, steps done and the outcome; dt, the limit, a pending wrench.
+:func:`pack_parameters` fills the per-body constants the compiled step reads (layout.py names
+the columns); :func:`unchecked_steps` steps bodies with one integrator and no reduction or
+checks, for measuring integrators themselves.
 """
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
-from numba import njit
 
-from .forces import add_wrench
-from .integrators import (
-    EULER,
-    IMPLICIT_GYROSCOPIC,
-    RK4,
-    SEMI_IMPLICIT_EULER,
-    SPLITTING,
-    SYMMETRIC_SPLITTING,
-    euler,
-    implicit_gyroscopic,
-    rk4,
-    semi_implicit_euler,
-    splitting,
-    symmetric_splitting,
-)
-from .layout import (
-    ACTIVE,
-    BOUND,
+from .free_rotor import rotor_pairing
+from .integrators import get_integrator, step_exact_rotor_splitting, step_reference
+from .kernels.layout import (
+    AXIS_K,
+    AXIS_S,
     BUDGET_FORCE,
     BUDGET_TORQUE,
+    C_K,
+    C_S,
     CACHE_DT,
-    CONTROL_WIDTH,
     CUR,
     DAMP_ANG,
     DAMP_LIN,
-    DIVERGED,
-    DONE,
     DT,
-    F_COM_P,
-    F_COM_W,
-    F_WORLD,
     GRAVITY,
     GRAVITY_BUDGET_RATE,
     GROUPS,
     INERTIA,
-    INPUT_WIDTH,
+    INV_I_T,
     INV_INERTIA,
     INV_MASS,
     LIMIT,
     MASS,
-    METHOD,
     MODEL,
-    MODEL_COUNT,
     MODEL_FULL,
-    MODEL_ISOTROPIC,
-    MODEL_KINEMATIC,
-    MODEL_PLANAR,
-    MODEL_SYMMETRIC,
-    MODEL_TRANSLATION,
-    NON_FINITE,
-    OK,
-    OUTCOME,
-    P,
-    PENDING,
-    PENDING_ARM,
-    PENDING_BODY,
-    PENDING_FORCE,
-    PENDING_FRAME,
-    PENDING_TORQUE,
     PRM_WIDTH,
     PROJECT,
     PROJECT_NONE,
     Q_PB,
-    AXIS_K,
-    AXIS_S,
-    C_K,
-    C_S,
-    INV_I_T,
     ROW_WIDTH,
-    SITE_MOMENT,
-    SPENT,
     STATE_WIDTH,
-    T_COM_P,
-    T_COM_W,
-    T_WORLD,
-    V,
-    W,
+    TOP_DT,
     WRENCH_WIDTH,
 )
-from .reduced_models import isotropic_free, kinematic, planar, symmetric_free, torque_free, translation
-from .jit import INLINE, JIT
+from .kernels.stepping import SCRATCH_ROWS, integrate, new_buffers
+from .model import State
+from .quaternion import quat_conjugate
 
-__all__ = ["pack_parameters", "new_buffers", "advance", "add_pending", "step_reduced", "check_members",
-           "clear_wrenches", "unchecked_steps"]
-
-#: Rows of the per-call scratch: stage derivatives and the stage state of the longest tableau.
-SCRATCH_ROWS = 6
+__all__ = ["pack_parameters", "unchecked_steps"]
 
 
 def pack_parameters(model) -> np.ndarray:
     """The (N, PRM_WIDTH) per-body constants of ``model`` (a BodyModel), every body of model full."""
-    from .free_rotor import rotor_pairing  # numpy, once per model
-    from .quaternion import quat_conjugate
-
     n = model.count
     prm = np.zeros((n, PRM_WIDTH))
     inertia = np.asarray(model.inertia_P, dtype=float).reshape(n, 3)
@@ -144,6 +69,7 @@ def pack_parameters(model) -> np.ndarray:
     prm[:, MODEL] = MODEL_FULL
     prm[:, PROJECT] = PROJECT_NONE
     prm[:, CACHE_DT] = np.nan
+    prm[:, TOP_DT] = np.nan
     prm[:, Q_PB:Q_PB + 4] = quat_conjugate(np.asarray(model.q_BP, dtype=float).reshape(n, 4))
     if n:
         rows = np.arange(n)
@@ -157,301 +83,6 @@ def pack_parameters(model) -> np.ndarray:
     return prm
 
 
-def new_buffers(count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(Ys, status, control, inputs) for ``count`` bodies, as :func:`advance` takes them."""
-    return (np.zeros((2, count, ROW_WIDTH)), np.zeros(count, dtype=np.int64),
-            np.zeros(CONTROL_WIDTH, dtype=np.int64), np.zeros(INPUT_WIDTH))
-
-
-# ----------------------------------------------------------------------------- checks
-
-
-@njit(**INLINE)
-def energy_bound_rate(y, p, w):
-    """d√K/dt can be at most this (see simulator.DivergenceError): |F + m g|/√(2m) + |τ|/√(2 I_min).
-
-    From the wrench row in frame terms with norms a rotation does not change, so it bounds the
-    power of the whole step, whatever the body does in it (the moment arm of a force about a
-    world point is taken at the step's start).
-    """
-    rate = p[GRAVITY_BUDGET_RATE]
-    if w[ACTIVE] != 0.0:
-        rate = _wrench_budget_rate(y, p, w)
-    _pin = y[P], p[0], w[0]  # the arrays' last use, out of branches and loops (jit.py)
-    return rate
-
-
-@njit(**INLINE)
-def _wrench_budget_rate(y, p, w):
-    """energy_bound_rate of a body with an applied wrench."""
-    m = p[MASS]
-    f0, f1, f2 = w[F_WORLD], w[F_WORLD + 1], w[F_WORLD + 2]
-    force = (math.sqrt((f0 + w[F_COM_W] + m * p[GRAVITY]) ** 2 + (f1 + w[F_COM_W + 1] + m * p[GRAVITY + 1]) ** 2
-                       + (f2 + w[F_COM_W + 2] + m * p[GRAVITY + 2]) ** 2)
-             + math.sqrt(w[F_COM_P] ** 2 + w[F_COM_P + 1] ** 2 + w[F_COM_P + 2] ** 2))
-    px, py, pz = y[P], y[P + 1], y[P + 2]
-    sites = 0.0
-    for j in range(9):
-        sites += w[SITE_MOMENT + j] ** 2
-    torque = (math.sqrt((w[T_WORLD] - (py * f2 - pz * f1)) ** 2 + (w[T_WORLD + 1] - (pz * f0 - px * f2)) ** 2
-                        + (w[T_WORLD + 2] - (px * f1 - py * f0)) ** 2)
-              + math.sqrt(w[T_COM_W] ** 2 + w[T_COM_W + 1] ** 2 + w[T_COM_W + 2] ** 2)
-              + math.sqrt(w[T_COM_P] ** 2 + w[T_COM_P + 1] ** 2 + w[T_COM_P + 2] ** 2)
-              + math.sqrt(2.0 * sites))
-    _pin = y[P], p[0], w[0]  # the arrays' last use, out of branches and loops (jit.py)
-    return force * p[BUDGET_FORCE] + torque * p[BUDGET_TORQUE]
-
-
-@njit(**INLINE)
-def finite_row(y):
-    """True when all 13 state numbers of row ``y`` are finite.
-
-    x·0 is 0 for a finite x and NaN for inf or NaN; the products are summed as a tree (depth
-    4, not a chain of 13 dependent additions: this check runs for every body every step).
-    """
-    a = (y[0] * 0.0 + y[1] * 0.0) + (y[2] * 0.0 + y[3] * 0.0)
-    b = (y[4] * 0.0 + y[5] * 0.0) + (y[6] * 0.0 + y[7] * 0.0)
-    c = (y[8] * 0.0 + y[9] * 0.0) + (y[10] * 0.0 + y[11] * 0.0)
-    return (a + b) + (c + y[12] * 0.0) == 0.0
-
-
-@njit(**INLINE)
-def check_body(y, out, p, w, dt, limit):
-    """Outcome of one body's step y → out: NON_FINITE, DIVERGED (kinetic energy > limit·B²) or OK; sets out's bound B."""
-    bound = y[BOUND] + dt * energy_bound_rate(y, p, w)
-    out[BOUND] = bound
-    v2 = out[V] * out[V] + out[V + 1] * out[V + 1] + out[V + 2] * out[V + 2]
-    energy = 0.5 * (p[MASS] * v2 + p[INERTIA] * out[W] ** 2 + p[INERTIA + 1] * out[W + 1] ** 2
-                    + p[INERTIA + 2] * out[W + 2] ** 2)
-    outcome = OK
-    if not finite_row(out):
-        outcome = NON_FINITE
-    elif energy > limit * bound * bound:
-        outcome = DIVERGED
-    return outcome
-
-
-@njit(**JIT)
-def _worse(a, b):
-    """The worse of two outcomes: NON_FINITE over DIVERGED over OK."""
-    if a == NON_FINITE or b == NON_FINITE:
-        return NON_FINITE
-    return max(a, b)
-
-
-# ----------------------------------------------------------------------------- one step of every moving body
-
-
-#: control[METHOD] of the numpy/scipy integrators: the step loop leaves their bodies to the caller.
-HOST_METHOD = -1
-
-
-@njit(**INLINE)
-def _checked(i, y, out, p, w, status, dt, limit, worst):
-    """Check body i's step y → out (check_body), record its status; the worse of it and ``worst``."""
-    status[i] = check_body(y, out, p, w, dt, limit)
-    return _worse(worst, status[i])
-
-
-@njit(**JIT)
-def _integrate(method, Y, Ynew, prm, wrenches, bodies, status, dt, limit, k):
-    """Step and check ``bodies`` with the compiled integrator ``method`` (Method.code): the one dispatch.
-
-    One loop per method rather than a branch per body: each loop body is then straight-line
-    code, which the compiler keeps free of reference counting (jit.py; measured ~70 ns a
-    body otherwise). Returns the worst outcome.
-    """
-    worst = OK
-    if method == RK4:
-        for i in bodies:
-            y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[i]
-            rk4(y, out, p, w, dt, k)
-            worst = _checked(i, y, out, p, w, status, dt, limit, worst)
-    elif method == EULER:
-        for i in bodies:
-            y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[i]
-            euler(y, out, p, w, dt, k)
-            worst = _checked(i, y, out, p, w, status, dt, limit, worst)
-    elif method == SEMI_IMPLICIT_EULER:
-        for i in bodies:
-            y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[i]
-            semi_implicit_euler(y, out, p, w, dt, k)
-            worst = _checked(i, y, out, p, w, status, dt, limit, worst)
-    elif method == IMPLICIT_GYROSCOPIC:
-        for i in bodies:
-            y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[i]
-            implicit_gyroscopic(y, out, p, w, dt, k)
-            worst = _checked(i, y, out, p, w, status, dt, limit, worst)
-    elif method == SPLITTING:
-        for i in bodies:
-            y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[i]
-            splitting(y, out, p, w, dt, k)
-            worst = _checked(i, y, out, p, w, status, dt, limit, worst)
-    elif method == SYMMETRIC_SPLITTING:
-        for i in bodies:
-            y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[i]
-            symmetric_splitting(y, out, p, w, dt, k)
-            worst = _checked(i, y, out, p, w, status, dt, limit, worst)
-    return worst
-
-
-@njit(**JIT)
-def _step_reduced_group(model, Y, Ynew, prm, wrenches, bodies, status, dt, limit, k, deferred):
-    """Step and check ``bodies``, all of the reduced model ``model``: the one dispatch over models.
-
-    Isotropic and symmetric bodies under a torque (reduced_models.torque_free) are not
-    stepped: they go into ``deferred`` for the integrator. Returns (worst outcome, how many
-    were deferred).
-    """
-    worst = OK
-    count = 0
-    for i in bodies:
-        y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[i]
-        stepped = True
-        if model == MODEL_KINEMATIC:
-            kinematic(y, out, p, w, dt, k)
-        elif model == MODEL_TRANSLATION:
-            translation(y, out, p, w, dt, k)
-        elif model == MODEL_PLANAR:
-            planar(y, out, p, w, dt, k)
-        elif model == MODEL_ISOTROPIC and torque_free(w):
-            isotropic_free(y, out, p, w, dt, k)
-        elif model == MODEL_SYMMETRIC and torque_free(w):
-            symmetric_free(y, out, p, w, dt, k)
-        else:
-            stepped = False
-        outcome = check_body(y, out, p, w, dt, limit)  # unconditionally (jit.py); kept only if stepped
-        if stepped:
-            status[i] = outcome
-            worst = _worse(worst, outcome)
-        else:
-            deferred[count] = i
-            count += 1
-    return worst, count
-
-
-@njit(**JIT)
-def _step_all(method, Y, Ynew, prm, wrenches, members, control, status, dt, limit, k, deferred):
-    """One step of every moving body, group by group; returns (worst outcome, bodies left in ``deferred``).
-
-    With HOST_METHOD the integrator's bodies (model full, and the deferred reduced ones) are
-    left in ``deferred`` unstepped, for a numpy/scipy integrator.
-    """
-    worst = OK
-    count = 0
-    for model in range(MODEL_COUNT):
-        start, end = control[GROUPS + 2 * model], control[GROUPS + 2 * model + 1]
-        if start < end and model == MODEL_FULL:
-            if method == HOST_METHOD:
-                deferred[count:count + end - start] = members[start:end]
-                count += end - start
-            else:
-                worst = _worse(worst, _integrate(method, Y, Ynew, prm, wrenches, members[start:end], status, dt,
-                                                 limit, k))
-        elif start < end:
-            outcome, added = _step_reduced_group(model, Y, Ynew, prm, wrenches, members[start:end], status, dt,
-                                                 limit, k, deferred[count:])
-            worst = _worse(worst, outcome)
-            if method != HOST_METHOD and added:
-                worst = _worse(worst, _integrate(method, Y, Ynew, prm, wrenches, deferred[count:count + added],
-                                                 status, dt, limit, k))
-            elif method == HOST_METHOD:
-                count += added
-    return worst, count
-
-
-@njit(**JIT)
-def add_pending(wrenches, prm, inputs):
-    """Move the pending wrench of ``inputs`` (Simulator.apply_*'s fast path) into its body's wrench row.
-
-    First, if the rows hold the last step's wrenches (inputs[SPENT]), they are dropped: a step's
-    wrenches stay in the rows after it, for the sensors to read (sensors.py), until something
-    new is applied or stepped.
-    """
-    if inputs[SPENT] != 0.0:
-        clear_wrenches(wrenches)
-        inputs[SPENT] = 0.0
-    if inputs[PENDING] != 0.0:
-        b = int(inputs[PENDING_BODY])
-        add_wrench(wrenches[b], prm[b], int(inputs[PENDING_FRAME]), inputs[PENDING_ARM], inputs[PENDING_ARM + 1],
-                   inputs[PENDING_ARM + 2], inputs[PENDING_FORCE], inputs[PENDING_FORCE + 1],
-                   inputs[PENDING_FORCE + 2], inputs[PENDING_TORQUE], inputs[PENDING_TORQUE + 1],
-                   inputs[PENDING_TORQUE + 2])
-        inputs[PENDING] = 0.0
-
-
-@njit(**JIT)
-def clear_wrenches(wrenches):
-    """Zero every wrench row that holds something."""
-    for i in range(wrenches.shape[0]):
-        if wrenches[i, ACTIVE] != 0.0:
-            wrenches[i, :] = 0.0
-
-
-@njit(**JIT)
-def advance(Ys, prm, wrenches, members, status, control, inputs, n_steps):
-    """Up to ``n_steps`` checked steps of every moving body with the compiled integrator control[METHOD].
-
-    Adds the pending wrench first (:func:`add_pending`). Stops at the first step some body
-    fails: that step is not applied (the state and its bounds stay in Ys[control[CUR]]),
-    ``status`` says which bodies failed how, and the wrenches are kept. Otherwise, after the
-    last step, the wrenches are spent (inputs[SPENT]): they stay in the rows for the sensors
-    and are dropped before the next step or the next wrench. Reports control[DONE] (steps done) and
-    control[OUTCOME] (OK, NON_FINITE, DIVERGED), and returns the outcome.
-    """
-    add_pending(wrenches, prm, inputs)
-    k = np.empty((SCRATCH_ROWS, ROW_WIDTH))
-    deferred = np.empty(members.shape[0], dtype=np.int64)
-    cur = control[CUR]
-    for step in range(n_steps):
-        worst, _ = _step_all(control[METHOD], Ys[cur], Ys[1 - cur], prm, wrenches, members, control, status,
-                             inputs[DT], inputs[LIMIT], k, deferred)
-        if worst != OK:
-            control[DONE] = step
-            control[OUTCOME] = worst
-            return worst
-        cur = 1 - cur
-        control[CUR] = cur
-    inputs[SPENT] = 1.0
-    control[DONE] = n_steps
-    control[OUTCOME] = OK
-    return OK
-
-
-@njit(**JIT)
-def step_reduced(Ys, prm, wrenches, members, status, control, inputs):
-    """One step of the bodies the reduced models take; returns the bodies left for the numpy/scipy integrator.
-
-    Ys[1 − CUR] ← the reduced models' step; the returned indices (model full, and isotropic
-    or symmetric bodies under a torque) are the caller's to step. :func:`check_members`
-    checks them all afterwards.
-    """
-    add_pending(wrenches, prm, inputs)
-    k = np.empty((SCRATCH_ROWS, ROW_WIDTH))
-    deferred = np.empty(members.shape[0], dtype=np.int64)
-    cur = control[CUR]
-    _, count = _step_all(HOST_METHOD, Ys[cur], Ys[1 - cur], prm, wrenches, members, control, status, inputs[DT],
-                         inputs[LIMIT], k, deferred)
-    return deferred[:count].copy()
-
-
-@njit(**JIT)
-def check_members(Ys, prm, wrenches, members, status, control, inputs):
-    """Check every moving body's step Ys[CUR] → Ys[1 − CUR]; commit it (flip CUR) if all pass. The outcome."""
-    dt, limit = inputs[DT], inputs[LIMIT]
-    cur = control[CUR]
-    Y, Ynew = Ys[cur], Ys[1 - cur]
-    worst = OK
-    for m in range(members.shape[0]):
-        i = members[m]
-        status[i] = check_body(Y[i], Ynew[i], prm[i], wrenches[i], dt, limit)
-        worst = _worse(worst, status[i])
-    control[OUTCOME] = worst
-    control[DONE] = 1 if worst == OK else 0
-    if worst == OK:
-        control[CUR] = 1 - cur
-    return worst
-
 
 def unchecked_steps(method_name: str, model, state, dt: float, steps: int = 1, wrenches: np.ndarray | None = None):
     """``steps`` steps of every body of ``model`` with the integrator ``method_name``, no reduction, no checks.
@@ -461,9 +92,6 @@ def unchecked_steps(method_name: str, model, state, dt: float, steps: int = 1, w
     returned as it is, and ``wrenches`` (rows in frame terms, forces.add_wrench; default
     none) hold for every step. Returns a new :class:`~rigid_body_sim.core.model.State`.
     """
-    from .integrators import get_integrator, step_exact_rotor_splitting, step_reference
-    from .model import State
-
     method = get_integrator(method_name)
     n = model.count
     prm = pack_parameters(model)
@@ -480,7 +108,7 @@ def unchecked_steps(method_name: str, model, state, dt: float, steps: int = 1, w
                 host = step_exact_rotor_splitting if method.name == "exact_rotor_splitting" else step_reference
                 host(Ys[cur], Ys[1 - cur], prm, rows, members, dt)
             else:
-                _integrate(method.code, Ys[cur], Ys[1 - cur], prm, rows, members, status, dt, np.inf,
+                integrate(method.code, Ys[cur], Ys[1 - cur], prm, rows, members, status, dt, np.inf,
                            np.empty((SCRATCH_ROWS, ROW_WIDTH)))
             control[CUR] = 1 - cur
     return State.of_rows(Ys[control[CUR], :, :STATE_WIDTH].copy())

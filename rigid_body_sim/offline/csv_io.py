@@ -39,7 +39,7 @@ from typing import IO, Any, Mapping
 import numpy as np
 
 from ..core import Simulator
-from ..paths import open_for_reading, open_for_writing, text_writer
+from ..safe_open import open_for_reading, open_for_writing, text_writer
 from .rundata import MAX_RUN_FILE_BYTES, BodyTrack, RunData
 
 __all__ = ["CsvWriter", "read_csv", "COLUMNS", "column_names", "STATUS_INCOMPLETE", "MAX_LINE_BYTES"]
@@ -70,7 +70,7 @@ class CommentedCsvFile:
     Raises
     ------
     OSError
-        If the file cannot be created; :class:`rigid_body_sim.paths.NotRegularFileError` for a
+        If the file cannot be created; :class:`rigid_body_sim.safe_open.NotRegularFileError` for a
         FIFO, device or directory (never blocking, nothing written to it).
     """
 
@@ -131,7 +131,7 @@ class CsvWriter(CommentedCsvFile):
     Raises
     ------
     OSError
-        If the file cannot be created; :class:`rigid_body_sim.paths.NotRegularFileError` for a
+        If the file cannot be created; :class:`rigid_body_sim.safe_open.NotRegularFileError` for a
         FIFO, device or directory (never blocking, nothing written to it).
     """
 

@@ -31,20 +31,25 @@ of names); a new pair of channels starts wherever the order changes.
 
 Every message's log and publish time is its sim time in nanoseconds (as rosbag2 records a
 ``use_sim_time`` system), so a player's timeline is sim time from t = 0. The file is written
-with ``mcap`` and ``mcap-ros2-support`` (profile ``ros2``, schemas in the ``ros2msg``
-encoding of :mod:`~rigid_body_sim.offline.msgdefs`, zstd chunks) and finished, with its
-summary and index, by :meth:`McapRecorder.close`. The scene file (when it is one) is attached
-as ``scene.yaml`` and the run's settings are in the metadata record ``rigid_body_sim``, so
-``rigid-body-sim plot`` can recompute energy and the closed form from a recording alone.
+with ``mcap``'s writer (profile ``ros2``, zstd chunks) as rosbag2 writes one: schemas in the
+``ros2msg`` encoding with the complete definitions of :mod:`~rigid_body_sim.offline.msgdefs`,
+messages in CDR (:class:`CdrEncoder`, driven by those definitions), and on every channel the
+key ``offered_qos_profiles`` the ``ros2`` profile requires: the QoS the node offers on that
+topic, as rosbag2's YAML (:func:`offered_qos_profiles`; state topics and ``/clock`` are
+latched). It is finished, with its summary and index, by :meth:`McapRecorder.close`. The
+scene file (when it is one) is attached as ``scene.yaml`` and the run's settings are in the
+metadata record ``rigid_body_sim``, so ``rigid-body-sim plot`` can recompute energy and the
+closed form from a recording alone.
 
 How the recording ended is its ``status``, the key ``status`` of the metadata records named
 ``rigid_body_sim_status`` (the last one wins): ``incomplete: ...`` is written first, and
 :meth:`McapRecorder.close` writes the final one (``complete: ...``, ``interrupted by SIGTERM
 at t = ... s``...). A file that still
-says ``incomplete`` was never closed; one without a summary (its writer was killed) is read by
-:func:`read_recording` up to where it was cut, with ``status`` ``cut short: ...``.
+says ``incomplete`` was never closed; one cut anywhere (its writer was killed, the disk filled
+up: no footer at its end) is read by :func:`read_recording` up to the last whole record before
+the cut, with ``status`` ``cut short: ...``.
 
-The file is created with :func:`rigid_body_sim.paths.open_for_writing`: never blocking on a FIFO
+The file is created with :func:`rigid_body_sim.safe_open.open_for_writing`: never blocking on a FIFO
 and refusing anything but a regular file (the node's ``record_path`` gets the same checks).
 """
 
@@ -52,20 +57,21 @@ from __future__ import annotations
 
 import json
 import os
+import struct
 from pathlib import Path
 from typing import IO, Any, Iterable, Mapping
 
 import numpy as np
-from mcap_ros2.writer import Writer
+from mcap.writer import CompressionType, Writer
 
 from ..core import Simulator
-from ..paths import check_writable_path, open_for_reading, open_for_writing
-from .msgdefs import complete_definition
+from ..safe_open import check_writable_path, open_for_reading, open_for_writing
+from .msgdefs import MSG_TEXT, complete_definition
 from .rundata import MAX_RUN_FILE_BYTES, BodyTrack, RunData, angular_velocity_body
 
 __all__ = ["McapRecorder", "read_recording", "stamp_ns", "check_record_path", "BODY_NAMES_KEY", "METADATA_NAME",
-           "SCENE_ATTACHMENT",
-           "STATUS_METADATA_NAME", "STATUS_INCOMPLETE"]
+           "SCENE_ATTACHMENT", "STATUS_METADATA_NAME", "STATUS_INCOMPLETE", "QOS_KEY", "offered_qos_profiles",
+           "topic_qos", "channel_metadata", "CdrEncoder", "CUT_SHORT"]
 
 #: Key, in the metadata of a ``poses``/``velocities`` channel, of its body order (a JSON list).
 BODY_NAMES_KEY = "body_names"
@@ -79,6 +85,125 @@ SCENE_ATTACHMENT = "scene.yaml"
 CHUNK_SIZE = 256 * 1024
 #: The status a recording has until it is closed.
 STATUS_INCOMPLETE = "incomplete: the recording was never closed (its writer was killed or crashed)"
+#: How the status of a recording read only up to a cut starts.
+CUT_SHORT = "cut short"
+#: Key of the channel metadata the ``ros2`` MCAP profile requires (rosbag2 writes it).
+QOS_KEY = "offered_qos_profiles"
+#: RMW_DURATION_INFINITE as rosbag2 writes it (what the graph reports for the node's endpoints).
+_INFINITE = {"sec": 9223372036, "nsec": 854775807}
+#: Depth of the node's wrench, impulse, IMU and diagnostics endpoints (ros/node.py QUEUE_DEPTH).
+_QUEUE_DEPTH = 10
+#: (history, depth, reliability, durability) of the node's state topics and /clock
+#: (ros/publishers.py STATE_QOS): latched, so a late subscriber gets the latest state.
+_STATE_QOS = ("keep_last", 1, "reliable", "transient_local")
+#: ... and of its IMU topics and the wrench topics it subscribes to (QoSProfile(depth=10)).
+_QUEUE_QOS = ("keep_last", _QUEUE_DEPTH, "reliable", "volatile")
+
+
+def offered_qos_profiles(history: str, depth: int, reliability: str, durability: str) -> str:
+    """The ``offered_qos_profiles`` value of one publisher's QoS, as rosbag2 writes it: the YAML
+    (yaml-cpp's ``Dump``) of a list of profiles with string policies (rosbag2 format 9 and
+    later), durations as ``sec``/``nsec`` (infinite: RMW_DURATION_INFINITE)."""
+    def duration(name: str) -> str:
+        return f"  {name}:\n    sec: {_INFINITE['sec']}\n    nsec: {_INFINITE['nsec']}\n"
+
+    return (f"- history: {history}\n  depth: {depth}\n  reliability: {reliability}\n  durability: {durability}\n"
+            + duration("deadline") + duration("lifespan") + "  liveliness: automatic\n"
+            + duration("liveliness_lease_duration") + "  avoid_ros_namespace_conventions: false")
+
+
+def topic_qos(topic: str) -> tuple[str, int, str, str]:
+    """(history, depth, reliability, durability) the node uses on a recorded topic: its state
+    topics (``B/pose``, ``B/twist``, ``poses``, ``velocities``) and ``/clock`` are latched
+    (``transient_local``, depth 1); ``B/S/imu`` and ``B/wrench`` (an input it subscribes to)
+    are ``volatile``, depth 10. Without ``qos_overrides`` parameters."""
+    if topic.endswith(("/imu", "/wrench")):
+        return _QUEUE_QOS
+    return _STATE_QOS
+
+
+def channel_metadata(topic: str, extra: Mapping[str, str] | None = None) -> dict[str, str]:
+    """The metadata of ``topic``'s channel: ``offered_qos_profiles`` (:func:`topic_qos`) and ``extra``."""
+    metadata = {QOS_KEY: offered_qos_profiles(*topic_qos(topic))}
+    metadata.update(extra or {})
+    return metadata
+
+
+_PRIMITIVES = {"bool": "?", "byte": "B", "char": "B", "int8": "b", "uint8": "B", "int16": "h", "uint16": "H",
+               "int32": "i", "uint32": "I", "int64": "q", "uint64": "Q", "float32": "f", "float64": "d"}
+
+
+class CdrEncoder:
+    """Serializes a message given as a (nested) dict to plain little-endian CDR (XCDR1, what the
+    node's middleware puts on the wire), field by field in the order of its .msg definition in
+    :data:`~rigid_body_sim.offline.msgdefs.MSG_TEXT`: each primitive aligned to its size from
+    the end of the 4-byte encapsulation header, strings as a uint32 length counting the NUL,
+    sequences as a uint32 count then the elements. A missing field is zero (or empty)."""
+
+    def __init__(self) -> None:
+        self._fields: dict[str, list[tuple[str, str, int | None]]] = {}
+
+    def fields(self, type_name: str) -> list[tuple[str, str, int | None]]:
+        """(name, full type, array length: None scalar, -1 sequence, n fixed) of ``type_name``'s fields."""
+        known = self._fields.get(type_name)
+        if known is not None:
+            return known
+        package = type_name.split("/", 1)[0]
+        fields = []
+        for line in MSG_TEXT[type_name].splitlines():
+            words = line.split("#", 1)[0].split()
+            if len(words) < 2 or "=" in line.split("#", 1)[0]:
+                continue  # blank, comment or constant
+            spec, name = words[0], words[1]
+            base, bracketed, bound = spec.partition("[")
+            bound = bound.rstrip("]")
+            length = None if not bracketed else -1 if bound == "" or bound.startswith("<=") else int(bound)
+            if base not in _PRIMITIVES and base != "string":
+                pkg, _, msg = base.rpartition("/")
+                base = f"{pkg or package}/msg/{msg}"
+            fields.append((name, base, length))
+        self._fields[type_name] = fields
+        return fields
+
+    def encode(self, type_name: str, message: Mapping[str, Any]) -> bytes:
+        out = bytearray()
+        self._message(out, type_name, message)
+        return b"\x00\x01\x00\x00" + bytes(out)
+
+    def _message(self, out: bytearray, type_name: str, message: Mapping[str, Any]) -> None:
+        for name, base, length in self.fields(type_name):
+            value = message.get(name)
+            if length is None:
+                self._value(out, base, value)
+                continue
+            items = list(value) if value is not None else []
+            if length == -1:
+                self._align(out, 4)
+                out += struct.pack("<I", len(items))
+            elif len(items) != length:
+                raise ValueError(f"{type_name}.{name}: expected {length} elements, got {len(items)}")
+            if base in ("uint8", "byte", "char") and isinstance(value, (bytes, bytearray, memoryview)):
+                out += bytes(value)
+                continue
+            for item in items:
+                self._value(out, base, item)
+
+    def _value(self, out: bytearray, base: str, value: Any) -> None:
+        code = _PRIMITIVES.get(base)
+        if code is not None:
+            size = struct.calcsize(code)
+            self._align(out, size)
+            out += struct.pack("<" + code, value if value is not None else 0)
+        elif base == "string":
+            data = (value or "").encode("utf-8") + b"\x00"
+            self._align(out, 4)
+            out += struct.pack("<I", len(data)) + data
+        else:
+            self._message(out, base, value or {})
+
+    @staticmethod
+    def _align(out: bytearray, size: int) -> None:
+        out += b"\x00" * (-len(out) % size)
 
 
 def stamp_ns(seconds: float) -> int:
@@ -96,7 +221,7 @@ def _xyz(v: np.ndarray) -> dict[str, float]:
 
 def check_record_path(path: str | os.PathLike[str]) -> str | None:
     """Why ``path`` cannot be recorded to, or None: its directory must exist and be writable,
-    and the path must not be a directory, FIFO or device (:func:`rigid_body_sim.paths.check_writable_path`;
+    and the path must not be a directory, FIFO or device (:func:`rigid_body_sim.safe_open.check_writable_path`;
     :class:`McapRecorder` checks the opened file again)."""
     return check_writable_path(path, expected="an .mcap file")
 
@@ -120,7 +245,7 @@ class McapRecorder:
     Raises
     ------
     OSError
-        If the file cannot be created; :class:`rigid_body_sim.paths.NotRegularFileError` if the
+        If the file cannot be created; :class:`rigid_body_sim.safe_open.NotRegularFileError` if the
         path is a FIFO, device or directory (never blocking, nothing written to it).
     """
 
@@ -131,10 +256,14 @@ class McapRecorder:
         self._prefix = namespace.rstrip("/") + "/"
         self._file: IO[bytes] | None = open_for_writing(self.path, expected="an .mcap file")
         try:
-            self._writer = Writer(self._file, chunk_size=CHUNK_SIZE)
-            self._schemas = {name: self._writer.register_msgdef(name, complete_definition(name)) for name in (
-                "geometry_msgs/msg/PoseStamped", "geometry_msgs/msg/Twist",
-                "geometry_msgs/msg/WrenchStamped", "rosgraph_msgs/msg/Clock", "sensor_msgs/msg/Imu")}
+            self._writer = Writer(self._file, chunk_size=CHUNK_SIZE, compression=CompressionType.ZSTD)
+            self._writer.start(profile="ros2", library="rigid_body_sim")
+            self._encoder = CdrEncoder()
+            self._schemas = {name: self._writer.register_schema(name, "ros2msg", complete_definition(name).encode())
+                             for name in ("geometry_msgs/msg/PoseStamped", "geometry_msgs/msg/Twist",
+                                          "geometry_msgs/msg/WrenchStamped", "rosgraph_msgs/msg/Clock",
+                                          "sensor_msgs/msg/Imu")}
+            self._channels: dict[str, int] = {}
             if metadata:
                 self._writer.add_metadata(METADATA_NAME, {str(k): str(v) for k, v in metadata.items()})
             self._writer.add_metadata(STATUS_METADATA_NAME, {"status": STATUS_INCOMPLETE})
@@ -160,8 +289,12 @@ class McapRecorder:
     def _write(self, topic: str, schema: str, message: dict[str, Any], ns: int) -> None:
         if self._file is None:
             raise ValueError(f"recording {self.path} is closed")
-        self._writer.write_message(topic, self._schemas[schema], message, log_time=ns, publish_time=ns,
-                                   sequence=self.message_count)
+        channel = self._channels.get(topic)
+        if channel is None:
+            channel = self._channels[topic] = self._writer.register_channel(topic, "cdr", self._schemas[schema],
+                                                                            channel_metadata(topic))
+        self._writer.add_message(channel, log_time=ns, data=self._encoder.encode(schema, message), publish_time=ns,
+                                 sequence=self.message_count)
         self.message_count += 1
 
     def write_state(self, time: float, bodies: Iterable[str], positions_world: np.ndarray,
@@ -292,6 +425,16 @@ def _cloud_columns(cloud: Any, fields: tuple[str, ...], n: int) -> np.ndarray | 
     return out
 
 
+#: The bytes an MCAP file starts and ends with.
+MCAP_MAGIC = b"\x89MCAP0\r\n"
+
+
+def _why(exc: BaseException) -> str:
+    """``Type: message`` of an exception, at most 200 characters."""
+    text = str(exc)
+    return f"{type(exc).__name__}{': ' + text if text else ''}"[:200]
+
+
 def read_recording(path: str | os.PathLike[str]) -> tuple[RunData, str | None]:
     """Read the poses and twists of a recording back into a :class:`RunData`, with the scene text.
 
@@ -302,8 +445,10 @@ def read_recording(path: str | os.PathLike[str]) -> tuple[RunData, str | None]:
     republish) the last message counts. Energy and |L| are left unknown
     (:func:`~rigid_body_sim.offline.rundata.with_derived_quantities` fills them in).
 
-    A file without a summary (its writer was killed) is read record by record up to where
-    it ends; its ``status`` then starts with ``cut short``. Only regular files of at most
+    A file cut anywhere (its writer was killed, the disk was full, a copy stopped half way: no
+    footer at its end) is read record by record up to the last whole record before the cut,
+    and never raises anything but ValueError; its ``status`` then starts with ``cut short``
+    (:data:`CUT_SHORT`) and says why and up to which sim time it was read. Only regular files of at most
     :data:`~rigid_body_sim.offline.rundata.MAX_RUN_FILE_BYTES` are read, no record longer
     than the file.
 
@@ -319,9 +464,8 @@ def read_recording(path: str | os.PathLike[str]) -> tuple[RunData, str | None]:
     ------
     ValueError
         If the file is not an MCAP file (or not a regular file, or too large) or has no pose
-        and twist topics.
+        and twist topics; a file cut before its first complete sample says ``cut short`` too.
     """
-    from mcap.exceptions import McapError
     from mcap.reader import NonSeekingReader, SeekingReader
     from mcap_ros2.decoder import DecoderFactory
 
@@ -330,7 +474,6 @@ def read_recording(path: str | os.PathLike[str]) -> tuple[RunData, str | None]:
     twists: dict[str, dict[int, tuple[list[float], list[float]]]] = {}
     meta: dict[str, str] = {}
     found: dict[str, str | None] = {"scene": None, "cut": None}
-    failures = (McapError, OSError, UnicodeDecodeError, ValueError, MemoryError, EOFError)
 
     def take(schema: Any, channel: Any, message: Any, decoded: Any) -> None:
         topic = channel.topic
@@ -378,43 +521,72 @@ def read_recording(path: str | os.PathLike[str]) -> tuple[RunData, str | None]:
             take(*item)
 
     parts = (read_metadata, read_attachments, read_messages)
+
+    def forget() -> None:
+        for collected in (poses, twists, meta):
+            collected.clear()
+        found["scene"] = None
+
     try:
         f = open_for_reading(path, expected="an MCAP recording")
     except OSError as exc:
         raise ValueError(f"{path}: cannot read the recording ({exc.strerror or exc})") from None
     with f:
-        size = os.fstat(f.fileno()).st_size
-        if size > MAX_RUN_FILE_BYTES:
-            raise ValueError(f"{path}: the recording is {size} bytes; expected at most {MAX_RUN_FILE_BYTES}")
         try:
-            try:
-                summary = SeekingReader(f, record_size_limit=size).get_summary()
-            except failures:
-                summary = None
-            for part in parts:
-                f.seek(0)
-                if summary is not None:
-                    part(SeekingReader(f, decoder_factories=[DecoderFactory()], record_size_limit=size))
-                    continue
-                try:  # no summary: read record by record, keeping what comes before a cut
-                    part(NonSeekingReader(f, decoder_factories=[DecoderFactory()], record_size_limit=size))
-                except failures as exc:
-                    found["cut"] = f"{type(exc).__name__}{': ' + str(exc) if str(exc) else ''}"
-        except failures as exc:
-            raise ValueError(f"{path}: cannot read it as an MCAP recording ({exc})") from None
+            size = os.fstat(f.fileno()).st_size
+            if size > MAX_RUN_FILE_BYTES:
+                raise ValueError(f"{path}: the recording is {size} bytes; expected at most {MAX_RUN_FILE_BYTES}")
+            head = f.read(len(MCAP_MAGIC))
+            if not MCAP_MAGIC.startswith(head):
+                raise ValueError(f"{path}: not an MCAP recording (it does not start with the MCAP magic)")
+            # A finished file ends with its footer and the magic; one without them was cut (a kill,
+            # a full disk, a copy stopped half way) and is read record by record up to the cut.
+            f.seek(max(0, size - len(MCAP_MAGIC)))
+            finished = size >= 2 * len(MCAP_MAGIC) and f.read(len(MCAP_MAGIC)) == MCAP_MAGIC
+            summary = None
+            if finished:
+                try:
+                    f.seek(0)
+                    summary = SeekingReader(f, record_size_limit=size).get_summary()
+                except Exception:  # noqa: BLE001 - any failure of a damaged summary: read record by record
+                    summary = None
+            if summary is not None:
+                try:
+                    for part in parts:
+                        f.seek(0)
+                        part(SeekingReader(f, decoder_factories=[DecoderFactory()], record_size_limit=size))
+                except Exception as exc:  # noqa: BLE001 - an index that does not lead to the data
+                    found["cut"] = f"its index cannot be followed ({_why(exc)})"
+                    summary = None
+                    forget()
+            if summary is None:
+                for part in parts:
+                    f.seek(0)
+                    try:  # record by record, keeping every record before the first that cannot be read
+                        part(NonSeekingReader(f, decoder_factories=[DecoderFactory()], record_size_limit=size))
+                    except Exception as exc:  # noqa: BLE001 - struct.error, zstd, CRC...: all mean "cut here"
+                        found["cut"] = found["cut"] or f"it ends in the middle of a record ({_why(exc)})"
+                if not finished:
+                    found["cut"] = found["cut"] or "it ends without its footer"
+        except OSError as exc:
+            raise ValueError(f"{path}: cannot read the recording ({exc.strerror or exc})") from None
+    cut = found["cut"]
     bodies = [b for b in poses if b in twists]
-    if not bodies and found["cut"] is not None:
-        raise ValueError(f"{path}: cannot read it as an MCAP recording ({found['cut'][:200]})")
+    if not bodies and cut is not None:
+        raise ValueError(f"{path}: {CUT_SHORT} before its first complete sample: {cut}")
     if not bodies:
         raise ValueError(f"{path}: expected <body>/pose (PoseStamped) and <body>/twist (Twist) topics, or poses "
                          f"(PoseArray) and velocities (PointCloud2) with {BODY_NAMES_KEY} in their channel metadata; "
                          "found none")
     times = sorted(set.intersection(*(set(poses[b]) & set(twists[b]) for b in bodies)))
+    if not times and cut is not None:
+        raise ValueError(f"{path}: {CUT_SHORT} before its first complete sample: {cut}")
     if not times:
         raise ValueError(f"{path}: no time at which every body {bodies} has both a pose and a twist")
-    if found["cut"] is not None:
-        meta["status"] = (f"cut short: the recording has no summary and ends in the middle of a record "
-                          f"({found['cut'][:200]}); read up to t = {times[-1] * 1e-9:.9g} s")
+    if cut is not None:
+        ended = meta.get("status", "")
+        meta["status"] = (f"{CUT_SHORT}: {cut}; read up to t = {times[-1] * 1e-9:.9g} s"
+                          + (f" (its last status record: {ended})" if ended else ""))
     tracks = {}
     for body in bodies:
         p = np.array([poses[body][t][0] for t in times])

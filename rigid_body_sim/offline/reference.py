@@ -2,7 +2,7 @@
 
 A body's rotation has a closed form when nothing exerts a torque on it about its centre of
 mass: no angular damping and no scripted wrench (uniform gravity exerts none). It is then the
-torque-free top of :mod:`rigid_body_sim.core.closed_form`: symmetric (two equal principal
+torque-free top of :mod:`rigid_body_sim.exact.closed_form`: symmetric (two equal principal
 moments, or a sphere) or asymmetric (Jacobi elliptic functions). Its translation has one when
 no force acts but gravity: no linear damping and no scripted wrench (a projectile). Runs
 start at t = 0 from the scene's initial state, so the references do too.
@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core import Scene
-from ..core.closed_form import (
+from ..exact.closed_form import (
     EQUAL_MOMENTS_RTOL,
     asymmetric_top,
     intermediate_axis_flip_period,

@@ -1,8 +1,9 @@
 """The node's health on ``/diagnostics``: tick timing over a window, rejected input, blow-ups.
 
-:class:`TickWindow` collects, between two reports, how late each timer tick ran against the
-timer's ideal schedule (rcl's expected call time on the steady clock, which is
-``CLOCK_MONOTONIC``, the clock of :func:`time.monotonic_ns`) and how far sim time advanced.
+:class:`TickWindow` collects, between two reports, how late each tick ran against the tick
+thread's ideal schedule (the time each tick was due on the steady clock, ``CLOCK_MONOTONIC``, the
+clock of :func:`time.monotonic_ns`) and how far sim time advanced. The first window opens at the
+first tick, not when the node was built: start-up time is no tick the node failed to run.
 :func:`diagnostic_statuses` turns a window and the node's counters into two
 diagnostic_msgs/DiagnosticStatus entries, named as ``diagnostic_updater`` names them
 ("<node name>: <task>"), with ``hardware_id`` ``"none"`` (the value diagnostic_updater asks
@@ -64,8 +65,12 @@ class TickWindow:
         self._lateness_ns: deque[int] = deque(maxlen=LATENESS_SAMPLES)
         self.reopen(sim_time)
 
+    #: True until the first tick is recorded: the window then opens at that tick's due time.
+    awaiting_first_tick = True
+
     def reopen(self, sim_time: float) -> None:
-        """Start a new window now (wall, steady clock) at ``sim_time``."""
+        """Start a new window now (wall, steady clock) at ``sim_time``; before the first tick, the
+        window opens at the first tick's due time instead (see :meth:`record`)."""
         self.opened_ns = time.monotonic_ns()
         self.sim_time_at_open = sim_time
         self.ticks = 0
@@ -80,7 +85,11 @@ class TickWindow:
         when the caller knows it (the node's tick thread catches short delays up and skips
         only beyond a limit), otherwise as rcl's timer does, every whole period of lateness.
         """
-        lateness = max(0, time.monotonic_ns() - expected_ns)
+        now_ns = time.monotonic_ns()
+        if self.awaiting_first_tick:
+            self.awaiting_first_tick = False
+            self.opened_ns = min(expected_ns, now_ns)
+        lateness = max(0, now_ns - expected_ns)
         self.ticks += 1
         self._lateness_ns.append(lateness)
         if lateness > self.max_lateness_ns:
@@ -91,7 +100,9 @@ class TickWindow:
             self.missed_ticks += lateness // period_ns
 
     def elapsed_s(self) -> float:
-        """Wall seconds (steady clock) since the window opened."""
+        """Wall seconds (steady clock) since the window opened (0 before the first tick)."""
+        if self.awaiting_first_tick:
+            return 0.0
         return (time.monotonic_ns() - self.opened_ns) * 1e-9
 
     def median_lateness_ns(self) -> float:

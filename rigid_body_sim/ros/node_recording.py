@@ -7,10 +7,11 @@ in the log; the simulation goes on.
 
 Crash safety: the node records with :class:`FlushingRecorder`, the offline
 :class:`~rigid_body_sim.offline.recording.McapRecorder` (same topics, schemas, metadata and
-status records, so :func:`~rigid_body_sim.offline.recording.read_recording` and any MCAP tool
-read it) written through mcap's own ``mcap.writer.Writer`` with messages serialized by rclpy,
-whose public ``flush()`` ends the open chunk. The node flushes at most :data:`FLUSH_PERIOD_S`
-wall seconds after a message was written (checked every tick, also while paused), so after a
+status records, channel metadata ``offered_qos_profiles``, so
+:func:`~rigid_body_sim.offline.recording.read_recording`, Foxglove and any MCAP tool read it)
+written through mcap's own ``mcap.writer.Writer`` with messages serialized by rclpy, whose
+public ``flush()`` ends the open chunk. The node flushes at most :data:`FLUSH_PERIOD_S` wall
+seconds after a message was written (checked every tick, also while paused), so after a
 SIGKILL or a crash the file holds every message written up to about ``FLUSH_PERIOD_S`` plus one
 tick before the kill, and is read as ``cut short`` (no summary). A clean stop finishes the file.
 """
@@ -32,9 +33,10 @@ from rclpy.serialization import serialize_message
 from ..core import Simulator
 from ..offline.msgdefs import complete_definition
 from ..offline.recording import (BODY_NAMES_KEY, CHUNK_SIZE, METADATA_NAME, SCENE_ATTACHMENT, STATUS_INCOMPLETE,
-                                 STATUS_METADATA_NAME, McapRecorder, stamp_ns)
-from ..paths import open_for_writing
+                                 STATUS_METADATA_NAME, McapRecorder, channel_metadata, stamp_ns)
+from ..safe_open import open_for_writing
 from .cdr import PoseTwistClockCdr
+from .file_access import RecordTargets
 
 __all__ = ["NodeRecording", "FlushingRecorder", "FLUSH_PERIOD_S"]
 
@@ -112,9 +114,10 @@ class FlushingRecorder(McapRecorder):
             key = tuple(body_names)
             channels = self._batch_channels.get(key)
             if channels is None:
-                metadata = {BODY_NAMES_KEY: json.dumps(list(key))}
+                names = {BODY_NAMES_KEY: json.dumps(list(key))}
                 channels = self._batch_channels[key] = tuple(
-                    self._writer.register_channel(f"{self._prefix}{topic}", "cdr", self._schema(schema)[0], metadata)
+                    self._writer.register_channel(f"{self._prefix}{topic}", "cdr", self._schema(schema)[0],
+                                                  channel_metadata(f"{self._prefix}{topic}", names))
                     for topic, schema in (("poses", "geometry_msgs/msg/PoseArray"),
                                           ("velocities", "sensor_msgs/msg/PointCloud2")))
             self._batch_names, self._batch_ids = body_names, channels
@@ -145,7 +148,8 @@ class FlushingRecorder(McapRecorder):
         if channel is None:
             if self._file is None:
                 raise ValueError(f"recording {self.path} is closed")
-            channel = self._channel_ids[topic] = self._writer.register_channel(topic, "cdr", self._schema(schema)[0])
+            channel = self._channel_ids[topic] = self._writer.register_channel(topic, "cdr", self._schema(schema)[0],
+                                                                               channel_metadata(topic))
         self._add(channel, data, ns)
 
     def _add(self, channel: int, data: bytes, ns: int) -> None:
@@ -175,14 +179,17 @@ class NodeRecording:
     logger : rclpy logger
     world_frame, namespace, node_name : str
         Written into each recording (frame of poses, topic prefix, metadata).
+    overwrite : bool
+        ``record_overwrite``: a recording may overwrite an existing file the node did not create.
     """
 
-    def __init__(self, logger: Any, world_frame: str, namespace: str, node_name: str):
+    def __init__(self, logger: Any, world_frame: str, namespace: str, node_name: str, overwrite: bool = False):
         self._logger = logger
         self._world_frame = world_frame
         self._namespace = namespace
         self._node_name = node_name
         self.recorder: McapRecorder | None = None
+        self.targets = RecordTargets(overwrite)
 
     def open(self, path: str, sim: Simulator, *, dt: float | None = None, integrator: str | None = None) -> McapRecorder:
         """A new recorder at ``path`` for ``sim`` (not yet the current one).
@@ -190,8 +197,9 @@ class NodeRecording:
         Raises
         ------
         OSError
-            If the file cannot be created.
+            If the file cannot be created, or may not be recorded to (:class:`RecordTargets`).
         """
+        self.targets.claim(path, sim.scene.source, self.recorder)
         source = Path(sim.scene.source)
         try:
             scene_text = source.read_text(encoding="utf-8") if source.is_file() else None

@@ -17,8 +17,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import stat
 import sys
 from dataclasses import dataclass
 from typing import Any, Callable, Mapping
@@ -28,8 +26,10 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from ..core import INTEGRATORS
+from ..core.scene import MAX_NAMESPACE_LENGTH
 from ..offline.recording import check_record_path
-from ..paths import default_scene_path
+from ..package_data import default_scene_path
+from .file_access import default_scene_dirs
 
 __all__ = [
     "ParameterSpec",
@@ -38,6 +38,9 @@ __all__ = [
     "NODE_NAME",
     "coerce",
     "declare_parameters",
+    "namespace_problem",
+    "MIN_DIAGNOSTICS_PERIOD_S",
+    "MAX_MARKER_RATE_HZ",
     "problem",
     "problems",
     "params_yaml",
@@ -85,6 +88,8 @@ class ParameterSpec:
     node_owned : bool
         The node sets the value (``body_names``); any value from outside, at start-up or later,
         is refused.
+    default_text : str
+        The default in words where :attr:`default` is None (computed from the installation).
     """
 
     name: str
@@ -98,11 +103,14 @@ class ParameterSpec:
     check: Callable[[Any], str | None] | None = None
     takes_effect: str = "at the next tick"
     node_owned: bool = False
+    default_text: str = ""
 
     def default_value(self) -> Any:
-        """The default, with ``scene``'s computed from the installation."""
+        """The default, with ``scene``'s and ``scene_dirs``' computed from the installation."""
         if self.name == "scene":
             return str(default_scene_path())
+        if self.name == "scene_dirs":
+            return default_scene_dirs()
         return self.default
 
     def additional_constraints(self) -> str:
@@ -152,6 +160,29 @@ def _check_scene_path(value: str) -> str | None:
     return None
 
 
+def _check_dirs(name: str) -> Callable[[Any], str | None]:
+    def check(value: Any) -> str | None:
+        if any(not d or "\0" in d for d in value):
+            return f"{name} must list directories (non-empty paths), got {list(value)!r}"
+        return None
+    return check
+
+
+#: Shortest ``diagnostics_period`` (s) other than 0: at most 10 DiagnosticArray messages a second
+#: (each is built under the node's lock; a period of 1e-9 s flooded /diagnostics at 10 k msgs/s).
+MIN_DIAGNOSTICS_PERIOD_S = 0.1
+#: Highest ``marker_rate_hz``: a MarkerArray holds every body's shape, sites and wrenches, so its
+#: rate is bounded (and it is at most once a tick anyway).
+MAX_MARKER_RATE_HZ = 1000.0
+
+
+def _check_diagnostics_period(value: float) -> str | None:
+    if 0.0 < value < MIN_DIAGNOSTICS_PERIOD_S:
+        return (f"diagnostics_period must be 0 (none) or at least {MIN_DIAGNOSTICS_PERIOD_S:g} s (the limit on "
+                f"/diagnostics: at most {1 / MIN_DIAGNOSTICS_PERIOD_S:g} messages a second); got {value!r}")
+    return None
+
+
 def _check_world_frame(value: str) -> str | None:
     if not value or "/" in value or any(c.isspace() for c in value):
         return f"world_frame must be a non-empty frame name without '/' or spaces, got {value!r}"
@@ -159,21 +190,11 @@ def _check_world_frame(value: str) -> str | None:
 
 
 def _check_record_path(value: str) -> str | None:
-    if not value:
-        return None
-    problem_ = check_record_path(value)
-    if problem_ is None:
-        try:
-            mode = os.stat(value).st_mode
-        except FileNotFoundError:
-            mode = None
-        except OSError as exc:
-            problem_ = f"cannot inspect {value!r} ({exc.strerror})"
-            mode = None
-        if mode is not None and not stat.S_ISREG(mode):
-            # A FIFO or device would block (or never end) an open for writing.
-            problem_ = f"{value!r} exists and is not a regular file; expected the path of an .mcap file to write"
-    return f"record_path rejected: {problem_}" if problem_ else None
+    # Only the text here: the file system is looked at once the path is known to be inside
+    # record_dirs (file_access.py), so a refusal never tells whether a path elsewhere exists.
+    if "\0" in value:
+        return "record_path rejected: the path contains a NUL character"
+    return None
 
 
 _T = Parameter.Type
@@ -184,7 +205,8 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
                   "Path of the scene YAML file (default: the installed config/default_scene.yaml). A change "
                   "loads and checks the new file, then swaps the whole scene (its initial state at t = 0, "
                   "holds and pending impulses dropped), or is refused with the loader's message.",
-                  constraints="a regular file holding a valid scene", check=_check_scene_path,
+                  constraints="a regular file holding a valid scene (at run time: a .yaml or .yml file inside "
+                  "scene_dirs)", check=_check_scene_path,
                   takes_effect="at once (t = 0)"),
     ParameterSpec("integrator", _T.STRING, "rk4",
                   "Integrator of free bodies (docs/choosing_an_integrator.md).",
@@ -222,17 +244,37 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec("status_period", _T.DOUBLE, 1.0, "Wall seconds between status log lines; 0 = none.",
                   range=(0.0, 1e6), takes_effect="at once"),
     ParameterSpec("diagnostics_period", _T.DOUBLE, 1.0,
-                  "Wall seconds between DiagnosticArray messages on /diagnostics; 0 = none.",
-                  range=(0.0, 1e6), takes_effect="at once"),
+                  "Wall seconds between DiagnosticArray messages on /diagnostics; 0 = none. At least "
+                  f"{MIN_DIAGNOSTICS_PERIOD_S:g} s otherwise, so no client can flood /diagnostics.",
+                  range=(0.0, 1e6), constraints=f"0 or at least {MIN_DIAGNOSTICS_PERIOD_S:g}",
+                  check=_check_diagnostics_period, takes_effect="at once"),
     ParameterSpec("record_path", _T.STRING, "",
                   "MCAP file to record to (B/pose and B/twist, or with per_body_topics false the poses and "
                   "velocities batches; B/wrench, /clock; ROS 2 messages, stamps = sim time); '' = no recording. "
                   "A change finishes the current file and starts the new one.",
-                  constraints="'' or the path of a regular file (or a new one) in a writable directory",
+                  constraints="'' or the path of a new file in a writable directory (at run time: an .mcap file inside record_dirs); "
+                  "never the scene file, the file being recorded, or an existing file the node did not create "
+                  "(unless record_overwrite)",
                   check=_check_record_path, takes_effect="at once"),
+    ParameterSpec("scene_dirs", _T.STRING_ARRAY, None,
+                  "Directories a run-time change of scene may read from (a .yaml or .yml file inside one of "
+                  "them, symlinks resolved); any other path is refused without being looked at. Relative "
+                  "paths are from the working directory. The start-up scene is not confined.",
+                  read_only=True, check=_check_dirs("scene_dirs"), takes_effect="start-up only",
+                  default_text="the installed `config/` and `.` (the working directory)"),
+    ParameterSpec("record_dirs", _T.STRING_ARRAY, ["."],
+                  "Directories a run-time change of record_path may write in (an .mcap file, symlinks resolved); any other "
+                  "path is refused without being looked at. Relative paths are from the working directory. "
+                  "The start-up record_path is not confined.",
+                  read_only=True, check=_check_dirs("record_dirs"), takes_effect="start-up only"),
+    ParameterSpec("record_overwrite", _T.BOOL, False,
+                  "Allow a recording to overwrite an existing file the node did not create. False: such a "
+                  "record_path is refused (at start-up too). Never the scene file or the file being recorded.",
+                  read_only=True, takes_effect="start-up only"),
     ParameterSpec("marker_rate_hz", _T.DOUBLE, 10.0,
                   "MarkerArray on 'markers' (bodies' shapes, sites, held wrenches in world_frame) per sim "
-                  "second, at most once a tick and only while subscribed; 0 = none.", range=(0.0, 1e6)),
+                  f"second, at most once a tick and only while subscribed; 0 = none. At most {MAX_MARKER_RATE_HZ:g}, "
+                  "so no client can flood 'markers'.", range=(0.0, MAX_MARKER_RATE_HZ)),
     ParameterSpec("marker_wrenches", _T.BOOL, True,
                   "Draw each held wrench's force as an arrow from its frame's origin in 'markers'."),
     ParameterSpec("marker_force_scale", _T.DOUBLE, 0.05, "Length of a wrench arrow in 'markers' per newton (m/N).",
@@ -284,6 +326,20 @@ def problems(values: Mapping[str, Any]) -> list[str]:
     return [reason for reason in reasons if reason]
 
 
+def namespace_problem(namespace: str) -> str | None:
+    """Why the node's ``namespace`` is too long for its topics, or None.
+
+    Topics are ``<namespace>/<body>/<site>/imu`` and the like, with body and site names of up to
+    :data:`~rigid_body_sim.core.scene.MAX_NAME_LENGTH` characters, and ROS takes 247 characters
+    in a topic name: the namespace may have :data:`~rigid_body_sim.core.scene.MAX_NAMESPACE_LENGTH`.
+    """
+    if len(namespace) > MAX_NAMESPACE_LENGTH:
+        return (f"namespace {namespace!r} has {len(namespace)} characters; this node takes at most "
+                f"{MAX_NAMESPACE_LENGTH} (MAX_NAMESPACE_LENGTH: a topic name <namespace>/<body>/<site>/imu with "
+                "body and site names of up to 63 characters must fit ROS's 247)")
+    return None
+
+
 def declare_parameters(node: Node) -> dict[str, Any]:
     """Declare every parameter of :data:`PARAMETERS` on ``node`` with its full descriptor; return
     the start-up values (overrides from ``--ros-args``, params files or ``parameter_overrides``).
@@ -299,7 +355,7 @@ def declare_parameters(node: Node) -> dict[str, Any]:
         Naming every start-up value that is not acceptable and what was expected.
     """
     values = {}
-    reasons = []
+    reasons = [namespace_problem(node.get_namespace())]
     for spec in PARAMETERS:
         if spec.node_owned:  # declared without a value; an override from outside is refused
             declared = node.declare_parameter(spec.name, spec.type, spec.descriptor())
@@ -309,7 +365,11 @@ def declare_parameters(node: Node) -> dict[str, Any]:
         declared = node.declare_parameter(spec.name, spec.default_value(),
                                           ParameterDescriptor(description=spec.description, dynamic_typing=True))
         values[spec.name] = coerce(spec, declared.value)
-    reasons = problems(values) + reasons
+    reasons = problems(values) + [reason for reason in reasons if reason]
+    if values.get("record_path") and not reasons:  # the operator's start-up path: said before the scene loads
+        unwritable = check_record_path(values["record_path"])
+        if unwritable is not None:
+            reasons.append(f"record_path rejected: {unwritable}")
     if reasons:
         raise ValueError("; ".join(reasons))
     for spec in PARAMETERS:
@@ -327,7 +387,7 @@ def _yaml_value(value: Any) -> str:
         return "true" if value else "false"
     if isinstance(value, float):
         return repr(value)
-    return json.dumps(value) if isinstance(value, str) else str(value)
+    return json.dumps(value) if isinstance(value, (str, list)) else str(value)
 
 
 def params_yaml(node_name: str = NODE_NAME) -> str:
@@ -337,8 +397,8 @@ def params_yaml(node_name: str = NODE_NAME) -> str:
         "# Parameters of the rigid_body_sim node, generated from rigid_body_sim/ros/parameters.py",
         "# (python -m rigid_body_sim.ros.parameters --yaml > config/params.yaml; a test checks it). Use:",
         "#   rigid_body_sim_node --ros-args --params-file config/params.yaml",
-        "# `scene` is left out: it defaults to the installed config/default_scene.yaml; `body_names` too: the",
-        "# node sets it.",
+        "# `scene` is left out: it defaults to the installed config/default_scene.yaml; `scene_dirs` too: it",
+        "# defaults to the installed config/ and the working directory; `body_names` too: the node sets it.",
         f"{node_name}:",
         "  ros__parameters:",
     ]
@@ -354,11 +414,11 @@ def params_yaml(node_name: str = NODE_NAME) -> str:
 
 
 def markdown_table() -> str:
-    """The README's parameter table (between the ``parameters`` markers)."""
+    """The parameter table of docs/interface.md (between the ``parameters`` markers)."""
     rows = ["| parameter | type | default | valid values | changes | meaning |", "|---|---|---|---|---|---|"]
     for spec in PARAMETERS:
-        default = ("the scene's body names" if spec.node_owned else "installed `config/default_scene.yaml`"
-                   if spec.default is None else f"`{_yaml_value(spec.default)}`")
+        default = ("the scene's body names" if spec.node_owned else spec.default_text
+                   or "installed `config/default_scene.yaml`" if spec.default is None else f"`{_yaml_value(spec.default)}`")
         valid = []
         if spec.choices:
             valid.append(", ".join(f"`{c}`" for c in spec.choices))

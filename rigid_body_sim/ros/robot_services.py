@@ -18,18 +18,17 @@ A request is handled whole: every result carries the same outcome.
 ``~/delete``
     One value per body to delete, named by the body (the value is not used). Its topics go.
 
-The work is done by the node (``step_ticks``, ``edit_scene``), under its lock.
+The work is done by the node's :class:`~rigid_body_sim.ros.session.SimSession` (``step_ticks``,
+``edit``), under its lock.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 from rcl_interfaces.msg import ParameterType, SetParametersResult
 from rcl_interfaces.srv import SetParameters
+from rclpy.node import Node
 
-if TYPE_CHECKING:
-    from .node import RigidBodySimNode
+from .session import SimSession
 
 __all__ = ["create_robot_services"]
 
@@ -60,8 +59,8 @@ def _names(request: SetParameters.Request, what: str) -> str | None:
     return None
 
 
-def create_robot_services(node: "RigidBodySimNode") -> list:
-    """Create ``~/step_ticks``, ``~/spawn`` and ``~/delete`` on ``node``; returns them."""
+def create_robot_services(node: Node, session: SimSession) -> list:
+    """Create ``~/step_ticks``, ``~/spawn`` and ``~/delete`` on ``node``, served by ``session``; returns them."""
 
     def on_step_ticks(request: SetParameters.Request, response: SetParameters.Response) -> SetParameters.Response:
         params = list(request.parameters)
@@ -69,7 +68,7 @@ def create_robot_services(node: "RigidBodySimNode") -> list:
             got = [(p.name, _type_name(p.value.type)) for p in params]
             return _answer(request, response, False,
                            f"refused: expected one integer parameter named 'ticks', got {got}")
-        return _answer(request, response, *node.step_ticks(int(params[0].value.integer_value)))
+        return _answer(request, response, *session.step_ticks(int(params[0].value.integer_value)))
 
     def on_spawn(request: SetParameters.Request, response: SetParameters.Response) -> SetParameters.Response:
         problem = _names(request, "body")
@@ -82,13 +81,13 @@ def create_robot_services(node: "RigidBodySimNode") -> list:
         if problem is not None:
             return _answer(request, response, False, problem)
         spawn = {p.name: p.value.string_value for p in request.parameters}
-        return _answer(request, response, *node.edit_scene(spawn, []))
+        return _answer(request, response, *session.edit(spawn, []))
 
     def on_delete(request: SetParameters.Request, response: SetParameters.Response) -> SetParameters.Response:
         problem = _names(request, "body")
         if problem is not None:
             return _answer(request, response, False, problem)
-        return _answer(request, response, *node.edit_scene({}, [p.name for p in request.parameters]))
+        return _answer(request, response, *session.edit({}, [p.name for p in request.parameters]))
 
     return [
         node.create_service(SetParameters, "~/step_ticks", on_step_ticks),

@@ -8,29 +8,28 @@
 ``~/step`` (std_srvs/Trigger)
     Exactly one tick while paused; refused with a reason while running.
 
-Each handler is a few lines over a public method of the node, which does the work under its
-lock; a tick that keeps the simulator longer than ``BUSY_WAIT_S`` (node.py) makes ``~/reset``
-and ``~/step`` refuse with a reason rather than wait.
+Each handler is a few lines over a method of the node's :class:`~rigid_body_sim.ros.session.SimSession`,
+which does the work under its lock; a tick (or another request) that keeps the simulator longer
+than ``BUSY_WAIT_S`` (session.py) makes ``~/reset`` and ``~/step`` refuse, saying which and for
+how long, rather than wait.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
+from rclpy.node import Node
 from rclpy.parameter import Parameter
 from std_srvs.srv import SetBool, Trigger
 
-if TYPE_CHECKING:
-    from .node import RigidBodySimNode
+from .session import SimSession
 
 __all__ = ["create_services"]
 
 
-def create_services(node: "RigidBodySimNode") -> list:
-    """Create the services on ``node``; returns them."""
+def create_services(node: Node, session: SimSession) -> list:
+    """Create the services on ``node``, served by ``session`` (``~/set_paused`` by ``node``'s parameters); returns them."""
 
     def on_reset(_request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
-        response.success, response.message = node.reset_simulation()
+        response.success, response.message = session.reset()
         return response
 
     def on_set_paused(request: SetBool.Request, response: SetBool.Response) -> SetBool.Response:
@@ -40,7 +39,7 @@ def create_services(node: "RigidBodySimNode") -> list:
         return response
 
     def on_step(_request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
-        response.success, response.message = node.step_paused()
+        response.success, response.message = session.step_paused()
         return response
 
     return [

@@ -10,7 +10,7 @@ every entity each time it wakes (milliseconds with hundreds of per-body subscrip
 timer in that executor would pay on every tick (``rigid_body_sim_node`` now spins the
 EventsExecutor, which does not, but the launch-free harness may spin either; a thread also keeps
 the deadline schedule independent of the executor's callbacks). The executor keeps the
-subscriptions, services, parameters and /diagnostics; the node's lock guards what both threads touch.
+subscriptions, services, parameters and /diagnostics; the session's lock guards what both threads touch.
 
 This is the only tick path: ``rigid_body_sim_node`` and the launch-free harness
 (:mod:`rigid_body_sim.testing`) both tick through it.
@@ -43,7 +43,8 @@ class TickLoop:
         ``tick(due_ns, period_ns, missed)``: one tick, due at ``due_ns`` (steady clock), with
         ``missed`` periods skipped before it. Called with ``lock`` held.
     lock : context manager
-        Held around each tick (the node's lock).
+        Held around each tick: the session's lock as ticks take it (``session.lock.ticks``, which
+        first lets in every caller already waiting, so back-to-back ticks cannot keep them out).
     on_failure : callable
         Called once, from the thread, with the exception if ``tick`` raises; the thread then
         ends. Never called for an exception raised after :meth:`stop`.
@@ -59,7 +60,6 @@ class TickLoop:
         self._retime = threading.Event()
         self._wake = threading.Event()
         self.failure: BaseException | None = None
-        self._busy_since_ns: int | None = None
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
 
     def start(self) -> None:
@@ -76,11 +76,6 @@ class TickLoop:
     def alive(self) -> bool:
         """True while the thread runs."""
         return self._thread.is_alive()
-
-    def busy_for(self) -> float | None:
-        """Seconds the tick under way has been running, or None between ticks."""
-        since = self._busy_since_ns
-        return None if since is None else (time.monotonic_ns() - since) * 1e-9
 
     def retime(self) -> None:
         """Restart the schedule from now with the current period (a new ``rate_hz``)."""
@@ -114,11 +109,7 @@ class TickLoop:
                 with self._lock:
                     if self._retime.is_set() or self._stop.is_set():
                         continue
-                    self._busy_since_ns = time.monotonic_ns()
-                    try:
-                        self._tick(due_ns, period_ns, missed)
-                    finally:
-                        self._busy_since_ns = None
+                    self._tick(due_ns, period_ns, missed)
             except BaseException as exc:  # noqa: BLE001  (reported through on_failure)
                 if self._stop.is_set():
                     return  # shutting down: publishers may already be invalid

@@ -1,4 +1,4 @@
-"""Newton–Euler equations of a free rigid body, written once, and the read-outs of energy and momentum.
+"""Newton–Euler equations of a free rigid body, written once (compiled; energy and momentum: core/mechanics.py).
 
 In the principal frame P (diagonal inertia I = (I1, I2, I3)):
 
@@ -18,14 +18,11 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 from numba import njit
 
 from .forces import body_wrench, resolve_wrench
 from .layout import (DAMP_ANG, DAMP_LIN, INERTIA, INERTIA_NORMAL, INV_INERTIA, INV_MASS, MODEL, MODEL_PLANAR, NORMAL,
                      P, Q, V, W)
-from .model import BodyModel, State
-from .quaternion import quat_to_matrix
 from .jit import INLINE, JIT
 from .rotation import normalise, rotate_back
 
@@ -35,10 +32,6 @@ __all__ = [
     "derivative",
     "derivatives",
     "impulse_response",
-    "kinetic_energy",
-    "potential_energy",
-    "linear_momentum_W",
-    "angular_momentum_W",
 ]
 
 
@@ -113,33 +106,3 @@ def impulse_response(y, p, impulse, out):
         for a in range(3):
             out[W + a] += hP[a] * p[INV_INERTIA + a]
     return math.sqrt(jx * jx + jy * jy + jz * jz), math.sqrt(hx * hx + hy * hy + hz * hz)
-
-
-def kinetic_energy(model: BodyModel, state: State) -> np.ndarray:
-    """Kinetic energy per body, J, shape (N,): ½ m |v|² + ½ wᵀ I w."""
-    translational = 0.5 * model.mass * np.sum(state.v_WC_W**2, axis=1)
-    rotational = 0.5 * np.sum(model.inertia_P * state.w_WP_P**2, axis=1)
-    return translational + rotational
-
-
-def potential_energy(model: BodyModel, state: State) -> np.ndarray:
-    """Gravitational potential energy per body, J, shape (N,): −m g·p (zero at the world origin)."""
-    return -model.mass * (state.p_WC_W @ model.gravity_W)
-
-
-def linear_momentum_W(model: BodyModel, state: State) -> np.ndarray:
-    """Linear momentum per body, world axes, kg·m/s, shape (N, 3)."""
-    return model.mass[:, None] * state.v_WC_W
-
-
-def angular_momentum_W(model: BodyModel, state: State, about_origin: bool = False) -> np.ndarray:
-    """Angular momentum per body, world axes, kg·m²/s, shape (N, 3).
-
-    About the centre of mass (spin, ``R I w``) by default; with ``about_origin`` the orbital
-    part ``p × m v`` about the world origin is added.
-    """
-    R_WP = quat_to_matrix(state.q_WP)
-    spin = np.einsum("nij,nj->ni", R_WP, model.inertia_P * state.w_WP_P)
-    if about_origin:
-        return spin + np.cross(state.p_WC_W, linear_momentum_W(model, state))
-    return spin

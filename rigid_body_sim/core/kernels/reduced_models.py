@@ -25,7 +25,6 @@ import math
 from numba import njit
 
 from .forces import body_wrench, resolve_wrench
-from .integrators import top_flow
 from .layout import (
     ACTIVE,
     AXIS_S,
@@ -50,6 +49,10 @@ from .layout import (
     PLANE_OFFSET,
     Q,
     SITE_MOMENT,
+    TOP_A,
+    TOP_B,
+    TOP_DT,
+    TOP_KEY,
     V,
     W,
     WRENCH_WIDTH,
@@ -286,17 +289,52 @@ def isotropic_free(y, out, p, w, dt, k):
 
 
 @njit(**INLINE)
+def top_increments(y, p, dt):
+    """(A, B) with q(t + dt) = A ⊗ q ⊗ B for the torque-free symmetric top at state ``y``; from the cache if it holds.
+
+    A = exp(dt L_W / I_t) and B = exp(dt λ e_s), λ = (1/I_s − 1/I_t) L_s: the exact flow of
+    integrators.top_flow, with the precession written on the world side, where L_W is
+    constant; L_s is constant too, so A and B stay the same along the motion. They are kept
+    with the state they led to, and reused when the step starts from exactly that state and dt.
+    """
+    hit = p[TOP_DT] == dt
+    for j in range(4):
+        hit = hit and y[Q + j] == p[TOP_KEY + j]
+    for j in range(3):
+        hit = hit and y[W + j] == p[TOP_KEY + 4 + j]
+    if not hit:
+        qw, qx, qy, qz = y[Q], y[Q + 1], y[Q + 2], y[Q + 3]
+        Lx, Ly, Lz = rotate(qw, qx, qy, qz, p[INERTIA] * y[W], p[INERTIA + 1] * y[W + 1], p[INERTIA + 2] * y[W + 2])
+        s = dt * p[INV_I_T]
+        a = exp_map(s * Lx, s * Ly, s * Lz)
+        axis = int(p[AXIS_S])
+        turn = dt * p[C_S] * p[INERTIA + axis] * y[W + axis]
+        b = exp_map(turn if axis == 0 else 0.0, turn if axis == 1 else 0.0, turn if axis == 2 else 0.0)
+        p[TOP_DT] = dt
+        for j in range(4):
+            p[TOP_A + j] = a[j]
+            p[TOP_B + j] = b[j]
+    _pin = y[P], p[0]  # the arrays' last use, out of branches and loops (jit.py)
+    return (p[TOP_A], p[TOP_A + 1], p[TOP_A + 2], p[TOP_A + 3]), (p[TOP_B], p[TOP_B + 1], p[TOP_B + 2], p[TOP_B + 3])
+
+
+@njit(**INLINE)
 def symmetric_free(y, out, p, w, dt, k):
-    """Axisymmetric, torque-free, no angular damping: exact translation; the exact symmetric-top flow."""
+    """Axisymmetric, torque-free, no angular damping: exact translation; the exact symmetric-top flow.
+
+    q ← A ⊗ q ⊗ B (:func:`top_increments`), and L_P turned back by B (L_P = I w_P).
+    """
     fx, fy, fz, _tx, _ty, _tz = body_wrench(y, p, w)
     translate_exact(y, out, p, fx, fy, fz, dt)
+    a, b = top_increments(y, p, dt)
+    q = qmul(a[0], a[1], a[2], a[3], y[Q], y[Q + 1], y[Q + 2], y[Q + 3])
+    q = qmul(q[0], q[1], q[2], q[3], b[0], b[1], b[2], b[3])
+    out[Q], out[Q + 1], out[Q + 2], out[Q + 3] = normalise(q[0], q[1], q[2], q[3])
+    L = rotate(b[0], -b[1], -b[2], -b[3], p[INERTIA] * y[W], p[INERTIA + 1] * y[W + 1], p[INERTIA + 2] * y[W + 2])
+    for j in range(3):  # a division, not a product with 1/I (integrators.end_kick)
+        out[W + j] = L[j] / p[INERTIA + j]
     for j in range(4):
-        out[Q + j] = y[Q + j]
-    for a in range(3):
-        out[W + a] = p[INERTIA + a] * y[W + a]
-    top_flow(out, p[INV_I_T], int(p[AXIS_S]), p[C_S], dt)
-    out[Q], out[Q + 1], out[Q + 2], out[Q + 3] = normalise(out[Q], out[Q + 1], out[Q + 2], out[Q + 3])
-    for a in range(3):
-        out[W + a] = out[W + a] / p[INERTIA + a]
-
+        p[TOP_KEY + j] = out[Q + j]
+    for j in range(3):
+        p[TOP_KEY + 4 + j] = out[W + j]
     _pin = y[P], out[P], p[0], w[0]  # the arrays' last use, out of branches and loops (jit.py)

@@ -19,8 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import special
 
-from . import elliptic
-from .quaternion import (
+from ..core import elliptic
+from ..core.quaternion import (
     quat_conjugate,
     quat_from_matrix,
     quat_from_rotation_vector,

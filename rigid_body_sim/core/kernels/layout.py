@@ -27,7 +27,7 @@ Wrench row (``WRENCH_WIDTH`` floats per body)
                                body-fixed points, which turns with the body.
     ``ACTIVE``                 non-zero if anything was added to the row.
 
-Parameter row (``PRM_WIDTH`` floats per body, ``stepping.pack_parameters``)
+Parameter row (``PRM_WIDTH`` floats per body, ``core/stepping.pack_parameters``)
     Mass properties, damping, gravity as the body's motion allows it, the energy-bound
     constants, the body's reduced model and projection, its plane (planar), its constant twist
     (kinematic), q_PB (principal → body frame) and a cache of the last rotation increment.
@@ -63,7 +63,7 @@ SITE_MOMENT = 18  # 9 columns, M[j, l] at SITE_MOMENT + 3 j + l
 ACTIVE = 27
 WRENCH_WIDTH = 28
 
-#: How a frame's origin and axes relate to its body (forces.parse_frame; forces.add_wrench).
+#: How a frame's origin and axes relate to its body (core/frames.parse_frame; forces.add_wrench).
 FRAME_WORLD = 0  # world origin, world axes
 FRAME_BODY = 1  # centre of mass, body axes
 FRAME_WORLD_ALIGNED = 2  # centre of mass, world axes
@@ -92,7 +92,13 @@ NORMAL = 35  # 3 columns: unit plane normal, world axes (planar)
 PLANE_OFFSET = 38  # n·p of the plane (planar), m
 INERTIA_NORMAL = 39  # nᵀ I_W n, the moment about the plane normal (planar), kg·m²
 KINEMATIC_W = 40  # 3 columns: constant angular velocity of a kinematic body, world axes, rad/s
-PRM_WIDTH = 43
+# The torque-free symmetric top's increments q ← A ⊗ q ⊗ B (reduced_models.symmetric_free): constant
+# along its motion, kept with the state (q, w) and dt they lead to; NaN in TOP_DT: nothing cached.
+TOP_KEY = 43  # 7 columns: q (w, x, y, z) then w_P the last step left
+TOP_DT = 50
+TOP_A = 51  # 4 columns: exp(dt L_W / I_t), world side
+TOP_B = 55  # 4 columns: exp(dt λ e_s), body side
+PRM_WIDTH = 59
 
 #: Per-body models (reduction.py says which body gets which, and why).
 MODEL_FULL = 0  # the integrator

@@ -1,0 +1,182 @@
+"""The node's per-body endpoints as one object: state publishers, wrench/impulse inputs, IMU
+publishers and set_state inputs, with one prepare / commit / release over the four families.
+
+A change of bodies (start-up, a new scene, a spawn or delete, a change of ``publish_odometry``,
+a reset) is made in three moves: :meth:`BodyEndpoints.prepare` creates whatever the new scene
+needs beyond what exists, without the session's lock; :meth:`BodyEndpoints.commit` swaps it in
+under the lock; :meth:`BodyEndpoints.release` destroys what was replaced, after the lock. The
+ticks so wait only for the swap. :class:`BodyEndpoints` is also the session's edge
+(:class:`~rigid_body_sim.ros.session.BodyIO`): it takes the arrived inputs for a tick and
+publishes (and records) the state after it, with the markers.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, ContextManager, Mapping
+
+from rclpy.node import Node
+from rclpy.qos import QoSProfile
+
+from ..core import Scene, Simulator
+from ..core.imu import ImuSample
+from ..offline.recording import McapRecorder
+from .imu import ImuChange, ImuPublishers
+from .inputs import InputChange, WrenchInputs
+from .markers import MarkerPublisher
+from .node_recording import NodeRecording
+from .publishers import PublisherChange, StatePublishers
+from .session import physics_dt
+from .set_state import SetStateChange, SetStateInputs
+
+__all__ = ["BodyEndpoints", "EndpointChange"]
+
+
+@dataclass
+class EndpointChange:
+    """A prepared change of all four families, and whether the state of the bodies kept stays."""
+
+    publishers: PublisherChange
+    inputs: InputChange
+    imus: ImuChange
+    set_state: SetStateChange
+    keep_state: bool
+
+
+class BodyEndpoints:
+    """The four per-body endpoint families of ``node``, the markers, and the recording of what they carry.
+
+    Parameters
+    ----------
+    node : rclpy.node.Node
+        Owner of the endpoints.
+    qos : QoSProfile
+        Of subscriptions, IMU and marker publishers (state publishers: publishers.STATE_QOS).
+    settings : mapping
+        ``world_frame``, ``per_body_topics``, ``twist_stamped`` (fixed for the node's life).
+    recording : NodeRecording
+        Where published state, wrenches and IMU samples are recorded (if it records).
+    """
+
+    def __init__(self, node: Node, qos: QoSProfile, settings: Mapping[str, Any], recording: NodeRecording):
+        world_frame = settings["world_frame"]
+        self.outputs = StatePublishers(node, world_frame, per_body_topics=settings["per_body_topics"],
+                                       twist_stamped=settings["twist_stamped"])
+        self.inputs = WrenchInputs(node, qos, world_frame)
+        self.imus = ImuPublishers(node, qos)
+        self.set_state = SetStateInputs(node, qos, world_frame, self.inputs)
+        self.markers = MarkerPublisher(node, qos, world_frame)
+        self.recording = recording
+
+    # ------------------------------------------------------------------ prepare / commit / release
+
+    def prepare(self, scene: Scene, publish_odometry: bool, *, keep_state: bool) -> EndpointChange:
+        """Create what ``scene`` needs beyond what exists; touches nothing the ticks read. With
+        ``keep_state`` the bodies kept keep their holds, pending impulses and set_states and the
+        IMUs kept their noise state (spawn, delete, odometry on/off); without, all start afresh."""
+        return EndpointChange(self.outputs.prepare(scene.body_names, publish_odometry), self.inputs.prepare(scene),
+                              self.imus.prepare(scene, keep_state=keep_state),
+                              self.set_state.prepare(scene.body_names), keep_state)
+
+    def commit(self, change: EndpointChange) -> None:
+        """Swap in a prepared change (hold the session's lock)."""
+        self.outputs.commit(change.publishers)
+        self.inputs.commit(change.inputs, keep_holds=change.keep_state)
+        self.imus.commit(change.imus)
+        self.set_state.commit(change.set_state)
+        if not change.keep_state:
+            self.set_state.clear()
+
+    def release(self, change: EndpointChange) -> None:
+        """Destroy the endpoints ``change`` replaced (after :meth:`commit`, without the lock)."""
+        self.outputs.release(change.publishers)
+        self.inputs.release(change.inputs)
+        self.imus.release(change.imus)
+        self.set_state.release(change.set_state)
+
+    # ------------------------------------------------------------------ per tick (the session's lock held)
+
+    def take_set_states(self, sim: Simulator) -> bool:
+        """Apply the set_states that arrived; True if any body was set."""
+        return bool(self.set_state.apply(sim))
+
+    def take_wrenches(self, sim: Simulator, wrench_timeout: float) -> None:
+        """Hand held wrenches and pending impulses to ``sim``; record them with the scripted ones."""
+        held = self.inputs.apply(sim, wrench_timeout)
+        self.recording.write(lambda recorder: recorder.write_wrenches(sim.time, held + sim.active_scripted_wrenches()))
+
+    def publish_tick(self, sim: Simulator, tick_s: float, settings: Mapping[str, Any]) -> None:
+        """Sample and publish the IMUs due, then the state (both recorded if recording)."""
+        self.imus.publish(sim, tick_s, self._record_imu if self.recording.recorder is not None else None)
+        self.publish(sim, settings)
+
+    def publish(self, sim: Simulator, settings: Mapping[str, Any]) -> None:
+        """Publish the state (and /clock), the markers when due, and record the state."""
+        self.outputs.publish(sim, settings["publish_clock"])
+        self.markers.publish(sim, settings["marker_rate_hz"], lambda: self.inputs.snapshot()[0],
+                             settings["marker_force_scale"] if settings["marker_wrenches"] else None)
+        if self.recording.recorder is not None:
+            self.record_state(sim, settings)
+
+    def publish_bodies(self, sim: Simulator) -> None:
+        """Publish the bodies' state only (no /clock, markers or recording)."""
+        self.outputs.publish(sim, False)
+
+    def record_state(self, sim: Simulator, settings: Mapping[str, Any]) -> None:
+        """Write the state just published, then /clock: with ``per_body_topics`` false the two
+        batches as published (two messages a tick for all bodies), else each running body's
+        pose and twist."""
+        batches = self.outputs.last_batches_cdr()
+        if not settings["per_body_topics"] and batches is not None and batches[0] is sim.body_names:
+            self.recording.write(lambda recorder: (recorder.write_batches(*batches), recorder.write_clock(sim.time)))
+            return
+        finite = sim.state.finite_bodies().tolist()
+        skip = [body for index, body in enumerate(sim.body_names) if not finite[index]]
+        self.recording.write(lambda recorder: recorder.write_simulator(sim, skip=skip))
+
+    def open_recorder(self, path: str, sim: Simulator, settings: Mapping[str, Any]) -> McapRecorder:
+        """A new recorder at ``path`` for a change to ``settings``, starting from ``sim``'s state.
+
+        Raises
+        ------
+        OSError
+            If ``path`` cannot be written.
+        """
+        return self.recording.open(path, sim, dt=physics_dt(settings), integrator=settings["integrator"])
+
+    def replace_recorder(self, recorder: McapRecorder | None) -> McapRecorder | None:
+        """Record from now on with ``recorder`` (None: stop); returns the one replaced (hold the lock)."""
+        return self.recording.replace(recorder)
+
+    def finish_recorder(self, recorder: McapRecorder) -> None:
+        """Finish a replaced recorder: a complete, indexed file (without the lock)."""
+        self.recording.finish(recorder)
+
+    def start_recording(self, path: str, sim: Simulator, lock: ContextManager[Any]) -> None:
+        """Record to ``path`` from ``sim``'s state on, unless recording already.
+
+        Raises
+        ------
+        ValueError
+            If ``path`` cannot be written.
+        """
+        if path and self.recording.recorder is None:
+            try:
+                recorder = self.recording.open(path, sim)
+            except OSError as exc:
+                raise ValueError(f"record_path rejected: cannot record to {path!r} ({exc})") from exc
+            with lock:
+                self.recording.replace(recorder)
+
+    def stop_recording(self, lock: ContextManager[Any]) -> None:
+        """Finish the recording (a complete, indexed MCAP file); ``lock`` is held while it is taken
+        away from the ticks (``contextlib.nullcontext()`` for an exit that cannot wait for a stuck tick)."""
+        with lock:
+            recorder = self.recording.replace(None)
+        if recorder is not None:
+            self.recording.finish(recorder)
+
+    def _record_imu(self, sample: ImuSample) -> None:
+        self.recording.write(lambda recorder: recorder.write_imu(
+            sample.time, sample.site, sample.orientation_xyzw, sample.angular_velocity, sample.specific_force,
+            sample.covariances))

@@ -1,0 +1,420 @@
+"""Recordings read by Foxglove's own readers, run by Node.js: none of this package's code decodes them.
+
+test/foxglove/decode.mjs opens each recording with @mcap/core (indexed, or record by record for
+a cut file) and @mcap/support's decompressors, parses every schema with @foxglove/rosmsg and
+decodes every message with @foxglove/rosmsg2-serialization, the libraries Foxglove uses; their
+exact versions are pinned in test/foxglove/package-lock.json and installed by ``make
+foxglove-deps`` (a prerequisite of ``make test``). Every message must decode, and what is
+decoded is compared with the simulator's own state or the closed form of the motion, and each
+channel's ``offered_qos_profiles`` (the ros2 profile's required metadata) with the QoS the
+running node's publishers really offer, as the ROS graph reports it.
+
+Recordings: the default scene from the node (in-process harness), an IMU scene from the node
+and from ``rigid-body-sim run --record``, 200 bodies batched (``per_body_topics`` false) from
+the node process, and the node process killed with SIGKILL (a file without a summary).
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+import yaml
+
+from rigid_body_sim.cli import main
+from rigid_body_sim.core import Simulator, load_scene
+from rigid_body_sim.offline.msgdefs import complete_definition
+from rigid_body_sim.package_data import default_scene_path
+
+pytestmark = pytest.mark.ros
+
+FOXGLOVE_DIR = Path(__file__).resolve().parent / "foxglove"
+TICK_S = 0.01  # the node's default tick: rate_hz 100, substeps 1
+LATCHED = {"pose", "twist", "poses", "velocities", "clock"}
+QOS_KEYS = ["history", "depth", "reliability", "durability", "deadline", "lifespan", "liveliness",
+            "liveliness_lease_duration", "avoid_ros_namespace_conventions"]
+
+
+def foxglove_decode(path: Path) -> dict[str, Any]:
+    """What Foxglove's readers make of ``path`` (decode.mjs's JSON)."""
+    node = shutil.which("node")
+    assert node is not None, "Node.js is needed: run `make foxglove-deps` (apt-get install nodejs npm)"
+    assert (FOXGLOVE_DIR / "node_modules" / "@mcap" / "core").is_dir(), (
+        "Foxglove's readers are not installed: run `make foxglove-deps` (npm ci --prefix test/foxglove)")
+    done = subprocess.run([node, str(FOXGLOVE_DIR / "decode.mjs"), str(path)], capture_output=True, text=True,
+                          timeout=120, check=False)
+    assert done.returncode == 0, done.stderr
+    return json.loads(done.stdout)
+
+
+def check_everything_decodes(result: dict[str, Any], *, finished: bool) -> None:
+    """Profile ros2, every schema parsed, 100 % of the messages decoded, ros2msg/cdr, rosbag2's QoS metadata."""
+    assert result["profile"] == "ros2"
+    assert result["schemaErrors"] == {}
+    assert result["failures"] == []
+    assert result["messageCount"] > 0
+    assert result["decodedCount"] == result["messageCount"] == len(result["messages"])
+    if finished:
+        assert result["reader"] == "indexed" and result["complete"] and result["cut"] is None
+        assert result["statisticsMessageCount"] == result["messageCount"]
+    else:
+        assert result["reader"] == "stream" and not result["complete"] and result["cut"]
+    for channel in result["channels"]:
+        assert channel["schemaEncoding"] == "ros2msg" and channel["messageEncoding"] == "cdr"
+        assert "/msg/" in channel["schemaName"]
+        profiles = yaml.safe_load(channel["metadata"]["offered_qos_profiles"])
+        assert isinstance(profiles, list) and len(profiles) == 1, channel
+        profile = profiles[0]
+        assert list(profile) == QOS_KEYS
+        kind = channel["topic"].rsplit("/", 1)[-1]
+        assert profile["reliability"] == "reliable"
+        assert profile["durability"] == ("transient_local" if kind in LATCHED else "volatile"), channel["topic"]
+        assert (profile["history"], profile["depth"]) == ("keep_last", 1 if kind in LATCHED else 10)
+        assert profile["liveliness"] == "automatic" and profile["avoid_ros_namespace_conventions"] is False
+        for key in ("deadline", "lifespan", "liveliness_lease_duration"):
+            assert profile[key] == {"sec": 9223372036, "nsec": 854775807}
+
+
+def check_schema_text(path: Path) -> None:
+    """Each schema in the file is the complete definition rosbag2 writes (``MSG: pkg/Type`` lines)."""
+    from mcap.records import Schema
+    from mcap.stream_reader import StreamReader
+
+    schemas = []
+    with open(path, "rb") as f:
+        try:
+            for record in StreamReader(f).records:
+                if isinstance(record, Schema):
+                    schemas.append(record)
+        except Exception:  # noqa: BLE001 - a cut file ends in the middle of a record; the schemas come first
+            pass
+    assert schemas
+    for schema in schemas:
+        text = schema.data.decode()
+        assert text == complete_definition(schema.name)
+        assert "MSG: std_msgs/msg/" not in text and "MSG: geometry_msgs/msg/" not in text
+
+
+def by_topic(result: dict[str, Any], topic: str) -> list[tuple[int, dict[str, Any]]]:
+    return [(int(log_time), decoded) for t, log_time, _publish, decoded in result["messages"] if t == topic]
+
+
+def stamp_ns(header: dict[str, Any]) -> int:
+    return header["stamp"]["sec"] * 1_000_000_000 + header["stamp"]["nanosec"]
+
+
+def xyz(v: dict[str, float]) -> np.ndarray:
+    return np.array([v["x"], v["y"], v["z"]])
+
+
+def xyzw(q: dict[str, float]) -> np.ndarray:
+    return np.array([q["x"], q["y"], q["z"], q["w"]])
+
+
+def rotation(q: np.ndarray) -> np.ndarray:
+    """The rotation matrix of a unit quaternion (x, y, z, w)."""
+    x, y, z, w = q
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+
+
+def quat_multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    ax, ay, az, aw = a
+    bx, by, bz, bw = b
+    return np.array([aw * bx + ax * bw + ay * bz - az * by, aw * by - ax * bz + ay * bw + az * bx,
+                     aw * bz + ax * by - ay * bx + az * bw, aw * bw - ax * bx - ay * by - az * bz])
+
+
+def same_rotation(a: np.ndarray, b: np.ndarray, atol: float) -> None:
+    assert abs(abs(float(np.dot(a, b))) - 1.0) <= atol, (a, b)
+
+
+def graph_qos(node: Any, topic: str) -> tuple[str, str]:
+    """(reliability, durability) the ROS graph reports for the publishers of ``topic``."""
+    infos = node.get_publishers_info_by_topic(topic)
+    assert infos, f"no publisher on {topic}"
+    names = {(i.qos_profile.reliability.name.lower(), i.qos_profile.durability.name.lower()) for i in infos}
+    assert len(names) == 1, names
+    return names.pop()
+
+
+def recorded_qos(result: dict[str, Any], topic: str) -> tuple[str, str]:
+    channel = next(c for c in result["channels"] if c["topic"] == topic)
+    profile = yaml.safe_load(channel["metadata"]["offered_qos_profiles"])[0]
+    return profile["reliability"], profile["durability"]
+
+
+def box_momentum(q: np.ndarray, w_world: np.ndarray) -> np.ndarray:
+    """Angular momentum (world) of the default scene's box: 2 kg, edges 1.0, 0.6, 0.4 m."""
+    m, (a, b, c) = 2.0, (1.0, 0.6, 0.4)
+    inertia_body = np.diag([m / 12 * (b * b + c * c), m / 12 * (a * a + c * c), m / 12 * (a * a + b * b)])
+    R = rotation(q)
+    return R @ inertia_body @ R.T @ w_world
+
+
+def check_default_scene_poses(result: dict[str, Any]) -> list[tuple[int, np.ndarray, np.ndarray]]:
+    """The box of the default scene: at rest at (0, 0, 1), unit quaternions, |L| (world) conserved
+    (torque-free: the closed form keeps L fixed), stamps on the ticks. Returns (ns, p, q) per pose."""
+    poses = by_topic(result, "/box/pose")
+    twists = by_topic(result, "/box/twist")
+    assert len(poses) == len(twists) >= 5
+    momentum0 = box_momentum(np.array([0.0, 0.0, 0.0, 1.0]), np.array([0.2, 0.1, 0.5]))
+    out = []
+    for (t, pose), (t2, twist) in zip(poses, twists):
+        assert t == t2 == stamp_ns(pose["header"]) and pose["header"]["frame_id"] == "world"
+        assert t % round(TICK_S * 1e9) == 0
+        p, q = xyz(pose["pose"]["position"]), xyzw(pose["pose"]["orientation"])
+        np.testing.assert_allclose(p, [0.0, 0.0, 1.0], rtol=0, atol=1e-12)
+        assert abs(np.linalg.norm(q) - 1.0) < 1e-12
+        np.testing.assert_allclose(xyz(twist["linear"]), 0.0, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(box_momentum(q, xyz(twist["angular"])), momentum0, rtol=0, atol=1e-9)
+        out.append((t, p, q))
+    assert [t for t, *_ in out] == sorted(t for t, *_ in out)
+    return out
+
+
+# --------------------------------------------------------------------------- the default scene, from the node
+
+
+def test_default_scene_node_recording_decodes_in_foxglove(tmp_path: Path) -> None:
+    from rigid_body_sim.testing import SimHarness
+
+    out = tmp_path / "default.mcap"
+    with SimHarness(parameters={"record_path": str(out)}) as h:
+        h.step(40)
+        sim = h.node.simulator
+        last = (round(sim.time * 1e9), sim.positions_world()[0].copy(), sim.orientations_xyzw()[0].copy())
+        live_qos = {topic: graph_qos(h.client, topic) for topic in ("/box/pose", "/box/twist", "/clock")}
+    result = foxglove_decode(out)
+    check_everything_decodes(result, finished=True)
+    check_schema_text(out)
+    assert {c["topic"] for c in result["channels"]} >= {"/box/pose", "/box/twist", "/clock"}
+    for topic, qos in live_qos.items():
+        assert recorded_qos(result, topic) == qos
+    poses = check_default_scene_poses(result)
+    t, p, q = poses[-1]
+    assert t == last[0] == round(40 * TICK_S * 1e9)
+    assert p.tolist() == last[1].tolist() and q.tolist() == last[2].tolist()  # bit for bit
+    clocks = [c["clock"]["sec"] * 10**9 + c["clock"]["nanosec"] for _t, c in by_topic(result, "/clock")]
+    assert sorted(set(clocks)) == [round(k * TICK_S * 1e9) for k in range(41)]
+
+
+# --------------------------------------------------------------------------- an IMU scene, from the node and the CLI
+
+
+def imu_scene(tmp_path: Path, w_z: float) -> Path:
+    """A box spinning at ``w_z`` about its principal z axis, no gravity, ideal IMUs at its centre and 1 m along x."""
+    path = tmp_path / "imu.yaml"
+    path.write_text(yaml.safe_dump({"gravity": [0.0, 0.0, 0.0], "bodies": {"b": {
+        "mass": 2.0, "inertia": {"box": [1.0, 0.6, 0.4]},
+        "pose": {"position": [0.0, 0.0, 5.0], "orientation": [0.0, 0.0, 0.0, 1.0]},
+        "twist": {"linear": [0.0, 0.0, 0.0], "angular": [0.0, 0.0, w_z]},
+        "sites": {"centre": {"position": [0.0, 0.0, 0.0], "imu": {}}, "arm": {"position": [1.0, 0.0, 0.0], "imu": {}}},
+    }}}), encoding="utf-8")
+    return path
+
+
+def check_imu_closed_form(result: dict[str, Any], w_z: float, count: int) -> None:
+    """Spin about a principal axis: ω stays w_z e_z, q(t) is a turn of w_z t about z; the centre
+    reads no specific force, the arm the centripetal −w_z² x (sensor axes); orientation = the pose's."""
+    poses = {t: xyzw(p["pose"]["orientation"]) for t, p in by_topic(result, "/b/pose")}
+    for topic, expected in (("/b/centre/imu", [0.0, 0.0, 0.0]), ("/b/arm/imu", [-w_z**2, 0.0, 0.0])):
+        imus = by_topic(result, topic)
+        assert len(imus) == count
+        for t, imu in imus:
+            assert t == stamp_ns(imu["header"]) and imu["header"]["frame_id"] == topic[1:-4]
+            np.testing.assert_allclose(xyz(imu["linear_acceleration"]), expected, rtol=0, atol=1e-9)
+            np.testing.assert_allclose(xyz(imu["angular_velocity"]), [0.0, 0.0, w_z], rtol=0, atol=1e-9)
+            q = xyzw(imu["orientation"])
+            assert abs(np.linalg.norm(q) - 1.0) < 1e-12
+            angle = w_z * t * 1e-9
+            same_rotation(q, np.array([0.0, 0.0, np.sin(angle / 2), np.cos(angle / 2)]), 1e-9)
+            np.testing.assert_allclose(q, poses[t], rtol=0, atol=1e-12)
+            assert len(imu["orientation_covariance"]) == 9 and len(imu["linear_acceleration_covariance"]) == 9
+
+
+def test_imu_scene_node_recording_decodes_in_foxglove(tmp_path: Path) -> None:
+    from rigid_body_sim.testing import SimHarness
+
+    w_z = 3.0
+    out = tmp_path / "imu_node.mcap"
+    with SimHarness(imu_scene(tmp_path, w_z), {"record_path": str(out), "integrator": "rk4"}) as h:
+        h.step(25)
+        live_qos = {topic: graph_qos(h.client, topic) for topic in ("/b/centre/imu", "/b/arm/imu", "/b/pose")}
+    result = foxglove_decode(out)
+    check_everything_decodes(result, finished=True)
+    check_schema_text(out)
+    for topic, qos in live_qos.items():
+        assert recorded_qos(result, topic) == qos
+    check_imu_closed_form(result, w_z, 25)
+
+
+def test_imu_scene_cli_recording_decodes_in_foxglove(tmp_path: Path) -> None:
+    w_z = 3.0
+    scene = imu_scene(tmp_path, w_z)
+    doc = yaml.safe_load(scene.read_text())  # a scripted wrench of zero force: /b/wrench is recorded too
+    doc["wrenches"] = [{"body": "b", "frame": "b/arm", "force": [0.0, 0.0, 0.0], "start": 0.0}]
+    scene.write_text(yaml.safe_dump(doc), encoding="utf-8")
+    out = tmp_path / "imu_cli.mcap"
+    assert main(["run", str(scene), "--duration", "0.3", "--dt", "0.01", "--record", str(out), "--quiet"]) == 0
+    result = foxglove_decode(out)
+    check_everything_decodes(result, finished=True)
+    check_schema_text(out)
+    check_imu_closed_form(result, w_z, 30)
+    wrenches = by_topic(result, "/b/wrench")
+    assert len(wrenches) == 31 and all(w["header"]["frame_id"] == "b/arm" for _t, w in wrenches)
+    assert all(xyz(w["wrench"]["force"]).tolist() == [0.0, 0.0, 0.0] for _t, w in wrenches)
+    # the poses are the simulator's, bit for bit
+    sim = Simulator(load_scene(scene), "rk4", 0.01)
+    poses = by_topic(result, "/b/pose")
+    assert len(poses) == 31
+    for k, (t, pose) in enumerate(poses):
+        assert t == round(k * 0.01 * 1e9) == stamp_ns(pose["header"])
+        assert xyz(pose["pose"]["position"]).tolist() == sim.positions_world()[0].tolist()
+        assert xyzw(pose["pose"]["orientation"]).tolist() == sim.orientations_xyzw()[0].tolist()
+        sim.step(1)
+
+
+# --------------------------------------------------------------------------- 200 bodies, batched, from the node process
+
+
+def run_node(tmp_path: Path, *ros_args: str) -> tuple[subprocess.Popen, Path]:
+    log_path = tmp_path / "node.log"
+    log = open(log_path, "w")
+    process = subprocess.Popen(
+        [sys.executable, "-m", "rigid_body_sim.ros.main", "--ros-args", "-p", "status_period:=0.0",
+         "-p", "diagnostics_period:=0.0", *ros_args], stdout=log, stderr=subprocess.STDOUT, env=os.environ.copy())
+    log.close()
+    return process, log_path
+
+
+def wait_for_recording(process: subprocess.Popen, log_path: Path, out: Path, min_bytes: int, timeout: float = 60.0) -> None:
+    deadline = time.monotonic() + timeout
+    while not (out.exists() and "recording to" in log_path.read_text() and out.stat().st_size >= min_bytes):
+        assert process.poll() is None, log_path.read_text()
+        assert time.monotonic() < deadline, log_path.read_text()
+        time.sleep(0.05)
+
+
+@pytest.mark.timeout(180)
+def test_200_batched_bodies_from_the_node_decode_in_foxglove(tmp_path: Path) -> None:
+    n = 200
+    rng = np.random.default_rng(7)
+    p0 = rng.uniform(-10, 10, (n, 3))
+    v = rng.uniform(-1, 1, (n, 3))
+    w = rng.uniform(-2, 2, (n, 3))
+    q0 = rng.normal(size=(n, 4))
+    q0 /= np.linalg.norm(q0, axis=1, keepdims=True)
+    names = [f"s{k:03d}" for k in range(n)]
+    scene = tmp_path / "many.yaml"
+    scene.write_text(yaml.safe_dump({"gravity": [0.0, 0.0, 0.0], "bodies": {names[k]: {
+        "mass": 1.5, "inertia": {"sphere": 0.2},
+        "pose": {"position": p0[k].tolist(), "orientation": q0[k].tolist()},
+        "twist": {"linear": v[k].tolist(), "angular": w[k].tolist()}} for k in range(n)}}), encoding="utf-8")
+    out = tmp_path / "many.mcap"
+    process, log_path = run_node(tmp_path, "-p", f"scene:={scene}", "-p", "per_body_topics:=false",
+                                 "-p", f"record_path:={out}")
+    try:
+        wait_for_recording(process, log_path, out, 200_000)
+        process.send_signal(signal.SIGINT)
+        assert process.wait(timeout=60) == 0, log_path.read_text()
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    result = foxglove_decode(out)
+    check_everything_decodes(result, finished=True)
+    check_schema_text(out)
+    assert {c["topic"] for c in result["channels"]} == {"/poses", "/velocities", "/clock"}
+    for channel in result["channels"]:
+        if channel["topic"] != "/clock":
+            assert json.loads(channel["metadata"]["body_names"]) == names
+    batches = by_topic(result, "/poses")
+    clouds = dict(by_topic(result, "/velocities"))
+    assert len(batches) >= 5
+    for t, batch in batches:
+        assert stamp_ns(batch["header"]) == t and batch["header"]["frame_id"] == "world"
+        assert len(batch["poses"]) == n
+        s = t * 1e-9
+        p = np.array([xyz(pose["position"]) for pose in batch["poses"]])
+        q = np.array([xyzw(pose["orientation"]) for pose in batch["poses"]])
+        # closed form: uniform motion, and a sphere turns at constant ω: q(t) = exp(ω t / 2) ⊗ q0
+        np.testing.assert_allclose(p, p0 + v * s, rtol=0, atol=1e-9)
+        assert np.all(np.abs(np.linalg.norm(q, axis=1) - 1.0) < 1e-12)
+        for k in range(n):
+            angle = np.linalg.norm(w[k]) * s
+            turn = np.concatenate([w[k] / np.linalg.norm(w[k]) * np.sin(angle / 2), [np.cos(angle / 2)]])
+            same_rotation(q[k], quat_multiply(turn, q0[k]), 1e-9)
+        cloud = clouds[t]
+        assert stamp_ns(cloud["header"]) == t and cloud["width"] * cloud["height"] == n
+        data = np.frombuffer(base64.b64decode(cloud["data"]["base64"]), dtype=np.uint8).reshape(n, cloud["point_step"])
+        fields = {f["name"]: f for f in cloud["fields"]}
+        columns = np.stack([data[:, fields[c]["offset"]:fields[c]["offset"] + 8].copy().view("<f8")[:, 0]
+                            for c in ("vx", "vy", "vz", "wx", "wy", "wz")], axis=1)
+        np.testing.assert_allclose(columns[:, :3], v, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(columns[:, 3:], w, rtol=0, atol=1e-12)
+        assert data[:, fields["stopped"]["offset"]].tolist() == [0] * n
+    assert batches[-1][0] == max(t for t, _ in batches)
+
+
+def test_batched_recording_declares_the_qos_the_node_offers(tmp_path: Path) -> None:
+    """per_body_topics false, in-process: /poses, /velocities and /clock carry the QoS the ROS
+    graph reports for the node's publishers, and the last batch is the simulator's state."""
+    from rigid_body_sim.testing import SimHarness
+
+    out = tmp_path / "batched.mcap"
+    with SimHarness(parameters={"record_path": str(out), "per_body_topics": False}) as h:
+        h.step(12)
+        sim = h.node.simulator
+        last = (round(sim.time * 1e9), sim.positions_world()[0].tolist(), sim.orientations_xyzw()[0].tolist())
+        live_qos = {topic: graph_qos(h.client, topic) for topic in ("/poses", "/velocities", "/clock")}
+    result = foxglove_decode(out)
+    check_everything_decodes(result, finished=True)
+    for topic, qos in live_qos.items():
+        assert recorded_qos(result, topic) == qos
+    t, batch = by_topic(result, "/poses")[-1]
+    assert t == last[0] == round(12 * TICK_S * 1e9)
+    pose = batch["poses"][0]
+    assert xyz(pose["position"]).tolist() == last[1] and xyzw(pose["orientation"]).tolist() == last[2]
+
+
+# --------------------------------------------------------------------------- the node process killed with SIGKILL
+
+
+@pytest.mark.timeout(120)
+def test_recording_of_a_node_killed_with_sigkill_decodes_in_foxglove(tmp_path: Path) -> None:
+    from rigid_body_sim.ros.node import DEFAULT_INTEGRATOR
+
+    out = tmp_path / "killed.mcap"
+    process, log_path = run_node(tmp_path, "-p", f"record_path:={out}")
+    try:
+        wait_for_recording(process, log_path, out, 8_000)  # at least one flushed chunk
+        time.sleep(0.7)
+        process.send_signal(signal.SIGKILL)
+        assert process.wait(timeout=20) == -signal.SIGKILL
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    result = foxglove_decode(out)
+    check_everything_decodes(result, finished=False)
+    check_schema_text(out)
+    poses = check_default_scene_poses(result)
+    # the last pose before the kill is the simulator's after as many steps, bit for bit
+    t, p, q = poses[-1]
+    steps = round(t * 1e-9 / TICK_S)
+    assert steps >= 10
+    sim = Simulator(load_scene(default_scene_path()), DEFAULT_INTEGRATOR, TICK_S)
+    sim.step(steps)
+    assert p.tolist() == sim.positions_world()[0].tolist() and q.tolist() == sim.orientations_xyzw()[0].tolist()

@@ -1,0 +1,108 @@
+"""The compiled kernels' cache: kept across edits outside core/kernels/, dropped by an edit inside it.
+
+The first test works on a copy of the package in a temporary folder (its own numba cache, next
+to the copied kernels) and compiles one small kernel, reading numba's own count of cache hits
+and misses in a fresh interpreter after each edit: no timing involved. The second checks that
+:func:`compile_kernels` gives every entry point the signature the Simulator later calls it
+with, so that a compiled checkout never compiles again at its first step.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+PACKAGE = REPO / "rigid_body_sim"
+
+#: Compiles (or loads) one kernel of the copy and reports what numba did.
+PROBE = (
+    "import json, rigid_body_sim\n"
+    "from rigid_body_sim.core.kernels.rotation import normalise\n"
+    "normalise(2.0, 0.0, 0.0, 0.0)\n"
+    "stats = normalise.stats\n"
+    "print(json.dumps({'package': rigid_body_sim.__file__, 'hits': sum(stats.cache_hits.values()),\n"
+    "                  'misses': sum(stats.cache_misses.values())}))\n"
+)
+
+
+def _probe(root: Path) -> dict:
+    env = {key: value for key, value in os.environ.items() if key not in ("NUMBA_CACHE_DIR", "NUMBA_DISABLE_JIT")}
+    env["PYTHONPATH"] = str(root)
+    result = subprocess.run([sys.executable, "-c", PROBE], cwd=root, env=env, capture_output=True, text=True,
+                            timeout=300)
+    assert result.returncode == 0, result.stderr
+    return json.loads(result.stdout.strip().splitlines()[-1])
+
+
+def _append(path: Path, text: str) -> None:
+    path.write_text(path.read_text(encoding="utf-8") + text, encoding="utf-8")
+
+
+def test_only_an_edit_under_kernels_recompiles(tmp_path: Path) -> None:
+    root = tmp_path / "src"
+    shutil.copytree(PACKAGE, root / "rigid_body_sim", ignore=shutil.ignore_patterns("__pycache__"))
+    kernels = root / "rigid_body_sim" / "core" / "kernels"
+    cache = kernels / "__pycache__"
+
+    first = _probe(root)
+    assert Path(first["package"]).is_relative_to(root), "the probe must import the copy"
+    assert (first["hits"], first["misses"]) == (0, 1)  # an empty cache: compiled
+    index_files = sorted(cache.glob("rotation.normalise-*.nbi"))
+    assert index_files, "numba wrote no cache index next to the kernels"
+    stamp = (cache / "numba-sources.sha256").read_text()
+
+    # an error message in scene.py, a docstring in describe.py, the oracle: none is compiled
+    _append(root / "rigid_body_sim" / "core" / "scene.py", "\n# an edit outside the kernels\n")
+    _append(root / "rigid_body_sim" / "core" / "describe.py", '\n"""another one"""\n')
+    second = _probe(root)
+    assert (second["hits"], second["misses"]) == (1, 0), "an edit outside core/kernels/ recompiled the kernels"
+    assert (cache / "numba-sources.sha256").read_text() == stamp
+    assert sorted(cache.glob("rotation.normalise-*.nbi")) == index_files
+
+    # layout.py is inlined into every kernel, though normalise's own file did not change
+    _append(kernels / "layout.py", "\n# an edit inside the kernels\n")
+    third = _probe(root)
+    assert (third["hits"], third["misses"]) == (0, 1), "an edit under core/kernels/ kept the stale cache"
+    assert (cache / "numba-sources.sha256").read_text() != stamp
+
+
+def test_compile_kernels_covers_what_the_simulator_calls() -> None:
+    from rigid_body_sim.core import INTEGRATORS, Simulator, load_scene
+    from rigid_body_sim.core.kernels.compile import ENTRY_POINTS, compile_kernels
+    from rigid_body_sim.core.stepping import unchecked_steps
+
+    compile_kernels()
+    before = {f.__name__: len(f.signatures) for f in ENTRY_POINTS}
+
+    def spec(inertia: dict, motion: str = "free", **twist: list) -> dict:
+        return {"mass": 1.0, "inertia": inertia, "motion": motion, "twist": twist,
+                "sites": {"s": {"position": [0.1, 0.0, 0.0], "axes": "world"}, "b": {"position": [0.0, 0.1, 0.0]}}}
+
+    box = {"box": [1.0, 0.6, 0.4]}
+    scene = load_scene({"gravity": [0.0, 0.0, -9.81], "bodies": {
+        "full": spec(box, angular=[0.3, 1.0, 0.2]), "ball": spec({"sphere": 0.1}, angular=[1.0, 0.0, 0.0]),
+        "can": spec({"cylinder": [0.1, 0.5]}, angular=[1.0, 0.0, 3.0]), "wall": spec(box, "static"),
+        "belt": spec(box, "kinematic", linear=[1.0, 0.0, 0.0]), "puck": spec(box, "planar"),
+        "sat": spec(box, "rotation_only"), "cart": spec(box, "translation_only")},
+        "wrenches": [{"body": "full", "frame": "full", "force": [0, 0, 1], "start": 0.0, "duration": 0.02}]})
+    for name in INTEGRATORS:
+        for reduce in (True, False):
+            sim = Simulator(scene, integrator=name, dt=0.01, model_reduction=reduce)
+            sim.step(1)
+            sim.apply_force_at_point("full", [0.0, 1.0, 0.0], [0.5, 0.3, 0.0], frame="full")
+            sim.apply_wrench("ball", torque=[0.0, 0.0, 0.1], frame="ball/s")
+            sim.step(3)
+            sim.apply_impulse("can", linear=[0.1, 0.0, 0.0], frame="can/b")
+            sim.set_body_state("puck", linear_velocity_world=[0.1, 0.2, 0.0])
+            sim.apply_wrench("puck", force=[0.0, 1.0, 0.0], frame="puck/s")
+            sim.step(1)
+            sim.site_readings()
+            sim.clear_wrenches()
+        unchecked_steps(name, scene.model, scene.initial_state, 0.01, 1)
+    after = {f.__name__: len(f.signatures) for f in ENTRY_POINTS}
+    assert after == before, "the Simulator compiled a signature compile_kernels does not make"
