@@ -17,10 +17,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from helpers import random_rotation_matrix
-from rigid_body_sim.core.contact.impacts import IMPACT_WORK_SHAPE, impact
-from rigid_body_sim.core.contact.layout import MAX_POINTS
-from rigid_body_sim.core.contact.shapes import box_points
-from rigid_body_sim.core.layout import INERTIA, INV_INERTIA, INV_MASS, MASS, P, PRM_WIDTH, Q, ROW_WIDTH, V, W
+from rigid_body_sim.core.kernels.contact.impacts import IMPACT_WORK_SHAPE, impact
+from rigid_body_sim.core.kernels.contact.layout import MAX_POINTS
+from rigid_body_sim.core.kernels.contact.shapes import box_points
+from rigid_body_sim.core.kernels.layout import INERTIA, INV_INERTIA, INV_MASS, MASS, P, PRM_WIDTH, Q, ROW_WIDTH, V, W
 from rigid_body_sim.core.quaternion import quat_from_matrix, quat_to_matrix
 
 SETTINGS = settings(max_examples=300, deadline=None, derandomize=True, database=None)

@@ -17,7 +17,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rigid_body_sim.core import Simulator, load_scene
-from rigid_body_sim.core.contact.shapes import MAX_FEATURES, feature_gaps
+from rigid_body_sim.core.kernels.contact.shapes import MAX_FEATURES, feature_gaps
 
 G = 9.81
 MASS, THICK = 0.2, 0.008
@@ -123,10 +123,10 @@ def test_rods_land_on_their_side_without_gaining_energy(collision, inertia, e):
 def test_gap_accelerations_match_finite_differences_of_the_gap_functions():
     """persistent.normal_bias: g̈ = n·a + α·(r × n) + bias, against the second difference of
     shapes.feature_gaps along a free motion (rk4 at h = 1e-4, so the difference's own error is ~h²)."""
-    from rigid_body_sim.core.contact.persistent import normal_bias
-    from rigid_body_sim.core.contact.shapes import feature_points
-    from rigid_body_sim.core.dynamics import derivative
-    from rigid_body_sim.core.layout import ROW_WIDTH, WRENCH_WIDTH
+    from rigid_body_sim.core.kernels.contact.persistent import normal_bias
+    from rigid_body_sim.core.kernels.contact.shapes import feature_points
+    from rigid_body_sim.core.kernels.dynamics import derivative
+    from rigid_body_sim.core.kernels.layout import ROW_WIDTH, WRENCH_WIDTH
     from rigid_body_sim.core.quaternion import quat_rotate
     from rigid_body_sim.core.stepping import pack_parameters, unchecked_steps
 

@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from rigid_body_sim.core import SceneError, Simulator, load_scene
-from rigid_body_sim.core.contact.layout import (
+from rigid_body_sim.core.kernels.contact.layout import (
     DIMS,
     KIND,
     NORMAL,

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 from helpers import random_rotation_matrix
-from rigid_body_sim.core.contact.layout import MAX_POINTS
-from rigid_body_sim.core.contact.shapes import box_points, capsule_points, cylinder_points, sphere_points
+from rigid_body_sim.core.kernels.contact.layout import MAX_POINTS
+from rigid_body_sim.core.kernels.contact.shapes import box_points, capsule_points, cylinder_points, sphere_points
 from rigid_body_sim.core.quaternion import quat_from_matrix
 
 
@@ -126,20 +126,3 @@ def test_cylinder_standing_and_lying():
     assert gaps[:2] == pytest.approx(np.full(2, 0.4), abs=1e-15)
     assert sorted(points[:2, 1].tolist()) == pytest.approx([-0.3, 0.3], abs=1e-15)
 
-
-def test_the_contact_cache_is_dropped_when_a_core_or_contact_source_changes(tmp_path):
-    from rigid_body_sim.core.contact import STAMP_NAME, invalidate_stale_cache
-
-    core, contact = tmp_path / "core", tmp_path / "core" / "contact"
-    cache = contact / "__pycache__"
-    cache.mkdir(parents=True)
-    (core / "dynamics.py").write_text("A = 1\n")
-    (contact / "persistent.py").write_text("B = 2\n")
-    cached = cache / "persistent.holding_wrench-1.py311.nbi"
-    cached.write_text("")
-    assert invalidate_stale_cache((core, contact), cache) and not cached.exists()
-    assert (cache / STAMP_NAME).exists()
-    cached.write_text("")
-    assert not invalidate_stale_cache((core, contact), cache) and cached.exists()  # nothing changed
-    (core / "dynamics.py").write_text("A = 2\n")  # a core source the kernels inline
-    assert invalidate_stale_cache((core, contact), cache) and not cached.exists()

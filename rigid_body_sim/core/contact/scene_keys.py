@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from .layout import (
+from ..kernels.contact.layout import (
     DIMS,
     FRICTION,
     GROUND_WIDTH,
@@ -229,9 +229,9 @@ def read_contact(check: Any, top: Mapping, model: Any, state: Any) -> ContactSpe
 
 def _check_not_inside(check: Any, model: Any, state: Any, shapes: np.ndarray, grounds: np.ndarray) -> None:
     """Refuse a moving body whose shape starts inside a half-space, naming the body, the ground and the depth."""
-    from ..layout import PRM_WIDTH, Q_PB, ROW_WIDTH, STATE_WIDTH
+    from ..kernels.layout import PRM_WIDTH, Q_PB, ROW_WIDTH, STATE_WIDTH
     from ..quaternion import quat_conjugate  # numpy
-    from .shapes import body_points
+    from ..kernels.contact.shapes import body_points
 
     rows = np.zeros((model.count, ROW_WIDTH))
     rows[:, :STATE_WIDTH] = state.rows()

@@ -44,12 +44,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import layout as L
-from ..stepping import advance, step_reduced
-from .batch import OK, hold_all, settle_all
-from .impacts import _LAM, IMPACT_WORK_SHAPE, impact
-from .layout import DIMS, FLIGHT, KIND, MAX_POINTS, NORMAL, PERSISTENT, SHAPE_BOX
-from .persistent import (
+from ..kernels import layout as L
+from ..kernels.stepping import advance, step_reduced
+from ..kernels.contact.batch import OK, hold_all, settle_all
+from ..kernels.contact.impacts import _LAM, IMPACT_WORK_SHAPE, impact
+from ..kernels.contact.layout import DIMS, FLIGHT, KIND, MAX_POINTS, NORMAL, PERSISTENT, SHAPE_BOX
+from ..kernels.contact.persistent import (
     LIFT_OFF,
     SLIDE,
     add_contact_wrench,
@@ -59,7 +59,15 @@ from .persistent import (
     normal_speeds,
     project,
 )
-from .shapes import FEATURE_BAND, MAX_FEATURES, body_gap, body_points, feature_gaps, feature_points, min_gaps
+from ..kernels.contact.shapes import (
+    FEATURE_BAND,
+    MAX_FEATURES,
+    body_gap,
+    body_points,
+    feature_gaps,
+    feature_points,
+    min_gaps,
+)
 
 __all__ = ["ContactSolver", "ContactEvent", "ZENO_APEX", "SLIP_TOLERANCE", "TOUCHING_GAP", "MAX_EVENTS_PER_STEP"]
 
@@ -161,6 +169,7 @@ class ContactSolver:
         self._status1 = np.zeros(1, dtype=np.int64)
         self._control1 = np.zeros(L.CONTROL_WIDTH, dtype=np.int64)
         self._inputs1 = np.zeros(L.INPUT_WIDTH)
+        self._never = np.zeros(1, dtype=np.int64)  # the step map's cancel flag (kernels.stepping.advance): never set
 
     # ----------------------------------------------------------------- modes
 
@@ -271,7 +280,7 @@ class ContactSolver:
         method = sim._method
         with np.errstate(all="ignore"):
             if method.code is not None:
-                advance(Y1, prm1, w1, self._members1, self._status1, control, inputs, 1)
+                advance(Y1, prm1, w1, self._members1, self._status1, control, inputs, 1, self._never)
             else:
                 deferred = step_reduced(Y1, prm1, w1, self._members1, self._status1, control, inputs)
                 if len(deferred):
