@@ -81,6 +81,8 @@ TOUCHING_GAP = 1e-12
 LIFT_OFF_SPEED = 1e-9
 #: Most events one body may have in one step (more is reported as an error, not looped on).
 MAX_EVENTS_PER_STEP = 10_000
+#: Most pieces a resting body's step is cut into when it gained energy (ContactSolver._refine_gains).
+MAX_REFINEMENT = 32
 #: Samples of s in (0, 1] looked at for the first sign change of the gap in a step.
 BRACKET_SAMPLES = 16
 
@@ -156,6 +158,8 @@ class ContactSolver:
         self._rdot = np.zeros((MAX_POINTS, 3))
         self.pressed = np.zeros(n, dtype=np.int64)  # the tracked features the holding force pushes on, as bits
         self.events: list[ContactEvent] = []
+        #: Steps of resting bodies that still gained energy when cut into MAX_REFINEMENT pieces.
+        self.energy_gains = 0
         self._points = np.empty((MAX_POINTS, 3))
         self._gaps = np.empty(MAX_POINTS)
         self._work = np.zeros(IMPACT_WORK_SHAPE)
@@ -340,6 +344,7 @@ class ContactSolver:
         resting = self.bodies[(self.modes[self.bodies] == PERSISTENT) & moving]
         settle_all(Y1, sim._prm, self.shapes, self.grounds, resting, self.ground_of, self.tracked, self.pressed,
                    self.sliding, self.slide_direction, self._band, self._status)
+        resting = self._refine_gains(sim, resting, Y0, Y1, t0, h)
         # only the bodies with an event in the step are looked at in Python
         busy = np.concatenate((resting[self._status[resting] != OK],
                                self.bodies[(self.modes[self.bodies] == FLIGHT) & moving & (self._lowest < 0.0)]))
@@ -350,6 +355,64 @@ class ContactSolver:
                 Y1[i, :L.STATE_WIDTH] = self._persistent_end(sim, i, Y0[i], Y1[i], wrenches[i], t0, h)[:L.STATE_WIDTH]
             else:
                 Y1[i, :L.STATE_WIDTH] = self._with_events(sim, i, Y0[i], wrenches[i], t0, h)[:L.STATE_WIDTH]
+
+    def _refine_gains(self, sim, resting: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, t0: float,
+                      h: float) -> np.ndarray:
+        """Take again, in 2, 4, ... MAX_REFINEMENT pieces, each holding force found afresh, the step
+        of every resting body under gravity alone whose energy it raised.
+
+        The holding force is held over a step (zero-order hold); where the contact point races
+        over a curved rim (a disk or cylinder rolling on its edge) that can do work. Shorter
+        pieces shrink it; a body still gaining at the finest split keeps that result and is
+        counted in :attr:`energy_gains`. Returns ``resting`` (the bodies handled here are marked
+        done in the status).
+        """
+        ok = resting[self._status[resting] == OK]
+        if not ok.size:
+            return resting
+        plain = self._bare_rows[ok, L.ACTIVE] == 0.0  # gravity alone: the energy must not rise
+        ok = ok[plain]
+        if not ok.size:
+            return resting
+        prm = sim._prm
+        g = prm[ok, L.GRAVITY:L.GRAVITY + 3]
+
+        def energy(Y):
+            rows = Y[ok]
+            kinetic = 0.5 * (prm[ok, L.MASS] * np.sum(rows[:, L.V:L.V + 3] ** 2, axis=1)
+                             + np.sum(prm[ok, L.INERTIA:L.INERTIA + 3] * rows[:, L.W:L.W + 3] ** 2, axis=1))
+            return kinetic - prm[ok, L.MASS] * np.sum(g * rows[:, L.P:L.P + 3], axis=1)
+
+        before, after = energy(Y0), energy(Y1)
+        rose = after > before + 1e-12 * np.abs(before) + 1e-300
+        for i, e0 in zip(ok[rose], before[rose]):
+            saved = (int(self.modes[i]), int(self.tracked[i]), bool(self.sliding[i]), self.slide_direction[i].copy(),
+                     int(self.pressed[i]), int(self.ground_of[i]), len(self.events))
+            bare = self._bare_rows[i].copy()
+            pieces = 2
+            while True:
+                self.modes[i], self.tracked[i], self.sliding[i], self.slide_direction[i], self.pressed[i], \
+                    self.ground_of[i] = saved[:6]
+                del self.events[saved[6]:]
+                y = Y0[i].copy()
+                for k in range(pieces):
+                    t = t0 + k * h / pieces
+                    if self.modes[i] == PERSISTENT:
+                        y = self._persistent_span(sim, i, y, bare.copy(), t, h / pieces)
+                    else:
+                        y = self._with_events(sim, i, y, bare.copy(), t, h / pieces)
+                row = y[:L.STATE_WIDTH]
+                gained = (0.5 * (prm[i, L.MASS] * row[L.V:L.V + 3] @ row[L.V:L.V + 3]
+                                 + prm[i, L.INERTIA:L.INERTIA + 3] @ row[L.W:L.W + 3] ** 2)
+                          - prm[i, L.MASS] * prm[i, L.GRAVITY:L.GRAVITY + 3] @ row[L.P:L.P + 3]) - e0
+                if gained <= 1e-12 * abs(e0) or pieces >= MAX_REFINEMENT:
+                    break
+                pieces *= 2
+            if gained > 1e-12 * abs(e0):
+                self.energy_gains += 1
+            Y1[i, :L.STATE_WIDTH] = row
+            self._status[i] = -1  # done here
+        return resting[self._status[resting] != -1]
 
     # ----------------------------------------------------------------- flight: impacts
 
