@@ -25,8 +25,10 @@ Persistent contact tracks *features* (shapes.feature_gaps: box corners, capsule 
 rims), so resting on a face, pivoting on an edge or rolling on a rim are one mechanism. The
 holding force is found at the start of each step and held over it (zero-order hold): exact
 for resting and sliding at constant force (the closed-form tests), first order in time where
-the contact point moves over a curved rim while the body turns fast (a disk rolling on its
-edge, Euler's disk): there the energy can drift up, which the tests do not cover yet.
+the contact point moves over a curved rim while the body turns fast (a disk or cylinder
+rolling on its edge, Euler's disk): there a step can raise the energy. Such a step of a body
+under gravity alone is taken again in up to MAX_REFINEMENT pieces (_refine_gains); what still
+gains is counted in ``energy_gains``. Forces evaluated at every integrator stage would remove it.
 
 Zeno guard: after an impact whose rebound would rise less than :data:`ZENO_APEX` (the normal
 speed u⁺ with u⁺²/(2a) < ZENO_APEX, a the free normal acceleration of the contact point toward
