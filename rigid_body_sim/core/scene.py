@@ -21,6 +21,8 @@ Schema (every key not listed is an error; see README "Scene files")::
           corner: {position: [0.5, 0.3, 0.0]}                   # body frame, from the COM
           nozzle: {position: [0, 0, -0.2], axes: world}         # axes: body (default) | world
           imu_mount: {position: [0, 0, 0.1], imu: {}}           # an IMU on the site (imu_spec.py; {} = ideal)
+    ground:                               # optional: static half-spaces n·x ≥ offset, and per body
+      - {normal: [0, 0, 1], offset: 0.0}  # material/collision keys: core/contact/scene_keys.py
     wrenches:                             # optional: scripted wrenches over sim time
       - {body: crate, frame: crate/corner, force: [0, 10, 0], torque: [0, 0, 0], start: 0.5, duration: 0.2}
 
@@ -78,6 +80,11 @@ from .quaternion import (
 )
 from .scene_yaml import YamlReadError, key_text, read_yaml
 
+# --- contact (core/contact/scene_keys.py): the keys ground, material, collision -----------------
+from .contact.scene_keys import TOP_KEYS as CONTACT_TOP_KEYS
+from .contact.scene_keys import ContactSpec, read_contact, without_contact_keys
+# --- end contact
+
 __all__ = ["Scene", "SceneError", "ScriptedWrench", "load_scene", "load_scene_text", "WORLD_FRAME",
            "ORIENTATION_TOLERANCE", "DEFAULT_ENERGY_GROWTH_LIMIT", "MAX_SCENE_BYTES", "MAX_BODIES",
            "MAX_SCRIPTED_WRENCHES", "MAX_NAME_LENGTH", "MAX_NAMESPACE_LENGTH", "MIN_POSITIVE",
@@ -133,7 +140,7 @@ _NAME_RULE = "a name of ASCII letters, digits and '_' starting with a letter (it
 _RESERVED_BODY_NAMES = {WORLD_FRAME}
 _RESERVED_SITE_NAMES = {"world_aligned"}
 _INERTIA_KINDS = ("box", "sphere", "cylinder", "principal", "tensor")
-_TOP_KEYS = ("gravity", "bodies", "wrenches", "energy_growth_limit")
+_TOP_KEYS = ("gravity", "bodies", "wrenches", "energy_growth_limit") + CONTACT_TOP_KEYS  # contact: ground
 _WRENCH_KEYS = ("body", "frame", "force", "torque", "start", "duration")
 _BODY_KEYS = ("mass", "inertia", "pose", "twist", "damping", "sites", "motion")
 _IDENTITY = (1.0, 0.0, 0.0, 0.0)
@@ -201,6 +208,9 @@ class Scene:
         recording without reading the file again (it may have changed or been swapped since).
     imus : dict of str to ImuSpec
         The IMUs declared on sites, by site name ``"<body>/<site>"``, in scene order.
+    contact : ContactSpec or None
+        Ground half-spaces, collision shapes and materials (core/contact/scene_keys.py); None
+        when the scene has no ``ground``.
     """
 
     source: str
@@ -211,6 +221,7 @@ class Scene:
     energy_growth_limit: float = DEFAULT_ENERGY_GROWTH_LIMIT
     text: str | None = None
     imus: Mapping[str, ImuSpec] = field(default_factory=dict)
+    contact: ContactSpec | None = field(default=None, compare=False)  # contact (core/contact)
 
     @property
     def body_names(self) -> tuple[str, ...]:
@@ -476,6 +487,9 @@ def _build(data: Mapping, source: str) -> Scene:
     if top.get("wrenches") is not None:
         scene = replace(scene, wrenches=_wrenches(check, top["wrenches"], scene))
     _check_derived(check, scene)
+    # --- contact: ground, material, collision (core/contact/scene_keys.py)
+    scene = replace(scene, contact=read_contact(check, top, model, state))
+    # --- end contact
     return scene
 
 
@@ -483,7 +497,7 @@ def _read_body(check: _Checker, index: int, raw_name: Any, raw_body: Any, out: _
     """Check one body of the ``bodies`` mapping and append what it declares to ``out``."""
     name = check.name(raw_name, "bodies", _RESERVED_BODY_NAMES)
     path = f"bodies.{name}"
-    body = check.mapping(raw_body, path, _BODY_KEYS, required=("mass", "inertia"))
+    body = check.mapping(without_contact_keys(raw_body), path, _BODY_KEYS, required=("mass", "inertia"))  # contact
     mass = check.number(body["mass"], f"{path}.mass", minimum=0.0, strict=True, scale=True, unit="kg")
     principal, q_BP, inertia_path = _inertia(check, body["inertia"], f"{path}.inertia", mass)
 

@@ -242,6 +242,15 @@ class Simulator:
         # their own rows, which user wrenches never touch, whenever the active set changes.
         self._script = tuple((parse_frame(scene, w.body, w.frame), w.force, w.torque, w.start, w.end)
                              for w in scene.wrenches)
+        # --- contact (core/contact): a ContactSolver only when the scene has ground half-spaces and a
+        # moving body with a collision shape; None otherwise, and then every step runs exactly the
+        # code it ran before contact existed.
+        self.contact = None
+        if scene.contact is not None and scene.contact.bodies.size:
+            from .contact.solver import ContactSolver
+
+            self.contact = ContactSolver(self)
+        # --- end contact
         self._method: Method = INTEGRATORS["rk4"]
         self.integrator = integrator
         self.dt = dt
@@ -267,7 +276,7 @@ class Simulator:
         self._method = method
         self._control[L.METHOD] = -1 if method.code is None else method.code
         # Scripted wrenches and the numpy/scipy integrators step one step per call (_step_once).
-        self._step_by_step = bool(self._script) or method.code is None
+        self._step_by_step = bool(self._script) or method.code is None or self.contact is not None  # contact
 
     @property
     def energy_growth_limit(self) -> float:
@@ -308,6 +317,8 @@ class Simulator:
         self.clear_wrenches()
         self._stopped[:] = False
         self._replan()
+        if self.contact is not None:  # contact: modes from the initial state, events cleared
+            self.contact.reset(self)
 
     def stop_body(self, body: str) -> None:
         """Freeze ``body`` at its current state; it is no longer integrated until :meth:`reset`."""
@@ -624,6 +635,8 @@ class Simulator:
     def _step_once(self) -> np.ndarray:
         """One step with the scene's scripted wrenches added, or with a numpy/scipy integrator; its wrench rows."""
         wrenches = self._wrenches_of_this_step()
+        if self.contact is not None:  # contact: the force holding bodies at rest is a wrench of this step
+            self.contact.add_holding_wrenches(self, wrenches)
         if self._method.code is not None:
             stepping.advance(self._Ys, self._prm, wrenches, self._members, self._status, self._control,
                              self._inputs, 1, _NEVER)
@@ -645,6 +658,8 @@ class Simulator:
         self.step_count += int(self._control[L.DONE])
         if self._control[L.OUTCOME]:
             self._raise_step_failure(int(self._control[L.OUTCOME]))
+        if self.contact is not None:  # contact: events located inside the step; resting bodies projected
+            self.contact.after_step(self, wrenches)
         return wrenches
 
     def _wrenches_of_this_step(self) -> np.ndarray:

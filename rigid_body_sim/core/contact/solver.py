@@ -1,0 +1,652 @@
+"""The contact driver around the integrator step: events located on the step map, impacts, resting contact.
+
+A :class:`ContactSolver` is what a :class:`~rigid_body_sim.core.simulator.Simulator` holds when
+its scene has ground half-spaces (``Scene.contact``); without one the simulator runs exactly its
+old code. Per step:
+
+1. :meth:`ContactSolver.add_holding_wrenches` — before the step, every body in persistent
+   contact gets the contact force that holds it (persistent.holding_wrench) added to the
+   step's wrench rows, in one compiled pass (batch.hold_all); a body whose holding force would
+   pull (or that moves away) lifts off.
+2. The simulator steps every body with its integrator, as without contact.
+3. :meth:`ContactSolver.after_step` — one compiled pass computes every body's lowest gap
+   (shapes.min_gaps). A body in flight whose gap became negative has its step taken again
+   from the step's start, in pieces: the impact time is the root of s ↦ gap(Φ(y₀, s·h)), Φ
+   the body's own step map (its integrator, or its reduced model — the same code the step
+   ran), bracketed and found by the Illinois method to round-off; there the impact law acts
+   (impacts.impact), and the rest of the step follows, event after event. A body in persistent
+   contact is projected back onto the contact (persistent.project, compiled pass
+   batch.settle_all) unless its step had an event, located on the step map the same way: its
+   slide stopped (the rest of the step sticking), another of its features reached the ground
+   (an impact of all touching features together, :meth:`ContactSolver._landing`), another
+   half-space was reached, or a feature the holding force did not push on moved off.
+
+Persistent contact tracks *features* (shapes.feature_gaps: box corners, capsule ends, cylinder
+rims), so resting on a face, pivoting on an edge or rolling on a rim are one mechanism. The
+holding force is found at the start of each step and held over it (zero-order hold): exact
+for resting and sliding at constant force (the closed-form tests), first order in time where
+the contact point moves over a curved rim while the body turns fast (a disk or cylinder
+rolling on its edge, Euler's disk): there a step can raise the energy. Such a step of a body
+under gravity alone is taken again in up to MAX_REFINEMENT pieces (_refine_gains); what still
+gains is counted in ``energy_gains``. Forces evaluated at every integrator stage would remove it.
+
+Zeno guard: after an impact whose rebound would rise less than :data:`ZENO_APEX` (the normal
+speed u⁺ with u⁺²/(2a) < ZENO_APEX, a the free normal acceleration of the contact point toward
+the ground), the remaining bounces form a geometric series u⁺, e u⁺, e² u⁺, ... whose flights
+sum to 2u⁺/(a(1 − e)): the body is put into persistent contact at once and its ``rest`` event
+is dated at that accumulation time (the positions it skips are below ZENO_APEX).
+
+Events are recorded in :attr:`ContactSolver.events` (:class:`ContactEvent`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..kernels import layout as L
+from ..kernels.stepping import advance, step_reduced
+from ..kernels.contact.batch import OK, hold_all, settle_all
+from ..kernels.contact.impacts import _LAM, IMPACT_WORK_SHAPE, impact
+from ..kernels.contact.layout import DIMS, FLIGHT, KIND, MAX_POINTS, NORMAL, PERSISTENT, SHAPE_BOX
+from ..kernels.contact.persistent import (
+    LIFT_OFF,
+    SLIDE,
+    add_contact_wrench,
+    holding_wrench,
+    normal_bias,
+    normal_motion,
+    normal_speeds,
+    project,
+)
+from ..kernels.contact.shapes import (
+    FEATURE_BAND,
+    MAX_FEATURES,
+    body_gap,
+    body_points,
+    feature_gaps,
+    feature_points,
+    min_gaps,
+)
+
+__all__ = ["ContactSolver", "ContactEvent", "ZENO_APEX", "SLIP_TOLERANCE", "TOUCHING_GAP", "MAX_EVENTS_PER_STEP"]
+
+#: A rebound that would rise less than this (m) ends the bounce sequence (the Zeno guard).
+ZENO_APEX = 1e-10
+#: A contact point slipping slower than this (m/s) sticks.
+SLIP_TOLERANCE = 1e-12
+#: A body this close to the ground (m) and not moving away starts in persistent contact.
+TOUCHING_GAP = 1e-12
+#: A body in persistent contact whose contact points move away faster than this (m/s) lifts off.
+LIFT_OFF_SPEED = 1e-9
+#: Most events one body may have in one step (more is reported as an error, not looped on).
+MAX_EVENTS_PER_STEP = 10_000
+#: Most pieces a resting body's step is cut into when it gained energy (ContactSolver._refine_gains).
+MAX_REFINEMENT = 32
+#: Samples of s in (0, 1] looked at for the first sign change of the gap in a step.
+BRACKET_SAMPLES = 16
+
+
+@dataclass(frozen=True)
+class ContactEvent:
+    """One contact event.
+
+    Attributes
+    ----------
+    time : float
+        s of sim time (located inside the step).
+    body : str
+    ground : int
+        Index into the scene's ``ground`` list.
+    kind : str
+        ``impact``, ``rest`` (persistent contact from here; for a Zeno sequence, dated at its
+        accumulation time), ``lift-off`` or ``stick`` (a sliding contact stopped).
+    normal_speed_before, normal_speed_after : float
+        Lowest normal velocity of the contact points (m/s, positive away from the ground).
+    impulse : float
+        Σ normal impulse, N·s (impacts), else 0.
+    energy_before, energy_after : float
+        Kinetic energy of the body, J, around the event.
+    """
+
+    time: float
+    body: str
+    ground: int
+    kind: str
+    normal_speed_before: float = 0.0
+    normal_speed_after: float = 0.0
+    impulse: float = 0.0
+    energy_before: float = 0.0
+    energy_after: float = 0.0
+
+
+class ContactSolver:
+    """Contact of a Simulator's bodies with the scene's ground half-spaces (the module docstring).
+
+    Parameters
+    ----------
+    sim : Simulator
+        Whose scene has ``contact`` (not None). The solver reads and writes the simulator's
+        state buffers; it holds per-body contact modes and the event list.
+    """
+
+    def __init__(self, sim) -> None:
+        spec = sim.scene.contact
+        self.grounds = spec.grounds
+        self.shapes = spec.shapes
+        self.restitution = spec.restitution
+        self.friction = spec.friction
+        model = sim.model
+        n = model.count
+        self.bodies = np.array(spec.bodies, dtype=np.int64)  # free bodies with a collision shape
+        self.names = model.names
+        # contact points fixed in the body (box corners) see the centripetal acceleration (persistent.accelerations)
+        self.vertex = spec.shapes[:, KIND] == SHAPE_BOX
+        self.modes = np.full(n, FLIGHT, dtype=np.int64)
+        self.ground_of = np.full(n, -1, dtype=np.int64)
+        self.sliding = np.zeros(n, dtype=bool)
+        self.slide_direction = np.zeros((n, 2))
+        self._bare_rows = np.zeros((n, L.WRENCH_WIDTH))  # each body's wrench row before its holding force
+        self._anchors = np.zeros((MAX_POINTS, 3))  # normal_bias: the body points the contact forces act at
+        # the features (shapes.feature_gaps) touching the ground in persistent contact, as bits
+        self.tracked = np.zeros(n, dtype=np.int64)
+        self._band = FEATURE_BAND * spec.shapes[:, DIMS:DIMS + 3].max(axis=1)  # m: "touching together"
+        self._features = np.empty(MAX_FEATURES)
+        self._owners = np.zeros(MAX_POINTS, dtype=np.int64)
+        self._bias = np.zeros(MAX_POINTS)
+        self._status = np.zeros(n, dtype=np.int64)  # batch.OK / TO_SOLVER of each body after a compiled pass
+        self._rdot = np.zeros((MAX_POINTS, 3))
+        self.pressed = np.zeros(n, dtype=np.int64)  # the tracked features the holding force pushes on, as bits
+        self.events: list[ContactEvent] = []
+        #: Steps of resting bodies that still gained energy when cut into MAX_REFINEMENT pieces.
+        self.energy_gains = 0
+        self._points = np.empty((MAX_POINTS, 3))
+        self._gaps = np.empty(MAX_POINTS)
+        self._work = np.zeros(IMPACT_WORK_SHAPE)
+        self._d = np.empty(L.STATE_WIDTH)
+        self._force = np.empty(6)
+        self._lowest = np.empty(len(self.bodies))
+        # one-body buffers of the step map
+        self._Y1 = np.zeros((2, 1, L.ROW_WIDTH))
+        self._w1 = np.zeros((1, L.WRENCH_WIDTH))
+        self._members1 = np.zeros(1, dtype=np.int64)
+        self._status1 = np.zeros(1, dtype=np.int64)
+        self._control1 = np.zeros(L.CONTROL_WIDTH, dtype=np.int64)
+        self._inputs1 = np.zeros(L.INPUT_WIDTH)
+        self._never = np.zeros(1, dtype=np.int64)  # the step map's cancel flag (kernels.stepping.advance): never set
+
+    # ----------------------------------------------------------------- modes
+
+    def reset(self, sim) -> None:
+        """Modes from the current state: touching and not moving away means persistent; the events cleared."""
+        self.events.clear()
+        self.modes[:] = FLIGHT
+        self.ground_of[:] = -1
+        self.sliding[:] = False
+        Y = sim._Ys[sim._control[L.CUR]]
+        for i in self.bodies:
+            gap, j = body_gap(Y[i], sim._prm[i], self.shapes[i], self.grounds, self._points, self._gaps)
+            if gap <= TOUCHING_GAP:
+                count = self._contact_points(sim, Y[i], i, j)
+                speed, _, _, _ = self._normal_motion(sim, Y[i], i, j, count, np.zeros(L.WRENCH_WIDTH))
+                if speed <= LIFT_OFF_SPEED:
+                    self.modes[i] = PERSISTENT
+                    self.ground_of[i] = j
+                    self.tracked[i] = self._touching(sim, Y[i], i, j)
+                    self.events.append(ContactEvent(sim.time, self.names[i], int(j), "rest", speed, speed))
+
+    def is_resting(self, body: str) -> bool:
+        """True while ``body`` is in persistent contact with the ground."""
+        return bool(self.modes[self.names.index(body)] == PERSISTENT)
+
+    def events_of(self, body: str, kind: str | None = None) -> list[ContactEvent]:
+        """The recorded events of ``body`` (of one ``kind`` if given), in time order of their recording."""
+        return [e for e in self.events if e.body == body and (kind is None or e.kind == kind)]
+
+    # ----------------------------------------------------------------- helpers
+
+    def _contact_points(self, sim, y: np.ndarray, i: int, j: int) -> int:
+        return body_points(y, sim._prm[i], self.shapes[i], self.grounds[j], self._points, self._gaps)
+
+    def _touching(self, sim, y: np.ndarray, i: int, j: int) -> int:
+        """The features of body i within its band of the lowest one against ground j, as bits."""
+        count = feature_gaps(y, sim._prm[i], self.shapes[i], self.grounds[j], self._features)
+        gaps = self._features[:count]
+        return int(sum(1 << k for k in np.flatnonzero(gaps <= gaps.min() + self._band[i])))
+
+    def _tracked_points(self, sim, y: np.ndarray, i: int, mask: int | None = None) -> int:
+        """Contact points (self._points, self._gaps) of body i's tracked features (or of ``mask``)."""
+        j = int(self.ground_of[i])
+        return feature_points(y, sim._prm[i], self.shapes[i], self.grounds[j],
+                              int(self.tracked[i]) if mask is None else mask, self._points, self._gaps, self._owners)
+
+    def _untracked_gap(self, sim, y: np.ndarray, i: int) -> float:
+        """The lowest gap of body i's features that are not tracked (inf if every one is)."""
+        j = int(self.ground_of[i])
+        count = feature_gaps(y, sim._prm[i], self.shapes[i], self.grounds[j], self._features)
+        mask = int(self.tracked[i])
+        free = [self._features[k] for k in range(count) if not mask & (1 << k)]
+        return min(free) if free else math.inf
+
+    def _settle(self, sim, y: np.ndarray, i: int, sticking: bool) -> None:
+        """Project body i onto its tracked features, adding every feature the projection leaves touching (≤ band)."""
+        j = int(self.ground_of[i])
+        for _ in range(4):
+            self._project(sim, y, i, sticking)
+            count = feature_gaps(y, sim._prm[i], self.shapes[i], self.grounds[j], self._features)
+            more = sum(1 << k for k in range(count) if self._features[k] <= self._band[i]) & ~int(self.tracked[i])
+            if not more:
+                break
+            self.tracked[i] = int(self.tracked[i]) | more
+
+    def _project(self, sim, y: np.ndarray, i: int, sticking: bool) -> None:
+        j = int(self.ground_of[i])
+        project(y, sim._prm[i], self.shapes[i], self.grounds[j], int(self.tracked[i]), sticking, self._points,
+                self._gaps, self._owners, self._work)
+
+    def _normal_motion(self, sim, y: np.ndarray, i: int, j: int, count: int, w: np.ndarray, mask: int | None = None):
+        """(lowest normal speed, its free normal acceleration, mean slip) of the points in self._points.
+
+        With ``mask`` (the points are those of feature_points, with their owners) the normal
+        accelerations carry each gap's exact velocity-product term (persistent.normal_bias);
+        without, the points' own centripetal acceleration for a box, none for the round shapes.
+        """
+        n = self.grounds[j, NORMAL:NORMAL + 3]
+        if mask is None:
+            self._owners[:] = 0
+        normal_bias(y, sim._prm[i], self.shapes[i], self.grounds[j], 0 if mask is None else mask, count,
+                    self._points, self._owners, self._bias, self._rdot, self._anchors)
+        if mask is None and not self.vertex[i]:
+            self._bias[:] = 0.0
+            self._rdot[:] = 0.0
+        return normal_motion(y, sim._prm[i], w, count, self._points, n[0], n[1], n[2], self._bias, self._rdot,
+                             self._work, self._d)
+
+    def _gap(self, sim, y: np.ndarray, i: int) -> tuple[float, int]:
+        return body_gap(y, sim._prm[i], self.shapes[i], self.grounds, self._points, self._gaps)
+
+    def step_map(self, sim, i: int, y0: np.ndarray, h: float, w: np.ndarray) -> np.ndarray:
+        """Φ(y0, h): body i's state row after one step of length h from y0 under the wrench row w.
+
+        The same code the simulator's step runs for it: its reduced model, or the integrator
+        (compiled through stepping.advance, or the numpy/scipy ones), on one-body buffers.
+        """
+        Y1, w1, control, inputs = self._Y1, self._w1, self._control1, self._inputs1
+        prm1 = sim._prm[i:i + 1]
+        Y1[0, 0] = y0
+        w1[0] = w
+        control[:] = 0
+        control[L.METHOD] = sim._control[L.METHOD]
+        model = int(prm1[0, L.MODEL])
+        control[L.GROUPS + 2 * model + 1] = 1
+        inputs[:] = 0.0
+        inputs[L.DT], inputs[L.LIMIT] = h, math.inf
+        method = sim._method
+        with np.errstate(all="ignore"):
+            if method.code is not None:
+                advance(Y1, prm1, w1, self._members1, self._status1, control, inputs, 1, self._never)
+            else:
+                deferred = step_reduced(Y1, prm1, w1, self._members1, self._status1, control, inputs)
+                if len(deferred):
+                    from ..integrators import step_exact_rotor_splitting, step_reference
+
+                    if method.name == "exact_rotor_splitting":
+                        step_exact_rotor_splitting(Y1[0], Y1[1], prm1, w1, deferred, h)
+                    else:
+                        step_reference(Y1[0], Y1[1], prm1, w1, deferred, h, **sim._reference_options)
+        return Y1[1, 0].copy()
+
+    # ----------------------------------------------------------------- before and after the step
+
+    def add_holding_wrenches(self, sim, wrenches: np.ndarray) -> None:
+        """Add to ``wrenches`` (the step's rows, in place) the force holding each body in persistent contact."""
+        Y = sim._Ys[sim._control[L.CUR]]
+        resting = self.bodies[(self.modes[self.bodies] == PERSISTENT) & ~sim._stopped[self.bodies]]
+        if not resting.size:
+            return
+        hold_all(Y, sim._prm, wrenches, self.shapes, self.grounds, resting, self.ground_of, self.tracked, self.friction,
+                 SLIP_TOLERANCE, LIFT_OFF_SPEED, TOUCHING_GAP, self._bare_rows, self.pressed,
+                 self.sliding, self.slide_direction, self._status)
+        for i in resting[self._status[resting] != OK]:  # lifting off: the solver says so and records it
+            self._hold(sim, Y[i], i, wrenches[i], sim.time)
+
+    def _hold(self, sim, y: np.ndarray, i: int, w: np.ndarray, t: float) -> bool:
+        """Add the holding force of body i at y into the wrench row w; False (and flight) if it lifts off."""
+        j = int(self.ground_of[i])
+        count = self._tracked_points(sim, y, i)
+        n = self.grounds[j, NORMAL:NORMAL + 3]
+        lowest = float(self._gaps[:count].min()) if count else math.inf  # set_body_state may have lifted it
+        speed, _, _, _ = self._normal_motion(sim, y, i, j, count, w, int(self.tracked[i]))
+        mode, _, sx, sy = holding_wrench(y, sim._prm[i], w, count, self._points, n[0], n[1], n[2],
+                                         float(self.friction[i, j]), SLIP_TOLERANCE, self._bias, self._rdot,
+                                         self._work, self._d, self._force)
+        if count == 0 or mode == LIFT_OFF or speed > LIFT_OFF_SPEED or lowest > TOUCHING_GAP:
+            self.modes[i] = FLIGHT
+            self.sliding[i] = False
+            self.events.append(ContactEvent(t, self.names[i], j, "lift-off", speed, speed))
+            return False
+        self.sliding[i] = mode == SLIDE
+        self.slide_direction[i] = sx, sy
+        lam = self._work[0:3 * count:3, _LAM]  # the normal forces of the points, in the order of _tracked_points
+        self.pressed[i] = int(sum(1 << int(self._owners[c]) for c in range(count) if lam[c] > 0.0))
+        self._bare_rows[i] = w
+        add_contact_wrench(w, y, sim._prm[i], count, self._points, self._anchors, self._work)
+        return True
+
+    def after_step(self, sim, wrenches: np.ndarray) -> None:
+        """Events inside the step just taken (the simulator's buffers: start in 1 − CUR, end in CUR)."""
+        cur = sim._control[L.CUR]
+        Y0, Y1 = sim._Ys[1 - cur], sim._Ys[cur]
+        h = sim.dt
+        t0 = sim.time - h
+        min_gaps(Y1, sim._prm, self.shapes, self.grounds, self.bodies, self._lowest)
+        moving = ~sim._stopped[self.bodies]
+        resting = self.bodies[(self.modes[self.bodies] == PERSISTENT) & moving]
+        settle_all(Y1, sim._prm, self.shapes, self.grounds, resting, self.ground_of, self.tracked, self.pressed,
+                   self.sliding, self.slide_direction, self._band, self._status)
+        resting = self._refine_gains(sim, resting, Y0, Y1, t0, h)
+        # only the bodies with an event in the step are looked at in Python
+        busy = np.concatenate((resting[self._status[resting] != OK],
+                               self.bodies[(self.modes[self.bodies] == FLIGHT) & moving & (self._lowest < 0.0)]))
+        for i in busy:
+            if sim._stopped[i]:
+                continue
+            if self.modes[i] == PERSISTENT:
+                Y1[i, :L.STATE_WIDTH] = self._persistent_end(sim, i, Y0[i], Y1[i], wrenches[i], t0, h)[:L.STATE_WIDTH]
+            else:
+                Y1[i, :L.STATE_WIDTH] = self._with_events(sim, i, Y0[i], wrenches[i], t0, h)[:L.STATE_WIDTH]
+
+    def _refine_gains(self, sim, resting: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, t0: float,
+                      h: float) -> np.ndarray:
+        """Take again, in 2, 4, ... MAX_REFINEMENT pieces, each holding force found afresh, the step
+        of every resting body under gravity alone whose energy it raised.
+
+        The holding force is held over a step (zero-order hold); where the contact point races
+        over a curved rim (a disk or cylinder rolling on its edge) that can do work. Shorter
+        pieces shrink it; a body still gaining at the finest split keeps that result and is
+        counted in :attr:`energy_gains`. Returns ``resting`` (the bodies handled here are marked
+        done in the status).
+        """
+        ok = resting[self._status[resting] == OK]
+        if not ok.size:
+            return resting
+        plain = self._bare_rows[ok, L.ACTIVE] == 0.0  # gravity alone: the energy must not rise
+        ok = ok[plain]
+        if not ok.size:
+            return resting
+        prm = sim._prm
+        g = prm[ok, L.GRAVITY:L.GRAVITY + 3]
+
+        def energy(Y):
+            rows = Y[ok]
+            kinetic = 0.5 * (prm[ok, L.MASS] * np.sum(rows[:, L.V:L.V + 3] ** 2, axis=1)
+                             + np.sum(prm[ok, L.INERTIA:L.INERTIA + 3] * rows[:, L.W:L.W + 3] ** 2, axis=1))
+            return kinetic - prm[ok, L.MASS] * np.sum(g * rows[:, L.P:L.P + 3], axis=1)
+
+        before, after = energy(Y0), energy(Y1)
+        rose = after > before + 1e-12 * np.abs(before) + 1e-300
+        for i, e0 in zip(ok[rose], before[rose]):
+            saved = (int(self.modes[i]), int(self.tracked[i]), bool(self.sliding[i]), self.slide_direction[i].copy(),
+                     int(self.pressed[i]), int(self.ground_of[i]), len(self.events))
+            bare = self._bare_rows[i].copy()
+            pieces = 2
+            while True:
+                self.modes[i], self.tracked[i], self.sliding[i], self.slide_direction[i], self.pressed[i], \
+                    self.ground_of[i] = saved[:6]
+                del self.events[saved[6]:]
+                y = Y0[i].copy()
+                for k in range(pieces):
+                    t = t0 + k * h / pieces
+                    if self.modes[i] == PERSISTENT:
+                        y = self._persistent_span(sim, i, y, bare.copy(), t, h / pieces)
+                    else:
+                        y = self._with_events(sim, i, y, bare.copy(), t, h / pieces)
+                row = y[:L.STATE_WIDTH]
+                gained = (0.5 * (prm[i, L.MASS] * row[L.V:L.V + 3] @ row[L.V:L.V + 3]
+                                 + prm[i, L.INERTIA:L.INERTIA + 3] @ row[L.W:L.W + 3] ** 2)
+                          - prm[i, L.MASS] * prm[i, L.GRAVITY:L.GRAVITY + 3] @ row[L.P:L.P + 3]) - e0
+                if gained <= 1e-12 * abs(e0) or pieces >= MAX_REFINEMENT:
+                    break
+                pieces *= 2
+            if gained > 1e-12 * abs(e0):
+                self.energy_gains += 1
+            Y1[i, :L.STATE_WIDTH] = row
+            self._status[i] = -1  # done here
+        return resting[self._status[resting] != -1]
+
+    # ----------------------------------------------------------------- flight: impacts
+
+    def _with_events(self, sim, i: int, y0: np.ndarray, w: np.ndarray, t: float, h: float) -> np.ndarray:
+        """Body i's step from y0 over h taken again in pieces, event after event (flight to persistent)."""
+        y = y0.copy()
+        after_impact = False
+        hint = -1.0
+        for _ in range(MAX_EVENTS_PER_STEP):
+            if h <= 0.0:
+                return y
+            if self.modes[i] == PERSISTENT:
+                return self._persistent_span(sim, i, y, w, t, h)
+            end = self.step_map(sim, i, y, h, w)
+            if self._gap(sim, end, i)[0] >= 0.0:
+                return end
+            s = self._locate(lambda s: self._gap(sim, self.step_map(sim, i, y, s * h, w), i)[0],
+                             0.0 if after_impact else self._gap(sim, y, i)[0], hint)
+            if s is None:  # a rebound too small to resolve: rest here
+                self._rest(sim, i, y, int(self._gap(sim, y, i)[1]), t, 0.0, 0.0)
+                continue
+            y = self.step_map(sim, i, y, s * h, w) if s > 0.0 else y
+            t, h = t + s * h, h - s * h
+            hint = self._impact(sim, i, y, w, t, h)
+            after_impact = True
+        raise RuntimeError(f"{self.names[i]!r}: more than {MAX_EVENTS_PER_STEP} contact events in one step at t = {t}")
+
+    def _locate(self, gap, g0: float, hint: float) -> float | None:
+        """The first root s in [0, 1] of gap(s) (gap(1) < 0), to round-off: bracket, then Illinois.
+
+        ``g0`` is gap(0) (0 right after an impact, where the gap opens first); ``hint`` a
+        fraction of the step where the gap should be positive (the rebound's apex), or < 0.
+        """
+        samples = sorted({k / BRACKET_SAMPLES for k in range(1, BRACKET_SAMPLES + 1)} | ({hint} if 0.0 < hint < 1.0 else set()))
+        lo, g_lo = 0.0, g0
+        hi = g_hi = None
+        for s in samples:
+            g = gap(s)
+            if g < 0.0:
+                hi, g_hi = s, g
+                break
+            if g > 0.0:
+                lo, g_lo = s, g
+        if hi is None:  # gap(1) < 0 was seen by the caller; round-off made it ≥ 0 here
+            return 1.0
+        if lo == 0.0 and g_lo <= 0.0:  # the rebound ends before the first sample: halve towards 0
+            s = hi
+            for _ in range(60):
+                s *= 0.5
+                g = gap(s)
+                if g > 0.0:
+                    lo, g_lo = s, g
+                    break
+                if g < 0.0:
+                    hi, g_hi = s, g
+            else:
+                return None
+        side = 0
+        for _ in range(200):
+            s = (lo * g_hi - hi * g_lo) / (g_hi - g_lo)
+            if not lo < s < hi:
+                s = 0.5 * (lo + hi)
+                if not lo < s < hi:
+                    break
+            g = gap(s)
+            if g > 0.0:
+                lo, g_lo = s, g
+                if side == 1:
+                    g_hi *= 0.5
+                side = 1
+            elif g < 0.0:
+                hi, g_hi = s, g
+                if side == -1:
+                    g_lo *= 0.5
+                side = -1
+            else:
+                return s
+        return lo
+
+    def _impact(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float, h_left: float) -> float:
+        """The impact of body i at y (in place: put onto the surface, velocities changed). The apex hint."""
+        gap, j = self._gap(sim, y, i)
+        n = self.grounds[j, NORMAL:NORMAL + 3]
+        y[L.P:L.P + 3] -= gap * n
+        count = self._contact_points(sim, y, i, j)
+        before, _, _, _ = self._normal_motion(sim, y, i, j, count, w)
+        e, mu = float(self.restitution[i, j]), float(self.friction[i, j])
+        after_row = y.copy()
+        impulse, e0, e1, _ = impact(y, after_row, sim._prm[i], count, self._points, n[0], n[1], n[2], e, mu,
+                                    self._work)
+        y[L.V:L.W + 3] = after_row[L.V:L.W + 3]
+        speed, accel, _, _ = self._normal_motion(sim, y, i, j, count, w)
+        self.events.append(ContactEvent(t, self.names[i], j, "impact", before, speed, impulse, e0, e1))
+        toward = -accel  # the free normal acceleration toward the ground
+        if speed <= 0.0 or (toward > 0.0 and speed * speed <= 2.0 * toward * ZENO_APEX):
+            rest = 0.0
+            if speed > 0.0 and e < 1.0:
+                rest = 2.0 * speed / (toward * (1.0 - e))  # the remaining flights: a geometric series
+            self._rest(sim, i, y, j, t, rest, speed)
+            return -1.0
+        return speed / (toward * h_left) if toward > 0.0 and h_left > 0.0 else -1.0
+
+    def _rest(self, sim, i: int, y: np.ndarray, j: int, t: float, remaining: float, speed: float) -> None:
+        """Body i goes into persistent contact with ground j at y (projected in place); 'rest' dated t + remaining."""
+        self.modes[i] = PERSISTENT
+        self.ground_of[i] = j
+        self.tracked[i] = self._touching(sim, y, i, j)
+        self._settle(sim, y, i, False)
+        self.events.append(ContactEvent(t + remaining, self.names[i], j, "rest", speed, 0.0))
+
+    # ----------------------------------------------------------------- persistent contact
+
+    def _persistent_span(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float, h: float) -> np.ndarray:
+        """Body i from y over h in persistent contact starting mid-step: holding force, step, projection."""
+        held = w.copy()
+        if not self._hold(sim, y, i, held, t):
+            return self._with_events(sim, i, y, w, t, h)
+        end = self.step_map(sim, i, y, h, held)
+        return self._persistent_end(sim, i, y, end, held, t, h)
+
+    def _bare(self, i: int, held: np.ndarray) -> np.ndarray:
+        """The wrench row ``held`` without the holding force _hold added to it for body i."""
+        return self._bare_rows[i].copy()
+
+    def _persistent_end(self, sim, i: int, y0: np.ndarray, end: np.ndarray, held: np.ndarray, t: float,
+                        h: float) -> np.ndarray:
+        """End of a step of body i in persistent contact, from y0 over h under ``held`` (with the holding force).
+
+        In order: the stop of a slide, or another feature reaching the ground (each located on
+        the step map, the rest of the step taken from there); tracked features that moved off
+        the ground dropped (none left: lift-off); then the projection onto the contact.
+        """
+        end = end.copy()
+        j = int(self.ground_of[i])
+        sx, sy = self.slide_direction[i]
+        if self.sliding[i] and (sx != 0.0 or sy != 0.0):  # sliding with friction: it may stop in this step
+
+            def along(s: float) -> float:
+                row = self.step_map(sim, i, y0, s * h, held) if s > 0.0 else y0
+                count = self._tracked_points(sim, row, i)
+                _, _, vx, vy = self._normal_motion(sim, row, i, j, count, held, int(self.tracked[i]))
+                return vx * sx + vy * sy
+
+            if along(1.0) <= 0.0:  # the slip reversed inside the step: the stop, located
+                s = self._locate(along, along(0.0), -1.0)
+                s = 1.0 if s is None else s
+                stop = self.step_map(sim, i, y0, s * h, held)
+                self._project(sim, stop, i, True)
+                self.sliding[i] = False
+                self.events.append(ContactEvent(t + s * h, self.names[i], j, "stick"))
+                if s < 1.0:  # the rest of the step sticking, with the holding force found at the stop
+                    return self._persistent_span(sim, i, stop, self._bare(i, held), t + s * h, h - s * h)
+                return stop
+        if self._other_gap(sim, end, i)[0] < 0.0:  # another half-space reached: an impact against it alone
+            g0 = self._other_gap(sim, y0, i)[0]
+            s = 0.0 if g0 <= 0.0 else self._locate(
+                lambda s: self._other_gap(sim, self.step_map(sim, i, y0, s * h, held), i)[0], g0, -1.0)
+            s = 0.0 if s is None else s
+            hit = self.step_map(sim, i, y0, s * h, held) if s > 0.0 else y0.copy()
+            self._side_impact(sim, i, hit, held, t + s * h)
+            self._project(sim, hit, i, False)
+            return self._persistent_span(sim, i, hit, self._bare(i, held), t + s * h, h - s * h) if s < 1.0 else hit
+        if self._untracked_gap(sim, end, i) < 0.0:  # another feature reached the ground: an impact
+            g0 = self._untracked_gap(sim, y0, i)
+            s = 0.0 if g0 <= 0.0 else self._locate(
+                lambda s: self._untracked_gap(sim, self.step_map(sim, i, y0, s * h, held), i), g0, -1.0)
+            s = 0.0 if s is None else s
+            hit = self.step_map(sim, i, y0, s * h, held) if s > 0.0 else y0.copy()
+            return self._landing(sim, i, hit, self._bare(i, held), t + s * h, h - s * h)
+        count = feature_gaps(end, sim._prm[i], self.shapes[i], self.grounds[j], self._features)
+        tracked, pressed = int(self.tracked[i]), int(self.pressed[i])
+        let_go = sum(1 << k for k in range(count)
+                     if tracked & (1 << k) and not pressed & (1 << k) and self._features[k] > self._band[i])
+        if let_go:  # features the holding force did not push on, and that moved off the ground
+            self.tracked[i] = tracked & ~let_go
+            if not self.tracked[i]:
+                self.modes[i] = FLIGHT
+                self.sliding[i] = False
+                self.events.append(ContactEvent(t + h, self.names[i], j, "lift-off"))
+                return end
+        self._project(sim, end, i, not self.sliding[i])
+        return end
+
+    def _other_gap(self, sim, y: np.ndarray, i: int) -> tuple[float, int]:
+        """(lowest gap, ground) of body i against the half-spaces other than the one it rests on."""
+        lowest, which = math.inf, -1
+        for jj in range(len(self.grounds)):
+            if jj != self.ground_of[i]:
+                count = body_points(y, sim._prm[i], self.shapes[i], self.grounds[jj], self._points, self._gaps)
+                if count and self._gaps[:count].min() < lowest:
+                    lowest, which = float(self._gaps[:count].min()), jj
+        return lowest, which
+
+    def _side_impact(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float) -> None:
+        """Body i, resting on its ground, hits another half-space at y: the impact against that one (in place).
+
+        The two contacts are not solved together yet: the resting contact is projected again
+        afterwards (for a wall at right angles to a frictionless floor this is exact).
+        """
+        gap, jj = self._other_gap(sim, y, i)
+        n = self.grounds[jj, NORMAL:NORMAL + 3]
+        y[L.P:L.P + 3] -= gap * n
+        count = body_points(y, sim._prm[i], self.shapes[i], self.grounds[jj], self._points, self._gaps)
+        before, _ = normal_speeds(y, sim._prm[i], count, self._points, n[0], n[1], n[2], self._work)
+        after_row = y.copy()
+        impulse, e0, e1, _ = impact(y, after_row, sim._prm[i], count, self._points, n[0], n[1], n[2],
+                                    float(self.restitution[i, jj]), float(self.friction[i, jj]), self._work)
+        y[L.V:L.W + 3] = after_row[L.V:L.W + 3]
+        after, _ = normal_speeds(y, sim._prm[i], count, self._points, n[0], n[1], n[2], self._work)
+        self.events.append(ContactEvent(t, self.names[i], jj, "impact", before, after, impulse, e0, e1))
+
+    def _landing(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float, h: float) -> np.ndarray:
+        """A feature of body i, in persistent contact, reaches the ground at y: the impact of every touching
+        feature together, then the rest h of the step (persistent, or in flight if it bounces off)."""
+        j = int(self.ground_of[i])
+        n = self.grounds[j, NORMAL:NORMAL + 3]
+        mask = int(self.tracked[i]) | self._touching(sim, y, i, j)
+        count = self._tracked_points(sim, y, i, mask)
+        before, _, _, _ = self._normal_motion(sim, y, i, j, count, w, mask)
+        e, mu = float(self.restitution[i, j]), float(self.friction[i, j])
+        after_row = y.copy()
+        impulse, e0, e1, _ = impact(y, after_row, sim._prm[i], count, self._points, n[0], n[1], n[2], e, mu,
+                                    self._work)
+        y = after_row
+        _, highest = normal_speeds(y, sim._prm[i], count, self._points, n[0], n[1], n[2], self._work)
+        _, accel, _, _ = self._normal_motion(sim, y, i, j, count, w, mask)
+        self.events.append(ContactEvent(t, self.names[i], j, "impact", before, highest, impulse, e0, e1))
+        toward = -accel
+        if highest <= LIFT_OFF_SPEED or (toward > 0.0 and highest * highest <= 2.0 * toward * ZENO_APEX):
+            self.tracked[i] = mask
+            self._settle(sim, y, i, False)
+            return self._persistent_span(sim, i, y, w, t, h) if h > 0.0 else y
+        self.modes[i] = FLIGHT
+        self.sliding[i] = False
+        return self._with_events(sim, i, y, w, t, h) if h > 0.0 else y

@@ -1,0 +1,197 @@
+"""A thrown, spinning, tilted phone (thin box) landing: no closed trajectory, but bounds that hold exactly.
+
+CONTACT_NOTES §3: E = KE + m g z never increases at an impact (e ≤ 1) and is constant in
+flight, so along the whole run E never rises (beyond the integrator's round-off in flight);
+no corner ever ends a step inside the ground; and the phone ends at rest, flat on a face, with
+gap 0 and zero velocity, its energy then exactly m g h/2 (h its thickness). Also: a box dropped
+flat onto its face bounces like the ball (four corners at once, Newton's law at each).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from rigid_body_sim.core import Simulator, load_scene
+from rigid_body_sim.core.kernels.contact.shapes import MAX_FEATURES, feature_gaps
+
+G = 9.81
+MASS, THICK = 0.2, 0.008
+
+
+def phone(e, integrator="rk4", dt=1e-3):
+    s, c = math.sin(0.3), math.cos(0.3)
+    data = {"gravity": [0.0, 0.0, -G],
+            "ground": [{"normal": [0, 0, 1], "material": {"restitution": e, "friction": 0.5}}],
+            "bodies": {"phone": {"mass": MASS, "inertia": {"box": [0.15, 0.075, THICK]},
+                                 "pose": {"position": [0.0, 0.0, 1.0], "orientation": [0.6 * s, 0.8 * s, 0.0, c]},
+                                 "twist": {"angular": [3.0, 5.0, 1.0]}}}}
+    return Simulator(load_scene(data), integrator=integrator, dt=dt, model_reduction=False)
+
+
+@pytest.mark.parametrize("e", [0.0, 0.5])
+def test_phone_landing_never_gains_energy_never_sinks_and_ends_flat_at_rest(e):
+    sim = phone(e)
+    contact = sim.contact
+    gaps = np.empty(MAX_FEATURES)
+
+    def energy():
+        return float(sim.kinetic_energy()[0]) + MASS * G * float(sim.state.p_WC_W[0, 2])
+
+    start = previous = energy()
+    for _ in range(2000):
+        in_flight, seen = contact.modes[0] == 0, len(contact.events)
+        sim.step()
+        now = energy()
+        if in_flight and len(contact.events) == seen:
+            # a flight step: rk4's own error on the spinning body, local order 5 in |ω|·dt ≈ 6e-3 (seen ≤ 3e-11)
+            assert now <= previous + 1e-10 * start
+        else:  # a step with an impact, a landing or a resting contact: never more energy (round-off)
+            assert now <= previous + 1e-14 * start
+        previous = now
+        y = sim._Ys[sim._control[0]][0]
+        count = feature_gaps(y, sim._prm[0], contact.shapes[0], contact.grounds[0], gaps)
+        assert gaps[:count].min() >= -1e-12
+    assert contact.is_resting("phone")
+    assert sim.state.p_WC_W[0, 2] == pytest.approx(THICK / 2.0, abs=1e-12)
+    assert np.linalg.norm(sim.state.v_WC_W[0]) <= 1e-12 and np.linalg.norm(sim.state.w_WP_P[0]) <= 1e-12
+    assert energy() == pytest.approx(MASS * G * THICK / 2.0, rel=1e-9)
+    impacts = contact.events_of("phone", "impact")
+    assert impacts and all(ev.energy_after <= ev.energy_before for ev in impacts)
+
+
+def test_box_dropped_flat_bounces_like_the_ball():
+    e, h0, half = 0.5, 1.0, 0.1
+    data = {"gravity": [0.0, 0.0, -G],
+            "ground": [{"normal": [0, 0, 1], "material": {"restitution": e, "friction": 0.5}}],
+            "bodies": {"crate": {"mass": 1.0, "inertia": {"box": [0.4, 0.2, 2 * half]},
+                                 "pose": {"position": [0.0, 0.0, h0 + half]}}}}
+    sim = Simulator(load_scene(data), integrator="rk4", dt=1e-2, model_reduction=False)
+    sim.step(150)
+    t1 = math.sqrt(2.0 * h0 / G)
+    v1 = G * t1
+    impacts = sim.contact.events_of("crate", "impact")
+    for k, event in enumerate(impacts[:3], start=1):
+        assert event.time == pytest.approx(t1 + sum(2.0 * e**j * v1 / G for j in range(1, k)), rel=1e-9)
+        assert event.normal_speed_after == pytest.approx(e**k * v1, rel=1e-9)
+    assert sim.contact.events_of("crate", "rest")[0].time == pytest.approx(t1 * (1 + e) / (1 - e), abs=1e-6)
+    assert sim.state.p_WC_W[0] == pytest.approx([0.0, 0.0, half], abs=1e-12)
+    assert np.linalg.norm(sim.state.w_WP_P[0]) <= 1e-12  # it never tipped
+
+
+@pytest.mark.parametrize("collision, inertia", [({"capsule": [0.05, 0.3]}, {"cylinder": [0.05, 0.4]}),
+                                                (None, {"cylinder": [0.05, 0.3]})])
+@pytest.mark.parametrize("e", [0.0, 0.5])
+def test_rods_land_on_their_side_without_gaining_energy(collision, inertia, e):
+    """A capsule and a long cylinder thrown tilted and spinning end lying on their side (gap 0 at
+    both ends, axis level), free to roll on (no rolling resistance), never gaining energy."""
+    s, c = math.sin(0.4), math.cos(0.4)
+    body = {"mass": 1.0, "inertia": inertia, "twist": {"angular": [1.0, 2.0, 0.5]},
+            "pose": {"position": [0.0, 0.0, 1.0], "orientation": [0.6 * s, 0.8 * s, 0.0, c]}}
+    if collision:
+        body["collision"] = collision
+    data = {"gravity": [0.0, 0.0, -G], "ground": [{"normal": [0, 0, 1], "material": {"restitution": e, "friction": 0.5}}],
+            "bodies": {"rod": body}}
+    sim = Simulator(load_scene(data), integrator="rk4", dt=1e-3, model_reduction=False)
+    contact = sim.contact
+    gaps = np.empty(MAX_FEATURES)
+
+    def energy():
+        return float(sim.kinetic_energy()[0]) + G * float(sim.state.p_WC_W[0, 2])
+
+    start = previous = energy()
+    for _ in range(4000):
+        in_flight, seen = contact.modes[0] == 0, len(contact.events)
+        sim.step()
+        now = energy()
+        assert now <= previous + (1e-10 if in_flight and len(contact.events) == seen else 1e-14) * start
+        previous = now
+        y = sim._Ys[sim._control[0]][0]
+        count = feature_gaps(y, sim._prm[0], contact.shapes[0], contact.grounds[0], gaps)
+        assert gaps[:count].min() >= -1e-12
+    assert contact.is_resting("rod")
+    assert sim.state.p_WC_W[0, 2] == pytest.approx(0.05, abs=1e-12)  # lying: the centre one radius up
+    axis = sim.orientations_xyzw()[0]
+    from rigid_body_sim.core.quaternion import quat_rotate, quat_wxyz_from_xyzw
+    assert quat_rotate(quat_wxyz_from_xyzw(axis), np.array([0.0, 0.0, 1.0]))[2] == pytest.approx(0.0, abs=1e-9)
+
+
+def test_gap_accelerations_match_finite_differences_of_the_gap_functions():
+    """persistent.normal_bias: g̈ = n·a + α·(r × n) + bias, against the second difference of
+    shapes.feature_gaps along a free motion (rk4 at h = 1e-4, so the difference's own error is ~h²)."""
+    from rigid_body_sim.core.kernels.contact.persistent import normal_bias
+    from rigid_body_sim.core.kernels.contact.shapes import feature_points
+    from rigid_body_sim.core.kernels.dynamics import derivative
+    from rigid_body_sim.core.kernels.layout import ROW_WIDTH, WRENCH_WIDTH
+    from rigid_body_sim.core.quaternion import quat_rotate
+    from rigid_body_sim.core.stepping import pack_parameters, unchecked_steps
+
+    s, c = math.sin(0.4), math.cos(0.4)
+    for inertia, collision in (({"cylinder": [0.2, 0.05]}, None), ({"box": [0.3, 0.2, 0.1]}, None),
+                               ({"cylinder": [0.05, 0.4]}, None), ({"cylinder": [0.05, 0.4]}, {"capsule": [0.05, 0.3]}),
+                               ({"sphere": 0.1}, None)):
+        body = {"mass": 1.0, "inertia": inertia, "twist": {"angular": [1.0, 2.0, 0.5], "linear": [0.3, 0.1, -0.2]},
+                "pose": {"position": [0.0, 0.0, 1.0], "orientation": [0.6 * s, 0.8 * s, 0.0, c]}}
+        if collision:
+            body["collision"] = collision
+        scene = load_scene({"gravity": [0.0, 0.0, -G], "ground": [{"normal": [0, 0, 1]}], "bodies": {"b": body}})
+        spec, prm, h = scene.contact, pack_parameters(scene.model), 1e-4
+        rows = []
+        for k in range(3):
+            row = np.zeros(ROW_WIDTH)
+            row[:13] = unchecked_steps("rk4", scene.model, scene.initial_state, h, k).rows()[0]
+            rows.append(row)
+        gaps = np.empty((3, MAX_FEATURES))
+        for k in range(3):
+            count = feature_gaps(rows[k], prm[0], spec.shapes[0], spec.grounds[0], gaps[k])
+        y = rows[1]
+        d = np.zeros(13)
+        derivative(y, prm[0], np.zeros(WRENCH_WIDTH), d)
+        alpha_W = quat_rotate(y[3:7], d[10:13])
+        for feature in range(count):
+            points, point_gaps, owners = np.zeros((4, 3)), np.zeros(4), np.zeros(4, dtype=np.int64)
+            bias, rdot = np.zeros(4), np.zeros((4, 3))
+            n_points = feature_points(y, prm[0], spec.shapes[0], spec.grounds[0], 1 << feature, points, point_gaps,
+                                      owners)
+            if n_points != 1:
+                continue
+            normal_bias(y, prm[0], spec.shapes[0], spec.grounds[0], 1 << feature, 1, points, owners, bias, rdot,
+                        np.zeros((4, 3)))
+            predicted = d[9] + alpha_W @ np.cross(points[0] - y[:3], [0.0, 0.0, 1.0]) + bias[0]
+            differenced = (gaps[2, feature] - 2.0 * gaps[1, feature] + gaps[0, feature]) / h**2
+            assert predicted == pytest.approx(differenced, abs=1e-6), (inertia, collision, feature)
+
+
+@settings(max_examples=25, deadline=None, derandomize=True, database=None)
+@given(seed=st.integers(0, 2**32 - 1), kind=st.sampled_from(["box", "sphere", "capsule", "cylinder"]),
+       e=st.sampled_from([0.0, 0.3, 0.8]), mu=st.sampled_from([0.0, 0.3, 1.0]), tilted=st.booleans())
+def test_random_throws_never_sink_and_no_impact_gains_energy(seed, kind, e, mu, tilted):
+    """Any shape thrown tumbling onto a (possibly tilted) ground: after every step no feature is
+    inside the ground (beyond round-off), and no impact ends with more kinetic energy than it began with."""
+    rng = np.random.default_rng(seed)
+    inertia, collision = {"box": {"box": rng.uniform(0.02, 0.3, 3).tolist()}, "sphere": {"sphere": 0.1},
+                          "capsule": {"cylinder": [0.05, 0.4]}, "cylinder": {"cylinder": [0.06, 0.3]}}[kind], None
+    if kind == "capsule":
+        collision = {"capsule": [0.05, float(rng.uniform(0.05, 0.4))]}
+    q = rng.normal(size=4)
+    q /= np.linalg.norm(q)
+    normal = [0.0, 0.0, 1.0] + (0.3 * rng.normal(size=3) if tilted else np.zeros(3))
+    body = {"mass": 1.0, "inertia": inertia, "pose": {"position": [0.0, 0.0, 1.5], "orientation": q.tolist()},
+            "twist": {"linear": rng.normal(size=3).tolist(), "angular": (3.0 * rng.normal(size=3)).tolist()}}
+    if collision:
+        body["collision"] = collision
+    data = {"gravity": [0.0, 0.0, -G], "bodies": {"b": body},
+            "ground": [{"normal": list(normal), "material": {"restitution": e, "friction": mu}}]}
+    sim = Simulator(load_scene(data), integrator="rk4", dt=1e-3, model_reduction=False)
+    contact, gaps = sim.contact, np.empty(MAX_FEATURES)
+    for _ in range(1500):
+        sim.step()
+        y = sim._Ys[sim._control[0]][0]
+        count = feature_gaps(y, sim._prm[0], contact.shapes[0], contact.grounds[0], gaps)
+        assert gaps[:count].min() >= -1e-12
+    for event in contact.events_of("b", "impact"):
+        assert event.energy_after <= event.energy_before * (1.0 + 1e-12)

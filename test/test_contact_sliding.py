@@ -1,0 +1,152 @@
+"""A box sliding on the ground with Coulomb friction, and a ball rolling, against the closed forms.
+
+Box (0.2 m cube, 1 kg) resting on its face, launched at v0 = 2 m/s with μ = 0.5, g = 9.81: the
+friction force μ m g is constant until the slip stops, so the box stops after d = v0²/(2μg)
+at t = v0/(μg) (0.407747 m at 0.407747 s) and stays: v ≡ 0 after. The stop is an event
+located on the step map, so the only error is round-off (1e-9 relative is asked).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rigid_body_sim.core import Simulator, load_scene
+
+G, MU, V0 = 9.81, 0.5, 2.0
+CONFIG = Path(__file__).resolve().parents[1] / "config"
+
+
+def sliding_scene(direction=(1.0, 0.0, 0.0)):
+    data = {"gravity": [0.0, 0.0, -G],
+            "ground": [{"normal": [0, 0, 1], "offset": 0.0, "material": {"restitution": 0.0, "friction": MU}}],
+            "bodies": {"crate": {"mass": 1.0, "inertia": {"box": [0.2, 0.2, 0.2]},
+                                 "pose": {"position": [0.0, 0.0, 0.1]},
+                                 "twist": {"linear": [V0 * c for c in direction]}}}}
+    return load_scene(data)
+
+
+@pytest.mark.parametrize("integrator, dt", [("rk4", 1e-2), ("rk4", 1e-3), ("rk4", 1e-4), ("reference", 1e-2),
+                                            ("reference", 1e-3), ("splitting", 1e-2), ("semi_implicit_euler", 1e-2)])
+def test_box_stops_after_the_closed_form_distance_and_time(integrator, dt):
+    sim = Simulator(sliding_scene(), integrator=integrator, dt=dt, model_reduction=False)
+    assert sim.contact.is_resting("crate")  # starts touching, not moving away: persistent
+    sim.step(int(round(0.6 / dt)))
+    stops = sim.contact.events_of("crate", "stick")
+    assert len(stops) == 1
+    t_stop, d_stop = V0 / (MU * G), V0 * V0 / (2.0 * MU * G)
+    if integrator == "semi_implicit_euler":  # first order in the slide: only close, the stop still located
+        assert stops[0].time == pytest.approx(t_stop, rel=2e-2)
+        return
+    assert stops[0].time == pytest.approx(t_stop, rel=1e-9)
+    assert sim.state.p_WC_W[0, 0] == pytest.approx(d_stop, rel=1e-9)
+    x_after = sim.state.p_WC_W[0, 0]
+    for _ in range(int(round(1.0 / dt))):  # and it stays, on the ground, not turning
+        sim.step()
+        assert np.linalg.norm(sim.state.v_WC_W[0]) <= 1e-12
+        assert np.linalg.norm(sim.state.w_WP_P[0]) <= 1e-12
+        assert sim.state.p_WC_W[0, 2] - 0.1 == pytest.approx(0.0, abs=1e-12)
+    assert sim.state.p_WC_W[0, 0] == pytest.approx(x_after, abs=1e-12)
+
+
+def test_example_scene_slides_to_its_stop():
+    sim = Simulator(load_scene(CONFIG / "contact_sliding_box.yaml"), integrator="rk4", dt=1e-2)
+    sim.step(60)
+    assert sim.contact.events_of("crate", "stick")[0].time == pytest.approx(V0 / (MU * G), rel=1e-9)
+
+
+def test_box_sliding_diagonally_stops_on_its_line():
+    direction = np.array([3.0, 4.0, 0.0]) / 5.0
+    sim = Simulator(sliding_scene(tuple(direction)), integrator="rk4", dt=1e-2, model_reduction=False)
+    sim.step(60)
+    d_stop = V0 * V0 / (2.0 * MU * G)
+    assert sim.state.p_WC_W[0, :2] == pytest.approx(d_stop * direction[:2], rel=1e-9)
+
+
+def test_sliding_friction_force_is_mu_m_g_and_the_imu_reads_it():
+    data = {"gravity": [0.0, 0.0, -G],
+            "ground": [{"normal": [0, 0, 1], "material": {"restitution": 0.0, "friction": MU}}],
+            "bodies": {"crate": {"mass": 2.0, "inertia": {"box": [0.2, 0.2, 0.2]},
+                                 "pose": {"position": [0.0, 0.0, 0.1]}, "twist": {"linear": [V0, 0.0, 0.0]},
+                                 "sites": {"imu": {"position": [0.0, 0.0, 0.0], "imu": {}}}}}}
+    sim = Simulator(load_scene(data), integrator="rk4", dt=1e-2)
+    sim.step(10)
+    # specific force = (contact force)/m: −μ g along x, +g up
+    assert sim.site_readings().specific_force[0] == pytest.approx([-MU * G, 0.0, G], rel=1e-12, abs=1e-12)
+    assert sim.state.v_WC_W[0, 0] == pytest.approx(V0 - MU * G * 0.1, rel=1e-12)
+
+
+@pytest.mark.parametrize("integrator, reduction", [("rk4", False), ("rk4", True), ("reference", False)])
+def test_ball_slides_then_rolls_at_the_closed_form_time_and_speed(integrator, reduction):
+    """Solid ball (k² = 2/5) launched at v0 without spin, μ = 0.3: rolls from t = k² v0/((1 + k²) μ g)
+    at v = v0/(1 + k²), having slid (v0² − v²)/(2μg); then rolls on at v, without slip."""
+    mu, r, k2 = 0.3, 0.1, 0.4
+    data = {"gravity": [0.0, 0.0, -G],
+            "ground": [{"normal": [0, 0, 1], "material": {"restitution": 0.0, "friction": mu}}],
+            "bodies": {"ball": {"mass": 1.0, "inertia": {"sphere": r}, "pose": {"position": [0.0, 0.0, r]},
+                                "twist": {"linear": [V0, 0.0, 0.0]}}}}
+    sim = Simulator(load_scene(data), integrator=integrator, dt=1e-2, model_reduction=reduction)
+    sim.step(50)
+    t_roll, v_roll = k2 * V0 / ((1.0 + k2) * mu * G), V0 / (1.0 + k2)
+    assert sim.contact.events_of("ball", "stick")[0].time == pytest.approx(t_roll, rel=1e-9)
+    assert sim.state.v_WC_W[0] == pytest.approx([v_roll, 0.0, 0.0], rel=1e-12, abs=1e-12)
+    slid = (V0 * V0 - v_roll * v_roll) / (2.0 * mu * G)
+    assert sim.state.p_WC_W[0, 0] == pytest.approx(slid + v_roll * (sim.time - t_roll), rel=1e-9)
+    w_W = sim.angular_velocities_world()[0]
+    assert w_W == pytest.approx([0.0, v_roll / r, 0.0], rel=1e-12, abs=1e-12)  # rolling: v = ω r
+    assert sim.state.p_WC_W[0, 2] == pytest.approx(r, abs=1e-12)
+
+
+def test_box_at_rest_on_an_incline_inside_the_friction_cone_does_not_move():
+    """20° incline, μ = 0.5 > tan 20°: no motion at all (peers creep 1e-7 to 1e-3 m/s)."""
+    theta = math.radians(20.0)
+    n = [0.0, -math.sin(theta), math.cos(theta)]
+    q_xyzw = [math.sin(theta / 2.0), 0.0, 0.0, math.cos(theta / 2.0)]  # body z along n
+    data = {"gravity": [0.0, 0.0, -G],
+            "ground": [{"normal": n, "material": {"restitution": 0.0, "friction": 0.5}}],
+            "bodies": {"crate": {"mass": 1.0, "inertia": {"box": [0.2, 0.2, 0.2]},
+                                 "pose": {"position": [0.1 * c for c in n], "orientation": q_xyzw}}}}
+    sim = Simulator(load_scene(data), integrator="rk4", dt=1e-2)
+    assert sim.contact.is_resting("crate")
+    start = sim.state.p_WC_W[0].copy()
+    for _ in range(1000):
+        sim.step()
+        assert np.linalg.norm(sim.state.v_WC_W[0]) <= 1e-12
+    assert np.linalg.norm(sim.state.p_WC_W[0] - start) <= 1e-12
+    assert [e.kind for e in sim.contact.events] == ["rest"]
+
+
+def test_a_resting_body_lifted_by_set_body_state_falls_again():
+    sim = Simulator(sliding_scene(direction=(0.0, 0.0, 0.0)), integrator="rk4", dt=1e-2)
+    assert sim.contact.is_resting("crate")
+    sim.set_body_state("crate", position_world=[0.0, 0.0, 0.6])  # 0.5 m up
+    sim.step(50)
+    impacts = sim.contact.events_of("crate", "impact")
+    assert impacts[0].time == pytest.approx(math.sqrt(2.0 * 0.5 / G), rel=1e-9)
+    assert sim.contact.is_resting("crate")  # e = 0: at rest at once
+    assert sim.state.p_WC_W[0] == pytest.approx([0.0, 0.0, 0.1], abs=1e-12)
+
+
+def test_a_ball_sliding_on_the_floor_bounces_off_a_wall():
+    """Two half-spaces: a frictionless floor (e 0) and a wall x ≤ 1 (e 1). The ball, resting on the
+    floor and sliding at v0 toward the wall, reaches it when x + r = 1 (t = (1 − r)/v0), comes back
+    at −v0 and stays on the floor."""
+    r = 0.1
+    data = {"gravity": [0.0, 0.0, -G],
+            "ground": [{"normal": [0, 0, 1], "material": {"restitution": 0.0, "friction": 0.0}},
+                       {"normal": [-2, 0, 0], "offset": -1.0, "material": {"restitution": 1.0, "friction": 0.0}}],
+            "bodies": {"ball": {"mass": 1.0, "inertia": {"sphere": r}, "pose": {"position": [0.0, 0.0, r]},
+                                "twist": {"linear": [V0, 0.0, 0.0]}}}}
+    sim = Simulator(load_scene(data), integrator="rk4", dt=1e-2)
+    assert sim.contact.is_resting("ball")
+    sim.step(100)
+    hits = sim.contact.events_of("ball", "impact")
+    assert len(hits) == 1 and hits[0].ground == 1
+    t_hit = (1.0 - r) / V0
+    assert hits[0].time == pytest.approx(t_hit, rel=1e-12)
+    assert sim.state.v_WC_W[0] == pytest.approx([-V0, 0.0, 0.0], rel=1e-12, abs=1e-12)
+    assert sim.state.p_WC_W[0] == pytest.approx([1.0 - r - V0 * (sim.time - t_hit), 0.0, r], rel=1e-12, abs=1e-12)
+    assert sim.contact.is_resting("ball")
