@@ -84,7 +84,7 @@ $(STAMP): requirements.txt requirements-test.txt setup.py setup.cfg package.xml 
 	$(PIP) install --no-deps -e .
 	$(PIP) check >/dev/null || { $(PIP) check; die "pip check found inconsistent dependencies"; }
 	say "compiling the numba kernels once (cached in rigid_body_sim/core/kernels/__pycache__; about a minute)"
-	$(VENV_PY) -c 'from rigid_body_sim.core.kernels.compile import compile_kernels; compile_kernels()'
+	$(VENV_PY) -c 'from rigid_body_sim.core.simulator import compile_kernels; compile_kernels()'
 	touch "$@"
 	say "ready: $(VENV) ($$($(VENV_PY) -V 2>&1))"
 

@@ -28,7 +28,7 @@ from .frames import new_wrench_rows, parse_frame
 from .integrators import INTEGRATORS, Method, get_integrator, step_exact_rotor_splitting, step_reference
 from .kernels import layout as L
 from .kernels import sensors, stepping
-from .kernels.compile import compile_kernels  # noqa: F401  (ros/main.py imports it from here)
+from .kernels.compile import compile_kernels as compile_stepping_kernels
 from .kernels.dynamics import impulse_response
 from .kernels.forces import add_wrench, project_twist
 from .mechanics import angular_momentum_W, kinetic_energy, linear_momentum_W, potential_energy
@@ -834,3 +834,25 @@ def _vector3(value: Any, name: str) -> np.ndarray:
     if v.shape != (3,) or not np.all(np.isfinite(v)):
         raise ValueError(f"{name}: expected 3 finite numbers, got {value!r}")
     return v
+
+
+def compile_kernels() -> None:
+    """Compile (or load from numba's cache) every compiled kernel: the stepping entry points
+    (:func:`~rigid_body_sim.core.kernels.compile.compile_kernels`), then the contact kernels, by
+    dropping one body of each shape onto a ground until it rests (``make venv`` and the node's
+    first start call this)."""
+    compile_stepping_kernels()
+    shapes = {"sphere": {"inertia": {"sphere": 0.1}},
+              "box": {"inertia": {"box": [0.2, 0.2, 0.1]}},
+              "cylinder": {"inertia": {"cylinder": [0.1, 0.2]}},
+              "capsule": {"inertia": {"sphere": 0.1}, "collision": {"capsule": [0.05, 0.1]}}}
+    bodies = {name: {"mass": 1.0, **spec, "pose": {"position": [float(k), 0.0, 0.4]},
+                     "twist": {"linear": [0.5, 0.0, 0.0], "angular": [0.3, 0.2, 0.1]}}
+              for k, (name, spec) in enumerate(shapes.items())}
+    from .scene import load_scene
+
+    scene = load_scene({"gravity": [0.0, 0.0, -9.81], "bodies": bodies,
+                        "ground": [{"normal": [0.0, 0.0, 1.0], "offset": 0.0,
+                                    "material": {"restitution": 0.5, "friction": 0.5}}]})
+    for integrator in ("rk4", "semi_implicit_euler"):
+        Simulator(scene, integrator=integrator, dt=0.01).step(200)

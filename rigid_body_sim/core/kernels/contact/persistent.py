@@ -70,7 +70,6 @@ def accelerations(y, p, w, count, rows, points, bias, rdot, work, d):
     qw, qx, qy, qz = y[Q], y[Q + 1], y[Q + 2], y[Q + 3]
     ox, oy, oz = rotate(qw, qx, qy, qz, y[W], y[W + 1], y[W + 2])  # ω_W
     for c in range(count):
-        rx, ry, rz = points[c, 0] - y[P], points[c, 1] - y[P + 1], points[c, 2] - y[P + 2]
         wrx, wry, wrz = rdot[c, 0], rdot[c, 1], rdot[c, 2]  # how the contact point moves (ω × r for a body point)
         cx, cy, cz = oy * wrz - oz * wry, oz * wrx - ox * wrz, ox * wry - oy * wrx  # ω × that
         for k in range(3):
