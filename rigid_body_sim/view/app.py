@@ -220,7 +220,7 @@ class _Page:
         self.frames: dict[str, Any] = {}
         self.shape_handles: dict[str, tuple[_Shape, Any]] = {}
         server.scene.set_up_direction("+z")
-        server.initial_camera.position = (2.6, -2.6, 2.2)
+        server.initial_camera.position = (1.9, -1.9, 2.0)
         server.initial_camera.look_at = (0.0, 0.0, 0.8)
         server.scene.add_grid("/ground", width=4.0, height=4.0, cell_size=0.5)
         gui = server.gui
@@ -287,7 +287,7 @@ class _Page:
             extra = f"; no shape yet for {', '.join(missing)} (markers come with ticks: Step or Run)" if missing else ""
             self.status.content = f"showing {len(names)} bod{'y' if len(names) == 1 else 'ies'}{extra}"
         if stamp is not None:
-            self.sim_time.value = f"{stamp:.6f}"
+            self.sim_time.value = f"{stamp:.9f}"
         self.reply.content = reply or " "
         if names is None or len(names) != len(poses):
             return
