@@ -112,8 +112,8 @@ def _positive_float(unit: str):
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``rigid-body-sim`` (all subcommands)."""
-    parser = argparse.ArgumentParser(
-        prog=PROG, description="Offline runs, plots and scene checks for rigid_body_sim (no ROS needed).")
+    parser = argparse.ArgumentParser(prog=PROG, description=(
+        "Offline runs, plots and scene checks for rigid_body_sim (no ROS needed), and a live browser view of a running node."))
     sub = parser.add_subparsers(dest="command", required=True, metavar="{run,plot,describe,check,view}")
 
     run = sub.add_parser("run", help="run a scene as fast as possible", description=(
