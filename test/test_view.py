@@ -32,6 +32,7 @@ import numpy as np
 import pytest
 import rclpy
 import yaml
+from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Twist, WrenchStamped
 from PIL import Image
 from rclpy.context import Context
@@ -83,7 +84,7 @@ def box_pixels(png: bytes) -> int:
 
 
 class Watcher:
-    """The test's own ROS participant: box/twist (latched) and box/impulse."""
+    """The test's own ROS participant: box/twist (latched), box/impulse and the node's pending impulses."""
 
     def __init__(self):
         self.context = Context()
@@ -96,6 +97,14 @@ class Watcher:
         self.node.create_subscription(Twist, "box/twist", self.twists.append,
                                       QoSProfile(depth=10, durability=DurabilityPolicy.TRANSIENT_LOCAL))
         self.node.create_subscription(WrenchStamped, "box/impulse", self.impulses.append, QoSProfile(depth=10))
+        self.pending_impulses: int | None = None
+        self.node.create_subscription(DiagnosticArray, "/diagnostics", self._on_diagnostics, QoSProfile(depth=10))
+
+    def _on_diagnostics(self, msg: DiagnosticArray) -> None:
+        for status in msg.status:
+            for kv in status.values:
+                if kv.key == "pending impulses":
+                    self.pending_impulses = int(kv.value)
 
     def wait(self, what: str, condition, timeout: float = 20.0) -> None:
         end = time.monotonic() + timeout
@@ -146,7 +155,7 @@ def test_view_in_chromium_draws_the_box_and_strikes_it(tmp_path):
     assert os.access(CHROMIUM, os.X_OK) and os.access(CHROMEDRIVER, os.X_OK), "make browser-deps installs them"
     mass, inertia, corner = box_from_scene()
     J = np.array([0.0, 0.0, STRIKE_IMPULSE_NS])
-    node = start_process(["-p", "paused:=true", "-p", "status_period:=0.0", "-p", "diagnostics_period:=0.0",
+    node = start_process(["-p", "paused:=true", "-p", "status_period:=0.0", "-p", "diagnostics_period:=0.1",
                           "-p", "real_time_factor:=1e-6", "-p", "rate_hz:=10000.0"], tmp_path / "node.log")
     watcher = Watcher()
     view = driver = None
@@ -194,7 +203,8 @@ def test_view_in_chromium_draws_the_box_and_strikes_it(tmp_path):
             np.testing.assert_allclose([f.x, f.y, f.z], J, atol=1e-15)
             np.testing.assert_allclose([tau.x, tau.y, tau.z], np.cross(expected_r, J), atol=1e-15)
             wait_text(driver, lambda t: "strike sent: J = 0.5 N·s up" in t, "the strike's report")
-            time.sleep(0.5)  # the node has it too (same machine, reliable) before Step asks for the tick
+            watcher.pending_impulses = None  # the node has it (its /diagnostics say so) before Step asks for the tick
+            watcher.wait("the node's pending impulse", lambda: watcher.pending_impulses == 1)
             n = len(watcher.twists)
             click(driver, "Step")
             watcher.wait("the twist after the strike", lambda: len(watcher.twists) > n)
