@@ -5,6 +5,7 @@
 #   make test-slow  set up if needed, then pytest -m slow (soak, statistics, repeated runs:
 #                   1e5-1e6 steps, the 100,000-message DDS fuzz, colcon test, environment probes)
 #   make venv       only the set-up: .venv with Python 3.11, pinned requirements, package -e
+#   make browser-deps   Debian's chromium and chromium-driver (apt if missing) for test/test_view.py
 #   make foxglove-deps  Node.js (apt if missing) and the pinned npm modules of test/foxglove (Foxglove's readers)
 #   make clean      remove caches and build output (keeps .venv); make distclean also .venv
 #
@@ -34,12 +35,12 @@ RUN_ARGS ?=
 # ROS_LOCALHOST_ONLY; ROS_AUTOMATIC_DISCOVERY_RANGE is the variable it reads).
 export ROS_AUTOMATIC_DISCOVERY_RANGE ?= LOCALHOST
 
-.PHONY: venv run test test-slow clean distclean foxglove-deps
+.PHONY: venv run test test-slow clean distclean foxglove-deps browser-deps
 
 venv: $(STAMP)
 
 # The venv is (re)provisioned when a pin, the build script or the manifest changes.
-$(STAMP): requirements.txt requirements-test.txt setup.py setup.cfg package.xml \
+$(STAMP): requirements.txt requirements-test.txt requirements-view.txt setup.py setup.cfg package.xml \
 		tools/ros_interfaces/build.py $(wildcard tools/ros_interfaces/*/msg/*.msg)
 	@say() { printf '[make venv] %s\n' "$$*"; }
 	die() { printf '[make venv] ERROR: %s\n' "$$*" >&2; exit 1; }
@@ -72,9 +73,9 @@ $(STAMP): requirements.txt requirements-test.txt setup.py setup.cfg package.xml 
 	  say "creating $(VENV) with $$py ($$($$py -V 2>&1))"
 	  "$$py" -m venv "$(VENV)"
 	fi
-	say "installing pinned requirements (pip $(PIP_VERSION), requirements-test.txt)"
+	say "installing pinned requirements (pip $(PIP_VERSION), requirements-view.txt: test and view pins)"
 	$(PIP) install "pip==$(PIP_VERSION)"
-	$(PIP) install -r requirements-test.txt
+	$(PIP) install -r requirements-view.txt
 	# tf2_msgs has no wheel on PyPI: build it from its message definition (needs gcc and g++).
 	command -v g++ >/dev/null || apt_install gcc g++ || die "no C/C++ compiler: install gcc and g++ (Debian: apt-get install gcc g++)"
 	say "building tf2_msgs from its message definition (tools/ros_interfaces)"
@@ -111,8 +112,19 @@ $(FOXGLOVE_STAMP): $(FOXGLOVE_DIR)/package.json $(FOXGLOVE_DIR)/package-lock.jso
 	npm ci --prefix "$(FOXGLOVE_DIR)" --no-audit --no-fund --ignore-scripts --loglevel=error
 	touch "$@"
 
+# The browser test/test_view.py drives: Debian's chromium through Debian's chromedriver (never a
+# downloaded browser build). Installed with apt when missing and root; otherwise the command to run.
+browser-deps:
+	@if [ ! -x /usr/bin/chromium ] || [ ! -x /usr/bin/chromedriver ]; then
+	  command -v apt-get >/dev/null && [ "$$(id -u)" = 0 ] \
+	    || { echo "[make browser-deps] ERROR: test/test_view.py needs /usr/bin/chromium and /usr/bin/chromedriver: sudo apt-get install chromium chromium-driver" >&2; exit 1; }
+	  echo "[make browser-deps] installing Debian packages: chromium chromium-driver (apt-get update first)"
+	  export DEBIAN_FRONTEND=noninteractive
+	  apt-get update -qq && apt-get install -y -qq --no-install-recommends chromium chromium-driver >/dev/null
+	fi
+
 # --foreground: Ctrl-C still reaches pytest; SIGINT first so pytest prints its summary.
-test: $(STAMP) $(FOXGLOVE_STAMP)
+test: $(STAMP) $(FOXGLOVE_STAMP) browser-deps
 	timeout --foreground -s INT -k 60 $(TEST_TIMEOUT_S) $(VENV_PY) -m pytest $(PYTEST_ARGS)
 
 test-slow: $(STAMP)

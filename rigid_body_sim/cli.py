@@ -6,6 +6,7 @@ Subcommands (``rigid-body-sim SUBCOMMAND --help`` for each)::
     plot RUN [-o OUT.png] [--scene SCENE] [--body NAME]
     describe SCENE [--json]
     check SCENE
+    view [--namespace NS] [--node NAME] [--host ADDR] [--port PORT] [--strike-body NAME]   (a live 3D view in the browser)
 
 Exit codes: 0 success; 1 a scene or input file that cannot be used (the message names the
 file, key path and expectation), a run that failed, or an output that could not be written
@@ -111,9 +112,9 @@ def _positive_float(unit: str):
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``rigid-body-sim`` (all subcommands)."""
-    parser = argparse.ArgumentParser(
-        prog=PROG, description="Offline runs, plots and scene checks for rigid_body_sim (no ROS needed).")
-    sub = parser.add_subparsers(dest="command", required=True, metavar="{run,plot,describe,check}")
+    parser = argparse.ArgumentParser(prog=PROG, description=(
+        "Offline runs, plots and scene checks for rigid_body_sim (no ROS needed), and a live browser view of a running node."))
+    sub = parser.add_subparsers(dest="command", required=True, metavar="{run,plot,describe,check,view}")
 
     run = sub.add_parser("run", help="run a scene as fast as possible", description=(
         "Step SCENE for --duration seconds of sim time as fast as possible, optionally writing a CSV "
@@ -161,7 +162,16 @@ def build_parser() -> argparse.ArgumentParser:
         "Validate SCENE only: print a one-line summary and exit 0, or print the loader's error "
         "(file, key path, what was expected) and exit 1."))
     check.add_argument("scene", metavar="SCENE", help="scene YAML file")
-    for subparser in (run, plot, describe, check):
+    view = sub.add_parser("view", help="a live 3D view of a running node in the browser", description=(
+        "Serve a live 3D view of a running rigid_body_sim node (viser; open the printed address): its bodies "
+        "from 'poses' and 'markers', sim time, Pause/Run/Step/Reset, and the 'Feel the offset' strike panel. "
+        "Needs requirements-view.txt (make venv installs it). Exit 2 if the address is in use. See docs/view.md."))
+    view.add_argument("--namespace", default="/", help="ROS namespace of the simulator's topics (default /)")
+    view.add_argument("--node", default="rigid_body_sim", help="the simulator node's name (default rigid_body_sim)")
+    view.add_argument("--host", default="127.0.0.1", help="address to serve on (default 127.0.0.1; 0.0.0.0 for all)")
+    view.add_argument("--port", type=int, default=8080, help="port to serve on (default 8080)")
+    view.add_argument("--strike-body", default="box", help="body the 'Feel the offset' panel strikes (default box)")
+    for subparser in (run, plot, describe, check, view):
         subparser.set_defaults(command_parser=subparser)  # so each command reports usage errors as itself
     return parser
 
@@ -170,7 +180,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``rigid-body-sim`` console script; returns the exit code."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    command = {"run": _run, "plot": _plot, "describe": _describe, "check": _check}[args.command]
+    command = {"run": _run, "plot": _plot, "describe": _describe, "check": _check, "view": _view}[args.command]
     # Phase 1 (nothing written yet): a signal exits 0 at once; ``run`` switches to phase 2 before
     # it opens its outputs, so that a signal then stops it between two samples.
     args.signals = TwoPhaseSignals(f"{PROG} {args.command}", during="")
@@ -192,6 +202,18 @@ def main(argv: Sequence[str] | None = None) -> int:
             return 0
     finally:
         args.signals.restore()
+
+
+def _view(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    """``view``: the work is in :mod:`rigid_body_sim.view.app`; a signal ends it in order (exit 0)."""
+    if not 0 < args.port < 65536:
+        parser.error(f"--port must be 1 to 65535, got {args.port}")
+    try:
+        from .view.app import run_view
+    except ImportError as exc:
+        raise _Failure(f"{exc}; install the view's pins: .venv/bin/pip install -r requirements-view.txt") from None
+    stop = args.signals.switch_to_orderly()
+    return run_view(args.namespace, args.node, args.host, args.port, args.strike_body, stop)
 
 
 #: What a path is when looking it up fails with this errno (the lookup, not the file, is the problem).

@@ -68,6 +68,11 @@ MODULES = {
     "mcap": (None, "mcap"),
 }
 
+#: Modules of an optional extra of setup.py (``pip install -e .[view]``), imported only by the part of
+#: the package that needs them (rigid_body_sim/view/, ``rigid-body-sim view``): no rosdep key, not in
+#: install_requires; pins in requirements-view.txt. Module → extra.
+OPTIONAL = {"viser": "view"}
+
 
 def manifest_dependencies(kind: str) -> list[str]:
     return [element.text for element in ET.parse(ROOT / "package.xml").getroot().iter(kind)]
@@ -91,8 +96,21 @@ def install_requires() -> list[str]:
     return re.findall(r'"([^"]+)"', block)
 
 
+def extras_require() -> dict[str, str]:
+    text = (ROOT / "setup.py").read_text()
+    block = re.search(r"extras_require=\{(.*?)\}", text, re.S).group(1)
+    return dict(re.findall(r'"([^"]+)": \[([^\]]*)\]', block))
+
+
 def test_every_import_is_declared_and_every_declaration_used():
     imports = imported_modules()
+    extras = extras_require()
+    for module, extra in OPTIONAL.items():
+        assert module in imports and f'"{module}' in extras.get(extra, ""), (module, extra, extras)
+        for path in PACKAGE.rglob("*.py"):
+            if module in path.read_text(encoding="utf-8").split():
+                assert "view" in path.relative_to(PACKAGE).parts, f"{module} imported outside rigid_body_sim/view/: {path}"
+    imports -= set(OPTIONAL)
     assert imports <= set(MODULES), f"imported but not mapped to a rosdep key: {imports - set(MODULES)}"
     keys = {MODULES[m][0] for m in imports} - {None}
     assert set(manifest_dependencies("exec_depend")) == keys
