@@ -205,3 +205,42 @@ def test_recording_carries_contacts_and_foxglove_decodes_them(tmp_path: Path) ->
     impact = dict(zip(dtype.names, impacts[0]))
     assert abs(impact["time"] - T1) < 1e-9
     assert abs(impact["impulse"] - M * (1 + E) * V1) < 1e-9
+
+
+def test_sliding_box_friction_and_stick_through_the_node() -> None:
+    """config/contact_sliding_box.yaml: a cube (1 kg) launched at v0 = 2 m/s along x on the ground,
+    μ = 0.5 (the body has no material: the ground's): x(t) = v0 t − μ g t²/2 until it sticks at
+    t_s = v0/(μ g), there x_s = v0²/(2 μ g); meanwhile held by m g along the normal and μ m g of friction."""
+    mu, v0, m = 0.5, 2.0, 1.0
+    t_stop = v0 / (mu * G)
+    ticks = 50
+    with SimHarness(CONFIG / "contact_sliding_box.yaml", PARAMETERS) as h:
+        clouds = collect(h, "/contacts", PointCloud2)
+        xs = []
+        for k in range(1, ticks + 1):
+            h.step(1)
+            xs.append(h.latest_pose("crate").pose.position.x)
+            h.spin_until(lambda: len(clouds) >= k, f"contacts of tick {k}")
+    for k, x in enumerate(xs, start=1):
+        t = min(k * TICK, t_stop)
+        assert abs(x - (v0 * t - 0.5 * mu * G * t * t)) < 1e-9, (k, x)
+    points = [cloud_points(c) for c in clouds]
+    sticks = np.concatenate([p[p["state"] == 4] for p in points])
+    assert len(sticks) == 1 and abs(sticks["time"][0] - t_stop) < 1e-9
+    sliding = np.concatenate([p[p["state"] == 2] for k, p in enumerate(points, start=1) if k * TICK < t_stop])
+    assert len(sliding) == int(t_stop / TICK)
+    np.testing.assert_allclose(sliding["normal_force"], m * G, rtol=1e-9)
+    np.testing.assert_allclose(sliding["friction_force"], mu * m * G, rtol=1e-9)
+    np.testing.assert_allclose(sliding["gap"], 0.0, atol=1e-9)
+    stuck = np.concatenate([p[p["state"] == 1] for k, p in enumerate(points, start=1) if (k - 1) * TICK > t_stop])
+    assert len(stuck) and np.all(np.abs(stuck["friction_force"]) < 1e-9)
+
+
+def test_no_contacts_without_ground() -> None:
+    """The default scene has no ground: nothing is published on ``contacts``, no contact status."""
+    with SimHarness(None, PARAMETERS) as h:
+        clouds = collect(h, "/contacts", PointCloud2)
+        h.step(3)
+        h.spin_for(0.2)
+        assert clouds == []
+        assert not [s for s in h.node.diagnostics().status if s.name.endswith(": contact")]
