@@ -46,7 +46,7 @@ from rclpy.serialization import serialize_message
 from sensor_msgs.msg import PointCloud2, PointField
 
 from ..core import Simulator
-from ..core.contact.query import lowest_gap, lowest_gaps, lowest_point, touching_points
+from ..core.contact.query import lowest_gap, lowest_gaps, lowest_point, resting_bodies, touching_points
 from .conversions import RejectedMessage, time_msg_from_seconds
 
 __all__ = ["CONTACT_FIELDS", "CONTACT_POINT_STEP", "STATES", "INTO_GROUND_TOLERANCE", "ContactPublisher",
@@ -183,7 +183,7 @@ class ContactPublisher:
     def _resting_rows(self, sim: Simulator, solver: Any) -> list[dict[str, Any]]:
         rows = []
         span = sim.time - self._time if self._time is not None else 0.0
-        for i in solver.bodies.tolist():
+        for i in resting_bodies(sim):
             points, gaps = touching_points(sim, i)
             if not len(points):
                 continue
@@ -215,7 +215,7 @@ class ContactPublisher:
             return None
         window = {key: value - self._at_open.get(key, 0) for key, value in self.totals.items()}
         energy = self.energy_change - self._at_open.get("energy_change", 0.0)
-        resting = sum(1 for i in solver.bodies.tolist() if touching_points(sim, i)[0].size)
+        resting = len(resting_bodies(sim))
         status = DiagnosticStatus(name=f"{node_name}: contact", hardware_id="none")
         status.level = DiagnosticStatus.OK
         status.message = (f"{resting} resting, {window['events']} events ({window['impacts']} impacts) "

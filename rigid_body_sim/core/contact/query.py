@@ -16,7 +16,7 @@ from ..kernels import layout as L
 from ..kernels.contact.layout import MAX_POINTS, PERSISTENT
 from ..kernels.contact.shapes import body_gap, body_points, feature_points, min_gaps
 
-__all__ = ["lowest_gap", "lowest_gaps", "lowest_point", "touching_points"]
+__all__ = ["lowest_gap", "lowest_gaps", "lowest_point", "resting_bodies", "touching_points"]
 
 
 def lowest_gap(sim, body: str, position_world, orientation_xyzw) -> tuple[float, int]:
@@ -68,3 +68,11 @@ def lowest_gaps(sim) -> np.ndarray:
     out = np.empty(len(solver.bodies))
     min_gaps(sim._Ys[sim._control[L.CUR]], sim._prm, solver.shapes, solver.grounds, solver.bodies, out)
     return out
+
+
+def resting_bodies(sim) -> list[int]:
+    """Indices of the bodies in persistent contact, in scene order ([] without contact)."""
+    solver = sim.contact
+    if solver is None:
+        return []
+    return solver.bodies[solver.modes[solver.bodies] == PERSISTENT].tolist()
