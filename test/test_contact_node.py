@@ -244,3 +244,18 @@ def test_no_contacts_without_ground() -> None:
         h.spin_for(0.2)
         assert clouds == []
         assert not [s for s in h.node.diagnostics().status if s.name.endswith(": contact")]
+
+
+def test_contacts_start_afresh_after_reset() -> None:
+    """~/reset puts the ball back at t = 0: the first impact is reported again at t1 (and only once)."""
+    with SimHarness(BALL, PARAMETERS) as h:
+        clouds = collect(h, "/contacts", PointCloud2)
+        h.step(50)
+        h.spin_until(lambda: len(clouds) >= 50, "50 contacts")
+        assert h.reset().success
+        h.step(50)
+        h.spin_until(lambda: len(clouds) >= 100, "50 more contacts")
+    for part in (clouds[:50], clouds[50:]):
+        points = np.concatenate([cloud_points(c) for c in part])
+        impacts = points[points["state"] == 0]
+        assert len(impacts) == 1 and abs(impacts["time"][0] - T1) < 1e-9

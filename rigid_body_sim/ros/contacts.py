@@ -112,6 +112,7 @@ class ContactPublisher:
         self.frame_id = frame_id
         self._solver: Any = None  # the ContactSolver the counts below follow
         self._seen = 0  # events of its list already published
+        self._last: Any = None  # the last of them (a reset clears the list: then it is gone)
         self._impulses = np.zeros((0, 3))  # its holding_impulses at the last publish
         self._time: float | None = None  # sim time of the last publish
         self.totals = {"events": 0, "impacts": 0, "zeno_guards": 0, "contact_points": 0}
@@ -125,8 +126,10 @@ class ContactPublisher:
         solver = sim.contact
         if solver is None:
             return None
-        if solver is not self._solver or len(solver.events) < self._seen:  # a new scene, or a reset
-            self._solver, self._seen, self._time = solver, 0, None
+        events = solver.events
+        if solver is not self._solver or (self._seen and (len(events) < self._seen
+                                                          or events[self._seen - 1] is not self._last)):
+            self._solver, self._seen, self._time = solver, 0, None  # a new scene, or a reset (events cleared)
         elif self._time is not None and sim.time <= self._time:  # time went back (reset_world...)
             self._time = None
         rows = self._event_rows(sim, solver) + self._resting_rows(sim, solver)
@@ -178,6 +181,7 @@ class ContactPublisher:
                          "time": event.time, "body": i, "ground": event.ground, "state": STATES[event.kind],
                          "energy_change": (event.energy_after - event.energy_before) if event.kind == "impact" else 0.0})
         self._seen = len(events)
+        self._last = events[-1] if events else None
         return rows
 
     def _resting_rows(self, sim: Simulator, solver: Any) -> list[dict[str, Any]]:
