@@ -26,6 +26,9 @@ message per tick for all bodies, as it publishes them; ros/batch.py has the layo
                                                  axes) and ``stopped`` (uint8: 1 once it blew up)
 =================  ============================  =============================================
 
+and, from the node on a scene with contact, ``/contacts`` (sensor_msgs/PointCloud2, one message
+per tick as published: ros/contacts.py has the layout).
+
 The scene order of the batches is in their channel's metadata, key ``body_names`` (a JSON list
 of names); a new pair of channels starts wherever the order changes.
 
@@ -115,9 +118,9 @@ def offered_qos_profiles(history: str, depth: int, reliability: str, durability:
 def topic_qos(topic: str) -> tuple[str, int, str, str]:
     """(history, depth, reliability, durability) the node uses on a recorded topic: its state
     topics (``B/pose``, ``B/twist``, ``poses``, ``velocities``) and ``/clock`` are latched
-    (``transient_local``, depth 1); ``B/S/imu`` and ``B/wrench`` (an input it subscribes to)
-    are ``volatile``, depth 10. Without ``qos_overrides`` parameters."""
-    if topic.endswith(("/imu", "/wrench")):
+    (``transient_local``, depth 1); ``B/S/imu``, ``contacts`` and ``B/wrench`` (an input it
+    subscribes to) are ``volatile``, depth 10. Without ``qos_overrides`` parameters."""
+    if topic.endswith(("/imu", "/wrench", "/contacts")):
         return _QUEUE_QOS
     return _STATE_QOS
 
@@ -314,6 +317,23 @@ class McapRecorder:
             self._write(f"{self._prefix}{body}/twist", "geometry_msgs/msg/Twist", {
                 "linear": _xyz(linear_velocities_world[i]), "angular": _xyz(angular_velocities_world[i]),
             }, ns)
+
+    def write_contacts(self, time: float, data: bytes) -> None:
+        """Write ``contacts`` (sensor_msgs/PointCloud2, the CDR bytes the node published; layout:
+        ros/contacts.py) at sim ``time`` (s)."""
+        self._write_bytes(f"{self._prefix}contacts", "sensor_msgs/msg/PointCloud2", data, stamp_ns(time))
+
+    def _write_bytes(self, topic: str, schema: str, data: bytes, ns: int) -> None:
+        if self._file is None:
+            raise ValueError(f"recording {self.path} is closed")
+        if schema not in self._schemas:
+            self._schemas[schema] = self._writer.register_schema(schema, "ros2msg", complete_definition(schema).encode())
+        channel = self._channels.get(topic)
+        if channel is None:
+            channel = self._channels[topic] = self._writer.register_channel(topic, "cdr", self._schemas[schema],
+                                                                            channel_metadata(topic))
+        self._writer.add_message(channel, log_time=ns, data=data, publish_time=ns, sequence=self.message_count)
+        self.message_count += 1
 
     def write_clock(self, time: float) -> None:
         """Write ``/clock`` at sim ``time`` (s)."""

@@ -24,6 +24,7 @@ from rclpy.qos import QoSProfile
 from ..core import Scene, Simulator
 from ..core.imu import ImuSample
 from ..offline.recording import McapRecorder
+from .contacts import ContactPublisher
 from .conversions import time_msg_from_seconds
 from .imu import ImuChange, ImuPublishers
 from .inputs import InputChange, WrenchInputs
@@ -73,6 +74,7 @@ class BodyEndpoints:
         self.imus = ImuPublishers(node, qos, prefix)
         self.set_state = SetStateInputs(node, qos, world_frame, self.inputs, prefix)
         self.markers = MarkerPublisher(node, qos, prefix + world_frame)
+        self.contacts = ContactPublisher(node, qos, prefix + world_frame)  # contacts.py
         self.tf = TfPublisher(node, world_frame, prefix) if TF_AVAILABLE else None
         self._tf_scene: Scene | None = None  # the scene whose /tf_static was sent last
         self._tf_scene_due: Scene | None = None  # a committed scene whose /tf_static is still to send
@@ -129,9 +131,13 @@ class BodyEndpoints:
                 for body, frame, force, torque in wrenches]
 
     def publish_tick(self, sim: Simulator, tick_s: float, settings: Mapping[str, Any]) -> None:
-        """Sample and publish the IMUs due, then the state (both recorded if recording)."""
+        """Sample and publish the IMUs due, then the state and the contacts (all recorded if recording)."""
         self.imus.publish(sim, tick_s, self._record_imu if self.recording.recorder is not None else None)
         self.publish(sim, settings)
+        contacts = self.contacts.publish(sim)
+        if contacts is not None and self.recording.recorder is not None:
+            data = self.contacts.cdr(contacts)
+            self.recording.write(lambda recorder: recorder.write_contacts(sim.time, data))
 
     def publish(self, sim: Simulator, settings: Mapping[str, Any]) -> None:
         """Publish the state (and /clock), /tf, the markers when due, and record the state."""

@@ -94,9 +94,9 @@ class RigidBodySimNode(Node):
         self.add_pre_set_parameters_callback(coerce_parameters)
         self.add_on_set_parameters_callback(self._prepare_change)
         self.add_post_set_parameters_callback(self._apply_change)
-
         self._steady_clock = Clock(clock_type=ClockType.STEADY_TIME)
-        self._diagnostics = NodeDiagnostics(self, self._session, self._endpoints.inputs, qos, self._steady_clock)
+        self._diagnostics = NodeDiagnostics(self, self._session, self._endpoints.inputs, qos, self._steady_clock,
+                                            self._endpoints.contacts)
         self._diagnostics.set_period(settings["diagnostics_period"])
         self._status_log = StatusLog()
         self._log_start_up()

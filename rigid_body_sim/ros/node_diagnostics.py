@@ -17,6 +17,7 @@ from rclpy.clock import Clock
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
 
+from .contacts import ContactPublisher
 from .diagnostics import TickWindow, busy_status, diagnostic_statuses
 from .inputs import WrenchInputs
 from .session import SessionBusy, SimSession
@@ -44,12 +45,16 @@ class NodeDiagnostics:
         Of the /diagnostics publisher.
     clock : rclpy.clock.Clock
         The steady clock the timer runs on.
+    contacts : ContactPublisher, optional
+        Whose contact counts (contacts.py) are reported, as ``<node>: contact``, when the scene has contact.
     """
 
-    def __init__(self, node: Node, session: SimSession, inputs: WrenchInputs, qos: QoSProfile, clock: Clock):
+    def __init__(self, node: Node, session: SimSession, inputs: WrenchInputs, qos: QoSProfile, clock: Clock,
+                 contacts: ContactPublisher | None = None):
         self._node = node
         self._session = session
         self._inputs = inputs
+        self._contacts = contacts
         self._clock = clock
         self.window = TickWindow(session.simulator.time)
         self.open_window()
@@ -70,6 +75,8 @@ class NodeDiagnostics:
         """Start a new report window at the current sim time (hold the session's lock)."""
         self.window.reopen(self._session.simulator.time)
         _, _, self._accepted_at_open, self._rejected_at_open = self._inputs.snapshot()
+        if self._contacts is not None:
+            self._contacts.open_window()
 
     def report(self, wait_s: float | None = None) -> DiagnosticArray:
         """The DiagnosticArray for the window since the last one; opens a new window. With ``wait_s``,
@@ -88,6 +95,9 @@ class NodeDiagnostics:
                     held_wrenches=len(holds), pending_impulses=len(pending), accepted_total=accepted,
                     accepted_at_open=self._accepted_at_open, rejected_total=rejected,
                     rejected_at_open=self._rejected_at_open, fault=session.fault)
+                contact = self._contacts.status(name, sim) if self._contacts is not None else None
+                if contact is not None:
+                    array.status.append(contact)
                 self.open_window()
         except SessionBusy as busy:
             running = session.tick_running_for()

@@ -14,7 +14,8 @@ and then stepped. A bad message changes nothing and is counted on ``/diagnostics
 wrench inputs' counters (inputs.py), by reason: ``unknown_frame`` (header.frame_id or
 child_frame_id), ``non_finite``, ``too_large`` (a component above :data:`MAX_STATE_COMPONENT`),
 ``non_unit_quaternion`` (| |q| − 1 | > :data:`~rigid_body_sim.core.scene.ORIENTATION_TOLERANCE`),
-``non_finite_result`` (the core refused it at the tick).
+``non_finite_result`` (the core refused it at the tick), ``into_ground`` (the body's collision
+shape would reach into a ground half-space: contacts.py).
 
 Subscriptions change in the three steps of :mod:`.publishers` (prepare, commit, release).
 """
@@ -34,6 +35,7 @@ from rclpy.qos import QoSProfile
 from ..core import Simulator
 from ..core.quaternion import quat_rotate, quat_wxyz_from_xyzw
 from ..core.scene import ORIENTATION_TOLERANCE
+from .contacts import into_ground
 from .conversions import RejectedMessage
 
 __all__ = ["MAX_STATE_COMPONENT", "SetStateChange", "SetStateInputs", "state_from_odometry"]
@@ -149,6 +151,10 @@ class SetStateInputs:
         applied = []
         for body, (p_W, q_xyzw, v_W, w_W) in pending.items():
             if body not in sim.body_names:
+                continue
+            refusal = into_ground(sim, body, p_W, q_xyzw)  # contacts.py: never into a ground half-space
+            if refusal is not None:
+                self._inputs.count_rejection(body, "set_state", refusal)
                 continue
             try:
                 sim.set_body_state(body, position_world=p_W, orientation_xyzw=q_xyzw, linear_velocity_world=v_W,

@@ -160,6 +160,10 @@ class ContactSolver:
         self._rdot = np.zeros((MAX_POINTS, 3))
         self.pressed = np.zeros(n, dtype=np.int64)  # the tracked features the holding force pushes on, as bits
         self.events: list[ContactEvent] = []
+        #: Per body, the contact force (N, world axes) held over the last step (zero while not resting).
+        self.holding_forces = np.zeros((n, 3))
+        #: Per body, Σ holding force × step (N·s, world axes) since the solver was made (impacts not included).
+        self.holding_impulses = np.zeros((n, 3))
         #: Steps of resting bodies that still gained energy when cut into MAX_REFINEMENT pieces.
         self.energy_gains = 0
         self._points = np.empty((MAX_POINTS, 3))
@@ -304,6 +308,7 @@ class ContactSolver:
         """Add to ``wrenches`` (the step's rows, in place) the force holding each body in persistent contact."""
         Y = sim._Ys[sim._control[L.CUR]]
         resting = self.bodies[(self.modes[self.bodies] == PERSISTENT) & ~sim._stopped[self.bodies]]
+        self.holding_forces[:] = 0.0
         if not resting.size:
             return
         hold_all(Y, sim._prm, wrenches, self.shapes, self.grounds, resting, self.ground_of, self.tracked, self.friction,
@@ -311,6 +316,10 @@ class ContactSolver:
                  self.sliding, self.slide_direction, self._status)
         for i in resting[self._status[resting] != OK]:  # lifting off: the solver says so and records it
             self._hold(sim, Y[i], i, wrenches[i], sim.time)
+        held = resting[self.modes[resting] == PERSISTENT]
+        added = wrenches[held] - self._bare_rows[held]  # the contact forces go in as world-axes forces (add_wrench)
+        self.holding_forces[held] = added[:, L.F_WORLD:L.F_WORLD + 3] + added[:, L.F_COM_W:L.F_COM_W + 3]
+        self.holding_impulses[held] += self.holding_forces[held] * sim.dt
 
     def _hold(self, sim, y: np.ndarray, i: int, w: np.ndarray, t: float) -> bool:
         """Add the holding force of body i at y into the wrench row w; False (and flight) if it lifts off."""

@@ -1,0 +1,261 @@
+"""Ground contact through the node's ROS interface, against closed forms.
+
+The dropped ball (config/contact_bouncing_ball.yaml: r = 0.1 m, lowest point at h = 1 m,
+e = max(0.5, 0.5), g = 9.81), paused and stepped tick by tick through ``~/step`` by a peer:
+impacts at t1 = √(2h/g), t_{k+1} = t_k + 2 e^k v1 / g (v1 = √(2gh)), the centre's height the
+parabolas z(t) = r + e^k v1 (t − t_k) − g (t − t_k)²/2 between them, at rest (r) from the
+accumulation time t1 (1 + e)/(1 − e). rk4 integrates a parabola exactly, so the only error is
+round-off and the event location: 1e-9 is asked. ``contacts`` must carry every impact at its
+time, with the impulse m (1 + e) e^{k−1} v1; /diagnostics its counts. An ideal IMU on a box
+resting on the ground (config/contact_resting_box_imu.yaml) reads the specific force +g up; a
+``set_state`` that puts the ball into the ground is refused (``into_ground``) and changes nothing.
+A recording of the ball carries ``contacts`` and Foxglove's readers decode it.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from nav_msgs.msg import Odometry
+from rclpy.qos import QoSProfile
+from sensor_msgs.msg import Imu, PointCloud2, PointField
+
+from rigid_body_sim.core.contact.solver import ZENO_APEX
+from rigid_body_sim.ros.diagnostics import status_values
+from rigid_body_sim.testing import SimHarness
+
+pytestmark = pytest.mark.ros
+
+CONFIG = Path(__file__).resolve().parents[1] / "config"
+BALL = CONFIG / "contact_bouncing_ball.yaml"
+BOX = CONFIG / "contact_resting_box_imu.yaml"
+G, E, R, H, M = 9.81, 0.5, 0.1, 1.0, 1.0
+T1 = math.sqrt(2.0 * H / G)
+V1 = math.sqrt(2.0 * G * H)
+REST = T1 * (1.0 + E) / (1.0 - E)
+TICK = 0.01  # rate_hz 100, substeps 1, real_time_factor 1
+PARAMETERS = {"integrator": "rk4", "rate_hz": 100.0, "substeps": 1, "real_time_factor": 1.0,
+              "diagnostics_period": 0.0}  # no timer: one /diagnostics window over the whole test
+#: The impacts t_k before the Zeno guard: the last is the first whose rebound e^k v1 would rise
+#: less than ZENO_APEX (e^k v1)²/(2g) (the solver's documented constant, 1e-10 m).
+IMPACTS = [T1]
+while (E ** len(IMPACTS) * V1) ** 2 / (2.0 * G) >= ZENO_APEX:
+    IMPACTS.append(IMPACTS[-1] + 2.0 * E ** len(IMPACTS) * V1 / G)
+
+_NUMPY = {PointField.FLOAT64: "<f8", PointField.UINT32: "<u4", PointField.UINT8: "u1"}
+
+
+def centre_height(t: float) -> float:
+    """Closed form z(t) of the ball's centre."""
+    if t <= T1:
+        return R + H - 0.5 * G * t * t
+    if t >= REST:
+        return R
+    k = max(k for k, tk in enumerate(IMPACTS, start=1) if tk <= t)
+    s = t - IMPACTS[k - 1]
+    return R + E**k * V1 * s - 0.5 * G * s * s
+
+
+def cloud_points(msg: PointCloud2) -> np.ndarray:
+    """The points of a PointCloud2, read from its own ``fields`` (as any consumer would)."""
+    dtype = np.dtype({"names": [f.name for f in msg.fields], "formats": [_NUMPY[f.datatype] for f in msg.fields],
+                      "offsets": [f.offset for f in msg.fields], "itemsize": msg.point_step})
+    assert not msg.is_bigendian and msg.height == 1 and msg.row_step == msg.point_step * msg.width
+    return np.frombuffer(bytes(msg.data), dtype=dtype, count=msg.width)
+
+
+def collect(h: SimHarness, topic: str, msg_type: type) -> list:
+    got: list = []
+    h.client.create_subscription(msg_type, topic, got.append, QoSProfile(depth=1000))
+    h.spin_until(lambda: h.node.count_subscribers(topic) > 0, f"the node's {topic} publisher to match")
+    return got
+
+
+def contact_status(h: SimHarness) -> dict[str, str]:
+    statuses = [s for s in h.node.diagnostics().status if s.name.endswith(": contact")]
+    assert len(statuses) == 1
+    return status_values(statuses[0])
+
+
+def set_state(h: SimHarness, publisher, z: float) -> None:
+    msg = Odometry()
+    msg.header.frame_id, msg.child_frame_id = "world", "world"
+    msg.pose.pose.position.z = z
+    msg.pose.pose.orientation.w = 1.0
+    publisher.publish(msg)
+
+
+def test_dropped_ball_poses_and_contacts_through_the_node_match_the_closed_form() -> None:
+    ticks = int(round(1.5 / TICK))
+    with SimHarness(BALL, PARAMETERS) as h:
+        clouds = collect(h, "/contacts", PointCloud2)
+        heights = []
+        for k in range(1, ticks + 1):
+            h.step(1)
+            heights.append(h.latest_pose("ball").pose.position.z)
+            h.spin_until(lambda: len(clouds) >= k, f"contacts of tick {k}")
+        status = contact_status(h)
+    # poses: the piecewise parabolas, and at rest on the ground after the accumulation time
+    errors = [abs(z - centre_height(k * TICK)) for k, z in enumerate(heights, start=1)]
+    assert max(errors) < 1e-9, max(errors)
+    # contacts: every impact, at its closed-form time, with its impulse; then the rest event
+    assert [c.header.frame_id for c in clouds] == ["world"] * ticks
+    points = np.concatenate([cloud_points(c) for c in clouds])
+    assert set(points["body"].tolist()) == {0} and set(points["ground"].tolist()) == {0}
+    impacts = points[points["state"] == 0]
+    assert len(impacts) == len(IMPACTS)
+    np.testing.assert_allclose(impacts["time"], IMPACTS, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(impacts["impulse"], [M * (1 + E) * E**k * V1 for k in range(len(IMPACTS))],
+                               rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(impacts["energy_change"],
+                               [-0.5 * M * (1 - E**2) * (E**k * V1) ** 2 for k in range(len(IMPACTS))],
+                               rtol=1e-9, atol=1e-12)
+    for name, value in (("x", 0.0), ("y", 0.0), ("z", 0.0), ("nx", 0.0), ("ny", 0.0), ("nz", 1.0)):
+        np.testing.assert_allclose(impacts[name], value, rtol=0, atol=1e-9)
+    rests = points[points["state"] == 3]
+    assert len(rests) == 1
+    assert abs(rests["time"][0] - REST) < 1e-9
+    # each impact is in the message of the tick that contains it
+    for cloud_index, cloud in enumerate(clouds):
+        for t in cloud_points(cloud)[cloud_points(cloud)["state"] == 0]["time"]:
+            assert cloud_index * TICK - 1e-12 < t <= (cloud_index + 1) * TICK + 1e-12
+    # resting after: one point per tick at the contact, gap 0, held by m g along the normal
+    settled = [cloud_points(c) for k, c in enumerate(clouds, start=1) if (k - 1) * TICK > REST + TICK]
+    assert settled and all(len(p) == 1 and p["state"][0] == 1 for p in settled)
+    resting = np.concatenate(settled)
+    np.testing.assert_allclose(resting["normal_force"], M * G, rtol=1e-9)
+    np.testing.assert_allclose(resting["friction_force"], 0.0, atol=1e-9)
+    np.testing.assert_allclose(resting["gap"], 0.0, atol=1e-9)
+    np.testing.assert_allclose(resting["z"], 0.0, atol=1e-9)
+    # /diagnostics: the counts of the window (all of it)
+    assert int(status["impacts (window)"]) == len(IMPACTS)
+    assert int(status["events (window)"]) == len(IMPACTS) + 1
+    assert int(status["Zeno guards (window)"]) == 1
+    assert int(status["contacts (resting bodies)"]) == 1
+    assert float(status["largest gap violation [m] (window)"]) < 1e-9
+    energy = -sum(0.5 * M * (1 - E**2) * (E**k * V1) ** 2 for k in range(len(IMPACTS)))
+    assert abs(float(status["energy change at impacts [J] (window)"]) - energy) < 1e-9
+
+
+def test_imu_on_a_resting_box_reads_g_up() -> None:
+    with SimHarness(BOX, PARAMETERS) as h:
+        imus = collect(h, "crate/top/imu", Imu)
+        clouds = collect(h, "/contacts", PointCloud2)
+        h.step(20)
+        h.spin_until(lambda: len(imus) >= 20 and len(clouds) >= 20, "20 IMU samples and contacts")
+        z = h.latest_pose("crate").pose.position.z
+    assert abs(z - 0.1) < 1e-9
+    for imu in imus:
+        a, w = imu.linear_acceleration, imu.angular_velocity
+        np.testing.assert_allclose([a.x, a.y, a.z], [0.0, 0.0, G], rtol=0, atol=1e-9)
+        np.testing.assert_allclose([w.x, w.y, w.z], 0.0, atol=1e-9)
+    for cloud in clouds[1:]:
+        points = cloud_points(cloud)
+        assert len(points) == 1 and points["state"][0] == 1
+        assert abs(points["normal_force"][0] - 2.0 * G) < 1e-9 and abs(points["friction_force"][0]) < 1e-9
+
+
+def test_set_state_into_the_ground_is_refused_with_a_reason() -> None:
+    with SimHarness(BALL, PARAMETERS) as h:
+        publisher = h.client.create_publisher(Odometry, "ball/set_state", QoSProfile(depth=10))
+        h.spin_until(lambda: publisher.get_subscription_count() > 0, "the node's ball/set_state subscription")
+        set_state(h, publisher, 0.05)  # r = 0.1: 5 cm into the ground
+        h.spin_until(lambda: h.node.rejected.get("into_ground", 0) == 1, "the into_ground rejection")
+        h.step(1)
+        z = h.latest_pose("ball").pose.position.z
+        assert abs(z - centre_height(TICK)) < 1e-9  # unchanged: still the free fall from 1.1 m
+        inputs = [s for s in h.node.diagnostics().status if s.name.endswith(": input")][0]
+        assert status_values(inputs)["rejected into_ground (total)"] == "1"
+        set_state(h, publisher, R)  # touching: allowed
+        h.spin_until(lambda: h.node.accepted_messages == 2, "the second set_state")
+        h.step(1)
+        assert h.node.rejected.get("into_ground", 0) == 1
+        assert abs(h.latest_pose("ball").pose.position.z - R) < 1e-9  # resting on the ground from there
+
+
+def test_recording_carries_contacts_and_foxglove_decodes_them(tmp_path: Path) -> None:
+    import base64
+
+    from test_foxglove_readers import (by_topic, check_everything_decodes, check_schema_text, foxglove_decode,
+                                       graph_qos, recorded_qos, stamp_ns)
+
+    out = tmp_path / "ball.mcap"
+    ticks = 50  # past the first impact, t1 = 0.4515 s
+    with SimHarness(BALL, {**PARAMETERS, "record_path": str(out)}) as h:
+        h.step(ticks)
+        live = graph_qos(h.client, "/contacts")
+    result = foxglove_decode(out)
+    check_everything_decodes(result, finished=True)
+    check_schema_text(out)
+    assert recorded_qos(result, "/contacts") == live
+    clouds = by_topic(result, "/contacts")
+    assert len(clouds) == ticks
+    impacts = []
+    for k, (log_ns, cloud) in enumerate(clouds, start=1):
+        assert log_ns == stamp_ns(cloud["header"]) == round(k * TICK * 1e9)
+        fields = cloud["fields"]
+        dtype = np.dtype({"names": [f["name"] for f in fields], "formats": [_NUMPY[f["datatype"]] for f in fields],
+                          "offsets": [f["offset"] for f in fields], "itemsize": cloud["point_step"]})
+        points = np.frombuffer(base64.b64decode(cloud["data"]["base64"]), dtype=dtype, count=cloud["width"])
+        impacts += points[points["state"] == 0].tolist()
+    assert len(impacts) == 1
+    impact = dict(zip(dtype.names, impacts[0]))
+    assert abs(impact["time"] - T1) < 1e-9
+    assert abs(impact["impulse"] - M * (1 + E) * V1) < 1e-9
+
+
+def test_sliding_box_friction_and_stick_through_the_node() -> None:
+    """config/contact_sliding_box.yaml: a cube (1 kg) launched at v0 = 2 m/s along x on the ground,
+    μ = 0.5 (the body has no material: the ground's): x(t) = v0 t − μ g t²/2 until it sticks at
+    t_s = v0/(μ g), there x_s = v0²/(2 μ g); meanwhile held by m g along the normal and μ m g of friction."""
+    mu, v0, m = 0.5, 2.0, 1.0
+    t_stop = v0 / (mu * G)
+    ticks = 50
+    with SimHarness(CONFIG / "contact_sliding_box.yaml", PARAMETERS) as h:
+        clouds = collect(h, "/contacts", PointCloud2)
+        xs = []
+        for k in range(1, ticks + 1):
+            h.step(1)
+            xs.append(h.latest_pose("crate").pose.position.x)
+            h.spin_until(lambda: len(clouds) >= k, f"contacts of tick {k}")
+    for k, x in enumerate(xs, start=1):
+        t = min(k * TICK, t_stop)
+        assert abs(x - (v0 * t - 0.5 * mu * G * t * t)) < 1e-9, (k, x)
+    points = [cloud_points(c) for c in clouds]
+    sticks = np.concatenate([p[p["state"] == 4] for p in points])
+    assert len(sticks) == 1 and abs(sticks["time"][0] - t_stop) < 1e-9
+    sliding = np.concatenate([p[p["state"] == 2] for k, p in enumerate(points, start=1) if k * TICK < t_stop])
+    assert len(sliding) == int(t_stop / TICK)
+    np.testing.assert_allclose(sliding["normal_force"], m * G, rtol=1e-9)
+    np.testing.assert_allclose(sliding["friction_force"], mu * m * G, rtol=1e-9)
+    np.testing.assert_allclose(sliding["gap"], 0.0, atol=1e-9)
+    stuck = np.concatenate([p[p["state"] == 1] for k, p in enumerate(points, start=1) if (k - 1) * TICK > t_stop])
+    assert len(stuck) and np.all(np.abs(stuck["friction_force"]) < 1e-9)
+
+
+def test_no_contacts_without_ground() -> None:
+    """The default scene has no ground: nothing is published on ``contacts``, no contact status."""
+    with SimHarness(None, PARAMETERS) as h:
+        clouds = collect(h, "/contacts", PointCloud2)
+        h.step(3)
+        h.spin_for(0.2)
+        assert clouds == []
+        assert not [s for s in h.node.diagnostics().status if s.name.endswith(": contact")]
+
+
+def test_contacts_start_afresh_after_reset() -> None:
+    """~/reset puts the ball back at t = 0: the first impact is reported again at t1 (and only once)."""
+    with SimHarness(BALL, PARAMETERS) as h:
+        clouds = collect(h, "/contacts", PointCloud2)
+        h.step(50)
+        h.spin_until(lambda: len(clouds) >= 50, "50 contacts")
+        assert h.reset().success
+        h.step(50)
+        h.spin_until(lambda: len(clouds) >= 100, "50 more contacts")
+    for part in (clouds[:50], clouds[50:]):
+        points = np.concatenate([cloud_points(c) for c in part])
+        impacts = points[points["state"] == 0]
+        assert len(impacts) == 1 and abs(impacts["time"][0] - T1) < 1e-9
