@@ -1,6 +1,6 @@
 # rigid_body_sim: set-up, run and test in a local virtualenv (.venv) with pinned wheels.
 #
-#   make run        set up if needed, then run rigid_body_sim_node on the default scene
+#   make run        set up if needed, then run rigid_body_sim_node on the default scene, with the browser view
 #   make test       set up if needed, then pytest (slow tests excluded; a budget of ~3 min)  <- what CI runs
 #   make test-slow  set up if needed, then pytest -m slow (soak, statistics, repeated runs:
 #                   1e5-1e6 steps, the 100,000-message DDS fuzz, colcon test, environment probes)
@@ -89,8 +89,17 @@ $(STAMP): requirements.txt requirements-test.txt requirements-view.txt setup.py 
 	touch "$@"
 	say "ready: $(VENV) ($$($(VENV_PY) -V 2>&1))"
 
+# The node in the foreground and the browser view beside it (it prints its address; VIEW=0: the
+# node alone; VIEW_ARGS="--port 8090"). Ctrl-C stops both.
+VIEW ?= 1
+VIEW_ARGS ?=
 run: $(STAMP)
-	exec $(VENV)/bin/rigid_body_sim_node $(RUN_ARGS)
+	@if [ "$(VIEW)" = 1 ]; then
+	  $(VENV)/bin/rigid-body-sim view $(VIEW_ARGS) &
+	  view=$$!
+	  trap 'kill -INT $$view 2>/dev/null || true; wait $$view 2>/dev/null || true' EXIT
+	fi
+	$(VENV)/bin/rigid_body_sim_node $(RUN_ARGS)
 
 # Foxglove's own readers (@mcap/core, @mcap/support, @foxglove/rosmsg, @foxglove/rosmsg2-serialization), pinned
 # in test/foxglove/package-lock.json, for test/test_foxglove_readers.py. Node.js and npm come from apt if missing.
