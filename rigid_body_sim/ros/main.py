@@ -7,9 +7,11 @@ in a step that will not end soon): then the recording is finished without waitin
 
 Signals come in two phases (:mod:`rigid_body_sim.signals`; rclpy is told to install no handler
 of its own). Until the recording opens and the ticks start, nothing is worth saving: a signal
-ends the process at once with status 0 and one line on stderr. From then on a signal only sets
-a flag; the spin loop sees it within :data:`SPIN_TIMEOUT_S` and stops in order: executor, tick
-thread, recording, node, context. This module imports only the standard library at module
+ends the process at once with status 0 and one line on stderr. From then on a signal sets a
+flag and cancels the step under way (``Simulator.cancel``: a long tick, or ``~/step_ticks``,
+ends at its next substep and publishes the state it reached); the spin loop sees the flag within
+:data:`SPIN_TIMEOUT_S` and stops in order: executor, tick thread (the running tick ends first),
+recording (after its last write), node, context. This module imports only the standard library at module
 level, so that the handlers are in place before the heavy imports begin.
 """
 
@@ -65,7 +67,11 @@ def main(args: list[str] | None = None) -> int:
     gc.collect()  # what start-up made stays for good: a full collection of it stalled the ticks ~90 ms
     gc.freeze()
     watchdog = Watchdog(STOP_GRACE_S, lambda: _give_up(node))
-    stop = signals.switch_to_orderly(on_first=watchdog.start)  # phase 2: a signal only sets `stop`
+    def on_first_signal() -> None:  # phase 2: a signal sets `stop`, cancels the step under way, arms the watchdog
+        node.session.request_stop()
+        watchdog.start()
+
+    stop = signals.switch_to_orderly(on_first=on_first_signal)
     status = 0
     try:
         try:
