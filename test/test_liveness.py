@@ -107,10 +107,12 @@ def recorded_messages(path: Path) -> int:
 # ---------------------------------------------------------------------- one long compiled tick
 
 
-@pytest.mark.parametrize("bodies", [2000, pytest.param(3000, marks=pytest.mark.slow)])
-def test_a_long_tick_answers_reports_error_and_stops_at_a_substep(bodies, tmp_path):
-    """``bodies`` × 1e5 rk4 substeps a tick (2000 bodies: about 20 s a tick here, 3000: about 30 s;
-    the tick is cut short by the signal, so the test takes start-up + about 7 s either way)."""
+@pytest.mark.parametrize("signum", [signal.SIGINT, pytest.param(signal.SIGTERM, marks=pytest.mark.slow)],
+                         ids=["SIGINT", "SIGTERM"])
+def test_a_long_tick_answers_reports_error_and_stops_at_a_substep(signum, tmp_path):
+    """3000 bodies × 1e5 rk4 substeps a tick (10-30 s a tick on a shared 2-core machine; the
+    signal cuts it short, so the test takes start-up, about 5 s, plus about 7 s)."""
+    bodies = 3000
     scene = write_tumbling_scene(tmp_path / f"bodies_{bodies}.yaml", bodies)
     record, log = tmp_path / "long.mcap", tmp_path / "long.log"
     rate_hz, substeps = 10.0, 100_000
@@ -157,18 +159,19 @@ def test_a_long_tick_answers_reports_error_and_stops_at_a_substep(bodies, tmp_pa
         assert quiet and max(quiet) < 0.8, f"/diagnostics every 0.5 s, with gaps {quiet} during the tick"
         assert process.poll() is None
 
-        took = stop_and_check(process, signal.SIGINT, log, record, what=f"{bodies} bodies, SIGINT during a tick")
+        took = stop_and_check(process, signum, log, record, what=f"{bodies} bodies, {signum.name} during a tick")
     finally:
         kill_if_running(process)
         peer.close()
-    assert took < 6.0, f"exit {took:.2f} s after SIGINT"
+    # promised: within 5 s (launch's grace); the cancel makes it well under 1 s (2 s: a loaded machine)
+    assert took < 2.0, f"exit {took:.2f} s after {signum.name}"
     data, _scene = read_recording(record)
     dt = 1.0 / (rate_hz * substeps)
     partial = data.time[-1] / dt  # the cut tick was recorded at the substep it reached
     assert 0 < data.time[-1] < 1.0 / rate_hz and abs(partial - round(partial)) < 1e-6, data.time
     print(f"\n{bodies} bodies × {substeps} substeps: ~/reset refused in {reset_s:.2f} s, a parameter change in "
           f"{change_s:.2f} s, ERROR {error_at:.2f} s after the tick's start (longest /diagnostics gap "
-          f"{max(gaps):.2f} s), exit 0 {took:.2f} s after SIGINT, the tick cut at substep {round(partial)}")
+          f"{max(gaps):.2f} s), exit 0 {took:.2f} s after {signum.name}, the tick cut at substep {round(partial)}")
 
 
 # ---------------------------------------------------------------------- a long ~/step_ticks
