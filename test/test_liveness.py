@@ -240,3 +240,55 @@ def test_a_signal_during_a_long_tick_of_step_ticks_ends_it_at_a_substep(tmp_path
     print(f"\n~/step_ticks of 3000 bodies × 1e5 substeps: exit 0 {took:.2f} s after SIGINT, "
           f"the tick cut at t = {data.time[-1]:.6f} s")
     assert took < 2.0, f"exit {took:.2f} s after SIGINT"
+
+
+# ---------------------------------------------------------------------- the recording's last write
+
+
+@pytest.mark.parametrize("take", ["replace", "finish_now"])
+def test_a_recording_taken_away_while_a_thread_writes_holds_what_it_counted(take, tmp_path):
+    """The ordered stop takes the recorder away (``replace(None)``), the watchdog with
+    ``finish_now``, while another thread may be writing (a tick, ~/step_ticks): the write under
+    way ends first, none follows, and the file holds the count logged. (Before, the watchdog
+    closed the file under a writer: the node said N messages, the file held N − 3.)"""
+    import logging
+    import threading
+
+    from rigid_body_sim.core import Simulator, load_scene
+    from rigid_body_sim.ros.node_recording import NodeRecording
+
+    sim = Simulator(load_scene(str(write_tumbling_scene(tmp_path / "ten.yaml", 10))), dt=1e-3)
+    recording = NodeRecording(logging.getLogger("liveness"), "world", "/", "/rigid_body_sim")
+    path = tmp_path / "raced.mcap"
+    recorder = recording.open(str(path), sim)
+    recording.replace(recorder)
+    failures: list[BaseException] = []
+
+    def writer() -> None:
+        try:
+            for _ in range(100_000):
+                sim.step(1)
+                recording.write(lambda r: (r.write_simulator(sim, clock=False), time.sleep(0.002),
+                                           r.write_clock(sim.time)))  # a write that takes a while
+                if recording.recorder is None:
+                    return
+        except BaseException as exc:  # noqa: BLE001  (reported below)
+            failures.append(exc)
+
+    sim.step(1)  # kernels loaded before the race
+    thread = threading.Thread(target=writer)
+    thread.start()
+    deadline = time.monotonic() + 30
+    while recorder.message_count < 300 and not failures:  # writing, mid-way through the loop
+        assert time.monotonic() < deadline and thread.is_alive(), "the writer wrote nothing"
+        time.sleep(0.01)
+    if take == "replace":
+        taken = recording.replace(None)
+        recording.finish(taken)
+    else:
+        recording.finish_now(wait_s=1.0)
+    thread.join(10)
+    assert not failures, failures
+    data, _scene = read_recording(path)
+    assert data.meta["status"].startswith("complete"), data.meta["status"]
+    assert recorder.message_count > 0 and recorded_messages(path) == recorder.message_count

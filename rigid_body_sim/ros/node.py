@@ -245,7 +245,7 @@ class RigidBodySimNode(Node):
     def finish_recording_now(self) -> None:
         """Finish the recording without the session's lock: a write under way ends first, none follows."""
         if self._tick_loop is not None:
-            self._endpoints.stop_recording(contextlib.nullcontext())
+            self._endpoints.recording.finish_now(wait_s=1.0)
 
     # ------------------------------------------------------------------ read-only access for tools and tests
 

@@ -225,6 +225,20 @@ class NodeRecording:
             old, self.recorder = self.recorder, recorder
         return old
 
+    def finish_now(self, wait_s: float) -> None:
+        """Take the recorder away and finish it, waiting at most ``wait_s`` for a write under way (an
+        exit that cannot wait for the node's lock); a write stuck longer leaves the file unfinished
+        (read as ``cut short``) rather than keep the process from exiting."""
+        if not self._writing.acquire(timeout=wait_s):
+            self._logger.error(f"a write into the recording has run over {wait_s:g} s; leaving it unfinished")
+            return
+        try:
+            recorder, self.recorder = self.recorder, None
+        finally:
+            self._writing.release()
+        if recorder is not None:
+            self.finish(recorder)
+
     def write(self, write: Callable[[McapRecorder], None]) -> None:
         """``write(recorder)`` if recording; a failed write ends the recording."""
         with self._writing:
