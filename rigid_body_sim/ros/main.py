@@ -2,8 +2,9 @@
 
 Exit status: 0 after SIGINT or SIGTERM at any moment, 2 for bad start-up parameters or scene
 (the reason on stderr), 1 if the tick thread fails (after saying so on the log and
-/diagnostics), and 1 if the orderly stop takes longer than :data:`STOP_GRACE_S` (a tick stuck
-in a step that will not end soon): then the recording is finished without waiting for the tick.
+/diagnostics), and 1 if the orderly stop takes longer than :data:`STOP_GRACE_S` (a step that
+cannot be cut short): then the recording is finished without the session's lock, after the
+write under way (if any; none follows).
 
 Signals come in two phases (:mod:`rigid_body_sim.signals`; rclpy is told to install no handler
 of its own). Until the recording opens and the ticks start, nothing is worth saving: a signal
