@@ -68,6 +68,7 @@ def main(args: list[str] | None = None) -> int:
     gc.collect()  # what start-up made stays for good: a full collection of it stalled the ticks ~90 ms
     gc.freeze()
     watchdog = Watchdog(STOP_GRACE_S, lambda: _give_up(node))
+
     def on_signal() -> None:  # phase 2: a signal sets `stop`, cancels the step under way, arms the watchdog
         node.session.request_stop()  # no lock: also from the signal watch thread, the main thread in a step
         watchdog.start()

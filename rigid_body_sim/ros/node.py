@@ -204,6 +204,7 @@ class RigidBodySimNode(Node):
     def _raise_tick_failure(self) -> None:
         if self.tick_failure is not None:
             raise self.tick_failure
+
     @property
     def tick_failure(self) -> BaseException | None:
         """The exception that ended the tick thread, or None while it runs (or before it starts)."""
@@ -235,8 +236,7 @@ class RigidBodySimNode(Node):
         super().destroy_node()
 
     def stop_ticking_and_recording(self) -> None:
-        """Cancel the step under way, stop the tick thread (the tick cut short publishes and records
-        the state it reached), then finish the recording after its last write. Safe to call twice."""
+        """Cancel the step under way, stop the ticks, finish the recording after its last write (twice: safe)."""
         if self._tick_loop is not None:  # else construction stopped before any recording could start
             self._session.request_stop()
             self._tick_loop.stop()
