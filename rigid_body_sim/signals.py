@@ -14,7 +14,10 @@ output file is opened): a signal only sets :attr:`TwoPhaseSignals.stop`, a
 samples or spins and stops in order. A :class:`Watchdog` bounds how long that stop may take.
 
 Python runs signal handlers in the main thread between bytecodes, so the latency of phase 1
-is that of the longest C call under way (an LLVM compile, one rclpy call).
+is that of the longest C call under way (an LLVM compile, one rclpy call). In phase 2 a
+thread also learns of each signal at once (through :func:`signal.set_wakeup_fd`) and calls
+``on_seen``: so a main thread inside a long compiled call that holds no GIL (a step of the
+simulator) can be told to return (``Simulator.cancel``) before its handler can run.
 """
 
 from __future__ import annotations
@@ -62,14 +65,38 @@ class TwoPhaseSignals:
         self._on_first: Callable[[], None] | None = None
         self._orderly = False
         self._previous: dict[int, Any] = {}
+        self._wakeup: tuple[int, int, int] | None = None  # (read fd, write fd, the wakeup fd before)
         if threading.current_thread() is threading.main_thread():
             self._previous = {signum: signal.signal(signum, self._handle) for signum in STOP_SIGNALS}
 
-    def switch_to_orderly(self, on_first: Callable[[], None] | None = None) -> threading.Event:
-        """Enter phase 2: from now on a signal sets the returned event and calls ``on_first`` (once)."""
+    def switch_to_orderly(self, on_first: Callable[[], None] | None = None,
+                          on_seen: Callable[[], None] | None = None) -> threading.Event:
+        """Enter phase 2: from now on a signal sets the returned event and calls ``on_first`` (once).
+
+        ``on_seen`` (optional) is called from a thread of this class as soon as a signal arrives,
+        even while the main thread is in a long call that holds no GIL; it must take no lock the
+        main thread may hold. Only from the main thread (else ``on_seen`` is never called)."""
         self._on_first = on_first
         self._orderly = True
+        if on_seen is not None and self._wakeup is None and threading.current_thread() is threading.main_thread():
+            read_fd, write_fd = os.pipe()
+            os.set_blocking(write_fd, False)
+            self._wakeup = (read_fd, write_fd, signal.set_wakeup_fd(write_fd, warn_on_full_buffer=False))
+            threading.Thread(target=self._watch, args=(read_fd, on_seen), name="signal watch", daemon=True).start()
         return self.stop
+
+    @staticmethod
+    def _watch(read_fd: int, on_seen: Callable[[], None]) -> None:
+        stops = {int(signum) for signum in STOP_SIGNALS}
+        while True:
+            try:
+                data = os.read(read_fd, 64)
+            except OSError:
+                return
+            if not data:
+                return
+            if stops.intersection(data):
+                on_seen()
 
     @property
     def signal_name(self) -> str:
@@ -91,6 +118,11 @@ class TwoPhaseSignals:
         for signum, previous in self._previous.items():
             signal.signal(signum, previous)
         self._previous = {}
+        if self._wakeup is not None:
+            read_fd, write_fd, before = self._wakeup
+            signal.set_wakeup_fd(before)
+            os.close(write_fd)  # the watch thread reads the end of the pipe and ends
+            self._wakeup = None
 
 
 class Watchdog:
@@ -105,13 +137,16 @@ class Watchdog:
         self._grace_s = grace_s
         self._on_expire = on_expire
         self._timer: threading.Timer | None = None
+        self._starting = threading.RLock()  # start may come from a signal handler and from another thread
 
     def start(self) -> None:
         """Start counting (a second call changes nothing)."""
-        if self._timer is None:
-            self._timer = threading.Timer(self._grace_s, self._expire)
-            self._timer.daemon = True
-            self._timer.start()
+        with self._starting:
+            if self._timer is None:
+                timer = threading.Timer(self._grace_s, self._expire)
+                timer.daemon = True
+                timer.start()
+                self._timer = timer
 
     def cancel(self) -> None:
         if self._timer is not None:

@@ -1,16 +1,18 @@
 """Console entry point ``rigid_body_sim_node``: start the node, spin it, stop it cleanly on a signal.
 
 Exit status: 0 after SIGINT or SIGTERM at any moment, 2 for bad start-up parameters or scene
-(the reason on stderr), 1 if the tick thread fails (after saying so on the log and
-/diagnostics), and 1 if the orderly stop takes longer than :data:`STOP_GRACE_S` (a tick stuck
-in a step that will not end soon): then the recording is finished without waiting for the tick.
+(the reason on stderr), 1 if the tick thread fails (said on the log and /diagnostics) or if the
+orderly stop takes longer than :data:`STOP_GRACE_S` (a step that cannot be cut short: the
+recording is then finished after the write under way).
 
-Signals come in two phases (:mod:`rigid_body_sim.signals`; rclpy is told to install no handler
-of its own). Until the recording opens and the ticks start, nothing is worth saving: a signal
-ends the process at once with status 0 and one line on stderr. From then on a signal only sets
-a flag; the spin loop sees it within :data:`SPIN_TIMEOUT_S` and stops in order: executor, tick
-thread, recording, node, context. This module imports only the standard library at module
-level, so that the handlers are in place before the heavy imports begin.
+Signals come in two phases (:mod:`rigid_body_sim.signals`; rclpy installs no handler of its
+own). Until the recording opens and the ticks start, nothing is worth saving: a signal ends the
+process at once with status 0 and one line on stderr. From then on a signal sets a flag and
+cancels the step under way (``Simulator.cancel``: a long tick or ``~/step_ticks`` ends at its next
+substep and publishes the state it reached); the spin loop sees the flag within
+:data:`SPIN_TIMEOUT_S` and stops in order: executor, tick thread, recording (after its last
+write), node, context. Module level imports only the standard library, so the handlers are in
+place before the heavy imports begin.
 """
 
 from __future__ import annotations
@@ -18,6 +20,8 @@ from __future__ import annotations
 import gc
 import os
 import sys
+import time
+from pathlib import Path
 from typing import Any
 
 from ..signals import TwoPhaseSignals, Watchdog, exit_now
@@ -29,13 +33,11 @@ __all__ = ["main", "SPIN_TIMEOUT_S", "STOP_GRACE_S"]
 SPIN_TIMEOUT_S = 0.1
 #: Longest wait (s) for the orderly stop after a stop request (launch escalates to SIGTERM after 5 s).
 STOP_GRACE_S = 5.0
-#: Above this many publishers and subscriptions, a stop by signal exits once the ticks are stopped
-#: and the recording finished, without destroying each endpoint: one by one, that grows faster
-#: than their number (``destroy_node``: 0.22 s for 2,406 endpoints, 2.8 s for 9,006, 17 s for
-#: 30,006). Peers then drop the endpoints when the participant's lease expires, as after a crash.
+#: Above this many publishers and subscriptions, a stop by signal exits once the ticks are stopped and
+#: the recording finished, without destroying each endpoint (``destroy_node`` grows faster than their
+#: number: 0.22 s for 2,406, 17 s for 30,006); peers drop them when the lease expires, as after a crash.
 FAST_EXIT_ENDPOINTS = 2500
-#: What a cold start costs, said before it begins (measured: 90-120 s on a 2-core machine under load).
-COLD_COMPILE_S = (60, 150)
+COLD_COMPILE_S = (60, 150)  #: what a cold start costs, said before it begins (90-120 s seen under load)
 
 
 def main(args: list[str] | None = None) -> int:
@@ -65,7 +67,12 @@ def main(args: list[str] | None = None) -> int:
     gc.collect()  # what start-up made stays for good: a full collection of it stalled the ticks ~90 ms
     gc.freeze()
     watchdog = Watchdog(STOP_GRACE_S, lambda: _give_up(node))
-    stop = signals.switch_to_orderly(on_first=watchdog.start)  # phase 2: a signal only sets `stop`
+
+    def on_signal() -> None:  # phase 2: a signal sets `stop`, cancels the step under way, arms the watchdog
+        node.session.request_stop()  # no lock: also from the signal watch thread, the main thread in a step
+        watchdog.start()
+
+    stop = signals.switch_to_orderly(on_first=on_signal, on_seen=on_signal)
     status = 0
     try:
         try:
@@ -117,8 +124,6 @@ def _compile_if_cold() -> None:
     than inside the first tick, which would hold the tick thread, and a stop, for a minute."""
     if _kernels_cached():
         return
-    import time
-
     from ..core.simulator import compile_kernels
 
     low, high = COLD_COMPILE_S
@@ -133,8 +138,6 @@ def _kernels_cached() -> bool:
     """True if numba's cache holds compiled core kernels, or if where it keeps them is unknown:
     next to the sources (``core/kernels/__pycache__``) unless ``NUMBA_CACHE_DIR`` is set (anything
     compiled under it counts) or the sources are read-only (a per-user directory not guessed here)."""
-    from pathlib import Path
-
     from ..core.kernels.jit import CACHE_DIR
 
     user_dir = os.environ.get("NUMBA_CACHE_DIR")

@@ -9,10 +9,9 @@ parameters.py. For robot stacks: ``B/S/imu`` per IMU site (imu.py), ``B/set_stat
 (set_state.py), ``~/step_ticks``, ``~/spawn`` and ``~/delete`` (robot_services.py,
 scene_edit.py) and ``markers`` (markers.py). Each physics step advances ``real_time_factor / (rate_hz · substeps)`` s.
 
-This module wires those parts together (the session, session.py; the per-body endpoints,
-endpoints.py; the tick thread, tick_loop.py; node_diagnostics.py) and keeps rclpy's parameter
-callbacks: a change is validated and prepared by the session in the on-set callback, then
-applied whole in the post-set callback.
+This module wires those parts together (session.py, endpoints.py, tick_loop.py, node_diagnostics.py)
+and keeps rclpy's parameter callbacks: a change is validated and prepared by the session in the
+on-set callback, then applied whole in the post-set callback.
 """
 
 from __future__ import annotations
@@ -234,22 +233,21 @@ class RigidBodySimNode(Node):
         super().destroy_node()
 
     def stop_ticking_and_recording(self) -> None:
-        """Stop the tick thread (a tick under way ends first) and finish the recording. Safe to call twice."""
+        """Cancel the step under way, stop the ticks, finish the recording after its last write (twice: safe)."""
         if self._tick_loop is not None:  # else construction stopped before any recording could start
+            self._session.request_stop()
             self._tick_loop.stop()
             self._endpoints.stop_recording(self._session.lock)
 
     def finish_recording_now(self) -> None:
-        """Finish the recording without waiting for the lock: for an exit that cannot wait for a
-        tick stuck in a step (which writes nothing while it steps)."""
+        """Finish the recording without the session's lock: a write under way ends first, none follows."""
         if self._tick_loop is not None:
-            self._endpoints.stop_recording(contextlib.nullcontext())
+            self._endpoints.recording.finish_now(wait_s=1.0)
 
     # ------------------------------------------------------------------ read-only access for tools and tests
 
     def diagnostics(self, wait_s: float | None = None) -> DiagnosticArray:
-        """The /diagnostics report for the window since the last one; opens a new window. With
-        ``wait_s``, a tick that keeps the simulator longer than that gives a report that says so."""
+        """The /diagnostics report since the last one (node_diagnostics.NodeDiagnostics.report)."""
         return self._diagnostics.report(wait_s)
 
     @property
@@ -259,8 +257,7 @@ class RigidBodySimNode(Node):
 
     @property
     def simulator(self) -> Simulator:
-        """The core simulator this node steps. Read it while paused, or inside :meth:`locked_simulator`
-        while running; drive it through topics, services and parameters."""
+        """The core simulator this node steps (read it while paused, or inside :meth:`locked_simulator`)."""
         return self._session.simulator
 
     @contextlib.contextmanager

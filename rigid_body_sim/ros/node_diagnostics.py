@@ -4,7 +4,9 @@ A report covers the window since the one before (tick count and lateness, sim ti
 messages accepted and rejected; diagnostics.py builds it); making it opens the next window, and so
 do a reset, a new scene and a new ``rate_hz``. The timer runs every ``diagnostics_period`` wall
 seconds on the steady clock. A tick that keeps the session's lock longer than the report may wait
-gives a report that says so (WARN; ERROR after :data:`STUCK_TICK_S`) instead.
+gives a report that says so (WARN; ERROR after :data:`STUCK_TICK_S`) instead, and one more report is
+sent when that tick reaches :data:`STUCK_TICK_S`, so the ERROR comes then, not up to a period later.
+The kernels release the GIL while they step, so the executor publishes these during the tick.
 """
 
 from __future__ import annotations
@@ -60,6 +62,7 @@ class NodeDiagnostics:
         self.open_window()
         self._publisher = node.create_publisher(DiagnosticArray, "/diagnostics", qos)
         self._timer: Any = None
+        self._stuck_timer: Any = None  # one report when a running tick reaches STUCK_TICK_S
 
     def set_period(self, period: float) -> None:
         """(Re)start the timer at ``period`` wall seconds; 0 stops it. Opens a new window."""
@@ -106,5 +109,19 @@ class NodeDiagnostics:
         return array
 
     def publish(self) -> None:
-        """Publish :meth:`report` on /diagnostics (the timer calls this); never waits long for a tick."""
+        """Publish :meth:`report` on /diagnostics (the timer calls this); never waits long for a tick.
+        A tick found running, not yet for :data:`STUCK_TICK_S`, gets one more report when it will have."""
         self._publisher.publish(self.report(wait_s=DIAGNOSTICS_WAIT_S))
+        running = self._session.tick_running_for()
+        armed = self._stuck_timer is not None and not self._stuck_timer.is_canceled()
+        if not armed and running is not None and DIAGNOSTICS_WAIT_S <= running <= STUCK_TICK_S:
+            if self._stuck_timer is not None:  # the spent one (not destroyed inside its own callback)
+                self._node.destroy_timer(self._stuck_timer)
+            self._stuck_timer = self._node.create_timer(STUCK_TICK_S - running + 0.01, self._publish_stuck,
+                                                        clock=self._clock)
+
+    def _publish_stuck(self) -> None:
+        self._stuck_timer.cancel()  # once
+        running = self._session.tick_running_for()
+        if running is not None and running > STUCK_TICK_S:  # the same tick, or another as long: report it now
+            self._publisher.publish(self.report(wait_s=DIAGNOSTICS_WAIT_S))

@@ -3,7 +3,10 @@
 A new file is opened while a parameter change is prepared (never under the tick lock, so an
 open that blocks or fails only refuses the change), swapped in with the change, and the one it
 replaces is finished afterwards. A failed write (disk full...) ends the recording with an error
-in the log; the simulation goes on.
+in the log; the simulation goes on. Every write, and taking the recorder away, holds the
+recording's own lock: a recorder taken away (by a change, the orderly stop or the stop's
+watchdog) has no write under way and gets none later, so the count it logs when finished is
+what the file holds.
 
 Crash safety: the node records with :class:`FlushingRecorder`, the offline
 :class:`~rigid_body_sim.offline.recording.McapRecorder` (same topics, schemas, metadata and
@@ -21,6 +24,7 @@ from __future__ import annotations
 import importlib
 import json
 import os
+import threading
 import time
 from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping
@@ -204,6 +208,7 @@ class NodeRecording:
         #: (history, depth, reliability, durability) by topic of the publishers whose QoS
         #: qos_overrides may change (StatePublishers.offered_qos), declared in each recording.
         self.offered_qos: Mapping[str, tuple[str, int, str, str]] = {}
+        self._writing = threading.RLock()  # held by every write and by taking the recorder away
 
     def open(self, path: str, sim: Simulator, *, dt: float | None = None, integrator: str | None = None) -> McapRecorder:
         """A new recorder at ``path`` for ``sim`` (not yet the current one).
@@ -229,21 +234,38 @@ class NodeRecording:
 
     def replace(self, recorder: McapRecorder | None) -> McapRecorder | None:
         """Make ``recorder`` the current one (hold the node's lock); returns the one it replaced,
-        to :meth:`finish` after the lock is released."""
-        old, self.recorder = self.recorder, recorder
+        to :meth:`finish` after the lock is released. Waits for a write under way: the one replaced
+        gets no write after this returns."""
+        with self._writing:
+            old, self.recorder = self.recorder, recorder
         return old
+
+    def finish_now(self, wait_s: float) -> None:
+        """Take the recorder away and finish it, waiting at most ``wait_s`` for a write under way (an
+        exit that cannot wait for the node's lock); a write stuck longer leaves the file unfinished
+        (read as ``cut short``) rather than keep the process from exiting."""
+        if not self._writing.acquire(timeout=wait_s):
+            self._logger.error(f"a write into the recording has run over {wait_s:g} s; leaving it unfinished")
+            return
+        try:
+            recorder, self.recorder = self.recorder, None
+        finally:
+            self._writing.release()
+        if recorder is not None:
+            self.finish(recorder)
 
     def write(self, write: Callable[[McapRecorder], None]) -> None:
         """``write(recorder)`` if recording; a failed write ends the recording."""
-        recorder = self.recorder
-        if recorder is None:
-            return
-        try:
-            write(recorder)
-        except OSError as exc:
-            self._logger.error(f"recording to {recorder.path} failed ({exc}); not recording")
-            self.recorder = None
-            self.finish(recorder)
+        with self._writing:
+            recorder = self.recorder
+            if recorder is None:
+                return
+            try:
+                write(recorder)
+            except OSError as exc:
+                self._logger.error(f"recording to {recorder.path} failed ({exc}); not recording")
+                self.recorder = None
+                self.finish(recorder)
 
     def flush_if_due(self) -> None:
         """Flush the recording if a message has waited :data:`FLUSH_PERIOD_S` (every tick, also paused)."""

@@ -288,6 +288,7 @@ class SimSession:
         self.simulator = simulator
         self.settings: dict[str, Any] = dict(settings)
         self.fault: str | None = None  # why the simulation cannot go on (ERROR on /diagnostics)
+        self.stop_requested = False  # the node is stopping: no tick or step starts, the one under way ends
         self._failed = False  # the fault is permanent (the tick thread died)
         self._io = io
         self._logger = logger
@@ -324,6 +325,14 @@ class SimSession:
         held = self.lock.held()
         return held[1] if held is not None and held[0] == SessionLock.TICK else None
 
+    def request_stop(self) -> None:
+        """The node is stopping: the step under way ends at its next substep boundary
+        (:meth:`Simulator.cancel`), its tick publishes the state it reached, and no tick, ``~/step``
+        or further tick of ``~/step_ticks`` starts. Takes no lock: safe from any thread and from a
+        signal handler."""
+        self.stop_requested = True
+        self.simulator.cancel()
+
     def fail(self, reason: str) -> None:
         """Stop for good (the tick thread died): every later tick and step is refused with ``reason``."""
         with self.lock:
@@ -341,9 +350,10 @@ class SimSession:
 
     def advance(self) -> bool:
         """``substeps`` physics steps with the held wrenches and pending impulses, then publish (hold
-        the lock); False if the simulation cannot go on (see :attr:`fault`)."""
+        the lock); False if the simulation cannot go on (see :attr:`fault`) or the node is stopping
+        (:meth:`request_stop`: a tick cut short publishes the state at the substep it reached)."""
         sim, settings = self.simulator, self.settings
-        if self.fault is not None:
+        if self.fault is not None or self.stop_requested:
             return False
         tick_s = settings["real_time_factor"] / settings["rate_hz"]
         self._io.take_set_states(sim)  # set_states take effect, whole, at the start of the tick
@@ -353,18 +363,25 @@ class SimSession:
             self._logger.error(self.fault)
             return False
         self._io.take_wrenches(sim, settings["wrench_timeout"])
-        target = sim.step_count + settings["substeps"]
-        while sim.step_count < target:
+        start_time, target = sim.time, sim.step_count + settings["substeps"]
+        while sim.step_count < target and not self.stop_requested:
             try:
-                sim.step(target - sim.step_count)
+                sim.step(target - sim.step_count)  # returns early once request_stop cancels it
             except NonFiniteStateError as failure:
                 if not failure.bodies:
                     raise
                 for body in failure.bodies:
                     sim.stop_body(body)
                 self._logger.error(f"stopped {list(failure.bodies)}: {failure}")
+        if sim.step_count < target:  # cut short by a stop: sim time advanced by exactly the substeps done
+            if sim.time > start_time:
+                self._io.publish_tick(sim, sim.time - start_time, settings)
+            return False
         self._io.publish_tick(sim, tick_s, settings)
         return True
+
+    def _why_not(self) -> str:
+        return self.fault or "the node is stopping"  # advance() is False for a fault or a stop request
 
     # ------------------------------------------------------------------ services
 
@@ -375,13 +392,15 @@ class SimSession:
                 if not self.settings["paused"]:
                     return False, _RUNNING
                 if not self.advance():
-                    return False, f"refused: {self.fault}"
+                    return False, f"refused: {self._why_not()}"
                 return True, f"stepped one tick to t = {self.simulator.time:.9f} s"
         except SessionBusy as busy:
             return False, f"refused: {busy}"
 
     def step_ticks(self, ticks: int) -> tuple[bool, str]:
-        """``~/step_ticks``: exactly ``ticks`` ticks while paused, answered when done; (success, message)."""
+        """``~/step_ticks``: exactly ``ticks`` ticks while paused, answered when done; (success, message).
+        A stop request (:meth:`request_stop`) ends it between ticks, or inside one at a substep
+        boundary; the answer (and the log) say how many whole ticks it ran."""
         if not 1 <= ticks <= MAX_STEP_TICKS:
             return False, f"refused: ticks = {ticks}; expected an integer from 1 to {MAX_STEP_TICKS}"
         try:
@@ -390,8 +409,11 @@ class SimSession:
                     return False, _RUNNING
                 for done in range(ticks):
                     if not self.advance():
-                        return False, (f"stopped after {done} of {ticks} ticks at t = {self.simulator.time:.9f} s: "
-                                       f"{self.fault}")
+                        stopped = (f"stopped after {done} of {ticks} ticks at t = {self.simulator.time:.9f} s: "
+                                   f"{self._why_not()}")
+                        if self.stop_requested:
+                            self._logger.info(f"~/step_ticks {stopped}")
+                        return False, stopped
                 return True, f"stepped {ticks} ticks to t = {self.simulator.time:.9f} s"
         except SessionBusy as busy:
             return False, f"refused: {busy}"
