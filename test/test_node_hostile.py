@@ -214,8 +214,9 @@ def test_too_many_bodies_are_refused_and_ticks_go_on_while_loading(tmp_path):
             sim_after, wall_after = sim.time, time.monotonic()
         assert not result.successful and f"at most {MAX_BODIES}" in result.reason
         assert harness.node.simulator.body_names == ("box",)
-        # The tick thread kept sim time going while the executor thread was loading the file.
-        assert sim_after - sim_before >= 0.5 * (wall_after - wall_before)
+        # The tick thread kept sim time going while the executor thread was loading the file (up to
+        # two ticks of 10 ms may fall outside a short wait).
+        assert sim_after - sim_before >= 0.5 * (wall_after - wall_before) - 0.02
 
 
 def test_an_alias_bomb_scene_change_is_refused_and_ticks_go_on(tmp_path):
