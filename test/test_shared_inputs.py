@@ -71,9 +71,9 @@ def odometry(frame_id: str, child: str, position, orientation_xyzw=(0.0, 0.0, 0.
     return msg
 
 
-def publisher(h: SimHarness, msg_type: type, topic: str):
+def publisher(h: SimHarness, msg_type: type, topic: str, depth: int = 100):
     """A client publisher on ``topic``, once the node's subscription has matched it."""
-    pub = h.client.create_publisher(msg_type, topic, QoSProfile(depth=100))
+    pub = h.client.create_publisher(msg_type, topic, QoSProfile(depth=depth))
     h.spin_until(lambda: pub.get_subscription_count() > 0, f"the node's {topic} subscription")
     return pub
 
@@ -225,8 +225,9 @@ def test_set_state_on_the_shared_topic_moves_the_named_body(tmp_path, prefix: st
 
 def test_ten_thousand_batched_bodies_have_no_per_body_subscription(tmp_path) -> None:
     """per_body_topics false with 10,000 bodies: the node's subscriptions are the same few as with
-    one body (the shared inputs; nothing per body), and a shared wrench reaches the
-    last body."""
+    one body (the shared inputs; nothing per body), a shared wrench reaches the last body, and a
+    burst of 1000 wrenches for 1000 bodies, published without waiting, is held whole (the shared
+    queue is SHARED_QUEUE_DEPTH deep, not the per-body queues' 10)."""
     bodies = {f"b{k}": {"mass": 1.0, "inertia": {"sphere": 0.5}, "pose": {"position": [float(k), 0.0, 0.0]}}
               for k in range(10_000)}
     counts = {}
@@ -239,4 +240,12 @@ def test_ten_thousand_batched_bodies_have_no_per_body_subscription(tmp_path) -> 
             last = f"b{n - 1}"
             h.publish_wrench(last, (1.0, 0.0, 0.0))
             assert set(h.node.held_wrenches) == {(last, last)}
+            if n == 10_000:
+                burst = publisher(h, WrenchStamped, "wrench", depth=1000)  # the whole burst kept until taken
+                seen = h.messages_seen()
+                for k in range(1000):
+                    burst.publish(wrench(f"b{k}/world_aligned", (0.0, 1.0, 0.0), (0.0, 0.0, 0.0)))
+                h.spin_until(lambda: h.messages_seen() >= seen + 1000, "the burst", timeout=60.0)
+                assert h.messages_seen() == seen + 1000 and sum(h.node.rejected.values()) == 0
+                assert len(h.node.held_wrenches) == 1001
     assert counts[10_000] == counts[1]

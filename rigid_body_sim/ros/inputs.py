@@ -43,10 +43,21 @@ from rclpy.qos import QoSProfile
 from ..core import Scene, Simulator
 from .conversions import RejectedMessage, wrench_from_msg
 
-__all__ = ["REJECTION_WARNING_PERIOD", "BodyInputs", "InputChange", "WrenchInputs"]
+__all__ = ["REJECTION_WARNING_PERIOD", "SHARED_QUEUE_DEPTH", "BodyInputs", "InputChange", "WrenchInputs",
+           "shared_qos"]
 
 #: Wall seconds between two warnings about dropped messages (the counts go on regardless).
 REJECTION_WARNING_PERIOD = 2.0
+#: History depth of the shared ``wrench``, ``impulse`` and ``set_state`` subscriptions: one queue
+#: for all bodies, so a burst for many bodies at once is not cut to the per-body queues' 10
+#: (bounded still: 1000 WrenchStamped are ~100 kB).
+SHARED_QUEUE_DEPTH = 1000
+
+
+def shared_qos(qos: QoSProfile) -> QoSProfile:
+    """``qos`` (the per-body subscriptions') with the depth :data:`SHARED_QUEUE_DEPTH`."""
+    return QoSProfile(history=qos.history, depth=SHARED_QUEUE_DEPTH, reliability=qos.reliability,
+                      durability=qos.durability)
 
 
 @dataclass
@@ -106,8 +117,10 @@ class WrenchInputs:
         self._lock = threading.Lock()  # guards bodies' frames in use, holds, pending impulses, counters
         self.bodies: dict[str, BodyInputs] = {}
         self.shared_frames: dict[str, tuple[str, str]] = {}
-        self.shared = [node.create_subscription(WrenchStamped, "wrench", lambda msg: self.on_wrench(None, msg), qos),
-                       node.create_subscription(WrenchStamped, "impulse", lambda msg: self.on_impulse(None, msg), qos)]
+        self.shared = [node.create_subscription(WrenchStamped, "wrench", lambda msg: self.on_wrench(None, msg),
+                                                shared_qos(qos)),
+                       node.create_subscription(WrenchStamped, "impulse", lambda msg: self.on_impulse(None, msg),
+                                                shared_qos(qos))]
         self.holds: dict[tuple[str, str], _Hold] = {}
         self.pending_impulses: dict[tuple[str, str], tuple[np.ndarray, np.ndarray]] = {}
         self.rejected: Counter[str] = Counter()

@@ -40,6 +40,7 @@ from ..core import Simulator
 from ..core.quaternion import quat_rotate, quat_wxyz_from_xyzw
 from ..core.scene import ORIENTATION_TOLERANCE
 from .conversions import RejectedMessage
+from .inputs import shared_qos
 
 __all__ = ["MAX_STATE_COMPONENT", "SetStateChange", "SetStateInputs", "state_from_odometry"]
 
@@ -120,7 +121,8 @@ class SetStateInputs:
         self.subscriptions: dict[str, Any] = {}
         self.bodies: frozenset[str] = frozenset()
         self.pending: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = {}
-        self.shared = node.create_subscription(Odometry, "set_state", lambda msg: self.on_set_state(None, msg), qos)
+        self.shared = node.create_subscription(Odometry, "set_state", lambda msg: self.on_set_state(None, msg),
+                                               shared_qos(qos))
 
     def prepare(self, body_names: tuple[str, ...]) -> SetStateChange:
         subs = {body: self.subscriptions.get(body) or self._node.create_subscription(
