@@ -97,16 +97,18 @@ def input_subscriptions(h: SimHarness) -> list[str]:
                   if s.topic_name.rsplit("/", 1)[-1] in ("wrench", "impulse", "set_state"))
 
 
-@pytest.mark.parametrize("prefix", ["", "sim1/"])
-def test_shared_topics_move_bodies_bitwise_as_the_per_body_topics(tmp_path, prefix: str) -> None:
+@pytest.mark.parametrize(("prefix", "timeout"), [("", 0.0), ("sim1/", 0.0), ("", 0.03)])
+def test_shared_topics_move_bodies_bitwise_as_the_per_body_topics(tmp_path, prefix: str, timeout: float) -> None:
     """The same wrenches (site, world-aligned and body frames) and impulses, on B/wrench and
     B/impulse in one node and on the shared wrench and impulse in another (no per-body inputs),
     give the same holds and, after 5 ticks, bitwise the same states of all bodies (and not the
-    states without inputs). Published and read over DDS; the prefixed frame ids with frame_prefix."""
+    states without inputs). Published and read over DDS; the prefixed frame ids with frame_prefix;
+    with a wrench_timeout of 3 ticks the holds end after 3 of the 5 ticks in both."""
     scene = write_scene(tmp_path, BODIES)
     results = {}
     for per_body in ("true", "false"):
-        params = {"integrator": "rk4", "wrench_timeout": 0.0, "frame_prefix": prefix, "per_body_inputs": per_body}
+        params = {"integrator": "rk4", "wrench_timeout": timeout, "frame_prefix": prefix,
+                  "per_body_inputs": per_body}
         with SimHarness(scene, params) as h:
             assert h.per_body_inputs is (per_body == "true")
             start = states(h)
@@ -115,6 +117,7 @@ def test_shared_topics_move_bodies_bitwise_as_the_per_body_topics(tmp_path, pref
             assert sum(h.node.rejected.values()) == 0 and h.node.accepted_messages == len(INPUTS)
             holds = h.node.held_wrenches
             h.step(5)
+            assert (h.node.held_wrenches == {}) is (timeout > 0.0)
             results[per_body] = (holds, states(h), [(h.latest_pose(b), h.latest_twist(b)) for b in BODIES])
             subscriptions = input_subscriptions(h)
         if per_body == "false":
@@ -249,3 +252,21 @@ def test_ten_thousand_batched_bodies_have_no_per_body_subscription(tmp_path) -> 
                 assert h.messages_seen() == seen + 1000 and sum(h.node.rejected.values()) == 0
                 assert len(h.node.held_wrenches) == 1001
     assert counts[10_000] == counts[1]
+
+
+def test_spawned_bodies_are_reachable_on_the_shared_topics_and_deleted_ones_not(tmp_path) -> None:
+    """A body spawned after start-up takes a shared wrench in its frames (held, it moves the body);
+    once it is deleted, its frame is unknown on the shared topics (counted, dropped)."""
+    scene = write_scene(tmp_path, {"box": BODIES["box"]})
+    with SimHarness(scene, {"integrator": "rk4", "per_body_topics": False, "wrench_timeout": 0.0}) as h:
+        assert h.spawn(ball=yaml.safe_dump(BODIES["ball"])).successful
+        h.watch_body("ball")
+        h.publish_wrench("ball", (0.0, 0.0, 4.0), frame_id="ball/world_aligned")
+        assert set(h.node.held_wrenches) == {("ball", "ball/world_aligned")}
+        h.step(1)
+        assert h.latest_pose("ball").pose.position.z > BODIES["ball"]["pose"]["position"][2]
+        assert h.delete("ball").successful
+        assert h.node.held_wrenches == {}
+        rejected = h.node.rejected.get("unknown_frame", 0)
+        h.publish_wrench("ball", (0.0, 0.0, 4.0), frame_id="ball")
+        assert h.node.rejected.get("unknown_frame", 0) == rejected + 1 and h.node.held_wrenches == {}
