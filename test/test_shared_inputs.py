@@ -227,8 +227,8 @@ def test_set_state_on_the_shared_topic_moves_the_named_body(tmp_path, prefix: st
 
 
 def test_ten_thousand_batched_bodies_have_no_per_body_subscription(tmp_path) -> None:
-    """per_body_topics false with 10,000 bodies: the node's subscriptions are the same few as with
-    one body (the shared inputs; nothing per body), a shared wrench reaches the last body, and a
+    """per_body_topics false with 10,000 bodies: the node's subscriptions and publishers are the
+    same few as with one body (the shared inputs, the batches; nothing per body), a shared wrench reaches the last body, and a
     burst of 1000 wrenches for 1000 bodies, published without waiting, is held whole (the shared
     queue is SHARED_QUEUE_DEPTH deep, not the per-body queues' 10)."""
     bodies = {f"b{k}": {"mass": 1.0, "inertia": {"sphere": 0.5}, "pose": {"position": [float(k), 0.0, 0.0]}}
@@ -238,7 +238,8 @@ def test_ten_thousand_batched_bodies_have_no_per_body_subscription(tmp_path) -> 
         scene = tmp_path / f"free_{n}.yaml"
         scene.write_text(yaml.safe_dump({"bodies": dict(list(bodies.items())[:n]), "gravity": [0.0, 0.0, 0.0]}))
         with SimHarness(scene, {"per_body_topics": False, "wrench_timeout": 0.0}, timeout=120.0) as h:
-            counts[n] = sorted(s.topic_name for s in h.node.subscriptions)
+            counts[n] = (sorted(s.topic_name for s in h.node.subscriptions),
+                         sorted(p.topic_name for p in h.node.publishers))
             assert input_subscriptions(h) == ["/impulse", "/set_state", "/wrench"]
             last = f"b{n - 1}"
             h.publish_wrench(last, (1.0, 0.0, 0.0))
