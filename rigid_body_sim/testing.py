@@ -20,7 +20,10 @@ runs are bitwise deterministic. The node ticks exactly as ``rigid_body_sim_node`
 its own tick thread (there is no other tick path); paused, that thread advances nothing.
 With ``parameters={"per_body_topics": False}`` the harness reads the ``poses`` and
 ``velocities`` batches and answers :meth:`SimHarness.latest_pose` and
-:meth:`SimHarness.latest_twist` from them.
+:meth:`SimHarness.latest_twist` from them. Where the node has no per-body inputs (its
+``per_body_inputs``; by default none with ``per_body_topics`` false), :meth:`SimHarness.publish_wrench`
+and :meth:`SimHarness.publish_impulse` publish on the shared ``wrench`` and ``impulse`` topics,
+whose messages name their body by their frame.
 """
 
 from __future__ import annotations
@@ -86,6 +89,10 @@ class SimHarness:
         #: True when the node publishes only the batches (``per_body_topics`` false): the harness
         #: then reads ``poses`` and ``velocities`` and answers :meth:`latest_pose` from them.
         self.batched = params.get("per_body_topics", True) is False
+        #: True when the node subscribes to B/wrench and B/impulse (``per_body_inputs``); else the
+        #: harness publishes wrenches and impulses on the shared ``wrench`` and ``impulse``.
+        self.per_body_inputs = {"auto": not self.batched, "true": True}.get(params.get("per_body_inputs", "auto"),
+                                                                           False)
         #: The node's ``frame_prefix``: in front of the default frame_id of :meth:`publish_wrench`.
         self.frame_prefix = str(params.get("frame_prefix", ""))
         if scene is not None:
@@ -110,13 +117,16 @@ class SimHarness:
             self._poses: dict[str, PoseStamped] = {}
             self._twists: dict[str, Twist] = {}
             self._odoms: dict[str, Odometry] = {}
-            self._publishers: dict[tuple[str, str], Any] = {}
+            self._publishers: dict[tuple[str, str], Any] = {
+                ("", topic): self.client.create_publisher(WrenchStamped, topic, QoSProfile(depth=100))
+                for topic in ("wrench", "impulse")}  # the shared topics (body "")
             self._batches: dict[str, Any] = {}  # "poses" -> latest PoseArray, "velocities" -> latest PointCloud2
             if self.batched:
                 for topic, msg_type in (("poses", PoseArray), ("velocities", PointCloud2)):
                     self.client.create_subscription(msg_type, topic, lambda m, t=topic: self._batches.__setitem__(t, m),
                                                     QoSProfile(depth=10))
-            for body in self.node.simulator.body_names:
+            self._watched = set(self.node.simulator.body_names)
+            for body in self._watched:
                 self._create_body_endpoints(body)
             self._step = self.client.create_client(Trigger, f"{self._service_prefix}/step")
             self._reset = self.client.create_client(Trigger, f"{self._service_prefix}/reset")
@@ -170,7 +180,7 @@ class SimHarness:
 
     def _create_body_endpoints(self, body: str) -> None:
         qos = QoSProfile(depth=100)
-        for topic in ("wrench", "impulse"):
+        for topic in ("wrench", "impulse") if self.per_body_inputs else ():
             self._publishers[(body, topic)] = self.client.create_publisher(WrenchStamped, f"{body}/{topic}", qos)
         if self.batched:
             return
@@ -181,9 +191,10 @@ class SimHarness:
     def watch_body(self, body: str) -> None:
         """Subscribe to and publish for a body that appeared after start-up (a new ``scene``), and
         wait until its topics are connected and its current state has arrived. Idempotent."""
-        if (body, "wrench") not in self._publishers:
+        if body not in self._watched:
+            self._watched.add(body)
             self._create_body_endpoints(body)
-        for topic in ("wrench", "impulse"):
+        for topic in ("wrench", "impulse") if self.per_body_inputs else ():
             pub = self._publishers[(body, topic)]
             self.spin_until(lambda p=pub: p.get_subscription_count() > 0, f"the node's {body}/{topic} subscription")
         if not self.batched:
@@ -222,12 +233,15 @@ class SimHarness:
         msg.wrench.force.x, msg.wrench.force.y, msg.wrench.force.z = (float(v) for v in force)
         msg.wrench.torque.x, msg.wrench.torque.y, msg.wrench.torque.z = (float(v) for v in torque)
         seen = self.messages_seen()
-        self._publishers[(body, topic)].publish(msg)
-        self.spin_until(lambda: self.messages_seen() > seen, f"the node to take the message on {body}/{topic}")
+        key = (body, topic) if self.per_body_inputs else ("", topic)
+        self._publishers[key].publish(msg)
+        where = f"{body}/{topic}" if self.per_body_inputs else topic
+        self.spin_until(lambda: self.messages_seen() > seen, f"the node to take the message on {where}")
 
     def publish_wrench(self, body: str, force: Sequence[float] = (0.0, 0.0, 0.0),
                        torque: Sequence[float] = (0.0, 0.0, 0.0), frame_id: str | None = None) -> None:
-        """Publish a WrenchStamped on ``body/wrench`` (frame_id default: the body, prefixed) and wait until the node took it."""
+        """Publish a WrenchStamped on ``body/wrench`` (without per-body inputs: on ``wrench``; frame_id
+        default: the body, prefixed) and wait until the node took it."""
         self._publish(body, "wrench", force, torque, frame_id)
 
     def publish_impulse(self, body: str, linear: Sequence[float] = (0.0, 0.0, 0.0),

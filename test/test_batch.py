@@ -223,7 +223,7 @@ def test_body_names_follow_a_scene_change(tmp_path):
 
 def test_per_body_topics_false_publishes_and_records_only_the_batches(tmp_path, scene_file):
     """per_body_topics:=false (one node process for both checks): no B/pose, B/twist or B/odom
-    publisher exists (graph query) while the inputs stay; with record_path, the recording holds
+    publisher exists (graph query), nor any per-body input (the shared ones are there); with record_path, the recording holds
     poses, velocities and /clock only, two batch messages a tick with the scene order in their
     channel metadata, and read_recording gives back exactly what a subscriber received at every
     stamp (t = 0 and 3 ~/step ticks)."""
@@ -242,7 +242,8 @@ def test_per_body_topics_false_publishes_and_records_only_the_batches(tmp_path, 
         peer.node.create_subscription(PointCloud2, "/velocities", clouds.append, latched)
         peer.spin_until(lambda: poses and clouds, "the latched initial state")
         assert len(poses[-1].poses) == N_BODIES
-        peer.spin_until(lambda: peer.node.count_subscribers("/b0/wrench") == 1, "the wrench subscription of b0")
+        peer.spin_until(lambda: peer.node.count_subscribers("/wrench") == 1, "the shared wrench subscription")
+        assert peer.node.count_subscribers("/b0/wrench") == 0  # per_body_inputs auto: none per body
         topics = {name for name, _types in peer.node.get_topic_names_and_types()}
         publishers = {t: peer.node.count_publishers(t) for t in topics}
         per_body = [t for t, count in publishers.items() if count and t.rsplit("/", 1)[-1] in ("pose", "twist", "odom")]

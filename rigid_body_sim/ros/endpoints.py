@@ -1,5 +1,7 @@
 """The node's per-body endpoints as one object: state publishers, wrench/impulse inputs, IMU
 publishers and set_state inputs, with one prepare / commit / release over the four families.
+The inputs also have shared topics (``wrench``, ``impulse``, ``set_state``: three subscriptions
+for all bodies); the per-body ones exist only if :func:`per_body_inputs` says so.
 
 A change of bodies (start-up, a new scene, a spawn or delete, a change of ``publish_odometry``,
 a reset) is made in three moves: :meth:`BodyEndpoints.prepare` creates whatever the new scene
@@ -35,7 +37,14 @@ from .session import physics_dt
 from .set_state import SetStateChange, SetStateInputs
 from .tf import TF_AVAILABLE, TfPublisher
 
-__all__ = ["BodyEndpoints", "EndpointChange"]
+__all__ = ["BodyEndpoints", "EndpointChange", "per_body_inputs"]
+
+
+def per_body_inputs(settings: Mapping[str, Any]) -> bool:
+    """Whether the node subscribes to B/wrench, B/impulse and B/set_state per body: the
+    ``per_body_inputs`` parameter, whose ``"auto"`` (the default) follows ``per_body_topics``."""
+    choice = settings.get("per_body_inputs", "auto")
+    return bool(settings["per_body_topics"]) if choice == "auto" else choice == "true"
 
 
 @dataclass
@@ -60,7 +69,8 @@ class BodyEndpoints:
     qos : QoSProfile
         Of subscriptions, IMU and marker publishers (state publishers: publishers.STATE_QOS).
     settings : mapping
-        ``world_frame``, ``frame_prefix``, ``per_body_topics``, ``twist_stamped`` (fixed for the node's life).
+        ``world_frame``, ``frame_prefix``, ``per_body_topics``, ``per_body_inputs``, ``twist_stamped``
+        (fixed for the node's life).
     recording : NodeRecording
         Where published state, wrenches and IMU samples are recorded (if it records).
     """
@@ -70,9 +80,10 @@ class BodyEndpoints:
         self._prefix = prefix
         self.outputs = StatePublishers(node, prefix + world_frame, per_body_topics=settings["per_body_topics"],
                                        twist_stamped=settings["twist_stamped"], frame_prefix=prefix)
-        self.inputs = WrenchInputs(node, qos, world_frame, prefix)
+        per_body = per_body_inputs(settings)
+        self.inputs = WrenchInputs(node, qos, world_frame, prefix, per_body=per_body)
         self.imus = ImuPublishers(node, qos, prefix)
-        self.set_state = SetStateInputs(node, qos, world_frame, self.inputs, prefix)
+        self.set_state = SetStateInputs(node, qos, world_frame, self.inputs, prefix, per_body=per_body)
         self.markers = MarkerPublisher(node, qos, prefix + world_frame)
         self.contacts = ContactPublisher(node, qos, prefix + world_frame)  # contacts.py
         self.tf = TfPublisher(node, world_frame, prefix) if TF_AVAILABLE else None

@@ -1,4 +1,10 @@
-"""What the node takes in: per body ``B/wrench`` (held) and ``B/impulse`` (applied once), validated.
+"""What the node takes in: ``B/wrench`` (held) and ``B/impulse`` (applied once), validated.
+
+Each comes on the shared topics ``wrench`` and ``impulse`` (one subscription each for all
+bodies: the body is the one whose frame ``header.frame_id`` is, ``B``, ``B/world_aligned`` or
+``B/<site>``; the world frame names no body, so it is refused there as ``unknown_frame``) and,
+with per-body inputs on (the node's ``per_body_inputs``), on each body's ``B/wrench`` and
+``B/impulse`` too. Both go through one parser, one validator and the same holds.
 
 A wrench is geometry_msgs/WrenchStamped: force and torque about the origin of
 ``header.frame_id``, in its axes. It is held per (B, frame_id) until replaced, cleared by an
@@ -37,10 +43,21 @@ from rclpy.qos import QoSProfile
 from ..core import Scene, Simulator
 from .conversions import RejectedMessage, wrench_from_msg
 
-__all__ = ["REJECTION_WARNING_PERIOD", "BodyInputs", "InputChange", "WrenchInputs"]
+__all__ = ["REJECTION_WARNING_PERIOD", "SHARED_QUEUE_DEPTH", "BodyInputs", "InputChange", "WrenchInputs",
+           "shared_qos"]
 
 #: Wall seconds between two warnings about dropped messages (the counts go on regardless).
 REJECTION_WARNING_PERIOD = 2.0
+#: History depth of the shared ``wrench``, ``impulse`` and ``set_state`` subscriptions: one queue
+#: for all bodies, so a burst for many bodies at once is not cut to the per-body queues' 10
+#: (bounded still: 1000 WrenchStamped are ~100 kB).
+SHARED_QUEUE_DEPTH = 1000
+
+
+def shared_qos(qos: QoSProfile) -> QoSProfile:
+    """``qos`` (the per-body subscriptions') with the depth :data:`SHARED_QUEUE_DEPTH`."""
+    return QoSProfile(history=qos.history, depth=SHARED_QUEUE_DEPTH, reliability=qos.reliability,
+                      durability=qos.durability)
 
 
 @dataclass
@@ -57,21 +74,23 @@ class _Hold:
 class BodyInputs:
     """One body's subscriptions and the header.frame_id values it accepts (→ core frame name)."""
 
-    wrench: Any
+    wrench: Any  # None without per-body inputs
     impulse: Any
     frames: dict[str, str]
 
 
 @dataclass
 class InputChange:
-    """Prepared subscriptions: ``bodies`` to swap in, ``stale`` subscriptions to destroy after."""
+    """Prepared subscriptions: ``bodies`` to swap in, ``stale`` subscriptions to destroy after;
+    ``shared``: header.frame_id on the shared topics → (body, core frame)."""
 
     bodies: dict[str, BodyInputs]
     stale: list[Any]
+    shared: dict[str, tuple[str, str]]
 
 
 class WrenchInputs:
-    """Held wrenches and pending impulses from ``B/wrench`` and ``B/impulse``.
+    """Held wrenches and pending impulses from ``wrench`` and ``impulse`` (and ``B/wrench`` and ``B/impulse``).
 
     Parameters
     ----------
@@ -84,15 +103,24 @@ class WrenchInputs:
     frame_prefix : str
         In front of every accepted header.frame_id (the node's ``frame_prefix``): with ``sim1/``,
         ``sim1/world`` and ``sim1/B/site`` are accepted, ``world`` and ``B/site`` are unknown frames.
+    per_body : bool
+        Also subscribe to ``B/wrench`` and ``B/impulse`` for every body B (two DDS endpoints a body).
     """
 
-    def __init__(self, node: Node, qos: QoSProfile, world_frame: str, frame_prefix: str = ""):
+    def __init__(self, node: Node, qos: QoSProfile, world_frame: str, frame_prefix: str = "", *,
+                 per_body: bool = True):
         self._node = node
         self._qos = qos
         self._world_frame = frame_prefix + world_frame
         self._prefix = frame_prefix
+        self.per_body = per_body
         self._lock = threading.Lock()  # guards bodies' frames in use, holds, pending impulses, counters
         self.bodies: dict[str, BodyInputs] = {}
+        self.shared_frames: dict[str, tuple[str, str]] = {}
+        self.shared = [node.create_subscription(WrenchStamped, "wrench", lambda msg: self.on_wrench(None, msg),
+                                                shared_qos(qos)),
+                       node.create_subscription(WrenchStamped, "impulse", lambda msg: self.on_impulse(None, msg),
+                                                shared_qos(qos))]
         self.holds: dict[tuple[str, str], _Hold] = {}
         self.pending_impulses: dict[tuple[str, str], tuple[np.ndarray, np.ndarray]] = {}
         self.rejected: Counter[str] = Counter()
@@ -105,12 +133,14 @@ class WrenchInputs:
     def prepare(self, sim: Simulator | Scene) -> InputChange:
         """Subscriptions for the bodies of ``sim`` (or a scene): existing ones kept (frames updated), new ones created."""
         bodies: dict[str, BodyInputs] = {}
+        shared: dict[str, tuple[str, str]] = {}
         for body in sim.body_names:
             frames = {self._world_frame: "world"}
             frames.update({self._prefix + f: f for f in sim.frames_of(body) if f != "world"})
+            shared.update((frame_id, (body, frame)) for frame_id, frame in frames.items() if frame != "world")
             old = self.bodies.get(body)
-            if old is not None:
-                bodies[body] = BodyInputs(old.wrench, old.impulse, frames)
+            if old is not None or not self.per_body:
+                bodies[body] = BodyInputs(old.wrench, old.impulse, frames) if old else BodyInputs(None, None, frames)
             else:
                 bodies[body] = BodyInputs(
                     wrench=self._node.create_subscription(WrenchStamped, f"{body}/wrench",
@@ -118,14 +148,15 @@ class WrenchInputs:
                     impulse=self._node.create_subscription(WrenchStamped, f"{body}/impulse",
                                                            lambda msg, b=body: self.on_impulse(b, msg), self._qos),
                     frames=frames)
-        stale = [s for name, old in self.bodies.items() if name not in bodies for s in (old.wrench, old.impulse)]
-        return InputChange(bodies, stale)
+        stale = [s for name, old in self.bodies.items() if name not in bodies for s in (old.wrench, old.impulse)
+                 if s is not None]
+        return InputChange(bodies, stale, shared)
 
     def commit(self, change: InputChange, keep_holds: bool = False) -> None:
         """Swap in prepared subscriptions and drop every hold and pending impulse (with ``keep_holds``:
         only those of bodies no longer there, for a spawn or delete)."""
         with self._lock:
-            self.bodies = change.bodies
+            self.bodies, self.shared_frames = change.bodies, change.shared
             if keep_holds:
                 self.holds = {key: h for key, h in self.holds.items() if key[0] in self.bodies}
                 self.pending_impulses = {key: j for key, j in self.pending_impulses.items() if key[0] in self.bodies}
@@ -154,21 +185,27 @@ class WrenchInputs:
 
     # ------------------------------------------------------------------ callbacks
 
-    def _parse(self, body: str, msg: WrenchStamped, topic: str) -> tuple[str, np.ndarray, np.ndarray] | None:
-        """(core frame, force, torque) of a valid message, or None after counting and warning."""
-        inputs = self.bodies.get(body)
+    def _parse(self, body: str | None, msg: WrenchStamped,
+               topic: str) -> tuple[str, str, np.ndarray, np.ndarray] | None:
+        """(body, core frame, force, torque) of a valid message, or None after counting and warning.
+        ``body`` None: a shared topic's message, whose body is the one header.frame_id is a frame of."""
+        shared = body is None
         try:
-            frame = inputs.frames.get(msg.header.frame_id) if inputs is not None else None
+            if shared:
+                body, frame = self.shared_frames.get(msg.header.frame_id, (None, None))
+            else:
+                inputs = self.bodies.get(body)
+                frame = inputs.frames.get(msg.header.frame_id) if inputs is not None else None
             if frame is None:
                 raise RejectedMessage("unknown_frame", "")  # detail built only if it is logged
             force, torque = wrench_from_msg(msg)
         except RejectedMessage as rejection:
-            self._reject(body, topic, msg, rejection)
+            self._reject(None if shared else body, topic, msg, rejection)
             return None
         self.accepted += 1
-        return frame, force, torque
+        return body, frame, force, torque
 
-    def _reject(self, body: str, topic: str, msg: WrenchStamped | None, rejection: RejectedMessage) -> None:
+    def _reject(self, body: str | None, topic: str, msg: WrenchStamped | None, rejection: RejectedMessage) -> None:
         """Count a dropped message by reason (the lock held); warn at most once per REJECTION_WARNING_PERIOD wall
         seconds (rclpy's own throttle inspects the caller's source on every call: ~0.4 ms, which a
         flood of bad messages would turn into a denial of service)."""
@@ -177,41 +214,49 @@ class WrenchInputs:
         wall = time.monotonic()
         if wall - self._warned_wall < REJECTION_WARNING_PERIOD:
             return
-        inputs = self.bodies.get(body)
-        valid_frames = list(inputs.frames) if inputs is not None else []
-        detail = rejection.detail or f"frame_id {msg.header.frame_id[:80]!r} is not one of {valid_frames}"
         more = self._rejections_since_warning - 1
-        self._node.get_logger().warning(
-            f"dropped a message on {body}/{topic} ({rejection.reason}): {detail}; valid frame_ids: {valid_frames}"
-            + (f" ({more} more dropped since the last warning; counts by reason on /diagnostics)" if more else ""))
+        more = f" ({more} more dropped since the last warning; counts by reason on /diagnostics)" if more else ""
+        if body is None:  # a shared topic's message
+            detail = rejection.detail or (
+                f"frame_id {msg.header.frame_id[:80]!r} is no body's frame (valid: {self._prefix}B, "
+                f"{self._prefix}B/world_aligned or {self._prefix}B/<site> of a body B; the world frame names "
+                f"no body: for world axes use B/world_aligned, or B/{topic})")
+            self._node.get_logger().warning(f"dropped a message on {topic} ({rejection.reason}): {detail}" + more)
+        else:
+            inputs = self.bodies.get(body)
+            valid_frames = list(inputs.frames) if inputs is not None else []
+            detail = rejection.detail or f"frame_id {msg.header.frame_id[:80]!r} is not one of {valid_frames}"
+            self._node.get_logger().warning(
+                f"dropped a message on {body}/{topic} ({rejection.reason}): {detail}; valid frame_ids: {valid_frames}"
+                + more)
         self._warned_wall = wall
         self._rejections_since_warning = 0
 
-    def on_wrench(self, body: str, msg: WrenchStamped) -> None:
-        """``B/wrench``: hold it per (body, frame), or clear the hold if all-zero."""
+    def on_wrench(self, body: str | None, msg: WrenchStamped) -> None:
+        """``B/wrench`` (``body`` None: ``wrench``): hold it per (body, frame), or clear the hold if all-zero."""
         with self._lock:
             parsed = self._parse(body, msg, "wrench")
             if parsed is None:
                 return
-            frame, force, torque = parsed
+            body, frame, force, torque = parsed
             if not force.any() and not torque.any():
                 self.holds.pop((body, frame), None)
             else:
                 self.holds[(body, frame)] = _Hold(force, torque)
 
-    def on_impulse(self, body: str, msg: WrenchStamped) -> None:
-        """``B/impulse``: add it to what is due at the next step in its (body, frame)."""
+    def on_impulse(self, body: str | None, msg: WrenchStamped) -> None:
+        """``B/impulse`` (``body`` None: ``impulse``): add it to what is due at the next step in its (body, frame)."""
         with self._lock:
             parsed = self._parse(body, msg, "impulse")
             if parsed is None:
                 return
-            frame, linear, angular = parsed
+            body, frame, linear, angular = parsed
             pending = self.pending_impulses.get((body, frame))
             if pending is not None:  # impulses due at the same step add
                 linear, angular = pending[0] + linear, pending[1] + angular
             self.pending_impulses[(body, frame)] = (linear, angular)
 
-    def count_rejection(self, body: str, topic: str, rejection: RejectedMessage) -> None:
+    def count_rejection(self, body: str | None, topic: str, rejection: RejectedMessage) -> None:
         """Count (and warn about, throttled) a message dropped by another input of the node (``set_state``)."""
         with self._lock:
             self._reject(body, topic, None, rejection)

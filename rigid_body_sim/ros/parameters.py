@@ -246,9 +246,15 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
                   "Also publish B/odom (nav_msgs/Odometry, twist in B's body axes) for every body B."),
     ParameterSpec("per_body_topics", _T.BOOL, True,
                   "Publish B/pose, B/twist (and B/odom) for every body B besides the batches poses and "
-                  "velocities; false: only the batches (B/wrench and B/impulse stay per body). False also "
-                  "lifts the node's body limit from 1000 to 10000.",
+                  "velocities; false: only the batches (and, unless per_body_inputs says otherwise, no per-body "
+                  "inputs). False also lifts the node's body limit from 1000 to 10000.",
                   read_only=True, takes_effect="start-up only"),
+    ParameterSpec("per_body_inputs", _T.STRING, "auto",
+                  "Subscribe to B/wrench, B/impulse and B/set_state for every body B, besides the shared "
+                  "wrench, impulse and set_state topics (always there; keyed by the message's frame). "
+                  "'auto': as per_body_topics (per-body inputs with per-body topics, none with batches only, "
+                  "so a swarm costs no DDS endpoint a body); 'true' or 'false' to choose.",
+                  choices=("auto", "true", "false"), read_only=True, takes_effect="start-up only"),
     ParameterSpec("twist_stamped", _T.BOOL, False,
                   "Publish B/twist as geometry_msgs/TwistStamped (the stamp and frame_id of B/pose) instead "
                   "of Twist.", read_only=True, takes_effect="start-up only"),

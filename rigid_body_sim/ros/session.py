@@ -37,8 +37,8 @@ __all__ = ["BUSY_WAIT_S", "CHANGE_WAIT_S", "MAX_BATCH_ONLY_BODIES", "MAX_BODIES"
 #: and their creation (~2 ms each); above this a scene change would stall the parameter
 #: service for many seconds. A larger scene is refused with this number in the reason.
 MAX_BODIES = 1000
-#: Most bodies with ``per_body_topics`` false (batches only; inputs stay per body: two
-#: subscriptions each).
+#: Most bodies with ``per_body_topics`` false (batches only; inputs on the shared topics unless
+#: ``per_body_inputs`` asks for three subscriptions a body).
 MAX_BATCH_ONLY_BODIES = 10_000
 #: Most ticks one ``~/step_ticks`` request may ask for (the node's other callbacks wait while it steps).
 MAX_STEP_TICKS = 1_000_000

@@ -1,4 +1,9 @@
-"""``<body>/set_state`` (nav_msgs/Odometry): put a body somewhere and give it a velocity.
+"""``set_state`` and ``<body>/set_state`` (nav_msgs/Odometry): put a body somewhere and give it a velocity.
+
+The shared ``set_state`` topic (one subscription for all bodies) sets the body its
+``child_frame_id`` names (``B``, prefixed by ``frame_prefix``; so its twist is in body axes); the
+per-body ``B/set_state`` (with per-body inputs on, the node's ``per_body_inputs``) also takes
+``world_frame`` there. Both are checked by one validator (:func:`state_from_odometry`).
 
 simulation_interfaces' SetEntityState with a standard type. The message is read as nav_msgs
 defines Odometry: ``pose`` is the body frame's pose in ``header.frame_id``, which must be the
@@ -37,6 +42,7 @@ from ..core.quaternion import quat_rotate, quat_wxyz_from_xyzw
 from ..core.scene import ORIENTATION_TOLERANCE
 from .contacts import into_ground
 from .conversions import RejectedMessage
+from .inputs import shared_qos
 
 __all__ = ["MAX_STATE_COMPONENT", "SetStateChange", "SetStateInputs", "state_from_odometry"]
 
@@ -50,6 +56,7 @@ class SetStateChange:
 
     subscriptions: dict[str, Any]
     stale: list[Any]
+    bodies: frozenset[str] = frozenset()
 
 
 def state_from_odometry(msg: Odometry, body: str, world_frame: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -100,29 +107,36 @@ class SetStateInputs:
     frame_prefix : str
         In front of the accepted frame ids (the node's ``frame_prefix``): ``header.frame_id`` must be
         the prefixed world frame, ``child_frame_id`` the prefixed body name or world frame.
+    per_body : bool
+        Also subscribe to ``B/set_state`` for every body B (one DDS endpoint a body).
     """
 
-    def __init__(self, node: Node, qos: QoSProfile, world_frame: str, inputs: Any, frame_prefix: str = ""):
+    def __init__(self, node: Node, qos: QoSProfile, world_frame: str, inputs: Any, frame_prefix: str = "", *,
+                 per_body: bool = True):
         self._node = node
         self._qos = qos
         self._world_frame = frame_prefix + world_frame
         self._prefix = frame_prefix
         self._inputs = inputs
         self._lock = threading.Lock()
+        self.per_body = per_body
         self.subscriptions: dict[str, Any] = {}
+        self.bodies: frozenset[str] = frozenset()
         self.pending: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = {}
+        self.shared = node.create_subscription(Odometry, "set_state", lambda msg: self.on_set_state(None, msg),
+                                               shared_qos(qos))
 
     def prepare(self, body_names: tuple[str, ...]) -> SetStateChange:
         subs = {body: self.subscriptions.get(body) or self._node.create_subscription(
             Odometry, f"{body}/set_state", lambda msg, b=body: self.on_set_state(b, msg), self._qos)
-            for body in body_names}
-        return SetStateChange(subs, [s for b, s in self.subscriptions.items() if b not in subs])
+            for body in body_names} if self.per_body else {}
+        return SetStateChange(subs, [s for b, s in self.subscriptions.items() if b not in subs], frozenset(body_names))
 
     def commit(self, change: SetStateChange) -> None:
         """Swap in prepared subscriptions (hold the node's lock); states pending for bodies gone are dropped."""
         with self._lock:
-            self.subscriptions = change.subscriptions
-            self.pending = {b: s for b, s in self.pending.items() if b in self.subscriptions}
+            self.subscriptions, self.bodies = change.subscriptions, change.bodies
+            self.pending = {b: s for b, s in self.pending.items() if b in self.bodies}
 
     def release(self, change: SetStateChange) -> None:
         for subscription in change.stale:
@@ -133,16 +147,28 @@ class SetStateInputs:
         with self._lock:
             self.pending.clear()
 
-    def on_set_state(self, body: str, msg: Odometry) -> None:
-        """``<body>/set_state``: validate, then keep it for the next tick (replacing an earlier one)."""
+    def on_set_state(self, body: str | None, msg: Odometry) -> None:
+        """``<body>/set_state`` (``body`` None: ``set_state``, for the body child_frame_id names):
+        validate, then keep it for the next tick (replacing an earlier one)."""
+        shared = body is None
         try:
+            if shared:
+                body = self._shared_body(msg.child_frame_id)
             state = state_from_odometry(msg, self._prefix + body, self._world_frame)
         except RejectedMessage as rejection:
-            self._inputs.count_rejection(body, "set_state", rejection)
+            self._inputs.count_rejection(None if shared else body, "set_state", rejection)
             return
         with self._lock:
             self.pending[body] = state
         self._inputs.count_accepted()
+
+    def _shared_body(self, child_frame_id: str) -> str:
+        """The body a shared ``set_state`` names in its child_frame_id (the prefixed body name)."""
+        body = child_frame_id[len(self._prefix):] if child_frame_id.startswith(self._prefix) else None
+        if body not in self.bodies:
+            raise RejectedMessage("unknown_frame", f"child_frame_id {child_frame_id[:80]!r}: expected a body's frame "
+                                                   f"({self._prefix}B for a body B; the world frame names no body)")
+        return body
 
     def apply(self, sim: Simulator) -> list[str]:
         """Apply the pending states to ``sim`` (at the start of a tick; hold the node's lock); the bodies set."""
