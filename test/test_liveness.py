@@ -28,7 +28,7 @@ from diagnostic_msgs.msg import DiagnosticArray
 from mcap.reader import make_reader
 from rcl_interfaces.msg import Parameter as ParameterMsg
 from rcl_interfaces.msg import ParameterType, ParameterValue
-from rcl_interfaces.srv import SetParameters
+from rcl_interfaces.srv import GetParameters, SetParameters
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
@@ -225,10 +225,57 @@ def test_a_signal_ends_step_ticks_and_the_recording_holds_every_message(tmp_path
     assert took < 1.0, f"exit {took:.2f} s after SIGINT"
 
 
+def test_the_node_answers_while_step_ticks_runs(tmp_path):
+    """``~/step_ticks`` 1,000,000 on one body: while it runs, ``get_parameters`` answers within 1 s,
+    /diagnostics keeps its 1 s period, ``~/set_paused`` and ``~/step`` answer (busy, naming
+    ``~/step_ticks``); then SIGINT ends it, said on the log, with exit 0. (When the ticks ran
+    inside the executor's callback, no answer and no /diagnostics came until they ended.)"""
+    scene = write_tumbling_scene(tmp_path / "one.yaml", 1)
+    log = tmp_path / "answers.log"
+    process = start_process(["-p", f"scene:={scene}", "-p", "paused:=true", "-p", "status_period:=0.0"], log)
+    peer = Peer()
+    try:
+        step_ticks = peer.client(SetParameters, "/rigid_body_sim/step_ticks")
+        get_parameters = peer.client(GetParameters, "/rigid_body_sim/get_parameters")
+        set_paused = peer.client(SetBool, "/rigid_body_sim/set_paused")
+        step = peer.client(Trigger, "/rigid_body_sim/step")
+        peer.spin_until(lambda: len(peer.diagnostics) >= 1, 30, "no /diagnostics from the node")
+        ticks = step_ticks.call_async(SetParameters.Request(parameters=[int_parameter("ticks", 1_000_000)]))
+        wait_until_busy(peer, process, 0.5)
+        started = time.monotonic()
+        latencies = []
+        while time.monotonic() - started < 3.5:
+            answer, took = peer.call(get_parameters, GetParameters.Request(names=["rate_hz"]), timeout=5.0)
+            assert len(answer.values) == 1 and answer.values[0].type == ParameterType.PARAMETER_DOUBLE, answer
+            latencies.append(took)
+            peer.spin_until(lambda: time.monotonic() - started > 0.25 * len(latencies), 5, "")
+        during = [t for t, _, _ in peer.diagnostics if t > started]
+        gaps = [b - a for a, b in zip([started, *during], during)]
+        assert not ticks.done(), "~/step_ticks answered before the checks ended: too few ticks to test with"
+        assert max(latencies) < 1.0, f"get_parameters answered in {max(latencies):.2f} s during ~/step_ticks"
+        assert len(during) >= 3 and max(gaps) < 1.3, f"/diagnostics gaps {gaps} during ~/step_ticks"
+
+        for client, request in ((set_paused, SetBool.Request(data=False)), (step, Trigger.Request())):
+            answer, took = peer.call(client, request, timeout=5.0)
+            assert not answer.success and "busy: ~/step_ticks has been running for" in answer.message, answer.message
+            assert took < 1.5, f"{client.srv_name} answered in {took:.2f} s: {answer.message}"
+        assert not ticks.done() and process.poll() is None
+        took = stop_and_check(process, signal.SIGINT, log, what="SIGINT during ~/step_ticks 1,000,000")
+    finally:
+        kill_if_running(process)
+        peer.close()
+    stopped = re.search(r"~/step_ticks stopped after (\d+) of 1000000 ticks", log.read_text())
+    assert stopped and int(stopped[1]) > 0, log.read_text()[-2000:]
+    print(f"\nduring ~/step_ticks: get_parameters in {min(latencies) * 1e3:.0f}-{max(latencies) * 1e3:.0f} ms "
+          f"({len(latencies)} calls), /diagnostics gaps up to {max(gaps):.2f} s; stopped after {stopped[1]} ticks, "
+          f"exit 0 {took:.2f} s after SIGINT")
+    assert took < 1.0, f"exit {took:.2f} s after SIGINT"
+
+
 @pytest.mark.parametrize("bodies", [600, pytest.param(3000, marks=pytest.mark.slow)])
 def test_a_signal_during_a_long_tick_of_step_ticks_ends_it_at_a_substep(bodies, tmp_path):
-    """``~/step_ticks`` runs in the executor's thread, the main thread, where Python runs signal
-    handlers only between bytecodes: a tick of ``bodies`` × 1e5 substeps there (600: 2-7 s, 3000:
+    """``~/step_ticks`` runs in a worker thread (it once ran in the executor's, the main thread,
+    where Python runs signal handlers only between bytecodes): a tick of ``bodies`` × 1e5 substeps there (600: 2-7 s, 3000:
     15-30 s on a shared 2-core machine) must still be cut short by a SIGINT at a substep (the
     signal is also seen by a thread: rigid_body_sim.signals)."""
     scene = write_tumbling_scene(tmp_path / f"bodies_{bodies}.yaml", bodies)

@@ -10,7 +10,9 @@ A request is handled whole: every result carries the same outcome.
 ``~/step_ticks``
     One INTEGER value named ``ticks``: exactly that many ticks while paused (1 to
     ``MAX_STEP_TICKS``), answered when done with the sim time reached; refused with a reason
-    while running. The node's other callbacks wait until it answers.
+    while running. The ticks run in a worker thread while the callback (a coroutine) awaits them,
+    so the executor stays free: parameters, /diagnostics and the other services answer meanwhile
+    (a request that needs the simulator is refused as busy, naming ``~/step_ticks``).
 ``~/spawn``
     One STRING value per new body: the name is the body's name, the value its definition in a
     scene file's YAML form (what goes under ``bodies.<name>``). The bodies appear with their
@@ -24,9 +26,13 @@ The work is done by the node's :class:`~rigid_body_sim.ros.session.SimSession` (
 
 from __future__ import annotations
 
+import threading
+from typing import Callable, TypeVar
+
 from rcl_interfaces.msg import ParameterType, SetParametersResult
 from rcl_interfaces.srv import SetParameters
 from rclpy.node import Node
+from rclpy.task import Future
 
 from .session import SimSession
 
@@ -42,6 +48,31 @@ def _answer(request: SetParameters.Request, response: SetParameters.Response, su
     count = max(1, len(request.parameters))
     response.results = [SetParametersResult(successful=success, reason=reason) for _ in range(count)]
     return response
+
+
+T = TypeVar("T")
+
+
+async def _in_worker_thread(node: Node, work: Callable[[], T], name: str) -> T:
+    """``work()`` in a daemon thread, awaited: the executor serves other callbacks meanwhile.
+
+    The future belongs to the node's executor and has a done callback, so completing it from the
+    thread schedules that callback on the executor, which wakes it to resume the awaiting task.
+    """
+    executor = node.executor
+    future: Future = executor.create_future() if executor is not None else Future()
+    future.add_done_callback(lambda _done: None)
+
+    def run() -> None:
+        try:
+            result = work()
+        except Exception as exc:  # noqa: BLE001  (raised again in the awaiting callback)
+            future.set_exception(exc)
+        else:
+            future.set_result(result)
+
+    threading.Thread(target=run, name=name, daemon=True).start()
+    return await future
 
 
 def _type_name(value_type: int) -> str:
@@ -62,13 +93,16 @@ def _names(request: SetParameters.Request, what: str) -> str | None:
 def create_robot_services(node: Node, session: SimSession) -> list:
     """Create ``~/step_ticks``, ``~/spawn`` and ``~/delete`` on ``node``, served by ``session``; returns them."""
 
-    def on_step_ticks(request: SetParameters.Request, response: SetParameters.Response) -> SetParameters.Response:
+    async def on_step_ticks(request: SetParameters.Request,
+                            response: SetParameters.Response) -> SetParameters.Response:
         params = list(request.parameters)
         if len(params) != 1 or params[0].name != "ticks" or params[0].value.type != ParameterType.PARAMETER_INTEGER:
             got = [(p.name, _type_name(p.value.type)) for p in params]
             return _answer(request, response, False,
                            f"refused: expected one integer parameter named 'ticks', got {got}")
-        return _answer(request, response, *session.step_ticks(int(params[0].value.integer_value)))
+        ticks = int(params[0].value.integer_value)
+        outcome = await _in_worker_thread(node, lambda: session.step_ticks(ticks), "step_ticks")
+        return _answer(request, response, *outcome)
 
     def on_spawn(request: SetParameters.Request, response: SetParameters.Response) -> SetParameters.Response:
         problem = _names(request, "body")
