@@ -244,7 +244,7 @@ def test_the_node_answers_while_step_ticks_runs(tmp_path):
         wait_until_busy(peer, process, 0.5)
         started = time.monotonic()
         latencies = []
-        while time.monotonic() - started < 3.5:
+        while time.monotonic() - started < 2.5:
             answer, took = peer.call(get_parameters, GetParameters.Request(names=["rate_hz"]), timeout=5.0)
             assert len(answer.values) == 1 and answer.values[0].type == ParameterType.PARAMETER_DOUBLE, answer
             latencies.append(took)
@@ -253,7 +253,7 @@ def test_the_node_answers_while_step_ticks_runs(tmp_path):
         gaps = [b - a for a, b in zip([started, *during], during)]
         assert not ticks.done(), "~/step_ticks answered before the checks ended: too few ticks to test with"
         assert max(latencies) < 1.0, f"get_parameters answered in {max(latencies):.2f} s during ~/step_ticks"
-        assert len(during) >= 3 and max(gaps) < 1.3, f"/diagnostics gaps {gaps} during ~/step_ticks"
+        assert len(during) >= 2 and max(gaps) < 1.3, f"/diagnostics gaps {gaps} during ~/step_ticks"
 
         for client, request in ((set_paused, SetBool.Request(data=False)), (step, Trigger.Request())):
             answer, took = peer.call(client, request, timeout=5.0)
