@@ -6,6 +6,8 @@ simulator's ``body_names`` parameter to name the poses, and calls its ``~/set_pa
 ``~/step`` and ``~/reset``. Each body is a frame (its axes) holding its shape from the markers
 (namespace B, id 0: CUBE, SPHERE, CYLINDER). The ROS executor spins in its own thread; viser's
 callbacks only call services asynchronously and publish, so no GUI click ever blocks on ROS.
+:class:`Bodies` (the drawing), :func:`setup_scene` and :func:`start_server` are shared with the
+replay of a recording (:mod:`.replay`).
 """
 
 from __future__ import annotations
