@@ -7,6 +7,7 @@ Subcommands (``rigid-body-sim SUBCOMMAND --help`` for each)::
     describe SCENE [--json]
     check SCENE
     view [--namespace NS] [--node NAME] [--host ADDR] [--port PORT] [--strike-body NAME]   (a live 3D view in the browser)
+    view RECORDING.mcap [--host ADDR] [--port PORT]   (replay a recording in the same view, no ROS)
 
 Exit codes: 0 success; 1 a scene or input file that cannot be used (the message names the
 file, key path and expectation), a run that failed, or an output that could not be written
@@ -162,10 +163,17 @@ def build_parser() -> argparse.ArgumentParser:
         "Validate SCENE only: print a one-line summary and exit 0, or print the loader's error "
         "(file, key path, what was expected) and exit 1."))
     check.add_argument("scene", metavar="SCENE", help="scene YAML file")
-    view = sub.add_parser("view", help="a live 3D view of a running node in the browser", description=(
+    view = sub.add_parser("view", help="a live 3D view of a running node, or a recording's replay, in the browser",
+                          description=(
         "Serve a live 3D view of a running rigid_body_sim node (viser; open the printed address): its bodies "
         "from 'poses' and 'markers', sim time, Pause/Run/Step/Reset, and the 'Feel the offset' strike panel. "
-        "Needs requirements-view.txt (make venv installs it). Exit 2 if the address is in use. See docs/view.md."))
+        "With RECORDING, replay that MCAP recording instead (no ROS): its bodies drawn from the attached scene, "
+        "a time slider, Play and Pause. "
+        "Needs requirements-view.txt (make venv installs it). Exit 2 if the address is in use, or if RECORDING "
+        "is not a recording that can be read. See docs/view.md."))
+    view.add_argument("recording", nargs="?", metavar="RECORDING",
+                      help="an MCAP recording ('run --record' or the node's record_path) to replay instead of "
+                           "viewing a live node")
     view.add_argument("--namespace", default="/", help="ROS namespace of the simulator's topics (default /)")
     view.add_argument("--node", default="rigid_body_sim", help="the simulator node's name (default rigid_body_sim)")
     view.add_argument("--host", default="127.0.0.1", help="address to serve on (default 127.0.0.1; 0.0.0.0 for all)")
@@ -213,6 +221,10 @@ def _view(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     except ImportError as exc:
         raise _Failure(f"{exc}; install the view's pins: .venv/bin/pip install -r requirements-view.txt") from None
     stop = args.signals.switch_to_orderly()
+    if args.recording is not None:
+        from .view.replay import run_replay
+
+        return run_replay(args.recording, args.host, args.port, stop)
     return run_view(args.namespace, args.node, args.host, args.port, args.strike_body, stop)
 
 

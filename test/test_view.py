@@ -13,6 +13,14 @@ buttons, its slider) it steps, strikes and resets the node, and checks:
   rate_hz 1e4), so the free tumbling during the tick moves ω by less than 1e-9 (about 1e-10).
 
 Without a node the view says it waits (no traceback); on a port in use it exits 2 saying so.
+
+The replay (``rigid-body-sim view RECORDING``, no node): a 4 s recording of the tumbling box made
+with ``rigid-body-sim run --record``; through the page (the slider's thumb by keyboard, the number
+box beside it typed into, Play and Pause) the time moves, and the ``pose`` field's time, position
+and quaternion equal read_recording's sample at that time within 1e-9; the box is drawn elsewhere
+at t = 2.5 s than at t = 0.1 s (box-coloured pixels of two screenshots differ). A file that is
+not a recording, or a missing one: one line, exit 2; a recording cut in half replays up to the
+cut and says so.
 ``RIGID_BODY_SIM_VIEW_PNG=docs/view.png`` also saves the screenshot with the box (the README's).
 """
 
@@ -270,3 +278,163 @@ def test_view_waits_for_a_node_and_refuses_a_port_in_use(tmp_path):
     text = (tmp_path / "view.log").read_text()
     assert code == 0 and "Traceback" not in text, text
     assert "/nobody_here/poses" in text
+
+
+# ------------------------------------------------------------------------------ replay of a recording
+
+
+def record_tumbling_box(path: Path, duration_s: float = 4.0) -> None:
+    """``rigid-body-sim run`` of the default scene (the box tumbling at ω = (0.2, 0.1, 0.5) rad/s), 100 samples/s."""
+    script = Path(view_command()[0])
+    done = subprocess.run([str(script), "run", str(SCENE), "--duration", f"{duration_s:g}", "--record", str(path), "-q"],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0 and path.is_file(), done
+
+
+def shown_pose(driver) -> tuple[float, np.ndarray, np.ndarray] | None:
+    """(t, position, quaternion xyzw) from the page's ``pose`` field, or None before it is filled."""
+    for area in driver.find_elements(By.TAG_NAME, "textarea"):
+        text = area.get_property("value") or ""
+        if text.startswith("body box,"):
+            lines = dict(line.split(" = ", 1) for line in text.splitlines()[1:])
+            return (float(lines["t"].removesuffix(" s")), np.array(yaml.safe_load(lines["position (m)"])),
+                    np.array(yaml.safe_load(lines["orientation (x, y, z, w)"])))
+    return None
+
+
+def wait_pose_at(driver, t: float, timeout: float = 30.0) -> tuple[float, np.ndarray, np.ndarray]:
+    end = time.monotonic() + timeout
+    while True:
+        pose = shown_pose(driver)
+        if pose is not None and abs(pose[0] - t) < 1e-9:
+            return pose
+        assert time.monotonic() < end, f"the page never showed t = {t}; it shows {pose}"
+        time.sleep(0.1)
+
+
+def box_mask(png: bytes) -> np.ndarray:
+    rgb = np.asarray(Image.open(io.BytesIO(png)).convert("RGB"), dtype=int)[:, : int(1200 * 0.7)]
+    r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
+    return (r > 60) & (b - r > 25) & (b > g + 8) & (b < 250)
+
+
+@pytest.mark.timeout(240)
+def test_replay_in_chromium_shows_the_recorded_pose_at_the_slider_time(tmp_path):
+    from rigid_body_sim.offline.recording import read_recording
+
+    record = tmp_path / "tumble.mcap"
+    record_tumbling_box(record)
+    data, _scene = read_recording(record)
+    track = data.bodies["box"]
+
+    def check(pose: tuple[float, np.ndarray, np.ndarray], t: float) -> None:
+        k = int(np.argmin(np.abs(data.time - t)))
+        assert abs(data.time[k] - t) < 1e-9
+        shown_t, p, q = pose
+        assert abs(shown_t - data.time[k]) < 1e-9
+        np.testing.assert_allclose(p, track.position_world[k], rtol=0, atol=1e-9)
+        np.testing.assert_allclose(q, track.orientation_xyzw[k], rtol=0, atol=1e-9)
+
+    port = free_port()
+    with open(tmp_path / "view.log", "w") as log:
+        view = subprocess.Popen(view_command(str(record), "--port", str(port)), stdout=log, stderr=subprocess.STDOUT)
+    driver = None
+    try:
+        driver = chromium()
+        end = time.monotonic() + 60.0
+        while True:
+            try:
+                driver.get(f"http://127.0.0.1:{port}")
+                break
+            except Exception:  # noqa: BLE001 - the view is still starting
+                assert view.poll() is None and time.monotonic() < end, (tmp_path / "view.log").read_text()
+                time.sleep(0.5)
+        for close in driver.find_elements(By.CSS_SELECTOR, "[class*='Notification-closeButton']"):
+            close.click()
+        wait_text(driver, lambda t: "1 body, 401 samples, t = 0 … 4 s" in t, "the recording's summary")
+        check(wait_pose_at(driver, 0.0), 0.0)
+
+        # The keyboard on the slider's thumb: ten steps of one sample (0.01 s) to the right.
+        thumb = driver.find_element(By.CSS_SELECTOR, "[role='slider']")
+        for _ in range(10):
+            thumb.send_keys(Keys.ARROW_RIGHT)
+        check(wait_pose_at(driver, 0.1), 0.1)
+        time.sleep(2.0)  # let the software renderer draw the frame
+        early = box_mask(driver.get_screenshot_as_png())
+
+        # The number box beside the slider, typed into as a user would.
+        box = thumb.find_element(By.XPATH, "./ancestor::div[contains(@class, 'Slider-root')]/following::input[1]")
+        box.send_keys(Keys.CONTROL, "a")
+        box.send_keys("2.5")
+        check(wait_pose_at(driver, 2.5), 2.5)
+        time.sleep(2.0)
+        png = driver.get_screenshot_as_png()
+        (tmp_path / "replay.png").write_bytes(png)
+        late = box_mask(png)
+        moved = int(np.count_nonzero(early ^ late))
+        print(f"box-coloured pixels: {int(early.sum())} at t = 0.1 s, {int(late.sum())} at t = 2.5 s, "
+              f"{moved} differ")
+        assert early.sum() > 3000 and late.sum() > 3000, (early.sum(), late.sum())
+        assert moved > 2000, moved
+
+        thumb.send_keys(Keys.END)
+        check(wait_pose_at(driver, 4.0), 4.0)
+
+        # Play from the end starts again at 0 and moves on; Pause holds a recorded sample.
+        click(driver, "Play")
+        wait_text(driver, lambda t: "playing" in t, "playing")
+        end = time.monotonic() + 30.0
+        while not ((pose := shown_pose(driver)) and 0.3 < pose[0] < 4.0):
+            assert time.monotonic() < end, f"playback never moved on; the page shows {pose}"
+            time.sleep(0.1)
+        click(driver, "Pause")
+        paused = wait_text(driver, lambda t: "paused at t = " in t, "paused")
+        at = float(paused.split("paused at t = ", 1)[1].split(" s", 1)[0])
+        pose = wait_pose_at(driver, at)
+        check(pose, pose[0])
+        time.sleep(1.0)
+        assert shown_pose(driver)[0] == pose[0]
+    finally:
+        if driver is not None:
+            driver.quit()
+        code = stop_process(view)
+    log = (tmp_path / "view.log").read_text()
+    assert code == 0 and "Traceback" not in log, log
+
+
+@pytest.mark.timeout(120)
+def test_replay_refuses_what_is_no_recording_and_plays_a_cut_one_up_to_the_cut(tmp_path):
+    from rigid_body_sim.offline.recording import read_recording
+
+    (tmp_path / "notes.mcap").write_text("not a recording\n")
+    for path, says in ((tmp_path / "notes.mcap", "not an MCAP recording"),
+                       (tmp_path / "missing.mcap", "No such file or directory")):
+        done = subprocess.run(view_command(str(path), "--port", str(free_port())), capture_output=True, text=True,
+                              timeout=60)
+        assert done.returncode == 2, done
+        assert done.stdout == "" and done.stderr.count("\n") == 1 and says in done.stderr, done
+        assert done.stderr.startswith(f"rigid-body-sim view: {path}: "), done
+
+    whole = tmp_path / "whole.mcap"
+    record_tumbling_box(whole, duration_s=40.0)  # 0.5 MB, two 256 KiB chunks: the cut keeps the first
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(whole.read_bytes()[: whole.stat().st_size // 2])
+    data, _ = read_recording(cut)
+    assert 1.0 < data.time[-1] < 39.0 and data.meta["status"].startswith("cut short: "), data.meta
+    with open(tmp_path / "view.log", "w") as log:
+        view = subprocess.Popen(view_command(str(cut), "--port", str(free_port())), stdout=log,
+                                stderr=subprocess.STDOUT)
+    try:
+        end = time.monotonic() + 60.0
+        while "Ctrl-C stops" not in (tmp_path / "view.log").read_text():
+            assert view.poll() is None and time.monotonic() < end, (tmp_path / "view.log").read_text()
+            time.sleep(0.2)
+    finally:
+        code = stop_process(view)
+    text = (tmp_path / "view.log").read_text()
+    assert code == 0 and "Traceback" not in text, text
+    warning = f"rigid-body-sim view: warning: {cut}: cut short: "
+    assert text.count(warning) == 1, text
+    line = text.split(warning, 1)[1].split("\n", 1)[0]
+    assert line.endswith(f"; the replay plays up to t = {data.time[-1]:.9g} s"), line
+    assert f"read up to t = {data.time[-1]:.9g} s" in line, line

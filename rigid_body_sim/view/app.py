@@ -6,6 +6,8 @@ simulator's ``body_names`` parameter to name the poses, and calls its ``~/set_pa
 ``~/step`` and ``~/reset``. Each body is a frame (its axes) holding its shape from the markers
 (namespace B, id 0: CUBE, SPHERE, CYLINDER). The ROS executor spins in its own thread; viser's
 callbacks only call services asynchronously and publish, so no GUI click ever blocks on ROS.
+:class:`Bodies` (the drawing), :func:`setup_scene` and :func:`start_server` are shared with the
+replay of a recording (:mod:`.replay`).
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from typing import Any
 
 from .strike import STRIKE_IMPULSE_NS, strike_point, strike_wrench
 
-__all__ = ["run_view", "port_in_use"]
+__all__ = ["run_view", "port_in_use", "Bodies", "shape_from_marker", "setup_scene", "start_server"]
 
 PROG = "rigid-body-sim view"
 #: How often the page is brought up to date with the latest state, Hz.
@@ -48,6 +50,94 @@ class _Shape:
     rgb: tuple[int, int, int]
     opacity: float | None
     q_rel_wxyz: tuple[float, float, float, float]  # shape in the body frame
+
+
+def shape_from_marker(kind: int, scale: tuple[float, float, float], rgba: tuple[float, float, float, float],
+                      q_rel_wxyz: tuple[float, float, float, float]) -> _Shape:
+    """A body's shape as a marker gives it (type, scale, colour), placed in the body frame by ``q_rel_wxyz``."""
+    rgb = tuple(int(round(255 * min(1.0, max(0.0, float(c))))) for c in rgba[:3])
+    opacity = float(rgba[3]) if 0.0 < rgba[3] < 1.0 else None
+    return _Shape(int(kind), tuple(float(x) for x in scale), rgb, opacity,  # type: ignore[arg-type]
+                  tuple(float(x) for x in q_rel_wxyz))  # type: ignore[arg-type]
+
+
+class Bodies:
+    """The drawing of the bodies, shared by the live view and the replay: each body a frame (its
+    axes) at ``/bodies/<name>`` holding its shape (box, cylinder along z, or a scaled sphere)."""
+
+    def __init__(self, server: Any):
+        self.server = server
+        self.frames: dict[str, Any] = {}
+        self.shape_handles: dict[str, tuple[_Shape, Any]] = {}
+
+    def show(self, poses: dict[str, tuple[tuple[float, float, float], tuple[float, float, float, float]]],
+             shapes: dict[str, _Shape]) -> set[str]:
+        """Place each body of ``poses`` (name: (position, wxyz)) and draw its shape when new or changed;
+        bodies not in ``poses`` are hidden. Returns the names whose frame or shape was (re)made."""
+        made: set[str] = set()
+        with self.server.atomic():
+            for name, (position, wxyz) in poses.items():
+                frame = self.frames.get(name)
+                if frame is None:
+                    frame = self.frames[name] = self.server.scene.add_frame(
+                        f"/bodies/{name}", axes_length=0.3, axes_radius=0.01)
+                    made.add(name)
+                frame.position, frame.wxyz, frame.visible = position, wxyz, True
+                shape = shapes.get(name)
+                if shape is not None and self.shape_handles.get(name, (None,))[0] != shape:
+                    self._draw_shape(name, shape)
+                    made.add(name)
+            for name, frame in self.frames.items():
+                if name not in poses:
+                    frame.visible = False
+        return made
+
+    def _draw_shape(self, name: str, shape: _Shape) -> None:
+        from visualization_msgs.msg import Marker
+
+        old = self.shape_handles.pop(name, None)
+        if old is not None:
+            old[1].remove()
+        path, scene = f"/bodies/{name}/shape", self.server.scene
+        sx, sy, sz = shape.scale
+        if shape.kind == Marker.CUBE:
+            handle = scene.add_box(path, color=shape.rgb, dimensions=(sx, sy, sz), opacity=shape.opacity,
+                                   wxyz=shape.q_rel_wxyz)
+        elif shape.kind == Marker.CYLINDER:
+            handle = scene.add_cylinder(path, radius=sx / 2.0, height=sz, color=shape.rgb, opacity=shape.opacity,
+                                        wxyz=shape.q_rel_wxyz)
+        else:
+            handle = scene.add_icosphere(path, radius=0.5, scale=(sx, sy, sz), color=shape.rgb,
+                                         opacity=shape.opacity, wxyz=shape.q_rel_wxyz)
+        self.shape_handles[name] = (shape, handle)
+
+
+def setup_scene(server: Any) -> None:
+    """The 3D scene both views share: z up, the camera on the default box, a 4 m grid at z = 0."""
+    server.scene.set_up_direction("+z")
+    server.initial_camera.position = (1.9, -1.9, 2.0)
+    server.initial_camera.look_at = (0.0, 0.0, 0.8)
+    server.scene.add_grid("/ground", width=4.0, height=4.0, cell_size=0.5)
+
+
+def start_server(host: str, port: int) -> Any:
+    """A viser server on ``host:port``, or None after saying why not (the address in use) on stderr."""
+    problem = port_in_use(host, port)
+    if problem:
+        print(f"{PROG}: {problem}", file=sys.stderr)
+        return None
+    import viser
+
+    server = viser.ViserServer(host=host, port=port, verbose=False)
+    if server.get_port() != port:  # viser moves to the next free port; we promised this one
+        server.stop()
+        print(f"{PROG}: address {host}:{port} is already in use; choose another with --port", file=sys.stderr)
+        return None
+    return server
+
+
+def shown_host(host: str) -> str:
+    return "localhost" if host in ("127.0.0.1", "0.0.0.0", "::", "::1") else host
 
 
 def _q_mul(a: tuple, b: tuple) -> tuple[float, float, float, float]:
@@ -159,9 +249,8 @@ class _Ros:
             if poses is not None and m.ns in names and names.index(m.ns) < len(poses):
                 w, x, y, z = poses[names.index(m.ns)][1]
                 q_rel = _q_mul((w, -x, -y, -z), q_marker)  # a principal-axes ellipsoid sits rotated in B
-            rgb = tuple(int(round(255 * min(1.0, max(0.0, c)))) for c in (m.color.r, m.color.g, m.color.b))
-            opacity = float(m.color.a) if 0.0 < m.color.a < 1.0 else None
-            shapes[m.ns] = _Shape(m.type, (m.scale.x, m.scale.y, m.scale.z), rgb, opacity, q_rel)  # type: ignore[arg-type]
+            shapes[m.ns] = shape_from_marker(m.type, (m.scale.x, m.scale.y, m.scale.z),
+                                             (m.color.r, m.color.g, m.color.b, m.color.a), q_rel)
         with self.lock:
             self.shapes.update(shapes)
 
@@ -217,12 +306,8 @@ class _Page:
 
     def __init__(self, server: Any, ros: _Ros, namespace: str):
         self.server, self.ros = server, ros
-        self.frames: dict[str, Any] = {}
-        self.shape_handles: dict[str, tuple[_Shape, Any]] = {}
-        server.scene.set_up_direction("+z")
-        server.initial_camera.position = (1.9, -1.9, 2.0)
-        server.initial_camera.look_at = (0.0, 0.0, 0.8)
-        server.scene.add_grid("/ground", width=4.0, height=4.0, cell_size=0.5)
+        self.bodies = Bodies(server)
+        setup_scene(server)
         gui = server.gui
         gui.add_markdown(f"**rigid_body_sim** `{ros.sim_name}`")
         self.status = gui.add_markdown("waiting…")
@@ -257,7 +342,7 @@ class _Page:
             return
         r = strike_point(edges, self.offset.value)
         self.strike_text.content = f"offset {self.offset.value:.2f}: r = ({r[0]:.3f}, {r[1]:.3f}, {r[2]:.3f}) m"
-        if self.ros.strike_body in self.frames:
+        if self.ros.strike_body in self.bodies.frames:
             name = f"/bodies/{self.ros.strike_body}/strike"
             if self.strike_dot is None:
                 self.strike_dot = self.server.scene.add_icosphere(name, radius=0.03, color=(220, 30, 30))
@@ -291,62 +376,20 @@ class _Page:
         self.reply.content = reply or " "
         if names is None or len(names) != len(poses):
             return
-        with self.server.atomic():
-            for name, (position, wxyz) in zip(names, poses):
-                frame = self.frames.get(name)
-                if frame is None:
-                    frame = self.frames[name] = self.server.scene.add_frame(
-                        f"/bodies/{name}", axes_length=0.3, axes_radius=0.01)
-                    if name == ros.strike_body:
-                        self._show_strike_point()
-                frame.position, frame.wxyz, frame.visible = position, wxyz, True
-                shape = shapes.get(name)
-                if shape is not None and self.shape_handles.get(name, (None,))[0] != shape:
-                    self._draw_shape(name, shape)
-                    if name == ros.strike_body:
-                        self._show_strike_point()
-            for name, frame in self.frames.items():
-                if name not in names:
-                    frame.visible = False
-
-    def _draw_shape(self, name: str, shape: _Shape) -> None:
-        from visualization_msgs.msg import Marker
-
-        old = self.shape_handles.pop(name, None)
-        if old is not None:
-            old[1].remove()
-        path, scene = f"/bodies/{name}/shape", self.server.scene
-        sx, sy, sz = shape.scale
-        if shape.kind == Marker.CUBE:
-            handle = scene.add_box(path, color=shape.rgb, dimensions=(sx, sy, sz), opacity=shape.opacity,
-                                   wxyz=shape.q_rel_wxyz)
-        elif shape.kind == Marker.CYLINDER:
-            handle = scene.add_cylinder(path, radius=sx / 2.0, height=sz, color=shape.rgb, opacity=shape.opacity,
-                                        wxyz=shape.q_rel_wxyz)
-        else:
-            handle = scene.add_icosphere(path, radius=0.5, scale=(sx, sy, sz), color=shape.rgb,
-                                         opacity=shape.opacity, wxyz=shape.q_rel_wxyz)
-        self.shape_handles[name] = (shape, handle)
+        made = self.bodies.show(dict(zip(names, poses)), shapes)
+        if ros.strike_body in made:
+            self._show_strike_point()
 
 
 def run_view(namespace: str, node_name: str, host: str, port: int, strike_body: str, stop: threading.Event) -> int:
     """Serve the view until ``stop`` is set; returns the exit code (2: the address is in use)."""
-    problem = port_in_use(host, port)
-    if problem:
-        print(f"{PROG}: {problem}", file=sys.stderr)
-        return 2
-    import viser
-
-    server = viser.ViserServer(host=host, port=port, verbose=False)
-    if server.get_port() != port:  # viser moves to the next free port; we promised this one
-        server.stop()
-        print(f"{PROG}: address {host}:{port} is already in use; choose another with --port", file=sys.stderr)
+    server = start_server(host, port)
+    if server is None:
         return 2
     ros = _Ros(namespace, node_name, strike_body)
     try:
         page = _Page(server, ros, namespace)
-        shown_host = "localhost" if host in ("127.0.0.1", "0.0.0.0", "::", "::1") else host
-        print(f"{PROG}: open http://{shown_host}:{port} (simulator {ros.sim_name}); Ctrl-C stops", flush=True)
+        print(f"{PROG}: open http://{shown_host(host)}:{port} (simulator {ros.sim_name}); Ctrl-C stops", flush=True)
         waiting_said = False
         while not stop.wait(1.0 / REFRESH_HZ):
             page.refresh()
