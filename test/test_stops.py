@@ -98,7 +98,10 @@ def start_node(tmp_path: Path, moment: Moment, name: str) -> tuple[subprocess.Po
         scene = tmp_path / f"scene_{moment.bodies}.yaml"
         if not scene.exists():
             write_tumbling_scene(scene, moment.bodies)
-        args += ["-p", f"scene:={scene}", "-p", f"per_body_topics:={str(moment.per_body_topics).lower()}"]
+        # Per-body inputs on: the floods publish on B/impulse and B/wrench, and 1000 bodies keep
+        # their 3006 endpoints (the fast exit) even with batched output.
+        args += ["-p", f"scene:={scene}", "-p", f"per_body_topics:={str(moment.per_body_topics).lower()}",
+                 "-p", "per_body_inputs:=true"]
     record, log = tmp_path / f"{name}.mcap", tmp_path / f"{name}.log"
     args += ["-p", f"record_path:={record}"]
     if moment.env is None:
