@@ -310,21 +310,25 @@ BY_NAME: dict[str, ParameterSpec] = {spec.name: spec for spec in PARAMETERS}
 
 
 def coerce(spec: ParameterSpec, value: Any) -> Any:
-    """``value`` as the parameter's type where that is lossless: a whole number for a DOUBLE is a float."""
+    """``value`` as the parameter's type where that is lossless: a whole number for a DOUBLE is a float;
+    ``true``/``false`` (parsed by ROS as a bool) for a string whose choices include them."""
     if spec.type is Parameter.Type.DOUBLE and isinstance(value, int) and not isinstance(value, bool):
         return float(value)
+    if spec.type is Parameter.Type.STRING and isinstance(value, bool) and str(value).lower() in spec.choices:
+        return str(value).lower()
     return value
 
 
 def coerce_parameters(parameters: list[Parameter]) -> list[Parameter]:
-    """The node's pre-set callback: whole numbers for float parameters are floats (``rate_hz:=200`` means 200.0)."""
-    def as_float(param: Parameter) -> Parameter:
+    """The node's pre-set callback: whole numbers for float parameters are floats (``rate_hz:=200`` means
+    200.0), and ``per_body_inputs:=true`` is the string ``"true"``."""
+    def as_declared(param: Parameter) -> Parameter:
         spec = BY_NAME.get(param.name)
-        if spec is None or spec.type is not Parameter.Type.DOUBLE:
+        if spec is None or spec.type not in (Parameter.Type.DOUBLE, Parameter.Type.STRING):
             return param
         value = coerce(spec, param.value)
-        return param if value is param.value else Parameter(param.name, Parameter.Type.DOUBLE, value)
-    return [as_float(param) for param in parameters]
+        return param if value is param.value else Parameter(param.name, spec.type, value)
+    return [as_declared(param) for param in parameters]
 
 
 def problem(name: str, value: Any) -> str | None:
