@@ -177,7 +177,8 @@ def holding_wrench(y, p, w, count, points, nx, ny, nz, mu, slip_tolerance, bias,
     tangential acceleration after the solve above START_SLIDE_ACCELERATION: a box released on a
     slope steeper than its friction angle) starts to slide: SLIDE, ŝ along the points' mean
     tangential acceleration under the normal forces alone, and the forces solved again with
-    friction −μ f_n ŝ.
+    friction −μ f_n ŝ — if, with that friction, the points still accelerate along ŝ (else the
+    sticking solution is kept: a spinning body whose onset direction is not consistent).
     """
     rows = build_rows(y, p, count, points, nx, ny, nz, work)
     vx, vy = slip_velocity(work, count)
@@ -215,6 +216,16 @@ def holding_wrench(y, p, w, count, points, nx, ny, nz, mu, slip_tolerance, bias,
                 mode = SLIDE
                 sx, sy = ax / size, ay / size
             pgs(work, count, mu, sx, sy)
+            ax = ay = 0.0  # consistent only if, with that friction, the points still accelerate along ŝ
+            for c in range(count):
+                ax += _row_velocity(work, rows, 3 * c + 1)
+                ay += _row_velocity(work, rows, 3 * c + 2)
+            if mode == SLIDE and ax * sx + ay * sy <= START_SLIDE_ACCELERATION * count:
+                mode = STICK  # not: the sticking solve (friction on the cone), as before
+                sx = sy = 0.0
+                for a in range(rows):
+                    work[a, _LAM] = 0.0
+                pgs(work, count, mu, 0.0, 0.0)
     normal = 0.0
     for c in range(count):
         normal += work[3 * c, _LAM]
