@@ -15,7 +15,7 @@ and runs the core's contact solver (rk4, dt = ``DT``) until the phone is at rest
 (:func:`drop`). It then reads which face is down: screen-down when the body +z axis points
 into the floor. One command regenerates docs/phone_drop.png and docs/phone_drop.md::
 
-    .venv/bin/python -m rigid_body_sim.tools.phone_drop --drops 240 --out docs
+    .venv/bin/python -m rigid_body_sim.tools.phone_drop --drops 2000 --seed 2026 --out docs
 
 This module imports only the core (no ROS).
 """
@@ -299,7 +299,7 @@ simultaneous contacts with e > 0 make the outcome depend on the impact model (co
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--drops", type=int, default=240)
+    parser.add_argument("--drops", type=int, default=2000)
     parser.add_argument("--seed", type=int, default=2026)
     parser.add_argument("--out", type=Path, default=Path("docs"), help="directory for phone_drop.png and phone_drop.md")
     args = parser.parse_args(argv)
