@@ -198,7 +198,7 @@ class ContactSolver:
                 if speed <= LIFT_OFF_SPEED:
                     self.modes[i] = PERSISTENT
                     self.ground_of[i] = j
-                    self.tracked[i] = self._touching(sim, Y[i], i, j)
+                    self.tracked[i] = self._staying(sim, Y[i], i, j, self._touching(sim, Y[i], i, j))
                     self.events.append(ContactEvent(sim.time, self.names[i], int(j), "rest", speed, speed))
 
     def is_resting(self, body: str) -> bool:
@@ -219,6 +219,20 @@ class ContactSolver:
         count = feature_gaps(y, sim._prm[i], self.shapes[i], self.grounds[j], self._features)
         gaps = self._features[:count]
         return int(sum(1 << k for k in np.flatnonzero(gaps <= gaps.min() + self._band[i])))
+
+    def _staying(self, sim, y: np.ndarray, i: int, j: int, mask: int) -> int:
+        """The features of ``mask`` whose contact points do not move away from ground j (a box spun about a
+        bottom edge touches with four corners, but two of them rise: only the edge is in contact)."""
+        n = self.grounds[j, NORMAL:NORMAL + 3]
+        kept = 0
+        for k in range(MAX_FEATURES):
+            if mask & (1 << k):
+                count = feature_points(y, sim._prm[i], self.shapes[i], self.grounds[j], 1 << k, self._points,
+                                       self._gaps, self._owners)
+                _, highest = normal_speeds(y, sim._prm[i], count, self._points, n[0], n[1], n[2], self._work)
+                if count and highest <= LIFT_OFF_SPEED:
+                    kept |= 1 << k
+        return kept or mask
 
     def _tracked_points(self, sim, y: np.ndarray, i: int, mask: int | None = None) -> int:
         """Contact points (self._points, self._gaps) of body i's tracked features (or of ``mask``)."""

@@ -28,17 +28,19 @@ from ..dynamics import derivative
 from ..forces import add_wrench
 from ..layout import FRAME_SITE_WORLD_AXES, INV_INERTIA, INV_MASS, P, Q, Q_PB, V, W
 from ..rotation import exp_map, normalise, qmul, rotate, rotate_back
-from .impacts import _A, _ANG, _B, _LAM, _LIN, apply_impulses, build_rows, pgs
+from .impacts import _A, _ANG, _B, _LAM, _LIN, _row_velocity, apply_impulses, build_rows, pgs
 from .layout import DIMS, KIND, NORMAL, SHAPE_CAPSULE, SHAPE_CYLINDER, SHAPE_SPHERE
 from .shapes import FEATURE_BAND, feature_points
 
-__all__ = ["LIFT_OFF", "STICK", "SLIDE", "add_contact_wrench", "accelerations", "normal_bias", "normal_motion", "holding_wrench", "project",
+__all__ = ["LIFT_OFF", "STICK", "SLIDE", "START_SLIDE_ACCELERATION", "add_contact_wrench", "accelerations", "normal_bias", "normal_motion", "holding_wrench", "project",
            "normal_speeds", "slip_velocity"]
 
 _OPTS = {"cache": True, "nogil": True, "error_model": "numpy"}
 
 #: What :func:`holding_wrench` found the contact doing.
 LIFT_OFF, STICK, SLIDE = 0, 1, 2
+#: m/s²: a sticking contact whose points still accelerate along the ground faster than this starts to slide.
+START_SLIDE_ACCELERATION = 1e-9
 
 
 @njit(**_OPTS)
@@ -170,7 +172,13 @@ def holding_wrench(y, p, w, count, points, nx, ny, nz, mu, slip_tolerance, bias,
     ``w`` is the step's wrench row without contact, ``d`` a 13-float scratch. Returns
     (mode, Σ f_n, ŝ1, ŝ2): LIFT_OFF (every f_n is zero: the body leaves), STICK or SLIDE, and
     the slip direction along (t1, t2) used while sliding (zeros otherwise, and always when
-    μ = 0: a frictionless contact slides, never sticks).
+    μ = 0: a frictionless contact slides, never sticks). A contact not slipping whose friction,
+    on the cone, cannot stop the contact points accelerating along the ground (their mean
+    tangential acceleration after the solve above START_SLIDE_ACCELERATION: a box released on a
+    slope steeper than its friction angle) starts to slide: SLIDE, ŝ along the points' mean
+    tangential acceleration under the normal forces alone, and the forces solved again with
+    friction −μ f_n ŝ — if, with that friction, the points still accelerate along ŝ (else the
+    sticking solution is kept: a spinning body whose onset direction is not consistent).
     """
     rows = build_rows(y, p, count, points, nx, ny, nz, work)
     vx, vy = slip_velocity(work, count)
@@ -187,6 +195,37 @@ def holding_wrench(y, p, w, count, points, nx, ny, nz, mu, slip_tolerance, bias,
         sx, sy = vx / slip, vy / slip
         mode = SLIDE
     pgs(work, count, mu, sx, sy)
+    if mode == STICK:  # not slipping yet: if the cone cannot hold it, the contact points still accelerate along
+        ax = ay = 0.0  # the ground after the solve, and it starts to slide
+        for c in range(count):
+            ax += _row_velocity(work, rows, 3 * c + 1)
+            ay += _row_velocity(work, rows, 3 * c + 2)
+        if math.sqrt(ax * ax + ay * ay) > START_SLIDE_ACCELERATION * count:
+            # along the points' mean tangential acceleration under the normal forces alone, friction against it
+            for a in range(rows):
+                work[a, _LAM] = 0.0
+            pgs(work, count, 0.0, 0.0, 0.0)
+            ax = ay = 0.0
+            for c in range(count):
+                ax += _row_velocity(work, rows, 3 * c + 1)
+                ay += _row_velocity(work, rows, 3 * c + 2)
+            size = math.sqrt(ax * ax + ay * ay)
+            for a in range(rows):
+                work[a, _LAM] = 0.0
+            if size > 0.0:
+                mode = SLIDE
+                sx, sy = ax / size, ay / size
+            pgs(work, count, mu, sx, sy)
+            ax = ay = 0.0  # consistent only if, with that friction, the points still accelerate along ŝ
+            for c in range(count):
+                ax += _row_velocity(work, rows, 3 * c + 1)
+                ay += _row_velocity(work, rows, 3 * c + 2)
+            if mode == SLIDE and ax * sx + ay * sy <= START_SLIDE_ACCELERATION * count:
+                mode = STICK  # not: the sticking solve (friction on the cone), as before
+                sx = sy = 0.0
+                for a in range(rows):
+                    work[a, _LAM] = 0.0
+                pgs(work, count, mu, 0.0, 0.0)
     normal = 0.0
     for c in range(count):
         normal += work[3 * c, _LAM]
