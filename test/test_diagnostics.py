@@ -1,4 +1,4 @@
-"""``/diagnostics`` (issue 7): what the node tells an operator, and when it says WARN or ERROR.
+"""``/diagnostics``: what the node tells an operator, and when it says WARN or ERROR.
 
 The statuses are read as an operator's tool would, from diagnostic_msgs/DiagnosticArray messages
 received over DDS, except where a test needs one exact window (``node.diagnostics()`` closes the

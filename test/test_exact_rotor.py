@@ -11,7 +11,7 @@ Why 1e-10 is meaningful even on the separatrix: a torque-free body that starts o
 1e-9 of) the separatrix near the intermediate axis amplifies a perturbation by at most
 e^{ν t} ≈ e^{0.58 · 10} ≈ 330 over 10 s here, so round-off in the state (1e-16 per step,
 10³ steps) can cost ~1e-11 at worst: the method is held to what a backward-stable step
-allows. The cases: the issue's body exactly on the separatrix (L² = 2E·I2 in real numbers),
+allows. The cases: the reference body exactly on the separatrix (L² = 2E·I2 in real numbers),
 1e-9 to either side, leaving the saddle on the unstable branch, near each principal axis,
 fast spin (|ω| h up to 94 at h = 10), tiny and huge moments (|L| from 1e-6 to 1e6), a
 near-symmetric body (the |n| > 1 form of Π) and random seeded bodies.
@@ -26,7 +26,7 @@ from scipy.integrate import solve_ivp
 from rigid_body_sim.core.free_rotor import exact_rotor
 
 T_END = 10.0  # s
-ANGLE_TOL = 1e-10  # rad, the target of issue 13
+ANGLE_TOL = 1e-10  # rad, the exact rotor's accuracy target
 REFERENCE_RTOL = 2.5e-14
 EPS = np.finfo(float).eps
 
@@ -46,7 +46,7 @@ def _random_cases() -> list[tuple[str, tuple, tuple]]:
 
 #: (name, principal moments kg·m², ω_B0 rad/s)
 CASES = [
-    ("issue 13: on the separatrix", I123, (0.1 * SQRT3, 1.0, 0.1)),
+    ("on the separatrix", I123, (0.1 * SQRT3, 1.0, 0.1)),
     ("separatrix + 1e-9 (about I3)", I123, (0.1 * SQRT3 * (1.0 - 1e-9), 1.0, 0.1)),
     ("separatrix - 1e-9 (about I1)", I123, (0.1 * SQRT3 * (1.0 + 1e-9), 1.0, 0.1)),
     ("separatrix, leaving the saddle", I123, (1e-6 * SQRT3, 1.0, -1e-6)),
@@ -149,7 +149,7 @@ def test_reference_is_accurate_enough(reference) -> None:
         assert np.max(np.abs(w - w_ref[i])) < 5e-12 * np.max(np.abs(W0[i])), NAMES[i]
 
 
-def test_issue_case_is_on_the_separatrix() -> None:
+def test_reference_case_is_on_the_separatrix() -> None:
     """L² − 2E·I2 = 0 in real numbers for I = (1, 2, 3), ω = (0.1√3, 1, 0.1); ~1 ulp once rounded."""
     I, w = np.array(I123), W0[0]
     L2, two_E_I2 = np.sum((I * w) ** 2), 2.0 * np.sum(I * w * w)
@@ -170,7 +170,7 @@ def test_exact_rotor_matches_the_reference_small_steps(h: float, reference) -> N
 
 
 def test_one_step_equals_many_steps_on_the_separatrix() -> None:
-    """The flow property at the issue's body: 1 × 10 s and 40 × 0.25 s agree to 1e-12 rad."""
+    """The flow property at the reference body: 1 × 10 s and 40 × 0.25 s agree to 1e-12 rad."""
     I, L0 = INERTIA[:1], INERTIA[:1] * W0[:1]
     q_one, L_one = exact_rotor(I, Q0[None], L0, 10.0)
     q, L = Q0[None], L0

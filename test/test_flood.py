@@ -1,4 +1,4 @@
-"""Flood (issue 7): four processes publish at 10× the tick rate each at the node process (slow);
+"""Flood: four processes publish at 10× the tick rate each at the node process (slow);
 ``test_flood_in_process_short`` is a 1.5 s in-process version for the default suite.
 
 The node runs as ``rigid_body_sim_node`` (its console script) at 100 Hz; four publisher

@@ -1,4 +1,4 @@
-"""No private API of rclpy, numba or any other library in rigid_body_sim/ (issue 14).
+"""No private API of rclpy, numba or any other library in rigid_body_sim/.
 
 Statically, over every module of the package: no attribute with a leading underscore read from
 anything but ``self``/``cls`` (``node._parameter_overrides``...), no import of a module whose

@@ -1,4 +1,4 @@
-"""The node against hostile clients, files, parameters and processes (issues 14 and 18, node side).
+"""The node against hostile clients, files, parameters and processes (the node side).
 
 Each test reproduces something that ended in a traceback, a hang or a silent node before the
 fix (named in its docstring), through the node's real interfaces: in-process through the

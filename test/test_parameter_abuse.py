@@ -1,4 +1,4 @@
-"""Parameter abuse (issue 7): every bad change is refused whole, with a reason, and the running
+"""Parameter abuse: every bad change is refused whole, with a reason, and the running
 simulation does not notice; a valid ``scene`` swaps the scene whole.
 
 One harness takes every bad change in turn, each time with a wrench held and an impulse

@@ -59,7 +59,7 @@ def test_describe_parameters_from_a_client_shows_every_type_range_and_descriptio
             assert docs[got.name][1] == type_names[got.type], got.name
             assert (docs[got.name][4] == "read-only") == got.read_only, got.name
         # Every declared parameter is in the table, but rclpy's own two and the standard
-        # qos_overrides of the batch and /clock publishers (issue 15).
+        # qos_overrides of the batch and /clock publishers.
         future = harness._parameters.list_parameters()
         harness.spin_until(future.done, "list_parameters")
         qos = {f"qos_overrides.{'/' + t.lstrip('/')}.publisher.{policy}" for t in OVERRIDABLE_TOPICS

@@ -1,4 +1,4 @@
-"""Model reduction (issue 6): each reduced model against a closed form or the full model, constraints
+"""Model reduction: each reduced model against a closed form or the full model, constraints
 that hold under arbitrary wrenches, the switch mid-run, the scene's ``motion`` key, and describe.
 
 Quaternions are (w, x, y, z) unless a name says ``_xyzw``.

@@ -34,7 +34,7 @@ forever); force and torque default to zero, ``start`` to 0.
 Validation is complete before anything is built: a scene either loads whole or raises one
 :class:`SceneError` naming the source, the key path and what was expected.
 
-Limits, for scenes from users (issue 18: a scene must never hang, exhaust memory or load and
+Limits, for scenes from users (a scene must never hang, exhaust memory or load and
 then fail to run). Files are read as YAML 1.2 by :mod:`~rigid_body_sim.core.scene_yaml`
 (aliases counted as what they expand to, no recursion, no tags beyond the core ones), at most
 :data:`MAX_SCENE_BYTES`, from a regular file opened without blocking
