@@ -59,11 +59,12 @@ def copy_kernel_cache(package_dir: Path) -> None:
     its stamp)."""
     from rigid_body_sim.core.kernels.jit import STAMP_NAME
 
-    cache = ROOT / PACKAGE / "core" / "kernels" / "__pycache__"
-    target = package_dir / "core" / "kernels" / "__pycache__"
-    target.mkdir(exist_ok=True)
-    for path in [*cache.glob("*.nbi"), *cache.glob("*.nbc"), cache / STAMP_NAME]:
-        shutil.copy2(path, target / path.name)
+    kernels = ROOT / PACKAGE / "core" / "kernels"
+    for cache in [kernels / "__pycache__", *(p for p in kernels.rglob("__pycache__") if p.parent != kernels)]:
+        target = package_dir / cache.relative_to(ROOT / PACKAGE)
+        target.mkdir(parents=True, exist_ok=True)
+        for path in [*cache.glob("*.nbi"), *cache.glob("*.nbc"), *cache.glob(STAMP_NAME)]:
+            shutil.copy2(path, target / path.name)
 
 
 def make_workspace(base: Path, *, kernel_cache: bool) -> Path:
