@@ -95,6 +95,12 @@ def test_nothing_built_while_nobody_listens():
     try:
         node = Node("tf_alone", context=context)
         tf = TfPublisher(node, "world")
+        # The premise: no subscriber on /tf in this domain (one of an earlier test may take a moment
+        # to be forgotten by discovery).
+        deadline = time.monotonic() + 15.0
+        while node.count_subscribers("/tf") and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert node.count_subscribers("/tf") == 0
         assert tf.publish(sim, time_msg_from_seconds(0.0)) is False
     finally:
         rclpy.try_shutdown(context=context)
