@@ -296,7 +296,8 @@ def gjk(pa, pb, s, lam, tmp, scale):
             vx += lam[k] * s[2, k, 0]
             vy += lam[k] * s[2, k, 1]
             vz += lam[k] * s[2, k, 2]
-    if overlap:
+    # nearer than round-off of the pair's size: touching or overlapping, for EPA to tell
+    if overlap or v2 <= (1e-12 * scale) ** 2:
         return 0.0, n, True
     return math.sqrt(v2), n, False
 

@@ -9,7 +9,8 @@ writes
 * ``normal[m]``: the unit normal from A to B (world axes) along which that distance is taken;
 * ``count[m]`` contact points, ``points[m, k, 0:3]`` on A's surface and ``points[m, k, 3:6]``
   on B's (world, m), with ``seps[m, k]`` = (p_B − p_A)·n; point 0 is the deepest
-  (seps[m, 0] = dist[m]). More than one point where a feature touches flat: two box faces
+  (seps[m, 0] = dist[m], except for GJK/EPA pairs with a cylinder, whose witness points are
+  projected onto the surfaces from blends of support points and only lie near the deepest pair). More than one point where a feature touches flat: two box faces
   (the incident face clipped to the reference face: up to 8 points), a capsule lying on a box
   face or parallel to another capsule (2). Every point whose separation is within
   ``FEATURE_BAND`` × the pair's size of the deepest, or that penetrates, is reported.
@@ -35,7 +36,7 @@ from ..jit import JIT
 from ..rotation import matrix
 from .convex import (CORE_BOX, CORE_CYLINDER, CORE_POINT, CORE_SEGMENT, EPA_MAX_FACES, EPA_MAX_VERTICES,
                      POSE_WIDTH, epa, gjk)
-from .layout import DIMS, KIND, SHAPE_BOX, SHAPE_CAPSULE, SHAPE_CYLINDER, SHAPE_SPHERE
+from .layout import DIMS, KIND, SHAPE_BOX, SHAPE_CAPSULE, SHAPE_SPHERE
 from .shapes import FEATURE_BAND
 
 __all__ = ["make_workspace_jit", "MAX_PAIR_POINTS", "FACE_ALIGNMENT", "set_pose", "surface_point", "pair_contact", "pair_contacts"]
@@ -706,7 +707,7 @@ def pair_contacts(pos, quat, shapes, pairs, dist, normal, count, points, seps):
                     max(shapes[b, DIMS], max(shapes[b, DIMS + 1], shapes[b, DIMS + 2])))
         sd, nx, ny, nz, c = pair_contact(poses[0], m1, poses[1], m2, scale, s, lam, tmp, poly, verts, faces,
                                          face_nd, edges, out, res, sp)
-        sgn = -1.0 if swap else 1.0
+        sgn = (-1.0 if swap else 1.0) / math.sqrt(nx * nx + ny * ny + nz * nz)
         dist[m] = sd
         normal[m, 0], normal[m, 1], normal[m, 2] = sgn * nx, sgn * ny, sgn * nz
         count[m] = c
