@@ -268,9 +268,12 @@ def gjk(pa, pb, s, lam, tmp, scale):
         v_norm = math.sqrt(v2)
         if v_norm - vw / v_norm <= tol:
             break
+        # a support point (nearly) repeated ends it: on a curved rim the points bunch up, and a
+        # simplex of points closer than 1e-7 × the scale gains ~1e-14 × the scale at most
         repeated = False
         for k in range(n):
-            if s[2, k, 0] == wx and s[2, k, 1] == wy and s[2, k, 2] == wz:
+            ex, ey, ez = s[2, k, 0] - wx, s[2, k, 1] - wy, s[2, k, 2] - wz
+            if ex * ex + ey * ey + ez * ez <= (1e-7 * scale) ** 2:
                 repeated = True
         if repeated:
             break
