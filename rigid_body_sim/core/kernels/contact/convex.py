@@ -33,7 +33,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..jit import JIT
+from ..jit import INLINE, JIT
 
 __all__ = ["CORE_POINT", "CORE_SEGMENT", "CORE_BOX", "CORE_CYLINDER", "POSE_WIDTH", "GJK_TOLERANCE",
            "GJK_MAX_ITERATIONS", "EPA_TOLERANCE", "EPA_MAX_VERTICES", "EPA_MAX_FACES", "support",
@@ -66,14 +66,13 @@ def make_workspace():
             np.empty((_EPA_MAX_EDGES, 2), np.int64))
 
 
-@njit(**JIT)
+@njit(**INLINE)
 def support(pose, dx, dy, dz):
     """The point of the core (pose row) furthest along the world direction d (world, m)."""
-    r = pose[_R:_R + 9]
     # local direction: R^T d
-    lx = r[0] * dx + r[3] * dy + r[6] * dz
-    ly = r[1] * dx + r[4] * dy + r[7] * dz
-    lz = r[2] * dx + r[5] * dy + r[8] * dz
+    lx = pose[_R + 0] * dx + pose[_R + 3] * dy + pose[_R + 6] * dz
+    ly = pose[_R + 1] * dx + pose[_R + 4] * dy + pose[_R + 7] * dz
+    lz = pose[_R + 2] * dx + pose[_R + 5] * dy + pose[_R + 8] * dz
     kind = int(pose[_KIND])
     sx, sy, sz = 0.0, 0.0, 0.0
     if kind == CORE_SEGMENT:
@@ -89,12 +88,12 @@ def support(pose, dx, dy, dz):
         else:
             sx = pose[_DIM]
         sz = pose[_DIM + 1] if lz >= 0.0 else -pose[_DIM + 1]
-    return (pose[_C] + r[0] * sx + r[1] * sy + r[2] * sz,
-            pose[_C + 1] + r[3] * sx + r[4] * sy + r[5] * sz,
-            pose[_C + 2] + r[6] * sx + r[7] * sy + r[8] * sz)
+    return (pose[_C] + pose[_R + 0] * sx + pose[_R + 1] * sy + pose[_R + 2] * sz,
+            pose[_C + 1] + pose[_R + 3] * sx + pose[_R + 4] * sy + pose[_R + 5] * sz,
+            pose[_C + 2] + pose[_R + 6] * sx + pose[_R + 7] * sy + pose[_R + 8] * sz)
 
 
-@njit(**JIT)
+@njit(**INLINE)
 def _add_support(pa, pb, dx, dy, dz, s, k):
     """Support point k of D = A − B in the direction d: a = s_A(d), b = s_B(−d), w = a − b."""
     ax, ay, az = support(pa, dx, dy, dz)
@@ -118,7 +117,7 @@ def _keep(s, lam, n):
     return m
 
 
-@njit(**JIT)
+@njit(**INLINE)
 def _dot(s, i, j):
     return s[2, i, 0] * s[2, j, 0] + s[2, i, 1] * s[2, j, 1] + s[2, i, 2] * s[2, j, 2]
 

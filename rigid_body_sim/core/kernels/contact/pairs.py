@@ -32,7 +32,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..jit import JIT
+from ..jit import INLINE, JIT
 from ..rotation import matrix
 from .convex import (CORE_BOX, CORE_CYLINDER, CORE_POINT, CORE_SEGMENT, EPA_MAX_FACES, EPA_MAX_VERTICES,
                      POSE_WIDTH, epa, gjk)
@@ -49,7 +49,7 @@ FACE_ALIGNMENT = 1e-6
 _KIND, _DIM, _C, _R = 0, 1, 4, 7
 
 
-@njit(**JIT)
+@njit(**INLINE)
 def set_pose(shape_kind, d0, d1, d2, cx, cy, cz, qw, qx, qy, qz, pose):
     """Write the core of a shape (layout.SHAPE_*) with its pose into a convex.py pose row; returns its margin (m)."""
     r = matrix(qw, qx, qy, qz)
@@ -74,25 +74,22 @@ def set_pose(shape_kind, d0, d1, d2, cx, cy, cz, qw, qx, qy, qz, pose):
     return margin
 
 
-@njit(**JIT)
+@njit(**INLINE)
 def _to_local(pose, x, y, z):
-    r = pose[_R:_R + 9]
     dx, dy, dz = x - pose[_C], y - pose[_C + 1], z - pose[_C + 2]
-    return (r[0] * dx + r[3] * dy + r[6] * dz, r[1] * dx + r[4] * dy + r[7] * dz, r[2] * dx + r[5] * dy + r[8] * dz)
+    return (pose[_R + 0] * dx + pose[_R + 3] * dy + pose[_R + 6] * dz, pose[_R + 1] * dx + pose[_R + 4] * dy + pose[_R + 7] * dz, pose[_R + 2] * dx + pose[_R + 5] * dy + pose[_R + 8] * dz)
 
 
-@njit(**JIT)
+@njit(**INLINE)
 def _to_world(pose, lx, ly, lz):
-    r = pose[_R:_R + 9]
-    return (pose[_C] + r[0] * lx + r[1] * ly + r[2] * lz, pose[_C + 1] + r[3] * lx + r[4] * ly + r[5] * lz,
-            pose[_C + 2] + r[6] * lx + r[7] * ly + r[8] * lz)
+    return (pose[_C] + pose[_R + 0] * lx + pose[_R + 1] * ly + pose[_R + 2] * lz, pose[_C + 1] + pose[_R + 3] * lx + pose[_R + 4] * ly + pose[_R + 5] * lz,
+            pose[_C + 2] + pose[_R + 6] * lx + pose[_R + 7] * ly + pose[_R + 8] * lz)
 
 
-@njit(**JIT)
+@njit(**INLINE)
 def _axis(pose, i):
     """The world direction of the core's local axis i."""
-    r = pose[_R:_R + 9]
-    return r[i], r[3 + i], r[6 + i]
+    return pose[_R + i], pose[_R + 3 + i], pose[_R + 6 + i]
 
 
 @njit(**JIT)
@@ -173,14 +170,14 @@ def _closest_segments(p1x, p1y, p1z, d1x, d1y, d1z, p2x, p2y, p2z, d2x, d2y, d2z
     return s, t
 
 
-@njit(**JIT)
+@njit(**INLINE)
 def _put(res, seps, k, ax, ay, az, bx, by, bz, nx, ny, nz):
     res[k, 0], res[k, 1], res[k, 2] = ax, ay, az
     res[k, 3], res[k, 4], res[k, 5] = bx, by, bz
     seps[k] = (bx - ax) * nx + (by - ay) * ny + (bz - az) * nz
 
 
-@njit(**JIT)
+@njit(**INLINE)
 def _round_pair(ax, ay, az, ra, bx, by, bz, rb, fx, fy, fz, res, seps, k):
     """Points of two balls (centres a, b on the cores; radii ra, rb) along b − a (or f if a = b); returns sd, n."""
     dx, dy, dz = bx - ax, by - ay, bz - az
@@ -193,7 +190,7 @@ def _round_pair(ax, ay, az, ra, bx, by, bz, rb, fx, fy, fz, res, seps, k):
     return d - ra - rb, nx, ny, nz
 
 
-@njit(**JIT)
+@njit(**INLINE)
 def _perpendicular(ux, uy, uz, dx, dy, dz):
     """A unit vector across u, towards d's part across u if it has one."""
     t = dx * ux + dy * uy + dz * uz
@@ -208,7 +205,7 @@ def _perpendicular(ux, uy, uz, dx, dy, dz):
     return px / p, py / p, pz / p
 
 
-@njit(**JIT)
+@njit(**INLINE)
 def _segment_ends(pose):
     ux, uy, uz = _axis(pose, 2)
     h = pose[_DIM]
@@ -292,11 +289,10 @@ def _point_box(pa, ra, pb, res, seps):
         else:
             mz = 1.0 if lz >= 0.0 else -1.0
             qz, depth = mz * a2, g2
-        r = pb[_R:_R + 9]
         # normal from the sphere to the box: into the box, against the face's outward normal m
-        nx = -(r[0] * mx + r[1] * my + r[2] * mz)
-        ny = -(r[3] * mx + r[4] * my + r[5] * mz)
-        nz = -(r[6] * mx + r[7] * my + r[8] * mz)
+        nx = -(pb[_R + 0] * mx + pb[_R + 1] * my + pb[_R + 2] * mz)
+        ny = -(pb[_R + 3] * mx + pb[_R + 4] * my + pb[_R + 5] * mz)
+        nz = -(pb[_R + 6] * mx + pb[_R + 7] * my + pb[_R + 8] * mz)
         bx, by, bz = _to_world(pb, qx, qy, qz)
         _put(res, seps, 0, pa[_C] + ra * nx, pa[_C + 1] + ra * ny, pa[_C + 2] + ra * nz, bx, by, bz, nx, ny, nz)
         return -depth - ra, nx, ny, nz, 1
@@ -323,10 +319,9 @@ def _point_cylinder(pa, ra, pb, res, seps):
         else:
             mz = 1.0 if lz >= 0.0 else -1.0
             qz, depth = mz * h, h - abs(lz)
-        rr = pb[_R:_R + 9]
-        nx = -(rr[0] * mx + rr[1] * my + rr[2] * mz)
-        ny = -(rr[3] * mx + rr[4] * my + rr[5] * mz)
-        nz = -(rr[6] * mx + rr[7] * my + rr[8] * mz)
+        nx = -(pb[_R + 0] * mx + pb[_R + 1] * my + pb[_R + 2] * mz)
+        ny = -(pb[_R + 3] * mx + pb[_R + 4] * my + pb[_R + 5] * mz)
+        nz = -(pb[_R + 6] * mx + pb[_R + 7] * my + pb[_R + 8] * mz)
         bx, by, bz = _to_world(pb, qx, qy, qz)
         _put(res, seps, 0, pa[_C] + ra * nx, pa[_C + 1] + ra * ny, pa[_C + 2] + ra * nz, bx, by, bz, nx, ny, nz)
         return -depth - ra, nx, ny, nz, 1
@@ -339,20 +334,18 @@ def _point_cylinder(pa, ra, pb, res, seps):
     return sd, nx, ny, nz, 1
 
 
-@njit(**JIT)
+@njit(**INLINE)
 def _box_radius(pose, ux, uy, uz):
     """Half the width of the box core along the unit world direction u."""
-    r = pose[_R:_R + 9]
-    return (pose[_DIM] * abs(r[0] * ux + r[3] * uy + r[6] * uz) + pose[_DIM + 1] * abs(r[1] * ux + r[4] * uy + r[7] * uz)
-            + pose[_DIM + 2] * abs(r[2] * ux + r[5] * uy + r[8] * uz))
+    return (pose[_DIM] * abs(pose[_R + 0] * ux + pose[_R + 3] * uy + pose[_R + 6] * uz) + pose[_DIM + 1] * abs(pose[_R + 1] * ux + pose[_R + 4] * uy + pose[_R + 7] * uz)
+            + pose[_DIM + 2] * abs(pose[_R + 2] * ux + pose[_R + 5] * uy + pose[_R + 8] * uz))
 
 
-@njit(**JIT)
+@njit(**INLINE)
 def _core_radius(pose, ux, uy, uz):
     if int(pose[_KIND]) == CORE_BOX:
         return _box_radius(pose, ux, uy, uz)
-    r = pose[_R:_R + 9]
-    return pose[_DIM] * abs(r[2] * ux + r[5] * uy + r[8] * uz)  # segment along local z
+    return pose[_DIM] * abs(pose[_R + 2] * ux + pose[_R + 5] * uy + pose[_R + 8] * uz)  # segment along local z
 
 
 @njit(**JIT)
@@ -402,10 +395,9 @@ def _sat(pa, pb, scale):
 @njit(**JIT)
 def _support_edge(pose, i, ux, uy, uz):
     """The edge along local axis i of the box core furthest along u: (start, direction) in world (m)."""
-    r = pose[_R:_R + 9]
-    lx = r[0] * ux + r[3] * uy + r[6] * uz
-    ly = r[1] * ux + r[4] * uy + r[7] * uz
-    lz = r[2] * ux + r[5] * uy + r[8] * uz
+    lx = pose[_R + 0] * ux + pose[_R + 3] * uy + pose[_R + 6] * uz
+    ly = pose[_R + 1] * ux + pose[_R + 4] * uy + pose[_R + 7] * uz
+    lz = pose[_R + 2] * ux + pose[_R + 5] * uy + pose[_R + 8] * uz
     sx = pose[_DIM] if lx >= 0.0 else -pose[_DIM]
     sy = pose[_DIM + 1] if ly >= 0.0 else -pose[_DIM + 1]
     sz = pose[_DIM + 2] if lz >= 0.0 else -pose[_DIM + 2]
@@ -448,13 +440,12 @@ def _sat_witness(pa, ma, pb, sd_core, ux, uy, uz, axis_id, res, seps):
     _put(res, seps, 0, ax + ma * ux, ay + ma * uy, az + ma * uz, bx, by, bz, ux, uy, uz)
 
 
-@njit(**JIT)
+@njit(**INLINE)
 def _support_point(pose, ux, uy, uz):
     """The core's support point along u; for a face or an edge, the middle of that feature."""
-    r = pose[_R:_R + 9]
-    lx = r[0] * ux + r[3] * uy + r[6] * uz
-    ly = r[1] * ux + r[4] * uy + r[7] * uz
-    lz = r[2] * ux + r[5] * uy + r[8] * uz
+    lx = pose[_R + 0] * ux + pose[_R + 3] * uy + pose[_R + 6] * uz
+    ly = pose[_R + 1] * ux + pose[_R + 4] * uy + pose[_R + 7] * uz
+    lz = pose[_R + 2] * ux + pose[_R + 5] * uy + pose[_R + 8] * uz
     tol = FACE_ALIGNMENT
     kind = int(pose[_KIND])
     sx, sy, sz = 0.0, 0.0, 0.0
@@ -467,7 +458,7 @@ def _support_point(pose, ux, uy, uz):
     return _to_world(pose, sx, sy, sz)
 
 
-@njit(**JIT)
+@njit(**INLINE)
 def _face_of(pose, ux, uy, uz):
     """(axis i, sign, |cos|) of the box face whose outward normal is nearest u."""
     best, axis, sgn = -1.0, 0, 1.0
@@ -595,7 +586,7 @@ def _clip_segment(poly, src, px, py, pz, ox, oy, oz, limit):
     return 2
 
 
-@njit(**JIT)
+@njit(**INLINE)
 def pair_contact(pa, ma, pb, mb, scale, ws_s, ws_lam, ws_tmp, ws_poly, verts, faces, face_nd, edges, out, res, seps):
     """Signed distance, normal (A to B) and contact points of two posed cores with margins (set_pose).
 
@@ -692,6 +683,7 @@ def pair_contacts(pos, quat, shapes, pairs, dist, normal, count, points, seps):
     tmp = np.empty(4)
     res = np.empty((MAX_PAIR_POINTS, 6))
     sp = np.empty(MAX_PAIR_POINTS)
+    pose_1, pose_2 = poses[0], poses[1]
     for m in range(pairs.shape[0]):
         a, b = pairs[m, 0], pairs[m, 1]
         ka, kb = int(shapes[a, KIND]), int(shapes[b, KIND])
@@ -699,13 +691,13 @@ def pair_contacts(pos, quat, shapes, pairs, dist, normal, count, points, seps):
         first, second = (b, a) if swap else (a, b)
         m1 = set_pose(int(shapes[first, KIND]), shapes[first, DIMS], shapes[first, DIMS + 1], shapes[first, DIMS + 2],
                       pos[first, 0], pos[first, 1], pos[first, 2],
-                      quat[first, 0], quat[first, 1], quat[first, 2], quat[first, 3], poses[0])
+                      quat[first, 0], quat[first, 1], quat[first, 2], quat[first, 3], pose_1)
         m2 = set_pose(int(shapes[second, KIND]), shapes[second, DIMS], shapes[second, DIMS + 1],
                       shapes[second, DIMS + 2], pos[second, 0], pos[second, 1], pos[second, 2],
-                      quat[second, 0], quat[second, 1], quat[second, 2], quat[second, 3], poses[1])
+                      quat[second, 0], quat[second, 1], quat[second, 2], quat[second, 3], pose_2)
         scale = max(max(shapes[a, DIMS], max(shapes[a, DIMS + 1], shapes[a, DIMS + 2])),
                     max(shapes[b, DIMS], max(shapes[b, DIMS + 1], shapes[b, DIMS + 2])))
-        sd, nx, ny, nz, c = pair_contact(poses[0], m1, poses[1], m2, scale, s, lam, tmp, poly, verts, faces,
+        sd, nx, ny, nz, c = pair_contact(pose_1, m1, pose_2, m2, scale, s, lam, tmp, poly, verts, faces,
                                          face_nd, edges, out, res, sp)
         sgn = (-1.0 if swap else 1.0) / math.sqrt(nx * nx + ny * ny + nz * nz)
         dist[m] = sd
