@@ -300,3 +300,26 @@ def test_broad_phase_finds_exactly_the_overlapping_boxes(margin):
         assert {tuple(p) for p in pairs[:count]} == brute
         small = np.empty((10, 2), np.int64)
         assert method(lo, hi, margin, small) == len(brute)  # the count says how much room is needed
+
+
+def test_cylinder_on_a_box_face_standing_and_lying():
+    """A cylinder (r 0.1, half length 0.2) sunk 1 mm into a box's top face: 4 rim points standing, 2 lying."""
+    a = np.array([0.3, 0.3, 0.1])
+    r, h = 0.1, 0.2
+    for shift, expect in (((0.05, 0.02), [(0.15, 0.02), (-0.05, 0.02), (0.05, 0.12), (0.05, -0.08)]),
+                          ((0.35, 0.0), [(0.25, 0.0), (0.3, 0.05), (0.3, -0.05)])):  # over the edge: clipped
+        c = np.array([shift[0], shift[1], a[2] + h - 1e-3])
+        dist, normal, count, points, seps = one(row("box", *a), row("cylinder", r, h), [0.0, 0.0, 0.0], c)
+        assert dist == pytest.approx(-1e-3, abs=1e-12)
+        assert normal == pytest.approx([0.0, 0.0, 1.0], abs=1e-12)
+        assert seps == pytest.approx([-1e-3] * count, abs=1e-12)
+        assert {tuple(np.round(p[:2], 9)) for p in points} == {tuple(np.round(e, 9)) for e in expect}
+        assert points[:, 2] == pytest.approx([a[2]] * count, abs=1e-12)
+        assert points[:, 5] == pytest.approx([a[2] - 1e-3] * count, abs=1e-12)
+    q = (np.cos(np.pi / 4), np.sin(np.pi / 4), 0.0, 0.0)  # the axis along world −y
+    c = np.array([0.0, 0.1, a[2] + r - 1e-3])
+    dist, normal, count, points, seps = one(row("box", *a), row("cylinder", r, h), [0.0, 0.0, 0.0], c, IDENTITY, q)
+    assert dist == pytest.approx(-1e-3, abs=1e-12)
+    assert count == 2
+    assert sorted(points[:, 1]) == pytest.approx([-0.1, 0.3], abs=1e-12)  # clipped at the face's edge y = 0.3
+    assert seps == pytest.approx([-1e-3] * 2, abs=1e-12)

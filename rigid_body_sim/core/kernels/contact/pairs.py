@@ -495,8 +495,9 @@ def _clip(poly, src, n, px, py, pz, ox, oy, oz, limit):
 def _face_manifold(ref, inc, ref_is_a, ma, mb, nx, ny, nz, sd, band, poly, res, seps):
     """Clip the incident core's feature (box face or segment) against the reference box face nearest n.
 
-    ``ref`` is a box core; ``inc`` a box or segment core (with margin on the A side only: a
-    segment is always A here). Writes the points whose separation is within ``band`` of the
+    ``ref`` is a box core; ``inc`` a box, a segment (with margin; a segment is always A here) or
+    a cylinder standing on an end (four rim points, as against the ground) or lying on its side
+    (the side's line), else nothing is clipped. Writes the points whose separation is within ``band`` of the
     deepest or below zero; returns their count (0 if clipping left nothing).
     """
     sgn_n = 1.0 if ref_is_a else -1.0  # the reference face's outward normal is ±n
@@ -522,6 +523,33 @@ def _face_manifold(ref, inc, ref_is_a, ma, mb, nx, ny, nz, sd, band, poly, res, 
             wz = inc[_C + 2] + fl * lz + fj * jz + fk * kz
             poly[0, corner, 0], poly[0, corner, 1], poly[0, corner, 2] = wx, wy, wz
         n = 4
+    elif int(inc[_KIND]) == CORE_CYLINDER:
+        ux, uy, uz = _axis(inc, 2)
+        c_axis = ux * rx + uy * ry + uz * rz
+        r, h = inc[_DIM], inc[_DIM + 1]
+        if abs(c_axis) >= 1.0 - 0.5 * FACE_ALIGNMENT * FACE_ALIGNMENT:
+            # standing on an end face: four rim points of the end facing the reference face
+            s_end = -1.0 if c_axis > 0.0 else 1.0
+            e1x, e1y, e1z = _axis(inc, 0)
+            e2x, e2y, e2z = _axis(inc, 1)
+            for k in range(4):
+                c1 = 1.0 if k == 0 else (-1.0 if k == 2 else 0.0)
+                c2 = 1.0 if k == 1 else (-1.0 if k == 3 else 0.0)
+                poly[0, k, 0] = inc[_C] + s_end * h * ux + r * (c1 * e1x + c2 * e2x)
+                poly[0, k, 1] = inc[_C + 1] + s_end * h * uy + r * (c1 * e1y + c2 * e2y)
+                poly[0, k, 2] = inc[_C + 2] + s_end * h * uz + r * (c1 * e1z + c2 * e2z)
+            n = 4
+        elif abs(c_axis) <= FACE_ALIGNMENT:
+            # lying on its side: the line of the side nearest the reference face
+            px, py, pz = rx - c_axis * ux, ry - c_axis * uy, rz - c_axis * uz
+            norm = math.sqrt(px * px + py * py + pz * pz)
+            px, py, pz = px / norm, py / norm, pz / norm
+            for k in range(2):
+                sgn = -1.0 if k == 0 else 1.0
+                poly[0, k, 0] = inc[_C] - r * px + sgn * h * ux
+                poly[0, k, 1] = inc[_C + 1] - r * py + sgn * h * uy
+                poly[0, k, 2] = inc[_C + 2] - r * pz + sgn * h * uz
+            n = 2
     else:
         p0x, p0y, p0z, dx, dy, dz = _segment_ends(inc)
         poly[0, 0, 0], poly[0, 0, 1], poly[0, 0, 2] = p0x, p0y, p0z
@@ -658,6 +686,11 @@ def pair_contact(pa, ma, pb, mb, scale, ws_s, ws_lam, ws_tmp, ws_poly, verts, fa
                     m = _face_manifold(pa, pb, True, ma, mb, nx, ny, nz, sd, band, ws_poly, res, seps)
                 else:
                     m = _face_manifold(pb, pa, False, ma, mb, nx, ny, nz, sd, band, ws_poly, res, seps)
+                count = max(m, 1)
+        elif ka == CORE_BOX:  # a cylinder on a box face, standing or lying: its rim or side clipped
+            _, _, ca = _face_of(pa, nx, ny, nz)
+            if ca >= 1.0 - 0.5 * FACE_ALIGNMENT * FACE_ALIGNMENT:
+                m = _face_manifold(pa, pb, True, ma, mb, nx, ny, nz, sd, band, ws_poly, res, seps)
                 count = max(m, 1)
     _pin = pa[0], pb[0], ws_s[0, 0, 0], ws_lam[0], ws_tmp[0], ws_poly[0, 0, 0], verts[0, 0, 0], faces[0, 0]
     _pin2 = face_nd[0, 0], edges[0, 0], out[0], res[0, 0], seps[0]
