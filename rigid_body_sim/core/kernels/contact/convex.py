@@ -49,9 +49,9 @@ GJK_TOLERANCE = 1e-14
 GJK_MAX_ITERATIONS = 200
 #: EPA stops when its upper and lower bounds of the depth are within this × the pair's scale (m).
 EPA_TOLERANCE = 1e-12
-EPA_MAX_VERTICES = 256
+EPA_MAX_VERTICES = 1024
 EPA_MAX_FACES = 2 * EPA_MAX_VERTICES
-_EPA_MAX_EDGES = 3 * EPA_MAX_VERTICES
+_EPA_MAX_EDGES = 3 * EPA_MAX_FACES  # a horizon never has more edges than the removed faces have
 
 
 def make_workspace():
@@ -441,7 +441,7 @@ def epa(pa, pb, s, nv, verts, faces, face_nd, edges, scale, out):
         if best < 0:
             break
         nx, ny, nz = face_nd[best, 0], face_nd[best, 1], face_nd[best, 2]
-        if nverts >= EPA_MAX_VERTICES or nfaces + 2 * nverts >= EPA_MAX_FACES:
+        if nverts >= verts.shape[1] or nfaces + 2 * nverts >= faces.shape[0]:
             iterations = -1
             break
         ax, ay, az = support(pa, nx, ny, nz)
@@ -451,9 +451,9 @@ def epa(pa, pb, s, nv, verts, faces, face_nd, edges, scale, out):
         if value < upper:
             upper, ux, uy, uz = value, nx, ny, nz
         # converged, or round-off: the polytope's nearest face must not come nearer
-        if upper - best_d <= tol or best_d < previous:
+        if upper - best_d <= tol or best_d < previous - tol:
             break
-        previous = best_d
+        previous = max(previous, best_d)
         iterations += 1
         v = nverts
         verts[0, v, 0], verts[0, v, 1], verts[0, v, 2] = ax, ay, az

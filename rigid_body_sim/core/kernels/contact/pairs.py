@@ -804,4 +804,4 @@ def make_workspace_jit():
     """convex.make_workspace, inside compiled code."""
     return (np.empty((3, 4, 3)), np.empty(4), np.empty((3, EPA_MAX_VERTICES, 3)),
             np.empty((EPA_MAX_FACES, 3), np.int64), np.empty((EPA_MAX_FACES, 5)),
-            np.empty((3 * EPA_MAX_VERTICES, 2), np.int64))
+            np.empty((3 * EPA_MAX_FACES, 2), np.int64))
