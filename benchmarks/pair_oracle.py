@@ -14,8 +14,8 @@ Reported per pair: the largest |Δ signed distance| (m), the largest angle betwe
 normals (rad), the fraction of poses within 1e-9 on each, split by apart/overlapping; and the
 largest distance of our contact points from their surfaces (independent closed forms here).
 
-Cost: ns per pair of our compiled loop (median of 5 runs over the batch) beside one
-``mj_geomDistance`` call from Python.
+Cost: ns per pair of our compiled loop (median [min–max] of 5 runs over 20,000 poses) beside
+one ``mj_geomDistance`` call from Python; then the broad phase's table (benchmarks/broadphase.py).
 
 ``python -m benchmarks.pair_oracle [--poses N] [--out DIR]`` writes DIR/pair_oracle.md (default
 benchmarks/results) and prints it.
