@@ -47,6 +47,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..kernels import layout as L
+from ..quaternion import quat_rotate, quat_to_matrix
 from ..kernels.stepping import advance, step_reduced
 from ..kernels.contact.batch import OK, hold_all, settle_all
 from ..kernels.contact.impacts import _LAM, IMPACT_WORK_SHAPE, impact
@@ -109,6 +110,17 @@ class ContactEvent:
         Σ normal impulse, N·s (impacts), else 0.
     energy_before, energy_after : float
         Kinetic energy of the body, J, around the event.
+    delta_v_world : tuple of 3 floats
+        Impacts: the jump of the centre of mass velocity, m/s, world axes; else ().
+    delta_w_principal : tuple of 3 floats
+        Impacts: the jump of the angular velocity, rad/s, the body's principal axes P; else ().
+    q_WP : tuple of 4 floats
+        Impacts: the body's orientation at the impact, (w, x, y, z); else ().
+    contacts : int
+        Impacts: the contact points that took part; else 0.
+    restitution_used : float
+        Impacts: the restitution factor the impact law applied (below the pair's e when the energy
+        cap acted, :mod:`~rigid_body_sim.core.kernels.contact.impacts`); else 0.
     """
 
     time: float
@@ -120,6 +132,11 @@ class ContactEvent:
     impulse: float = 0.0
     energy_before: float = 0.0
     energy_after: float = 0.0
+    delta_v_world: tuple = ()
+    delta_w_principal: tuple = ()
+    q_WP: tuple = ()
+    contacts: int = 0
+    restitution_used: float = 0.0
 
 
 class ContactSolver:
@@ -166,6 +183,21 @@ class ContactSolver:
         self.holding_impulses = np.zeros((n, 3))
         #: Steps of resting bodies that still gained energy when cut into MAX_REFINEMENT pieces.
         self.energy_gains = 0
+        #: Per body, Σ impact impulse since the solver was made or reset: (N·s, then N·m·s about the
+        #: centre of mass), world axes.
+        self.impact_impulses = np.zeros((n, 6))
+        #: Set True to have :attr:`holding_angular_impulses` kept (off: the resting path costs nothing more).
+        self.track_torques = False
+        #: Per body, Σ holding torque about the centre of mass × step (N·m·s, world axes, the torque at
+        #: each step's start), while :attr:`track_torques`.
+        self.holding_angular_impulses = np.zeros((n, 3))
+        #: Counts of what /diagnostics reports (reset clears them): ``restitution_capped`` impacts whose
+        #: restitution the energy cap lowered below e; ``multi_contact_elastic`` impacts of several
+        #: contact points with e > 0 (the model-dependent case); ``refined_steps`` resting steps taken
+        #: again in pieces because they gained energy; ``second_half_space`` impacts of a resting body
+        #: against another half-space.
+        self.counts = dict.fromkeys(("restitution_capped", "multi_contact_elastic", "refined_steps",
+                                     "second_half_space"), 0)
         self._points = np.empty((MAX_POINTS, 3))
         self._gaps = np.empty(MAX_POINTS)
         self._work = np.zeros(IMPACT_WORK_SHAPE)
@@ -186,6 +218,10 @@ class ContactSolver:
     def reset(self, sim) -> None:
         """Modes from the current state: touching and not moving away means persistent; the events cleared."""
         self.events.clear()
+        self.impact_impulses[:] = 0.0
+        self.holding_angular_impulses[:] = 0.0
+        for key in self.counts:
+            self.counts[key] = 0
         self.modes[:] = FLIGHT
         self.ground_of[:] = -1
         self.sliding[:] = False
@@ -334,6 +370,8 @@ class ContactSolver:
         added = wrenches[held] - self._bare_rows[held]  # the contact forces go in as world-axes forces (add_wrench)
         self.holding_forces[held] = added[:, L.F_WORLD:L.F_WORLD + 3] + added[:, L.F_COM_W:L.F_COM_W + 3]
         self.holding_impulses[held] += self.holding_forces[held] * sim.dt
+        if self.track_torques:
+            self.holding_angular_impulses[held] += _torques_about_com(Y[held], added) * sim.dt
 
     def _hold(self, sim, y: np.ndarray, i: int, w: np.ndarray, t: float) -> bool:
         """Add the holding force of body i at y into the wrench row w; False (and flight) if it lifts off."""
@@ -433,6 +471,7 @@ class ContactSolver:
                 if gained <= 1e-12 * abs(e0) or pieces >= MAX_REFINEMENT:
                     break
                 pieces *= 2
+            self.counts["refined_steps"] += 1
             if gained > 1e-12 * abs(e0):
                 self.energy_gains += 1
             Y1[i, :L.STATE_WIDTH] = row
@@ -526,11 +565,12 @@ class ContactSolver:
         before, _, _, _ = self._normal_motion(sim, y, i, j, count, w)
         e, mu = float(self.restitution[i, j]), float(self.friction[i, j])
         after_row = y.copy()
-        impulse, e0, e1, _ = impact(y, after_row, sim._prm[i], count, self._points, n[0], n[1], n[2], e, mu,
-                                    self._work)
+        impulse, e0, e1, alpha = impact(y, after_row, sim._prm[i], count, self._points, n[0], n[1], n[2], e, mu,
+                                        self._work)
+        jump = self._jump(sim, i, y, after_row, count, e, alpha)
         y[L.V:L.W + 3] = after_row[L.V:L.W + 3]
         speed, accel, _, _ = self._normal_motion(sim, y, i, j, count, w)
-        self.events.append(ContactEvent(t, self.names[i], j, "impact", before, speed, impulse, e0, e1))
+        self.events.append(ContactEvent(t, self.names[i], j, "impact", before, speed, impulse, e0, e1, *jump))
         toward = -accel  # the free normal acceleration toward the ground
         if speed <= 0.0 or (toward > 0.0 and speed * speed <= 2.0 * toward * ZENO_APEX):
             rest = 0.0
@@ -539,6 +579,23 @@ class ContactSolver:
             self._rest(sim, i, y, j, t, rest, speed)
             return -1.0
         return speed / (toward * h_left) if toward > 0.0 and h_left > 0.0 else -1.0
+
+    def _jump(self, sim, i: int, before: np.ndarray, after: np.ndarray, count: int, e: float,
+              alpha: float) -> tuple:
+        """The velocity jump of body i's impact from ``before`` to ``after`` (state rows), as ContactEvent's
+        (delta_v_world, delta_w_principal, q_WP, contacts, restitution_used); adds its impulse to
+        :attr:`impact_impulses` and counts the model-dependent and capped impacts."""
+        prm = sim._prm[i]
+        dv = after[L.V:L.V + 3] - before[L.V:L.V + 3]
+        dw = after[L.W:L.W + 3] - before[L.W:L.W + 3]
+        q = before[L.Q:L.Q + 4]
+        self.impact_impulses[i, 0:3] += prm[L.MASS] * dv
+        self.impact_impulses[i, 3:6] += quat_rotate(q, prm[L.INERTIA:L.INERTIA + 3] * dw)
+        if count > 1 and e > 0.0:
+            self.counts["multi_contact_elastic"] += 1
+        if alpha < e:
+            self.counts["restitution_capped"] += 1
+        return tuple(dv.tolist()), tuple(dw.tolist()), tuple(q.tolist()), int(count), float(alpha)
 
     def _rest(self, sim, i: int, y: np.ndarray, j: int, t: float, remaining: float, speed: float) -> None:
         """Body i goes into persistent contact with ground j at y (projected in place); 'rest' dated t + remaining."""
@@ -643,11 +700,14 @@ class ContactSolver:
         count = body_points(y, sim._prm[i], self.shapes[i], self.grounds[jj], self._points, self._gaps)
         before, _ = normal_speeds(y, sim._prm[i], count, self._points, n[0], n[1], n[2], self._work)
         after_row = y.copy()
-        impulse, e0, e1, _ = impact(y, after_row, sim._prm[i], count, self._points, n[0], n[1], n[2],
-                                    float(self.restitution[i, jj]), float(self.friction[i, jj]), self._work)
+        e = float(self.restitution[i, jj])
+        impulse, e0, e1, alpha = impact(y, after_row, sim._prm[i], count, self._points, n[0], n[1], n[2],
+                                        e, float(self.friction[i, jj]), self._work)
+        jump = self._jump(sim, i, y, after_row, count, e, alpha)
+        self.counts["second_half_space"] += 1
         y[L.V:L.W + 3] = after_row[L.V:L.W + 3]
         after, _ = normal_speeds(y, sim._prm[i], count, self._points, n[0], n[1], n[2], self._work)
-        self.events.append(ContactEvent(t, self.names[i], jj, "impact", before, after, impulse, e0, e1))
+        self.events.append(ContactEvent(t, self.names[i], jj, "impact", before, after, impulse, e0, e1, *jump))
 
     def _landing(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float, h: float) -> np.ndarray:
         """A feature of body i, in persistent contact, reaches the ground at y: the impact of every touching
@@ -659,12 +719,13 @@ class ContactSolver:
         before, _, _, _ = self._normal_motion(sim, y, i, j, count, w, mask)
         e, mu = float(self.restitution[i, j]), float(self.friction[i, j])
         after_row = y.copy()
-        impulse, e0, e1, _ = impact(y, after_row, sim._prm[i], count, self._points, n[0], n[1], n[2], e, mu,
-                                    self._work)
+        impulse, e0, e1, alpha = impact(y, after_row, sim._prm[i], count, self._points, n[0], n[1], n[2], e, mu,
+                                        self._work)
+        jump = self._jump(sim, i, y, after_row, count, e, alpha)
         y = after_row
         _, highest = normal_speeds(y, sim._prm[i], count, self._points, n[0], n[1], n[2], self._work)
         _, accel, _, _ = self._normal_motion(sim, y, i, j, count, w, mask)
-        self.events.append(ContactEvent(t, self.names[i], j, "impact", before, highest, impulse, e0, e1))
+        self.events.append(ContactEvent(t, self.names[i], j, "impact", before, highest, impulse, e0, e1, *jump))
         toward = -accel
         if highest <= LIFT_OFF_SPEED or (toward > 0.0 and highest * highest <= 2.0 * toward * ZENO_APEX):
             self.tracked[i] = mask
@@ -673,3 +734,16 @@ class ContactSolver:
         self.modes[i] = FLIGHT
         self.sliding[i] = False
         return self._with_events(sim, i, y, w, t, h) if h > 0.0 else y
+
+
+def _torques_about_com(Y: np.ndarray, added: np.ndarray) -> np.ndarray:
+    """(k, 3) torques about the centre of mass, world axes, N·m, of the wrench rows ``added`` (k, WRENCH_WIDTH)
+    on bodies at state rows ``Y`` (k, ≥ STATE_WIDTH), at those states (layout: the wrench row's columns)."""
+    R_WP = quat_to_matrix(Y[:, L.Q:L.Q + 4])
+    p_W = Y[:, L.P:L.P + 3]
+    torque = added[:, L.T_WORLD:L.T_WORLD + 3] - np.cross(p_W, added[:, L.F_WORLD:L.F_WORLD + 3])
+    torque += added[:, L.T_COM_W:L.T_COM_W + 3] + np.einsum("kij,kj->ki", R_WP, added[:, L.T_COM_P:L.T_COM_P + 3])
+    moment = added[:, L.SITE_MOMENT:L.SITE_MOMENT + 9].reshape(-1, 3, 3)  # M[j, l] = f_j r_l
+    for col in range(3):  # Σ_l (R r_l e_l) × f: the lever R[:, l] r_l crossed with f, r_l folded into M[:, l]
+        torque += np.cross(R_WP[:, :, col], moment[:, :, col])
+    return torque
