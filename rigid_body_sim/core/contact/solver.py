@@ -21,6 +21,9 @@ old code. Per step:
    (an impact of all touching features together, :meth:`ContactSolver._landing`), another
    half-space was reached, or a feature the holding force did not push on moved off.
 
+A body that touches a second half-space while resting on one (a groove, a corner) is held by
+both together (two_grounds.py); those bodies take the Python path around the compiled passes.
+
 Persistent contact tracks *features* (shapes.feature_gaps: box corners, capsule ends, cylinder
 rims), so resting on a face, pivoting on an edge or rolling on a rim are one mechanism. The
 holding force is found at the start of each step and held over it (zero-order hold): exact
@@ -48,6 +51,7 @@ import numpy as np
 
 from ..kernels import layout as L
 from ..quaternion import quat_rotate, quat_to_matrix
+from . import two_grounds
 from ..kernels.stepping import advance, step_reduced
 from ..kernels.contact.batch import OK, hold_all, settle_all
 from ..kernels.contact.impacts import _LAM, IMPACT_WORK_SHAPE, impact
@@ -197,7 +201,14 @@ class ContactSolver:
         #: again in pieces because they gained energy; ``second_half_space`` impacts of a resting body
         #: against another half-space.
         self.counts = dict.fromkeys(("restitution_capped", "multi_contact_elastic", "refined_steps",
-                                     "second_half_space"), 0)
+                                     "second_half_space", "two_ground_overflow"), 0)
+        #: Per body, a second half-space it is held on besides ``ground_of`` (two_grounds.py), or -1.
+        self.other_ground = np.full(n, -1, dtype=np.int64)
+        #: The features touching ``other_ground``, as bits.
+        self.other_tracked = np.zeros(n, dtype=np.int64)
+        #: Per body with an ``other_ground``: True when the two together have more contact points than the
+        #: rows hold, so it is held on ``ground_of`` alone and projected onto both after each step.
+        self.other_projected = np.zeros(n, dtype=bool)
         self._points = np.empty((MAX_POINTS, 3))
         self._gaps = np.empty(MAX_POINTS)
         self._work = np.zeros(IMPACT_WORK_SHAPE)
@@ -224,6 +235,8 @@ class ContactSolver:
             self.counts[key] = 0
         self.modes[:] = FLIGHT
         self.ground_of[:] = -1
+        self.other_ground[:] = -1
+        self.other_projected[:] = False
         self.sliding[:] = False
         Y = sim._Ys[sim._control[L.CUR]]
         for i in self.bodies:
@@ -236,6 +249,7 @@ class ContactSolver:
                     self.ground_of[i] = j
                     self.tracked[i] = self._staying(sim, Y[i], i, j, self._touching(sim, Y[i], i, j))
                     self.events.append(ContactEvent(sim.time, self.names[i], int(j), "rest", speed, speed))
+                    two_grounds.start_if_touching(self, sim, Y[i], i, LIFT_OFF_SPEED, TOUCHING_GAP)
 
     def is_resting(self, body: str) -> bool:
         """True while ``body`` is in persistent contact with the ground."""
@@ -361,10 +375,14 @@ class ContactSolver:
         self.holding_forces[:] = 0.0
         if not resting.size:
             return
-        hold_all(Y, sim._prm, wrenches, self.shapes, self.grounds, resting, self.ground_of, self.tracked, self.friction,
+        two = resting[self.other_ground[resting] >= 0]  # held on two half-spaces: two_grounds.py
+        one = resting[self.other_ground[resting] < 0]
+        hold_all(Y, sim._prm, wrenches, self.shapes, self.grounds, one, self.ground_of, self.tracked, self.friction,
                  SLIP_TOLERANCE, LIFT_OFF_SPEED, TOUCHING_GAP, self._bare_rows, self.pressed,
                  self.sliding, self.slide_direction, self._status)
-        for i in resting[self._status[resting] != OK]:  # lifting off: the solver says so and records it
+        for i in one[self._status[one] != OK]:  # lifting off: the solver says so and records it
+            self._hold(sim, Y[i], i, wrenches[i], sim.time)
+        for i in two:
             self._hold(sim, Y[i], i, wrenches[i], sim.time)
         held = resting[self.modes[resting] == PERSISTENT]
         added = wrenches[held] - self._bare_rows[held]  # the contact forces go in as world-axes forces (add_wrench)
@@ -375,6 +393,8 @@ class ContactSolver:
 
     def _hold(self, sim, y: np.ndarray, i: int, w: np.ndarray, t: float) -> bool:
         """Add the holding force of body i at y into the wrench row w; False (and flight) if it lifts off."""
+        if self.other_ground[i] >= 0 and not self.other_projected[i]:
+            return two_grounds.hold(self, sim, y, i, w, t, LIFT_OFF_SPEED, TOUCHING_GAP, SLIP_TOLERANCE)
         j = int(self.ground_of[i])
         count = self._tracked_points(sim, y, i)
         n = self.grounds[j, NORMAL:NORMAL + 3]
@@ -405,11 +425,13 @@ class ContactSolver:
         min_gaps(Y1, sim._prm, self.shapes, self.grounds, self.bodies, self._lowest)
         moving = ~sim._stopped[self.bodies]
         resting = self.bodies[(self.modes[self.bodies] == PERSISTENT) & moving]
+        two = resting[self.other_ground[resting] >= 0]  # held on two half-spaces: two_grounds.py
+        resting = resting[self.other_ground[resting] < 0]
         settle_all(Y1, sim._prm, self.shapes, self.grounds, resting, self.ground_of, self.tracked, self.pressed,
                    self.sliding, self.slide_direction, self._band, self._status)
         resting = self._refine_gains(sim, resting, Y0, Y1, t0, h)
         # only the bodies with an event in the step are looked at in Python
-        busy = np.concatenate((resting[self._status[resting] != OK],
+        busy = np.concatenate((resting[self._status[resting] != OK], two,
                                self.bodies[(self.modes[self.bodies] == FLIGHT) & moving & (self._lowest < 0.0)]))
         for i in busy:
             if sim._stopped[i]:
@@ -627,6 +649,8 @@ class ContactSolver:
         the step map, the rest of the step taken from there); tracked features that moved off
         the ground dropped (none left: lift-off); then the projection onto the contact.
         """
+        if self.other_ground[i] >= 0 and not self.other_projected[i]:
+            return two_grounds.end_of_step(self, sim, i, end, t, h)
         end = end.copy()
         j = int(self.ground_of[i])
         sx, sy = self.slide_direction[i]
@@ -676,13 +700,15 @@ class ContactSolver:
                 self.events.append(ContactEvent(t + h, self.names[i], j, "lift-off"))
                 return end
         self._project(sim, end, i, not self.sliding[i])
+        if self.other_ground[i] >= 0:  # held on ground_of alone, projected onto the second half-space too
+            two_grounds.project_second(self, sim, i, end, TOUCHING_GAP)
         return end
 
     def _other_gap(self, sim, y: np.ndarray, i: int) -> tuple[float, int]:
         """(lowest gap, ground) of body i against the half-spaces other than the one it rests on."""
         lowest, which = math.inf, -1
         for jj in range(len(self.grounds)):
-            if jj != self.ground_of[i]:
+            if jj != self.ground_of[i] and jj != self.other_ground[i]:
                 count = body_points(y, sim._prm[i], self.shapes[i], self.grounds[jj], self._points, self._gaps)
                 if count and self._gaps[:count].min() < lowest:
                     lowest, which = float(self._gaps[:count].min()), jj
@@ -691,8 +717,9 @@ class ContactSolver:
     def _side_impact(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float) -> None:
         """Body i, resting on its ground, hits another half-space at y: the impact against that one (in place).
 
-        The two contacts are not solved together yet: the resting contact is projected again
-        afterwards (for a wall at right angles to a frictionless floor this is exact).
+        The impact acts against that half-space alone, then the resting contact is projected again;
+        if the body stays on the second half-space (no rebound), it is held on both from there
+        (two_grounds.py).
         """
         gap, jj = self._other_gap(sim, y, i)
         n = self.grounds[jj, NORMAL:NORMAL + 3]
@@ -708,6 +735,9 @@ class ContactSolver:
         y[L.V:L.W + 3] = after_row[L.V:L.W + 3]
         after, _ = normal_speeds(y, sim._prm[i], count, self._points, n[0], n[1], n[2], self._work)
         self.events.append(ContactEvent(t, self.names[i], jj, "impact", before, after, impulse, e0, e1, *jump))
+        if after <= LIFT_OFF_SPEED and self.other_ground[i] < 0:  # it stays on the second one: held on both
+            self.other_ground[i] = two_grounds.touching_other(self, sim, y, i, LIFT_OFF_SPEED,
+                                                              max(TOUCHING_GAP, float(self._band[i])))
 
     def _landing(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float, h: float) -> np.ndarray:
         """A feature of body i, in persistent contact, reaches the ground at y: the impact of every touching
