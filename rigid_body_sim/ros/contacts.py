@@ -243,6 +243,7 @@ class ContactPublisher:
             _kv("resting steps refined (total)", solver.counts["refined_steps"]),
             _kv("impacts with restitution capped (total)", solver.counts["restitution_capped"]),
             _kv("multi-contact impacts with e > 0, model-dependent (total)", solver.counts["multi_contact_elastic"]),
+            _kv("sliding holds in a Painlevé configuration, model-dependent (total)", solver.counts["painleve"]),
             _kv("impacts on a second half-space while resting (total)", solver.counts["second_half_space"]),
             _kv("two half-spaces with too many contact points: projected (total)", solver.counts["two_ground_overflow"]),
         ]

@@ -54,7 +54,7 @@ from ..quaternion import quat_rotate, quat_to_matrix
 from . import two_grounds
 from ..kernels.stepping import advance, step_reduced
 from ..kernels.contact.batch import OK, hold_all, settle_all
-from ..kernels.contact.impacts import _LAM, IMPACT_WORK_SHAPE, impact
+from ..kernels.contact.impacts import _A, _LAM, IMPACT_WORK_SHAPE, impact
 from ..kernels.contact.layout import DIMS, FLIGHT, KIND, MAX_POINTS, NORMAL, PERSISTENT, SHAPE_BOX
 from ..kernels.contact.persistent import (
     LIFT_OFF,
@@ -199,9 +199,11 @@ class ContactSolver:
         #: restitution the energy cap lowered below e; ``multi_contact_elastic`` impacts of several
         #: contact points with e > 0 (the model-dependent case); ``refined_steps`` resting steps taken
         #: again in pieces because they gained energy; ``second_half_space`` impacts of a resting body
-        #: against another half-space.
+        #: against another half-space; ``two_ground_overflow`` holds on two half-spaces with more
+        #: contact points than the rows take (two_grounds.py); ``painleve`` sliding holds in a
+        #: Painlevé configuration (:meth:`_painleve`).
         self.counts = dict.fromkeys(("restitution_capped", "multi_contact_elastic", "refined_steps",
-                                     "second_half_space", "two_ground_overflow"), 0)
+                                     "second_half_space", "two_ground_overflow", "painleve"), 0)
         #: Per body, a second half-space it is held on besides ``ground_of`` (two_grounds.py), or -1.
         self.other_ground = np.full(n, -1, dtype=np.int64)
         #: The features touching ``other_ground``, as bits.
@@ -403,6 +405,8 @@ class ContactSolver:
         mode, _, sx, sy = holding_wrench(y, sim._prm[i], w, count, self._points, n[0], n[1], n[2],
                                          float(self.friction[i, j]), SLIP_TOLERANCE, self._bias, self._rdot,
                                          self._work, self._d, self._force)
+        if count and self._painleve(count, float(self.friction[i, j]), sx, sy):
+            self.counts["painleve"] += 1
         if count == 0 or mode == LIFT_OFF or speed > LIFT_OFF_SPEED or lowest > TOUCHING_GAP:
             self.modes[i] = FLIGHT
             self.sliding[i] = False
@@ -415,6 +419,24 @@ class ContactSolver:
         self._bare_rows[i] = w
         add_contact_wrench(w, y, sim._prm[i], count, self._points, self._anchors, self._work)
         return True
+
+    def _painleve(self, count: int, mu: float, sx: float, sy: float) -> bool:
+        """Whether the sliding contact rows in self._work (holding_wrench's) are in a Painlevé configuration.
+
+        Sliding along ŝ, friction −μ f_n ŝ enters each normal acceleration: f_n acts on it through
+        A_nn − μ (A_nt1 ŝ1 + A_nt2 ŝ2), the diagonal projected Gauss–Seidel solves with. Where that is
+        ≤ 0 the rigid problem may have no solution or several (a uniform rod sliding on its end at θ
+        to the ground: 1 + 3 cos²θ − 3 μ sin θ cos θ ≤ 0, possible for μ ≥ 4/3). The solver does not
+        resolve it (the normal force stays 0: the body lifts off and lands again); it is counted.
+        """
+        if mu == 0.0 or (sx == 0.0 and sy == 0.0):
+            return False
+        work = self._work
+        for c in range(count):
+            a = 3 * c
+            if work[a, _A + a] - mu * (work[a, _A + a + 1] * sx + work[a, _A + a + 2] * sy) <= 0.0:
+                return True
+        return False
 
     def after_step(self, sim, wrenches: np.ndarray) -> None:
         """Events inside the step just taken (the simulator's buffers: start in 1 − CUR, end in CUR)."""
