@@ -14,6 +14,7 @@ Against closed forms (g = 9.81), through the node stepped with ``~/step`` while 
   rolls at t = 2 v0 / (7 μ g), then none.
 * The resting box (config/contact_resting_box_imu.yaml, 0.4 × 0.3 × 0.2 m, 2 kg): ``markers`` shows
   its four bottom corners and an arrow of m g × marker_force_scale up from their centre.
+* An IMU at the dropped ball's centre reads the first impact as (1 + e) v1 / Δt over its sample.
 """
 
 from __future__ import annotations
@@ -174,3 +175,24 @@ def test_markers_show_the_contact_points_and_the_holding_force() -> None:
     start, tip = arrows[0].points
     np.testing.assert_allclose([start.x, start.y, start.z], [0.0, 0.0, 0.0], atol=1e-9)
     np.testing.assert_allclose([tip.x, tip.y, tip.z], [0.0, 0.0, scale * 2.0 * G], atol=1e-9)
+
+
+def test_an_imu_reads_the_impact_as_the_velocity_jump_over_its_sample(tmp_path: Path) -> None:
+    """The dropped ball with an ideal IMU at its centre (world axes), sampled every tick through the node:
+    0 in free fall, (1 + e) v1 / Δt up in the tick holding the first impact, 0 again in flight after it."""
+    from sensor_msgs.msg import Imu
+
+    e, h0 = 0.5, 1.0
+    t1, v1 = math.sqrt(2.0 * h0 / G), math.sqrt(2.0 * G * h0)
+    scene = tmp_path / "ball_imu.yaml"
+    scene.write_text((CONFIG / "contact_bouncing_ball.yaml").read_text()
+                     + "    sites:\n      centre: {position: [0.0, 0.0, 0.0], axes: world, imu: {}}\n")
+    first = int(math.ceil(t1 / TICK))
+    with SimHarness(scene, PARAMETERS) as h:
+        imus = collect(h, "ball/centre/imu", Imu)
+        h.step(first + 3)
+        h.spin_until(lambda: len(imus) >= first + 3, f"{first + 3} IMU samples")
+    for k, imu in enumerate(imus[:first + 3], start=1):
+        a = imu.linear_acceleration
+        expected = (1.0 + e) * v1 / TICK if k == first else 0.0
+        np.testing.assert_allclose([a.x, a.y, a.z], [0.0, 0.0, expected], rtol=1e-9, atol=1e-9)
