@@ -98,3 +98,35 @@ def test_at_rest_the_imu_reads_g_up_and_the_readings_integrate_to_the_velocity_c
     ticks = int(round(0.8 / TICK))
     change = ((centre[:ticks, 2] - G) * TICK).sum()
     assert abs(change - (E * V1 - G * (0.8 - T1))) < 1e-9
+
+
+def test_an_off_centre_imu_on_a_spinning_ball_reads_the_jump_of_its_own_velocity() -> None:
+    """The ball dropped spinning at ω = 10 rad/s about y (μ = √(0.3 · 0.5) on the pair, enough to stop the
+    contact point slipping within the impact): the contact point moves at u = −ω R, the compression's
+    tangential impulse P_t = −u m / (1 + m R² / I) = (2/7) m ω R brings it to rest, the normal impulse is
+    m (1 + e) v1, so Δv = (P_t / m, 0, (1 + e) v1) and Δω_y = −R P_t / I. An IMU at r = R on the ball
+    (world axes) sits at r_W = R (sin α, 0, cos α), α = ω t1, at the impact: its jump is
+    Δv + Δω × r_W, read over the tick's Δt on top of the centripetal −ω² r_W of the spin."""
+    omega, radius, inertia = 10.0, 0.1, 0.4 * M * 0.1**2
+    scene = SCENE.replace("collision: {sphere: 0.1}\n", "collision: {sphere: 0.1}\n    material: {restitution: 0.5, friction: 0.3}\n"
+                          f"    twist: {{angular: [0.0, {omega}, 0.0]}}\n")
+    scene = scene.replace(f"orientation: [{', '.join(map(str, ORIENTATION_XYZW))}]", "orientation: [0, 0, 0, 1]")
+    scene = scene.replace("rim: {position: [0.05, 0.02, -0.03], imu: {}}", "rim: {position: [0.0, 0.0, 0.1], axes: world, imu: {}}")
+    sim = Simulator(load_scene_text(scene, "spinning ball"), "rk4", TICK)
+    bank = ImuBank(sim.scene.imus)
+    first = int(math.ceil(T1 / TICK))
+    p_t = (2.0 / 7.0) * M * omega * radius
+    omega_after = omega - radius * p_t / inertia
+    alpha = omega * T1
+    r_hit = radius * np.array([math.sin(alpha), 0.0, math.cos(alpha)])
+    jump = np.array([p_t / M, 0.0, (1.0 + E) * V1]) + np.cross([0.0, omega_after - omega, 0.0], r_hit)
+    for k in range(1, first + 4):
+        sim.step(1)
+        rim = next(s for s in bank.sample(sim, TICK) if s.site == "ball/rim")
+        t = k * TICK
+        w, angle = (omega, omega * t) if t < T1 else (omega_after, alpha + omega_after * (t - T1))
+        expected = -w * w * radius * np.array([math.sin(angle), 0.0, math.cos(angle)])
+        if k == first:
+            expected = expected + jump / TICK
+        np.testing.assert_allclose(rim.specific_force, expected, rtol=1e-9, atol=1e-9)
+    assert abs(sim.body_state("ball").angular_velocity_world[1] - omega_after) < 1e-9

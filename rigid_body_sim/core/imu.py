@@ -155,6 +155,9 @@ class ImuBank:
         self.sites = tuple(self.noise)
         #: Per site, Σ velocity jumps of impacts (m/s, the site's axes) not yet in a sample.
         self.pending_jumps: dict[str, np.ndarray] = {site: np.zeros(3) for site in self.sites}
+        self._sites_of: dict[str, list[str]] = {}  # body → its IMU sites
+        for site in self.sites:
+            self._sites_of.setdefault(site.split("/", 1)[0], []).append(site)
         self._solver = None  # the ContactSolver whose events were read up to ...
         self._seen = 0  # ... this index
         self._last_event = None  # the last of them (a reset clears the list: then it is gone)
@@ -177,14 +180,15 @@ class ImuBank:
                 jump[:] = 0.0
         since = sim.time - step_dt if fresh else -math.inf
         model = sim.model
-        names = list(model.site_names)
+        index = None
         for event in events[self._seen:]:
-            if event.kind != "impact" or not event.delta_v_world or event.time <= since:
+            if (event.kind != "impact" or not event.delta_v_world or event.time <= since
+                    or event.body not in self._sites_of):
                 continue
-            for site in self.sites:
-                if not site.startswith(event.body + "/"):
-                    continue
-                s = names.index(site)
+            if index is None:
+                index = {name: s for s, name in enumerate(model.site_names)}
+            for site in self._sites_of[event.body]:
+                s = index[site]
                 b = int(model.site_body[s])
                 q_WP = np.asarray(event.q_WP, dtype=float)
                 jump_W = np.asarray(event.delta_v_world) + quat_rotate(
