@@ -23,7 +23,9 @@ from typing import Any
 
 import numpy as np
 
-from .app import PROG, REFRESH_HZ, Bodies, _Shape, setup_scene, shape_from_marker, shown_host, start_server
+from .app import PROG, shown_host, start_server
+from .drawing import Bodies, _Shape, setup_scene, shape_from_marker
+from .page import REFRESH_HZ
 
 __all__ = ["Replay", "load_replay", "run_replay", "pose_text", "SPEEDS"]
 
