@@ -1,9 +1,10 @@
 """``rigid-body-sim view`` in a real browser: Debian's headless chromium, driven by selenium.
 
-The simulator runs as its own process (paused), the view as another, and the test is a third
-ROS participant that watches ``box/twist`` and the shared ``impulse`` topic. One browser serves
-the module's browser tests. Through the page only (its
-buttons, its slider) it steps, strikes and resets the node, and checks:
+The simulator runs as its own process (paused, in the namespace ``/view_test`` with the
+``frame_prefix`` ``sim1/``), the view as another (``--namespace /view_test``), and the test is a
+third ROS participant that watches ``box/twist`` and the shared ``impulse`` topic. One browser
+serves the module's browser tests. Through the page only (its buttons, its slider, a click on the
+box) it steps, strikes and resets the node, and checks:
 
 - the box is drawn: box-coloured pixels of a screenshot after the first tick (when the view has
   the markers) against one before it (the view knows the pose but not yet the shape);
@@ -13,6 +14,8 @@ buttons, its slider) it steps, strikes and resets the node, and checks:
   computed here from the scene file. The node ticks 1e-10 s of sim time (real_time_factor 1e-6,
   rate_hz 1e4), so the free tumbling during the tick moves ω by less than 1e-9 (about 1e-10);
 - Step N with 3 in ``ticks`` makes exactly three ticks (three twists);
+- ``rate_hz`` typed into the page is set on the node (read back from it), Run makes ticks flow
+  and Pause stops them;
 - a click on the box's pixels strikes it where the click's ray meets it: the impulse comes in
   ``box/world_aligned``, of the default size 0.5 N·s, at a point of the box's surface (as the
   page reports it), with the angular impulse r × J.
@@ -66,6 +69,8 @@ pytestmark = pytest.mark.ros
 REPO = Path(__file__).resolve().parents[1]
 SCENE = REPO / "config" / "default_scene.yaml"
 CHROMIUM, CHROMEDRIVER = "/usr/bin/chromium", "/usr/bin/chromedriver"
+#: The live test's node runs in a namespace with a frame prefix: the view's strikes must name its frames.
+NAMESPACE, PREFIX = "/view_test", "sim1/"
 
 
 def view_command(*args: str) -> list[str]:
@@ -104,7 +109,7 @@ class Watcher:
     def __init__(self):
         self.context = Context()
         rclpy.init(context=self.context)
-        self.node = rclpy.create_node("view_test_watcher", context=self.context)
+        self.node = rclpy.create_node("view_test_watcher", namespace=NAMESPACE, context=self.context)
         self.executor = SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)
         self.twists: list[Twist] = []
@@ -215,7 +220,7 @@ def click(driver, label: str) -> None:
 def test_view_in_chromium_draws_the_box_and_strikes_it(tmp_path, browser):
     mass, inertia, corner = box_from_scene()
     J = np.array([0.0, 0.0, STRIKE_IMPULSE_NS])
-    node = start_process(["-p", "paused:=true", "-p", "status_period:=0.0", "-p", "diagnostics_period:=0.1",
+    node = start_process(["-r", f"__ns:={NAMESPACE}", "-p", f"frame_prefix:={PREFIX}", "-p", "paused:=true", "-p", "status_period:=0.0", "-p", "diagnostics_period:=0.1",
                           "-p", "real_time_factor:=1e-6", "-p", "rate_hz:=10000.0"], tmp_path / "node.log")
     watcher = Watcher()
     view = None
@@ -224,7 +229,8 @@ def test_view_in_chromium_draws_the_box_and_strikes_it(tmp_path, browser):
         watcher.wait("the node's first twist", lambda: watcher.twists, timeout=60.0)
         port = free_port()
         with open(tmp_path / "view.log", "w") as log:
-            view = subprocess.Popen(view_command("--port", str(port)), stdout=log, stderr=subprocess.STDOUT)
+            view = subprocess.Popen(view_command("--port", str(port), "--namespace", NAMESPACE), stdout=log,
+                                    stderr=subprocess.STDOUT)
         open_page(driver, port, view, tmp_path / "view.log")
         # The node is found, its pose known; no tick yet, so no markers: no shape drawn.
         wait_text(driver, lambda t: "showing 1 body; no shape yet for box" in t, "the node found, no shape yet")
@@ -247,7 +253,7 @@ def test_view_in_chromium_draws_the_box_and_strikes_it(tmp_path, browser):
             click(driver, "Strike")
             watcher.wait("the view's impulse", lambda: len(watcher.impulses) > k)
             msg = watcher.impulses[-1]
-            assert msg.header.frame_id == "box"  # about the box's origin in its axes, on the shared topic
+            assert msg.header.frame_id == PREFIX + "box"  # about the box's origin in its axes, on the shared topic
             f, tau = msg.wrench.force, msg.wrench.torque
             np.testing.assert_allclose([f.x, f.y, f.z], J, atol=1e-15)
             np.testing.assert_allclose([tau.x, tau.y, tau.z], np.cross(expected_r, J), atol=1e-15)
@@ -310,7 +316,7 @@ def test_view_in_chromium_draws_the_box_and_strikes_it(tmp_path, browser):
             canvas, int(np.median(xs)) - canvas.rect["width"] // 2, int(np.median(ys)) - canvas.rect["height"] // 2).click().perform()
         watcher.wait("the click's impulse", lambda: len(watcher.impulses) > k)
         msg = watcher.impulses[-1]
-        assert msg.header.frame_id == "box/world_aligned"
+        assert msg.header.frame_id == PREFIX + "box/world_aligned"
         f = np.array([msg.wrench.force.x, msg.wrench.force.y, msg.wrench.force.z])
         tau = np.array([msg.wrench.torque.x, msg.wrench.torque.y, msg.wrench.torque.z])
         text = wait_text(driver, lambda t: "struck `box` at" in t or "struck box at" in t, "the click's report")
@@ -320,7 +326,26 @@ def test_view_in_chromium_draws_the_box_and_strikes_it(tmp_path, browser):
         half = corner * [1, 1, -1]  # (a/2, b/2, c/2): the box is still axis-aligned (t < 1e-8 s)
         assert abs(np.max(np.abs(r) / half) - 1.0) < 1e-3, r  # the struck point is on the box's surface
         np.testing.assert_allclose(tau, np.cross(r, f), rtol=0, atol=1e-4)  # r as shown, to 4 decimals
+        watcher.pending_impulses = None
+        watcher.wait("the node taking the click's impulse (its frame is valid)", lambda: watcher.pending_impulses == 1)
         print(f"click strike at r = {r.tolist()} m: J = {f.tolist()} N·s, r x J = {tau.tolist()} N·m·s")
+
+        # rate_hz through the page (the node's own value read back on the status line), then Run
+        # and Pause: ticks flow, then stop.
+        rate = driver.find_element(By.XPATH, "//label[normalize-space()='rate_hz']/following::input[1]")
+        driver.execute_script("arguments[0].scrollIntoView({block: 'center'})", rate)
+        rate.send_keys(Keys.CONTROL, "a")
+        rate.send_keys("100")
+        wait_text(driver, lambda t: "rate_hz 100 ·" in t and "rate_hz := 100.0: ok" in t, "rate_hz 100 from the node")
+        n = len(watcher.twists)
+        click(driver, "Run")
+        watcher.wait("ticks while running", lambda: len(watcher.twists) >= n + 5)
+        click(driver, "Pause")
+        wait_text(driver, lambda t: "pause: ok" in t, "Pause's answer")
+        watcher.wait("the last tick's twist", lambda: False, timeout=0.3, expire_ok=True)
+        n = len(watcher.twists)
+        watcher.wait("no tick while paused", lambda: len(watcher.twists) > n, timeout=0.5, expire_ok=True)
+        assert len(watcher.twists) == n
     finally:
         view_code = stop_process(view) if view is not None else 0
         watcher.close()

@@ -78,7 +78,8 @@ class RosClient:
         latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
         self.node.create_subscription(PoseArray, "poses", self._on_poses, latched, raw=True)
         self.node.create_subscription(PointCloud2, "velocities", self._on_velocities, latched)
-        self.node.create_subscription(MarkerArray, "markers", self._on_markers, QoSProfile(depth=10))
+        self._markers_args = (MarkerArray, "markers", self._on_markers, QoSProfile(depth=10))
+        self._markers_subscription: Any = self.node.create_subscription(*self._markers_args)
         self.node.create_subscription(PointCloud2, "contacts", self._on_contacts, QoSProfile(depth=10))
         self.node.create_subscription(TFMessage, "/tf_static", self._on_tf_static,
                                       QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL))
@@ -232,6 +233,17 @@ class RosClient:
             for name, points in sites.items():
                 self.sites_B[name] = tuple(points)
             self.arrows_W = np.asarray(arrows, dtype=float).reshape(-1, 2, 3)
+
+    def want_markers(self, wanted: bool) -> None:
+        """Subscribe to ``markers`` or not. The node builds them only while someone subscribes
+        (about 20 µs a marker), so the page stops listening once it has what it needs of them."""
+        if wanted and self._markers_subscription is None:
+            self._markers_subscription = self.node.create_subscription(*self._markers_args)
+        elif not wanted and self._markers_subscription is not None:
+            self.node.destroy_subscription(self._markers_subscription)
+            self._markers_subscription = None
+            with self.lock:
+                self.arrows_W = np.zeros((0, 2, 3))
 
     # ------------------------------------------------------------------ reads (any thread)
     def node_seen(self) -> bool:

@@ -91,19 +91,15 @@ class LivePage:
             self.trails_on.on_update(lambda _event: self.bodies.show_trails(self.trails_on.value))
             gui.add_button("Clear trails").on_click(lambda _event: self._clear_trails())
             self.imu_text = gui.add_markdown("IMUs: none")
-        with gui.add_folder("Plots"):
+        with gui.add_folder("Plots") as self.plots_folder:
             self.plot_note = gui.add_markdown("waiting for the scene")
             self.speed_body = gui.add_dropdown("speed of", options=("–",), initial_value="–")
-            xs = {"x": {"time": False}}
-            self.plots = {
-                key: gui.add_uplot(data=(np.zeros(0), np.zeros(0)), series=({"label": "t (s)"}, {"label": label, "stroke": color}),
-                                   title=title, scales=xs, aspect=2.2)
-                for key, label, title, color in (("energy", "E (J)", "total energy (J)", "#d62728"),
-                                                 ("L", "|L| (kg·m²/s)", "|L| about the origin (kg·m²/s)", "#1f77b4"),
-                                                 ("speed", "|v| (m/s)", "speed of the chosen body (m/s)", "#2ca02c"))}
+        # Made when their first two samples are there (viser's uPlot shows no data added to an empty chart).
+        self.plots: dict[str, Any] = {}
         self.history: deque[tuple[float, float, float, float]] = deque(maxlen=PLOT_SAMPLES)
         self._mass: tuple[tuple, MassModel | None, str] = ((), None, "")
         self._last_velocity_stamp: float | None = None
+        self._plotted_body = ""
         self.strike_dot: Any = None
         self._slow_due = 0.0
         self._params_seen: dict = {}
@@ -232,6 +228,10 @@ class LivePage:
         t = key[0] + 1e-9 * key[1]
         if self._last_velocity_stamp is not None and t < self._last_velocity_stamp:
             self.history.clear()  # a reset: time went back
+        body = self.speed_body.value
+        if self.history and self._plotted_body != body:
+            self.history.clear()  # another body chosen: its speed from now on
+        self._plotted_body = body
         if t == self._last_velocity_stamp:
             return
         self._last_velocity_stamp = t
@@ -239,13 +239,25 @@ class LivePage:
         energy = L = np.nan
         if model is not None and poses is not None and len(poses[0]) == len(names):
             energy, L = totals(model, poses[0], poses[1], v, w)
-        body = self.speed_body.value
         speed = float(np.linalg.norm(v[names.index(body)])) if body in names else np.nan
         self.history.append((t, energy, L, speed))
         data = np.asarray(self.history, dtype=float)
-        self.plots["energy"].data = (data[:, 0], data[:, 1])
-        self.plots["L"].data = (data[:, 0], data[:, 2])
-        self.plots["speed"].data = (data[:, 0], data[:, 3])
+        if len(data) < 2:
+            return
+        for key, column, label, title, color in (
+                ("energy", 1, "E (J)", "total energy (J)", "#d62728"),
+                ("L", 2, "|L| (kg·m²/s)", "|L| about the origin (kg·m²/s)", "#1f77b4"),
+                ("speed", 3, "|v| (m/s)", "speed of the chosen body (m/s)", "#2ca02c")):
+            xy = (np.ascontiguousarray(data[:, 0]), np.ascontiguousarray(data[:, column]))
+            if not np.all(np.isfinite(xy[1])):  # no masses (energy, |L|) or no such body (speed)
+                continue
+            if key in self.plots:
+                self.plots[key].data = xy
+            else:
+                with self.plots_folder:
+                    self.plots[key] = self.server.gui.add_uplot(
+                        data=xy, series=({"label": "t (s)"}, {"label": label, "stroke": color}), title=title,
+                        scales={"x": {"time": False}}, aspect=2.2)
 
     # ------------------------------------------------------------------ refresh
     def refresh(self) -> None:
@@ -278,6 +290,10 @@ class LivePage:
             poses = {n: (tuple(float(c) for c in positions[k]),
                          (float(q_xyzw[k][3]), float(q_xyzw[k][0]), float(q_xyzw[k][1]), float(q_xyzw[k][2])))
                      for k, n in enumerate(names)}
+        # Many bodies: the markers are wanted for the shapes only (sites and wrench arrows are not
+        # drawn batched), so the view stops listening once it has every shape, and the node stops
+        # building them; a body without a shape (a new scene, a spawn) brings the subscription back.
+        ros.want_markers(not batched or any(n not in shapes for n in names))
         if batched:
             if any(f.visible for f in self.bodies.frames.values()):
                 self.bodies.show({}, {})  # hide the bodies drawn one by one
