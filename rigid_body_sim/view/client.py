@@ -108,6 +108,7 @@ class RosClient:
         self.static_sites: dict[str, tuple[float, float, float]] = {}  # "B/S" (prefix removed) -> position in B
         self.reply = ""
         self._names_pending = self._again = False
+        self._unnamed_markers: Any = None
         self._stop = threading.Event()
         self.thread = threading.Thread(target=self._spin, name="view-ros", daemon=True)
         self.thread.start()
@@ -188,6 +189,10 @@ class RosClient:
             if params is not None:
                 self.params = params
                 self.names = list(params["body_names"] or [])
+        with self.lock:
+            unnamed, self._unnamed_markers = (self._unnamed_markers, None) if self.names is not None else (None, self._unnamed_markers)
+        if unnamed is not None:
+            self._on_markers(unnamed)
         if again:
             self.request_parameters()
 
@@ -198,7 +203,10 @@ class RosClient:
         sites: dict[str, list] = {}
         arrows = []
         with self.lock:
-            names = list(self.names or [])
+            if self.names is None:  # kept until the body names come (the node sends markers only when due)
+                self._unnamed_markers = msg
+                return
+            names = list(self.names)
         index = {n: k for k, n in enumerate(names)}
         for m in msg.markers:
             if m.action != Marker.ADD:
