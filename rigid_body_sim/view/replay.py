@@ -2,7 +2,7 @@
 
 The recording is read by :func:`rigid_body_sim.offline.recording.read_recording` (each body's
 samples over sim time, and the scene attached as ``scene.yaml``). Each body is drawn as the live
-view draws it (:class:`.app.Bodies`: a frame with its axes holding its shape), the shape being the
+view draws it (:class:`.drawing.Bodies`: a frame with its axes holding its shape), the shape being the
 one the node's markers give it (:func:`rigid_body_sim.ros.markers.body_shapes`, from the attached
 scene's inertia declaration). No ROS domain is joined: nothing here creates an rclpy context.
 
@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from .app import PROG, shown_host, start_server
-from .drawing import Bodies, _Shape, setup_scene, shape_from_marker
+from .drawing import BATCH_ABOVE, BatchedBodies, Bodies, _Shape, setup_scene, shape_from_marker
 from .page import REFRESH_HZ
 
 __all__ = ["Replay", "load_replay", "run_replay", "pose_text", "replay_series", "SPEEDS"]
@@ -172,6 +172,7 @@ class _ReplayPage:
     def __init__(self, server: Any, replay: Replay):
         self.server, self.replay = server, replay
         self.bodies = Bodies(server)
+        self.batched = BatchedBodies(server) if len(replay.names) > BATCH_ABOVE else None
         self.lock = threading.RLock()
         self.playing = False
         self.origin = (0.0, 0.0)  # (wall monotonic, sim time) playback started from
@@ -279,7 +280,12 @@ class _ReplayPage:
                 p, q = r.positions[name][k], r.orientations_xyzw[name][k]
                 if np.all(np.isfinite(p)) and np.all(np.isfinite(q)):
                     poses[name] = (tuple(float(v) for v in p), (float(q[3]), float(q[0]), float(q[1]), float(q[2])))
-            self.bodies.show(poses, r.shapes)
+            if self.batched is not None:  # many bodies: instanced, as the live view draws them
+                shown = [n for n in r.names if n in poses]
+                self.batched.show_arrays(shown, np.array([r.positions[n][k] for n in shown]).reshape(-1, 3),
+                                         np.array([r.orientations_xyzw[n][k] for n in shown]).reshape(-1, 4), r.shapes)
+            else:
+                self.bodies.show(poses, r.shapes)
             self.pose.value = pose_text(r, self.body.value, k)
 
 
