@@ -197,18 +197,41 @@ BATCH_ABOVE = 20
 
 
 def _unit_mesh(kind: int) -> tuple[np.ndarray, np.ndarray]:
-    """(vertices, faces) of the unit shape a batched instance scales: a cube of edge 1, a sphere of
-    diameter 1, a cylinder of diameter 1 and length 1 along z."""
-    import trimesh
+    """(vertices (V, 3), faces (F, 3), outward counter-clockwise) of the unit shape a batched instance
+    scales: a cube of edge 1, a sphere of diameter 1, a cylinder of diameter 1 and length 1 along z."""
     from visualization_msgs.msg import Marker
 
     if kind == Marker.CUBE:
-        mesh = trimesh.creation.box(extents=(1.0, 1.0, 1.0))
-    elif kind == Marker.CYLINDER:
-        mesh = trimesh.creation.cylinder(radius=0.5, height=1.0, sections=24)
-    else:
-        mesh = trimesh.creation.icosphere(subdivisions=2, radius=0.5)
-    return np.asarray(mesh.vertices, dtype=np.float32), np.asarray(mesh.faces, dtype=np.uint32)
+        v = np.array([[x, y, z] for x in (-0.5, 0.5) for y in (-0.5, 0.5) for z in (-0.5, 0.5)])
+        quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+        f = [t for a, b, c, d in quads for t in ((a, b, c), (a, c, d))]
+        return v.astype(np.float32), np.asarray(f, dtype=np.uint32)
+    sections = 24
+    phi = np.linspace(0.0, 2.0 * np.pi, sections, endpoint=False)
+    if kind == Marker.CYLINDER:
+        ring = np.stack((0.5 * np.cos(phi), 0.5 * np.sin(phi)), axis=1)
+        v = np.vstack((np.c_[ring, np.full(sections, -0.5)], np.c_[ring, np.full(sections, 0.5)],
+                       [[0.0, 0.0, -0.5], [0.0, 0.0, 0.5]]))
+        f = []
+        for i in range(sections):
+            j = (i + 1) % sections
+            f += [(i, j, sections + j), (i, sections + j, sections + i),  # side
+                  (2 * sections, j, i), (2 * sections + 1, sections + i, sections + j)]  # caps
+        return v.astype(np.float32), np.asarray(f, dtype=np.uint32)
+    rings = 12
+    theta = np.linspace(0.0, np.pi, rings + 1)[1:-1]
+    v = [[0.0, 0.0, 0.5]] + [[0.5 * np.sin(t) * np.cos(p), 0.5 * np.sin(t) * np.sin(p), 0.5 * np.cos(t)]
+                             for t in theta for p in phi] + [[0.0, 0.0, -0.5]]
+    f = []
+    for i in range(sections):
+        j = (i + 1) % sections
+        f.append((0, 1 + i, 1 + j))
+        for r in range(rings - 2):
+            a, b = 1 + r * sections, 1 + (r + 1) * sections
+            f += [(a + i, b + i, b + j), (a + i, b + j, a + j)]
+        last = 1 + (rings - 2) * sections
+        f.append((len(v) - 1, last + j, last + i))
+    return np.asarray(v, dtype=np.float32), np.asarray(f, dtype=np.uint32)
 
 
 def _q_mul_rows(p: np.ndarray, q: np.ndarray) -> np.ndarray:
