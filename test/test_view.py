@@ -14,8 +14,8 @@ box) it steps, strikes and resets the node, and checks:
   computed here from the scene file. The node ticks 1e-10 s of sim time (real_time_factor 1e-6,
   rate_hz 1e4), so the free tumbling during the tick moves ω by less than 1e-9 (about 1e-10);
 - Step N with 3 in ``ticks`` makes exactly three ticks (three twists);
-- ``rate_hz`` typed into the page is set on the node (read back from it), Run makes ticks flow
-  and Pause stops them;
+- ``rate_hz`` typed into the page and the integrator chosen in its list are set on the node
+  (read back from it), Run makes ticks flow and Pause stops them;
 - a click on the box's pixels strikes it where the click's ray meets it: the impulse comes in
   ``box/world_aligned``, of the default size 0.5 N·s, at a point of the box's surface (as the
   page reports it), with the angular impulse r × J.
@@ -337,6 +337,11 @@ def test_view_in_chromium_draws_the_box_and_strikes_it(tmp_path, browser):
         rate.send_keys(Keys.CONTROL, "a")
         rate.send_keys("100")
         wait_text(driver, lambda t: "rate_hz 100 ·" in t and "rate_hz := 100.0: ok" in t, "rate_hz 100 from the node")
+        integrator = driver.find_element(By.XPATH, "//label[normalize-space()='integrator']/following::input[1]")
+        driver.execute_script("arguments[0].scrollIntoView({block: 'center'})", integrator)
+        integrator.click()
+        driver.find_element(By.XPATH, "//*[@role='option' and normalize-space()='semi_implicit_euler']").click()
+        wait_text(driver, lambda t: "integrator semi_implicit_euler ·" in t, "the integrator from the node")
         n = len(watcher.twists)
         click(driver, "Run")
         watcher.wait("ticks while running", lambda: len(watcher.twists) >= n + 5)
@@ -557,6 +562,33 @@ def test_poses_are_read_from_cdr_as_the_middleware_writes_them():
             assert np.array_equal(np.hstack((p, q)), values)  # the same float64s, bit for bit
     with pytest.raises(ValueError):
         parse_pose_array(b"not cdr at all")
+
+
+def test_velocities_and_contacts_are_read_at_the_offsets_the_node_writes():
+    from rclpy.serialization import deserialize_message, serialize_message
+    from sensor_msgs.msg import PointCloud2
+
+    from rigid_body_sim.ros.batch import batch_rows, velocity_cloud
+    from rigid_body_sim.ros.contacts import CONTACT_POINT_STEP, contact_points
+    from rigid_body_sim.view.wire import contacts_from_cloud, velocities_from_cloud
+
+    rng = np.random.default_rng(2)
+    v, w = rng.normal(size=(3, 3)), rng.normal(size=(3, 3))
+    cloud = velocity_cloud(3)
+    cloud.data = batch_rows(np.zeros((3, 3)), np.zeros((3, 4)), v, w, np.array([False, True, False]))[1].tobytes()
+    read_v, read_w = velocities_from_cloud(deserialize_message(serialize_message(cloud), PointCloud2))
+    assert np.array_equal(read_v, v) and np.array_equal(read_w, w)
+
+    rows = [{"x": 0.1, "y": -0.2, "z": 0.0, "nx": 0.0, "ny": 0.6, "nz": 0.8, "gap": -1e-9, "normal_force": 19.62,
+             "body": 4, "ground": 1, "state": 1},
+            {"x": 2.0, "y": 3.0, "z": 4.0, "nx": 1.0, "ny": 0.0, "nz": 0.0, "impulse": 0.5, "state": 0}]
+    cloud = PointCloud2(height=1, width=2, point_step=CONTACT_POINT_STEP, row_step=2 * CONTACT_POINT_STEP,
+                        is_dense=True, data=contact_points(rows).tobytes())
+    points, normals = contacts_from_cloud(deserialize_message(serialize_message(cloud), PointCloud2))
+    assert np.array_equal(points, [[0.1, -0.2, 0.0], [2.0, 3.0, 4.0]])
+    assert np.array_equal(normals, [[0.0, 0.6, 0.8], [1.0, 0.0, 0.0]])
+    cloud.point_step = 100  # another layout: not read
+    assert contacts_from_cloud(cloud) is None
 
 
 def test_click_rays_meet_each_shape_where_geometry_says():

@@ -23,15 +23,12 @@ from typing import Any
 import numpy as np
 
 from .drawing import _Shape, shape_from_marker
-from .wire import parse_pose_array
+from .wire import contacts_from_cloud, parse_pose_array, velocities_from_cloud
 
 __all__ = ["RosClient", "VIEW_PARAMETERS"]
 
 #: The simulator parameters the view reads (and shows).
 VIEW_PARAMETERS = ("body_names", "frame_prefix", "integrator", "rate_hz", "real_time_factor", "scene", "paused")
-_VELOCITY_DTYPE = np.dtype([("v", "<f8", 3), ("w", "<f8", 3), ("stopped", "u1"), ("pad", "V7")])
-_CONTACT_DTYPE = np.dtype({"names": ["p", "n", "state", "body"], "formats": [("<f8", 3), ("<f8", 3), "u1", "<u4"],
-                           "offsets": [0, 24, 104, 96], "itemsize": 112})
 
 
 def _q_mul(a: tuple, b: tuple) -> tuple[float, float, float, float]:
@@ -136,18 +133,16 @@ class RosClient:
             self.request_parameters()
 
     def _on_velocities(self, msg: Any) -> None:
-        if msg.point_step != _VELOCITY_DTYPE.itemsize or msg.is_bigendian:
-            return
-        rows = np.frombuffer(bytes(msg.data), dtype=_VELOCITY_DTYPE, count=msg.width)
-        with self.lock:
-            self.velocities = ((msg.header.stamp.sec, msg.header.stamp.nanosec), rows["v"].copy(), rows["w"].copy())
+        read = velocities_from_cloud(msg)
+        if read is not None:
+            with self.lock:
+                self.velocities = ((msg.header.stamp.sec, msg.header.stamp.nanosec), *read)
 
     def _on_contacts(self, msg: Any) -> None:
-        if msg.point_step != _CONTACT_DTYPE.itemsize or msg.is_bigendian:
-            return
-        rows = np.frombuffer(bytes(msg.data), dtype=_CONTACT_DTYPE, count=msg.width)
-        with self.lock:
-            self.contacts = (rows["p"].copy(), rows["n"].copy())
+        read = contacts_from_cloud(msg)
+        if read is not None:
+            with self.lock:
+                self.contacts = read
 
     def _on_tf_static(self, msg: Any) -> None:
         prefix = str(self.params.get("frame_prefix", ""))

@@ -1,4 +1,4 @@
-"""``poses`` (geometry_msgs/PoseArray) read straight from its CDR bytes with numpy.
+"""The node's batches read with numpy: ``poses`` from its CDR bytes, ``velocities`` and ``contacts`` clouds.
 
 The view subscribes to ``poses`` raw (``raw=True``): at 1000 bodies and 100 ticks a second,
 building 1000 Pose objects per message in Python would cost the view more than drawing them.
@@ -14,7 +14,29 @@ import struct
 
 import numpy as np
 
-__all__ = ["parse_pose_array"]
+__all__ = ["parse_pose_array", "velocities_from_cloud", "contacts_from_cloud"]
+
+_VELOCITY_DTYPE = np.dtype([("v", "<f8", 3), ("w", "<f8", 3), ("stopped", "u1"), ("pad", "V7")])
+_CONTACT_DTYPE = np.dtype({"names": ["p", "n", "body", "state"], "formats": [("<f8", 3), ("<f8", 3), "<u4", "u1"],
+                           "offsets": [0, 24, 96, 104], "itemsize": 112})
+
+
+def velocities_from_cloud(msg) -> tuple[np.ndarray, np.ndarray] | None:
+    """(v (N, 3) m/s, ω (N, 3) rad/s), world axes, of a ``velocities`` PointCloud2 (docs/interface.md,
+    "Many bodies"), or None if its layout is not that one."""
+    if msg.point_step != _VELOCITY_DTYPE.itemsize or msg.is_bigendian or len(msg.data) < msg.width * msg.point_step:
+        return None
+    rows = np.frombuffer(bytes(msg.data), dtype=_VELOCITY_DTYPE, count=msg.width)
+    return rows["v"].copy(), rows["w"].copy()
+
+
+def contacts_from_cloud(msg) -> tuple[np.ndarray, np.ndarray] | None:
+    """(points (K, 3) m, unit normals (K, 3)), world, of a ``contacts`` PointCloud2 (docs/interface.md,
+    "Contacts"), or None if its layout is not that one."""
+    if msg.point_step != _CONTACT_DTYPE.itemsize or msg.is_bigendian or len(msg.data) < msg.width * msg.point_step:
+        return None
+    rows = np.frombuffer(bytes(msg.data), dtype=_CONTACT_DTYPE, count=msg.width)
+    return rows["p"].copy(), rows["n"].copy()
 
 
 def parse_pose_array(raw: bytes) -> tuple[tuple[int, int], str, np.ndarray, np.ndarray]:
