@@ -450,8 +450,8 @@ def test_replay_in_chromium_shows_the_recorded_pose_at_the_slider_time(tmp_path,
     driver = browser
     try:
         open_page(driver, port, view, tmp_path / "view.log")
-        wait_text(driver, lambda t: "1 body, 4001 samples, t = 0 … 40 s" in t and "total energy (J)" in t
-                  and "speed of box (m/s)" in t, "the recording's summary and its plots")
+        wait_text(driver, lambda t: "1 body, 4001 samples, t = 0 … 40 s" in t and "Plots (the whole recording)" in t,
+                  "the recording's summary and its plots")
         check(wait_pose_at(driver, 0.0), 0.0)
 
         # The keyboard on the slider's thumb: three steps of one sample (0.01 s) to the right.

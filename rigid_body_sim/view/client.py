@@ -262,12 +262,12 @@ class RosClient:
         return sorted(found)
 
     def measured_rtf(self, window_s: float = 2.0) -> float | None:
-        """Sim seconds per wall second over the last ``window_s`` of received ``poses``."""
+        """Sim seconds per wall second of the ``poses`` received in the last ``window_s`` (None: too few)."""
         with self.lock:
             history = list(self.stamp_history)
         if len(history) < 2:
             return None
-        now = history[-1][0]
+        now = time.monotonic()
         recent = [h for h in history if now - h[0] <= window_s]
         if len(recent) < 2 or recent[-1][0] - recent[0][0] < 0.2:
             return None

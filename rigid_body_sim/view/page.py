@@ -27,6 +27,8 @@ __all__ = ["LivePage", "REFRESH_HZ", "INTEGRATORS", "STRIKE_DIRECTIONS"]
 REFRESH_HZ = 20.0
 #: Plots, the IMU search and trails are refreshed at most this often, Hz.
 SLOW_HZ = 4.0
+#: How often the node's parameters are read again, s.
+PARAMS_PERIOD_S = 2.0
 #: Samples kept in each plot.
 PLOT_SAMPLES = 600
 INTEGRATORS = ("rk4", "euler", "exact_rotor_splitting", "implicit_gyroscopic", "reference", "semi_implicit_euler",
@@ -101,7 +103,7 @@ class LivePage:
         self._last_velocity_stamp: float | None = None
         self._plotted_body = ""
         self.strike_dot: Any = None
-        self._slow_due = 0.0
+        self._slow_due = self._params_due = 0.0
         self._params_seen: dict = {}
         self._drawn_stamp: float | None = None
         self._draws: deque[float] = deque(maxlen=400)  # wall times at which new poses were drawn
@@ -319,6 +321,9 @@ class LivePage:
                 self.speed_body.value = ros.strike_body if ros.strike_body in names else names[0]
             self._update_plots(names, params)
             self._show_imus()
+            if now >= self._params_due:  # the node's parameters as they are now (another client may change them)
+                self._params_due = now + PARAMS_PERIOD_S
+                ros.request_parameters()
             if self.trails_on.value:
                 self.bodies.show_trails(True)
 

@@ -200,7 +200,9 @@ class _ReplayPage:
         self.body = gui.add_dropdown("body", options=tuple(r.names), initial_value=r.names[0])
         self.pose = gui.add_text("pose", initial_value="", disabled=True, multiline=True)
         self.playback = gui.add_markdown("paused")
-        self.plots_folder = gui.add_folder("Plots (the whole recording)")
+        # Closed at first: a chart of thousands of samples redrawn with every page update slows the
+        # page down on a slow machine (software WebGL), so it is drawn when the user opens it.
+        self.plots_folder = gui.add_folder("Plots (the whole recording)", expand_by_default=False)
         self.plots: dict[str, Any] = {}
         self.slider.on_update(self._on_slider)
         self.speed.on_update(lambda _event: self._reanchor())
