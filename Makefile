@@ -196,3 +196,10 @@ BENCH_NODE_ARGS ?=
 .PHONY: bench-node
 bench-node: $(STAMP)
 	$(VENV_PY) -m benchmarks.node_batch $(BENCH_NODE_ARGS)
+
+# The browser view's frame rate at 1, 100 and 1000 bodies and the node's CPU per tick with and without a
+# viewer (headless Debian chromium; medians of 5 windows of 3 s). Writes benchmarks/results/view.md and the
+# generated block of docs/view.md.
+.PHONY: bench-view
+bench-view: $(STAMP) browser-deps
+	$(VENV_PY) -m benchmarks.view_fps --docs
