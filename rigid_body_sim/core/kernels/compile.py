@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import layout as L
+from .controls import add_controls, advance_controlled, new_table
 from .dynamics import derivatives, impulse_response
 from .forces import add_wrench, project_twist
 from .integrators import INTEGRATORS, final_kick, kick_and_drift
@@ -22,7 +23,7 @@ from .stepping import SCRATCH_ROWS, add_pending, advance, check_members, clear_w
 __all__ = ["compile_kernels", "ENTRY_POINTS"]
 
 #: The compiled functions called from Python (core/simulator.py, core/stepping.py, core/integrators.py).
-ENTRY_POINTS = (advance, step_reduced, check_members, add_pending, clear_wrenches, integrate, kick_and_drift,
+ENTRY_POINTS = (advance, advance_controlled, add_controls, step_reduced, check_members, add_pending, clear_wrenches, integrate, kick_and_drift,
                 final_kick, derivatives, impulse_response, add_wrench, project_twist, site_readings)
 
 
@@ -45,6 +46,10 @@ def compile_kernels() -> None:
             advance(Ys, prm, wrenches, members, status, control, inputs, 1, np.zeros(1, dtype=np.int64))
             integrate(method.code, Ys[0], Ys[1], prm, wrenches, members, status, 0.01, np.inf,
                       np.empty((SCRATCH_ROWS, L.ROW_WIDTH)))
+    table = new_table(1)
+    table[1, 0] = 1
+    advance_controlled(Ys, prm, wrenches, members, status, control, inputs, 1, np.zeros(1, dtype=np.int64), table)
+    add_controls(wrenches, prm, table)
     bodies = step_reduced(Ys, prm, wrenches, members, status, control, inputs)
     kick_and_drift(Ys[0], Ys[1], prm, wrenches, bodies, 0.01)
     final_kick(Ys[1], prm, wrenches, bodies, 0.01)
