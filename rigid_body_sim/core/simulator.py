@@ -359,12 +359,23 @@ class Simulator:
         self._reduce = bool(value)
         self._replan()
 
-    def body_models(self) -> list[reduction.BodyPlan]:
-        """The model each body gets now and why (reduction.BodyPlan: body, motion, model, code, reason)."""
+    def body_models(self, first: int | None = None) -> list[reduction.BodyPlan]:
+        """The model each body gets now and why (reduction.BodyPlan: body, motion, model, code, reason).
+
+        ``first``: only the first that many bodies (what a log lists of 10⁵).
+        """
+        if first is not None and first < self.model.count:
+            return reduction.plan_models(self.model, self._reduce, self._stopped,
+                                         self._prm[:, L.MODEL].astype(np.int64), first=first)
         if self._plans is None:
             self._plans = reduction.plan_models(self.model, self._reduce, self._stopped,
                                                 self._prm[:, L.MODEL].astype(np.int64))
         return list(self._plans)
+
+    def model_counts(self) -> dict[str, int]:
+        """How many bodies each model (reduction.MODEL_NAMES) has now; models no body has are left out."""
+        codes, counts = np.unique(self._prm[:, L.MODEL].astype(np.int64), return_counts=True)
+        return {reduction.MODEL_NAMES[int(c)]: int(k) for c, k in zip(codes, counts)}
 
     def _replan(self) -> None:
         """Derive each body's model from the scene, the switch, the stopped bodies and the current state."""
