@@ -30,7 +30,7 @@ from rclpy.parameter import Parameter
 from rigid_body_sim.cli import main as cli_main
 from rigid_body_sim.core import Simulator, load_scene
 from rigid_body_sim.ros.node import RigidBodySimNode
-from rigid_body_sim.tools.shards import MANIFEST, ShardJoiner, read_manifest, split_bodies, write_shards
+from rigid_body_sim.tools.shards import JOIN_DEPTH, MANIFEST, ShardJoiner, read_manifest, split_bodies, write_shards
 
 NODE = Path(sys.executable).parent / "rigid_body_sim_node"
 
@@ -114,7 +114,8 @@ def test_one_consumer_joins_every_tick_of_three_shard_nodes(tmp_path) -> None:
         for spec in shards:
             overrides = [Parameter("scene", value=str(spec.file)), Parameter("per_body_topics", value=False),
                          Parameter("paused", value=True), Parameter("status_period", value=0.0),
-                         Parameter("publish_clock", value=spec.namespace == "/shard_0")]
+                         Parameter("publish_clock", value=spec.namespace == "/shard_0"),
+                         Parameter(f"qos_overrides.{spec.namespace}/poses.publisher.depth", value=JOIN_DEPTH)]
             nodes.append(RigidBodySimNode("rigid_body_sim", context=context, namespace=spec.namespace,
                                           parameter_overrides=overrides))
         consumer = Node("shard_consumer", context=context)
@@ -184,6 +185,7 @@ def test_one_consumer_gets_every_tick_of_four_shard_processes_of_ten_thousand_bo
             processes.append(subprocess.Popen(
                 [str(NODE), "--ros-args", "-r", f"__ns:={spec.namespace}", "-p", f"scene:={spec.file}",
                  "-p", "per_body_topics:=false", "-p", f"publish_clock:={'true' if k == 0 else 'false'}",
+                 "-p", f"qos_overrides.{spec.namespace}/poses.publisher.depth:={JOIN_DEPTH}",
                  "-p", "paused:=true", "-p", f"rate_hz:={SHARD_RATE_HZ}", "-p", "status_period:=0.0"],
                 stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT))
         consumer = Node("shard_consumer", context=context)

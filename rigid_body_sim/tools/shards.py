@@ -41,10 +41,14 @@ import yaml
 from rigid_body_sim.core.scene import MAX_SCENE_BYTES, SceneError, load_scene
 from rigid_body_sim.core.scene_yaml import read_yaml
 
-__all__ = ["MANIFEST", "ShardJoiner", "ShardSpec", "read_manifest", "split_bodies", "write_shards", "main"]
+__all__ = ["JOIN_DEPTH", "MANIFEST", "ShardJoiner", "ShardSpec", "read_manifest", "split_bodies", "write_shards", "main"]
 
 #: The manifest's file name in the output folder.
 MANIFEST = "shards.yaml"
+#: History depth of each shard's ``poses`` publisher in the manifest's commands (the node's
+#: default is 1: the latest state; a reliable writer that keeps only the latest may replace a tick
+#: a busy consumer has not yet acknowledged, and a joiner needs every tick of every shard).
+JOIN_DEPTH = 10
 #: Top-level scene keys copied into every shard (bodies and wrenches are split).
 _SHARED_KEYS = ("gravity", "ground", "energy_growth_limit")
 
@@ -106,6 +110,7 @@ def write_shards(scene_path: str | Path, shards: int, out: str | Path, node_args
         {"file": spec.file.name, "namespace": spec.namespace, "bodies": spec.bodies, "first_body": spec.first_body,
          "command": " ".join(["rigid_body_sim_node", "--ros-args", "-r", f"__ns:={spec.namespace}",
                               "-p", f"scene:={spec.file.resolve()}", "-p", "per_body_topics:=false",
+                              "-p", f"qos_overrides.{spec.namespace}/poses.publisher.depth:={JOIN_DEPTH}",
                               *(["-p", "publish_clock:=false"] if k else []), *node_args])}
         for k, spec in enumerate(specs)]}
     (out / MANIFEST).write_text(yaml.safe_dump(manifest, sort_keys=False, width=1 << 16))
