@@ -263,6 +263,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seconds", type=float)
     parser.add_argument("--bodies", type=int, nargs="*", help="only these body counts")
     parser.add_argument("--depth", type=int, default=10, help="the subscriber's history depth (default 10)")
+    parser.add_argument("--recording", choices=("both", "yes", "no"), default="both",
+                        help="only the cases with (yes) or without (no) a recording")
     parser.add_argument("--out", type=Path, default=REPO / "benchmarks" / "results")
     parser.add_argument("--listen", type=Path, help=argparse.SUPPRESS)  # the subscriber process (listen())
     args = parser.parse_args(argv)
@@ -270,7 +272,8 @@ def main(argv: list[str] | None = None) -> int:
         return listen(args.listen, args.depth)
     repeats = args.repeats or (3 if args.quick else 5)
     seconds = args.seconds or (5.0 if args.quick else 10.0)
-    cases = [c for c in CASES if not args.bodies or c[0] in args.bodies]
+    cases = [c for c in CASES if (not args.bodies or c[0] in args.bodies)
+             and args.recording in ("both", "yes" if c[2] else "no")]
     rows = []
     load_before = os.getloadavg()
     with tempfile.TemporaryDirectory() as directory:
