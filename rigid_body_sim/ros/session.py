@@ -39,12 +39,12 @@ __all__ = ["BUSY_WAIT_S", "CHANGE_WAIT_S", "MAX_BATCH_ONLY_BODIES", "MAX_BODIES"
 MAX_BODIES = 1000
 #: Most bodies with ``per_body_topics`` false (batches only; inputs on the shared topics unless
 #: ``per_body_inputs`` asks for three subscriptions a body): the scene loader's own limit
-#: (core/scene.MAX_BODIES). What sets it, measured at 10⁵ (docs/performance.md, "The node with
-#: batched output"): memory, ~20 KB a body in the node (state buffers, model, scene text, the
-#: batch rows and their CDR copies); the size of a tick's batches, 56 bytes a body in each of
-#: ``poses`` and ``velocities`` (5.6 MB each at 10⁵), which Fast DDS sends as ~64 KB fragments,
-#: so a tick costs the middleware ~180 fragments and every subscriber as many; and the tick's
-#: CPU (stepping, packing, sending), which at 10⁵ leaves a 2-core machine about 10 Hz.
+#: (core/scene.MAX_BODIES). What sets it (docs/interface.md, "Many bodies"; measured by
+#: ``make bench-node``): memory, ~4 KB a body in the node (state buffers, model, scene text,
+#: the batch rows and their CDR copies); the size of a tick's batches, 56 bytes a body in each
+#: of ``poses`` and ``velocities`` (5.6 MB each at 10⁵), which Fast DDS sends in ~64 KB
+#: fragments, ~180 a tick to every subscriber; and the tick's CPU (stepping, packing, sending),
+#: which at 10⁵ leaves a 2-core machine about 10 Hz. A larger scene is split into shards.
 MAX_BATCH_ONLY_BODIES = 100_000
 #: Most ticks one ``~/step_ticks`` request may ask for (the node's other callbacks wait while it steps).
 MAX_STEP_TICKS = 1_000_000
