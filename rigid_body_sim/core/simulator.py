@@ -29,6 +29,7 @@ from .frames import new_wrench_rows, parse_frame
 from .integrators import INTEGRATORS, Method, get_integrator, step_exact_rotor_splitting, step_reference
 from .kernels import layout as L
 from .kernels import controls, sensors, stepping
+from .kernels.state_rows import pose_twist_rows
 from .kernels.compile import compile_kernels as compile_stepping_kernels
 from .kernels.dynamics import impulse_response
 from .kernels.forces import add_wrench, project_twist
@@ -866,6 +867,20 @@ class Simulator:
     def angular_velocities_body(self) -> np.ndarray:
         """Angular velocities, rad/s, body axes B, shape (N, 3)."""
         return quat_rotate(self.model.q_BP, self.state.w_WP_P)
+
+    def pose_twist_rows(self, poses: np.ndarray, twists: np.ndarray) -> np.ndarray:
+        """Every body's pose and twist in one compiled pass, into the caller's arrays; returns which are finite.
+
+        ``poses`` : float64 (N, k ≥ 7), C order: columns 0–6 get (x, y, z, qx, qy, qz, qw), the
+        centre of mass (m) and body frame B in the world. ``twists`` : float64 (N, k ≥ 6): columns
+        0–5 get the linear (m/s) and angular (rad/s) velocity in world axes; other columns are
+        left as they are. Bitwise what positions_world, orientations_xyzw,
+        linear_velocities_world and angular_velocities_world give. Returns (N,) bool: True
+        where all of the body's state is finite (State.finite_bodies).
+        """
+        finite = np.empty(self.model.count, dtype=np.bool_)
+        pose_twist_rows(self._Ys[self._control[L.CUR]], self.model.q_BP, poses, twists, finite)
+        return finite
 
     def kinetic_energy(self) -> np.ndarray:
         """Kinetic energy per body, J, shape (N,)."""

@@ -17,6 +17,7 @@ from .dynamics import derivatives, impulse_response
 from .forces import add_wrench, project_twist
 from .integrators import INTEGRATORS, final_kick, kick_and_drift
 from .sensors import site_readings
+from .state_rows import pose_twist_rows
 from .stepping import SCRATCH_ROWS, add_pending, advance, check_members, clear_wrenches, integrate, new_buffers, \
     step_reduced
 
@@ -24,7 +25,7 @@ __all__ = ["compile_kernels", "ENTRY_POINTS"]
 
 #: The compiled functions called from Python (core/simulator.py, core/stepping.py, core/integrators.py).
 ENTRY_POINTS = (advance, advance_controlled, add_controls, step_reduced, check_members, add_pending, clear_wrenches, integrate, kick_and_drift,
-                final_kick, derivatives, impulse_response, add_wrench, project_twist, site_readings)
+                final_kick, derivatives, impulse_response, add_wrench, project_twist, site_readings, pose_twist_rows)
 
 
 def compile_kernels() -> None:
@@ -61,5 +62,6 @@ def compile_kernels() -> None:
     add_wrench(row, prm[0], L.FRAME_BODY, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     impulse_response(Ys[0][0], prm[0], row, np.empty(L.ROW_WIDTH))
     project_twist(prm[0], np.zeros(6))
+    pose_twist_rows(Ys[0], np.array([[1.0, 0.0, 0.0, 0.0]]), np.empty((n, 7)), np.zeros((n, 7)), np.empty(n, dtype=np.bool_))
     site_readings(Ys[0], prm, wrenches, np.zeros(3), np.zeros(1, dtype=np.int64), np.zeros((1, 3)),
                   np.zeros(1, dtype=np.bool_), np.empty((1, 10)))
