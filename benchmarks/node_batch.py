@@ -32,6 +32,7 @@ subscriber's. The targets table compares the medians with the node's targets. Ru
 from __future__ import annotations
 
 import argparse
+import fcntl
 import os
 import select
 import signal
@@ -48,7 +49,9 @@ from . import machine
 
 REPO = Path(__file__).resolve().parent.parent
 NODE = REPO / ".venv" / "bin" / "rigid_body_sim_node"
-DOMAIN_ID = 78
+#: ROS domain ids the runs may take (Fast DDS's safe ones, test/conftest.py): each run holds one
+#: with the tests' lock files, so a benchmark and a test session never share a domain.
+DOMAIN_IDS = tuple(range(1, 102)) + tuple(range(215, 233))
 #: Settle (s) after the first ``poses`` before the window: the first ticks catch up on start-up work.
 SETTLE_S = 3.0
 #: (bodies, rate_hz, recording): the small sizes, and the two targets with and without a recording.
@@ -145,9 +148,27 @@ def _count_recorded(path: Path, rate_hz: float) -> float:
     return count / (round((last - first) * 1e-9 * rate_hz) + 1)
 
 
-def measure(scene: Path, n: int, rate_hz: float, seconds: float, depth: int, record: Path | None = None) -> dict:
+def claim_domain() -> tuple[int, object]:
+    """A ROS domain id no test session or other run holds (the lock of test/conftest.py), and its open lock file."""
+    for k in range(len(DOMAIN_IDS)):
+        domain = DOMAIN_IDS[(os.getpid() + k) % len(DOMAIN_IDS)]
+        try:
+            lock = open(f"/tmp/rigid_body_sim_ros_domain_{domain}.lock", "a+")  # noqa: SIM115 - held for the run
+        except OSError:
+            continue
+        try:
+            fcntl.flock(lock.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            lock.close()
+            continue
+        return domain, lock
+    raise RuntimeError("every ROS domain id is held by another process")
+
+
+def measure(scene: Path, n: int, rate_hz: float, seconds: float, depth: int, record: Path | None = None,
+            domain: int = 78) -> dict:
     """One run of the node on ``scene`` (recording to ``record`` if given): the figures of the module docstring."""
-    env = {**os.environ, "ROS_DOMAIN_ID": str(DOMAIN_ID), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
+    env = {**os.environ, "ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
     work = Path(tempfile.mkdtemp(prefix="node_batch_"))
     arrivals_file = work / "arrivals.npz"
     listener = subprocess.Popen([sys.executable, "-m", "benchmarks.node_batch", "--listen", str(arrivals_file),
@@ -275,6 +296,7 @@ def main(argv: list[str] | None = None) -> int:
     cases = [c for c in CASES if (not args.bodies or c[0] in args.bodies)
              and args.recording in ("both", "yes" if c[2] else "no")]
     rows = []
+    domain, _lock = claim_domain()  # held until the process ends
     load_before = os.getloadavg()
     with tempfile.TemporaryDirectory() as directory:
         for n, rate, recording in cases:
@@ -282,7 +304,7 @@ def main(argv: list[str] | None = None) -> int:
             runs = []
             for k in range(repeats):
                 record = Path(directory) / f"run{k}.mcap" if recording else None
-                runs.append(measure(scene, n, rate, seconds, args.depth, record))
+                runs.append(measure(scene, n, rate, seconds, args.depth, record, domain))
                 if record is not None:
                     record.unlink(missing_ok=True)
             rows.append(_median_row(runs))
