@@ -188,9 +188,11 @@ bench-oracle: bench-deps
 	$(VENV_PY) -m pytest -q -m bench test/test_bench_pairs.py
 	$(VENV_PY) -m benchmarks.pair_oracle --out $(BENCH_OUT)
 
-# The node with batched output: 1, 100, 1000, 10000 bodies at 100 Hz and 100 at 1 kHz, rk4, 1 substep,
-# per_body_topics false, a `poses` subscriber in another process; sim/wall, ticks delivered, CPU per tick, RSS,
-# start to first poses, stop time (medians of 5 runs of 10 s; BENCH_NODE_ARGS=--quick for 3 runs of 5 s).
+# The node benchmark: batched output and shared inputs, 1 to 10000 bodies at 100 Hz, 100 at 1 kHz, 100000 at
+# 10 Hz, the 10000 and 100000 cases also recording; rk4, 1 substep, a plain rclpy `poses` subscriber in its own
+# process; start to first poses, RSS, sim/wall, ticks delivered and recorded, CPU per tick, stop time, and the
+# node's targets (medians of 5 runs of 10 s; BENCH_NODE_ARGS=--quick for 3 runs of 5 s,
+# BENCH_NODE_ARGS="--bodies 10000 100000" for the target sizes only).
 # Writes benchmarks/results/node_batch.md (linked from docs/performance.md).
 BENCH_NODE_ARGS ?=
 .PHONY: bench-node

@@ -104,17 +104,18 @@ def model_codes(model: BodyModel, reduce: bool = True, stopped: np.ndarray | Non
 
 
 def plan_models(model: BodyModel, reduce: bool = True, stopped: np.ndarray | None = None,
-                codes: np.ndarray | None = None) -> list[BodyPlan]:
+                codes: np.ndarray | None = None, first: int | None = None) -> list[BodyPlan]:
     """Which model each body of ``model`` gets, and why (one :class:`BodyPlan` per body, in order).
 
     ``codes`` are :func:`model_codes`' (computed here when not given); this adds the reasons.
+    ``first``: only the first that many bodies (default all).
     """
     if codes is None:
         codes = model_codes(model, reduce, stopped)
     plans = []
     motions = model.motions
     normals = model.plane_normals_W
-    for b, name in enumerate(model.names):
+    for b, name in enumerate(model.names[:first]):
         motion, code = motions[b], int(codes[b])
         I = model.inertia_P[b]
         moments = f"I = ({I[0]:.6g}, {I[1]:.6g}, {I[2]:.6g}) kg·m²"

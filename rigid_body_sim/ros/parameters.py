@@ -247,7 +247,7 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec("per_body_topics", _T.BOOL, True,
                   "Publish B/pose, B/twist (and B/odom) for every body B besides the batches poses and "
                   "velocities; false: only the batches (and, unless per_body_inputs says otherwise, no per-body "
-                  "inputs). False also lifts the node's body limit from 1000 to 10000.",
+                  "inputs). False also lifts the node's body limit from 1000 to 100000.",
                   read_only=True, takes_effect="start-up only"),
     ParameterSpec("per_body_inputs", _T.STRING, "auto",
                   "Subscribe to B/wrench, B/impulse and B/set_state for every body B, besides the shared "
