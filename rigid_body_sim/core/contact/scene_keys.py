@@ -19,6 +19,8 @@ Schema (scene.py's other keys are unchanged)::
 A body whose inertia is ``principal`` or ``tensor`` has no collision shape unless it declares
 one. Contact acts on bodies whose motion is ``free``; the others pass through the ground (they
 do not move, or move as declared).
+A body whose motion is ``static`` and that has a collision shape is static geometry in a scene
+with a ``ground`` key (``ground: []`` for no half-space): the solver's static_geometry.py.
 
 Pair material: friction √(μ_a μ_b), restitution max(e_a, e_b) (Box2D's rule); a side without
 a material takes the other's; with neither, :data:`DEFAULT_RESTITUTION` and
