@@ -19,13 +19,15 @@ A static body (``motion: static``) with a collision shape, in a scene with a ``g
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from rigid_body_sim.core import Simulator, load_scene
+from rigid_body_sim.core import SceneError, Simulator, load_scene
 from rigid_body_sim.core.quaternion import quat_conjugate, quat_multiply, quat_rotate
 
+CONFIG = Path(__file__).resolve().parents[1] / "config"
 G, E, R = 9.81, 0.5, 0.1
 TOP = 0.25  # m: the static box's top face (box 1 × 1 × 0.5 centred at the origin)
 
@@ -165,3 +167,45 @@ def test_a_box_dropped_flat_on_a_static_box_comes_to_rest_and_stays():
         worst_speed = max(worst_speed, np.linalg.norm(sim.state.v_WC_W[1]), np.linalg.norm(sim.state.w_WP_P[1]))
     assert worst_gap <= 1e-12 and worst_speed <= 1e-12, (worst_gap, worst_speed)
     assert sim.contact.counts["static_tangent"] == 0
+
+
+# ----------------------------------------------------------------------------- scene
+
+def test_a_body_starting_inside_a_static_shape_is_refused():
+    with pytest.raises(SceneError, match=r"bodies\.ball: .*0\.05 m inside static body 'table'"):
+        _scene({"ball": _ball([0.0, 0.0, TOP + R - 0.05])})
+
+
+def test_the_example_scene_drops_a_ball_and_a_crate_on_its_table():
+    sim = Simulator(load_scene(CONFIG / "contact_static_table.yaml"), "rk4", 1e-3)
+    while sim.time < 1.2:
+        sim.step()
+    h0 = 0.5  # the ball's lowest point above the table top
+    t1 = math.sqrt(2.0 * h0 / G)
+    first = sim.contact.events_of("ball", "impact")[0]
+    assert first.time == pytest.approx(t1, rel=1e-9) and sim.contact.static_body_of(first.ground) == "table"
+    assert sim.contact.events_of("ball", "rest")[0].time == pytest.approx(t1 * (1 + E) / (1 - E), abs=1e-6)
+    for body in ("ball", "crate"):
+        assert sim.contact.is_resting(body)
+        assert sim.contact.static_body_of(sim.contact.events_of(body, "rest")[-1].ground) == "table"
+
+
+def test_a_box_sliding_on_the_floor_into_a_static_wall_rebounds():
+    """Frictionless floor, a 0.2 m cube at 2 m/s towards a static wall whose face is 0.8 m ahead of the
+    cube's: the impact at t = 0.8 / 2 = 0.4 s, rebound at e v = 1 m/s (the face's normal), still resting on
+    the floor."""
+    wall = {"mass": 1.0, "inertia": {"box": [0.2, 1.0, 1.0]}, "motion": "static", "pose": {"position": [1.0, 0.0, 0.5]},
+            "material": {"restitution": E, "friction": 0.0}}
+    crate = {"mass": 1.0, "inertia": {"box": [0.2, 0.2, 0.2]}, "material": {"restitution": E, "friction": 0.0},
+             "pose": {"position": [0.0, 0.0, 0.1]}, "twist": {"linear": [2.0, 0.0, 0.0]}}
+    sim = Simulator(load_scene({"gravity": [0.0, 0.0, -G], "bodies": {"wall": wall, "crate": crate},
+                                "ground": [{"normal": [0, 0, 1], "material": {"restitution": 0.0, "friction": 0.0}}]}),
+                    "rk4", 1e-3)
+    while sim.time < 0.6:
+        sim.step()
+    (hit,) = sim.contact.events_of("crate", "impact")
+    assert hit.time == pytest.approx(0.4, rel=1e-9) and sim.contact.static_body_of(hit.ground) == "wall"
+    assert hit.normal_speed_after == pytest.approx(E * 2.0, rel=1e-9)
+    np.testing.assert_allclose(sim.state.v_WC_W[1], [-E * 2.0, 0.0, 0.0], atol=1e-9)
+    assert sim.state.p_WC_W[1, 0] == pytest.approx(0.8 - E * 2.0 * (sim.time - 0.4), rel=1e-9)
+    assert sim.contact.is_resting("crate") and sim.contact.static_body_of(int(sim.contact.ground_of[1])) is None

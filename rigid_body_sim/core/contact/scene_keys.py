@@ -222,6 +222,9 @@ def read_contact(check: Any, top: Mapping, model: Any, state: Any) -> ContactSpe
         for j in range(g):
             restitution[i, j], friction[i, j] = pair_material(shapes[i], grounds[j])
     _check_not_inside(check, model, state, shapes, grounds)
+    from .static_geometry import check_not_inside_statics  # here: it uses pair_material of this module
+
+    check_not_inside_statics(check, model, state, shapes)
     bodies = np.array([i for i in range(n) if shapes[i, KIND] != SHAPE_NONE and model.motions[i] == "free"],
                       dtype=np.int64)
     for array in (grounds, shapes, restitution, friction, bodies):

@@ -219,10 +219,13 @@ class ContactSolver:
         #: against another half-space; ``two_ground_overflow`` holds on two half-spaces with more
         #: contact points than the rows take (two_grounds.py); ``painleve`` sliding holds in a
         #: Painlevé configuration (:meth:`_painleve`); ``static_tangent`` body-steps held on a static shape's
-        #: tangent plane (a curved support, an edge or a rim: first order; static_geometry.py).
+        #: tangent plane (a curved support, an edge or a rim: first order; static_geometry.py);
+        #: ``static_pressed`` impacts of a resting body against a static shape it stays pressed on (not held
+        #: there: it may reach into it by up to a h²/2 per step, a its acceleration towards it).
+        self._static_skipped: set[int] = set()  # bodies not looked at against static shapes for the rest of the step
         self.counts = dict.fromkeys(("restitution_capped", "multi_contact_elastic", "refined_steps",
                                      "second_half_space", "two_ground_overflow", "painleve",
-                                     "static_tangent"), 0)
+                                     "static_tangent", "static_pressed"), 0)
         #: Per body, a second half-space it is held on besides ``ground_of`` (two_grounds.py), or -1.
         self.other_ground = np.full(n, -1, dtype=np.int64)
         #: The features touching ``other_ground``, as bits.
@@ -260,6 +263,8 @@ class ContactSolver:
         self.other_projected[:] = False
         self.sliding[:] = False
         Y = sim._Ys[sim._control[L.CUR]]
+        if self.statics is not None:
+            self.statics.place(sim)
         for i in self.bodies:
             gap, j = self._gap(sim, Y[i], i)
             if gap <= TOUCHING_GAP:
@@ -480,6 +485,7 @@ class ContactSolver:
         h = sim.dt
         t0 = sim.time - h
         min_gaps(Y1, sim._prm, self.shapes, self.half_spaces, self.bodies, self._lowest)
+        self._static_skipped.clear()
         moving = ~sim._stopped[self.bodies]
         resting = self.bodies[(self.modes[self.bodies] == PERSISTENT) & moving]
         two = resting[self.other_ground[resting] >= 0]  # held on two half-spaces: two_grounds.py
@@ -772,7 +778,8 @@ class ContactSolver:
                 count = body_points(y, sim._prm[i], self.shapes[i], self.grounds[jj], self._points, self._gaps)
                 if count and self._gaps[:count].min() < lowest:
                     lowest, which = float(self._gaps[:count].min()), jj
-        if self.statics is not None and not self.statics.is_tangent(int(self.ground_of[i])):
+        if (self.statics is not None and not self.statics.is_tangent(int(self.ground_of[i]))
+                and i not in self._static_skipped):
             dist, s = self.statics.nearest(y, i, self.shapes[i], int(self.statics.row_owner[self.ground_of[i]]))
             if dist < lowest:
                 lowest, which = dist, self.statics.plane_for(y, sim._prm[i], i, self.shapes[i], s)
@@ -832,7 +839,10 @@ class ContactSolver:
         y[L.V:L.W + 3] = after_row[L.V:L.W + 3]
         after, _ = normal_speeds(y, sim._prm[i], count, self._points, n[0], n[1], n[2], self._work)
         self.events.append(ContactEvent(t, self.names[i], jj, "impact", before, after, impulse, e0, e1, *jump))
-        if after <= LIFT_OFF_SPEED and self.other_ground[i] < 0:  # it stays on the second one: held on both
+        if after <= LIFT_OFF_SPEED and jj >= len(self.half_spaces):  # stays pressed on a static shape (not held)
+            self.counts["static_pressed"] += 1
+            self._static_skipped.add(i)
+        elif after <= LIFT_OFF_SPEED and self.other_ground[i] < 0:  # it stays on the second one: held on both
             self.other_ground[i] = two_grounds.touching_other(self, sim, y, i, LIFT_OFF_SPEED,
                                                               max(TOUCHING_GAP, float(self._band[i])))
 

@@ -49,10 +49,10 @@ from ..kernels.contact.layout import (
 )
 from ..kernels.contact.pairs import FACE_ALIGNMENT, MAX_PAIR_POINTS, pair_contacts
 from ..kernels.contact.shapes import body_points
-from ..quaternion import quat_multiply, quat_to_matrix
+from ..quaternion import quat_conjugate, quat_multiply, quat_to_matrix
 from .scene_keys import pair_material
 
-__all__ = ["StaticGeometry", "static_shapes", "bounding_radius"]
+__all__ = ["StaticGeometry", "static_shapes", "bounding_radius", "check_not_inside_statics"]
 
 #: A contact point this far (× the face's size) outside a static box face's rectangle is off the face.
 FACE_MARGIN = 1e-9
@@ -83,13 +83,39 @@ def shape_poses(rows: np.ndarray, q_PB: np.ndarray) -> tuple[np.ndarray, np.ndar
     return rows[:, L.P:L.P + 3].copy(), quat_multiply(rows[:, L.Q:L.Q + 4], q_PB)
 
 
+def check_not_inside_statics(check, model, state, shapes: np.ndarray) -> None:
+    """Refuse a moving body whose shape starts inside a static body's shape, naming both and the depth.
+
+    A depth up to 1e-9 × the pair's size (the narrow phase's round-off for shapes placed touching)
+    is let through; ``check`` is scene.py's checker, ``model`` and ``state`` the scene's bodies.
+    """
+    statics = static_shapes(shapes, model.motions)
+    moving = [i for i in range(model.count) if model.motions[i] == "free" and shapes[i, KIND] != SHAPE_NONE]
+    if not statics.size or not moving:
+        return
+    rows = state.rows()
+    pos, quat = shape_poses(rows, quat_conjugate(np.asarray(model.q_BP, dtype=float).reshape(-1, 4)))
+    pairs = np.array([[s, i] for s in statics for i in moving], dtype=np.int64)
+    m = len(pairs)
+    dist = np.empty(m)
+    pair_contacts(pos, quat, shapes, pairs, dist, np.empty((m, 3)), np.empty(m, dtype=np.int64),
+                  np.empty((m, MAX_PAIR_POINTS, 6)), np.empty((m, MAX_PAIR_POINTS)))
+    for (s, i), d in zip(pairs, dist):
+        size = max(shapes[s, DIMS:DIMS + 3].max(), shapes[i, DIMS:DIMS + 3].max())
+        if -d > 1e-9 * size:
+            name, other = model.names[i], model.names[s]
+            check.fail(f"bodies.{name}", f"a body that starts outside the static shapes: its collision shape is "
+                       f"{-d:.6g} m inside static body {other!r}'s; move it out by at least that", show_got=False)
+
+
 class StaticGeometry:
     """The static shapes of a scene and the plane rows the solver holds bodies on (the module docstring).
 
     Parameters
     ----------
     sim : Simulator
-        The static bodies' poses are read from its current state (they do not move).
+        Its model and parameter rows; the static bodies' poses are read from its state by
+        :meth:`place` (the solver's reset: they do not move).
     spec : ContactSpec
         The scene's contact declaration (shapes, materials, half-spaces).
     statics : ndarray of int
@@ -102,22 +128,15 @@ class StaticGeometry:
         self.half_spaces = spec.grounds
         g = len(spec.grounds)
         self.shapes = spec.shapes[statics].copy()
-        Y = sim._Ys[sim._control[L.CUR]]
-        self.pos, self.quat = shape_poses(Y[statics], sim._prm[statics, L.Q_PB:L.Q_PB + 4])
+        self.pos, self.quat = np.zeros((len(statics), 3)), np.tile([1.0, 0.0, 0.0, 0.0], (len(statics), 1))
         self.radius = np.array([bounding_radius(s) for s in self.shapes])
         boxes = [s for s in range(len(statics)) if self.shapes[s, KIND] == SHAPE_BOX]
         #: First face row of each static shape (6 rows: +x, −x, +y, −y, +z, −z of its frame B), -1 if not a box.
         self.first_face = np.full(len(statics), -1, dtype=np.int64)
-        rows = [np.asarray(spec.grounds)]
-        face = np.zeros((6 * len(boxes), GROUND_WIDTH))
-        R = quat_to_matrix(self.quat)
         for m, s in enumerate(boxes):
             self.first_face[s] = g + 6 * m
-            for k in range(6):
-                axis, sign = k // 2, 1.0 - 2.0 * (k % 2)
-                normal = sign * R[s, :, axis]
-                face[6 * m + k, NORMAL:NORMAL + 3] = normal
-                face[6 * m + k, OFFSET] = normal @ self.pos[s] + self.shapes[s, DIMS + axis]
+        rows = [np.asarray(spec.grounds)]
+        face = np.zeros((6 * len(boxes), GROUND_WIDTH))
         rows.append(face)
         #: The first tangent row: body i's is first_tangent + i.
         self.first_tangent = g + len(face)
@@ -147,7 +166,7 @@ class StaticGeometry:
         self._pos = np.zeros((k + 1, 3))
         self._quat = np.zeros((k + 1, 4))
         self._shapes = np.zeros((k + 1, spec.shapes.shape[1]))
-        self._pos[:k], self._quat[:k], self._shapes[:k] = self.pos, self.quat, self.shapes
+        self._shapes[:k] = self.shapes
         self._pairs = np.array([[s, k] for s in range(k)], dtype=np.int64)
         self._dist = np.empty(k)
         self._normal = np.empty((k, 3))
@@ -158,6 +177,23 @@ class StaticGeometry:
         self._reach = np.array([bounding_radius(shape) for shape in spec.shapes])
         self._body_points = np.empty((MAX_POINTS, 3))
         self._body_gaps = np.empty(MAX_POINTS)
+
+    def place(self, sim) -> None:
+        """Read the static shapes' poses from the simulator's current state; the face rows from them."""
+        Y = sim._Ys[sim._control[L.CUR]]
+        self.pos, self.quat = shape_poses(Y[self.statics], sim._prm[self.statics, L.Q_PB:L.Q_PB + 4])
+        k = len(self.statics)
+        self._pos[:k], self._quat[:k] = self.pos, self.quat
+        R = quat_to_matrix(self.quat)
+        for s in range(k):
+            f = int(self.first_face[s])
+            if f < 0:
+                continue
+            for face in range(6):
+                axis, sign = face // 2, 1.0 - 2.0 * (face % 2)
+                normal = sign * R[s, :, axis]
+                self.rows[f + face, NORMAL:NORMAL + 3] = normal
+                self.rows[f + face, OFFSET] = normal @ self.pos[s] + self.shapes[s, DIMS + axis]
 
     # ----------------------------------------------------------------- narrow phase
 
