@@ -209,3 +209,18 @@ def test_a_box_sliding_on_the_floor_into_a_static_wall_rebounds():
     np.testing.assert_allclose(sim.state.v_WC_W[1], [-E * 2.0, 0.0, 0.0], atol=1e-9)
     assert sim.state.p_WC_W[1, 0] == pytest.approx(0.8 - E * 2.0 * (sim.time - 0.4), rel=1e-9)
     assert sim.contact.is_resting("crate") and sim.contact.static_body_of(int(sim.contact.ground_of[1])) is None
+
+
+def test_resting_on_a_static_ball_is_held_on_its_tangent_plane_and_counted():
+    """Not covered exactly (a curved support): held on the tangent plane, refreshed each step, counted.
+    At the apex that plane is level: the ball stays there (the equilibrium), gap 0."""
+    post = {"mass": 1.0, "inertia": {"sphere": 0.3}, "motion": "static", "pose": {"position": [0.0, 0.0, 1.0]},
+            "material": {"restitution": 0.0, "friction": 0.5}}
+    ball = {"mass": 1.0, "inertia": {"sphere": R}, "pose": {"position": [0.0, 0.0, 1.6]}}
+    sim = Simulator(load_scene({"gravity": [0.0, 0.0, -G], "ground": [], "bodies": {"post": post, "ball": ball}}),
+                    "rk4", 1e-3)
+    while sim.time < 0.5:
+        sim.step()
+    assert sim.contact.is_resting("ball")
+    assert sim.contact.counts["static_tangent"] > 0
+    assert abs(sim.state.p_WC_W[1, 2] - 1.4) <= 1e-12 and np.abs(sim.state.v_WC_W[1]).max() <= 1e-12
