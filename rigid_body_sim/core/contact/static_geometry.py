@@ -184,7 +184,7 @@ class StaticGeometry:
         self.pos, self.quat = shape_poses(Y[self.statics], sim._prm[self.statics, L.Q_PB:L.Q_PB + 4])
         k = len(self.statics)
         self._pos[:k], self._quat[:k] = self.pos, self.quat
-        R = quat_to_matrix(self.quat)
+        R = self._R_WB = quat_to_matrix(self.quat)
         for s in range(k):
             f = int(self.first_face[s])
             if f < 0:
@@ -270,7 +270,7 @@ class StaticGeometry:
         s = int(self.row_owner[j])
         axis = (j - int(self.first_face[s])) // 2
         half = self.shapes[s, DIMS:DIMS + 3]
-        local = (points - self.pos[s]) @ quat_to_matrix(self.quat[s])  # rows: Rᵀ (p − c)
+        local = (points - self.pos[s]) @ self._R_WB[s]  # rows: Rᵀ (p − c)
         margin = FACE_MARGIN * float(half.max())
         for other in range(3):
             if other != axis and np.any(np.abs(local[:, other]) > half[other] + margin):
