@@ -19,6 +19,8 @@ Schema (scene.py's other keys are unchanged)::
 A body whose inertia is ``principal`` or ``tensor`` has no collision shape unless it declares
 one. Contact acts on bodies whose motion is ``free``; the others pass through the ground (they
 do not move, or move as declared).
+A body whose motion is ``static`` and that has a collision shape is static geometry in a scene
+with a ``ground`` key (``ground: []`` for no half-space): the solver's static_geometry.py.
 
 Pair material: friction √(μ_a μ_b), restitution max(e_a, e_b) (Box2D's rule); a side without
 a material takes the other's; with neither, :data:`DEFAULT_RESTITUTION` and
@@ -220,6 +222,9 @@ def read_contact(check: Any, top: Mapping, model: Any, state: Any) -> ContactSpe
         for j in range(g):
             restitution[i, j], friction[i, j] = pair_material(shapes[i], grounds[j])
     _check_not_inside(check, model, state, shapes, grounds)
+    from .static_geometry import check_not_inside_statics  # here: it uses pair_material of this module
+
+    check_not_inside_statics(check, model, state, shapes)
     bodies = np.array([i for i in range(n) if shapes[i, KIND] != SHAPE_NONE and model.motions[i] == "free"],
                       dtype=np.int64)
     for array in (grounds, shapes, restitution, friction, bodies):

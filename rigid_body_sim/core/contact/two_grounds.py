@@ -61,7 +61,7 @@ def touching_other(solver, sim, y: np.ndarray, i: int, speed_limit: float, gap_l
     j = int(solver.ground_of[i])
     prm, shape = sim._prm[i], solver.shapes[i]
     gaps = np.empty(MAX_FEATURES)
-    for jj in range(len(solver.grounds)):
+    for jj in range(len(solver.half_spaces)):  # the half-spaces (static shapes: static_geometry.py)
         if jj == j or abs(abs(solver.grounds[jj, NORMAL:NORMAL + 3] @ solver.grounds[j, NORMAL:NORMAL + 3]) - 1.0) < 1e-12:
             continue
         count = feature_gaps(y, prm, shape, solver.grounds[jj], gaps)
