@@ -312,7 +312,7 @@ def _cases_large(count: int) -> list[Case]:
     v6_full_derivative(Ys, prm, members, aux, DT, LIMIT, 1, 0)
     v4b_checks_tree(Ys, prm, members, aux, DT, LIMIT, 1, 0)
     s = scene(count)
-    ours = {name: Simulator(s, integrator=name, dt=DT) for name in ("euler", "rk4")}
+    ours = {name: Simulator(s, integrator=name, dt=DT, threads=1) for name in ("euler", "rk4")}
     return [
         Case("0 floor (euler)", lambda k: floors.euler_floor(Y, inertia, DT, k), reset),
         Case("1 + parameter rows", lambda k: v1_parameter_rows(Y, prm, DT, k), reset),

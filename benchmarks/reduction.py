@@ -71,14 +71,15 @@ def sweep(count: int, repeats: int, min_seconds: float, integrators=INTEGRATORS,
     for scene_name, name in jobs:
         kinds = kinds_of(scene_name, count)
         whole = scene_of(kinds)
-        reduced_sim = Simulator(whole, integrator=name, dt=DT, model_reduction=True)
+        reduced_sim = Simulator(whole, integrator=name, dt=DT, model_reduction=True, threads=1)
         cases = [_case("reduced", reduced_sim)]
         moving = [k for k in kinds if k != "wall"]
         if moving:
-            cases.append(_case("full", Simulator(scene_of(kinds, skip_static=True), integrator=name, dt=DT,
+            cases.append(_case("full", Simulator(scene_of(kinds, skip_static=True), integrator=name, dt=DT, threads=1,
                                                  model_reduction=False)))
         if len(moving) < len(kinds):
-            cases.append(_case("full, statics stepped", Simulator(whole, integrator=name, dt=DT, model_reduction=False)))
+            cases.append(_case("full, statics stepped", Simulator(whole, integrator=name, dt=DT, model_reduction=False,
+                                                threads=1)))
         stats = interleaved(cases, repeats, min_seconds)
         models: dict[str, int] = {}
         for plan in reduced_sim.body_models():

@@ -127,6 +127,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--integrator", default="rk4", choices=_IntegratorNames(), metavar="NAME",
                      help="one of %(choices)s (default rk4)")
     run.add_argument("--dt", type=_positive_float("s"), default=DEFAULT_DT, help=f"physics step, s (default {DEFAULT_DT:g})")
+    run.add_argument("--threads", type=int, default=0, metavar="N",
+                     help="threads the step may use over the bodies (default 0: every core; the same results "
+                          "for any N)")
     run.add_argument("--rate", type=_positive_float("samples per sim second"), default=DEFAULT_RATE_HZ,
                      help=f"samples per sim second in --csv and --record (default {DEFAULT_RATE_HZ:g}; "
                           "every step if the step is longer)")
@@ -158,6 +161,8 @@ def build_parser() -> argparse.ArgumentParser:
     describe.add_argument("scene", metavar="SCENE", help="scene YAML file")
     describe.add_argument("--json", action="store_true", help="print JSON (one object per body) instead of text")
     describe.add_argument("--no-reduction", action="store_true", help="the models with model reduction off")
+    describe.add_argument("--integrator", default="rk4", choices=_IntegratorNames(), metavar="NAME",
+                          help="the models under this integrator (default rk4)")
 
     check = sub.add_parser("check", help="validate a scene", description=(
         "Validate SCENE only: print a one-line summary and exit 0, or print the loader's error "
@@ -325,7 +330,13 @@ def _run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     scene = load_scene(args.scene)
     from .core import NonFiniteStateError, Simulator
 
-    sim = Simulator(scene, integrator=args.integrator, dt=args.dt, model_reduction=not args.no_reduction)
+    try:
+        sim = Simulator(scene, integrator=args.integrator, dt=args.dt, model_reduction=not args.no_reduction,
+                        threads=args.threads)
+    except ValueError as exc:
+        if not str(exc).startswith("threads:"):
+            raise
+        parser.error(f"argument --threads: {str(exc).removeprefix('threads: ')}")
     meta = {"scene": str(Path(args.scene).resolve()), "integrator": args.integrator, "dt": repr(args.dt),
             "duration": repr(args.duration), "sample_every_steps": str(every), "version": _version(),
             "model_reduction": str(not args.no_reduction)}
@@ -621,7 +632,7 @@ def _describe(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
 
     _input_path(parser, "SCENE", args.scene, "a scene YAML file")
     scene = load_scene(args.scene)
-    bodies = describe_scene(scene, model_reduction=not args.no_reduction)
+    bodies = describe_scene(scene, model_reduction=not args.no_reduction, integrator=args.integrator)
     if args.json:
         print(json.dumps({"scene": scene.source, "gravity": _floats(scene.model.gravity_W), "bodies": bodies}, indent=2))
         return 0
