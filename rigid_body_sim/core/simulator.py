@@ -887,6 +887,7 @@ def compile_kernels() -> None:
     dropping one body of each shape onto a ground until it rests (``make venv`` and the node's
     first start call this)."""
     compile_stepping_kernels()
+    parallel.compile_parallel()  # the step over bodies on several threads (kernels/parallel.py)
     shapes = {"sphere": {"inertia": {"sphere": 0.1}},
               "box": {"inertia": {"box": [0.2, 0.2, 0.1]}},
               "cylinder": {"inertia": {"cylinder": [0.1, 0.2]}},

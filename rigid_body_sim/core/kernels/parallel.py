@@ -28,10 +28,12 @@ import numpy as np
 from numba import njit, prange
 
 from .jit import JIT
+from . import layout as L
 from .layout import CUR, DONE, DT, LIMIT, METHOD, OK, OUTCOME, ROW_WIDTH, SPENT
-from .stepping import SCRATCH_ROWS, _worse, add_pending, step_group
+from .stepping import SCRATCH_ROWS, _worse, add_pending, new_buffers, step_group
 
-__all__ = ["PARALLEL", "MIN_BODIES", "PART_BODIES", "max_threads", "parts_of", "advance_parallel", "run_parallel"]
+__all__ = ["PARALLEL", "MIN_BODIES", "PART_BODIES", "max_threads", "parts_of", "advance_parallel", "run_parallel",
+           "compile_parallel"]
 
 #: JIT with numba's parallel loops (``prange``).
 PARALLEL = {**JIT, "parallel": True}
@@ -107,3 +109,24 @@ def run_parallel(threads: int, Ys, prm, wrenches, members, status, control, inpu
         numba.set_num_threads(threads)
         return advance_parallel(Ys, prm, wrenches, members, status, control, inputs, n_steps, cancel, parts)
 
+
+
+def compile_parallel() -> None:
+    """Compile (or load from numba's cache) :func:`advance_parallel` with the argument types the Simulator passes.
+
+    With one body's buffers built as the Simulator builds them (kernels/compile.py does the
+    same for the serial entry points); ``make venv`` and the node's first start call it
+    through core/simulator.compile_kernels.
+    """
+    n = 1
+    Ys, status, control, inputs = new_buffers(n)
+    prm = np.zeros((n, L.PRM_WIDTH))
+    prm[:, L.MASS] = prm[:, L.INV_MASS] = 1.0
+    prm[:, L.INERTIA:L.INERTIA + 3] = prm[:, L.INV_INERTIA:L.INV_INERTIA + 3] = 1.0
+    Ys[:, :, L.Q] = 1.0
+    groups = np.zeros((L.MODEL_COUNT, 2), dtype=np.int64)
+    groups[L.MODEL_FULL] = (0, n)
+    control[L.GROUPS:L.GROUPS + groups.size] = groups.ravel()
+    inputs[L.DT], inputs[L.LIMIT] = 0.01, np.inf
+    run_parallel(1, Ys, prm, np.zeros((n, L.WRENCH_WIDTH)), np.arange(n, dtype=np.int64), status, control, inputs,
+                 1, np.zeros(1, dtype=np.int64), parts_of(groups))
