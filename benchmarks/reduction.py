@@ -5,8 +5,13 @@ Scenes of N bodies, no gravity, nothing applied, each moving body with a random 
 * ``sphere``: r = 0.2 m — isotropic, exact exp-map rotation with reduction;
 * ``crate``: a 1.0 × 0.5 × 0.5 m box — symmetric, the exact symmetric-top flow;
 * ``box``: a 1.0 × 0.6 × 0.4 m box — full: the integrator either way;
+* ``cart``: the same box, ``motion: translation_only`` — the exact constant-force flow;
 * ``wall``: 1.0 × 1.0 × 0.1 m, ``motion: static`` — never stepped;
 * ``mixed``: sphere, box, wall repeating.
+
+Under an integrator whose own step costs no more than the exact isotropic and symmetric
+models (``Method.exact_models_pay`` False: ``euler``), spheres and crates are not reduced
+(core/reduction.py): their rows time the same step on both sides, and say so.
 
 For each scene and integrator, seconds per ``sim.step(k)`` (batched), median of ≥ 5 interleaved
 samples (min–max), of:
@@ -25,16 +30,19 @@ from __future__ import annotations
 
 import numpy as np
 
+from rigid_body_sim.core import INTEGRATORS as METHODS
 from rigid_body_sim.core import Simulator, load_scene
 
 from .timing import Case, interleaved
 
 INTEGRATORS = ("euler", "semi_implicit_euler", "implicit_gyroscopic", "splitting", "symmetric_splitting", "rk4")
-KINDS = ("sphere", "crate", "box", "wall")
+KINDS = ("sphere", "crate", "box", "cart", "wall")
 MIXED_PATTERN = ("sphere", "box", "wall")
 DT = 1e-3
 _SPEC = {"sphere": {"inertia": {"sphere": 0.2}}, "crate": {"inertia": {"box": [1.0, 0.5, 0.5]}},
-         "box": {"inertia": {"box": [1.0, 0.6, 0.4]}}, "wall": {"inertia": {"box": [1.0, 1.0, 0.1]}, "motion": "static"}}
+         "box": {"inertia": {"box": [1.0, 0.6, 0.4]}},
+         "cart": {"inertia": {"box": [1.0, 0.6, 0.4]}, "motion": "translation_only"},
+         "wall": {"inertia": {"box": [1.0, 1.0, 0.1]}, "motion": "static"}}
 
 
 def scene_of(kinds: list[str], seed: int = 0, skip_static: bool = False):
@@ -43,6 +51,8 @@ def scene_of(kinds: list[str], seed: int = 0, skip_static: bool = False):
     bodies = {}
     for i, kind in enumerate(kinds):
         twist = {"linear": rng.normal(size=3).tolist(), "angular": rng.normal(size=3).tolist()}
+        if kind == "cart":
+            twist["angular"] = [0.0, 0.0, 0.0]
         if kind == "wall":
             if skip_static:
                 continue
@@ -57,6 +67,15 @@ def kinds_of(scene_name: str, count: int) -> list[str]:
     if scene_name == "mixed":
         return [MIXED_PATTERN[i % len(MIXED_PATTERN)] for i in range(count)]
     return [scene_name] * count
+
+
+def _note(kinds: list[str], integrator: str) -> str:
+    """Why a row's gain is 1 by construction, if it is: nothing reduced on the moving bodies."""
+    if not METHODS[integrator].exact_models_pay and {"sphere", "crate"} & set(kinds):
+        return f"spheres and crates not reduced: {integrator}'s step costs no more than the exact models"
+    if set(kinds) <= {"box", "wall"} and "box" in kinds:
+        return "the integrator either way"
+    return ""
 
 
 def _case(key, sim: Simulator) -> Case:
@@ -85,7 +104,7 @@ def sweep(count: int, repeats: int, min_seconds: float, integrators=INTEGRATORS,
         for plan in reduced_sim.body_models():
             models[plan.model] = models.get(plan.model, 0) + 1
         row = {"scene": scene_name, "integrator": name, "bodies": count, "moving": len(moving),
-               "models": ", ".join(f"{k} {v}" for k, v in sorted(models.items()))}
+               "models": ", ".join(f"{k} {v}" for k, v in sorted(models.items())), "note": _note(kinds, name)}
         for key, s in stats.items():
             row.update(s.scaled(1e6).as_row(f"{key.replace(', ', '_').replace(' ', '_')}_us"))
         reduced = stats["reduced"].median

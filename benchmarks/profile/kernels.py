@@ -35,9 +35,9 @@ from numba import njit
 
 from rigid_body_sim.core import Simulator
 
-from . import floors
-from .throughput import ANGULAR_VELOCITY, DT, INERTIA_BOX, scene
-from .timing import Case, interleaved
+from .. import floors
+from ..throughput import ANGULAR_VELOCITY, DT, INERTIA_BOX, scene
+from ..timing import Case, interleaved
 
 PRM_WIDTH = 40   # our parameter rows' width (kernels.PRM_WIDTH at the time of writing)
 INERTIA = 2      # their inertia columns
@@ -374,6 +374,3 @@ def report(repeats: int = 5, min_seconds: float = 0.05, count: int = 10_000, log
     log("  kernel profile done")
     return "\n".join(lines) + "\n"
 
-
-if __name__ == "__main__":
-    print(report())
