@@ -93,3 +93,37 @@ def test_thread_count_is_checked_and_takes_effect_at_once(small_parallel_thresho
     sim.threads = 1
     sim.step(10)
     assert sim.threads == 1 and sim.step_count == 10
+
+
+def test_a_blow_up_stops_the_parallel_step_where_it_stops_the_serial_one(small_parallel_threshold) -> None:
+    """One body blows up (euler, fast spin): the same error, step count, failing body and kept state on 1 and 2+ threads."""
+    from rigid_body_sim.core import NonFiniteStateError
+
+    outcomes = []
+    for threads in sorted({1, parallel.max_threads()}):
+        scene = _scene(False)
+        sim = Simulator(scene, integrator="euler", dt=0.004, threads=threads, energy_growth_limit=1.5)
+        sim.set_body_state("b5", angular_velocity_world=[60.0, 90.0, 40.0])
+        with pytest.raises(NonFiniteStateError) as info:
+            sim.step(STEPS)
+        outcomes.append((type(info.value), info.value.bodies, sim.step_count, sim.state.rows().copy()))
+    first = outcomes[0]
+    assert "b5" in first[1] and 0 < first[2] < STEPS
+    for other in outcomes[1:]:
+        assert other[:3] == first[:3]
+        np.testing.assert_array_equal(other[3], first[3])
+
+
+def test_cancel_stops_a_parallel_step_from_another_thread(small_parallel_threshold) -> None:
+    """The parallel step holds no GIL and reads the cancel flag between steps, as the serial one does."""
+    import threading
+
+    sim = Simulator(_scene(False), integrator="rk4", dt=0.004, threads=parallel.max_threads())
+    done: list[int] = []
+    worker = threading.Thread(target=lambda: done.append(sim.step(10**9)))
+    worker.start()
+    worker.join(timeout=0.3)  # the compiled step runs meanwhile; this thread gets the GIL back
+    sim.cancel()
+    worker.join(timeout=30)
+    assert not worker.is_alive()
+    assert 0 < done[0] < 10**9 and sim.step_count == done[0]
