@@ -172,9 +172,8 @@ named below; compare them only with each other.
   |L| to round-off; `splitting` degrades there ({stability.get('splitting', 'see stability.md')}).
 - **Not for tumbling bodies:** {', '.join(f'`{n}`' for n in first_order)} — first order, with |ω|·h
   limits near 1e-3 (stability.md); they are here for comparison with textbook and game-engine loops.
-- **Static and kinematic bodies** get exact reduced models whatever the integrator, and
-  **spheres, cubes and cylinders** under every integrator whose own step costs more than the
-  exact model (all but `euler`; [scenes.md](scenes.md), "Motions and model reduction").
+- **Spheres, cubes, cylinders, static and kinematic bodies** get exact reduced models
+  whatever the integrator ([scenes.md](scenes.md), "Motions and model reduction").
 
 ## Choosing the step
 

@@ -161,8 +161,6 @@ def build_parser() -> argparse.ArgumentParser:
     describe.add_argument("scene", metavar="SCENE", help="scene YAML file")
     describe.add_argument("--json", action="store_true", help="print JSON (one object per body) instead of text")
     describe.add_argument("--no-reduction", action="store_true", help="the models with model reduction off")
-    describe.add_argument("--integrator", default="rk4", choices=_IntegratorNames(), metavar="NAME",
-                          help="the models under this integrator (default rk4)")
 
     check = sub.add_parser("check", help="validate a scene", description=(
         "Validate SCENE only: print a one-line summary and exit 0, or print the loader's error "
@@ -632,7 +630,7 @@ def _describe(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
 
     _input_path(parser, "SCENE", args.scene, "a scene YAML file")
     scene = load_scene(args.scene)
-    bodies = describe_scene(scene, model_reduction=not args.no_reduction, integrator=args.integrator)
+    bodies = describe_scene(scene, model_reduction=not args.no_reduction)
     if args.json:
         print(json.dumps({"scene": scene.source, "gravity": _floats(scene.model.gravity_W), "bodies": bodies}, indent=2))
         return 0

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from rigid_body_sim.core import INTEGRATORS, SceneError, Simulator, describe_scene, load_scene
+from rigid_body_sim.core import SceneError, Simulator, describe_scene, load_scene
 from rigid_body_sim.exact.closed_form import symmetric_top_flow
 from rigid_body_sim.core.quaternion import (
     quat_conjugate,
@@ -24,10 +24,6 @@ from rigid_body_sim.core.quaternion import (
 
 from helpers import COMPILED_INTEGRATORS as COMPILED
 from helpers import EPS, FIXED_STEP_INTEGRATORS
-
-#: The integrators under which isotropic and symmetric bodies get their exact models: those whose
-#: own step costs more (Method.exact_models_pay); under the others such bodies take the integrator.
-EXACT_MODELS_PAY = tuple(name for name in FIXED_STEP_INTEGRATORS if INTEGRATORS[name].exact_models_pay)
 
 
 def body(inertia: dict, *, mass: float = 2.0, position=(0.0, 0.0, 0.0), orientation_xyzw=(0.0, 0.0, 0.0, 1.0),
@@ -59,8 +55,8 @@ def same_rotation(q1: np.ndarray, q2: np.ndarray) -> float:
 # --------------------------------------------------------------------------- exact against closed forms
 
 
-@pytest.mark.parametrize("integrator", EXACT_MODELS_PAY)
-def test_torque_free_sphere_is_exact_under_every_integrator_it_pays_under(integrator: str) -> None:
+@pytest.mark.parametrize("integrator", FIXED_STEP_INTEGRATORS)
+def test_torque_free_sphere_is_exact_whatever_the_integrator(integrator: str) -> None:
     """Exact translation under a constant force and an exact exp-map rotation: closed forms to round-off."""
     p0, v0, w0 = np.array([1.0, -2.0, 0.5]), np.array([0.3, 0.1, -0.2]), np.array([3.0, -7.0, 11.0])
     q0_xyzw = np.array([0.2, -0.3, 0.4, 0.8]) / np.linalg.norm([0.2, -0.3, 0.4, 0.8])
@@ -85,28 +81,6 @@ def test_torque_free_sphere_is_exact_under_every_integrator_it_pays_under(integr
     assert same_rotation(q_xyzw_to_wxyz(s.orientation_xyzw), expected) < 1e-11
 
 
-@pytest.mark.parametrize("integrator", [name for name in FIXED_STEP_INTEGRATORS if name not in EXACT_MODELS_PAY])
-def test_where_the_integrators_step_is_as_cheap_spheres_and_cylinders_take_it(integrator: str) -> None:
-    """Under such an integrator (euler) the exact models do not pay: those bodies are stepped as with reduction off,
-    to the bit, and say why; static bodies are still skipped; switching integrator re-plans."""
-    scene = load_scene({"bodies": {"ball": body({"sphere": 0.3}, angular=[3.0, -7.0, 11.0]),
-                                   "can": body({"cylinder": [0.1, 0.5]}, angular=[0.7, -0.4, 9.0]),
-                                   "wall": body({"box": [1, 1, 1]}, motion="static")}})
-    sim = Simulator(scene, integrator=integrator, dt=0.01)
-    assert models(sim) == {"ball": "full", "can": "full", "wall": "static"}
-    reasons = {plan.body: plan.reason for plan in sim.body_models()}
-    assert f"isotropic, but {integrator}'s step costs no more than the exact model" in reasons["ball"]
-    assert f"axisymmetric, but {integrator}'s step costs no more than the exact model" in reasons["can"]
-    off = Simulator(scene, integrator=integrator, dt=0.01, model_reduction=False)
-    sim.step(100)
-    off.step(100)
-    np.testing.assert_array_equal(sim.state.rows()[:2], off.state.rows()[:2])
-    sim.integrator = "rk4"
-    assert models(sim) == {"ball": "isotropic", "can": "symmetric", "wall": "static"}
-    sim.integrator = integrator
-    assert models(sim) == {"ball": "full", "can": "full", "wall": "static"}
-
-
 def test_isotropic_body_with_angular_damping_follows_the_exponential_decay() -> None:
     w0, c, I = np.array([0.0, 0.0, 5.0]), 0.05, 0.4 * 2.0 * 0.3 ** 2
     scene = load_scene({"bodies": {"ball": body({"sphere": 0.3}, angular=w0, damping={"angular": c})}})
@@ -120,7 +94,7 @@ def test_isotropic_body_with_angular_damping_follows_the_exponential_decay() -> 
     assert same_rotation(q_xyzw_to_wxyz(s.orientation_xyzw), expected) < 1e-11
 
 
-@pytest.mark.parametrize("integrator", [name for name in COMPILED if name in EXACT_MODELS_PAY])
+@pytest.mark.parametrize("integrator", COMPILED)
 def test_torque_free_axisymmetric_body_follows_the_symmetric_top_closed_form(integrator: str) -> None:
     """A cylinder (I1 = I2 ≠ I3): the exact symmetric-top flow, at a step where every integrator errs."""
     w0_W = np.array([0.7, -0.4, 9.0])
@@ -346,7 +320,7 @@ def test_static_body_never_moves(integrator: str) -> None:
 # --------------------------------------------------------------------------- the same numbers as the full model
 
 
-@pytest.mark.parametrize("integrator", EXACT_MODELS_PAY)
+@pytest.mark.parametrize("integrator", FIXED_STEP_INTEGRATORS)
 def test_reduced_body_under_torque_takes_the_integrators_step_and_switches_back(integrator: str) -> None:
     """Torque-free: exact; a torque arrives: the integrator's step, bit for bit; torque gone: exact again."""
     spec = body({"sphere": 0.3}, linear=[0.2, 0.0, 0.0], angular=[1.0, 2.0, -0.5])

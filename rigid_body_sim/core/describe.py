@@ -22,12 +22,11 @@ from .scene import Scene
 __all__ = ["body_model_kind", "describe_scene"]
 
 
-def body_model_kind(scene: Scene, body: str, model_reduction: bool = True, integrator: str = "rk4") -> str:
-    """The model the simulator gives ``body`` in ``scene`` at the start under ``integrator``, and why.
+def body_model_kind(scene: Scene, body: str, model_reduction: bool = True) -> str:
+    """The model the simulator gives ``body`` in ``scene`` at the start, and why: ``"<model>: <reason>"``.
 
-    ``"<model>: <reason>"``. The models are reduction.MODEL_NAMES' (full, static, kinematic,
-    translation, planar, isotropic, symmetric); ``model_reduction=False`` is the switch of the
-    Simulator.
+    The models are reduction.MODEL_NAMES' (full, static, kinematic, translation, planar,
+    isotropic, symmetric); ``model_reduction=False`` is the switch of the Simulator.
 
     Raises
     ------
@@ -36,12 +35,12 @@ def body_model_kind(scene: Scene, body: str, model_reduction: bool = True, integ
     """
     if body not in scene.sites:
         raise ValueError(f"unknown body {body!r}; bodies are {list(scene.body_names)}")
-    plan = plan_models(scene.model, model_reduction, integrator=integrator)[scene.body_names.index(body)]
+    plan = plan_models(scene.model, model_reduction)[scene.body_names.index(body)]
     return f"{plan.model}: {plan.reason}"
 
 
-def describe_scene(scene: Scene, model_reduction: bool = True, integrator: str = "rk4") -> list[dict[str, Any]]:
-    """One dict per body, in scene order: what the scene declares and what the simulator derives (under ``integrator``).
+def describe_scene(scene: Scene, model_reduction: bool = True) -> list[dict[str, Any]]:
+    """One dict per body, in scene order: what the scene declares and what the simulator derives.
 
     Keys (all SI; lists, floats and strings only, so the result serialises to JSON as is):
 
@@ -63,7 +62,7 @@ def describe_scene(scene: Scene, model_reduction: bool = True, integrator: str =
       ``None`` = forever)
     """
     model, state = scene.model, scene.initial_state
-    plans = plan_models(model, model_reduction, integrator=integrator)
+    plans = plan_models(model, model_reduction)
     energy = kinetic_energy(model, state)
     momentum = angular_momentum_W(model, state)
     out = []

@@ -21,13 +21,12 @@ full                   everything else: the integrator (also isotropic/symmetric
                        step where a torque acts on them: re-derived every step)
 =====================  ==========================================================================
 
-What it gains, per body: a static body costs nothing; the exact models are exact (round-off
-only) where the integrator has a truncation error, and cost less than the integrator's step.
-Where they would not cost less, a body keeps the integrator: the isotropic and symmetric
-models are given only under integrators whose own step costs more
-(``Method.exact_models_pay``; under ``euler`` its step is as cheap, so those bodies take
-it). benchmarks/reduction.py measures every model against the integrator it replaces
-(docs/performance.md, "Model reduction").
+What it gains (benchmarks/reduction.py times every model against every integrator it replaces):
+a static body costs nothing; the translation model is exact and several times cheaper than any
+integrator's step; the isotropic and symmetric models are exact (round-off only) and cheaper
+than every integrator's step but ``euler``'s, which costs about as much. Under ``euler`` they
+are kept for their exactness: a ball's parabola through its impacts, a box at rest on a face
+that stays exactly there (the contact tests rely on both).
 
 ``rotation_only`` bodies keep the centre of mass put by projection (no force, no gravity, zero
 velocity); ``translation_only`` bodies keep their orientation. With ``reduce=False`` (the
@@ -43,7 +42,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from .kernels import layout as L
-from .kernels.integrators import get_integrator
 from .free_rotor import EQUAL_MOMENTS_RTOL
 from .model import BodyModel, State
 from .quaternion import quat_rotate, quat_to_matrix
@@ -82,9 +80,8 @@ class BodyPlan:
     reason: str
 
 
-def model_codes(model: BodyModel, reduce: bool = True, stopped: np.ndarray | None = None,
-                integrator: str = "rk4") -> np.ndarray:
-    """The model (layout.MODEL_*) each body of ``model`` gets under ``integrator``, shape (N,) int64: arrays only.
+def model_codes(model: BodyModel, reduce: bool = True, stopped: np.ndarray | None = None) -> np.ndarray:
+    """The model (layout.MODEL_*) each body of ``model`` gets, shape (N,) int64: arrays only, no per-body Python.
 
     What :func:`plan_models` explains; this is what the simulator re-derives whenever a body is
     stopped, set or reset, so it must stay cheap at 1e5 bodies.
@@ -101,10 +98,9 @@ def model_codes(model: BodyModel, reduce: bool = True, stopped: np.ndarray | Non
     symmetric = pair & (np.asarray(model.damping_angular) == 0.0)
     free_to_turn = (motions == "free") | (motions == "rotation_only")
     codes = np.full(model.count, L.MODEL_FULL, dtype=np.int64)
-    if reduce and get_integrator(integrator).exact_models_pay:
+    if reduce:
         codes[free_to_turn & symmetric] = L.MODEL_SYMMETRIC
         codes[free_to_turn & isotropic] = L.MODEL_ISOTROPIC
-    if reduce:
         codes[motions == "translation_only"] = L.MODEL_TRANSLATION
         codes[motions == "static"] = L.MODEL_STATIC
     codes[motions == "planar"] = L.MODEL_PLANAR
@@ -115,13 +111,13 @@ def model_codes(model: BodyModel, reduce: bool = True, stopped: np.ndarray | Non
 
 
 def plan_models(model: BodyModel, reduce: bool = True, stopped: np.ndarray | None = None,
-                codes: np.ndarray | None = None, integrator: str = "rk4") -> list[BodyPlan]:
-    """Which model each body of ``model`` gets under ``integrator``, and why (one :class:`BodyPlan` per body, in order).
+                codes: np.ndarray | None = None) -> list[BodyPlan]:
+    """Which model each body of ``model`` gets, and why (one :class:`BodyPlan` per body, in order).
 
     ``codes`` are :func:`model_codes`' (computed here when not given); this adds the reasons.
     """
     if codes is None:
-        codes = model_codes(model, reduce, stopped, integrator)
+        codes = model_codes(model, reduce, stopped)
     plans = []
     motions = model.motions
     normals = model.plane_normals_W
@@ -157,16 +153,8 @@ def plan_models(model: BodyModel, reduce: bool = True, stopped: np.ndarray | Non
         else:
             pair = any(abs(I[i] - I[j]) <= EQUAL_MOMENTS_RTOL * max(abs(I[i]), abs(I[j]))
                        for i, j in ((0, 1), (1, 2), (0, 2)))
-            iso = pair and all(abs(I[i] - I[j]) <= EQUAL_MOMENTS_RTOL * max(abs(I[i]), abs(I[j]))
-                               for i, j in ((0, 1), (1, 2)))
-            fits = pair and (iso or model.damping_angular[b] == 0.0)
-            if not reduce:
-                why = "reduction off"
-            elif fits:
-                why = (f"{'isotropic' if iso else 'axisymmetric'}, but {integrator}'s step costs no more than the "
-                       "exact model (benchmarks/reduction.py)")
-            else:
-                why = "asymmetric inertia" if not pair else "axisymmetric but with angular damping"
+            why = "reduction off" if not reduce else (
+                "asymmetric inertia" if not pair else "axisymmetric but with angular damping")
             reason = f"the integrator ({why}, {moments})"
         if motion == "rotation_only":
             reason += "; motion: rotation_only: the centre of mass stays put (forces and gravity projected out)"

@@ -204,8 +204,7 @@ class Simulator:
         Factor (> 1) of the blow-up check (:class:`DivergenceError`); default the scene's.
     model_reduction : bool
         Give each body the cheapest exact model for what it is and what the scene declares
-        (reduction.py; :meth:`body_models` says which and why; the isotropic and symmetric models
-        only under an integrator whose own step costs more). False steps every body with the
+        (reduction.py; :meth:`body_models` says which and why). False steps every body with the
         integrator, except the declared constraints the full equations cannot make (kinematic,
         planar): the switch for comparing.
     threads : int
@@ -282,13 +281,10 @@ class Simulator:
     @integrator.setter
     def integrator(self, name: str) -> None:
         method = get_integrator(name)
-        replan = hasattr(self, "_stopped") and method.exact_models_pay != self._method.exact_models_pay
         self._method = method
         self._control[L.METHOD] = -1 if method.code is None else method.code
         # Scripted wrenches and the numpy/scipy integrators step one step per call (_step_once).
         self._step_by_step = bool(self._script) or method.code is None or self.contact is not None  # contact
-        if replan:  # which bodies the exact models pay for depends on the integrator (reduction.py)
-            self._replan()
 
     @property
     def threads(self) -> int:
@@ -382,12 +378,12 @@ class Simulator:
         """The model each body gets now and why (reduction.BodyPlan: body, motion, model, code, reason)."""
         if self._plans is None:
             self._plans = reduction.plan_models(self.model, self._reduce, self._stopped,
-                                                self._prm[:, L.MODEL].astype(np.int64), self.integrator)
+                                                self._prm[:, L.MODEL].astype(np.int64))
         return list(self._plans)
 
     def _replan(self) -> None:
         """Derive each body's model from the scene, the switch, the stopped bodies and the current state."""
-        codes = reduction.model_codes(self.model, self._reduce, self._stopped, self.integrator)
+        codes = reduction.model_codes(self.model, self._reduce, self._stopped)
         self._plans = None  # body_models() explains the codes when asked
         self._members, groups = reduction.apply_plan(self._prm, self.model, self.scene.initial_state, self.state,
                                                      codes)

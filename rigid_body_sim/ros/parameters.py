@@ -233,8 +233,7 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
                   choices=tuple(sorted(INTEGRATORS))),
     ParameterSpec("model_reduction", _T.BOOL, True,
                   "Give each body the cheapest exact model for what it is and what the scene declares "
-                  "(docs/scenes.md); the isotropic and symmetric models only under an integrator whose own step costs more "
-                  "(not euler). False steps every free body with the integrator."),
+                  "(docs/scenes.md); false steps every free body with the integrator."),
     ParameterSpec("threads", _T.INTEGER, 0,
                   "Threads the physics step may use over the bodies: 0 = every core (NUMBA_NUM_THREADS, by default "
                   f"the CPU count). The step runs in parallel only from {PARALLEL_MIN_BODIES} moving bodies; the results "

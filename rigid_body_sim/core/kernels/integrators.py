@@ -402,10 +402,7 @@ class Method:
     ``step`` the compiled per-body step ``step(y, out, p, w, dt, k)`` (None: a numpy/scipy
     method the Simulator runs group by group, core/integrators.py: exact_rotor_splitting,
     reference); ``code`` its position in :data:`COMPILED`, the number stepping.integrate
-    dispatches on (None with ``step``). ``exact_models_pay``: the exact isotropic and
-    symmetric models (reduced_models.py) cost less than this method's own step, so model
-    reduction gives them to the bodies they fit (core/reduction.py); False where the method's
-    step is as cheap (``euler``, measured by benchmarks/reduction.py), and those bodies take it.
+    dispatches on (None with ``step``).
     """
 
     name: str
@@ -413,15 +410,13 @@ class Method:
     step: Any
     summary: str
     code: int | None = None
-    exact_models_pay: bool = True
 
 
 #: Every integrator, by name: the one place to add one. A compiled one is a per-body step
 #: function (as above) in a row here; stepping.py builds its loop over bodies from the row.
 INTEGRATORS: dict[str, Method] = {}
 for _method in (
-    Method("euler", 1, euler, "explicit Euler with the gyroscopic term; q += dq·dt, then normalised",
-           exact_models_pay=False),
+    Method("euler", 1, euler, "explicit Euler with the gyroscopic term; q += dq·dt, then normalised"),
     Method("semi_implicit_euler", 1, semi_implicit_euler,
            "velocities first, then positions; orientation by the exponential map"),
     Method("implicit_gyroscopic", 2, implicit_gyroscopic,
