@@ -187,6 +187,13 @@ bench-full: bench-deps
 bench-threads: $(STAMP)
 	$(VENV_PY) -m benchmarks.threads --performance docs/performance.md
 
+# Body–body narrow phase against MuJoCo (mj_geomDistance, 10,000 random poses per pair), its ns per pair, and
+# the broad phase's cost at 1e3, 1e4, 1e5 bodies: writes benchmarks/results/pair_oracle.md (docs/contact.md quotes it).
+.PHONY: bench-oracle
+bench-oracle: bench-deps
+	$(VENV_PY) -m pytest -q -m bench test/test_bench_pairs.py
+	$(VENV_PY) -m benchmarks.pair_oracle --out $(BENCH_OUT)
+
 # The node with batched output: 1, 100, 1000, 10000 bodies at 100 Hz and 100 at 1 kHz, rk4, 1 substep,
 # per_body_topics false, a `poses` subscriber in another process; sim/wall, ticks delivered, CPU per tick, RSS,
 # start to first poses, stop time (medians of 5 runs of 10 s; BENCH_NODE_ARGS=--quick for 3 runs of 5 s).
