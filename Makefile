@@ -159,9 +159,9 @@ envelope: $(STAMP)
 
 # Speed and accuracy benchmarks (benchmarks/; not part of `make test`), beside MuJoCo (requirements-bench.txt):
 # throughput against N with the plain-loop floor and a numpy loop, the per-frame cost of a force and
-# one body driven per step, work-precision on the top and the forced box, model reduction, a kernel
-# profile and node timing. Every figure is a median of >= 5 samples with its min-max.
-# bench: quick mode (fewer sizes, a few minutes); bench-full: every size up to 1e5, 20 s node windows.
+# one body driven per step, work-precision on the top and the forced box, model reduction and a kernel
+# profile. Every figure is a median of >= 5 samples with its min-max.
+# bench: quick mode (fewer sizes, a few minutes); bench-full: every size up to 1e5, longer samples.
 # Into the default BENCH_OUT they also write docs/choosing_an_integrator.md (+ .claims.json) and the
 # generated block of docs/performance.md, so the docs and results.md come from one run.
 # BENCH_BASELINE=<git rev>: also time that revision's core beside this one at N = 1e4 (core_compare.py).
@@ -180,6 +180,12 @@ bench: bench-deps
 bench-full: bench-deps
 	$(VENV_PY) -m pytest -q -m bench
 	$(VENV_PY) -m benchmarks.run --full $(BENCH_FLAGS)
+
+# The step on every core: threads vs one thread at 1e5, the parallel threshold, one thread vs the
+# plain loops at 1e4; writes benchmarks/results/threads.{csv,md} and the block in docs/performance.md.
+.PHONY: bench-threads
+bench-threads: $(STAMP)
+	$(VENV_PY) -m benchmarks.threads --performance docs/performance.md
 
 # Body–body narrow phase against MuJoCo (mj_geomDistance, 10,000 random poses per pair), its ns per pair, and
 # the broad phase's cost at 1e3, 1e4, 1e5 bodies: writes benchmarks/results/pair_oracle.md (docs/contact.md quotes it).

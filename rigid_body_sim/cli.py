@@ -128,6 +128,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--integrator", default="rk4", choices=_IntegratorNames(), metavar="NAME",
                      help="one of %(choices)s (default rk4)")
     run.add_argument("--dt", type=_positive_float("s"), default=DEFAULT_DT, help=f"physics step, s (default {DEFAULT_DT:g})")
+    run.add_argument("--threads", type=int, default=0, metavar="N",
+                     help="threads the step may use over the bodies (default 0: every core; the same results "
+                          "for any N)")
     run.add_argument("--rate", type=_positive_float("samples per sim second"), default=DEFAULT_RATE_HZ,
                      help=f"samples per sim second in --csv and --record (default {DEFAULT_RATE_HZ:g}; "
                           "every step if the step is longer)")
@@ -335,7 +338,13 @@ def _run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     scene = load_scene(args.scene)
     from .core import NonFiniteStateError, Simulator
 
-    sim = Simulator(scene, integrator=args.integrator, dt=args.dt, model_reduction=not args.no_reduction)
+    try:
+        sim = Simulator(scene, integrator=args.integrator, dt=args.dt, model_reduction=not args.no_reduction,
+                        threads=args.threads)
+    except ValueError as exc:
+        if not str(exc).startswith("threads:"):
+            raise
+        parser.error(f"argument --threads: {str(exc).removeprefix('threads: ')}")
     meta = {"scene": str(Path(args.scene).resolve()), "integrator": args.integrator, "dt": repr(args.dt),
             "duration": repr(args.duration), "sample_every_steps": str(every), "version": _version(),
             "model_reduction": str(not args.no_reduction)}

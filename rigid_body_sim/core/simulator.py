@@ -28,7 +28,7 @@ from . import reduction
 from .frames import new_wrench_rows, parse_frame
 from .integrators import INTEGRATORS, Method, get_integrator, step_exact_rotor_splitting, step_reference
 from .kernels import layout as L
-from .kernels import controls, sensors, stepping
+from .kernels import controls, parallel, sensors, stepping
 from .kernels.state_rows import pose_twist_rows
 from .kernels.compile import compile_kernels as compile_stepping_kernels
 from .kernels.jit import cache_complete, cache_lock, mark_cache_complete, sources_unchanged
@@ -223,11 +223,16 @@ class Simulator:
         (reduction.py; :meth:`body_models` says which and why). False steps every body with the
         integrator, except the declared constraints the full equations cannot make (kinematic,
         planar): the switch for comparing.
+    threads : int
+        Threads the compiled step may use over the bodies: 0 (default) for every core numba
+        may use (``NUMBA_NUM_THREADS``, by default the CPU count), else 1 to that many. The
+        step runs in parallel only from ``kernels/parallel.MIN_BODIES`` moving bodies; the
+        results are the same to the bit for any count (kernels/parallel.py).
     """
 
     def __init__(self, scene: Scene, integrator: str = "rk4", dt: float = 0.01, *,
                  reference_rtol: float = 1e-12, reference_atol: float = 1e-12,
-                 energy_growth_limit: float | None = None, model_reduction: bool = True):
+                 energy_growth_limit: float | None = None, model_reduction: bool = True, threads: int = 0):
         ensure_kernels()
         self.scene = scene
         self.model = scene.model
@@ -283,6 +288,9 @@ class Simulator:
         self._control_table: np.ndarray | None = None  # kernels/controls.py's table
         self._advance, self._advance_tail = stepping.advance, (self._cancel,)
         self._rejected_controls: tuple[tuple[str, str, tuple[float, ...]], ...] = ()
+        self._parts = np.zeros((0, 3), dtype=np.int64)  # the parallel step's parts (_replan)
+        self._parallel = 0  # threads of the parallel step, 0 for the serial one (_replan)
+        self.threads = threads
         self.reset()
 
     # ----------------------------------------------------------------- configuration
@@ -299,6 +307,34 @@ class Simulator:
         self._control[L.METHOD] = -1 if method.code is None else method.code
         # Scripted wrenches and the numpy/scipy integrators step one step per call (_step_once).
         self._step_by_step = bool(self._script) or method.code is None or self.contact is not None  # contact
+
+    @property
+    def threads(self) -> int:
+        """Threads the step may use (0: every core numba may use); setting it validates (0 to parallel.max_threads())."""
+        return self._threads
+
+    @threads.setter
+    def threads(self, value: int) -> None:
+        most = parallel.max_threads()
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 0 <= value <= most:
+            raise ValueError(f"threads: expected a whole number from 0 (every core) to {most} (NUMBA_NUM_THREADS), "
+                             f"got {value!r}")
+        self._threads = int(value)
+        if hasattr(self, "_members"):
+            self._choose_parallel()
+
+    def _choose_parallel(self) -> None:
+        """The parallel step when more than one thread may run and enough bodies move (parallel.MIN_BODIES)."""
+        threads = self._threads or parallel.max_threads()
+        self._parallel = threads if threads > 1 and len(self._members) >= parallel.MIN_BODIES else 0
+
+    def _advance_with(self, wrenches: np.ndarray, n: int, cancel: np.ndarray) -> int:
+        """stepping.advance of ``n`` steps with ``wrenches``, on the threads _choose_parallel chose; the steps done."""
+        if self._parallel:
+            return parallel.run_parallel(self._parallel, self._Ys, self._prm, wrenches, self._members, self._status,
+                                         self._control, self._inputs, n, cancel, self._parts)
+        return stepping.advance(self._Ys, self._prm, wrenches, self._members, self._status, self._control,
+                                self._inputs, n, cancel)
 
     @property
     def energy_growth_limit(self) -> float:
@@ -387,6 +423,8 @@ class Simulator:
         self._members, groups = reduction.apply_plan(self._prm, self.model, self.scene.initial_state, self.state,
                                                      codes)
         self._control[L.GROUPS:L.GROUPS + groups.size] = groups.ravel()
+        self._parts = parallel.parts_of(groups)
+        self._choose_parallel()
         # The buffers of stepping.advance, in its order: one tuple, so a step(1) builds no arguments.
         self._buffers = (self._Ys, self._prm, self._wrenches, self._members, self._status, self._control,
                          self._inputs)
@@ -638,7 +676,8 @@ class Simulator:
         """
         options = self._reference_options
         new = Simulator(scene, self.integrator, self.dt, reference_rtol=options["rtol"], reference_atol=options["atol"],
-                        energy_growth_limit=self.energy_growth_limit, model_reduction=self._reduce)
+                        energy_growth_limit=self.energy_growth_limit, model_reduction=self._reduce,
+                        threads=self._threads)
         state = new.state.copy()
         old_state = self.state
         for b, name in enumerate(scene.body_names):
@@ -708,13 +747,19 @@ class Simulator:
             if not n:
                 self.clear_wrenches()
                 return 0
-            # stepping.advance, or controls.advance_controlled once a control exists (control()).
-            done = self._advance(*self._buffers, n, *self._advance_tail)
-            if done < 0:  # a control row was rejected (controls.advance_controlled)
-                done = -1 - done
-                self._report_controls()
-            elif self._rejected_controls:
-                self._rejected_controls = ()
+            if self._parallel:  # the step on several threads (kernels/parallel.py); the controls added first
+                if self._control_table is not None:
+                    self._flush_pending()
+                    self._add_controls()
+                done = self._advance_with(self._wrenches, n, self._cancel)
+            else:
+                # stepping.advance, or controls.advance_controlled once a control exists (control()).
+                done = self._advance(*self._buffers, n, *self._advance_tail)
+                if done < 0:  # a control row was rejected (controls.advance_controlled)
+                    done = -1 - done
+                    self._report_controls()
+                elif self._rejected_controls:
+                    self._rejected_controls = ()
             self._pending = False  # advance took the pending wrench
             self.step_count += done
             if done != n and self._control[L.OUTCOME]:  # all n done: every step passed its checks
@@ -739,8 +784,7 @@ class Simulator:
         if self.contact is not None:  # contact: the force holding bodies at rest is a wrench of this step
             self.contact.add_holding_wrenches(self, wrenches)
         if self._method.code is not None:
-            stepping.advance(self._Ys, self._prm, wrenches, self._members, self._status, self._control,
-                             self._inputs, 1, _NEVER)
+            self._advance_with(wrenches, 1, _NEVER)
             self._inputs[L.SPENT] = 0.0  # ``wrenches`` is this step's own array: nothing to drop before the next
         else:
             bodies = stepping.step_reduced(self._Ys, self._prm, wrenches, self._members, self._status,
@@ -992,6 +1036,7 @@ def compile_kernels() -> None:
 
 def _compile_all() -> None:
     compile_stepping_kernels()
+    parallel.compile_parallel()  # the step over bodies on several threads (kernels/parallel.py)
     shapes = {"sphere": {"inertia": {"sphere": 0.1}},
               "box": {"inertia": {"box": [0.2, 0.2, 0.1]}},
               "cylinder": {"inertia": {"cylinder": [0.1, 0.2]}},

@@ -140,7 +140,7 @@ def build_simulator(path: str, settings: Mapping[str, Any]) -> Simulator:
     scene = load_scene(path)
     check_scene(scene, settings["world_frame"], settings["per_body_topics"])
     return Simulator(scene, integrator=settings["integrator"], dt=physics_dt(settings),
-                     model_reduction=settings["model_reduction"])
+                     model_reduction=settings["model_reduction"], threads=settings.get("threads", 0))
 
 
 def _ignore(*_args: Any) -> None:
@@ -595,8 +595,8 @@ class SimSession:
             self._on_restart()
             return
         sim = self.simulator
-        for name in ("integrator", "model_reduction"):
-            if old[name] != settings[name]:
+        for name in ("integrator", "model_reduction", "threads"):
+            if old.get(name) != settings.get(name) and name in settings:
                 setattr(sim, name, settings[name])
         dt = physics_dt(settings)
         if dt != sim.dt:
