@@ -51,13 +51,13 @@ Events are recorded in :attr:`ContactSolver.events` (:class:`ContactEvent`).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from ..kernels import layout as L
 from ..quaternion import quat_rotate, quat_to_matrix
 from . import static_geometry, two_grounds
+from .events import ContactEvent
 from ..kernels.stepping import advance, step_reduced
 from ..kernels.contact.batch import OK, hold_all, settle_all
 from ..kernels.contact.impacts import _A, _LAM, IMPACT_WORK_SHAPE, impact
@@ -98,55 +98,6 @@ MAX_EVENTS_PER_STEP = 10_000
 MAX_REFINEMENT = 32
 #: Samples of s in (0, 1] looked at for the first sign change of the gap in a step.
 BRACKET_SAMPLES = 16
-
-
-@dataclass(frozen=True)
-class ContactEvent:
-    """One contact event.
-
-    Attributes
-    ----------
-    time : float
-        s of sim time (located inside the step).
-    body : str
-    ground : int
-        Index into the scene's ``ground`` list.
-    kind : str
-        ``impact``, ``rest`` (persistent contact from here; for a Zeno sequence, dated at its
-        accumulation time), ``lift-off`` or ``stick`` (a sliding contact stopped).
-    normal_speed_before, normal_speed_after : float
-        Lowest normal velocity of the contact points (m/s, positive away from the ground).
-    impulse : float
-        Σ normal impulse, N·s (impacts), else 0.
-    energy_before, energy_after : float
-        Kinetic energy of the body, J, around the event.
-    delta_v_world : tuple of 3 floats
-        Impacts: the jump of the centre of mass velocity, m/s, world axes; else ().
-    delta_w_principal : tuple of 3 floats
-        Impacts: the jump of the angular velocity, rad/s, the body's principal axes P; else ().
-    q_WP : tuple of 4 floats
-        Impacts: the body's orientation at the impact, (w, x, y, z); else ().
-    contacts : int
-        Impacts: the contact points that took part; else 0.
-    restitution_used : float
-        Impacts: the restitution factor the impact law applied (below the pair's e when the energy
-        cap acted, :mod:`~rigid_body_sim.core.kernels.contact.impacts`); else 0.
-    """
-
-    time: float
-    body: str
-    ground: int
-    kind: str
-    normal_speed_before: float = 0.0
-    normal_speed_after: float = 0.0
-    impulse: float = 0.0
-    energy_before: float = 0.0
-    energy_after: float = 0.0
-    delta_v_world: tuple = ()
-    delta_w_principal: tuple = ()
-    q_WP: tuple = ()
-    contacts: int = 0
-    restitution_used: float = 0.0
 
 
 class ContactSolver:

@@ -50,7 +50,7 @@ from ..kernels.contact.layout import (
 from ..kernels.contact.pairs import FACE_ALIGNMENT, MAX_PAIR_POINTS, pair_contacts
 from ..kernels.contact.shapes import body_points
 from ..quaternion import quat_conjugate, quat_multiply, quat_to_matrix
-from .scene_keys import pair_material
+from .materials import pair_material
 
 __all__ = ["StaticGeometry", "static_shapes", "bounding_radius", "check_not_inside_statics"]
 
