@@ -48,7 +48,7 @@ import numpy as np
 
 from ..kernels import layout as L
 from ..kernels.stepping import advance, step_reduced
-from ..kernels.contact.batch import OK, hold_all, settle_all
+from ..kernels.contact.batch import CACHE_WIDTH, OK, TO_SOLVER, hold_all, settle_all
 from ..kernels.contact.impacts import _LAM, IMPACT_WORK_SHAPE, impact
 from ..kernels.contact.layout import DIMS, FLIGHT, KIND, MAX_POINTS, NORMAL, PERSISTENT, SHAPE_BOX
 from ..kernels.contact.persistent import (
@@ -156,7 +156,9 @@ class ContactSolver:
         self._features = np.empty(MAX_FEATURES)
         self._owners = np.zeros(MAX_POINTS, dtype=np.int64)
         self._bias = np.zeros(MAX_POINTS)
-        self._status = np.zeros(n, dtype=np.int64)  # batch.OK / TO_SOLVER of each body after a compiled pass
+        self._status = np.zeros(n, dtype=np.int64)  # batch.OK / TO_SOLVER / LOCKED of each body after a compiled pass
+        self._locked = np.zeros(n, dtype=np.int64)  # batch.hold_all: 1 for a body locked at rest for this step
+        self._hold_cache = np.zeros((n, CACHE_WIDTH))  # batch.hold_all: what each locked body's hold found
         self._rdot = np.zeros((MAX_POINTS, 3))
         self.pressed = np.zeros(n, dtype=np.int64)  # the tracked features the holding force pushes on, as bits
         self.events: list[ContactEvent] = []
@@ -323,11 +325,12 @@ class ContactSolver:
         Y = sim._Ys[sim._control[L.CUR]]
         resting = self.bodies[(self.modes[self.bodies] == PERSISTENT) & ~sim._stopped[self.bodies]]
         self.holding_forces[:] = 0.0
+        self._locked[:] = 0
         if not resting.size:
             return
         hold_all(Y, sim._prm, wrenches, self.shapes, self.grounds, resting, self.ground_of, self.tracked, self.friction,
                  SLIP_TOLERANCE, LIFT_OFF_SPEED, TOUCHING_GAP, self._bare_rows, self.pressed,
-                 self.sliding, self.slide_direction, self._status)
+                 self.sliding, self.slide_direction, self._status, self._locked, self._hold_cache)
         for i in resting[self._status[resting] != OK]:  # lifting off: the solver says so and records it
             self._hold(sim, Y[i], i, wrenches[i], sim.time)
         held = resting[self.modes[resting] == PERSISTENT]
@@ -364,15 +367,17 @@ class ContactSolver:
         Y0, Y1 = sim._Ys[1 - cur], sim._Ys[cur]
         h = sim.dt
         t0 = sim.time - h
-        min_gaps(Y1, sim._prm, self.shapes, self.grounds, self.bodies, self._lowest)
         moving = ~sim._stopped[self.bodies]
-        resting = self.bodies[(self.modes[self.bodies] == PERSISTENT) & moving]
-        settle_all(Y1, sim._prm, self.shapes, self.grounds, resting, self.ground_of, self.tracked, self.pressed,
-                   self.sliding, self.slide_direction, self._band, self._status)
+        modes = self.modes[self.bodies]
+        flying = self.bodies[(modes == FLIGHT) & moving]
+        lowest = self._lowest[:flying.size]
+        min_gaps(Y1, sim._prm, self.shapes, self.grounds, flying, lowest)
+        resting = self.bodies[(modes == PERSISTENT) & moving]
+        settle_all(Y0, Y1, sim._prm, self.shapes, self.grounds, resting, self.ground_of, self.tracked, self.pressed,
+                   self.sliding, self.slide_direction, self._band, self._status, self._locked)
         resting = self._refine_gains(sim, resting, Y0, Y1, t0, h)
         # only the bodies with an event in the step are looked at in Python
-        busy = np.concatenate((resting[self._status[resting] != OK],
-                               self.bodies[(self.modes[self.bodies] == FLIGHT) & moving & (self._lowest < 0.0)]))
+        busy = np.concatenate((resting[self._status[resting] == TO_SOLVER], flying[lowest < 0.0]))
         for i in busy:
             if sim._stopped[i]:
                 continue
