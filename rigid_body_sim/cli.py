@@ -504,6 +504,11 @@ def _print_summary(args: argparse.Namespace, summary: Any, csv_writer: Any, reco
             f"drift max ||L|-|L0||/|L0| = {summary.momentum_drift[body]:.3g}")
     if len(summary.energy_drift) > 20:
         lines.append(f"  ... and {len(summary.energy_drift) - 20} more bodies")
+    contact = summary.contact
+    if contact is not None:  # energy is lost at impacts and to friction: its drift is not an error here
+        lines.append(f"  contact: {contact['impacts']} impacts ({contact['events']} events), energy change at impacts "
+                     f"{contact['impact_energy']:.6g} J, lowest gap {contact['lowest_gap']:.3g} m, "
+                     f"{contact['resting']} bodies resting at the end")
     if csv_writer is not None:
         lines.append(f"  wrote {csv_writer.path} ({csv_writer.rows} samples)")
     if recorder is not None:

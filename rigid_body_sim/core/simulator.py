@@ -29,6 +29,7 @@ from .integrators import INTEGRATORS, Method, get_integrator, step_exact_rotor_s
 from .kernels import layout as L
 from .kernels import sensors, stepping
 from .kernels.compile import compile_kernels as compile_stepping_kernels
+from .kernels.jit import cache_complete, cache_lock, mark_cache_complete, sources_unchanged
 from .kernels.dynamics import impulse_response
 from .kernels.forces import add_wrench, project_twist
 from .mechanics import angular_momentum_W, kinetic_energy, linear_momentum_W, potential_energy
@@ -212,6 +213,7 @@ class Simulator:
     def __init__(self, scene: Scene, integrator: str = "rk4", dt: float = 0.01, *,
                  reference_rtol: float = 1e-12, reference_atol: float = 1e-12,
                  energy_growth_limit: float | None = None, model_reduction: bool = True):
+        ensure_kernels()
         self.scene = scene
         self.model = scene.model
         limit = scene.energy_growth_limit if energy_growth_limit is None else energy_growth_limit
@@ -836,11 +838,46 @@ def _vector3(value: Any, name: str) -> np.ndarray:
     return v
 
 
+_kernels_ready = False
+
+
+def ensure_kernels() -> None:
+    """Once per process, before its first Simulator steps: if the kernel cache is not complete
+    for these sources, compile every kernel into it (:func:`compile_kernels`), under the cache's
+    lock, so that processes starting together on a cold cache compile once and never interleave
+    their writes (kernels/jit.py, cache_lock)."""
+    global _kernels_ready
+    if _kernels_ready:
+        return
+    _kernels_ready = True
+    with cache_lock():
+        if not cache_complete():
+            compile_kernels()
+
+
 def compile_kernels() -> None:
     """Compile (or load from numba's cache) every compiled kernel: the stepping entry points
     (:func:`~rigid_body_sim.core.kernels.compile.compile_kernels`), then the contact kernels, by
     dropping one body of each shape onto a ground until it rests (``make venv`` and the node's
-    first start call this)."""
+    first start call this). Runs under the cache's lock and marks the cache complete.
+
+    Raises
+    ------
+    RuntimeError
+        If the kernel sources changed on disk since this process imported them: its machine
+        code would be cached under the new sources' name.
+    """
+    global _kernels_ready
+    _kernels_ready = True
+    with cache_lock():
+        if not sources_unchanged():
+            raise RuntimeError("the kernel sources (rigid_body_sim/core/kernels) changed since this process started; "
+                               "start it again to compile the new ones")
+        _compile_all()
+        mark_cache_complete()
+
+
+def _compile_all() -> None:
     compile_stepping_kernels()
     shapes = {"sphere": {"inertia": {"sphere": 0.1}},
               "box": {"inertia": {"box": [0.2, 0.2, 0.1]}},

@@ -301,8 +301,14 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
                   "so no client can flood 'markers'.", range=(0.0, MAX_MARKER_RATE_HZ)),
     ParameterSpec("marker_wrenches", _T.BOOL, True,
                   "Draw each held wrench's force as an arrow from its frame's origin in 'markers'."),
-    ParameterSpec("marker_force_scale", _T.DOUBLE, 0.05, "Length of a wrench arrow in 'markers' per newton (m/N).",
+    ParameterSpec("marker_force_scale", _T.DOUBLE, 0.05,
+                  "Length of a wrench arrow, and of a contact force arrow, in 'markers' per newton (m/N).",
                   range=(1e-9, 1e9)),
+    ParameterSpec("publish_contact_wrench", _T.BOOL, False,
+                  "Publish B/contact_wrench (geometry_msgs/WrenchStamped) after every tick for every body B with a "
+                  "collision shape, in a scene with ground contact: the ground's mean force and torque on B over the "
+                  "tick (holding forces and impacts; frame B/world_aligned).",
+                  takes_effect="from the first tick that starts after the change"),
 )
 
 #: :data:`PARAMETERS` by name.
