@@ -7,6 +7,7 @@
 #   make venv       only the set-up: .venv with Python 3.11, pinned requirements, package -e
 #   make browser-deps   Debian's chromium and chromium-driver (apt if missing) for test/test_view.py
 #   make foxglove-deps  Node.js (apt if missing) and the pinned npm modules of test/foxglove (Foxglove's readers)
+#   make bench-contact  contact beside MuJoCo and PyBullet (docs/contact_benchmarks.md; about 10 min)
 #   make clean      remove caches and build output (keeps .venv); make distclean also .venv
 #
 # Variables: PYTHON=/path/to/python3.11, PYTEST_ARGS="-k foo -x", RUN_ARGS="--ros-args ...",
@@ -193,6 +194,16 @@ bench-threads: $(STAMP)
 bench-oracle: bench-deps
 	$(VENV_PY) -m pytest -q -m bench test/test_bench_pairs.py
 	$(VENV_PY) -m benchmarks.pair_oracle --out $(BENCH_OUT)
+
+# Contact beside MuJoCo and PyBullet (benchmarks/contact_peers.py): every closed-form contact case at
+# dt = 10, 1, 0.1 ms (errors and µs per step), 1000 cubes resting on a plane (body-steps/s), and the
+# free-body scene at N = 1e4 with and without a ground (and the core before contact: BENCH_CONTACT_ARGS=--baseline '' skips it).
+# Writes benchmarks/results/contact_peers.csv and .md and the generated block of docs/contact_benchmarks.md.
+BENCH_CONTACT_ARGS ?=
+.PHONY: bench-contact
+bench-contact: bench-deps
+	$(VENV_PY) -m benchmarks.contact_peers --out $(BENCH_OUT) \
+		$(if $(BENCH_DEFAULT_OUT),--docs docs/contact_benchmarks.md) $(BENCH_CONTACT_ARGS)
 
 # The node benchmark: batched output and shared inputs, 1 to 10000 bodies at 100 Hz, 100 at 1 kHz, 100000 at
 # 10 Hz, the 10000 and 100000 cases also recording; rk4, 1 substep, a plain rclpy `poses` subscriber in its own

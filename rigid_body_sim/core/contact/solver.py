@@ -59,7 +59,7 @@ from ..quaternion import quat_rotate, quat_to_matrix
 from . import static_geometry, two_grounds
 from .events import ContactEvent
 from ..kernels.stepping import advance, step_reduced
-from ..kernels.contact.batch import OK, hold_all, settle_all
+from ..kernels.contact.batch import CACHE_WIDTH, OK, TO_SOLVER, hold_all, settle_all
 from ..kernels.contact.impacts import _A, _LAM, IMPACT_WORK_SHAPE, impact
 from ..kernels.contact.layout import DIMS, FLIGHT, KIND, MAX_POINTS, NORMAL, PERSISTENT, SHAPE_BOX
 from ..kernels.contact.persistent import (
@@ -145,7 +145,9 @@ class ContactSolver:
         self._features = np.empty(MAX_FEATURES)
         self._owners = np.zeros(MAX_POINTS, dtype=np.int64)
         self._bias = np.zeros(MAX_POINTS)
-        self._status = np.zeros(n, dtype=np.int64)  # batch.OK / TO_SOLVER of each body after a compiled pass
+        self._status = np.zeros(n, dtype=np.int64)  # batch.OK / TO_SOLVER / LOCKED of each body after a compiled pass
+        self._locked = np.zeros(n, dtype=np.int64)  # batch.hold_all: 1 for a body locked at rest for this step
+        self._hold_cache = np.zeros((n, CACHE_WIDTH))  # batch.hold_all: what each locked body's hold found
         self._rdot = np.zeros((MAX_POINTS, 3))
         self.pressed = np.zeros(n, dtype=np.int64)  # the tracked features the holding force pushes on, as bits
         self.events: list[ContactEvent] = []
@@ -362,6 +364,7 @@ class ContactSolver:
         Y = sim._Ys[sim._control[L.CUR]]
         resting = self.bodies[(self.modes[self.bodies] == PERSISTENT) & ~sim._stopped[self.bodies]]
         self.holding_forces[:] = 0.0
+        self._locked[:] = 0
         if not resting.size:
             return
         two = resting[self.other_ground[resting] >= 0]  # held on two half-spaces: two_grounds.py
@@ -372,7 +375,7 @@ class ContactSolver:
             two = np.concatenate((two, self._refresh_static(sim, Y, on_static)))
         hold_all(Y, sim._prm, wrenches, self.shapes, self.grounds, one, self.ground_of, self.tracked, self.friction,
                  SLIP_TOLERANCE, LIFT_OFF_SPEED, TOUCHING_GAP, self._bare_rows, self.pressed,
-                 self.sliding, self.slide_direction, self._status)
+                 self.sliding, self.slide_direction, self._status, self._locked, self._hold_cache)
         for i in one[self._status[one] != OK]:  # lifting off: the solver says so and records it
             self._hold(sim, Y[i], i, wrenches[i], sim.time)
         for i in two:
@@ -435,21 +438,26 @@ class ContactSolver:
         Y0, Y1 = sim._Ys[1 - cur], sim._Ys[cur]
         h = sim.dt
         t0 = sim.time - h
-        min_gaps(Y1, sim._prm, self.shapes, self.half_spaces, self.bodies, self._lowest)
         self._static_skipped.clear()
         moving = ~sim._stopped[self.bodies]
-        resting = self.bodies[(self.modes[self.bodies] == PERSISTENT) & moving]
+        modes = self.modes[self.bodies]
+        flying = self.bodies[(modes == FLIGHT) & moving]
+        resting = self.bodies[(modes == PERSISTENT) & moving]
         two = resting[self.other_ground[resting] >= 0]  # held on two half-spaces: two_grounds.py
         resting = resting[self.other_ground[resting] < 0]
-        if self.statics is not None:  # static shapes: their gaps; bodies on their planes in Python
+        if self.statics is None:
+            lowest = self._lowest[:flying.size]
+            min_gaps(Y1, sim._prm, self.shapes, self.half_spaces, flying, lowest)
+        else:  # static shapes: their gaps too (every body's); bodies on their planes in Python
+            min_gaps(Y1, sim._prm, self.shapes, self.half_spaces, self.bodies, self._lowest)
             two = np.concatenate((two, self._static_busy(Y1, resting)))
             resting = resting[self.ground_of[resting] < len(self.half_spaces)]
-        settle_all(Y1, sim._prm, self.shapes, self.half_spaces, resting, self.ground_of, self.tracked, self.pressed,
-                   self.sliding, self.slide_direction, self._band, self._status)
+            lowest = self._lowest[(modes == FLIGHT) & moving]
+        settle_all(Y0, Y1, sim._prm, self.shapes, self.half_spaces, resting, self.ground_of, self.tracked,
+                   self.pressed, self.sliding, self.slide_direction, self._band, self._status, self._locked)
         resting = self._refine_gains(sim, resting, Y0, Y1, t0, h)
         # only the bodies with an event in the step are looked at in Python
-        busy = np.concatenate((resting[self._status[resting] != OK], two,
-                               self.bodies[(self.modes[self.bodies] == FLIGHT) & moving & (self._lowest < 0.0)]))
+        busy = np.concatenate((resting[self._status[resting] == TO_SOLVER], two, flying[lowest < 0.0]))
         for i in busy:
             if sim._stopped[i]:
                 continue
