@@ -52,7 +52,7 @@ class Replay:
     sites_B: dict[str, tuple[tuple[float, float, float], ...]] = field(default_factory=dict)  # body -> sites in B (m)
     imus: dict[str, tuple[float, float, float]] = field(default_factory=dict)  # "B/S" -> position in B (m)
     mass: Any = None  # a .mechanics.MassModel in the order of ``names``, from the attached scene, or None
-    _totals: Any = None  # (T, 2) energy and |L|, computed once when first plotted
+    cached_totals: Any = None  # (T, 2) energy and |L|, computed once when first plotted
 
     @property
     def cut_short(self) -> bool:
@@ -140,12 +140,12 @@ def replay_series(replay: Replay, body: str) -> tuple[np.ndarray, np.ndarray | N
     speed = np.linalg.norm(replay.linear_velocities[body], axis=1)
     if replay.mass is None:
         return t, None, None, speed
-    if replay._totals is None:
+    if replay.cached_totals is None:
         stack = lambda d: np.stack([d[n] for n in replay.names], axis=1)  # noqa: E731  (T, N, k)
         p, q, v, w = (stack(d) for d in (replay.positions, replay.orientations_xyzw, replay.linear_velocities,
                                          replay.angular_velocities))
-        replay._totals = np.array([totals(replay.mass, p[k], q[k], v[k], w[k]) for k in range(len(t))]).reshape(-1, 2)
-    energy, L = replay._totals[:, 0], replay._totals[:, 1]
+        replay.cached_totals = np.array([totals(replay.mass, p[k], q[k], v[k], w[k]) for k in range(len(t))]).reshape(-1, 2)
+    energy, L = replay.cached_totals[:, 0], replay.cached_totals[:, 1]
     return t, energy, L, speed
 
 
