@@ -23,7 +23,9 @@ do not move, or move as declared).
 Pair material: friction √(μ_a μ_b), restitution max(e_a, e_b) (Box2D's rule); a side without
 a material takes the other's; with neither, :data:`DEFAULT_RESTITUTION` and
 :data:`DEFAULT_FRICTION`. A scene whose moving bodies start inside the ground is refused, with
-the body, the half-space and the depth named. Without a ``ground`` key the scene has no contact
+the body, the half-space and the depth named; so is a scene with a ground whose bodies start
+with their collision shapes overlapping (a pair with at least one ``free`` body), with both
+bodies and the depth named. Without a ``ground`` key the scene has no contact
 (``Scene.contact`` is None) and runs exactly as before.
 """
 
@@ -194,12 +196,14 @@ def _default_shape(inertia: Any, row: np.ndarray) -> None:
         row[DIMS:DIMS + 2] = [float(arg[0]), 0.5 * float(arg[1])]
 
 
-def read_contact(check: Any, top: Mapping, model: Any, state: Any) -> ContactSpec | None:
+def read_contact(check: Any, top: Mapping, model: Any, state: Any, *, apart: bool = True) -> ContactSpec | None:
     """Read and check the contact keys of a scene whose bodies scene.py has already read.
 
     ``check`` is scene.py's checker (errors name the key path and what was expected), ``top``
     the scene mapping, ``model`` and ``state`` the BodyModel and initial State built from it.
-    Returns None when the scene has no ``ground`` (the body keys are still checked).
+    Returns None when the scene has no ``ground`` (the body keys are still checked). With
+    ``apart`` false, bodies whose shapes overlap are not refused (a spawn checks its new bodies
+    against the others' current poses instead).
     """
     bodies = top["bodies"]
     shapes = np.zeros((len(bodies), SHAPE_WIDTH))
@@ -220,6 +224,8 @@ def read_contact(check: Any, top: Mapping, model: Any, state: Any) -> ContactSpe
         for j in range(g):
             restitution[i, j], friction[i, j] = pair_material(shapes[i], grounds[j])
     _check_not_inside(check, model, state, shapes, grounds)
+    if apart:
+        _check_apart(check, model, state, shapes)
     bodies = np.array([i for i in range(n) if shapes[i, KIND] != SHAPE_NONE and model.motions[i] == "free"],
                       dtype=np.int64)
     for array in (grounds, shapes, restitution, friction, bodies):
@@ -249,3 +255,19 @@ def _check_not_inside(check: Any, model: Any, state: Any, shapes: np.ndarray, gr
                 check.fail(f"bodies.{name}", f"a body that starts outside the ground: its collision shape is {depth:.6g} m "
                            f"inside ground[{j}] (normal {grounds[j, NORMAL:NORMAL + 3].tolist()}, offset "
                            f"{grounds[j, OFFSET]:g} m); move it up by at least that", show_got=False)
+
+
+def _check_apart(check: Any, model: Any, state: Any, shapes: np.ndarray) -> None:
+    """Refuse bodies whose collision shapes start overlapping (at least one of them free), naming both and the depth."""
+    from ..quaternion import quat_conjugate, quat_multiply  # numpy
+    from .query import overlapping_bodies  # compiled: imported only when a scene has a ground
+
+    q_WB = quat_multiply(state.q_WP, quat_conjugate(np.asarray(model.q_BP, dtype=float).reshape(-1, 4)))
+    moving = np.array([motion == "free" for motion in model.motions], dtype=bool)
+    overlaps = overlapping_bodies(state.p_WC_W, q_WB, shapes, moving)
+    if overlaps:
+        i, j, depth = overlaps[0]
+        a, b = model.names[i], model.names[j]
+        more = f" ({len(overlaps) - 1} more overlapping pairs)" if len(overlaps) > 1 else ""
+        check.fail(f"bodies.{b}", f"bodies that start apart: the collision shapes of {a} and {b} overlap by "
+                   f"{depth:.12g} m{more}; move them apart by at least that", show_got=False)
