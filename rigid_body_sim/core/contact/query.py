@@ -49,9 +49,10 @@ def overlapping_bodies(p_WC_W, q_WB, shapes, moving, of=None) -> list[tuple[int,
     Candidates come from the uniform grid (linear in N for shapes of comparable size), then one
     compiled narrow-phase call over them.
     """
-    pos = np.ascontiguousarray(p_WC_W, dtype=float).reshape(-1, 3)
-    quat = np.ascontiguousarray(q_WB, dtype=float).reshape(-1, 4)
-    rows = np.array(shapes, dtype=float, order="C")  # a writable copy: one compiled signature
+    # writable C-ordered copies: the one signature compile_pairs.py compiles (a read-only array is another type)
+    pos = np.array(p_WC_W, dtype=float, order="C").reshape(-1, 3)
+    quat = np.array(q_WB, dtype=float, order="C").reshape(-1, 4)
+    rows = np.array(shapes, dtype=float, order="C")
     n = len(pos)
     lo, hi = np.empty((n, 3)), np.empty((n, 3))
     shape_aabbs(pos, quat, rows, lo, hi)
