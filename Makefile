@@ -7,6 +7,7 @@
 #   make venv       only the set-up: .venv with Python 3.11, pinned requirements, package -e
 #   make browser-deps   Debian's chromium and chromium-driver (apt if missing) for test/test_view.py
 #   make foxglove-deps  Node.js (apt if missing) and the pinned npm modules of test/foxglove (Foxglove's readers)
+#   make bench-contact  contact beside MuJoCo and PyBullet (docs/contact_benchmarks.md; about 10 min)
 #   make clean      remove caches and build output (keeps .venv); make distclean also .venv
 #
 # Variables: PYTHON=/path/to/python3.11, PYTEST_ARGS="-k foo -x", RUN_ARGS="--ros-args ...",
@@ -159,9 +160,9 @@ envelope: $(STAMP)
 
 # Speed and accuracy benchmarks (benchmarks/; not part of `make test`), beside MuJoCo (requirements-bench.txt):
 # throughput against N with the plain-loop floor and a numpy loop, the per-frame cost of a force and
-# one body driven per step, work-precision on the top and the forced box, model reduction, a kernel
-# profile and node timing. Every figure is a median of >= 5 samples with its min-max.
-# bench: quick mode (fewer sizes, a few minutes); bench-full: every size up to 1e5, 20 s node windows.
+# one body driven per step, work-precision on the top and the forced box, model reduction and a kernel
+# profile. Every figure is a median of >= 5 samples with its min-max.
+# bench: quick mode (fewer sizes, a few minutes); bench-full: every size up to 1e5, longer samples.
 # Into the default BENCH_OUT they also write docs/choosing_an_integrator.md (+ .claims.json) and the
 # generated block of docs/performance.md, so the docs and results.md come from one run.
 # BENCH_BASELINE=<git rev>: also time that revision's core beside this one at N = 1e4 (core_compare.py).
@@ -181,6 +182,12 @@ bench-full: bench-deps
 	$(VENV_PY) -m pytest -q -m bench
 	$(VENV_PY) -m benchmarks.run --full $(BENCH_FLAGS)
 
+# The step on every core: threads vs one thread at 1e5, the parallel threshold, one thread vs the
+# plain loops at 1e4; writes benchmarks/results/threads.{csv,md} and the block in docs/performance.md.
+.PHONY: bench-threads
+bench-threads: $(STAMP)
+	$(VENV_PY) -m benchmarks.threads --performance docs/performance.md
+
 # Body–body narrow phase against MuJoCo (mj_geomDistance, 10,000 random poses per pair), its ns per pair, and
 # the broad phase's cost at 1e3, 1e4, 1e5 bodies: writes benchmarks/results/pair_oracle.md (docs/contact.md quotes it).
 .PHONY: bench-oracle
@@ -188,9 +195,21 @@ bench-oracle: bench-deps
 	$(VENV_PY) -m pytest -q -m bench test/test_bench_pairs.py
 	$(VENV_PY) -m benchmarks.pair_oracle --out $(BENCH_OUT)
 
-# The node with batched output: 1, 100, 1000, 10000 bodies at 100 Hz and 100 at 1 kHz, rk4, 1 substep,
-# per_body_topics false, a `poses` subscriber in another process; sim/wall, ticks delivered, CPU per tick, RSS,
-# start to first poses, stop time (medians of 5 runs of 10 s; BENCH_NODE_ARGS=--quick for 3 runs of 5 s).
+# Contact beside MuJoCo and PyBullet (benchmarks/contact_peers.py): every closed-form contact case at
+# dt = 10, 1, 0.1 ms (errors and µs per step), 1000 cubes resting on a plane (body-steps/s), and the
+# free-body scene at N = 1e4 with and without a ground (and the core before contact: BENCH_CONTACT_ARGS=--baseline '' skips it).
+# Writes benchmarks/results/contact_peers.csv and .md and the generated block of docs/contact_benchmarks.md.
+BENCH_CONTACT_ARGS ?=
+.PHONY: bench-contact
+bench-contact: bench-deps
+	$(VENV_PY) -m benchmarks.contact_peers --out $(BENCH_OUT) \
+		$(if $(BENCH_DEFAULT_OUT),--docs docs/contact_benchmarks.md) $(BENCH_CONTACT_ARGS)
+
+# The node benchmark: batched output and shared inputs, 1 to 10000 bodies at 100 Hz, 100 at 1 kHz, 100000 at
+# 10 Hz, the 10000 and 100000 cases also recording; rk4, 1 substep, a plain rclpy `poses` subscriber in its own
+# process; start to first poses, RSS, sim/wall, ticks delivered and recorded, CPU per tick, stop time, and the
+# node's targets (medians of 5 runs of 10 s; BENCH_NODE_ARGS=--quick for 3 runs of 5 s,
+# BENCH_NODE_ARGS="--bodies 10000 100000" for the target sizes only).
 # Writes benchmarks/results/node_batch.md (linked from docs/performance.md).
 BENCH_NODE_ARGS ?=
 .PHONY: bench-node

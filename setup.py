@@ -31,9 +31,9 @@ setup(
     # Exact pins are in requirements.txt; these name what the package imports.
     install_requires=["numpy", "scipy", "numba", "pyyaml", "matplotlib", "mcap", "mcap-ros2-support", "tqdm"],
     # test: what `colcon test` looks for to run pytest (pins in requirements-test.txt);
-    # bench: benchmarks/ compares with MuJoCo (pip install -e .[bench]; pin in requirements-bench.txt);
+    # bench: benchmarks/ compares with MuJoCo and PyBullet (pip install -e .[bench]; pin in requirements-bench.txt);
     # view: `rigid-body-sim view` (rigid_body_sim/view/; pins in requirements-view.txt).
-    extras_require={"test": ["pytest", "hypothesis"], "bench": ["mujoco==4.0.0"], "view": ["viser==1.1.1"]},
+    extras_require={"test": ["pytest", "hypothesis"], "bench": ["mujoco==4.0.0", "pybullet==3.2.7"], "view": ["viser==1.1.1"]},
     zip_safe=True,
     maintainer="rigid_body_sim maintainers",
     maintainer_email="rigid-body-sim@example.com",

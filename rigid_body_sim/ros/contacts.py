@@ -27,7 +27,8 @@ time           80     FLOAT64 event: its sim time, located inside the step (s); 
                               contact: the stamp's time
 energy_change  88     FLOAT64 impact: kinetic energy after − before (J, ≤ 0); else 0
 body           96     UINT32  index of the body in scene order (``body_names``)
-ground         100    UINT32  index of the half-space in the scene's ``ground`` list
+ground         100    UINT32  index of the half-space in the scene's ``ground`` list; from its
+                              length on, a static shape's plane (ContactSolver.static_body_of)
 state          104    UINT8   :data:`STATES`: 0 impact, 1 resting, 2 sliding (persistent contact),
                               3 rest (came to rest; a Zeno sequence's accumulation time), 4 stick
                               (a slide stopped), 5 lift_off
@@ -246,5 +247,7 @@ class ContactPublisher:
             _kv("sliding holds in a Painlevé configuration, model-dependent (total)", solver.counts["painleve"]),
             _kv("impacts on a second half-space while resting (total)", solver.counts["second_half_space"]),
             _kv("two half-spaces with too many contact points: projected (total)", solver.counts["two_ground_overflow"]),
+            _kv("steps held on a static shape's tangent plane, first order (total)", solver.counts["static_tangent"]),
+            _kv("impacts of a resting body pressed on a static shape, not held (total)", solver.counts["static_pressed"]),
         ]
         return status

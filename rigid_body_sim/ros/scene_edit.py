@@ -21,13 +21,17 @@ import numpy as np
 
 from ..core import Scene, SceneError, Simulator
 from ..core.quaternion import quat_conjugate, quat_multiply
-from ..core.scene import MAX_SCENE_BYTES, load_scene_text
+from ..core.scene import load_scene_text
 from ..core.scene_yaml import YamlReadError, read_yaml
 
 __all__ = ["SOURCE", "scene_data", "edited_scene", "spawn_overlap"]
 
 #: What errors call a scene made by an edit (and its ``Scene.source``).
 SOURCE = "spawn/delete request"
+
+#: Longest definition of one spawned body, characters: 8 MiB, far more than a body with its
+#: sites needs (MAX_SITES_PER_BODY sites of ~100 characters), and read while the node waits.
+MAX_DEFINITION_CHARS = 8 * 1024 * 1024
 
 
 def scene_data(scene: Scene) -> dict[str, Any]:
@@ -69,9 +73,9 @@ def edited_scene(scene: Scene, spawn: Mapping[str, str], delete: list[str]) -> S
         if name in bodies:
             raise SceneError(f"{SOURCE}: cannot spawn {name!r}: a body of that name exists; delete it first or "
                              "choose another name")
-        if len(text) > MAX_SCENE_BYTES:  # characters ≥ bytes / 4; the loader bounds the rest
-            raise SceneError(f"{SOURCE}: bodies.{name}: expected a definition of at most {MAX_SCENE_BYTES} "
-                             f"characters (a scene file's limit), got {len(text)}")
+        if len(text) > MAX_DEFINITION_CHARS:  # the loader bounds the rest
+            raise SceneError(f"{SOURCE}: bodies.{name}: expected a definition of at most {MAX_DEFINITION_CHARS} "
+                             f"characters, got {len(text)}")
         try:
             definition = read_yaml(text)
         except YamlReadError as exc:
@@ -103,6 +107,7 @@ def spawn_overlap(sim: Simulator, scene: Scene, spawned: Iterable[str]) -> str |
     if scene.contact is None:
         return None
     from ..core.contact.query import overlapping_bodies  # compiled: imported only for a scene with a ground
+    from ..core.contact.scene_keys import apart_shapes
 
     state, model = scene.initial_state, scene.model
     p_WC_W = np.array(state.p_WC_W, dtype=float)
@@ -116,7 +121,7 @@ def spawn_overlap(sim: Simulator, scene: Scene, spawned: Iterable[str]) -> str |
             p_WC_W[b], q_WB[b] = now.p_WC_W[a], old_q_WB[a]
     new = [b for b, name in enumerate(model.names) if name in set(spawned)]
     moving = np.array([motion == "free" for motion in model.motions], dtype=bool)
-    overlaps = overlapping_bodies(p_WC_W, q_WB, scene.contact.shapes, moving, of=new)
+    overlaps = overlapping_bodies(p_WC_W, q_WB, apart_shapes(scene.contact.shapes, model.motions), moving, of=new)
     if not overlaps:
         return None
     i, j, depth = overlaps[0]

@@ -94,7 +94,7 @@ def lowest_gap(sim, body: str, position_world, orientation_xyzw) -> tuple[float,
     x, yy, z, w = (float(c) for c in orientation_xyzw)
     q_BP = sim.model.q_BP[i]  # the state row holds q_WP = q_WB ⊗ q_BP (the shape is in principal axes)
     y[L.Q:L.Q + 4] = _product((w, x, yy, z), q_BP)
-    gap, j = body_gap(y, sim._prm[i], solver.shapes[i], solver.grounds, np.empty((MAX_POINTS, 3)),
+    gap, j = body_gap(y, sim._prm[i], solver.shapes[i], solver.half_spaces, np.empty((MAX_POINTS, 3)),
                       np.empty(MAX_POINTS))
     return float(gap), int(j)
 
@@ -144,7 +144,7 @@ def lowest_gaps(sim) -> np.ndarray:
     """The lowest gap (m) over every ground of each body with a shape, in ``sim.contact.bodies`` order."""
     solver = sim.contact
     out = np.empty(len(solver.bodies))
-    min_gaps(sim._Ys[sim._control[L.CUR]], sim._prm, solver.shapes, solver.grounds, solver.bodies, out)
+    min_gaps(sim._Ys[sim._control[L.CUR]], sim._prm, solver.shapes, solver.half_spaces, solver.bodies, out)
     return out
 
 

@@ -19,13 +19,15 @@ Schema (scene.py's other keys are unchanged)::
 A body whose inertia is ``principal`` or ``tensor`` has no collision shape unless it declares
 one. Contact acts on bodies whose motion is ``free``; the others pass through the ground (they
 do not move, or move as declared).
+A body whose motion is ``static`` and that has a collision shape is static geometry in a scene
+with a ``ground`` key (``ground: []`` for no half-space): the solver's static_geometry.py.
 
 Pair material: friction √(μ_a μ_b), restitution max(e_a, e_b) (Box2D's rule); a side without
 a material takes the other's; with neither, :data:`DEFAULT_RESTITUTION` and
 :data:`DEFAULT_FRICTION`. A scene whose moving bodies start inside the ground is refused, with
 the body, the half-space and the depth named; so is a scene with a ground whose bodies start
-with their collision shapes overlapping (a pair with at least one ``free`` body), with both
-bodies and the depth named. Without a ``ground`` key the scene has no contact
+with their collision shapes overlapping (a pair with at least one ``free`` body; inside a
+static body: static_geometry.py), with both bodies and the depth named. Without a ``ground`` key the scene has no contact
 (``Scene.contact`` is None) and runs exactly as before.
 """
 
@@ -56,13 +58,12 @@ from ..kernels.contact.layout import (
     SHAPE_SPHERE,
     SHAPE_WIDTH,
 )
+from .materials import DEFAULT_FRICTION, DEFAULT_RESTITUTION, pair_material
+from .static_geometry import check_not_inside_statics
 
-__all__ = ["ContactSpec", "read_contact", "without_contact_keys", "pair_material", "DEFAULT_RESTITUTION", "DEFAULT_FRICTION",
+__all__ = ["ContactSpec", "read_contact", "apart_shapes", "without_contact_keys", "pair_material", "DEFAULT_RESTITUTION", "DEFAULT_FRICTION",
            "MAX_GROUNDS", "BODY_KEYS", "TOP_KEYS"]
 
-#: Restitution and friction of a pair where neither side declares a material.
-DEFAULT_RESTITUTION = 0.0
-DEFAULT_FRICTION = 0.5
 #: Most half-spaces a scene may list.
 MAX_GROUNDS = 64
 #: The keys this module adds to a scene's top level and to a body.
@@ -96,20 +97,6 @@ class ContactSpec:
     restitution: np.ndarray
     friction: np.ndarray
     bodies: np.ndarray
-
-
-def pair_material(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
-    """(restitution, friction) of two rows with material columns: max(e_a, e_b), √(μ_a μ_b).
-
-    A side without a material (HAS_MATERIAL 0) takes the other's; with neither, the defaults.
-    """
-    if not a[HAS_MATERIAL] and not b[HAS_MATERIAL]:
-        return DEFAULT_RESTITUTION, DEFAULT_FRICTION
-    if not a[HAS_MATERIAL]:
-        a = b
-    if not b[HAS_MATERIAL]:
-        b = a
-    return max(float(a[RESTITUTION]), float(b[RESTITUTION])), math.sqrt(float(a[FRICTION]) * float(b[FRICTION]))
 
 
 def without_contact_keys(body: Any) -> Any:
@@ -224,6 +211,7 @@ def read_contact(check: Any, top: Mapping, model: Any, state: Any, *, apart: boo
         for j in range(g):
             restitution[i, j], friction[i, j] = pair_material(shapes[i], grounds[j])
     _check_not_inside(check, model, state, shapes, grounds)
+    check_not_inside_statics(check, model, state, shapes)
     if apart:
         _check_apart(check, model, state, shapes)
     bodies = np.array([i for i in range(n) if shapes[i, KIND] != SHAPE_NONE and model.motions[i] == "free"],
@@ -257,14 +245,22 @@ def _check_not_inside(check: Any, model: Any, state: Any, shapes: np.ndarray, gr
                            f"{grounds[j, OFFSET]:g} m); move it up by at least that", show_got=False)
 
 
+def apart_shapes(shapes: np.ndarray, motions: Any) -> np.ndarray:
+    """``shapes`` with the static bodies' rows emptied (SHAPE_NONE): the shapes the body–body overlap
+    check pairs. A moving body inside a static one is refused by static_geometry.py's own check."""
+    out = np.array(shapes, dtype=float)
+    out[[i for i, motion in enumerate(motions) if motion == "static"], KIND] = SHAPE_NONE
+    return out
+
+
 def _check_apart(check: Any, model: Any, state: Any, shapes: np.ndarray) -> None:
-    """Refuse bodies whose collision shapes start overlapping (at least one of them free), naming both and the depth."""
+    """Refuse bodies whose collision shapes start overlapping (at least one free, neither static), naming both and the depth."""
     from ..quaternion import quat_conjugate, quat_multiply  # numpy
     from .query import overlapping_bodies  # compiled: imported only when a scene has a ground
 
     q_WB = quat_multiply(state.q_WP, quat_conjugate(np.asarray(model.q_BP, dtype=float).reshape(-1, 4)))
     moving = np.array([motion == "free" for motion in model.motions], dtype=bool)
-    overlaps = overlapping_bodies(state.p_WC_W, q_WB, shapes, moving)
+    overlaps = overlapping_bodies(state.p_WC_W, q_WB, apart_shapes(shapes, model.motions), moving)
     if overlaps:
         i, j, depth = overlaps[0]
         a, b = model.names[i], model.names[j]

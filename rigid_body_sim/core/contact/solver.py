@@ -24,6 +24,12 @@ old code. Per step:
 A body that touches a second half-space while resting on one (a groove, a corner) is held by
 both together (two_grounds.py); those bodies take the Python path around the compiled passes.
 
+Static bodies with a shape are geometry too (static_geometry.py): the flight gap is the least of
+the half-spaces' gaps and the narrow phase's signed distances to them, and each contact with one
+is a plane row of :attr:`ContactSolver.grounds` after the half-spaces (a static box's face, or a
+body's tangent row); bodies resting on such a row take the Python path. Without static shapes
+``grounds`` are the half-spaces and the code path is the one without them.
+
 Persistent contact tracks *features* (shapes.feature_gaps: box corners, capsule ends, cylinder
 rims), so resting on a face, pivoting on an edge or rolling on a rim are one mechanism. The
 holding force is found at the start of each step and held over it (zero-order hold): exact
@@ -45,15 +51,15 @@ Events are recorded in :attr:`ContactSolver.events` (:class:`ContactEvent`).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from ..kernels import layout as L
 from ..quaternion import quat_rotate, quat_to_matrix
-from . import two_grounds
+from . import static_geometry, two_grounds
+from .events import ContactEvent
 from ..kernels.stepping import advance, step_reduced
-from ..kernels.contact.batch import OK, hold_all, settle_all
+from ..kernels.contact.batch import CACHE_WIDTH, OK, TO_SOLVER, hold_all, settle_all
 from ..kernels.contact.impacts import _A, _LAM, IMPACT_WORK_SHAPE, impact
 from ..kernels.contact.layout import DIMS, FLIGHT, KIND, MAX_POINTS, NORMAL, PERSISTENT, SHAPE_BOX
 from ..kernels.contact.persistent import (
@@ -94,55 +100,6 @@ MAX_REFINEMENT = 32
 BRACKET_SAMPLES = 16
 
 
-@dataclass(frozen=True)
-class ContactEvent:
-    """One contact event.
-
-    Attributes
-    ----------
-    time : float
-        s of sim time (located inside the step).
-    body : str
-    ground : int
-        Index into the scene's ``ground`` list.
-    kind : str
-        ``impact``, ``rest`` (persistent contact from here; for a Zeno sequence, dated at its
-        accumulation time), ``lift-off`` or ``stick`` (a sliding contact stopped).
-    normal_speed_before, normal_speed_after : float
-        Lowest normal velocity of the contact points (m/s, positive away from the ground).
-    impulse : float
-        Σ normal impulse, N·s (impacts), else 0.
-    energy_before, energy_after : float
-        Kinetic energy of the body, J, around the event.
-    delta_v_world : tuple of 3 floats
-        Impacts: the jump of the centre of mass velocity, m/s, world axes; else ().
-    delta_w_principal : tuple of 3 floats
-        Impacts: the jump of the angular velocity, rad/s, the body's principal axes P; else ().
-    q_WP : tuple of 4 floats
-        Impacts: the body's orientation at the impact, (w, x, y, z); else ().
-    contacts : int
-        Impacts: the contact points that took part; else 0.
-    restitution_used : float
-        Impacts: the restitution factor the impact law applied (below the pair's e when the energy
-        cap acted, :mod:`~rigid_body_sim.core.kernels.contact.impacts`); else 0.
-    """
-
-    time: float
-    body: str
-    ground: int
-    kind: str
-    normal_speed_before: float = 0.0
-    normal_speed_after: float = 0.0
-    impulse: float = 0.0
-    energy_before: float = 0.0
-    energy_after: float = 0.0
-    delta_v_world: tuple = ()
-    delta_w_principal: tuple = ()
-    q_WP: tuple = ()
-    contacts: int = 0
-    restitution_used: float = 0.0
-
-
 class ContactSolver:
     """Contact of a Simulator's bodies with the scene's ground half-spaces (the module docstring).
 
@@ -160,6 +117,17 @@ class ContactSolver:
         self.restitution = spec.restitution
         self.friction = spec.friction
         model = sim.model
+        #: The scene's half-spaces (rows 0 … G − 1 of :attr:`grounds`).
+        self.half_spaces = spec.grounds
+        #: Static bodies with a shape as geometry (static_geometry.py), or None: then ``grounds`` are the
+        #: half-spaces alone and nothing here differs from a scene without static shapes.
+        self.statics = None
+        statics = static_geometry.static_shapes(spec.shapes, model.motions)
+        if statics.size:
+            self.statics = static_geometry.StaticGeometry(sim, spec, statics)
+            # plane rows: half-spaces, static box faces, one tangent row per body (static_geometry.py)
+            self.grounds, self.restitution, self.friction = (self.statics.rows, self.statics.restitution,
+                                                             self.statics.friction)
         n = model.count
         self.bodies = np.array(spec.bodies, dtype=np.int64)  # free bodies with a collision shape
         self.names = model.names
@@ -177,7 +145,9 @@ class ContactSolver:
         self._features = np.empty(MAX_FEATURES)
         self._owners = np.zeros(MAX_POINTS, dtype=np.int64)
         self._bias = np.zeros(MAX_POINTS)
-        self._status = np.zeros(n, dtype=np.int64)  # batch.OK / TO_SOLVER of each body after a compiled pass
+        self._status = np.zeros(n, dtype=np.int64)  # batch.OK / TO_SOLVER / LOCKED of each body after a compiled pass
+        self._locked = np.zeros(n, dtype=np.int64)  # batch.hold_all: 1 for a body locked at rest for this step
+        self._hold_cache = np.zeros((n, CACHE_WIDTH))  # batch.hold_all: what each locked body's hold found
         self._rdot = np.zeros((MAX_POINTS, 3))
         self.pressed = np.zeros(n, dtype=np.int64)  # the tracked features the holding force pushes on, as bits
         self.events: list[ContactEvent] = []
@@ -201,9 +171,14 @@ class ContactSolver:
         #: again in pieces because they gained energy; ``second_half_space`` impacts of a resting body
         #: against another half-space; ``two_ground_overflow`` holds on two half-spaces with more
         #: contact points than the rows take (two_grounds.py); ``painleve`` sliding holds in a
-        #: Painlevé configuration (:meth:`_painleve`).
+        #: Painlevé configuration (:meth:`_painleve`); ``static_tangent`` body-steps held on a static shape's
+        #: tangent plane (a curved support, an edge or a rim: first order; static_geometry.py);
+        #: ``static_pressed`` impacts of a resting body against a static shape it stays pressed on (not held
+        #: there: it may reach into it by up to a h²/2 per step, a its acceleration towards it).
+        self._static_skipped: set[int] = set()  # bodies not looked at against static shapes for the rest of the step
         self.counts = dict.fromkeys(("restitution_capped", "multi_contact_elastic", "refined_steps",
-                                     "second_half_space", "two_ground_overflow", "painleve"), 0)
+                                     "second_half_space", "two_ground_overflow", "painleve",
+                                     "static_tangent", "static_pressed"), 0)
         #: Per body, a second half-space it is held on besides ``ground_of`` (two_grounds.py), or -1.
         self.other_ground = np.full(n, -1, dtype=np.int64)
         #: The features touching ``other_ground``, as bits.
@@ -241,8 +216,10 @@ class ContactSolver:
         self.other_projected[:] = False
         self.sliding[:] = False
         Y = sim._Ys[sim._control[L.CUR]]
+        if self.statics is not None:
+            self.statics.place(sim)
         for i in self.bodies:
-            gap, j = body_gap(Y[i], sim._prm[i], self.shapes[i], self.grounds, self._points, self._gaps)
+            gap, j = self._gap(sim, Y[i], i)
             if gap <= TOUCHING_GAP:
                 count = self._contact_points(sim, Y[i], i, j)
                 speed, _, _, _ = self._normal_motion(sim, Y[i], i, j, count, np.zeros(L.WRENCH_WIDTH))
@@ -256,6 +233,12 @@ class ContactSolver:
     def is_resting(self, body: str) -> bool:
         """True while ``body`` is in persistent contact with the ground."""
         return bool(self.modes[self.names.index(body)] == PERSISTENT)
+
+    def static_body_of(self, ground: int) -> str | None:
+        """The static body whose shape plane row ``ground`` (a ContactEvent's) belongs to; None for a
+        half-space of the scene's ``ground`` list (static_geometry.py; a tangent row names its latest owner)."""
+        b = -1 if self.statics is None or ground < len(self.half_spaces) else self.statics.static_of(ground)
+        return self.names[b] if b >= 0 else None
 
     def events_of(self, body: str, kind: str | None = None) -> list[ContactEvent]:
         """The recorded events of ``body`` (of one ``kind`` if given), in time order of their recording."""
@@ -335,7 +318,13 @@ class ContactSolver:
                              self._work, self._d)
 
     def _gap(self, sim, y: np.ndarray, i: int) -> tuple[float, int]:
-        return body_gap(y, sim._prm[i], self.shapes[i], self.grounds, self._points, self._gaps)
+        """(lowest gap, its plane row) of body i at y over the half-spaces and the static shapes."""
+        gap, j = body_gap(y, sim._prm[i], self.shapes[i], self.half_spaces, self._points, self._gaps)
+        if self.statics is not None:
+            dist, s = self.statics.nearest(y, i, self.shapes[i])
+            if dist < gap:
+                gap, j = dist, self.statics.plane_for(y, sim._prm[i], i, self.shapes[i], s)
+        return gap, j
 
     def step_map(self, sim, i: int, y0: np.ndarray, h: float, w: np.ndarray) -> np.ndarray:
         """Φ(y0, h): body i's state row after one step of length h from y0 under the wrench row w.
@@ -375,13 +364,18 @@ class ContactSolver:
         Y = sim._Ys[sim._control[L.CUR]]
         resting = self.bodies[(self.modes[self.bodies] == PERSISTENT) & ~sim._stopped[self.bodies]]
         self.holding_forces[:] = 0.0
+        self._locked[:] = 0
         if not resting.size:
             return
         two = resting[self.other_ground[resting] >= 0]  # held on two half-spaces: two_grounds.py
         one = resting[self.other_ground[resting] < 0]
+        if self.statics is not None:  # held on a static shape's plane: in Python (static_geometry.py)
+            on_static = one[self.ground_of[one] >= len(self.half_spaces)]
+            one = one[self.ground_of[one] < len(self.half_spaces)]
+            two = np.concatenate((two, self._refresh_static(sim, Y, on_static)))
         hold_all(Y, sim._prm, wrenches, self.shapes, self.grounds, one, self.ground_of, self.tracked, self.friction,
                  SLIP_TOLERANCE, LIFT_OFF_SPEED, TOUCHING_GAP, self._bare_rows, self.pressed,
-                 self.sliding, self.slide_direction, self._status)
+                 self.sliding, self.slide_direction, self._status, self._locked, self._hold_cache)
         for i in one[self._status[one] != OK]:  # lifting off: the solver says so and records it
             self._hold(sim, Y[i], i, wrenches[i], sim.time)
         for i in two:
@@ -444,17 +438,26 @@ class ContactSolver:
         Y0, Y1 = sim._Ys[1 - cur], sim._Ys[cur]
         h = sim.dt
         t0 = sim.time - h
-        min_gaps(Y1, sim._prm, self.shapes, self.grounds, self.bodies, self._lowest)
+        self._static_skipped.clear()
         moving = ~sim._stopped[self.bodies]
-        resting = self.bodies[(self.modes[self.bodies] == PERSISTENT) & moving]
+        modes = self.modes[self.bodies]
+        flying = self.bodies[(modes == FLIGHT) & moving]
+        resting = self.bodies[(modes == PERSISTENT) & moving]
         two = resting[self.other_ground[resting] >= 0]  # held on two half-spaces: two_grounds.py
         resting = resting[self.other_ground[resting] < 0]
-        settle_all(Y1, sim._prm, self.shapes, self.grounds, resting, self.ground_of, self.tracked, self.pressed,
-                   self.sliding, self.slide_direction, self._band, self._status)
+        if self.statics is None:
+            lowest = self._lowest[:flying.size]
+            min_gaps(Y1, sim._prm, self.shapes, self.half_spaces, flying, lowest)
+        else:  # static shapes: their gaps too (every body's); bodies on their planes in Python
+            min_gaps(Y1, sim._prm, self.shapes, self.half_spaces, self.bodies, self._lowest)
+            two = np.concatenate((two, self._static_busy(Y1, resting)))
+            resting = resting[self.ground_of[resting] < len(self.half_spaces)]
+            lowest = self._lowest[(modes == FLIGHT) & moving]
+        settle_all(Y0, Y1, sim._prm, self.shapes, self.half_spaces, resting, self.ground_of, self.tracked,
+                   self.pressed, self.sliding, self.slide_direction, self._band, self._status, self._locked)
         resting = self._refine_gains(sim, resting, Y0, Y1, t0, h)
         # only the bodies with an event in the step are looked at in Python
-        busy = np.concatenate((resting[self._status[resting] != OK], two,
-                               self.bodies[(self.modes[self.bodies] == FLIGHT) & moving & (self._lowest < 0.0)]))
+        busy = np.concatenate((resting[self._status[resting] == TO_SOLVER], two, flying[lowest < 0.0]))
         for i in busy:
             if sim._stopped[i]:
                 continue
@@ -729,12 +732,50 @@ class ContactSolver:
     def _other_gap(self, sim, y: np.ndarray, i: int) -> tuple[float, int]:
         """(lowest gap, ground) of body i against the half-spaces other than the one it rests on."""
         lowest, which = math.inf, -1
-        for jj in range(len(self.grounds)):
+        for jj in range(len(self.half_spaces)):
             if jj != self.ground_of[i] and jj != self.other_ground[i]:
                 count = body_points(y, sim._prm[i], self.shapes[i], self.grounds[jj], self._points, self._gaps)
                 if count and self._gaps[:count].min() < lowest:
                     lowest, which = float(self._gaps[:count].min()), jj
+        if (self.statics is not None and not self.statics.is_tangent(int(self.ground_of[i]))
+                and i not in self._static_skipped):
+            dist, s = self.statics.nearest(y, i, self.shapes[i], int(self.statics.row_owner[self.ground_of[i]]))
+            if dist < lowest:
+                lowest, which = dist, self.statics.plane_for(y, sim._prm[i], i, self.shapes[i], s)
         return lowest, which
+
+    # ----------------------------------------------------------------- static shapes (static_geometry.py)
+
+    def _refresh_static(self, sim, Y: np.ndarray, on_static: np.ndarray) -> np.ndarray:
+        """Before the step, the bodies resting on a static shape's plane: one on a face row whose tracked contact
+        points left the face goes on on its tangent row; a tangent row is refreshed from the narrow phase
+        (each such body-step counted in ``static_tangent``). Returns them, for the Python hold."""
+        statics = self.statics
+        for i in on_static:
+            j = int(self.ground_of[i])
+            if not statics.is_tangent(j):
+                count = self._tracked_points(sim, Y[i], i)
+                if statics.within_face(j, self._points[:count]):
+                    continue
+            self.counts["static_tangent"] += 1
+            row = statics.refresh(Y[i], sim._prm[i], i, self.shapes[i])
+            if row >= 0:
+                self.ground_of[i] = row
+        return on_static
+
+    def _static_busy(self, Y1: np.ndarray, resting: np.ndarray) -> np.ndarray:
+        """After the step: ``_lowest`` lowered, in place, to the bodies' signed distances to the static shapes;
+        returns the resting bodies the solver looks at in Python: those on a static shape's plane, and those
+        on a half-space that reached a static shape (an impact against it, located on the step map)."""
+        g = len(self.half_spaces)
+        looked = (self.modes[self.bodies] == FLIGHT) | (self.ground_of[self.bodies] < g)  # not those on a static
+        static_gaps = np.full(int(looked.sum()), math.inf)
+        self.statics.lower_gaps(Y1, self.shapes, self.bodies[looked], static_gaps)
+        self._lowest[looked] = np.minimum(self._lowest[looked], static_gaps)
+        reached = np.zeros(len(self.modes), dtype=bool)
+        reached[self.bodies[looked]] = static_gaps < 0.0
+        return np.concatenate((resting[self.ground_of[resting] >= g],
+                               resting[(self.ground_of[resting] < g) & reached[resting]]))
 
     def _side_impact(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float) -> None:
         """Body i, resting on its ground, hits another half-space at y: the impact against that one (in place).
@@ -757,7 +798,10 @@ class ContactSolver:
         y[L.V:L.W + 3] = after_row[L.V:L.W + 3]
         after, _ = normal_speeds(y, sim._prm[i], count, self._points, n[0], n[1], n[2], self._work)
         self.events.append(ContactEvent(t, self.names[i], jj, "impact", before, after, impulse, e0, e1, *jump))
-        if after <= LIFT_OFF_SPEED and self.other_ground[i] < 0:  # it stays on the second one: held on both
+        if after <= LIFT_OFF_SPEED and jj >= len(self.half_spaces):  # stays pressed on a static shape (not held)
+            self.counts["static_pressed"] += 1
+            self._static_skipped.add(i)
+        elif after <= LIFT_OFF_SPEED and self.other_ground[i] < 0:  # it stays on the second one: held on both
             self.other_ground[i] = two_grounds.touching_other(self, sim, y, i, LIFT_OFF_SPEED,
                                                               max(TOUCHING_GAP, float(self._band[i])))
 

@@ -38,6 +38,7 @@ from ..kernels.contact.layout import MAX_POINTS, NORMAL, PERSISTENT
 from ..kernels.contact.persistent import START_SLIDE_ACCELERATION, accelerations, add_contact_wrench, normal_bias, project
 from ..kernels.contact.shapes import MAX_FEATURES, feature_gaps, feature_points
 from ..quaternion import quat_rotate
+from .events import ContactEvent
 
 __all__ = ["touching_other", "hold", "end_of_step", "project_second", "crease", "start_if_touching"]
 
@@ -61,7 +62,7 @@ def touching_other(solver, sim, y: np.ndarray, i: int, speed_limit: float, gap_l
     j = int(solver.ground_of[i])
     prm, shape = sim._prm[i], solver.shapes[i]
     gaps = np.empty(MAX_FEATURES)
-    for jj in range(len(solver.grounds)):
+    for jj in range(len(solver.half_spaces)):  # the half-spaces (static shapes: static_geometry.py)
         if jj == j or abs(abs(solver.grounds[jj, NORMAL:NORMAL + 3] @ solver.grounds[j, NORMAL:NORMAL + 3]) - 1.0) < 1e-12:
             continue
         count = feature_gaps(y, prm, shape, solver.grounds[jj], gaps)
@@ -148,7 +149,6 @@ def hold(solver, sim, y: np.ndarray, i: int, w: np.ndarray, t: float, lift_off_s
     or lifted) is let go: the one-ground hold takes over (:meth:`ContactSolver._hold`). Returns
     False if the body leaves both (lift-off: flight).
     """
-    from .solver import ContactEvent
 
     prm = sim._prm[i]
     name = solver.names[i]
@@ -208,7 +208,6 @@ def hold(solver, sim, y: np.ndarray, i: int, w: np.ndarray, t: float, lift_off_s
 def end_of_step(solver, sim, i: int, end: np.ndarray, t: float, h: float) -> np.ndarray:
     """End of a step of body i held on two half-spaces: a slide along the crease that reversed stops
     (``stick`` at the step's end), then the body is projected onto both contacts."""
-    from .solver import ContactEvent
 
     end = end.copy()
     sticking = not solver.sliding[i]

@@ -5,6 +5,14 @@ solver.ContactSolver does body by body in Python for the rare cases (persistent.
 physics): a resting, sliding or rolling body costs no Python call per step. A body whose step
 needs an event (it lifts off, its slide stops, another feature reaches the ground, a feature is
 let go) is flagged in ``status`` and left to the solver.
+
+**Locked bodies.** A body that starts a step exactly at rest (v = ω = 0), sticking, and whose
+holding force leaves it no acceleration (≤ LOCK_ACCELERATION: round-off) is *locked*: the
+exact motion over the step is none, so its step ends where it started (settle_all copies
+its start row back; no projection is needed). Its holding force is a function of its state,
+parameters, wrench row and tracked features alone, so while those are bitwise the ones of the
+step before, the wrench row found then is used again (``cache``): a resting pile costs a
+comparison per body and step, not a contact solve.
 """
 
 from __future__ import annotations
@@ -14,35 +22,80 @@ import math
 import numpy as np
 from numba import njit
 
-from ..layout import STATE_WIDTH
+from ..dynamics import derivative
+from ..layout import AXIS_S, CACHE_RATE, PRM_WIDTH, Q, STATE_WIDTH, TOP_KEY, V, W, WRENCH_WIDTH
+from ..rotation import rotate
 from .impacts import _LAM, IMPACT_WORK_SHAPE, build_rows
 from .layout import MAX_POINTS, NORMAL
 from .persistent import (
     LIFT_OFF,
     SLIDE,
     add_contact_wrench,
+    STICK,
     holding_wrench,
     normal_bias,
-    normal_motion,
     project,
     slip_velocity,
 )
 from .shapes import MAX_FEATURES, body_points, feature_gaps, feature_points
 
-__all__ = ["OK", "TO_SOLVER", "hold_all", "settle_all"]
+__all__ = ["OK", "TO_SOLVER", "LOCKED", "LOCK_ACCELERATION", "CACHE_WIDTH", "hold_all", "settle_all"]
 
 _OPTS = {"cache": True, "nogil": True, "error_model": "numpy"}
 
-#: ``status`` of a body after a pass: nothing to do, or the solver's to handle in Python.
-OK, TO_SOLVER = 0, 1
+#: ``status`` of a body after a pass: nothing to do, the solver's to handle in Python, or locked (its start row kept).
+OK, TO_SOLVER, LOCKED = 0, 1, 2
+#: m/s² and rad/s²: a body at rest whose held acceleration is below this (round-off) is locked for the step.
+LOCK_ACCELERATION = 1e-12
+# cache row (float64 per body): valid, ground, tracked, pressed, then the state row, the parameter row, the wrench
+# row without and with the holding force
+_VALID, _GROUND, _TRACKED, _PRESSED, _STATE = 0, 1, 2, 3, 4
+_PRM = _STATE + STATE_WIDTH
+_BARE = _PRM + PRM_WIDTH
+_HELD = _BARE + WRENCH_WIDTH
+#: Width of hold_all's ``cache`` rows.
+CACHE_WIDTH = _HELD + WRENCH_WIDTH
+
+
+@njit(**_OPTS)
+def _lowest_normal_speed(y, count, points, nx, ny, nz):
+    """The lowest normal velocity n·(v + ω × r) of the contact points (m/s, away from the ground positive)."""
+    ox, oy, oz = rotate(y[Q], y[Q + 1], y[Q + 2], y[Q + 3], y[W], y[W + 1], y[W + 2])  # ω_W
+    lowest = math.inf
+    for c in range(count):
+        rx, ry, rz = points[c, 0] - y[0], points[c, 1] - y[1], points[c, 2] - y[2]
+        u = (nx * (y[V] + oy * rz - oz * ry) + ny * (y[V + 1] + oz * rx - ox * rz)
+             + nz * (y[V + 2] + ox * ry - oy * rx))
+        lowest = min(lowest, u)
+    return lowest
+
+
+@njit(**_OPTS)
+def _cache_hit(cache, i, y, p, w, j, tracked):
+    """True if body i's cache row is valid and was made for this ground, tracked features, state, parameters and wrench."""
+    row = cache[i]
+    if row[_VALID] == 0.0 or row[_GROUND] != j or row[_TRACKED] != tracked:
+        return False
+    for k in range(STATE_WIDTH):
+        if row[_STATE + k] != y[k]:
+            return False
+    for k in range(PRM_WIDTH):  # the body's parameters; not the step's own caches in the row (NaN when empty)
+        if (k < CACHE_RATE or AXIS_S <= k < TOP_KEY) and row[_PRM + k] != p[k]:
+            return False
+    for k in range(WRENCH_WIDTH):
+        if row[_BARE + k] != w[k]:
+            return False
+    return True
 
 
 @njit(**_OPTS)
 def hold_all(Y, prm, wrenches, shapes, grounds, bodies, ground_of, tracked, friction, slip_tolerance,
-             lift_off_speed, touching_gap, bare, pressed, sliding, slide_direction, status):
+             lift_off_speed, touching_gap, bare, pressed, sliding, slide_direction, status, locked, cache):
     """Add each body's holding force (persistent.holding_wrench) to its wrench row; flag the ones that lift off.
 
     ``bare[i]`` keeps body i's wrench row as it was before (for a step taken again in pieces).
+    ``locked[i]`` ← 1 for a body locked for this step (module docstring), else 0; ``cache``
+    (CACHE_WIDTH floats per body, zeros at first) holds what a locked body's hold found.
     """
     points = np.empty((MAX_POINTS, 3))
     gaps = np.empty(MAX_POINTS)
@@ -59,6 +112,17 @@ def hold_all(Y, prm, wrenches, shapes, grounds, bodies, ground_of, tracked, fric
         y, p, w, ground = Y[i], prm[i], wrenches[i], grounds[j]
         nx, ny, nz = ground[NORMAL], ground[NORMAL + 1], ground[NORMAL + 2]
         status[i] = OK
+        locked[i] = 0
+        if _cache_hit(cache, i, y, p, w, j, tracked[i]):  # the inputs of the last hold, bitwise: its result
+            for k in range(WRENCH_WIDTH):
+                bare[i, k] = w[k]
+                w[k] = cache[i, _HELD + k]
+            pressed[i] = np.int64(cache[i, _PRESSED])
+            sliding[i] = False
+            slide_direction[i, 0], slide_direction[i, 1] = 0.0, 0.0
+            locked[i] = 1
+            continue
+        cache[i, _VALID] = 0.0
         count = feature_points(y, p, shapes[i], ground, tracked[i], points, gaps, owners)
         if count == 0:
             status[i] = TO_SOLVER
@@ -67,7 +131,7 @@ def hold_all(Y, prm, wrenches, shapes, grounds, bodies, ground_of, tracked, fric
         for c in range(count):
             lowest = min(lowest, gaps[c])
         normal_bias(y, p, shapes[i], ground, tracked[i], count, points, owners, bias, rdot, anchors)
-        speed, _, _, _ = normal_motion(y, p, w, count, points, nx, ny, nz, bias, rdot, work, d)
+        speed = _lowest_normal_speed(y, count, points, nx, ny, nz)
         mode, _, sx, sy = holding_wrench(y, p, w, count, points, nx, ny, nz, friction[i, j], slip_tolerance, bias,
                                          rdot, work, d, force)
         if mode == LIFT_OFF or speed > lift_off_speed or lowest > touching_gap:
@@ -80,14 +144,40 @@ def hold_all(Y, prm, wrenches, shapes, grounds, bodies, ground_of, tracked, fric
             if work[3 * c, _LAM] > 0.0:
                 bits |= 1 << owners[c]
         pressed[i] = bits
-        for k in range(w.shape[0]):
+        for k in range(WRENCH_WIDTH):
             bare[i, k] = w[k]
         add_contact_wrench(w, y, p, count, points, anchors, work)
+        if mode != STICK:
+            continue
+        at_rest = True
+        for k in range(3):
+            if y[V + k] != 0.0 or y[W + k] != 0.0:
+                at_rest = False
+        if not at_rest:
+            continue
+        derivative(y, p, w, d)
+        held = 0.0
+        for k in range(3):
+            held = max(held, abs(d[V + k]), abs(d[W + k]))
+        if held <= LOCK_ACCELERATION:  # at rest and held still: locked, and remembered
+            locked[i] = 1
+            cache[i, _VALID], cache[i, _GROUND], cache[i, _TRACKED], cache[i, _PRESSED] = 1.0, j, tracked[i], bits
+            for k in range(STATE_WIDTH):
+                cache[i, _STATE + k] = y[k]
+            for k in range(PRM_WIDTH):
+                cache[i, _PRM + k] = p[k]
+            for k in range(WRENCH_WIDTH):
+                cache[i, _BARE + k] = bare[i, k]
+                cache[i, _HELD + k] = w[k]
 
 
 @njit(**_OPTS)
-def settle_all(Y, prm, shapes, grounds, bodies, ground_of, tracked, pressed, sliding, slide_direction, band, status):
+def settle_all(Y0, Y, prm, shapes, grounds, bodies, ground_of, tracked, pressed, sliding, slide_direction, band, status,
+               locked):
     """Project each body in persistent contact back onto it (persistent.project), unless its step had an event.
+
+    A body locked by hold_all ends the step at its start row (Y0: the step's start buffer,
+    Y: its end) and gets status LOCKED.
 
     Flagged for the solver instead: a slide whose slip reversed in the step, another ground
     reached, a feature not tracked that is now below the ground, a tracked feature the holding
@@ -100,6 +190,11 @@ def settle_all(Y, prm, shapes, grounds, bodies, ground_of, tracked, pressed, sli
     work = np.zeros(IMPACT_WORK_SHAPE)
     for m in range(bodies.shape[0]):
         i = bodies[m]
+        if locked[i]:
+            for k in range(STATE_WIDTH):
+                Y[i, k] = Y0[i, k]
+            status[i] = LOCKED
+            continue
         j = ground_of[i]
         y, p, ground = Y[i], prm[i], grounds[j]
         nx, ny, nz = ground[NORMAL], ground[NORMAL + 1], ground[NORMAL + 2]

@@ -275,24 +275,63 @@ def add_contact_wrench(w, y, p, count, points, anchors, work):
     _pin = w[0], y[P], p[0], points[0, 0], anchors[0, 0], work[0, 0]
 
 
+#: A pivot of the contact rows' Cholesky factor below this × the largest diagonal is a redundant row (dropped).
+REDUNDANT_PIVOT = 1e-10
+
+
 @njit(**_OPTS)
 def _solve_normal_rows(work, rows, step):
-    """Gauss–Seidel (unclamped: bilateral) on the rows 0, step, 2 step, ... for λ with (A λ)_a = −b_a."""
+    """λ on the rows 0, step, 2 step, ... with (A λ)_a = −b_a (bilateral), the other λ zero; returns the rank.
+
+    A direct solve: the Cholesky factorisation A = L D Lᵀ of those rows (in place of A's block
+    in ``work``: the caller rebuilds the rows before using A again), a row whose pivot is below
+    REDUNDANT_PIVOT × the largest diagonal being redundant (four corners of a face on the
+    ground have rank 3 in their normal rows): its λ is 0. A is positive semi-definite and the
+    right-hand side consistent (gaps and velocities of one rigid body), so every solution gives
+    the same body displacement M⁻¹ Jᵀ λ: the one of least norm in the mass metric.
+    """
+    largest = 0.0
+    for a in range(0, rows, step):
+        largest = max(largest, work[a, _A + a])
     for a in range(rows):
         work[a, _LAM] = 0.0
-    for _ in range(200):
-        change = 0.0
-        size = 0.0
-        for a in range(0, rows, step):
-            u = work[a, _B]
-            for b in range(rows):
-                u += work[a, _A + b] * work[b, _LAM]
-            delta = -u / work[a, _A + a] if work[a, _A + a] > 0.0 else 0.0
-            work[a, _LAM] += delta
-            change = max(change, abs(delta))
-            size = max(size, abs(work[a, _LAM]))
-        if change <= 1e-15 * size or change == 0.0:
-            break
+    rank = 0
+    if largest <= 0.0:
+        return rank
+    for a in range(0, rows, step):  # L (strictly below the diagonal) and D (on it), column by column
+        d = work[a, _A + a]
+        for k in range(0, a, step):
+            d -= work[a, _A + k] * work[a, _A + k] * work[k, _A + k]
+        if d <= REDUNDANT_PIVOT * largest:
+            work[a, _A + a] = 0.0
+            for i in range(a + step, rows, step):
+                work[i, _A + a] = 0.0
+            continue
+        rank += 1
+        work[a, _A + a] = d
+        for i in range(a + step, rows, step):
+            s = work[i, _A + a]
+            for k in range(0, a, step):
+                s -= work[i, _A + k] * work[a, _A + k] * work[k, _A + k]
+            work[i, _A + a] = s / d
+    for a in range(0, rows, step):  # L z = −b
+        z = -work[a, _B]
+        for k in range(0, a, step):
+            z -= work[a, _A + k] * work[k, _LAM]
+        work[a, _LAM] = z
+    for a in range(0, rows, step):  # z / D (0 on a redundant row)
+        d = work[a, _A + a]
+        work[a, _LAM] = work[a, _LAM] / d if d > 0.0 else 0.0
+    last = (rows - 1) // step * step
+    for a in range(last, -1, -step):  # Lᵀ λ = z / D
+        lam = work[a, _LAM]
+        if work[a, _A + a] > 0.0:
+            for i in range(a + step, rows, step):
+                lam -= work[i, _A + a] * work[i, _LAM]
+        else:
+            lam = 0.0
+        work[a, _LAM] = lam
+    return rank
 
 
 @njit(**_OPTS)
@@ -304,7 +343,8 @@ def project(y, p, shape, ground, mask, sticking, points, gaps, owners, work):
     in ``mask`` (shapes.feature_points), twice (the second pass takes the first's round-off).
     Velocities: the normal velocities of the contact points (and their tangential ones when
     ``sticking``) removed by the impulse of least kinetic energy (the same solve on
-    velocities). Never adds energy. Returns the number of contact points.
+    velocities); sticking points that span the body (rank 6: a face, three corners) leave it
+    exactly at rest. Never adds energy. Returns the number of contact points.
     """
     nx, ny, nz = ground[NORMAL], ground[NORMAL + 1], ground[NORMAL + 2]
     inv_m = p[INV_MASS]
@@ -337,8 +377,13 @@ def project(y, p, shape, ground, mask, sticking, points, gaps, owners, work):
     if count > 0:
         count = feature_points(y, p, shape, ground, mask, points, gaps, owners)
         rows = build_rows(y, p, count, points, nx, ny, nz, work)
-        _solve_normal_rows(work, rows, 1 if sticking else 3)
-        apply_impulses(y, y, p, work, rows, _LAM, 1.0)
+        rank = _solve_normal_rows(work, rows, 1 if sticking else 3)
+        if sticking and rank == 6:  # the contact points span the body: no velocity is left, exactly
+            for j in range(3):
+                y[V + j] = 0.0
+                y[W + j] = 0.0
+        else:
+            apply_impulses(y, y, p, work, rows, _LAM, 1.0)
     _pin = y[P], p[0], shape[0], ground[0], points[0, 0], gaps[0], owners[0]
     return count
 

@@ -1,0 +1,82 @@
+"""A box resting on the ground: exactly at rest, held by m g, and answering a push as the closed forms say.
+
+A body at rest held by a sticking contact is locked (core/kernels/contact/batch.py): its step
+ends where it started and its holding force is reused while its state, parameters and wrench
+are bitwise the same. These tests check that this shortcut changes nothing a user can see: the
+box stays put with the contact force m g up, a push inside the friction cone leaves it at rest
+with the friction equal and opposite to the push, a push beyond it makes it slide with
+a = (F − μ m g)/m from the first step (½ a t², which rk4 integrates exactly), and a box that
+lands flat comes to rest exactly on the ground and stays bitwise put.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rigid_body_sim.core import Simulator, load_scene
+
+G, MU, M = 9.81, 0.5, 1.0
+
+
+def box_scene(height: float = 0.1):
+    return load_scene({"gravity": [0.0, 0.0, -G],
+                       "ground": [{"normal": [0, 0, 1], "material": {"restitution": 0.0, "friction": MU}}],
+                       "bodies": {"crate": {"mass": M, "inertia": {"box": [0.2, 0.2, 0.2]},
+                                            "pose": {"position": [0.0, 0.0, height]}}}})
+
+
+@pytest.mark.parametrize("integrator", ["rk4", "semi_implicit_euler"])
+def test_resting_box_stays_exactly_put_held_by_m_g(integrator):
+    sim = Simulator(box_scene(), integrator=integrator, dt=1e-3)
+    start = sim.state
+    sim.step(200)
+    assert np.array_equal(sim.state.p_WC_W, start.p_WC_W)
+    assert np.array_equal(sim.state.q_WP, start.q_WP)
+    assert not np.any(sim.state.v_WC_W) and not np.any(sim.state.w_WP_P)
+    assert sim.contact.holding_forces[0] == pytest.approx([0.0, 0.0, M * G], rel=1e-12, abs=1e-12)
+
+
+def test_push_inside_the_friction_cone_leaves_it_at_rest():
+    sim = Simulator(box_scene(), integrator="rk4", dt=1e-3)
+    sim.step(50)  # resting (locked) before the push
+    push = 0.5 * MU * M * G
+    sim.apply_wrench("crate", force=(push, 0.0, 0.0))
+    sim.step(100)
+    assert not np.any(sim.state.v_WC_W)
+    assert sim.state.p_WC_W[0] == pytest.approx([0.0, 0.0, 0.1], abs=1e-15)
+    assert sim.contact.holding_forces[0] == pytest.approx([-push, 0.0, M * G], rel=1e-12, abs=1e-12)
+
+
+@pytest.mark.parametrize("rest_steps", [0, 50])
+def test_push_beyond_the_friction_cone_slides_with_the_closed_form_acceleration(rest_steps):
+    sim = Simulator(box_scene(), integrator="rk4", dt=1e-3)
+    sim.step(rest_steps)
+    push = 2.0 * MU * M * G
+    sim.apply_wrench("crate", force=(push, 0.0, 0.0))
+    sim.step(100)
+    a = (push - MU * M * G) / M
+    t = 0.1
+    assert sim.state.p_WC_W[0, 0] == pytest.approx(0.5 * a * t * t, rel=1e-9)
+    assert sim.state.v_WC_W[0, 0] == pytest.approx(a * t, rel=1e-9)
+    assert sim.state.p_WC_W[0, 2] == pytest.approx(0.1, abs=1e-12)
+    # and once the push is gone it stops after v²/(2 μ g), then stays exactly put
+    sim.step(1000)
+    stops = sim.contact.events_of("crate", "stick")
+    assert stops and stops[-1].time == pytest.approx(rest_steps * 1e-3 + t + a * t / (MU * G), rel=1e-9)
+    x = sim.state.p_WC_W[0, 0]
+    assert x == pytest.approx(0.5 * a * t * t + (a * t) ** 2 / (2.0 * MU * G), rel=1e-9)
+    after = sim.state
+    sim.step(100)
+    assert np.array_equal(sim.state.p_WC_W, after.p_WC_W) and not np.any(sim.state.v_WC_W)
+
+
+def test_box_landing_flat_comes_to_rest_exactly_on_the_ground():
+    sim = Simulator(box_scene(height=0.6), integrator="rk4", dt=1e-3)
+    sim.step(1000)
+    assert sim.contact.is_resting("crate")
+    assert sim.state.p_WC_W[0, 2] == pytest.approx(0.1, abs=1e-12)
+    assert not np.any(sim.state.v_WC_W) and not np.any(sim.state.w_WP_P)
+    after = sim.state
+    sim.step(100)
+    assert np.array_equal(sim.state.p_WC_W, after.p_WC_W) and np.array_equal(sim.state.q_WP, after.q_WP)
