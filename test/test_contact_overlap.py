@@ -61,13 +61,20 @@ def test_a_sphere_sunk_into_a_turned_box_face():
 
 
 def test_what_is_not_refused():
-    """Apart by 1 nm; no ground (no contact); a body without a shape; two bodies that do not move."""
+    """Apart by 1 nm; touching within round-off; no ground (no contact); a body without a shape; two
+    bodies that do not move. A kinematic body and a free one are refused (inside a static one:
+    static_geometry.py's own refusal)."""
     load_scene({"ground": GROUND, "bodies": {"a": ball([0, 0, 0], 0.1), "b": ball([0.2 + 1e-9, 0, 0], 0.1)}})
     load_scene({"bodies": {"a": ball([0, 0, 0], 0.1), "b": ball([0.1, 0, 0], 0.1)}})
     load_scene({"ground": GROUND, "bodies": {"a": ball([0, 0, 0], 0.1), "b": ball([0.1, 0, 0], 0.1, collision="none")}})
+    third = 1.0 / 3.0  # 0.1 + 0.2 − (1/3 − 0.0333...) is a round-off away from 0
+    load_scene({"ground": GROUND, "bodies": {"a": ball([0, 0, 0], 0.1), "b": ball([third, 0, 0], third - 0.1)}})
     load_scene({"ground": GROUND, "bodies": {"a": ball([0, 0, 0], 0.1, motion="static"),
                                              "b": ball([0.1, 0, 0], 0.1, motion="static")}})
     with pytest.raises(SceneError, match="shapes of a and b overlap by 0.1 m"):  # one moves: refused
+        load_scene({"ground": GROUND, "bodies": {"a": ball([0, 0, 0], 0.1, motion="kinematic"),
+                                                 "b": ball([0.1, 0, 0], 0.1)}})
+    with pytest.raises(SceneError, match="inside static body 'a'"):
         load_scene({"ground": GROUND, "bodies": {"a": ball([0, 0, 0], 0.1, motion="static"),
                                                  "b": ball([0.1, 0, 0], 0.1)}})
 

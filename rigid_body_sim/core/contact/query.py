@@ -16,16 +16,21 @@ import math
 import numpy as np
 
 from ..kernels import layout as L
-from ..kernels.contact.layout import MAX_POINTS, PERSISTENT
+from ..kernels.contact.layout import DIMS, MAX_POINTS, PERSISTENT
 from ..kernels.contact.broadphase import grid_pairs, shape_aabbs
 from ..kernels.contact.pairs import MAX_PAIR_POINTS, pair_contacts
 from ..kernels.contact.shapes import body_gap, body_points, feature_points, min_gaps
 
-__all__ = ["overlapping_bodies", "lowest_gap", "lowest_gaps", "lowest_gaps_along", "lowest_point", "resting_bodies", "touching_points"]
+__all__ = ["TOUCHING", "overlapping_bodies", "lowest_gap", "lowest_gaps", "lowest_gaps_along", "lowest_point", "resting_bodies", "touching_points"]
+
+
+#: A penetration up to this × the pair's size (its largest shape dimension) counts as touching: the
+#: narrow phase's round-off for shapes placed face to face (static_geometry.py uses the same).
+TOUCHING = 1e-9
 
 
 def overlapping_bodies(p_WC_W, q_WB, shapes, moving, of=None) -> list[tuple[int, int, float]]:
-    """The pairs of bodies whose collision shapes overlap (signed distance < 0), deepest first.
+    """The pairs of bodies whose collision shapes overlap (deeper than :data:`TOUCHING`), deepest first.
 
     Parameters
     ----------
@@ -73,7 +78,8 @@ def overlapping_bodies(p_WC_W, q_WB, shapes, moving, of=None) -> list[tuple[int,
     dist, normal, count = np.empty(m), np.empty((m, 3)), np.zeros(m, dtype=np.int64)
     points, seps = np.empty((m, MAX_PAIR_POINTS, 6)), np.empty((m, MAX_PAIR_POINTS))
     pair_contacts(pos, quat, rows, pairs, dist, normal, count, points, seps)
-    hits = np.flatnonzero(dist < 0.0)
+    size = np.maximum(rows[pairs[:, 0], DIMS:DIMS + 3].max(axis=1), rows[pairs[:, 1], DIMS:DIMS + 3].max(axis=1))
+    hits = np.flatnonzero(-dist > TOUCHING * size)
     hits = hits[np.argsort(dist[hits], kind="stable")]
     return [(int(pairs[k, 0]), int(pairs[k, 1]), -float(dist[k])) for k in hits]
 
