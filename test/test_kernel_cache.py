@@ -108,6 +108,32 @@ def test_compile_kernels_covers_what_the_simulator_calls() -> None:
     assert after == before, "the Simulator compiled a signature compile_kernels does not make"
 
 
+def test_compile_kernels_covers_the_body_body_kernels_the_scene_loader_calls() -> None:
+    """The loader's overlap check (a scene with a ground) and a spawn's add no signature to the pair kernels."""
+    import numpy as np
+    import pytest
+
+    from rigid_body_sim.core import SceneError, load_scene
+    from rigid_body_sim.core.contact.compile_pairs import PAIR_ENTRY_POINTS, compile_pair_kernels
+    from rigid_body_sim.core.contact.query import overlapping_bodies
+
+    compile_pair_kernels()
+    before = {f.__name__: len(f.signatures) for f in PAIR_ENTRY_POINTS}
+    bodies = {"ball": {"mass": 1.0, "inertia": {"sphere": 0.1}, "pose": {"position": [0.0, 0.0, 1.0]}},
+              "crate": {"mass": 1.0, "inertia": {"box": [0.2, 0.2, 0.2]}, "pose": {"position": [0.35, 0.0, 1.0]}},
+              "can": {"mass": 1.0, "inertia": {"cylinder": [0.1, 0.2]}, "pose": {"position": [0.7, 0.0, 1.0]}},
+              "pill": {"mass": 1.0, "inertia": {"sphere": 0.1}, "collision": {"capsule": [0.05, 0.1]},
+                       "pose": {"position": [1.05, 0.0, 1.0]}}}
+    scene = load_scene({"ground": [{"normal": [0.0, 0.0, 1.0]}], "bodies": bodies})
+    with pytest.raises(SceneError, match="overlap"):
+        load_scene({"ground": [{"normal": [0.0, 0.0, 1.0]}],
+                    "bodies": {**bodies, "pea": {**bodies["ball"], "pose": {"position": [0.05, 0.0, 1.0]}}}})
+    overlapping_bodies(scene.initial_state.p_WC_W, scene.initial_state.q_WP, scene.contact.shapes,
+                       np.ones(4, dtype=bool), of=[3])
+    after = {f.__name__: len(f.signatures) for f in PAIR_ENTRY_POINTS}
+    assert after == before, "the overlap check compiled a signature compile_pair_kernels does not make"
+
+
 #: Waits for the kernel cache (ensure_kernels) and says when it got past it.
 WAITER = (
     "import time\n"

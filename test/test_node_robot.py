@@ -508,6 +508,27 @@ def test_bad_spawn_or_delete_names_the_problem_and_changes_nothing(tmp_path, req
         h.step(1)  # still steps
 
 
+def test_a_spawn_into_another_body_is_refused_with_its_name_and_the_depth(tmp_path) -> None:
+    """A ball (r 0.5) falling above a ground; a pea (r 0.1) spawned 0.55 m beside the ball's centre
+    where it is now overlaps it by 0.5 + 0.1 − 0.55 = 0.05 m: refused, nothing changes."""
+    path = tmp_path / "scene.yaml"
+    path.write_text(yaml.safe_dump({"gravity": [0.0, 0.0, -G], "ground": [{"normal": [0, 0, 1], "offset": -10.0}],
+                                    "bodies": {"ball": BALL}}))
+    with SimHarness(path) as h:
+        h.step(3)
+        with h.node.locked_simulator() as sim:
+            before = (sim.body_names, sim.time, sim.positions_world())
+        pea = yaml.safe_dump({"mass": 0.1, "inertia": {"sphere": 0.1},
+                              "pose": {"position": (before[2][0] + [0.55, 0.0, 0.0]).tolist()}})
+        result = h.spawn(pea=pea)
+        assert not result.successful
+        assert "bodies.pea: its collision shape would overlap ball's by " in result.reason
+        assert float(result.reason.split("overlap ball's by ")[1].split(" m")[0]) == pytest.approx(0.05, abs=1e-12)
+        with h.node.locked_simulator() as sim:
+            assert sim.body_names == before[0] and sim.time == before[1]
+            np.testing.assert_array_equal(sim.positions_world(), before[2])
+
+
 # ---------------------------------------------------------------------------------------- markers
 
 def test_marker_array_shows_shapes_sites_and_held_wrenches(tmp_path) -> None:

@@ -233,6 +233,32 @@ def test_a_refused_edit_changes_nothing():
     assert session.simulator.body_names == ("box", "ball") and not io.named("prepare")
 
 
+def test_a_spawn_into_another_body_where_it_is_now_is_refused_and_changes_nothing():
+    """The box (1.0 × 0.6 × 0.4 m, not turning, not pushed) moves +x from x = 0; a ball of radius 0.1 spawned
+    0.55 m beyond its +x face's centre line overlaps it by 0.5 + 0.1 − 0.55 = 0.05 m where the box
+    is now; the same ball at the box's start, which it has left, is accepted."""
+    scene = {**SCENE, "ground": [{"normal": [0.0, 0.0, 1.0], "offset": -1.0}]}
+    sim = Simulator(load_scene_text(json.dumps(scene), "test scene"), integrator="rk4", dt=physics_dt(SETTINGS))
+    io = RecordingIO()
+    io.pushing = False
+    session = SimSession(sim, dict(SETTINGS), io, logging.getLogger("test_session"))
+    assert session.step_ticks(50)[0]
+    box_now = session.simulator.body_state("box").position_world
+    assert box_now[0] - X0[0] > 0.1  # it has moved on at V0
+    before = session.simulator.state.copy()
+    ball = {"mass": 1.0, "inertia": {"sphere": 0.1}}
+    ok, message = session.edit({"pea": json.dumps({**ball, "pose": {"position": (box_now + [0.55, 0, 0]).tolist()}})}, [])
+    assert not ok and message.startswith("refused: spawn/delete request: bodies.pea: its collision shape would "
+                                         "overlap box's by ")
+    depth = float(message.split("overlap box's by ")[1].split(" m")[0])
+    assert depth == pytest.approx(0.05, abs=1e-12)
+    assert session.simulator.body_names == ("box", "ball") and not io.named("prepare")
+    np.testing.assert_array_equal(session.simulator.state.rows(), before.rows())
+    ok, message = session.edit({"pea": json.dumps({**ball, "pose": {"position": (X0 - [0.55, 0, 0]).tolist()}})}, [])
+    assert ok, message
+    assert session.simulator.body_names == ("box", "ball", "pea")
+
+
 class BackToBackTicks:
     """A tick thread whose ticks overrun their period: each holds the lock ``tick_s`` and the next
     one starts at once (through ``session.lock.ticks``, as tick_loop.py takes it)."""

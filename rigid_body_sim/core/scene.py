@@ -275,7 +275,7 @@ def load_scene(source: str | Path | Mapping[str, Any]) -> Scene:
     return load_scene_text(_decode(raw, name), name)
 
 
-def load_scene_text(text: str, source: str = "<text>") -> Scene:
+def load_scene_text(text: str, source: str = "<text>", *, apart: bool = True) -> Scene:
     """Load and validate a scene from YAML text (e.g. a recording's attached scene).
 
     Parameters
@@ -284,6 +284,10 @@ def load_scene_text(text: str, source: str = "<text>") -> Scene:
         The YAML document.
     source : str
         What errors call it (a file name, ``"<text>"``).
+    apart : bool
+        Refuse bodies whose collision shapes start overlapping (scenes with a ground). False
+        for a scene edited at run time, whose other bodies have moved from their initial poses:
+        ``~/spawn`` checks the new bodies against their current poses instead.
 
     Raises
     ------
@@ -300,7 +304,7 @@ def load_scene_text(text: str, source: str = "<text>") -> Scene:
             raise SceneError(f"{source}: {exc}") from None
         if not isinstance(data, Mapping):
             raise SceneError(f"{source}: expected a mapping with key 'bodies' at the top, got {_kind(data)}")
-        return replace(_build(data, source), text=text)
+        return replace(_build(data, source, apart=apart), text=text)
 
 
 @contextmanager
@@ -465,7 +469,7 @@ class _Bodies:
 _ZERO3 = [0.0, 0.0, 0.0]
 
 
-def _build(data: Mapping, source: str) -> Scene:
+def _build(data: Mapping, source: str, *, apart: bool = True) -> Scene:
     check = _Checker(source)
     top = check.mapping(data, "", _TOP_KEYS, required=("bodies",))
     gravity = _ZERO3
@@ -517,7 +521,7 @@ def _build(data: Mapping, source: str) -> Scene:
         scene = replace(scene, wrenches=_wrenches(check, top["wrenches"], scene))
     _check_derived(check, scene)
     # --- contact: ground, material, collision (core/contact/scene_keys.py)
-    scene = replace(scene, contact=read_contact(check, top, model, state))
+    scene = replace(scene, contact=read_contact(check, top, model, state, apart=apart))
     # --- end contact
     return scene
 

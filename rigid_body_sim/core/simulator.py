@@ -1015,8 +1015,9 @@ def ensure_kernels() -> None:
 def compile_kernels() -> None:
     """Compile (or load from numba's cache) every compiled kernel: the stepping entry points
     (:func:`~rigid_body_sim.core.kernels.compile.compile_kernels`), then the contact kernels, by
-    dropping one body of each shape onto a ground until it rests (``make venv`` and the node's
-    first start call this). Runs under the cache's lock and marks the cache complete.
+    dropping one body of each shape onto a ground until it rests, then the body–body kernels
+    (:func:`~rigid_body_sim.core.contact.compile_pairs.compile_pair_kernels`) (``make venv`` and
+    the node's first start call this). Runs under the cache's lock and marks the cache complete.
 
     Raises
     ------
@@ -1051,3 +1052,6 @@ def _compile_all() -> None:
                                     "material": {"restitution": 0.5, "friction": 0.5}}]})
     for integrator in ("rk4", "semi_implicit_euler"):
         Simulator(scene, integrator=integrator, dt=0.01).step(200)
+    from .contact.compile_pairs import compile_pair_kernels
+
+    compile_pair_kernels()  # body–body geometry (the scene loader's overlap check) and the pair impact

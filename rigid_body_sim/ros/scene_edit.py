@@ -7,20 +7,24 @@ into a new scene through the ordinary loader (so every check of a scene file app
 error names the key path, e.g. ``spawn request: bodies.crate2.mass: expected ...``); the node
 then continues the simulation in it with ``Simulator.with_scene`` (sim time, step count and
 every other body's state carry over). Scripted wrenches of a deleted body are deleted with it.
-Nothing is changed unless the whole request is valid.
+In a scene with a ground, a spawned body whose collision shape overlaps another body's where that
+body is now (:func:`spawn_overlap`) is refused. Nothing is changed unless the whole request is valid.
 """
 
 from __future__ import annotations
 
 import json
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from typing import Any
 
-from ..core import Scene, SceneError
+import numpy as np
+
+from ..core import Scene, SceneError, Simulator
+from ..core.quaternion import quat_conjugate, quat_multiply
 from ..core.scene import load_scene_text
 from ..core.scene_yaml import YamlReadError, read_yaml
 
-__all__ = ["SOURCE", "scene_data", "edited_scene"]
+__all__ = ["SOURCE", "scene_data", "edited_scene", "spawn_overlap"]
 
 #: What errors call a scene made by an edit (and its ``Scene.source``).
 SOURCE = "spawn/delete request"
@@ -90,4 +94,37 @@ def edited_scene(scene: Scene, spawn: Mapping[str, str], delete: list[str]) -> S
         text = json.dumps(data, allow_nan=False)
     except (TypeError, ValueError) as exc:
         raise SceneError(f"{SOURCE}: the edited scene cannot be written as text ({exc})") from None
-    return load_scene_text(text, SOURCE)
+    # the kept bodies' initial poses are not where they are now: spawn_overlap checks the current ones
+    return load_scene_text(text, SOURCE, apart=False)
+
+
+def spawn_overlap(sim: Simulator, scene: Scene, spawned: Iterable[str]) -> str | None:
+    """Why the bodies ``spawned`` cannot join ``sim`` as ``scene`` (the edited scene): the deepest
+    overlap of a spawned body's collision shape with another body's, the kept bodies taken where
+    they are now in ``sim`` and the spawned ones at their initial poses (as ``with_scene`` would
+    place them); None when there is none, or the scene has no ground (no contact).
+    """
+    if scene.contact is None:
+        return None
+    from ..core.contact.query import overlapping_bodies  # compiled: imported only for a scene with a ground
+    from ..core.contact.scene_keys import apart_shapes
+
+    state, model = scene.initial_state, scene.model
+    p_WC_W = np.array(state.p_WC_W, dtype=float)
+    q_WB = quat_multiply(state.q_WP, quat_conjugate(model.q_BP))
+    old_index = {name: a for a, name in enumerate(sim.body_names)}
+    now = sim.state
+    old_q_WB = quat_multiply(now.q_WP, quat_conjugate(sim.model.q_BP))
+    for b, name in enumerate(model.names):
+        a = old_index.get(name)
+        if a is not None:
+            p_WC_W[b], q_WB[b] = now.p_WC_W[a], old_q_WB[a]
+    new = [b for b, name in enumerate(model.names) if name in set(spawned)]
+    moving = np.array([motion == "free" for motion in model.motions], dtype=bool)
+    overlaps = overlapping_bodies(p_WC_W, q_WB, apart_shapes(scene.contact.shapes, model.motions), moving, of=new)
+    if not overlaps:
+        return None
+    i, j, depth = overlaps[0]
+    body, other = (model.names[j], model.names[i]) if j in new else (model.names[i], model.names[j])
+    return (f"{SOURCE}: bodies.{body}: its collision shape would overlap {other}'s by {depth:.12g} m "
+            f"({other} where it is now); spawn it at least that much further away")

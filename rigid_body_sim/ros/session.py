@@ -27,7 +27,7 @@ from typing import Any, Callable, Iterator, Mapping, Protocol
 
 from ..core import NonFiniteStateError, Scene, SceneError, Simulator, load_scene
 from .node_log import log_models
-from .scene_edit import edited_scene
+from .scene_edit import edited_scene, spawn_overlap
 
 __all__ = ["BUSY_WAIT_S", "CHANGE_WAIT_S", "MAX_BATCH_ONLY_BODIES", "MAX_BODIES", "MAX_STEP_TICKS", "BodyIO",
            "SessionBusy", "SessionLock", "SettingsChange", "SimSession", "build_simulator", "check_scene",
@@ -478,6 +478,14 @@ class SimSession:
                 check_scene(new_scene, settings["world_frame"], settings["per_body_topics"])
             except (SceneError, ValueError) as exc:
                 return False, f"refused: {exc}"
+            if spawn:
+                try:
+                    with self.busy_or_locked(holder="a spawn"):  # the other bodies where they are now
+                        overlap = spawn_overlap(self.simulator, new_scene, spawn)
+                except SessionBusy as busy:
+                    return False, f"refused: {busy}"
+                if overlap is not None:
+                    return False, f"refused: {overlap}"
             change = self._io.prepare(new_scene, settings["publish_odometry"], keep_state=True)
             with self.lock("a spawn or delete"):
                 self.simulator = self.simulator.with_scene(new_scene)

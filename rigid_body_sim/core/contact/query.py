@@ -3,7 +3,10 @@
 :func:`lowest_gap` answers where a body *would* be against the ground at a given pose (the
 node refuses a ``set_state`` into a half-space with it); :func:`touching_points` gives the
 contact points of a body in persistent contact, as the solver tracks them. Both use the
-compiled gap functions the solver uses (core/kernels/contact/shapes.py).
+compiled gap functions the solver uses (core/kernels/contact/shapes.py). :func:`overlapping_bodies`
+finds the bodies whose collision shapes overlap one another (the scene loader and ``~/spawn``
+refuse them) with the compiled broad phase (uniform grid) and narrow phase
+(core/kernels/contact/broadphase.py, pairs.py).
 """
 
 from __future__ import annotations
@@ -13,10 +16,72 @@ import math
 import numpy as np
 
 from ..kernels import layout as L
-from ..kernels.contact.layout import MAX_POINTS, PERSISTENT
+from ..kernels.contact.layout import DIMS, MAX_POINTS, PERSISTENT
+from ..kernels.contact.broadphase import grid_pairs, shape_aabbs
+from ..kernels.contact.pairs import MAX_PAIR_POINTS, pair_contacts
 from ..kernels.contact.shapes import body_gap, body_points, feature_points, min_gaps
 
-__all__ = ["lowest_gap", "lowest_gaps", "lowest_gaps_along", "lowest_point", "resting_bodies", "touching_points"]
+__all__ = ["TOUCHING", "overlapping_bodies", "lowest_gap", "lowest_gaps", "lowest_gaps_along", "lowest_point", "resting_bodies", "touching_points"]
+
+
+#: A penetration up to this × the pair's size (its largest shape dimension) counts as touching: the
+#: narrow phase's round-off for shapes placed face to face (static_geometry.py uses the same).
+TOUCHING = 1e-9
+
+
+def overlapping_bodies(p_WC_W, q_WB, shapes, moving, of=None) -> list[tuple[int, int, float]]:
+    """The pairs of bodies whose collision shapes overlap (deeper than :data:`TOUCHING`), deepest first.
+
+    Parameters
+    ----------
+    p_WC_W : array-like, shape (N, 3)
+        Each body's centre of mass (world, m): where its shape is centred.
+    q_WB : array-like, shape (N, 4)
+        Each body's frame B in the world, (w, x, y, z): the frame its shape is declared in.
+    shapes : ndarray, shape (N, SHAPE_WIDTH)
+        Shape rows (core/kernels/contact/layout.py); a SHAPE_NONE row overlaps nothing.
+    moving : array-like of bool, shape (N,)
+        Bodies that move (motion ``free``); a pair of two bodies that do not is never reported.
+    of : array-like of int, optional
+        Only pairs with at least one body among these indices (default: every pair).
+
+    Returns
+    -------
+    list of (i, j, depth)
+        i < j body indices and the penetration depth in m (minus the signed distance: the
+        shortest translation that separates them), deepest first.
+
+    Candidates come from the uniform grid (linear in N for shapes of comparable size), then one
+    compiled narrow-phase call over them.
+    """
+    # writable C-ordered copies: the one signature compile_pairs.py compiles (a read-only array is another type)
+    pos = np.array(p_WC_W, dtype=float, order="C").reshape(-1, 3)
+    quat = np.array(q_WB, dtype=float, order="C").reshape(-1, 4)
+    rows = np.array(shapes, dtype=float, order="C")
+    n = len(pos)
+    lo, hi = np.empty((n, 3)), np.empty((n, 3))
+    shape_aabbs(pos, quat, rows, lo, hi)
+    pairs = np.empty((max(4 * n, 16), 2), dtype=np.int64)
+    found = grid_pairs(lo, hi, 0.0, pairs)
+    if found > len(pairs):
+        pairs = np.empty((found, 2), dtype=np.int64)
+        found = grid_pairs(lo, hi, 0.0, pairs)
+    pairs = pairs[:found]
+    moves = np.asarray(moving, dtype=bool)
+    keep = moves[pairs[:, 0]] | moves[pairs[:, 1]]
+    if of is not None:
+        chosen = np.zeros(n, dtype=bool)
+        chosen[np.asarray(of, dtype=np.int64)] = True
+        keep &= chosen[pairs[:, 0]] | chosen[pairs[:, 1]]
+    pairs = np.ascontiguousarray(pairs[keep])
+    m = len(pairs)
+    dist, normal, count = np.empty(m), np.empty((m, 3)), np.zeros(m, dtype=np.int64)
+    points, seps = np.empty((m, MAX_PAIR_POINTS, 6)), np.empty((m, MAX_PAIR_POINTS))
+    pair_contacts(pos, quat, rows, pairs, dist, normal, count, points, seps)
+    size = np.maximum(rows[pairs[:, 0], DIMS:DIMS + 3].max(axis=1), rows[pairs[:, 1], DIMS:DIMS + 3].max(axis=1))
+    hits = np.flatnonzero(-dist > TOUCHING * size)
+    hits = hits[np.argsort(dist[hits], kind="stable")]
+    return [(int(pairs[k, 0]), int(pairs[k, 1]), -float(dist[k])) for k in hits]
 
 
 def lowest_gap(sim, body: str, position_world, orientation_xyzw) -> tuple[float, int]:

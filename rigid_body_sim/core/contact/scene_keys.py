@@ -25,7 +25,9 @@ with a ``ground`` key (``ground: []`` for no half-space): the solver's static_ge
 Pair material: friction √(μ_a μ_b), restitution max(e_a, e_b) (Box2D's rule); a side without
 a material takes the other's; with neither, :data:`DEFAULT_RESTITUTION` and
 :data:`DEFAULT_FRICTION`. A scene whose moving bodies start inside the ground is refused, with
-the body, the half-space and the depth named. Without a ``ground`` key the scene has no contact
+the body, the half-space and the depth named; so is a scene with a ground whose bodies start
+with their collision shapes overlapping (a pair with at least one ``free`` body; inside a
+static body: static_geometry.py), with both bodies and the depth named. Without a ``ground`` key the scene has no contact
 (``Scene.contact`` is None) and runs exactly as before.
 """
 
@@ -59,7 +61,7 @@ from ..kernels.contact.layout import (
 from .materials import DEFAULT_FRICTION, DEFAULT_RESTITUTION, pair_material
 from .static_geometry import check_not_inside_statics
 
-__all__ = ["ContactSpec", "read_contact", "without_contact_keys", "pair_material", "DEFAULT_RESTITUTION", "DEFAULT_FRICTION",
+__all__ = ["ContactSpec", "read_contact", "apart_shapes", "without_contact_keys", "pair_material", "DEFAULT_RESTITUTION", "DEFAULT_FRICTION",
            "MAX_GROUNDS", "BODY_KEYS", "TOP_KEYS"]
 
 #: Most half-spaces a scene may list.
@@ -181,12 +183,14 @@ def _default_shape(inertia: Any, row: np.ndarray) -> None:
         row[DIMS:DIMS + 2] = [float(arg[0]), 0.5 * float(arg[1])]
 
 
-def read_contact(check: Any, top: Mapping, model: Any, state: Any) -> ContactSpec | None:
+def read_contact(check: Any, top: Mapping, model: Any, state: Any, *, apart: bool = True) -> ContactSpec | None:
     """Read and check the contact keys of a scene whose bodies scene.py has already read.
 
     ``check`` is scene.py's checker (errors name the key path and what was expected), ``top``
     the scene mapping, ``model`` and ``state`` the BodyModel and initial State built from it.
-    Returns None when the scene has no ``ground`` (the body keys are still checked).
+    Returns None when the scene has no ``ground`` (the body keys are still checked). With
+    ``apart`` false, bodies whose shapes overlap are not refused (a spawn checks its new bodies
+    against the others' current poses instead).
     """
     bodies = top["bodies"]
     shapes = np.zeros((len(bodies), SHAPE_WIDTH))
@@ -207,8 +211,9 @@ def read_contact(check: Any, top: Mapping, model: Any, state: Any) -> ContactSpe
         for j in range(g):
             restitution[i, j], friction[i, j] = pair_material(shapes[i], grounds[j])
     _check_not_inside(check, model, state, shapes, grounds)
-
     check_not_inside_statics(check, model, state, shapes)
+    if apart:
+        _check_apart(check, model, state, shapes)
     bodies = np.array([i for i in range(n) if shapes[i, KIND] != SHAPE_NONE and model.motions[i] == "free"],
                       dtype=np.int64)
     for array in (grounds, shapes, restitution, friction, bodies):
@@ -238,3 +243,27 @@ def _check_not_inside(check: Any, model: Any, state: Any, shapes: np.ndarray, gr
                 check.fail(f"bodies.{name}", f"a body that starts outside the ground: its collision shape is {depth:.6g} m "
                            f"inside ground[{j}] (normal {grounds[j, NORMAL:NORMAL + 3].tolist()}, offset "
                            f"{grounds[j, OFFSET]:g} m); move it up by at least that", show_got=False)
+
+
+def apart_shapes(shapes: np.ndarray, motions: Any) -> np.ndarray:
+    """``shapes`` with the static bodies' rows emptied (SHAPE_NONE): the shapes the body–body overlap
+    check pairs. A moving body inside a static one is refused by static_geometry.py's own check."""
+    out = np.array(shapes, dtype=float)
+    out[[i for i, motion in enumerate(motions) if motion == "static"], KIND] = SHAPE_NONE
+    return out
+
+
+def _check_apart(check: Any, model: Any, state: Any, shapes: np.ndarray) -> None:
+    """Refuse bodies whose collision shapes start overlapping (at least one free, neither static), naming both and the depth."""
+    from ..quaternion import quat_conjugate, quat_multiply  # numpy
+    from .query import overlapping_bodies  # compiled: imported only when a scene has a ground
+
+    q_WB = quat_multiply(state.q_WP, quat_conjugate(np.asarray(model.q_BP, dtype=float).reshape(-1, 4)))
+    moving = np.array([motion == "free" for motion in model.motions], dtype=bool)
+    overlaps = overlapping_bodies(state.p_WC_W, q_WB, apart_shapes(shapes, model.motions), moving)
+    if overlaps:
+        i, j, depth = overlaps[0]
+        a, b = model.names[i], model.names[j]
+        more = f" ({len(overlaps) - 1} more overlapping pairs)" if len(overlaps) > 1 else ""
+        check.fail(f"bodies.{b}", f"bodies that start apart: the collision shapes of {a} and {b} overlap by "
+                   f"{depth:.12g} m{more}; move them apart by at least that", show_got=False)

@@ -1,0 +1,60 @@
+"""Compile (or load from numba's cache) the body–body contact kernels with the argument types they are called with.
+
+Called from ``compile_kernels()`` (core/simulator.py: ``make venv``, the node's first start),
+under the cache's lock, so that neither a scene load nor a test pays for compiling them. Each
+function of :data:`PAIR_ENTRY_POINTS` is called once on a small batch built as its callers
+build theirs: :func:`~rigid_body_sim.core.contact.query.overlapping_bodies` (C-ordered float64
+arrays, int64 pairs) and the narrow phase also on a strided view of the pairs (a reversed
+``pairs[:, ::-1]``). This module compiles nothing of its own (it lives outside
+core/kernels/, so editing it keeps the kernel cache); test_kernel_cache.py checks that the
+query adds no signature afterwards.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..kernels.contact.broadphase import grid_pairs, shape_aabbs, sweep_pairs
+from ..kernels.contact.impacts import IMPACT_WORK_SHAPE
+from ..kernels.contact.layout import DIMS, KIND, SHAPE_BOX, SHAPE_CAPSULE, SHAPE_CYLINDER, SHAPE_SPHERE, SHAPE_WIDTH
+from ..kernels.contact.pair_impacts import PAIR_JACOBIAN_SHAPE, pair_impact
+from ..kernels.contact.pairs import MAX_PAIR_POINTS, pair_contacts
+from ..kernels.layout import INERTIA, INV_INERTIA, INV_MASS, MASS, PRM_WIDTH, P, Q, STATE_WIDTH, V
+
+__all__ = ["PAIR_ENTRY_POINTS", "compile_pair_kernels"]
+
+#: The body–body contact kernels called from Python.
+PAIR_ENTRY_POINTS = (shape_aabbs, grid_pairs, sweep_pairs, pair_contacts, pair_impact)
+
+
+def compile_pair_kernels() -> None:
+    """Call each of :data:`PAIR_ENTRY_POINTS` once with the argument types its callers use."""
+    kinds = (SHAPE_SPHERE, SHAPE_BOX, SHAPE_CYLINDER, SHAPE_CAPSULE)
+    n = len(kinds)
+    shapes = np.zeros((n, SHAPE_WIDTH))
+    shapes[:, KIND] = kinds
+    shapes[:, DIMS:DIMS + 3] = 0.1
+    pos = np.zeros((n, 3))
+    pos[:, 0] = 0.15 * np.arange(n)  # neighbours touch: every kind meets another
+    quat = np.zeros((n, 4))
+    quat[:, 0] = 1.0
+    lo, hi = np.empty((n, 3)), np.empty((n, 3))
+    shape_aabbs(pos, quat, shapes, lo, hi)
+    pairs = np.empty((n * n, 2), dtype=np.int64)
+    sweep_pairs(lo, hi, 0.0, pairs)
+    found = grid_pairs(lo, hi, 0.0, pairs)
+    pairs = np.ascontiguousarray(pairs[:found])
+    for batch in (pairs, pairs[:, ::-1]):
+        m = len(batch)
+        pair_contacts(pos, quat, shapes, batch, np.empty(m), np.empty((m, 3)), np.zeros(m, dtype=np.int64),
+                      np.empty((m, MAX_PAIR_POINTS, 6)), np.empty((m, MAX_PAIR_POINTS)))
+    y = np.zeros(STATE_WIDTH + 1)
+    y[Q] = 1.0
+    prm = np.zeros(PRM_WIDTH)
+    prm[MASS] = prm[INV_MASS] = 1.0
+    prm[INERTIA:INERTIA + 3] = prm[INV_INERTIA:INV_INERTIA + 3] = 1.0
+    y_b = y.copy()
+    y_b[P], y_b[V] = 0.2, -1.0  # b, 0.2 m along x, approaching a
+    points = np.array([[0.1, 0.0, 0.0]])  # world, m
+    pair_impact(y, y.copy(), prm, y_b, y_b.copy(), prm.copy(), 1, points, 1.0, 0.0, 0.0, 0.5, 0.5,
+                np.zeros(PAIR_JACOBIAN_SHAPE), np.zeros(IMPACT_WORK_SHAPE))
