@@ -1050,8 +1050,19 @@ def _compile_all() -> None:
     scene = load_scene({"gravity": [0.0, 0.0, -9.81], "bodies": bodies,
                         "ground": [{"normal": [0.0, 0.0, 1.0], "offset": 0.0,
                                     "material": {"restitution": 0.5, "friction": 0.5}}]})
+    # a static shape as geometry (contact/static_geometry.py): a ball and a crate onto a static table
+    table = load_scene({"gravity": [0.0, 0.0, -9.81],
+                        "ground": [{"normal": [0.0, 0.0, 1.0], "offset": 0.0}],
+                        "bodies": {"table": {"mass": 20.0, "inertia": {"box": [1.0, 1.0, 0.5]}, "motion": "static",
+                                             "pose": {"position": [0.0, 0.0, 0.25]}},
+                                   "ball": {"mass": 1.0, "inertia": {"sphere": 0.1},
+                                            "material": {"restitution": 0.5, "friction": 0.3},
+                                            "pose": {"position": [-0.2, 0.0, 1.1]}},
+                                   "crate": {"mass": 2.0, "inertia": {"box": [0.2, 0.2, 0.2]},
+                                             "pose": {"position": [0.25, 0.1, 0.7]}}}})
     for integrator in ("rk4", "semi_implicit_euler"):
         Simulator(scene, integrator=integrator, dt=0.01).step(200)
+        Simulator(table, integrator=integrator, dt=0.01).step(150)
     from .contact.compile_pairs import compile_pair_kernels
 
     compile_pair_kernels()  # body–body geometry (the scene loader's overlap check) and the pair impact
