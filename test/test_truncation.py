@@ -3,7 +3,8 @@
 A recording is cut when its writer dies (SIGKILL, a crash), the disk fills up, or a copy stops
 half way: the file then ends at an arbitrary byte. Here a recording written by ``rigid-body-sim
 run --record`` and one written by the node process are each cut at 200 random byte offsets
-(and at the edges: inside the magic, the header, right after it, the last byte). Each cut file
+(40 in the default run; and at the edges: inside the magic, the header, right after it, the last
+byte). Each cut file
 must either read, with a status starting ``cut short``, exactly the samples that lie in the
 chunks written whole before the cut (worked out from the complete file's chunk index, with
 mcap's own reader) with the complete file's values, or, when no whole sample lies before the
@@ -153,8 +154,7 @@ def check_plot_on_cuts(tmp_path: Path, full: Path, seed: int, n: int = 6) -> Non
 @pytest.mark.timeout(300)
 @pytest.mark.parametrize("cuts", [pytest.param(40, id="40 cuts"), pytest.param(CUTS, id="200 cuts", marks=pytest.mark.slow)])
 def test_cli_recording_cut_anywhere_reads_up_to_the_cut(tmp_path: Path, cuts: int) -> None:
-    """The CLI's recording cut at random offsets (40 in the default run, 200 in the slow one; the
-    node's recording below is cut at 200 in every run)."""
+    """The CLI's recording cut at random offsets (40 in the default run, 200 in the slow one)."""
     scene = tmp_path / "scene.yaml"
     scene.write_text(yaml.safe_dump(SCENE), encoding="utf-8")
     full = tmp_path / "run.mcap"
@@ -166,8 +166,10 @@ def test_cli_recording_cut_anywhere_reads_up_to_the_cut(tmp_path: Path, cuts: in
 
 @pytest.mark.ros
 @pytest.mark.timeout(300)
-def test_node_recording_cut_anywhere_reads_up_to_the_cut(tmp_path: Path) -> None:
-    """The node flushes a chunk every 0.5 s of wall time: 3 s of running gives several chunks."""
+@pytest.mark.parametrize("cuts", [pytest.param(40, id="40 cuts"), pytest.param(CUTS, id="200 cuts", marks=pytest.mark.slow)])
+def test_node_recording_cut_anywhere_reads_up_to_the_cut(tmp_path: Path, cuts: int) -> None:
+    """The node flushes a chunk every 0.5 s of wall time: 3 s of running gives several chunks
+    (cut at 40 random offsets in the default run, 200 in the slow one)."""
     scene = tmp_path / "scene.yaml"
     scene.write_text(yaml.safe_dump(SCENE), encoding="utf-8")
     full = tmp_path / "node.mcap"
@@ -190,8 +192,8 @@ def test_node_recording_cut_anywhere_reads_up_to_the_cut(tmp_path: Path) -> None
         if process.poll() is None:
             process.kill()
             process.wait()
-    counts = check_cuts(tmp_path, full, seed=3)
-    assert counts["cuts"] == CUTS + 9
+    counts = check_cuts(tmp_path, full, seed=3, cuts=cuts)
+    assert counts["cuts"] == cuts + 9
     check_plot_on_cuts(tmp_path, full, seed=4)
 
 
