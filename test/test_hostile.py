@@ -670,7 +670,8 @@ def test_plot_output_that_is_the_run_is_refused(capsys: pytest.CaptureFixture[st
     assert run.read_bytes() == before
 
 
-@pytest.mark.parametrize(("sig", "code"), [(signal.SIGTERM, 0), (signal.SIGINT, 0)], ids=["SIGTERM", "SIGINT"])
+@pytest.mark.parametrize(("sig", "code"), [pytest.param(signal.SIGTERM, 0, marks=pytest.mark.slow), (signal.SIGINT, 0)],
+                         ids=["SIGTERM", "SIGINT"])  # one handler (rigid_body_sim.signals) for both; SIGTERM in test-slow
 def test_a_signal_during_run_closes_and_marks_the_files(tmp_path: Path, spinner: Path, sig: int, code: int) -> None:
     """Once: SIGTERM during ``run`` left an MCAP file without a summary that ``plot`` could not read,
     and nothing said the run was cut short."""

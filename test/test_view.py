@@ -18,7 +18,7 @@ The replay (``rigid-body-sim view RECORDING``, no node): a 4 s recording of the 
 with ``rigid-body-sim run --record``; through the page (the slider's thumb by keyboard, the number
 box beside it typed into, Play and Pause) the time moves, and the ``pose`` field's time, position
 and quaternion equal read_recording's sample at that time within 1e-9; the box is drawn elsewhere
-at t = 2.5 s than at t = 0.1 s (box-coloured pixels of two screenshots differ). A file that is
+at t = 2.5 s than at t = 0.02 s (box-coloured pixels of two screenshots differ). A file that is
 not a recording, or a missing one: one line, exit 2; a recording cut in half replays up to the
 cut and says so.
 ``RIGID_BODY_SIM_VIEW_PNG=docs/view.png`` also saves the screenshot with the box (the README's).
@@ -131,6 +131,7 @@ def twist_arrays(t: Twist) -> tuple[np.ndarray, np.ndarray]:
 
 
 def chromium() -> webdriver.Chrome:
+    """A new headless chromium (the tests share one: the ``browser`` fixture)."""
     options = webdriver.ChromeOptions()
     options.binary_location = CHROMIUM
     for arg in ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
@@ -138,6 +139,43 @@ def chromium() -> webdriver.Chrome:
                 f"--user-data-dir={tempfile.mkdtemp(prefix='rbs-view-chromium-')}", "--window-size=1200,800"):
         options.add_argument(arg)
     return webdriver.Chrome(service=Service(CHROMEDRIVER), options=options)
+
+
+@pytest.fixture(scope="module")
+def browser():
+    """One chromium for the module's tests (each loads its own page); quit at the end."""
+    assert os.access(CHROMIUM, os.X_OK) and os.access(CHROMEDRIVER, os.X_OK), "make browser-deps installs them"
+    driver = chromium()
+    try:
+        yield driver
+    finally:
+        driver.quit()
+
+
+def open_page(driver, port: int, view: subprocess.Popen, log: Path) -> None:
+    """Load the view's page once it serves (it may still be starting); close the software-WebGL notice."""
+    end = time.monotonic() + 60.0
+    while True:
+        try:
+            driver.get(f"http://127.0.0.1:{port}")
+            break
+        except Exception:  # noqa: BLE001 - the view is still starting
+            assert view.poll() is None and time.monotonic() < end, log.read_text()
+            time.sleep(0.5)
+    for close in driver.find_elements(By.CSS_SELECTOR, "[class*='Notification-closeButton']"):
+        close.click()  # the software-WebGL notice of a headless browser (cosmetic: the README's picture)
+
+
+def screenshot_when(driver, predicate, what: str, timeout: float = 30.0) -> bytes:
+    """The first screenshot (taken every 0.25 s) that ``predicate`` accepts: the software renderer
+    has drawn the frame by then."""
+    end = time.monotonic() + timeout
+    while True:
+        png = driver.get_screenshot_as_png()
+        if predicate(png):
+            return png
+        assert time.monotonic() < end, f"the page never showed {what}"
+        time.sleep(0.25)
 
 
 def page_text(driver) -> str:
@@ -159,30 +197,20 @@ def click(driver, label: str) -> None:
 
 
 @pytest.mark.timeout(240)
-def test_view_in_chromium_draws_the_box_and_strikes_it(tmp_path):
-    assert os.access(CHROMIUM, os.X_OK) and os.access(CHROMEDRIVER, os.X_OK), "make browser-deps installs them"
+def test_view_in_chromium_draws_the_box_and_strikes_it(tmp_path, browser):
     mass, inertia, corner = box_from_scene()
     J = np.array([0.0, 0.0, STRIKE_IMPULSE_NS])
     node = start_process(["-p", "paused:=true", "-p", "status_period:=0.0", "-p", "diagnostics_period:=0.1",
                           "-p", "real_time_factor:=1e-6", "-p", "rate_hz:=10000.0"], tmp_path / "node.log")
     watcher = Watcher()
-    view = driver = None
+    view = None
+    driver = browser
     try:
         watcher.wait("the node's first twist", lambda: watcher.twists, timeout=60.0)
         port = free_port()
         with open(tmp_path / "view.log", "w") as log:
             view = subprocess.Popen(view_command("--port", str(port)), stdout=log, stderr=subprocess.STDOUT)
-        driver = chromium()
-        end = time.monotonic() + 60.0
-        while True:
-            try:
-                driver.get(f"http://127.0.0.1:{port}")
-                break
-            except Exception:  # noqa: BLE001 - the view is still starting
-                assert view.poll() is None and time.monotonic() < end, (tmp_path / "view.log").read_text()
-                time.sleep(0.5)
-        for close in driver.find_elements(By.CSS_SELECTOR, "[class*='Notification-closeButton']"):
-            close.click()  # the software-WebGL notice of a headless browser (cosmetic: the README's picture)
+        open_page(driver, port, view, tmp_path / "view.log")
         # The node is found, its pose known; no tick yet, so no markers: no shape drawn.
         wait_text(driver, lambda t: "showing 1 body; no shape yet for box" in t, "the node found, no shape yet")
         time.sleep(2.0)  # let the software renderer draw the frame
@@ -193,8 +221,7 @@ def test_view_in_chromium_draws_the_box_and_strikes_it(tmp_path):
         watcher.wait("the twist after Step", lambda: len(watcher.twists) > n)
         wait_text(driver, lambda t: "showing 1 body" in t and "no shape yet" not in t, "the box's shape")
         wait_text(driver, lambda t: "step: ok" in t, "Step's answer")
-        time.sleep(2.0)
-        png = driver.get_screenshot_as_png()
+        png = screenshot_when(driver, lambda png: box_pixels(png) > 3000, "the box drawn")
         (tmp_path / "view.png").write_bytes(png)
         with_box = box_pixels(png)
         print(f"box-coloured pixels: {with_box} with the box, {without_box} before its shape came")
@@ -248,8 +275,6 @@ def test_view_in_chromium_draws_the_box_and_strikes_it(tmp_path):
         if target:
             shutil.copyfile(tmp_path / "view.png", target)
     finally:
-        if driver is not None:
-            driver.quit()
         view_code = stop_process(view) if view is not None else 0
         watcher.close()
         stop_process(node)
@@ -284,11 +309,12 @@ def test_view_waits_for_a_node_and_refuses_a_port_in_use(tmp_path):
 
 
 def record_tumbling_box(path: Path, duration_s: float = 4.0) -> None:
-    """``rigid-body-sim run`` of the default scene (the box tumbling at ω = (0.2, 0.1, 0.5) rad/s), 100 samples/s."""
-    script = Path(view_command()[0])
-    done = subprocess.run([str(script), "run", str(SCENE), "--duration", f"{duration_s:g}", "--record", str(path), "-q"],
-                          capture_output=True, text=True, timeout=120)
-    assert done.returncode == 0 and path.is_file(), done
+    """``rigid-body-sim run`` (in this process) of the default scene (the box tumbling at
+    ω = (0.2, 0.1, 0.5) rad/s), 100 samples/s."""
+    from rigid_body_sim.cli import main
+
+    assert main(["run", str(SCENE), "--duration", f"{duration_s:g}", "--record", str(path), "-q"]) == 0
+    assert path.is_file()
 
 
 def shown_pose(driver) -> tuple[float, np.ndarray, np.ndarray] | None:
@@ -319,7 +345,7 @@ def box_mask(png: bytes) -> np.ndarray:
 
 
 @pytest.mark.timeout(240)
-def test_replay_in_chromium_shows_the_recorded_pose_at_the_slider_time(tmp_path):
+def test_replay_in_chromium_shows_the_recorded_pose_at_the_slider_time(tmp_path, browser):
     from rigid_body_sim.offline.recording import read_recording
 
     record = tmp_path / "tumble.mcap"
@@ -338,41 +364,31 @@ def test_replay_in_chromium_shows_the_recorded_pose_at_the_slider_time(tmp_path)
     port = free_port()
     with open(tmp_path / "view.log", "w") as log:
         view = subprocess.Popen(view_command(str(record), "--port", str(port)), stdout=log, stderr=subprocess.STDOUT)
-    driver = None
+    driver = browser
     try:
-        driver = chromium()
-        end = time.monotonic() + 60.0
-        while True:
-            try:
-                driver.get(f"http://127.0.0.1:{port}")
-                break
-            except Exception:  # noqa: BLE001 - the view is still starting
-                assert view.poll() is None and time.monotonic() < end, (tmp_path / "view.log").read_text()
-                time.sleep(0.5)
-        for close in driver.find_elements(By.CSS_SELECTOR, "[class*='Notification-closeButton']"):
-            close.click()
+        open_page(driver, port, view, tmp_path / "view.log")
         wait_text(driver, lambda t: "1 body, 401 samples, t = 0 … 4 s" in t, "the recording's summary")
         check(wait_pose_at(driver, 0.0), 0.0)
 
-        # The keyboard on the slider's thumb: ten steps of one sample (0.01 s) to the right.
+        # The keyboard on the slider's thumb: two steps of one sample (0.01 s) to the right (each key
+        # redraws the page in software WebGL: seconds on a loaded machine).
         thumb = driver.find_element(By.CSS_SELECTOR, "[role='slider']")
-        for _ in range(10):
+        for _ in range(2):
             thumb.send_keys(Keys.ARROW_RIGHT)
-        check(wait_pose_at(driver, 0.1), 0.1)
-        time.sleep(2.0)  # let the software renderer draw the frame
-        early = box_mask(driver.get_screenshot_as_png())
+        check(wait_pose_at(driver, 0.02), 0.02)
+        early = box_mask(screenshot_when(driver, lambda png: box_mask(png).sum() > 3000, "the box at t = 0.02 s"))
 
         # The number box beside the slider, typed into as a user would.
         box = thumb.find_element(By.XPATH, "./ancestor::div[contains(@class, 'Slider-root')]/following::input[1]")
         box.send_keys(Keys.CONTROL, "a")
         box.send_keys("2.5")
         check(wait_pose_at(driver, 2.5), 2.5)
-        time.sleep(2.0)
-        png = driver.get_screenshot_as_png()
+        png = screenshot_when(driver, lambda png: box_mask(png).sum() > 3000 and np.count_nonzero(early ^ box_mask(png)) > 2000,
+                              "the box moved at t = 2.5 s")
         (tmp_path / "replay.png").write_bytes(png)
         late = box_mask(png)
         moved = int(np.count_nonzero(early ^ late))
-        print(f"box-coloured pixels: {int(early.sum())} at t = 0.1 s, {int(late.sum())} at t = 2.5 s, "
+        print(f"box-coloured pixels: {int(early.sum())} at t = 0.02 s, {int(late.sum())} at t = 2.5 s, "
               f"{moved} differ")
         assert early.sum() > 3000 and late.sum() > 3000, (early.sum(), late.sum())
         assert moved > 2000, moved
@@ -395,8 +411,6 @@ def test_replay_in_chromium_shows_the_recorded_pose_at_the_slider_time(tmp_path)
         time.sleep(1.0)
         assert shown_pose(driver)[0] == pose[0]
     finally:
-        if driver is not None:
-            driver.quit()
         code = stop_process(view)
     log = (tmp_path / "view.log").read_text()
     assert code == 0 and "Traceback" not in log, log
