@@ -233,7 +233,18 @@ def tipping_run(integrator: str, omega: float, dt: float = 1e-3, until: float = 
     return sim, np.array(tilts)
 
 
-@pytest.mark.parametrize("integrator", list(INTEGRATORS))
+#: The methods the Simulator steps in Python (no compiled ``code``: exact_rotor_splitting, and the adaptive
+#: reference): a tipping run or a three-step-size convergence fit with them takes 5-30 s of CPU, so
+#: their tipping runs are in ``make test-slow``; in the default run they land and bounce as the
+#: closed form (test_contact_bounce.py) and slide (test_contact_sliding.py).
+PYTHON_STEPPED = tuple(name for name, method in INTEGRATORS.items() if method.code is None)
+
+
+def slow_if_python_stepped(names):
+    return [pytest.param(name, marks=pytest.mark.slow) if name in PYTHON_STEPPED else name for name in names]
+
+
+@pytest.mark.parametrize("integrator", slow_if_python_stepped(INTEGRATORS))
 def test_box_spun_one_percent_below_the_tipping_threshold_falls_back(integrator):
     """At 0.99 ω_c it pivots on the edge up to the closed-form tilt, short of β = atan(a/b), falls back and
     ends at rest on the same face. rk4 and reference reach the closed-form largest tilt within 1e-6 rad
@@ -248,17 +259,6 @@ def test_box_spun_one_percent_below_the_tipping_threshold_falls_back(integrator)
     assert abs(tilts[-1]) <= 1e-9
     assert sim.state.p_WC_W[0, 2] == pytest.approx(TIP_B / 2.0, abs=1e-12)
     assert np.linalg.norm(sim.state.v_WC_W[0]) <= 1e-12
-
-
-#: The methods the Simulator steps in Python (no compiled ``code``: exact_rotor_splitting, and the adaptive
-#: reference): a 2.5 s tipping run or a three-step-size convergence fit with them takes 10-30 s. Each
-#: reaches the closed-form tilt in the default run (falls back, above); tipping over and the pivot's
-#: order with them run in ``make test-slow``.
-PYTHON_STEPPED = tuple(name for name, method in INTEGRATORS.items() if method.code is None)
-
-
-def slow_if_python_stepped(names):
-    return [pytest.param(name, marks=pytest.mark.slow) if name in PYTHON_STEPPED else name for name in names]
 
 
 @pytest.mark.parametrize("integrator", slow_if_python_stepped(INTEGRATORS))
@@ -283,7 +283,12 @@ def pivot_energy_error(integrator: str, dt: float) -> float:
     return worst
 
 
-@pytest.mark.parametrize("integrator", slow_if_python_stepped(FIXED_STEP_INTEGRATORS))
+#: The pivot's order in the default run: a first-order method (1) and rk4 (capped at 2); every other in test-slow.
+PIVOT_ORDER_DEFAULT = ("semi_implicit_euler", "rk4")
+
+
+@pytest.mark.parametrize("integrator", [name if name in PIVOT_ORDER_DEFAULT else pytest.param(name, marks=pytest.mark.slow)
+                                        for name in FIXED_STEP_INTEGRATORS])
 def test_pivoting_energy_error_converges_at_most_at_second_order(integrator):
     """Pivoting on an edge the energy is constant. The contact force is held over each step (zero-order
     hold, contact.md), which caps every method at order 2 here: observed min(p, 2) by a log-log fit over
