@@ -159,9 +159,9 @@ envelope: $(STAMP)
 
 # Speed and accuracy benchmarks (benchmarks/; not part of `make test`), beside MuJoCo (requirements-bench.txt):
 # throughput against N with the plain-loop floor and a numpy loop, the per-frame cost of a force and
-# one body driven per step, work-precision on the top and the forced box, model reduction, a kernel
-# profile and node timing. Every figure is a median of >= 5 samples with its min-max.
-# bench: quick mode (fewer sizes, a few minutes); bench-full: every size up to 1e5, 20 s node windows.
+# one body driven per step, work-precision on the top and the forced box, model reduction and a kernel
+# profile. Every figure is a median of >= 5 samples with its min-max.
+# bench: quick mode (fewer sizes, a few minutes); bench-full: every size up to 1e5, longer samples.
 # Into the default BENCH_OUT they also write docs/choosing_an_integrator.md (+ .claims.json) and the
 # generated block of docs/performance.md, so the docs and results.md come from one run.
 # BENCH_BASELINE=<git rev>: also time that revision's core beside this one at N = 1e4 (core_compare.py).
@@ -181,11 +181,33 @@ bench-full: bench-deps
 	$(VENV_PY) -m pytest -q -m bench
 	$(VENV_PY) -m benchmarks.run --full $(BENCH_FLAGS)
 
-# The node with batched output: 1, 100, 1000, 10000 bodies at 100 Hz and 100 at 1 kHz, rk4, 1 substep,
-# per_body_topics false, a `poses` subscriber in another process; sim/wall, ticks delivered, CPU per tick, RSS,
-# start to first poses, stop time (medians of 5 runs of 10 s; BENCH_NODE_ARGS=--quick for 3 runs of 5 s).
+# The step on every core: threads vs one thread at 1e5, the parallel threshold, one thread vs the
+# plain loops at 1e4; writes benchmarks/results/threads.{csv,md} and the block in docs/performance.md.
+.PHONY: bench-threads
+bench-threads: $(STAMP)
+	$(VENV_PY) -m benchmarks.threads --performance docs/performance.md
+
+# Body–body narrow phase against MuJoCo (mj_geomDistance, 10,000 random poses per pair), its ns per pair, and
+# the broad phase's cost at 1e3, 1e4, 1e5 bodies: writes benchmarks/results/pair_oracle.md (docs/contact.md quotes it).
+.PHONY: bench-oracle
+bench-oracle: bench-deps
+	$(VENV_PY) -m pytest -q -m bench test/test_bench_pairs.py
+	$(VENV_PY) -m benchmarks.pair_oracle --out $(BENCH_OUT)
+
+# The node benchmark: batched output and shared inputs, 1 to 10000 bodies at 100 Hz, 100 at 1 kHz, 100000 at
+# 10 Hz, the 10000 and 100000 cases also recording; rk4, 1 substep, a plain rclpy `poses` subscriber in its own
+# process; start to first poses, RSS, sim/wall, ticks delivered and recorded, CPU per tick, stop time, and the
+# node's targets (medians of 5 runs of 10 s; BENCH_NODE_ARGS=--quick for 3 runs of 5 s,
+# BENCH_NODE_ARGS="--bodies 10000 100000" for the target sizes only).
 # Writes benchmarks/results/node_batch.md (linked from docs/performance.md).
 BENCH_NODE_ARGS ?=
 .PHONY: bench-node
 bench-node: $(STAMP)
 	$(VENV_PY) -m benchmarks.node_batch $(BENCH_NODE_ARGS)
+
+# The browser view's frame rate at 1, 100 and 1000 bodies and the node's CPU per tick with and without a
+# viewer (headless Debian chromium; medians of 5 windows of 3 s). Writes benchmarks/results/view.md and the
+# generated block of docs/view.md.
+.PHONY: bench-view
+bench-view: $(STAMP) browser-deps
+	$(VENV_PY) -m benchmarks.view_fps --docs

@@ -25,7 +25,10 @@ with a motor on a site (the match of ``b/corner``); RK4.
 ``sim.apply_force_at_point("b", F, (0, 0, 0), frame="b/corner"); sim.step(1)`` against MuJoCo's
 ``d.ctrl[0] = f; mujoco.mj_step(m, d)`` with ``<motor site="s0" gear="0 1 0 0 0 0"/>`` on the same
 corner, for each matched pair (semi_implicit_euler ↔ Euler, implicit_gyroscopic ↔
-implicitfast, rk4 ↔ RK4); ``step(1)`` and ``mj_step`` alone beside them.
+implicitfast, rk4 ↔ RK4); ``step(1)`` and ``mj_step`` alone beside them. For the matched
+integrators also the control array, MuJoCo's own idiom on our side: ``u = sim.control("b",
+"b/corner")`` once, then ``u[1] = f; sim.step(1)`` every step (the force along the site's y
+axis, as MuJoCo's motor gear), in the same interleaved run.
 """
 
 from __future__ import annotations
@@ -103,6 +106,19 @@ def _bare_step(sim: Simulator, key) -> Case:
     return Case(key, run, sim.reset)
 
 
+def _control_case(sim: Simulator, key) -> Case:
+    """``u[1] = ±FORCE; step(1)`` through the control row of the corner site (Simulator.control)."""
+    u = sim.control("b", "b/corner")
+    step = sim.step
+    values = (FORCE, -FORCE)
+
+    def run(k: int) -> None:
+        for i in range(k):
+            u[1] = values[i & 1]
+            step(1)
+    return Case(key, run, sim.reset)
+
+
 def _mujoco_cases(integrator: str) -> list[Case]:
     mujoco = mjm.mujoco
     m, d = mjm.make(1, INERTIA_BOX, MASS, DT, integrator, site=CORNER_B)
@@ -175,6 +191,8 @@ def site_force_per_step(repeats: int, min_seconds: float, integrators=tuple(INTE
         cases.append(_our_cases(Simulator(s, integrator=ours, dt=DT), "apply_force_at_point", "b/corner",
                                 (0.0, 0.0, 0.0), tag=(ours,))[1])
         cases.append(_bare_step(Simulator(s, integrator=ours, dt=DT), (ours, "step(1)")))
+        if ours in mjm.MATCHED:
+            cases.append(_control_case(Simulator(s, integrator=ours, dt=DT), (ours, "control + step(1)")))
     if mjm.available():
         for theirs in mjm.MJ_INTEGRATORS:
             ctrl_case, _world, bare = _mujoco_cases(theirs)
@@ -186,11 +204,14 @@ def site_force_per_step(repeats: int, min_seconds: float, integrators=tuple(INTE
         theirs = mjm.MATCHED.get(ours, "")
         row = {"integrator": ours, "mujoco": theirs, **mine.scaled(1e6).as_row("ours_us"),
                **stats[(ours, "step(1)")].scaled(1e6).as_row("ours_step_only_us")}
+        if theirs:
+            control = stats[(ours, "control + step(1)")]
+            row.update(**control.scaled(1e6).as_row("control_us"))
         if theirs and mjm.available():
             peer = stats[("mujoco", theirs, "ctrl + mj_step")]
             row.update(**peer.scaled(1e6).as_row("mujoco_us"),
                        **stats[("mujoco", theirs, "mj_step")].scaled(1e6).as_row("mujoco_step_only_us"),
-                       ratio=mine.median / peer.median)
+                       ratio=mine.median / peer.median, control_ratio=control.median / peer.median)
         rows.append(row)
     log("  site force per step done")
     return rows

@@ -100,7 +100,7 @@ def compare_throughput(rev: str, count: int, repeats: int, min_seconds: float, l
         s = scene(count)
         cases = []
         for name in names:
-            sim = Simulator(s, integrator=name, dt=DT)
+            sim = Simulator(s, integrator=name, dt=DT, threads=1)
             cases.append(Case(("this", name), sim.step, sim.reset, MAX_STEPS_PER_SAMPLE))
             cases.append(other.case(("base", name), count, name, DT, MAX_STEPS_PER_SAMPLE))
         stats = interleaved(cases, repeats, min_seconds)

@@ -1,8 +1,8 @@
 """One command for every benchmark: ``python -m benchmarks.run --quick|--full --out DIR``.
 
 Writes to DIR: results.md (every table, the targets met or not, the machine), throughput.csv,
-apply_cost.csv, site_force.csv, work_precision.csv, reduction.csv, node_timing.csv,
-targets.csv, core_compare.csv (with ``--baseline-core``), the plots, and profile_kernels.txt;
+apply_cost.csv, site_force.csv, work_precision.csv, reduction.csv, targets.csv,
+core_compare.csv (with ``--baseline-core``), the plots, and profile_kernels.txt;
 to ``--docs``: choosing_an_integrator.md and its claims (benchmarks/choosing.py); with
 ``--performance``: the generated block of docs/performance.md (between ``<!-- bench:begin -->``
 and ``<!-- bench:end -->``): the provenance, the machine, the per-integrator table and the
@@ -36,7 +36,7 @@ from . import mujoco_models as mjm  # noqa: E402
 from . import problems as P  # noqa: E402
 from .timing import MIN_REPEATS  # noqa: E402
 
-PARTS = ("throughput", "apply", "work", "reduction", "profile", "node")
+PARTS = ("throughput", "apply", "work", "reduction", "profile")
 BLOCK_BEGIN, BLOCK_END = "<!-- bench:begin -->", "<!-- bench:end -->"
 
 
@@ -50,18 +50,15 @@ class Mode:
     budget_s: float
     reduction_count: int
     kind_integrators: tuple[str, ...]
-    node_configs: tuple[tuple[float, int], ...]
-    node_seconds: float
     profile_count: int
 
 
 QUICK = Mode("quick", (1, 100, 10_000), MIN_REPEATS, 0.05, work_precision.QUICK_STEPS_PER_CHECKPOINT, 0.5, 10_000,
-             ("rk4",), ((1000.0, 1), (100.0, 100)), 5.0, 10_000)
+             reduction.INTEGRATORS, 10_000)
 FULL = Mode("full", (1, 10, 100, 1000, 10_000, 100_000), 7, 0.2, work_precision.FULL_STEPS_PER_CHECKPOINT, 3.0,
-            10_000, reduction.INTEGRATORS, tuple((r, b) for b in (1, 10, 100) for r in (100.0, 500.0, 1000.0)), 20.0,
-            10_000)
+            10_000, reduction.INTEGRATORS, 10_000)
 #: Tiny sizes and samples: checks that the code runs (test/test_bench_smoke.py); its figures mean nothing.
-SMOKE = Mode("smoke", (1, 3), MIN_REPEATS, 0.0005, (1, 25, 100), 0.05, 6, ("rk4",), ((100.0, 1),), 2.0, 3)
+SMOKE = Mode("smoke", (1, 3), MIN_REPEATS, 0.0005, (1, 25, 100), 0.05, 6, ("rk4",), 3)
 
 
 # ----------------------------------------------------------------------------- formatting
@@ -285,7 +282,10 @@ def apply_tables(frames: list[dict], sites: list[dict], level: str = "###") -> s
                              ("MuJoCo (matched)", lambda r: r["mujoco"] or ""),
                              ("ctrl + mj_step", lambda r: _range(r, "mujoco_us")),
                              ("mj_step alone", lambda r: _range(r, "mujoco_step_only_us")),
-                             ("ours / MuJoCo", lambda r: _fmt(r.get("ratio")) + ("×" if "ratio" in r else ""))]))
+                             ("ours / MuJoCo", lambda r: _fmt(r.get("ratio")) + ("×" if "ratio" in r else "")),
+                             ("control array + step(1)", lambda r: _range(r, "control_us") if "control_us" in r else "—"),
+                             ("control array / MuJoCo",
+                              lambda r: _fmt(r.get("control_ratio")) + ("×" if "control_ratio" in r else ""))]))
 
 
 def section_apply(frames: list[dict], sites: list[dict], targets: list[dict]) -> str:
@@ -303,6 +303,10 @@ def section_apply(frames: list[dict], sites: list[dict], targets: list[dict]) ->
             _target(targets, f"1 body, new site force every step: our `{r['integrator']}` apply + `step(1)` vs MuJoCo "
                     f"`{r['mujoco']}` `d.ctrl[0] = f; mj_step(m, d)` with a site motor (time ratio)", "≤ 0.5",
                     f"{_fmt(r['ratio'])}× ({r['ours_us']:.3g} vs {r['mujoco_us']:.3g} µs)", r["ratio"] <= 0.5)
+            _target(targets, f"1 body, new site force every step: our `{r['integrator']}` control array "
+                    f"(`u[1] = f; step(1)`) vs MuJoCo `{r['mujoco']}` `d.ctrl[0] = f; mj_step(m, d)` (time ratio)",
+                    "≤ 0.7", f"{_fmt(r['control_ratio'])}× ({r['control_us']:.3g} vs {r['mujoco_us']:.3g} µs)",
+                    r["control_ratio"] <= 0.7)
     return text
 
 
@@ -387,45 +391,13 @@ def section_reduction(red: list[dict], targets: list[dict]) -> str:
                            ("full, statics stepped, µs/step", lambda r: _range(r, "full_statics_stepped_us")),
                            ("gain", lambda r: _fmt(r.get("gain"))),
                            ("gain vs statics stepped", lambda r: _fmt(r.get("gain_vs_statics_stepped"))),
-                           ("models", "models")]))
+                           ("models", "models"), ("note", lambda r: r.get("note", ""))]))
     mixed = next((r for r in red if r["scene"] == "mixed" and r["integrator"] == "rk4"), None)
     if mixed:
         _target(targets, f"mixed scene of {mixed['bodies']:g} bodies (sphere, box, static wall), `rk4`: reduced vs the full "
                 "model that skips static bodies (time ratio)", "≥ 2 (against the fair baseline)",
                 f"{_fmt(mixed['gain'])}× ({_fmt(mixed.get('gain_vs_statics_stepped'))}× against a baseline that steps the walls)",
                 mixed["gain"] >= 2.0)
-    return text
-
-
-def section_node(node_rows: list[dict], targets: list[dict], seconds: float) -> str:
-    from . import node_timing
-    for r in node_rows:
-        r["jitter"] = "/".join(_fmt(r.get(k)) for k in ("jitter_med_ms", "jitter_p99_ms", "jitter_max_ms"))
-        r["late"] = "/".join(_fmt(r.get(k)) for k in ("late_med_ms", "late_p99_ms", "late_max_ms"))
-        r["latency"] = "/".join(_fmt(r.get(k)) for k in ("latency_med_ms", "latency_max_ms"))
-        r["node_late"] = "/".join(_fmt(r.get(k)) for k in ("node_late_med_ms", "node_late_p99_ms_max", "node_late_max_ms"))
-    text = (f"## Node timing ({seconds:g} s windows)\n\n" + node_timing.__doc__.split(chr(10) * 2, 1)[1] + "\n"
-            + _table(node_rows, [
-                ("rate_hz", "rate_hz"), ("bodies", "bodies"), ("achieved Hz", "achieved_hz"), ("sim/wall", "sim_wall"),
-                ("jitter med/p99/max (ms)", "jitter"), ("lateness med/p99/max (ms)", "late"),
-                ("node's own lateness med/worst 1-s p99/max (ms)", "node_late"), ("ticks missed (node)", "node_ticks_missed"),
-                ("node CPU share", "cpu_share"), ("listener CPU share", "listener_cpu_share"),
-                ("bodies watched", "watched_bodies"), ("pose every tick (frac)", "pose_every_tick_frac"),
-                ("twist/tick (min)", "twist_per_tick_min"), ("wrench→twist med/max (ms)", "latency"), ("error", "error")]))
-    for r in node_rows:
-        if r.get("rate_hz") == 1000.0 and r.get("bodies") == 1 and "sim_wall" in r:
-            worst_p99 = r.get("node_late_p99_ms_max", math.nan)
-            sim_wall = r.get("node_sim_wall", r["sim_wall"])
-            _target(targets, f"node at 1 kHz, 1 body, {r['seconds']:g} s: sim/wall and p99 tick lateness (the node's "
-                    "own /diagnostics; lateness: its worst 1-s window)", "≥ 0.999 and < 0.5 ms",
-                    f"sim/wall {sim_wall:.4g}; p99 {_fmt(worst_p99)} ms (seen by the listener over DDS: sim/wall "
-                    f"{r['sim_wall']:.4g}, p99 lateness {_fmt(r['late_p99_ms'])} ms)",
-                    sim_wall >= 0.999 and worst_p99 < 0.5)
-        if r.get("rate_hz") == 100.0 and r.get("bodies") == 100 and "pose_every_tick_frac" in r:
-            _target(targets, f"node, 100 bodies at 100 Hz, {r['seconds']:g} s: pose and twist of every body every tick",
-                    "every tick", f"pose on {r['pose_every_tick_frac']:.4g} of ticks, twist/tick min "
-                    f"{r['twist_per_tick_min']:.4g}, {r['achieved_hz']:.4g} Hz",
-                    r["pose_every_tick_frac"] >= 1.0 and r["twist_per_tick_min"] >= 0.999 and r["watched_bodies"] == 100)
     return text
 
 
@@ -514,14 +486,13 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     mode_group = parser.add_mutually_exclusive_group()
     mode_group.add_argument("--quick", action="store_true", help="fewer sizes, shorter samples (default)")
-    mode_group.add_argument("--full", action="store_true", help="every size up to 1e5, longer samples, 20 s node windows")
+    mode_group.add_argument("--full", action="store_true", help="every size up to 1e5, longer samples")
     mode_group.add_argument("--smoke", action="store_true", help="tiny sizes: only checks that the code runs")
     parser.add_argument("--out", default="benchmarks/results", help="output directory")
     parser.add_argument("--docs", default="docs", help="where choosing_an_integrator.md and its claims go")
     parser.add_argument("--performance", default="",
                         help="update the generated block of this page (docs/performance.md)")
     parser.add_argument("--parts", default=",".join(PARTS), help=f"comma-separated subset of {','.join(PARTS)}")
-    parser.add_argument("--node-configs", default="", help="e.g. 1000x1,100x100 (rate_hz x bodies)")
     parser.add_argument("--baseline-core", default="", help="a git revision whose core is timed beside this one")
     args = parser.parse_args(argv)
     mode = FULL if args.full else (SMOKE if args.smoke else QUICK)
@@ -576,22 +547,11 @@ def main(argv=None) -> int:
         sections.append(section_reduction(red, targets))
     if "profile" in parts:
         log("kernel profile ...")
-        from . import profile_kernels
+        from .profile import kernels as profile_kernels
         (out / "profile_kernels.txt").write_text(profile_kernels.report(mode.repeats, mode.min_seconds, mode.profile_count, log=log))
         sections.append("## Where our kernels lose time against the floor\n\n"
-                        "[profile_kernels.txt](profile_kernels.txt) (benchmarks/profile_kernels.py): the floor loop "
+                        "[profile_kernels.txt](profile_kernels.txt) (benchmarks/profile/kernels.py): the floor loop "
                         f"with our costs added one at a time, at N = {mode.profile_count:g} and N = 1.\n")
-    if "node" in parts:
-        log("node timing ...")
-        from . import node_timing
-        configs = ([(float(r), int(b)) for r, b in (c.split("x") for c in args.node_configs.split(","))]
-                   if args.node_configs else list(mode.node_configs))
-        node_rows = []
-        for rate, bodies in configs:
-            node_rows += node_timing.sweep([rate], [bodies], mode.node_seconds, log)
-        _write_csv(out / "node_timing.csv", node_rows)
-        sections.append(section_node(node_rows, targets, mode.node_seconds))
-
     machine_text = machine.text()
     prov = provenance(mode)
     missing = [p for p in PARTS if p not in parts]

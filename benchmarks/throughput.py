@@ -7,8 +7,9 @@ sample starts from that state (``setup``), so no method drifts into a blow-up.
 
 Rows (``system``, ``integrator``, ``mode``):
 
-* ``rigid_body_sim`` — every integrator; ``batched``: ``sim.step(k)``; ``per-step``:
-  ``sim.step(1)`` k times in a Python loop;
+* ``rigid_body_sim`` — every integrator, on one thread (``threads=1``, as ``mj_step`` runs;
+  benchmarks/threads.py measures the step on every core); ``batched``: ``sim.step(k)``;
+  ``per-step``: ``sim.step(1)`` k times in a Python loop;
 * ``mujoco`` — ``Euler``, ``implicitfast``, ``RK4`` (the matches of ``semi_implicit_euler``,
   ``implicit_gyroscopic``, ``rk4``); ``batched``: ``mj_step(m, d, nstep=k)``; ``per-step``:
   ``mj_step(m, d)`` k times in a Python loop;
@@ -122,7 +123,7 @@ def cases_at(count: int, integrators: tuple[str, ...] = tuple(INTEGRATORS), with
         if name == "reference" and count > MAX_BODIES_REFERENCE:
             continue
         for mode in modes:
-            cases.append(_ours(Simulator(s, integrator=name, dt=DT), name, mode))
+            cases.append(_ours(Simulator(s, integrator=name, dt=DT, threads=1), name, mode))
     if with_mujoco and mjm.available() and count <= MUJOCO_MAX_BODIES:
         m, d = mjm.make(count, INERTIA_BOX, MASS, DT, "Euler")
         for name in mjm.MJ_INTEGRATORS:

@@ -8,6 +8,7 @@ Subcommands (``rigid-body-sim SUBCOMMAND --help`` for each)::
     check SCENE
     view [--namespace NS] [--node NAME] [--host ADDR] [--port PORT] [--strike-body NAME]   (a live 3D view in the browser)
     view RECORDING.mcap [--host ADDR] [--port PORT]   (replay a recording in the same view, no ROS)
+    shard SCENE --shards K --out DIR   (shard scenes, one node each: docs/shards.md)
 
 Exit codes: 0 success; 1 a scene or input file that cannot be used (the message names the
 file, key path and expectation), a run that failed, or an output that could not be written
@@ -115,7 +116,7 @@ def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``rigid-body-sim`` (all subcommands)."""
     parser = argparse.ArgumentParser(prog=PROG, description=(
         "Offline runs, plots and scene checks for rigid_body_sim (no ROS needed), and a live browser view of a running node."))
-    sub = parser.add_subparsers(dest="command", required=True, metavar="{run,plot,describe,check,view}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="{run,plot,describe,check,view,shard}")
 
     run = sub.add_parser("run", help="run a scene as fast as possible", description=(
         "Step SCENE for --duration seconds of sim time as fast as possible, optionally writing a CSV "
@@ -127,6 +128,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--integrator", default="rk4", choices=_IntegratorNames(), metavar="NAME",
                      help="one of %(choices)s (default rk4)")
     run.add_argument("--dt", type=_positive_float("s"), default=DEFAULT_DT, help=f"physics step, s (default {DEFAULT_DT:g})")
+    run.add_argument("--threads", type=int, default=0, metavar="N",
+                     help="threads the step may use over the bodies (default 0: every core; the same results "
+                          "for any N)")
     run.add_argument("--rate", type=_positive_float("samples per sim second"), default=DEFAULT_RATE_HZ,
                      help=f"samples per sim second in --csv and --record (default {DEFAULT_RATE_HZ:g}; "
                           "every step if the step is longer)")
@@ -179,7 +183,15 @@ def build_parser() -> argparse.ArgumentParser:
     view.add_argument("--host", default="127.0.0.1", help="address to serve on (default 127.0.0.1; 0.0.0.0 for all)")
     view.add_argument("--port", type=int, default=8080, help="port to serve on (default 8080)")
     view.add_argument("--strike-body", default="box", help="body the 'Feel the offset' panel strikes (default box)")
-    for subparser in (run, plot, describe, check, view):
+    shard = sub.add_parser("shard", help="split a scene into shard scenes, one node each", description=(
+        "Write SCENE's bodies split into K shard scenes (contiguous blocks in scene order, each with its scripted "
+        "wrenches; gravity and ground in every shard) and a manifest, shards.yaml, with the command that runs "
+        "each shard as a node in its own namespace /shard_<k>. Bodies touch only the ground, never each other, "
+        "so every body moves exactly as in the whole scene. See docs/shards.md."))
+    shard.add_argument("scene", metavar="SCENE", help="scene YAML file")
+    shard.add_argument("--shards", "-k", type=int, required=True, help="number of shards (1 to the body count)")
+    shard.add_argument("--out", required=True, metavar="DIR", help="folder for shard_<k>.yaml and shards.yaml")
+    for subparser in (run, plot, describe, check, view, shard):
         subparser.set_defaults(command_parser=subparser)  # so each command reports usage errors as itself
     return parser
 
@@ -188,7 +200,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``rigid-body-sim`` console script; returns the exit code."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    command = {"run": _run, "plot": _plot, "describe": _describe, "check": _check, "view": _view}[args.command]
+    command = {"run": _run, "plot": _plot, "describe": _describe, "check": _check, "view": _view,
+               "shard": _shard}[args.command]
     # Phase 1 (nothing written yet): a signal exits 0 at once; ``run`` switches to phase 2 before
     # it opens its outputs, so that a signal then stops it between two samples.
     args.signals = TwoPhaseSignals(f"{PROG} {args.command}", during="")
@@ -325,7 +338,13 @@ def _run(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     scene = load_scene(args.scene)
     from .core import NonFiniteStateError, Simulator
 
-    sim = Simulator(scene, integrator=args.integrator, dt=args.dt, model_reduction=not args.no_reduction)
+    try:
+        sim = Simulator(scene, integrator=args.integrator, dt=args.dt, model_reduction=not args.no_reduction,
+                        threads=args.threads)
+    except ValueError as exc:
+        if not str(exc).startswith("threads:"):
+            raise
+        parser.error(f"argument --threads: {str(exc).removeprefix('threads: ')}")
     meta = {"scene": str(Path(args.scene).resolve()), "integrator": args.integrator, "dt": repr(args.dt),
             "duration": repr(args.duration), "sample_every_steps": str(every), "version": _version(),
             "model_reduction": str(not args.no_reduction)}
@@ -504,6 +523,11 @@ def _print_summary(args: argparse.Namespace, summary: Any, csv_writer: Any, reco
             f"drift max ||L|-|L0||/|L0| = {summary.momentum_drift[body]:.3g}")
     if len(summary.energy_drift) > 20:
         lines.append(f"  ... and {len(summary.energy_drift) - 20} more bodies")
+    contact = summary.contact
+    if contact is not None:  # energy is lost at impacts and to friction: its drift is not an error here
+        lines.append(f"  contact: {contact['impacts']} impacts ({contact['events']} events), energy change at impacts "
+                     f"{contact['impact_energy']:.6g} J, lowest gap {contact['lowest_gap']:.3g} m, "
+                     f"{contact['resting']} bodies resting at the end")
     if csv_writer is not None:
         lines.append(f"  wrote {csv_writer.path} ({csv_writer.rows} samples)")
     if recorder is not None:
@@ -666,6 +690,23 @@ def _check(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     count = len(scene.body_names)
     print(f"{scene.source}: ok ({count} bod{'y' if count == 1 else 'ies'}: {', '.join(scene.body_names)}; "
           f"{len(scene.wrenches)} scripted wrench{'' if len(scene.wrenches) == 1 else 'es'})")
+    return 0
+
+
+def _shard(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
+    from .tools.shards import MANIFEST, write_shards
+
+    _input_path(parser, "SCENE", args.scene, "a scene YAML file")
+    try:
+        specs = write_shards(args.scene, args.shards, args.out)
+    except ValueError as exc:
+        if isinstance(exc, SceneError):
+            raise
+        parser.error(str(exc))
+    out = Path(args.out)
+    for spec in specs:
+        print(f"{spec.file}: {spec.bodies} bodies from {spec.first_body!r}, namespace {spec.namespace}")
+    print(f"{out / MANIFEST}: the shards and the command that runs each")
     return 0
 
 

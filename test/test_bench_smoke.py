@@ -5,9 +5,8 @@
   code computes each side, so a tolerance: 1e-12 over 20 steps of order-1 quantities).
 * MuJoCo's site motor pushes the box as the closed form does (when MuJoCo is installed): the
   mapping of "a force fixed in the body at a site" onto MuJoCo is the same physical input.
-* ``python -m benchmarks.run --smoke`` writes every file with every part but the node (tiny
-  sizes; the node part needs DDS and is exercised by the node tests): two parts in the default
-  run, all of them in the slow run (about 40 s on a loaded 2-core machine).
+* ``python -m benchmarks.run --smoke`` writes every file of every part (tiny sizes): two parts
+  in the default run, all of them in the slow run (about 40 s on a loaded 2-core machine).
 
 The package never imports benchmarks/ (test_core_purity-style check below).
 """
@@ -85,25 +84,25 @@ def _bench_smoke(tmp_path: Path, parts: str) -> tuple[Path, Path]:
 
 def test_bench_smoke_run_writes_the_files_of_its_parts(tmp_path):
     """The default run's representative: the two quickest parts in one --smoke run (the slow run
-    below runs every part but the node)."""
+    below runs every part)."""
     out, _docs = _bench_smoke(tmp_path, "throughput,apply")
     for name in ("results_partial.md", "throughput.csv", "apply_cost.csv", "site_force.csv", "targets.csv",
                  "throughput.png"):
         assert (out / name).stat().st_size > 0, name
     results = (out / "results_partial.md").read_text()
-    assert "Parts not run in this run: work, reduction, profile, node" in results
+    assert "Parts not run in this run: work, reduction, profile" in results
     assert "plain numba loop" in results
 
 
 @pytest.mark.slow
 def test_bench_smoke_run_writes_every_file(tmp_path):
     out, docs = _bench_smoke(tmp_path, "throughput,apply,work,reduction,profile")
-    for name in ("results_partial.md", "throughput.csv", "apply_cost.csv", "site_force.csv", "work_precision.csv",
+    for name in ("results.md", "throughput.csv", "apply_cost.csv", "site_force.csv", "work_precision.csv",
                  "reduction.csv", "targets.csv", "throughput.png", "work_precision_top.png", "work_precision_box.png",
                  "profile_kernels.txt"):
         assert (out / name).stat().st_size > 0, name
-    results = (out / "results_partial.md").read_text()
-    assert "Parts not run in this run: node" in results
+    results = (out / "results.md").read_text()
+    assert "Parts not run in this run" not in results
     assert "plain numba loop" in results and "site motor" in results
     claims = json.loads((docs / "choosing_an_integrator.claims.json").read_text())
     assert {c["kind"] for c in claims["claims"]} >= {"reached", "not_reached"}

@@ -106,3 +106,64 @@ def test_compile_kernels_covers_what_the_simulator_calls() -> None:
         unchecked_steps(name, scene.model, scene.initial_state, 0.01, 1)
     after = {f.__name__: len(f.signatures) for f in ENTRY_POINTS}
     assert after == before, "the Simulator compiled a signature compile_kernels does not make"
+
+
+#: Waits for the kernel cache (ensure_kernels) and says when it got past it.
+WAITER = (
+    "import time\n"
+    "from rigid_body_sim.core.simulator import ensure_kernels\n"
+    "ensure_kernels()\n"
+    "print(time.monotonic(), flush=True)\n"
+)
+
+
+def test_a_process_waits_while_another_compiles(tmp_path: Path) -> None:
+    """Processes starting together on one cache take turns (cache_lock): while one holds the lock
+    (compiling), another's first Simulator waits, and goes on the moment it is released."""
+    import time
+
+    from rigid_body_sim.core.kernels import jit
+
+    cache = tmp_path / "numba_cache"
+    cache.mkdir()
+    (cache / jit.COMPLETE_NAME).write_text(jit.SOURCE_DIGEST)  # complete: once past the lock, nothing to compile
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache), "PYTHONPATH": str(REPO)}
+    with open(cache / jit.LOCK_NAME, "a+b") as handle:
+        import fcntl
+
+        fcntl.flock(handle, fcntl.LOCK_EX)  # another process compiling
+        waiter = subprocess.Popen([sys.executable, "-c", WAITER], env=env, stdout=subprocess.PIPE, text=True)
+        time.sleep(3.0)
+        assert waiter.poll() is None, "a process went past the cache while another held its lock"
+        released = time.monotonic()
+        fcntl.flock(handle, fcntl.LOCK_UN)
+    out, _ = waiter.communicate(timeout=120)
+    assert waiter.returncode == 0
+    assert float(out.strip().splitlines()[-1]) >= released
+
+
+def test_compiling_refuses_sources_changed_under_the_process(monkeypatch) -> None:
+    """A process whose kernel sources changed on disk after it imported them would cache its old
+    machine code under the new sources' name: compile_kernels refuses, naming why."""
+    import pytest
+
+    from rigid_body_sim.core import simulator
+    from rigid_body_sim.core.kernels import jit
+
+    monkeypatch.setattr(jit, "SOURCE_DIGEST", "0" * 64)
+    with pytest.raises(RuntimeError, match="changed since this process started"):
+        simulator.compile_kernels()
+
+
+def test_a_stale_cache_is_no_longer_complete(tmp_path: Path) -> None:
+    from rigid_body_sim.core.kernels import jit
+
+    source = tmp_path / "kernels"
+    source.mkdir()
+    (source / "a.py").write_text("x = 1\n")
+    cache = source / "__pycache__"
+    jit.invalidate_stale_cache(source, cache)
+    (cache / jit.COMPLETE_NAME).write_text("digest of the old sources")
+    (source / "a.py").write_text("x = 2\n")
+    assert jit.invalidate_stale_cache(source, cache)
+    assert not (cache / jit.COMPLETE_NAME).exists()

@@ -27,20 +27,25 @@ BODIES = {
     "box": {"mass": 2.0, "inertia": {"box": [1.0, 0.6, 0.4]},
             "pose": {"position": [0.0, 0.0, 1.0], "orientation": [0.1, 0.2, 0.3, 0.9273618495495703]},
             "twist": {"linear": [0.1, 0.0, 0.0], "angular": [0.2, 0.1, 0.5]},
-            "sites": {"corner": {"position": [0.5, 0.3, 0.0]}}},
+            "sites": {"corner": {"position": [0.5, 0.3, 0.0]},
+                      "nozzle": {"position": [-0.5, 0.0, 0.2], "axes": "world"}}},
     "crate": {"mass": 3.0, "inertia": {"box": [0.5, 0.8, 1.2]},
               "pose": {"position": [2.0, -1.0, 0.0]},
               "twist": {"linear": [0.0, 0.2, 0.0], "angular": [-0.4, 0.3, 0.2]}},
     "ball": {"mass": 2.0, "inertia": {"sphere": 0.5}, "pose": {"position": [1.0, 2.0, 3.0]}},
 }
 
-#: (topic, body, frame kind, force, torque): every frame kind a shared input may name.
+#: (topic, body, frame kind, force, torque): every frame kind a shared input may name (body, world-aligned,
+#: a site with body axes, a site with world axes; the world frame names no body and is refused).
 INPUTS = [
     ("wrench", "box", "box/corner", (0.0, 10.0, 0.0), (0.0, 0.0, 0.0)),
+    ("wrench", "box", "box/nozzle", (0.0, 0.0, 3.0), (0.1, 0.0, 0.0)),
     ("wrench", "crate", "crate/world_aligned", (1.0, 0.0, -2.0), (0.0, 0.3, 0.0)),
     ("wrench", "crate", "crate", (0.0, 0.0, 4.0), (0.5, 0.0, 0.0)),
     ("impulse", "box", "box", (0.2, 0.0, 0.1), (0.0, 0.05, 0.0)),
     ("impulse", "ball", "ball/world_aligned", (0.0, -0.4, 0.0), (0.1, 0.0, 0.0)),
+    ("impulse", "box", "box/nozzle", (0.0, 0.1, 0.0), (0.0, 0.0, 0.02)),
+    ("impulse", "box", "box/corner", (0.05, 0.0, 0.0), (0.0, 0.0, 0.0)),
 ]
 
 
@@ -125,8 +130,8 @@ def test_shared_topics_move_bodies_bitwise_as_the_per_body_topics(tmp_path, pref
         else:
             assert len(subscriptions) == 3 + 3 * len(BODIES)
     (holds_a, after_a, msgs_a), (holds_b, after_b, msgs_b) = results["true"], results["false"]
-    assert set(holds_a) == set(holds_b) == {("box", "box/corner"), ("crate", "crate/world_aligned"),
-                                            ("crate", "crate")}
+    assert set(holds_a) == set(holds_b) == {("box", "box/corner"), ("box", "box/nozzle"),
+                                            ("crate", "crate/world_aligned"), ("crate", "crate")}
     for key in holds_a:
         np.testing.assert_array_equal(holds_a[key][0], holds_b[key][0])
         np.testing.assert_array_equal(holds_a[key][1], holds_b[key][1])

@@ -16,6 +16,13 @@ model of Kalibr and Gazebo, per axis and per sample of interval Δt (s):
 variance of one sample's white noise, σ_n²/Δt, is the covariance a sensor_msgs/Imu carries.
 Random numbers come from numpy's PCG64 seeded by (``seed``, the site's name), so a run repeats
 exactly and two IMUs with the same seed still have independent noise.
+
+Contact (core/contact): a body held by the ground reads the holding force at once (it is a
+wrench of the step, so at rest an IMU reads +g up). An impact changes the velocity in no time,
+which no instantaneous reading sees; an IMU feels it as a real one integrating over its sample
+does: the site's velocity jump Δv_S (the centre of mass's jump plus Δω × r, in the site's axes at
+the impact) divided by the sample's interval Δt is added to the sample that contains the impact,
+so the readings integrate to the right velocity change.
 """
 
 from __future__ import annotations
@@ -28,6 +35,7 @@ from typing import TYPE_CHECKING, Mapping
 import numpy as np
 
 from .imu_spec import ImuChannel, ImuSpec
+from .quaternion import quat_conjugate, quat_multiply, quat_rotate
 
 if TYPE_CHECKING:
     from .simulator import Simulator
@@ -145,6 +153,52 @@ class ImuBank:
                 self.noise[site] = ImuNoise(spec, site)
                 self.next_due_s[site] = None
         self.sites = tuple(self.noise)
+        #: Per site, Σ velocity jumps of impacts (m/s, the site's axes) not yet in a sample.
+        self.pending_jumps: dict[str, np.ndarray] = {site: np.zeros(3) for site in self.sites}
+        self._sites_of: dict[str, list[str]] = {}  # body → its IMU sites
+        for site in self.sites:
+            self._sites_of.setdefault(site.split("/", 1)[0], []).append(site)
+        self._solver = None  # the ContactSolver whose events were read up to ...
+        self._seen = 0  # ... this index
+        self._last_event = None  # the last of them (a reset clears the list: then it is gone)
+
+    def _gather_impacts(self, sim: Simulator, step_dt: float) -> None:
+        """Add the impacts recorded since the last call to :attr:`pending_jumps` (of the sites of their body).
+
+        On a new solver or after a reset (its event list cleared) only the events of the last
+        ``step_dt`` are taken, so a bank made for a running simulation replays nothing older.
+        """
+        solver = getattr(sim, "contact", None)
+        if solver is None:
+            return
+        events = solver.events
+        fresh = solver is not self._solver or (self._seen and (len(events) < self._seen
+                                                               or events[self._seen - 1] is not self._last_event))
+        if fresh:
+            self._solver, self._seen = solver, 0
+            for jump in self.pending_jumps.values():
+                jump[:] = 0.0
+        since = sim.time - step_dt if fresh else -math.inf
+        model = sim.model
+        index = None
+        for event in events[self._seen:]:
+            if (event.kind != "impact" or not event.delta_v_world or event.time <= since
+                    or event.body not in self._sites_of):
+                continue
+            if index is None:
+                index = {name: s for s, name in enumerate(model.site_names)}
+            for site in self._sites_of[event.body]:
+                s = index[site]
+                b = int(model.site_body[s])
+                q_WP = np.asarray(event.q_WP, dtype=float)
+                jump_W = np.asarray(event.delta_v_world) + quat_rotate(
+                    q_WP, np.cross(np.asarray(event.delta_w_principal), model.site_p_P[s]))
+                if not model.site_world_axes[s]:  # the body's axes B at the impact: q_WB = q_WP ⊗ q_BPᶜ
+                    q_WB = quat_multiply(q_WP, quat_conjugate(model.q_BP[b]))
+                    jump_W = quat_rotate(quat_conjugate(q_WB), jump_W)
+                self.pending_jumps[site] += jump_W
+        self._seen = len(events)
+        self._last_event = events[-1] if events else None
 
     def sample(self, sim: Simulator, step_dt: float) -> list[ImuSample]:
         """The samples due at ``sim.time``, read right after the step(s) just taken.
@@ -156,6 +210,7 @@ class ImuBank:
         """
         if not self.sites:
             return []
+        self._gather_impacts(sim, step_dt)
         t = sim.time
         due = []
         for site in self.sites:
@@ -178,7 +233,9 @@ class ImuBank:
                 if next_due <= t:  # fallen behind by more than one sample: go on from now
                     next_due = t + dt
                 self.next_due_s[site] = next_due
-            force, rate = noise.sample(readings.specific_force[k], readings.angular_velocity[k], dt)
+            jump = self.pending_jumps[site]
+            force, rate = noise.sample(readings.specific_force[k] + jump / dt, readings.angular_velocity[k], dt)
+            jump[:] = 0.0
             covariances = ((0.0,) * 9 if spec.orientation else NOT_PROVIDED,
                            noise_covariance(ImuNoise.variance(spec.gyroscope, dt)),
                            noise_covariance(ImuNoise.variance(spec.accelerometer, dt)))

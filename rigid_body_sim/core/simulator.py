@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 import struct
+import warnings
 from dataclasses import dataclass
 from typing import Any, Sequence
 
@@ -27,8 +28,10 @@ from . import reduction
 from .frames import new_wrench_rows, parse_frame
 from .integrators import INTEGRATORS, Method, get_integrator, step_exact_rotor_splitting, step_reference
 from .kernels import layout as L
-from .kernels import sensors, stepping
+from .kernels import controls, parallel, sensors, stepping
+from .kernels.state_rows import pose_twist_rows
 from .kernels.compile import compile_kernels as compile_stepping_kernels
+from .kernels.jit import cache_complete, cache_lock, mark_cache_complete, sources_unchanged
 from .kernels.dynamics import impulse_response
 from .kernels.forces import add_wrench, project_twist
 from .mechanics import angular_momentum_W, kinetic_energy, linear_momentum_W, potential_energy
@@ -44,7 +47,7 @@ from .scene import ORIENTATION_TOLERANCE, Scene
 from .stepping import pack_parameters
 
 __all__ = ["Simulator", "BodyState", "SiteReadings", "NonFiniteStateError", "DivergenceError",
-           "SCRIPT_TIME_TOLERANCE"]
+           "ControlRejectedWarning", "SCRIPT_TIME_TOLERANCE"]
 
 #: A step whose start time is within this fraction of ``dt`` of a scripted wrench's window edge
 #: counts as on the edge, so a window given in multiples of ``dt`` covers exactly
@@ -137,6 +140,19 @@ class DivergenceError(NonFiniteStateError):
         )
 
 
+class ControlRejectedWarning(RuntimeWarning):
+    """A control row (:meth:`Simulator.control`) held a non-finite number at a step: it was skipped whole.
+
+    ``rejected`` : tuple of (body, frame, values) of the rows skipped, ``values`` the six numbers read.
+    """
+
+    def __init__(self, rejected: tuple[tuple[str, str, tuple[float, ...]], ...]):
+        self.rejected = rejected
+        rows = "; ".join(f"{body!r} in {frame!r}: {list(values)}" for body, frame, values in rejected)
+        super().__init__(f"control rejected, nothing of it applied (expected 6 finite numbers: force, torque, "
+                         f"and a finite wrench from them): {rows}")
+
+
 @dataclass(frozen=True)
 class SiteReadings:
     """Ideal IMU readings at sites (:meth:`Simulator.site_readings`), one row per site.
@@ -207,11 +223,17 @@ class Simulator:
         (reduction.py; :meth:`body_models` says which and why). False steps every body with the
         integrator, except the declared constraints the full equations cannot make (kinematic,
         planar): the switch for comparing.
+    threads : int
+        Threads the compiled step may use over the bodies: 0 (default) for every core numba
+        may use (``NUMBA_NUM_THREADS``, by default the CPU count), else 1 to that many. The
+        step runs in parallel only from ``kernels/parallel.MIN_BODIES`` moving bodies; the
+        results are the same to the bit for any count (kernels/parallel.py).
     """
 
     def __init__(self, scene: Scene, integrator: str = "rk4", dt: float = 0.01, *,
                  reference_rtol: float = 1e-12, reference_atol: float = 1e-12,
-                 energy_growth_limit: float | None = None, model_reduction: bool = True):
+                 energy_growth_limit: float | None = None, model_reduction: bool = True, threads: int = 0):
+        ensure_kernels()
         self.scene = scene
         self.model = scene.model
         limit = scene.energy_growth_limit if energy_growth_limit is None else energy_growth_limit
@@ -261,6 +283,14 @@ class Simulator:
             raise ValueError(f"model_reduction: expected True or False, got {model_reduction!r}")
         self._reduce = bool(model_reduction)
         self._plans: list[reduction.BodyPlan] | None = None
+        # The control array (control()): rows allocated on first use, one per (body, frame) asked for.
+        self._control_rows: dict[tuple[str, str], int] = {}
+        self._control_table: np.ndarray | None = None  # kernels/controls.py's table
+        self._advance, self._advance_tail = stepping.advance, (self._cancel,)
+        self._rejected_controls: tuple[tuple[str, str, tuple[float, ...]], ...] = ()
+        self._parts = np.zeros((0, 3), dtype=np.int64)  # the parallel step's parts (_replan)
+        self._parallel = 0  # threads of the parallel step, 0 for the serial one (_replan)
+        self.threads = threads
         self.reset()
 
     # ----------------------------------------------------------------- configuration
@@ -277,6 +307,34 @@ class Simulator:
         self._control[L.METHOD] = -1 if method.code is None else method.code
         # Scripted wrenches and the numpy/scipy integrators step one step per call (_step_once).
         self._step_by_step = bool(self._script) or method.code is None or self.contact is not None  # contact
+
+    @property
+    def threads(self) -> int:
+        """Threads the step may use (0: every core numba may use); setting it validates (0 to parallel.max_threads())."""
+        return self._threads
+
+    @threads.setter
+    def threads(self, value: int) -> None:
+        most = parallel.max_threads()
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 0 <= value <= most:
+            raise ValueError(f"threads: expected a whole number from 0 (every core) to {most} (NUMBA_NUM_THREADS), "
+                             f"got {value!r}")
+        self._threads = int(value)
+        if hasattr(self, "_members"):
+            self._choose_parallel()
+
+    def _choose_parallel(self) -> None:
+        """The parallel step when more than one thread may run and enough bodies move (parallel.MIN_BODIES)."""
+        threads = self._threads or parallel.max_threads()
+        self._parallel = threads if threads > 1 and len(self._members) >= parallel.MIN_BODIES else 0
+
+    def _advance_with(self, wrenches: np.ndarray, n: int, cancel: np.ndarray) -> int:
+        """stepping.advance of ``n`` steps with ``wrenches``, on the threads _choose_parallel chose; the steps done."""
+        if self._parallel:
+            return parallel.run_parallel(self._parallel, self._Ys, self._prm, wrenches, self._members, self._status,
+                                         self._control, self._inputs, n, cancel, self._parts)
+        return stepping.advance(self._Ys, self._prm, wrenches, self._members, self._status, self._control,
+                                self._inputs, n, cancel)
 
     @property
     def energy_growth_limit(self) -> float:
@@ -315,6 +373,8 @@ class Simulator:
         self._time_origin = 0.0
         self._step_origin = 0
         self.clear_wrenches()
+        if self._control_table is not None:
+            self._control_table[:-1, controls.VALUES:controls.VALUES + 6] = 0.0
         self._stopped[:] = False
         self._replan()
         if self.contact is not None:  # contact: modes from the initial state, events cleared
@@ -338,12 +398,23 @@ class Simulator:
         self._reduce = bool(value)
         self._replan()
 
-    def body_models(self) -> list[reduction.BodyPlan]:
-        """The model each body gets now and why (reduction.BodyPlan: body, motion, model, code, reason)."""
+    def body_models(self, first: int | None = None) -> list[reduction.BodyPlan]:
+        """The model each body gets now and why (reduction.BodyPlan: body, motion, model, code, reason).
+
+        ``first``: only the first that many bodies (what a log lists of 10⁵).
+        """
+        if first is not None and first < self.model.count:
+            return reduction.plan_models(self.model, self._reduce, self._stopped,
+                                         self._prm[:, L.MODEL].astype(np.int64), first=first)
         if self._plans is None:
             self._plans = reduction.plan_models(self.model, self._reduce, self._stopped,
                                                 self._prm[:, L.MODEL].astype(np.int64))
         return list(self._plans)
+
+    def model_counts(self) -> dict[str, int]:
+        """How many bodies each model (reduction.MODEL_NAMES) has now; models no body has are left out."""
+        codes, counts = np.unique(self._prm[:, L.MODEL].astype(np.int64), return_counts=True)
+        return {reduction.MODEL_NAMES[int(c)]: int(k) for c, k in zip(codes, counts)}
 
     def _replan(self) -> None:
         """Derive each body's model from the scene, the switch, the stopped bodies and the current state."""
@@ -352,6 +423,8 @@ class Simulator:
         self._members, groups = reduction.apply_plan(self._prm, self.model, self.scene.initial_state, self.state,
                                                      codes)
         self._control[L.GROUPS:L.GROUPS + groups.size] = groups.ravel()
+        self._parts = parallel.parts_of(groups)
+        self._choose_parallel()
         # The buffers of stepping.advance, in its order: one tuple, so a step(1) builds no arguments.
         self._buffers = (self._Ys, self._prm, self._wrenches, self._members, self._status, self._control,
                          self._inputs)
@@ -447,6 +520,64 @@ class Simulator:
         stepping.add_pending(self._wrenches, self._prm, self._inputs)
         self._pending = False
 
+    def control(self, body: str, frame: str = "world") -> np.ndarray:
+        """The control row of ``body`` in ``frame``: a numpy view a controller writes, read by every step.
+
+        MuJoCo's ``d.ctrl`` idiom: write the numbers, then :meth:`step`; no call per input.
+        Returns an array of shape (6,), float64: force (N, indices 0–2) and torque (N·m, 3–5)
+        about the origin of ``frame``, in its axes (the frame rule of :meth:`apply_wrench`).
+        The same (body, frame) always gives the same array, zero at first and after
+        :meth:`reset`. Each :meth:`step` call reads every row once, at its start, and holds
+        the wrench for all its steps, on top of any applied wrench; the values stay until
+        written again (a control is a setting, an applied wrench a one-call input).
+
+        Checked inside the compiled step, not here: a row holding a non-finite number, or
+        whose wrench would not be finite (a moment that overflows), is skipped whole for
+        that step: nothing of it acts on its body, the other rows act. The step then says so
+        with a :class:`ControlRejectedWarning` and :attr:`rejected_controls`. The rows of a
+        simulator from :meth:`with_scene` are new ones.
+
+        Raises
+        ------
+        ValueError
+            Unknown body or frame (the valid ones are listed).
+        """
+        row = self._control_rows.get((body, frame)) if isinstance(body, str) and isinstance(frame, str) else None
+        if row is None:
+            ref = parse_frame(self.scene, body, frame)  # raises, listing the valid choices
+            table = self._control_table
+            if table is None:
+                # One row per distinct (body, frame) a scene allows (world, body, world_aligned, each
+                # site), allocated once so that the views handed out stay valid.
+                table = self._control_table = controls.new_table(3 * self.model.count + len(self.model.site_names))
+                self._advance, self._advance_tail = controls.advance_controlled, (self._cancel, table)
+            row = int(table[-1, 0])
+            table[row, controls.HEAD:controls.REJECTED] = (ref.body_index, ref.kind, *ref.arm_P)
+            table[-1, 0] = row + 1
+            self._control_rows[body, frame] = row
+        return self._control_table[row, controls.VALUES:controls.VALUES + 6]
+
+    @property
+    def rejected_controls(self) -> tuple[tuple[str, str, tuple[float, ...]], ...]:
+        """The control rows the last :meth:`step` call skipped: (body, frame, the six values read); empty if none."""
+        return self._rejected_controls
+
+    def _add_controls(self) -> None:
+        """Add the control rows to the wrench rows now (the step-by-step path); report any rejected."""
+        self._any_wrench = True
+        if controls.add_controls(self._wrenches, self._prm, self._control_table):
+            self._report_controls()
+        else:
+            self._rejected_controls = ()
+
+    def _report_controls(self) -> None:
+        """Record and warn about the control rows the step skipped (marked in the table)."""
+        table = self._control_table
+        names = {row: key for key, row in self._control_rows.items()}
+        rows = np.flatnonzero(table[:-1, controls.REJECTED])
+        self._rejected_controls = tuple((*names[k], tuple(table[k, :6].tolist())) for k in rows)
+        warnings.warn(ControlRejectedWarning(self._rejected_controls), stacklevel=3)
+
     def apply_impulse(self, body: str, linear: Any = (0.0, 0.0, 0.0), angular: Any = (0.0, 0.0, 0.0),
                       frame: str = "world") -> None:
         """Change velocities at once by a linear impulse (N·s) and an angular impulse (N·m·s).
@@ -491,7 +622,7 @@ class Simulator:
         """Drop every applied wrench before the next step."""
         self._pending = False
         self._inputs[L.PENDING] = self._inputs[L.SPENT] = 0.0
-        if self._any_wrench:
+        if self._any_wrench or self._control_table is not None:  # the controls' wrenches may be in the rows
             stepping.clear_wrenches(self._wrenches)
             self._any_wrench = False
 
@@ -545,7 +676,8 @@ class Simulator:
         """
         options = self._reference_options
         new = Simulator(scene, self.integrator, self.dt, reference_rtol=options["rtol"], reference_atol=options["atol"],
-                        energy_growth_limit=self.energy_growth_limit, model_reduction=self._reduce)
+                        energy_growth_limit=self.energy_growth_limit, model_reduction=self._reduce,
+                        threads=self._threads)
         state = new.state.copy()
         old_state = self.state
         for b, name in enumerate(scene.body_names):
@@ -604,6 +736,8 @@ class Simulator:
         try:
             if self._step_by_step:
                 self._flush_pending()
+                if self._control_table is not None:
+                    self._add_controls()
                 done = 0
                 while done < n and not self._cancel[0]:
                     self._last_wrenches = self._step_once()
@@ -613,10 +747,22 @@ class Simulator:
             if not n:
                 self.clear_wrenches()
                 return 0
-            done = stepping.advance(*self._buffers, n, self._cancel)
+            if self._parallel:  # the step on several threads (kernels/parallel.py); the controls added first
+                if self._control_table is not None:
+                    self._flush_pending()
+                    self._add_controls()
+                done = self._advance_with(self._wrenches, n, self._cancel)
+            else:
+                # stepping.advance, or controls.advance_controlled once a control exists (control()).
+                done = self._advance(*self._buffers, n, *self._advance_tail)
+                if done < 0:  # a control row was rejected (controls.advance_controlled)
+                    done = -1 - done
+                    self._report_controls()
+                elif self._rejected_controls:
+                    self._rejected_controls = ()
             self._pending = False  # advance took the pending wrench
             self.step_count += done
-            if self._control[L.OUTCOME]:
+            if done != n and self._control[L.OUTCOME]:  # all n done: every step passed its checks
                 self._raise_step_failure(int(self._control[L.OUTCOME]))  # the wrenches are kept, for the caller
             self._last_wrenches = self._wrenches  # spent: they stay for the sensors until something new is applied
             return done
@@ -638,8 +784,7 @@ class Simulator:
         if self.contact is not None:  # contact: the force holding bodies at rest is a wrench of this step
             self.contact.add_holding_wrenches(self, wrenches)
         if self._method.code is not None:
-            stepping.advance(self._Ys, self._prm, wrenches, self._members, self._status, self._control,
-                             self._inputs, 1, _NEVER)
+            self._advance_with(wrenches, 1, _NEVER)
             self._inputs[L.SPENT] = 0.0  # ``wrenches`` is this step's own array: nothing to drop before the next
         else:
             bodies = stepping.step_reduced(self._Ys, self._prm, wrenches, self._members, self._status,
@@ -769,6 +914,20 @@ class Simulator:
         """Angular velocities, rad/s, body axes B, shape (N, 3)."""
         return quat_rotate(self.model.q_BP, self.state.w_WP_P)
 
+    def pose_twist_rows(self, poses: np.ndarray, twists: np.ndarray) -> np.ndarray:
+        """Every body's pose and twist in one compiled pass, into the caller's arrays; returns which are finite.
+
+        ``poses`` : float64 (N, k ≥ 7), C order: columns 0–6 get (x, y, z, qx, qy, qz, qw), the
+        centre of mass (m) and body frame B in the world. ``twists`` : float64 (N, k ≥ 6): columns
+        0–5 get the linear (m/s) and angular (rad/s) velocity in world axes; other columns are
+        left as they are. Bitwise what positions_world, orientations_xyzw,
+        linear_velocities_world and angular_velocities_world give. Returns (N,) bool: True
+        where all of the body's state is finite (State.finite_bodies).
+        """
+        finite = np.empty(self.model.count, dtype=np.bool_)
+        pose_twist_rows(self._Ys[self._control[L.CUR]], self.model.q_BP, poses, twists, finite)
+        return finite
+
     def kinetic_energy(self) -> np.ndarray:
         """Kinetic energy per body, J, shape (N,)."""
         return kinetic_energy(self.model, self.state)
@@ -836,12 +995,48 @@ def _vector3(value: Any, name: str) -> np.ndarray:
     return v
 
 
+_kernels_ready = False
+
+
+def ensure_kernels() -> None:
+    """Once per process, before its first Simulator steps: if the kernel cache is not complete
+    for these sources, compile every kernel into it (:func:`compile_kernels`), under the cache's
+    lock, so that processes starting together on a cold cache compile once and never interleave
+    their writes (kernels/jit.py, cache_lock)."""
+    global _kernels_ready
+    if _kernels_ready:
+        return
+    _kernels_ready = True
+    with cache_lock():
+        if not cache_complete():
+            compile_kernels()
+
+
 def compile_kernels() -> None:
     """Compile (or load from numba's cache) every compiled kernel: the stepping entry points
     (:func:`~rigid_body_sim.core.kernels.compile.compile_kernels`), then the contact kernels, by
     dropping one body of each shape onto a ground until it rests (``make venv`` and the node's
-    first start call this)."""
+    first start call this). Runs under the cache's lock and marks the cache complete.
+
+    Raises
+    ------
+    RuntimeError
+        If the kernel sources changed on disk since this process imported them: its machine
+        code would be cached under the new sources' name.
+    """
+    global _kernels_ready
+    _kernels_ready = True
+    with cache_lock():
+        if not sources_unchanged():
+            raise RuntimeError("the kernel sources (rigid_body_sim/core/kernels) changed since this process started; "
+                               "start it again to compile the new ones")
+        _compile_all()
+        mark_cache_complete()
+
+
+def _compile_all() -> None:
     compile_stepping_kernels()
+    parallel.compile_parallel()  # the step over bodies on several threads (kernels/parallel.py)
     shapes = {"sphere": {"inertia": {"sphere": 0.1}},
               "box": {"inertia": {"box": [0.2, 0.2, 0.1]}},
               "cylinder": {"inertia": {"cylinder": [0.1, 0.2]}},

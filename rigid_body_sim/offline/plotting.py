@@ -4,7 +4,11 @@ Six panels over sim time: position and linear velocity (world), orientation (the
 x, y, z, w, kept sign-continuous: for display only), angular velocity in body axes (where an
 intermediate-axis flip shows as the rate about that axis changing sign), the relative drift
 of energy and |L|, and the error against the closed form where the scene has one
-(:mod:`~rigid_body_sim.offline.reference`). matplotlib's Agg canvas is used directly, so no
+(:mod:`~rigid_body_sim.offline.reference`). A body the ground can touch (a collision shape in a
+scene with ``ground``, docs/contact.md) gets instead its energy E(t) − E(0) in J (kinetic plus
+potential: it drops at impacts and with friction, and must never rise) and the lowest gap of its
+collision shape to the ground over time (from the sampled poses; zero while it rests, never
+negative beyond round-off). matplotlib's Agg canvas is used directly, so no
 GUI backend or global pyplot state is involved.
 """
 
@@ -82,20 +86,13 @@ def plot_body(data: RunData, body: str, out: str | os.PathLike[str], *, scene: S
     if reference is not None and reference.flip_period is not None and scene is not None:
         _mark_flips(axes[1, 1], t, scene, body, reference)
 
-    ax = axes[2, 0]
-    drawn = False
-    if track.energy is not None:
-        drawn |= _drift(ax, t, track.energy, "energy $E$", "tab:purple")
-    if track.angular_momentum_norm is not None:
-        drawn |= _drift(ax, t, track.angular_momentum_norm, "$|L|$ about the COM", "tab:orange")
-    ax.set_ylabel(r"relative drift $(X(t) - X(0))\,/\,|X(0)|$ (1)")
-    ax.set_title("Conservation: energy and |angular momentum|")
-    if drawn:
-        ax.legend(loc="upper left", fontsize="small")
+    touches = scene is not None and body in scene.body_names and scene.contact is not None and \
+        scene.body_names.index(body) in np.asarray(scene.contact.bodies).tolist()
+    if touches:
+        _contact_panels(axes[2, 0], axes[2, 1], t, track, scene, body)
     else:
-        _note(ax, "energy and |L| unknown: pass --scene to compute them")
-
-    _error_panel(axes[2, 1], t, track, reference, scene)
+        _conservation_panel(axes[2, 0], t, track)
+        _error_panel(axes[2, 1], t, track, reference, scene)
     for ax in axes[2]:
         ax.set_xlabel("sim time t (s)")
     for ax in axes.ravel():
@@ -115,6 +112,42 @@ def plot_body(data: RunData, body: str, out: str | os.PathLike[str], *, scene: S
     out = Path(out)
     _save_whole(fig, out, dpi)
     return out
+
+
+def _conservation_panel(ax, t: np.ndarray, track: BodyTrack) -> None:
+    """Relative drift of energy and |L|."""
+    drawn = False
+    if track.energy is not None:
+        drawn |= _drift(ax, t, track.energy, "energy $E$", "tab:purple")
+    if track.angular_momentum_norm is not None:
+        drawn |= _drift(ax, t, track.angular_momentum_norm, "$|L|$ about the COM", "tab:orange")
+    ax.set_ylabel(r"relative drift $(X(t) - X(0))\,/\,|X(0)|$ (1)")
+    ax.set_title("Conservation: energy and |angular momentum|")
+    if drawn:
+        ax.legend(loc="upper left", fontsize="small")
+    else:
+        _note(ax, "energy and |L| unknown: pass --scene to compute them")
+
+
+def _contact_panels(energy_ax, gap_ax, t: np.ndarray, track: BodyTrack, scene: Scene, body: str) -> None:
+    """Energy E(t) − E(0) (J) and the lowest gap to the ground (m) of a body the ground can touch."""
+    from ..core import Simulator
+    from ..core.contact.query import lowest_gaps_along
+
+    energy_ax.set_title("Energy: kinetic + potential, E(t) − E(0) (lost at impacts and to friction)")
+    if track.energy is not None:
+        energy_ax.plot(t, track.energy - track.energy[0], color="tab:purple", lw=1.2, label="$E - E(0)$")
+        energy_ax.legend(loc="upper right", fontsize="small")
+        energy_ax.set_ylabel("energy change (J)")
+    else:
+        _note(energy_ax, "energy unknown: pass --scene to compute it")
+    gaps = lowest_gaps_along(Simulator(scene), body, track.position_world, track.orientation_xyzw)
+    gap_ax.set_title("Lowest gap of the collision shape to the ground")
+    gap_ax.plot(t, gaps, color="tab:brown", lw=1.2, label="gap (m)")
+    gap_ax.axhline(0.0, color="0.5", lw=0.8, ls=":")
+    gap_ax.set_ylabel("gap (m)")
+    gap_ax.text(0.99, 0.98, f"lowest: {gaps.min():.3g} m", transform=gap_ax.transAxes, ha="right", va="top",
+                fontsize="small", color="0.25")
 
 
 def _save_whole(fig, out: Path, dpi: int) -> None:

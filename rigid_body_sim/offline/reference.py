@@ -4,8 +4,9 @@ A body's rotation has a closed form when nothing exerts a torque on it about its
 mass: no angular damping and no scripted wrench (uniform gravity exerts none). It is then the
 torque-free top of :mod:`rigid_body_sim.exact.closed_form`: symmetric (two equal principal
 moments, or a sphere) or asymmetric (Jacobi elliptic functions). Its translation has one when
-no force acts but gravity: no linear damping and no scripted wrench (a projectile). Runs
-start at t = 0 from the scene's initial state, so the references do too.
+no force acts but gravity: no linear damping and no scripted wrench (a projectile). A body the
+ground can touch (a collision shape in a scene with ``ground``) has neither: contact exerts
+force and torque. Runs start at t = 0 from the scene's initial state, so the references do too.
 """
 
 from __future__ import annotations
@@ -71,11 +72,14 @@ def closed_form_reference(scene: Scene, body: str, t: np.ndarray) -> Reference:
     b = model.names.index(body)
     t = np.asarray(t, dtype=float)
     scripted = any(w.body == body for w in scene.wrenches)
+    touches = scene.contact is not None and b in np.asarray(scene.contact.bodies).tolist()
 
     q_WB = w_B = None
     flip_period = None
     inertia = model.inertia_P[b]
-    if scripted:
+    if touches:
+        rotation = "none: ground contact"
+    elif scripted:
         rotation = "none: scripted wrenches act on it"
     elif model.damping_angular[b] > 0.0:
         rotation = "none: angular damping"
@@ -100,7 +104,9 @@ def closed_form_reference(scene: Scene, body: str, t: np.ndarray) -> Reference:
             w_B = quat_rotate(q_BP, w_P)
 
     p_W = v_W = None
-    if scripted:
+    if touches:
+        translation = "none: ground contact"
+    elif scripted:
         translation = "none: scripted wrenches act on it"
     elif model.damping_linear[b] > 0.0:
         translation = "none: linear damping"

@@ -4,7 +4,7 @@
 :class:`~rigid_body_sim.core.Simulator` (whose scene may script wrenches) for a duration,
 hands the state to ``on_sample`` callbacks every ``sample_every`` steps (and at the start and
 the end), reports progress, and returns a :class:`RunSummary` with the drift of each body's
-energy and |L| over the samples.
+energy and |L| over the samples (and, with ground contact, its impacts and lowest gap).
 """
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ from typing import Callable, Iterable
 import numpy as np
 
 from ..core import Simulator
+from ..core.contact.query import lowest_gaps, resting_bodies
 
 __all__ = ["RunSummary", "run_offline", "steps_for", "sample_interval", "MAX_RUN_STEPS"]
 
@@ -88,6 +89,11 @@ class RunSummary:
         The same for |L| about the centre of mass (kg·m²/s).
     stopped : bool
         True if ``stop`` ended the run before the duration (e.g. on SIGTERM).
+    contact : dict or None
+        With ground contact (``Simulator.contact``): ``impacts`` and ``events`` recorded in the run,
+        ``resting`` bodies in persistent contact at the end, ``lowest_gap`` the lowest gap (m) of
+        any collision shape over the samples (negative: inside the ground), ``impact_energy`` the
+        kinetic energy change summed over the impacts (J, ≤ 0); None without contact.
     """
 
     steps: int
@@ -99,6 +105,7 @@ class RunSummary:
     momentum_initial: dict[str, float]
     momentum_drift: dict[str, float]
     stopped: bool = False
+    contact: dict | None = None
 
     @property
     def real_time_factor(self) -> float:
@@ -143,9 +150,14 @@ def run_offline(sim: Simulator, duration: float, *, sample_every: int = 1,
     energy_drift = np.zeros(len(names))
     momentum_drift = np.zeros(len(names))
     samples = 0
+    solver = sim.contact
+    events_before = len(solver.events) if solver is not None else 0
+    lowest_gap = math.inf
 
     def sample() -> None:
-        nonlocal samples, energy_drift, momentum_drift
+        nonlocal samples, energy_drift, momentum_drift, lowest_gap
+        if solver is not None:
+            lowest_gap = min(lowest_gap, float(lowest_gaps(sim).min(initial=math.inf)))
         energy = sim.kinetic_energy() + sim.potential_energy()
         momentum = np.linalg.norm(sim.angular_momentum(), axis=1)
         energy_drift = np.maximum(energy_drift, _relative(energy, energy0))
@@ -170,11 +182,17 @@ def run_offline(sim: Simulator, duration: float, *, sample_every: int = 1,
         if progress is not None:
             progress(n)
     wall = time.perf_counter() - start_wall
+    contact = None
+    if solver is not None:
+        events = solver.events[events_before:] if len(solver.events) >= events_before else solver.events
+        impacts = [e for e in events if e.kind == "impact"]
+        contact = {"impacts": len(impacts), "events": len(events), "resting": len(resting_bodies(sim)),
+                   "lowest_gap": lowest_gap, "impact_energy": sum(e.energy_after - e.energy_before for e in impacts)}
     return RunSummary(
         steps=sim.step_count - start_steps, sim_time=sim.time, wall_time=wall, samples=samples,
         energy_initial=dict(zip(names, energy0.tolist())), energy_drift=dict(zip(names, energy_drift.tolist())),
         momentum_initial=dict(zip(names, momentum0.tolist())),
-        momentum_drift=dict(zip(names, momentum_drift.tolist())), stopped=stopped,
+        momentum_drift=dict(zip(names, momentum_drift.tolist())), stopped=stopped, contact=contact,
     )
 
 

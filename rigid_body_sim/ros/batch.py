@@ -50,6 +50,16 @@ VELOCITY_FIELDS: tuple[tuple[str, int, int], ...] = (
 #: Bytes per point of ``velocities``.
 VELOCITY_POINT_STEP = 56
 _POSE_BYTES = 7 * 8
+#: Most bodies :meth:`BatchCdr.check` reads back (a larger batch is checked on this many, built the same way).
+CHECK_BODIES = 64
+
+
+def _patched(head: bytes, counts: list[tuple[int, int]], n: int, word: struct.Struct) -> bytes:
+    """``head`` (of 1 body) with each count field (offset, value per body) set for ``n`` bodies."""
+    out = bytearray(head)
+    for offset, per_body in counts:
+        word.pack_into(out, offset, per_body * n)
+    return bytes(out)
 
 
 def batch_rows(positions_world: np.ndarray, orientations_xyzw: np.ndarray, linear_velocities_world: np.ndarray,
@@ -111,24 +121,45 @@ class BatchCdr:
     def __init__(self, n: int, frame_id: str):
         self.n = n
         self.frame_id = frame_id
-        poses = pose_array(n)
-        poses.header.frame_id = frame_id
-        pose_bytes = serialize_message(poses)
-        cloud = velocity_cloud(n)
-        cloud.header.frame_id = frame_id
-        cloud_bytes = serialize_message(cloud)
-        if pose_bytes[:2] not in (b"\x00\x01", b"\x00\x00") or cloud_bytes[:4] != pose_bytes[:4]:
+        # The middleware's bytes of 1, 2 and 3 bodies (building the messages of n bodies as objects
+        # would take seconds at 10⁵): the heads differ in the count fields (the sequence lengths,
+        # width, row_step), each a uint32 k·n, and in padding bytes the serializer leaves as they
+        # were (any value is valid there). A count field is a word that reads k, 2k and 3k;
+        # check() reads a batch back on CHECK_BODIES bodies.
+        heads = [self._templates(k) for k in (1, 2, 3)]
+        pose_bytes = heads[0][0]
+        if pose_bytes[:2] not in (b"\x00\x01", b"\x00\x00") or heads[0][1][:4] != pose_bytes[:4]:
             raise ValueError(f"unexpected CDR encapsulation {pose_bytes[:4]!r}")
         self._order = "<" if pose_bytes[:2] == b"\x00\x01" else ">"
         self._stamp = struct.Struct(self._order + "iI")
-        # PoseArray: header, then poses (sequence of 7 float64, 8-aligned) at the very end.
-        self._pose_head = pose_bytes[: len(pose_bytes) - n * _POSE_BYTES]
-        # PointCloud2: ... data (uint8 sequence), then is_dense (1 byte) at the very end.
-        data_len = VELOCITY_POINT_STEP * n
-        tail = 1
-        self._cloud_head = cloud_bytes[: len(cloud_bytes) - data_len - tail]
-        self._cloud_tail = cloud_bytes[len(cloud_bytes) - tail:]
         self._pose_dtype = np.dtype(self._order + "f8")
+        word = struct.Struct(self._order + "I")
+        parts = []
+        for which in range(3):  # pose head, cloud head, cloud tail
+            one, two, three = (h[which] for h in heads)
+            if not len(one) == len(two) == len(three):
+                raise ValueError("the message heads change length with the body count")
+            counts = []
+            for o in range(4, len(one) - 3, 4):  # CDR aligns a uint32 to 4 from the end of the encapsulation
+                k, k2, k3 = (word.unpack_from(h, o)[0] for h in (one, two, three))
+                if k and k2 == 2 * k and k3 == 3 * k:
+                    counts.append((o, k))
+            parts.append(_patched(one, counts, n, word))
+        self._pose_head, self._cloud_head, self._cloud_tail = parts
+
+    def _templates(self, n: int) -> tuple[bytes, bytes, bytes]:
+        """(PoseArray head, PointCloud2 head, PointCloud2 tail) of ``n`` bodies as the middleware serializes them."""
+        poses = pose_array(n)
+        poses.header.frame_id = self.frame_id
+        pose_bytes = serialize_message(poses)
+        cloud = velocity_cloud(n)
+        cloud.header.frame_id = self.frame_id
+        cloud_bytes = serialize_message(cloud)
+        # PoseArray: header, then poses (sequence of 7 float64, 8-aligned) at the very end.
+        # PointCloud2: ... data (uint8 sequence), then is_dense (1 byte) at the very end.
+        data_len, tail = VELOCITY_POINT_STEP * n, 1
+        return (pose_bytes[: len(pose_bytes) - n * _POSE_BYTES], cloud_bytes[: len(cloud_bytes) - data_len - tail],
+                cloud_bytes[len(cloud_bytes) - tail:])
 
     def _stamped(self, head: bytes, sec: int, nanosec: int) -> bytes:
         return head[:4] + self._stamp.pack(sec, nanosec) + head[12:]
@@ -144,7 +175,10 @@ class BatchCdr:
 
     def check(self) -> str | None:
         """Why these bytes differ from the middleware's messages, or None if they agree (a sample
-        with distinct values in every pose and point, a large stamp, a stopped body)."""
+        with distinct values in every pose and point, a large stamp, a stopped body), on at most
+        :data:`CHECK_BODIES` bodies built the same way (reading 10⁵ poses back as objects takes seconds)."""
+        if self.n > CHECK_BODIES:
+            return BatchCdr(CHECK_BODIES, self.frame_id).check()
         rng = np.random.default_rng(0)
         n = self.n
         p, q = rng.normal(size=(n, 3)), rng.normal(size=(n, 4))

@@ -27,7 +27,8 @@ time           80     FLOAT64 event: its sim time, located inside the step (s); 
                               contact: the stamp's time
 energy_change  88     FLOAT64 impact: kinetic energy after − before (J, ≤ 0); else 0
 body           96     UINT32  index of the body in scene order (``body_names``)
-ground         100    UINT32  index of the half-space in the scene's ``ground`` list
+ground         100    UINT32  index of the half-space in the scene's ``ground`` list; from its
+                              length on, a static shape's plane (ContactSolver.static_body_of)
 state          104    UINT8   :data:`STATES`: 0 impact, 1 resting, 2 sliding (persistent contact),
                               3 rest (came to rest; a Zeno sequence's accumulation time), 4 stick
                               (a slide stopped), 5 lift_off
@@ -119,6 +120,7 @@ class ContactPublisher:
         self.energy_change = 0.0  # J, Σ over impacts
         self._at_open: dict[str, float] = {}
         self.window_violation = 0.0  # m, the deepest gap seen at a tick end in the window (≥ 0)
+        self.window_most_events = 0  # the most events one tick had in the window
         self.open_window()
 
     def publish(self, sim: Simulator) -> PointCloud2 | None:
@@ -132,7 +134,9 @@ class ContactPublisher:
             self._solver, self._seen, self._time = solver, 0, None  # a new scene, or a reset (events cleared)
         elif self._time is not None and sim.time <= self._time:  # time went back (reset_world...)
             self._time = None
-        rows = self._event_rows(sim, solver) + self._resting_rows(sim, solver)
+        event_rows = self._event_rows(sim, solver)
+        self.window_most_events = max(self.window_most_events, len(event_rows))
+        rows = event_rows + self._resting_rows(sim, solver)
         self._impulses, self._time = solver.holding_impulses.copy(), sim.time
         gaps = lowest_gaps(sim)
         if gaps.size:
@@ -211,6 +215,7 @@ class ContactPublisher:
         """Start a new /diagnostics window (the counts below are since then)."""
         self._at_open = {**self.totals, "energy_change": self.energy_change}
         self.window_violation = 0.0
+        self.window_most_events = 0
 
     def status(self, node_name: str, sim: Simulator) -> DiagnosticStatus | None:
         """The ``<node>: contact`` status of the window (None without contact in the scene)."""
@@ -228,6 +233,7 @@ class ContactPublisher:
             _kv("contacts (resting bodies)", resting),
             _kv("contact points published (window)", window["contact_points"]),
             _kv("events (window)", window["events"]),
+            _kv("most events in one tick (window)", self.window_most_events),
             _kv("impacts (window)", window["impacts"]),
             _kv("Zeno guards (window)", window["zeno_guards"]),
             _kv("largest gap violation [m] (window)", f"{self.window_violation:.9g}"),
@@ -235,5 +241,13 @@ class ContactPublisher:
             _kv("events (total)", self.totals["events"]),
             _kv("Zeno guards (total)", self.totals["zeno_guards"]),
             _kv("resting steps that gained energy (total)", solver.energy_gains),
+            _kv("resting steps refined (total)", solver.counts["refined_steps"]),
+            _kv("impacts with restitution capped (total)", solver.counts["restitution_capped"]),
+            _kv("multi-contact impacts with e > 0, model-dependent (total)", solver.counts["multi_contact_elastic"]),
+            _kv("sliding holds in a Painlevé configuration, model-dependent (total)", solver.counts["painleve"]),
+            _kv("impacts on a second half-space while resting (total)", solver.counts["second_half_space"]),
+            _kv("two half-spaces with too many contact points: projected (total)", solver.counts["two_ground_overflow"]),
+            _kv("steps held on a static shape's tangent plane, first order (total)", solver.counts["static_tangent"]),
+            _kv("impacts of a resting body pressed on a static shape, not held (total)", solver.counts["static_pressed"]),
         ]
         return status

@@ -26,6 +26,7 @@ from rclpy.qos import QoSProfile
 from ..core import Scene, Simulator
 from ..core.imu import ImuSample
 from ..offline.recording import McapRecorder
+from .contact_wrench import ContactWrenchPublishers
 from .contacts import ContactPublisher
 from .conversions import time_msg_from_seconds
 from .imu import ImuChange, ImuPublishers
@@ -86,6 +87,8 @@ class BodyEndpoints:
         self.set_state = SetStateInputs(node, qos, world_frame, self.inputs, prefix, per_body=per_body)
         self.markers = MarkerPublisher(node, qos, prefix + world_frame)
         self.contacts = ContactPublisher(node, qos, prefix + world_frame)  # contacts.py
+        self.contact_wrenches = ContactWrenchPublishers(node, qos, prefix,  # contact_wrench.py
+                                                        bool(settings.get("publish_contact_wrench", False)))
         self.tf = TfPublisher(node, world_frame, prefix) if TF_AVAILABLE else None
         self._tf_scene: Scene | None = None  # the scene whose /tf_static was sent last
         self._tf_scene_due: Scene | None = None  # a committed scene whose /tf_static is still to send
@@ -130,6 +133,7 @@ class BodyEndpoints:
     def take_wrenches(self, sim: Simulator, wrench_timeout: float) -> None:
         """Hand held wrenches and pending impulses to ``sim``; record them with the scripted ones."""
         held = self.inputs.apply(sim, wrench_timeout)
+        self.contact_wrenches.before_tick(sim)
         self.recording.write(lambda recorder: recorder.write_wrenches(sim.time, self._prefixed(
             held + sim.active_scripted_wrenches())))
 
@@ -145,6 +149,7 @@ class BodyEndpoints:
         """Sample and publish the IMUs due, then the state and the contacts (all recorded if recording)."""
         self.imus.publish(sim, tick_s, self._record_imu if self.recording.recorder is not None else None)
         self.publish(sim, settings)
+        self.contact_wrenches.publish(sim, bool(settings.get("publish_contact_wrench", False)))
         contacts = self.contacts.publish(sim)
         if contacts is not None and self.recording.recorder is not None:
             data = self.contacts.cdr(contacts)
@@ -155,7 +160,8 @@ class BodyEndpoints:
         self.outputs.publish(sim, settings["publish_clock"])
         self._publish_tf(sim)
         self.markers.publish(sim, settings["marker_rate_hz"], lambda: self.inputs.snapshot()[0],
-                             settings["marker_force_scale"] if settings["marker_wrenches"] else None)
+                             settings["marker_force_scale"] if settings["marker_wrenches"] else None,
+                             contact_force_scale=settings["marker_force_scale"])
         if self.recording.recorder is not None:
             self.record_state(sim, settings)
 

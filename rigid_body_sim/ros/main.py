@@ -18,10 +18,8 @@ place before the heavy imports begin.
 from __future__ import annotations
 
 import gc
-import os
 import sys
 import time
-from pathlib import Path
 from typing import Any
 
 from ..signals import TwoPhaseSignals, Watchdog, exit_now
@@ -135,15 +133,11 @@ def _compile_if_cold() -> None:
 
 
 def _kernels_cached() -> bool:
-    """True if numba's cache holds compiled core kernels, or if where it keeps them is unknown:
-    next to the sources (``core/kernels/__pycache__``) unless ``NUMBA_CACHE_DIR`` is set (anything
-    compiled under it counts) or the sources are read-only (a per-user directory not guessed here)."""
-    from ..core.kernels.jit import CACHE_DIR
+    """True if numba's cache holds every compiled kernel of these sources (kernels/jit.py marks it
+    once they were all compiled), or if the cache is not ours to fill (a read-only install)."""
+    from ..core.kernels.jit import cache_complete
 
-    user_dir = os.environ.get("NUMBA_CACHE_DIR")
-    if user_dir:
-        return any(Path(user_dir).rglob("*.nbi"))
-    return not os.access(CACHE_DIR, os.W_OK) or any(CACHE_DIR.glob("*.nbi"))
+    return cache_complete()
 
 
 if __name__ == "__main__":

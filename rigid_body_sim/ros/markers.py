@@ -10,7 +10,12 @@ or Foxglove shows the scene with the fixed frame set to it. Per body B (namespac
 - ids 1, 2, ... its sites in scene order: SPHEREs of diameter :data:`SITE_DIAMETER_M`;
 - namespace ``B/wrench``, with ``marker_wrenches``: one ARROW per held wrench (B/wrench topic),
   from the origin of its frame (the site, the COM for B and B/world_aligned, the world origin
-  for ``world_frame``) along the force, ``marker_force_scale`` m per N.
+  for ``world_frame``) along the force, ``marker_force_scale`` m per N;
+- namespace ``B/contact``, in a scene with ground contact, while B rests on the ground (persistent
+  contact): ids 0, 1, ... a SPHERE of diameter :data:`CONTACT_POINT_DIAMETER_M` at each of its
+  touching contact points, then one ARROW from their centre along the ground's holding force of
+  the last step (``marker_force_scale`` m per N; the force that holds a 1 kg box at rest on level
+  ground points up, 9.81 N).
 
 Each array starts with a DELETEALL marker, so bodies deleted and wrenches released disappear.
 Published at ``marker_rate_hz`` of sim time (at most once a tick; 0 = never), and only while
@@ -29,11 +34,12 @@ from rclpy.qos import QoSProfile
 from visualization_msgs.msg import Marker, MarkerArray
 
 from ..core import Scene, Simulator
+from ..core.contact.query import resting_bodies, touching_points
 from ..core.quaternion import quat_multiply, quat_rotate, quat_wxyz_from_xyzw, quat_xyzw_from_wxyz
 from .conversions import time_msg_from_seconds
 from .scene_edit import scene_data
 
-__all__ = ["MarkerPublisher", "SITE_DIAMETER_M", "body_shapes", "TOPIC"]
+__all__ = ["MarkerPublisher", "SITE_DIAMETER_M", "CONTACT_POINT_DIAMETER_M", "body_shapes", "TOPIC"]
 
 #: Topic of the MarkerArray (relative: in the node's namespace).
 TOPIC = "markers"
@@ -42,6 +48,9 @@ SITE_DIAMETER_M = 0.05
 _BODY_RGBA = (0.55, 0.65, 0.8, 0.8)
 _SITE_RGBA = (1.0, 0.55, 0.0, 1.0)
 _ARROW_RGBA = (0.9, 0.1, 0.1, 1.0)
+#: Diameter of a contact point's sphere, m.
+CONTACT_POINT_DIAMETER_M = 0.03
+_CONTACT_RGBA = (0.1, 0.7, 0.2, 1.0)
 
 
 def body_shapes(scene: Scene) -> list[tuple[int, tuple[float, float, float], bool]]:
@@ -103,10 +112,11 @@ class MarkerPublisher:
 
     def publish(self, sim: Simulator, rate_hz: float,
                 holds: Callable[[], Mapping[tuple[str, str], tuple[np.ndarray, np.ndarray]]],
-                force_scale: float | None) -> None:
+                force_scale: float | None, *, contact_force_scale: float = 0.05) -> None:
         """Publish the markers if due at ``sim.time`` (every ``1 / rate_hz`` s of sim time) and
         someone listens; ``holds()`` gives the held wrenches ((body, core frame) → (force, torque)
-        in that frame), drawn when ``force_scale`` (m/N) is not None. Hold the node's lock."""
+        in that frame), drawn when ``force_scale`` (m/N) is not None; contact forces are drawn at
+        ``contact_force_scale`` (m/N). Hold the node's lock."""
         if rate_hz <= 0.0 or self._publisher.get_subscription_count() == 0:
             return
         t = sim.time
@@ -115,10 +125,11 @@ class MarkerPublisher:
             return
         self._last_t = t
         self._next_due_s = t + 1.0 / rate_hz
-        self._publisher.publish(self.build(sim, holds() if force_scale is not None else {}, force_scale))
+        self._publisher.publish(self.build(sim, holds() if force_scale is not None else {}, force_scale,
+                                           contact_force_scale=contact_force_scale))
 
     def build(self, sim: Simulator, holds: Mapping[tuple[str, str], tuple[np.ndarray, np.ndarray]],
-              force_scale: float | None) -> MarkerArray:
+              force_scale: float | None, *, contact_force_scale: float = 0.05) -> MarkerArray:
         """The MarkerArray of ``sim``'s current state (see the module docstring)."""
         scene = sim.scene
         if scene is not self._scene:
@@ -186,5 +197,35 @@ class MarkerPublisher:
                 m.points = [start, end]
                 m.scale.x, m.scale.y, m.scale.z = 0.02, 0.04, 0.06  # shaft and head diameters, head length (m)
                 markers.append(m)
+        markers += self._contact_markers(sim, marker, contact_force_scale)
         array.markers = markers
         return array
+
+    @staticmethod
+    def _contact_markers(sim: Simulator, marker: Callable[..., Marker], force_scale: float) -> list[Marker]:
+        """The ``B/contact`` markers of every body resting on the ground (see the module docstring)."""
+        solver = sim.contact
+        if solver is None:
+            return []
+        out = []
+        stopped = set(sim.stopped_bodies)
+        for i in resting_bodies(sim):
+            body = sim.body_names[i]
+            points, _ = touching_points(sim, i)
+            if body in stopped or not len(points):
+                continue
+            ns = f"{body}/contact"
+            for k, point in enumerate(points):
+                m = marker(ns, k, Marker.SPHERE, _CONTACT_RGBA)
+                _pose(m, point, (0.0, 0.0, 0.0, 1.0))
+                m.scale.x = m.scale.y = m.scale.z = CONTACT_POINT_DIAMETER_M
+                out.append(m)
+            centre = points.mean(axis=0)
+            tip = centre + force_scale * solver.holding_forces[i]
+            m = marker(ns, len(points), Marker.ARROW, _CONTACT_RGBA)
+            _pose(m, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
+            m.points = [Point(x=float(centre[0]), y=float(centre[1]), z=float(centre[2])),
+                        Point(x=float(tip[0]), y=float(tip[1]), z=float(tip[2]))]
+            m.scale.x, m.scale.y, m.scale.z = 0.02, 0.04, 0.06
+            out.append(m)
+        return out

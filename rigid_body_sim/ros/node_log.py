@@ -34,13 +34,10 @@ def log_scene(logger: Any, sim: Simulator, settings: Mapping[str, Any], frames: 
 
 def log_models(logger: Any, sim: Simulator) -> None:
     """Which model each body gets and why (model reduction): counts, then one line per body."""
-    plans = sim.body_models()
-    counts: dict[str, int] = {}
-    for plan in plans:
-        counts[plan.model] = counts.get(plan.model, 0) + 1
+    counts = sim.model_counts()
     logger.info(f"models (model_reduction {'on' if sim.model_reduction else 'off'}): "
                 + ", ".join(f"{count} {model}" for model, count in sorted(counts.items())))
-    for plan in plans[:LISTED_BODIES]:
+    for plan in sim.body_models(first=LISTED_BODIES):
         logger.info(f"  {plan.body}: {plan.model} model: {plan.reason}")
 
 

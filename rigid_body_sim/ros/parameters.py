@@ -28,6 +28,8 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from ..core import INTEGRATORS
+from ..core.kernels.parallel import MIN_BODIES as PARALLEL_MIN_BODIES
+from ..core.kernels.parallel import max_threads
 from ..core.scene import MAX_NAMESPACE_LENGTH
 from ..offline.recording import check_record_path
 from ..package_data import default_scene_path
@@ -188,6 +190,13 @@ def _check_diagnostics_period(value: float) -> str | None:
     return None
 
 
+def _check_threads(value: int) -> str | None:
+    if value > max_threads():
+        return (f"threads must be 0 (every core) or at most {max_threads()} (NUMBA_NUM_THREADS on this machine), "
+                f"got {value!r}")
+    return None
+
+
 def _check_world_frame(value: str) -> str | None:
     if not value or "/" in value or any(c.isspace() for c in value):
         return f"world_frame must be a non-empty frame name without '/' or spaces, got {value!r}"
@@ -224,7 +233,12 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
                   choices=tuple(sorted(INTEGRATORS))),
     ParameterSpec("model_reduction", _T.BOOL, True,
                   "Give each body the cheapest exact model for what it is and what the scene declares "
-                  "(README 'Motions and model reduction'); false steps every free body with the integrator."),
+                  "(docs/scenes.md); false steps every free body with the integrator."),
+    ParameterSpec("threads", _T.INTEGER, 0,
+                  "Threads the physics step may use over the bodies: 0 = every core (NUMBA_NUM_THREADS, by default "
+                  f"the CPU count). The step runs in parallel only from {PARALLEL_MIN_BODIES} moving bodies; the results "
+                  "are the same to the bit for any count (docs/performance.md).",
+                  range=(0, 1024), constraints="at most NUMBA_NUM_THREADS", check=_check_threads),
     ParameterSpec("rate_hz", _T.DOUBLE, 100.0, "Ticks per wall-clock second (Hz).", range=(0.001, 100000.0)),
     ParameterSpec("substeps", _T.INTEGER, 1,
                   "Physics steps per tick; dt = real_time_factor / (rate_hz * substeps) seconds.",
@@ -247,7 +261,7 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec("per_body_topics", _T.BOOL, True,
                   "Publish B/pose, B/twist (and B/odom) for every body B besides the batches poses and "
                   "velocities; false: only the batches (and, unless per_body_inputs says otherwise, no per-body "
-                  "inputs). False also lifts the node's body limit from 1000 to 10000.",
+                  "inputs). False also lifts the node's body limit from 1000 to 100000.",
                   read_only=True, takes_effect="start-up only"),
     ParameterSpec("per_body_inputs", _T.STRING, "auto",
                   "Subscribe to B/wrench, B/impulse and B/set_state for every body B, besides the shared "
@@ -301,8 +315,14 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
                   "so no client can flood 'markers'.", range=(0.0, MAX_MARKER_RATE_HZ)),
     ParameterSpec("marker_wrenches", _T.BOOL, True,
                   "Draw each held wrench's force as an arrow from its frame's origin in 'markers'."),
-    ParameterSpec("marker_force_scale", _T.DOUBLE, 0.05, "Length of a wrench arrow in 'markers' per newton (m/N).",
+    ParameterSpec("marker_force_scale", _T.DOUBLE, 0.05,
+                  "Length of a wrench arrow, and of a contact force arrow, in 'markers' per newton (m/N).",
                   range=(1e-9, 1e9)),
+    ParameterSpec("publish_contact_wrench", _T.BOOL, False,
+                  "Publish B/contact_wrench (geometry_msgs/WrenchStamped) after every tick for every body B with a "
+                  "collision shape, in a scene with ground contact: the ground's mean force and torque on B over the "
+                  "tick (holding forces and impacts; frame B/world_aligned).",
+                  takes_effect="from the first tick that starts after the change"),
 )
 
 #: :data:`PARAMETERS` by name.

@@ -38,7 +38,7 @@ from rosgraph_msgs.msg import Clock as ClockMsg
 from sensor_msgs.msg import PointCloud2
 
 from ..core import Simulator
-from .batch import BatchCdr, batch_rows, pose_array, velocity_cloud
+from .batch import VELOCITY_POINT_STEP, BatchCdr, pose_array, velocity_cloud
 from .cdr import PoseTwistClockCdr, check_against_middleware
 from .conversions import fill_odometry, fill_pose_stamped, fill_twist, time_msg_from_seconds
 
@@ -215,17 +215,18 @@ class StatePublishers:
         sec, nanosec = stamp.sec, stamp.nanosec
         names = sim.body_names
         n = len(names)
-        positions, orientations = sim.positions_world(), sim.orientations_xyzw()
-        velocities, rates_world = sim.linear_velocities_world(), sim.angular_velocities_world()
-        finite = sim.state.finite_bodies()
+        # The pose rows and the velocity points (batch.py) in one compiled pass over the state:
+        # bitwise batch_rows of positions_world, orientations_xyzw and the velocities.
+        rows, twists = np.empty((n, 7)), np.zeros((n, 7))
+        finite = sim.pose_twist_rows(rows, twists)
         stopped_names = sim.stopped_bodies
         stopped = ~finite
         if stopped_names:
             if len(self._index) != n or any(self._index.get(b) is None for b in stopped_names):
                 self._index = {b: k for k, b in enumerate(names)}
-            stopped = stopped.copy()
             stopped[[self._index[b] for b in stopped_names]] = True
-        rows, points = batch_rows(positions, orientations, velocities, rates_world, stopped)
+        points = twists.astype("<f8", copy=False).view(np.uint8).reshape(n, VELOCITY_POINT_STEP)  # little endian
+        points[:, 48] = stopped
         last = self._last
         if not finite.all():
             if last is not None and last[0] is sim and last[1] == n:

@@ -17,13 +17,17 @@ from collections.abc import Mapping
 from typing import Any
 
 from ..core import Scene, SceneError
-from ..core.scene import MAX_SCENE_BYTES, load_scene_text
+from ..core.scene import load_scene_text
 from ..core.scene_yaml import YamlReadError, read_yaml
 
 __all__ = ["SOURCE", "scene_data", "edited_scene"]
 
 #: What errors call a scene made by an edit (and its ``Scene.source``).
 SOURCE = "spawn/delete request"
+
+#: Longest definition of one spawned body, characters: 8 MiB, far more than a body with its
+#: sites needs (MAX_SITES_PER_BODY sites of ~100 characters), and read while the node waits.
+MAX_DEFINITION_CHARS = 8 * 1024 * 1024
 
 
 def scene_data(scene: Scene) -> dict[str, Any]:
@@ -65,9 +69,9 @@ def edited_scene(scene: Scene, spawn: Mapping[str, str], delete: list[str]) -> S
         if name in bodies:
             raise SceneError(f"{SOURCE}: cannot spawn {name!r}: a body of that name exists; delete it first or "
                              "choose another name")
-        if len(text) > MAX_SCENE_BYTES:  # characters ≥ bytes / 4; the loader bounds the rest
-            raise SceneError(f"{SOURCE}: bodies.{name}: expected a definition of at most {MAX_SCENE_BYTES} "
-                             f"characters (a scene file's limit), got {len(text)}")
+        if len(text) > MAX_DEFINITION_CHARS:  # the loader bounds the rest
+            raise SceneError(f"{SOURCE}: bodies.{name}: expected a definition of at most {MAX_DEFINITION_CHARS} "
+                             f"characters, got {len(text)}")
         try:
             definition = read_yaml(text)
         except YamlReadError as exc:

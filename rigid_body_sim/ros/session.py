@@ -38,8 +38,14 @@ __all__ = ["BUSY_WAIT_S", "CHANGE_WAIT_S", "MAX_BATCH_ONLY_BODIES", "MAX_BODIES"
 #: service for many seconds. A larger scene is refused with this number in the reason.
 MAX_BODIES = 1000
 #: Most bodies with ``per_body_topics`` false (batches only; inputs on the shared topics unless
-#: ``per_body_inputs`` asks for three subscriptions a body).
-MAX_BATCH_ONLY_BODIES = 10_000
+#: ``per_body_inputs`` asks for three subscriptions a body): the scene loader's own limit
+#: (core/scene.MAX_BODIES). What sets it (docs/interface.md, "Many bodies"; measured by
+#: ``make bench-node``): memory, ~4 KB a body in the node (state buffers, model, scene text,
+#: the batch rows and their CDR copies); the size of a tick's batches, 56 bytes a body in each
+#: of ``poses`` and ``velocities`` (5.6 MB each at 10⁵), which Fast DDS sends in ~64 KB
+#: fragments, ~180 a tick to every subscriber; and the tick's CPU (stepping, packing, sending),
+#: ~20 ms at 10⁵ bodies with rk4 (a fifth of a core at 10 Hz). A larger scene is split into shards.
+MAX_BATCH_ONLY_BODIES = 100_000
 #: Most ticks one ``~/step_ticks`` request may ask for (the node's other callbacks wait while it steps).
 MAX_STEP_TICKS = 1_000_000
 #: Longest wait (s) of a scene or parameter change for the one before it to finish.
@@ -117,8 +123,8 @@ def check_scene(scene: Scene, world_frame: str, per_body_topics: bool) -> None:
         raise SceneError(f"{scene.source}: {count} bodies; this node takes at most {MAX_BODIES} "
                          f"(each body has its own topics); with per_body_topics:=false, up to {MAX_BATCH_ONLY_BODIES}")
     if count > MAX_BATCH_ONLY_BODIES:
-        raise SceneError(f"{scene.source}: {count} bodies; this node takes at most "
-                         f"{MAX_BATCH_ONLY_BODIES} (each body has its own wrench and impulse subscriptions)")
+        raise SceneError(f"{scene.source}: {count} bodies; this node takes at most {MAX_BATCH_ONLY_BODIES} "
+                         "(split the scene into shards: rigid-body-sim shard, docs/shards.md)")
     if world_frame in scene.body_names:
         raise ValueError(f"body name {world_frame!r} clashes with world_frame; rename the body")
 
@@ -134,7 +140,7 @@ def build_simulator(path: str, settings: Mapping[str, Any]) -> Simulator:
     scene = load_scene(path)
     check_scene(scene, settings["world_frame"], settings["per_body_topics"])
     return Simulator(scene, integrator=settings["integrator"], dt=physics_dt(settings),
-                     model_reduction=settings["model_reduction"])
+                     model_reduction=settings["model_reduction"], threads=settings.get("threads", 0))
 
 
 def _ignore(*_args: Any) -> None:
@@ -589,8 +595,8 @@ class SimSession:
             self._on_restart()
             return
         sim = self.simulator
-        for name in ("integrator", "model_reduction"):
-            if old[name] != settings[name]:
+        for name in ("integrator", "model_reduction", "threads"):
+            if old.get(name) != settings.get(name) and name in settings:
                 setattr(sim, name, settings[name])
         dt = physics_dt(settings)
         if dt != sim.dt:

@@ -1,12 +1,14 @@
 """A live 3D view of a running ``rigid_body_sim_node`` in the browser (``rigid-body-sim view``).
 
-A client of the node's public ROS interface only: it joins the ROS domain as its own rclpy node,
-reads ``poses`` (with the node's ``body_names`` parameter) and ``markers``, calls ``~/set_paused``,
-``~/step`` and ``~/reset``, and publishes ``B/impulse`` from the "Feel the offset" panel. The page
-is served by viser (docs/view.md says why). :mod:`.strike` is the panel's geometry, without ROS or
-viser; :mod:`.app` is the server and the drawing of the bodies (:class:`.app.Bodies`); :mod:`.replay`
-shows an MCAP recording with that same drawing, a time slider and Play/Pause, without a ROS domain
-(``rigid-body-sim view RECORDING``).
+A client of the node's public ROS interface only (:mod:`.client`): it joins the ROS domain as its
+own rclpy node, reads ``poses``, ``velocities``, ``markers``, ``contacts`` and the node's
+parameters, calls its services, sets ``integrator``, ``rate_hz`` and ``real_time_factor``, and
+publishes strikes on ``impulse``. The page is served by viser (docs/view.md says why):
+:mod:`.page` is the live page, :mod:`.drawing` the drawing shared with the replay of a recording
+(:mod:`.replay`, no ROS), :mod:`.app` the server and the command. Pure parts, without ROS or
+viser: :mod:`.strike` (the "Feel the offset" strike), :mod:`.pick` (click-to-strike: where a click
+ray meets a shape), :mod:`.mechanics` (the plotted energy and |L|), :mod:`.wire` (``poses`` read
+from CDR with numpy).
 """
 
 from .strike import STRIKE_IMPULSE_NS, strike_point, strike_wrench

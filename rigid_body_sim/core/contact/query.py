@@ -16,11 +16,12 @@ from ..kernels import layout as L
 from ..kernels.contact.layout import MAX_POINTS, PERSISTENT
 from ..kernels.contact.shapes import body_gap, body_points, feature_points, min_gaps
 
-__all__ = ["lowest_gap", "lowest_gaps", "lowest_point", "resting_bodies", "touching_points"]
+__all__ = ["lowest_gap", "lowest_gaps", "lowest_gaps_along", "lowest_point", "resting_bodies", "touching_points"]
 
 
 def lowest_gap(sim, body: str, position_world, orientation_xyzw) -> tuple[float, int]:
-    """(lowest gap in m, index of its ground) of ``body``'s collision shape placed at that pose,
+    """(lowest gap in m, index of its ground) of ``body``'s collision shape placed at that pose (its
+    centre of mass at ``position_world``, its frame B turned by ``orientation_xyzw``, (x, y, z, w)),
     over every ground half-space of ``sim``; (inf, -1) without contact or without a shape.
 
     A negative gap is how far the shape's lowest point lies inside that half-space.
@@ -32,10 +33,28 @@ def lowest_gap(sim, body: str, position_world, orientation_xyzw) -> tuple[float,
     y = np.zeros(L.ROW_WIDTH)
     y[L.P:L.P + 3] = np.asarray(position_world, dtype=float)
     x, yy, z, w = (float(c) for c in orientation_xyzw)
-    y[L.Q:L.Q + 4] = w, x, yy, z
-    gap, j = body_gap(y, sim._prm[i], solver.shapes[i], solver.grounds, np.empty((MAX_POINTS, 3)),
+    q_BP = sim.model.q_BP[i]  # the state row holds q_WP = q_WB ⊗ q_BP (the shape is in principal axes)
+    y[L.Q:L.Q + 4] = _product((w, x, yy, z), q_BP)
+    gap, j = body_gap(y, sim._prm[i], solver.shapes[i], solver.half_spaces, np.empty((MAX_POINTS, 3)),
                       np.empty(MAX_POINTS))
     return float(gap), int(j)
+
+
+def lowest_gaps_along(sim, body: str, positions_world, orientations_xyzw) -> np.ndarray:
+    """(T,) lowest gap in m of ``body``'s collision shape at each of T poses (positions (T, 3) of its
+    centre of mass, orientations (T, 4) of its frame B, (x, y, z, w)), over every ground half-space
+    (inf without contact or without a shape): a recorded run's gap over time."""
+    positions = np.asarray(positions_world, dtype=float).reshape(-1, 3)
+    orientations = np.asarray(orientations_xyzw, dtype=float).reshape(-1, 4)
+    return np.array([lowest_gap(sim, body, p, q)[0] for p, q in zip(positions, orientations)], dtype=float)
+
+
+def _product(a, b) -> tuple[float, float, float, float]:
+    """The Hamilton product a ⊗ b of two (w, x, y, z) quaternions."""
+    aw, ax, ay, az = a
+    bw, bx, by, bz = (float(c) for c in b)
+    return (aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw)
 
 
 def touching_points(sim, index: int) -> tuple[np.ndarray, np.ndarray]:
@@ -66,7 +85,7 @@ def lowest_gaps(sim) -> np.ndarray:
     """The lowest gap (m) over every ground of each body with a shape, in ``sim.contact.bodies`` order."""
     solver = sim.contact
     out = np.empty(len(solver.bodies))
-    min_gaps(sim._Ys[sim._control[L.CUR]], sim._prm, solver.shapes, solver.grounds, solver.bodies, out)
+    min_gaps(sim._Ys[sim._control[L.CUR]], sim._prm, solver.shapes, solver.half_spaces, solver.bodies, out)
     return out
 
 

@@ -19,6 +19,8 @@ Schema (scene.py's other keys are unchanged)::
 A body whose inertia is ``principal`` or ``tensor`` has no collision shape unless it declares
 one. Contact acts on bodies whose motion is ``free``; the others pass through the ground (they
 do not move, or move as declared).
+A body whose motion is ``static`` and that has a collision shape is static geometry in a scene
+with a ``ground`` key (``ground: []`` for no half-space): the solver's static_geometry.py.
 
 Pair material: friction √(μ_a μ_b), restitution max(e_a, e_b) (Box2D's rule); a side without
 a material takes the other's; with neither, :data:`DEFAULT_RESTITUTION` and
@@ -54,13 +56,12 @@ from ..kernels.contact.layout import (
     SHAPE_SPHERE,
     SHAPE_WIDTH,
 )
+from .materials import DEFAULT_FRICTION, DEFAULT_RESTITUTION, pair_material
+from .static_geometry import check_not_inside_statics
 
 __all__ = ["ContactSpec", "read_contact", "without_contact_keys", "pair_material", "DEFAULT_RESTITUTION", "DEFAULT_FRICTION",
            "MAX_GROUNDS", "BODY_KEYS", "TOP_KEYS"]
 
-#: Restitution and friction of a pair where neither side declares a material.
-DEFAULT_RESTITUTION = 0.0
-DEFAULT_FRICTION = 0.5
 #: Most half-spaces a scene may list.
 MAX_GROUNDS = 64
 #: The keys this module adds to a scene's top level and to a body.
@@ -94,20 +95,6 @@ class ContactSpec:
     restitution: np.ndarray
     friction: np.ndarray
     bodies: np.ndarray
-
-
-def pair_material(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
-    """(restitution, friction) of two rows with material columns: max(e_a, e_b), √(μ_a μ_b).
-
-    A side without a material (HAS_MATERIAL 0) takes the other's; with neither, the defaults.
-    """
-    if not a[HAS_MATERIAL] and not b[HAS_MATERIAL]:
-        return DEFAULT_RESTITUTION, DEFAULT_FRICTION
-    if not a[HAS_MATERIAL]:
-        a = b
-    if not b[HAS_MATERIAL]:
-        b = a
-    return max(float(a[RESTITUTION]), float(b[RESTITUTION])), math.sqrt(float(a[FRICTION]) * float(b[FRICTION]))
 
 
 def without_contact_keys(body: Any) -> Any:
@@ -220,6 +207,8 @@ def read_contact(check: Any, top: Mapping, model: Any, state: Any) -> ContactSpe
         for j in range(g):
             restitution[i, j], friction[i, j] = pair_material(shapes[i], grounds[j])
     _check_not_inside(check, model, state, shapes, grounds)
+
+    check_not_inside_statics(check, model, state, shapes)
     bodies = np.array([i for i in range(n) if shapes[i, KIND] != SHAPE_NONE and model.motions[i] == "free"],
                       dtype=np.int64)
     for array in (grounds, shapes, restitution, friction, bodies):

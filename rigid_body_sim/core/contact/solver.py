@@ -21,6 +21,15 @@ old code. Per step:
    (an impact of all touching features together, :meth:`ContactSolver._landing`), another
    half-space was reached, or a feature the holding force did not push on moved off.
 
+A body that touches a second half-space while resting on one (a groove, a corner) is held by
+both together (two_grounds.py); those bodies take the Python path around the compiled passes.
+
+Static bodies with a shape are geometry too (static_geometry.py): the flight gap is the least of
+the half-spaces' gaps and the narrow phase's signed distances to them, and each contact with one
+is a plane row of :attr:`ContactSolver.grounds` after the half-spaces (a static box's face, or a
+body's tangent row); bodies resting on such a row take the Python path. Without static shapes
+``grounds`` are the half-spaces and the code path is the one without them.
+
 Persistent contact tracks *features* (shapes.feature_gaps: box corners, capsule ends, cylinder
 rims), so resting on a face, pivoting on an edge or rolling on a rim are one mechanism. The
 holding force is found at the start of each step and held over it (zero-order hold): exact
@@ -42,14 +51,16 @@ Events are recorded in :attr:`ContactSolver.events` (:class:`ContactEvent`).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from ..kernels import layout as L
+from ..quaternion import quat_rotate, quat_to_matrix
+from . import static_geometry, two_grounds
+from .events import ContactEvent
 from ..kernels.stepping import advance, step_reduced
 from ..kernels.contact.batch import OK, hold_all, settle_all
-from ..kernels.contact.impacts import _LAM, IMPACT_WORK_SHAPE, impact
+from ..kernels.contact.impacts import _A, _LAM, IMPACT_WORK_SHAPE, impact
 from ..kernels.contact.layout import DIMS, FLIGHT, KIND, MAX_POINTS, NORMAL, PERSISTENT, SHAPE_BOX
 from ..kernels.contact.persistent import (
     LIFT_OFF,
@@ -89,39 +100,6 @@ MAX_REFINEMENT = 32
 BRACKET_SAMPLES = 16
 
 
-@dataclass(frozen=True)
-class ContactEvent:
-    """One contact event.
-
-    Attributes
-    ----------
-    time : float
-        s of sim time (located inside the step).
-    body : str
-    ground : int
-        Index into the scene's ``ground`` list.
-    kind : str
-        ``impact``, ``rest`` (persistent contact from here; for a Zeno sequence, dated at its
-        accumulation time), ``lift-off`` or ``stick`` (a sliding contact stopped).
-    normal_speed_before, normal_speed_after : float
-        Lowest normal velocity of the contact points (m/s, positive away from the ground).
-    impulse : float
-        Σ normal impulse, N·s (impacts), else 0.
-    energy_before, energy_after : float
-        Kinetic energy of the body, J, around the event.
-    """
-
-    time: float
-    body: str
-    ground: int
-    kind: str
-    normal_speed_before: float = 0.0
-    normal_speed_after: float = 0.0
-    impulse: float = 0.0
-    energy_before: float = 0.0
-    energy_after: float = 0.0
-
-
 class ContactSolver:
     """Contact of a Simulator's bodies with the scene's ground half-spaces (the module docstring).
 
@@ -139,6 +117,17 @@ class ContactSolver:
         self.restitution = spec.restitution
         self.friction = spec.friction
         model = sim.model
+        #: The scene's half-spaces (rows 0 … G − 1 of :attr:`grounds`).
+        self.half_spaces = spec.grounds
+        #: Static bodies with a shape as geometry (static_geometry.py), or None: then ``grounds`` are the
+        #: half-spaces alone and nothing here differs from a scene without static shapes.
+        self.statics = None
+        statics = static_geometry.static_shapes(spec.shapes, model.motions)
+        if statics.size:
+            self.statics = static_geometry.StaticGeometry(sim, spec, statics)
+            # plane rows: half-spaces, static box faces, one tangent row per body (static_geometry.py)
+            self.grounds, self.restitution, self.friction = (self.statics.rows, self.statics.restitution,
+                                                             self.statics.friction)
         n = model.count
         self.bodies = np.array(spec.bodies, dtype=np.int64)  # free bodies with a collision shape
         self.names = model.names
@@ -166,6 +155,35 @@ class ContactSolver:
         self.holding_impulses = np.zeros((n, 3))
         #: Steps of resting bodies that still gained energy when cut into MAX_REFINEMENT pieces.
         self.energy_gains = 0
+        #: Per body, Σ impact impulse since the solver was made or reset: (N·s, then N·m·s about the
+        #: centre of mass), world axes.
+        self.impact_impulses = np.zeros((n, 6))
+        #: Set True to have :attr:`holding_angular_impulses` kept (off: the resting path costs nothing more).
+        self.track_torques = False
+        #: Per body, Σ holding torque about the centre of mass × step (N·m·s, world axes, the torque at
+        #: each step's start), while :attr:`track_torques`.
+        self.holding_angular_impulses = np.zeros((n, 3))
+        #: Counts of what /diagnostics reports (reset clears them): ``restitution_capped`` impacts whose
+        #: restitution the energy cap lowered below e; ``multi_contact_elastic`` impacts of several
+        #: contact points with e > 0 (the model-dependent case); ``refined_steps`` resting steps taken
+        #: again in pieces because they gained energy; ``second_half_space`` impacts of a resting body
+        #: against another half-space; ``two_ground_overflow`` holds on two half-spaces with more
+        #: contact points than the rows take (two_grounds.py); ``painleve`` sliding holds in a
+        #: Painlevé configuration (:meth:`_painleve`); ``static_tangent`` body-steps held on a static shape's
+        #: tangent plane (a curved support, an edge or a rim: first order; static_geometry.py);
+        #: ``static_pressed`` impacts of a resting body against a static shape it stays pressed on (not held
+        #: there: it may reach into it by up to a h²/2 per step, a its acceleration towards it).
+        self._static_skipped: set[int] = set()  # bodies not looked at against static shapes for the rest of the step
+        self.counts = dict.fromkeys(("restitution_capped", "multi_contact_elastic", "refined_steps",
+                                     "second_half_space", "two_ground_overflow", "painleve",
+                                     "static_tangent", "static_pressed"), 0)
+        #: Per body, a second half-space it is held on besides ``ground_of`` (two_grounds.py), or -1.
+        self.other_ground = np.full(n, -1, dtype=np.int64)
+        #: The features touching ``other_ground``, as bits.
+        self.other_tracked = np.zeros(n, dtype=np.int64)
+        #: Per body with an ``other_ground``: True when the two together have more contact points than the
+        #: rows hold, so it is held on ``ground_of`` alone and projected onto both after each step.
+        self.other_projected = np.zeros(n, dtype=bool)
         self._points = np.empty((MAX_POINTS, 3))
         self._gaps = np.empty(MAX_POINTS)
         self._work = np.zeros(IMPACT_WORK_SHAPE)
@@ -186,12 +204,20 @@ class ContactSolver:
     def reset(self, sim) -> None:
         """Modes from the current state: touching and not moving away means persistent; the events cleared."""
         self.events.clear()
+        self.impact_impulses[:] = 0.0
+        self.holding_angular_impulses[:] = 0.0
+        for key in self.counts:
+            self.counts[key] = 0
         self.modes[:] = FLIGHT
         self.ground_of[:] = -1
+        self.other_ground[:] = -1
+        self.other_projected[:] = False
         self.sliding[:] = False
         Y = sim._Ys[sim._control[L.CUR]]
+        if self.statics is not None:
+            self.statics.place(sim)
         for i in self.bodies:
-            gap, j = body_gap(Y[i], sim._prm[i], self.shapes[i], self.grounds, self._points, self._gaps)
+            gap, j = self._gap(sim, Y[i], i)
             if gap <= TOUCHING_GAP:
                 count = self._contact_points(sim, Y[i], i, j)
                 speed, _, _, _ = self._normal_motion(sim, Y[i], i, j, count, np.zeros(L.WRENCH_WIDTH))
@@ -200,10 +226,17 @@ class ContactSolver:
                     self.ground_of[i] = j
                     self.tracked[i] = self._staying(sim, Y[i], i, j, self._touching(sim, Y[i], i, j))
                     self.events.append(ContactEvent(sim.time, self.names[i], int(j), "rest", speed, speed))
+                    two_grounds.start_if_touching(self, sim, Y[i], i, LIFT_OFF_SPEED, TOUCHING_GAP)
 
     def is_resting(self, body: str) -> bool:
         """True while ``body`` is in persistent contact with the ground."""
         return bool(self.modes[self.names.index(body)] == PERSISTENT)
+
+    def static_body_of(self, ground: int) -> str | None:
+        """The static body whose shape plane row ``ground`` (a ContactEvent's) belongs to; None for a
+        half-space of the scene's ``ground`` list (static_geometry.py; a tangent row names its latest owner)."""
+        b = -1 if self.statics is None or ground < len(self.half_spaces) else self.statics.static_of(ground)
+        return self.names[b] if b >= 0 else None
 
     def events_of(self, body: str, kind: str | None = None) -> list[ContactEvent]:
         """The recorded events of ``body`` (of one ``kind`` if given), in time order of their recording."""
@@ -283,7 +316,13 @@ class ContactSolver:
                              self._work, self._d)
 
     def _gap(self, sim, y: np.ndarray, i: int) -> tuple[float, int]:
-        return body_gap(y, sim._prm[i], self.shapes[i], self.grounds, self._points, self._gaps)
+        """(lowest gap, its plane row) of body i at y over the half-spaces and the static shapes."""
+        gap, j = body_gap(y, sim._prm[i], self.shapes[i], self.half_spaces, self._points, self._gaps)
+        if self.statics is not None:
+            dist, s = self.statics.nearest(y, i, self.shapes[i])
+            if dist < gap:
+                gap, j = dist, self.statics.plane_for(y, sim._prm[i], i, self.shapes[i], s)
+        return gap, j
 
     def step_map(self, sim, i: int, y0: np.ndarray, h: float, w: np.ndarray) -> np.ndarray:
         """Φ(y0, h): body i's state row after one step of length h from y0 under the wrench row w.
@@ -325,18 +364,30 @@ class ContactSolver:
         self.holding_forces[:] = 0.0
         if not resting.size:
             return
-        hold_all(Y, sim._prm, wrenches, self.shapes, self.grounds, resting, self.ground_of, self.tracked, self.friction,
+        two = resting[self.other_ground[resting] >= 0]  # held on two half-spaces: two_grounds.py
+        one = resting[self.other_ground[resting] < 0]
+        if self.statics is not None:  # held on a static shape's plane: in Python (static_geometry.py)
+            on_static = one[self.ground_of[one] >= len(self.half_spaces)]
+            one = one[self.ground_of[one] < len(self.half_spaces)]
+            two = np.concatenate((two, self._refresh_static(sim, Y, on_static)))
+        hold_all(Y, sim._prm, wrenches, self.shapes, self.grounds, one, self.ground_of, self.tracked, self.friction,
                  SLIP_TOLERANCE, LIFT_OFF_SPEED, TOUCHING_GAP, self._bare_rows, self.pressed,
                  self.sliding, self.slide_direction, self._status)
-        for i in resting[self._status[resting] != OK]:  # lifting off: the solver says so and records it
+        for i in one[self._status[one] != OK]:  # lifting off: the solver says so and records it
+            self._hold(sim, Y[i], i, wrenches[i], sim.time)
+        for i in two:
             self._hold(sim, Y[i], i, wrenches[i], sim.time)
         held = resting[self.modes[resting] == PERSISTENT]
         added = wrenches[held] - self._bare_rows[held]  # the contact forces go in as world-axes forces (add_wrench)
         self.holding_forces[held] = added[:, L.F_WORLD:L.F_WORLD + 3] + added[:, L.F_COM_W:L.F_COM_W + 3]
         self.holding_impulses[held] += self.holding_forces[held] * sim.dt
+        if self.track_torques:
+            self.holding_angular_impulses[held] += _torques_about_com(Y[held], added) * sim.dt
 
     def _hold(self, sim, y: np.ndarray, i: int, w: np.ndarray, t: float) -> bool:
         """Add the holding force of body i at y into the wrench row w; False (and flight) if it lifts off."""
+        if self.other_ground[i] >= 0 and not self.other_projected[i]:
+            return two_grounds.hold(self, sim, y, i, w, t, LIFT_OFF_SPEED, TOUCHING_GAP, SLIP_TOLERANCE)
         j = int(self.ground_of[i])
         count = self._tracked_points(sim, y, i)
         n = self.grounds[j, NORMAL:NORMAL + 3]
@@ -345,6 +396,8 @@ class ContactSolver:
         mode, _, sx, sy = holding_wrench(y, sim._prm[i], w, count, self._points, n[0], n[1], n[2],
                                          float(self.friction[i, j]), SLIP_TOLERANCE, self._bias, self._rdot,
                                          self._work, self._d, self._force)
+        if count and self._painleve(count, float(self.friction[i, j]), sx, sy):
+            self.counts["painleve"] += 1
         if count == 0 or mode == LIFT_OFF or speed > LIFT_OFF_SPEED or lowest > TOUCHING_GAP:
             self.modes[i] = FLIGHT
             self.sliding[i] = False
@@ -358,20 +411,44 @@ class ContactSolver:
         add_contact_wrench(w, y, sim._prm[i], count, self._points, self._anchors, self._work)
         return True
 
+    def _painleve(self, count: int, mu: float, sx: float, sy: float) -> bool:
+        """Whether the sliding contact rows in self._work (holding_wrench's) are in a Painlevé configuration.
+
+        Sliding along ŝ, friction −μ f_n ŝ enters each normal acceleration: f_n acts on it through
+        A_nn − μ (A_nt1 ŝ1 + A_nt2 ŝ2), the diagonal projected Gauss–Seidel solves with. Where that is
+        ≤ 0 the rigid problem may have no solution or several (a uniform rod sliding on its end at θ
+        to the ground: 1 + 3 cos²θ − 3 μ sin θ cos θ ≤ 0, possible for μ ≥ 4/3). The solver does not
+        resolve it (the normal force stays 0: the body lifts off and lands again); it is counted.
+        """
+        if mu == 0.0 or (sx == 0.0 and sy == 0.0):
+            return False
+        work = self._work
+        for c in range(count):
+            a = 3 * c
+            if work[a, _A + a] - mu * (work[a, _A + a + 1] * sx + work[a, _A + a + 2] * sy) <= 0.0:
+                return True
+        return False
+
     def after_step(self, sim, wrenches: np.ndarray) -> None:
         """Events inside the step just taken (the simulator's buffers: start in 1 − CUR, end in CUR)."""
         cur = sim._control[L.CUR]
         Y0, Y1 = sim._Ys[1 - cur], sim._Ys[cur]
         h = sim.dt
         t0 = sim.time - h
-        min_gaps(Y1, sim._prm, self.shapes, self.grounds, self.bodies, self._lowest)
+        min_gaps(Y1, sim._prm, self.shapes, self.half_spaces, self.bodies, self._lowest)
+        self._static_skipped.clear()
         moving = ~sim._stopped[self.bodies]
         resting = self.bodies[(self.modes[self.bodies] == PERSISTENT) & moving]
-        settle_all(Y1, sim._prm, self.shapes, self.grounds, resting, self.ground_of, self.tracked, self.pressed,
+        two = resting[self.other_ground[resting] >= 0]  # held on two half-spaces: two_grounds.py
+        resting = resting[self.other_ground[resting] < 0]
+        if self.statics is not None:  # static shapes: their gaps; bodies on their planes in Python
+            two = np.concatenate((two, self._static_busy(Y1, resting)))
+            resting = resting[self.ground_of[resting] < len(self.half_spaces)]
+        settle_all(Y1, sim._prm, self.shapes, self.half_spaces, resting, self.ground_of, self.tracked, self.pressed,
                    self.sliding, self.slide_direction, self._band, self._status)
         resting = self._refine_gains(sim, resting, Y0, Y1, t0, h)
         # only the bodies with an event in the step are looked at in Python
-        busy = np.concatenate((resting[self._status[resting] != OK],
+        busy = np.concatenate((resting[self._status[resting] != OK], two,
                                self.bodies[(self.modes[self.bodies] == FLIGHT) & moving & (self._lowest < 0.0)]))
         for i in busy:
             if sim._stopped[i]:
@@ -433,6 +510,7 @@ class ContactSolver:
                 if gained <= 1e-12 * abs(e0) or pieces >= MAX_REFINEMENT:
                     break
                 pieces *= 2
+            self.counts["refined_steps"] += 1
             if gained > 1e-12 * abs(e0):
                 self.energy_gains += 1
             Y1[i, :L.STATE_WIDTH] = row
@@ -526,11 +604,12 @@ class ContactSolver:
         before, _, _, _ = self._normal_motion(sim, y, i, j, count, w)
         e, mu = float(self.restitution[i, j]), float(self.friction[i, j])
         after_row = y.copy()
-        impulse, e0, e1, _ = impact(y, after_row, sim._prm[i], count, self._points, n[0], n[1], n[2], e, mu,
-                                    self._work)
+        impulse, e0, e1, alpha = impact(y, after_row, sim._prm[i], count, self._points, n[0], n[1], n[2], e, mu,
+                                        self._work)
+        jump = self._jump(sim, i, y, after_row, count, e, alpha)
         y[L.V:L.W + 3] = after_row[L.V:L.W + 3]
         speed, accel, _, _ = self._normal_motion(sim, y, i, j, count, w)
-        self.events.append(ContactEvent(t, self.names[i], j, "impact", before, speed, impulse, e0, e1))
+        self.events.append(ContactEvent(t, self.names[i], j, "impact", before, speed, impulse, e0, e1, *jump))
         toward = -accel  # the free normal acceleration toward the ground
         if speed <= 0.0 or (toward > 0.0 and speed * speed <= 2.0 * toward * ZENO_APEX):
             rest = 0.0
@@ -539,6 +618,23 @@ class ContactSolver:
             self._rest(sim, i, y, j, t, rest, speed)
             return -1.0
         return speed / (toward * h_left) if toward > 0.0 and h_left > 0.0 else -1.0
+
+    def _jump(self, sim, i: int, before: np.ndarray, after: np.ndarray, count: int, e: float,
+              alpha: float) -> tuple:
+        """The velocity jump of body i's impact from ``before`` to ``after`` (state rows), as ContactEvent's
+        (delta_v_world, delta_w_principal, q_WP, contacts, restitution_used); adds its impulse to
+        :attr:`impact_impulses` and counts the model-dependent and capped impacts."""
+        prm = sim._prm[i]
+        dv = after[L.V:L.V + 3] - before[L.V:L.V + 3]
+        dw = after[L.W:L.W + 3] - before[L.W:L.W + 3]
+        q = before[L.Q:L.Q + 4]
+        self.impact_impulses[i, 0:3] += prm[L.MASS] * dv
+        self.impact_impulses[i, 3:6] += quat_rotate(q, prm[L.INERTIA:L.INERTIA + 3] * dw)
+        if count > 1 and e > 0.0:
+            self.counts["multi_contact_elastic"] += 1
+        if alpha < e:
+            self.counts["restitution_capped"] += 1
+        return tuple(dv.tolist()), tuple(dw.tolist()), tuple(q.tolist()), int(count), float(alpha)
 
     def _rest(self, sim, i: int, y: np.ndarray, j: int, t: float, remaining: float, speed: float) -> None:
         """Body i goes into persistent contact with ground j at y (projected in place); 'rest' dated t + remaining."""
@@ -570,6 +666,8 @@ class ContactSolver:
         the step map, the rest of the step taken from there); tracked features that moved off
         the ground dropped (none left: lift-off); then the projection onto the contact.
         """
+        if self.other_ground[i] >= 0 and not self.other_projected[i]:
+            return two_grounds.end_of_step(self, sim, i, end, t, h)
         end = end.copy()
         j = int(self.ground_of[i])
         sx, sy = self.slide_direction[i]
@@ -619,23 +717,64 @@ class ContactSolver:
                 self.events.append(ContactEvent(t + h, self.names[i], j, "lift-off"))
                 return end
         self._project(sim, end, i, not self.sliding[i])
+        if self.other_ground[i] >= 0:  # held on ground_of alone, projected onto the second half-space too
+            two_grounds.project_second(self, sim, i, end, TOUCHING_GAP)
         return end
 
     def _other_gap(self, sim, y: np.ndarray, i: int) -> tuple[float, int]:
         """(lowest gap, ground) of body i against the half-spaces other than the one it rests on."""
         lowest, which = math.inf, -1
-        for jj in range(len(self.grounds)):
-            if jj != self.ground_of[i]:
+        for jj in range(len(self.half_spaces)):
+            if jj != self.ground_of[i] and jj != self.other_ground[i]:
                 count = body_points(y, sim._prm[i], self.shapes[i], self.grounds[jj], self._points, self._gaps)
                 if count and self._gaps[:count].min() < lowest:
                     lowest, which = float(self._gaps[:count].min()), jj
+        if (self.statics is not None and not self.statics.is_tangent(int(self.ground_of[i]))
+                and i not in self._static_skipped):
+            dist, s = self.statics.nearest(y, i, self.shapes[i], int(self.statics.row_owner[self.ground_of[i]]))
+            if dist < lowest:
+                lowest, which = dist, self.statics.plane_for(y, sim._prm[i], i, self.shapes[i], s)
         return lowest, which
+
+    # ----------------------------------------------------------------- static shapes (static_geometry.py)
+
+    def _refresh_static(self, sim, Y: np.ndarray, on_static: np.ndarray) -> np.ndarray:
+        """Before the step, the bodies resting on a static shape's plane: one on a face row whose tracked contact
+        points left the face goes on on its tangent row; a tangent row is refreshed from the narrow phase
+        (each such body-step counted in ``static_tangent``). Returns them, for the Python hold."""
+        statics = self.statics
+        for i in on_static:
+            j = int(self.ground_of[i])
+            if not statics.is_tangent(j):
+                count = self._tracked_points(sim, Y[i], i)
+                if statics.within_face(j, self._points[:count]):
+                    continue
+            self.counts["static_tangent"] += 1
+            row = statics.refresh(Y[i], sim._prm[i], i, self.shapes[i])
+            if row >= 0:
+                self.ground_of[i] = row
+        return on_static
+
+    def _static_busy(self, Y1: np.ndarray, resting: np.ndarray) -> np.ndarray:
+        """After the step: ``_lowest`` lowered, in place, to the bodies' signed distances to the static shapes;
+        returns the resting bodies the solver looks at in Python: those on a static shape's plane, and those
+        on a half-space that reached a static shape (an impact against it, located on the step map)."""
+        g = len(self.half_spaces)
+        looked = (self.modes[self.bodies] == FLIGHT) | (self.ground_of[self.bodies] < g)  # not those on a static
+        static_gaps = np.full(int(looked.sum()), math.inf)
+        self.statics.lower_gaps(Y1, self.shapes, self.bodies[looked], static_gaps)
+        self._lowest[looked] = np.minimum(self._lowest[looked], static_gaps)
+        reached = np.zeros(len(self.modes), dtype=bool)
+        reached[self.bodies[looked]] = static_gaps < 0.0
+        return np.concatenate((resting[self.ground_of[resting] >= g],
+                               resting[(self.ground_of[resting] < g) & reached[resting]]))
 
     def _side_impact(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float) -> None:
         """Body i, resting on its ground, hits another half-space at y: the impact against that one (in place).
 
-        The two contacts are not solved together yet: the resting contact is projected again
-        afterwards (for a wall at right angles to a frictionless floor this is exact).
+        The impact acts against that half-space alone, then the resting contact is projected again;
+        if the body stays on the second half-space (no rebound), it is held on both from there
+        (two_grounds.py).
         """
         gap, jj = self._other_gap(sim, y, i)
         n = self.grounds[jj, NORMAL:NORMAL + 3]
@@ -643,11 +782,20 @@ class ContactSolver:
         count = body_points(y, sim._prm[i], self.shapes[i], self.grounds[jj], self._points, self._gaps)
         before, _ = normal_speeds(y, sim._prm[i], count, self._points, n[0], n[1], n[2], self._work)
         after_row = y.copy()
-        impulse, e0, e1, _ = impact(y, after_row, sim._prm[i], count, self._points, n[0], n[1], n[2],
-                                    float(self.restitution[i, jj]), float(self.friction[i, jj]), self._work)
+        e = float(self.restitution[i, jj])
+        impulse, e0, e1, alpha = impact(y, after_row, sim._prm[i], count, self._points, n[0], n[1], n[2],
+                                        e, float(self.friction[i, jj]), self._work)
+        jump = self._jump(sim, i, y, after_row, count, e, alpha)
+        self.counts["second_half_space"] += 1
         y[L.V:L.W + 3] = after_row[L.V:L.W + 3]
         after, _ = normal_speeds(y, sim._prm[i], count, self._points, n[0], n[1], n[2], self._work)
-        self.events.append(ContactEvent(t, self.names[i], jj, "impact", before, after, impulse, e0, e1))
+        self.events.append(ContactEvent(t, self.names[i], jj, "impact", before, after, impulse, e0, e1, *jump))
+        if after <= LIFT_OFF_SPEED and jj >= len(self.half_spaces):  # stays pressed on a static shape (not held)
+            self.counts["static_pressed"] += 1
+            self._static_skipped.add(i)
+        elif after <= LIFT_OFF_SPEED and self.other_ground[i] < 0:  # it stays on the second one: held on both
+            self.other_ground[i] = two_grounds.touching_other(self, sim, y, i, LIFT_OFF_SPEED,
+                                                              max(TOUCHING_GAP, float(self._band[i])))
 
     def _landing(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float, h: float) -> np.ndarray:
         """A feature of body i, in persistent contact, reaches the ground at y: the impact of every touching
@@ -659,12 +807,13 @@ class ContactSolver:
         before, _, _, _ = self._normal_motion(sim, y, i, j, count, w, mask)
         e, mu = float(self.restitution[i, j]), float(self.friction[i, j])
         after_row = y.copy()
-        impulse, e0, e1, _ = impact(y, after_row, sim._prm[i], count, self._points, n[0], n[1], n[2], e, mu,
-                                    self._work)
+        impulse, e0, e1, alpha = impact(y, after_row, sim._prm[i], count, self._points, n[0], n[1], n[2], e, mu,
+                                        self._work)
+        jump = self._jump(sim, i, y, after_row, count, e, alpha)
         y = after_row
         _, highest = normal_speeds(y, sim._prm[i], count, self._points, n[0], n[1], n[2], self._work)
         _, accel, _, _ = self._normal_motion(sim, y, i, j, count, w, mask)
-        self.events.append(ContactEvent(t, self.names[i], j, "impact", before, highest, impulse, e0, e1))
+        self.events.append(ContactEvent(t, self.names[i], j, "impact", before, highest, impulse, e0, e1, *jump))
         toward = -accel
         if highest <= LIFT_OFF_SPEED or (toward > 0.0 and highest * highest <= 2.0 * toward * ZENO_APEX):
             self.tracked[i] = mask
@@ -673,3 +822,16 @@ class ContactSolver:
         self.modes[i] = FLIGHT
         self.sliding[i] = False
         return self._with_events(sim, i, y, w, t, h) if h > 0.0 else y
+
+
+def _torques_about_com(Y: np.ndarray, added: np.ndarray) -> np.ndarray:
+    """(k, 3) torques about the centre of mass, world axes, N·m, of the wrench rows ``added`` (k, WRENCH_WIDTH)
+    on bodies at state rows ``Y`` (k, ≥ STATE_WIDTH), at those states (layout: the wrench row's columns)."""
+    R_WP = quat_to_matrix(Y[:, L.Q:L.Q + 4])
+    p_W = Y[:, L.P:L.P + 3]
+    torque = added[:, L.T_WORLD:L.T_WORLD + 3] - np.cross(p_W, added[:, L.F_WORLD:L.F_WORLD + 3])
+    torque += added[:, L.T_COM_W:L.T_COM_W + 3] + np.einsum("kij,kj->ki", R_WP, added[:, L.T_COM_P:L.T_COM_P + 3])
+    moment = added[:, L.SITE_MOMENT:L.SITE_MOMENT + 9].reshape(-1, 3, 3)  # M[j, l] = f_j r_l
+    for col in range(3):  # Σ_l (R r_l e_l) × f: the lever R[:, l] r_l crossed with f, r_l folded into M[:, l]
+        torque += np.cross(R_WP[:, :, col], moment[:, :, col])
+    return torque

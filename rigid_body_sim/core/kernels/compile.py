@@ -12,18 +12,20 @@ from __future__ import annotations
 import numpy as np
 
 from . import layout as L
+from .controls import add_controls, advance_controlled, new_table
 from .dynamics import derivatives, impulse_response
 from .forces import add_wrench, project_twist
 from .integrators import INTEGRATORS, final_kick, kick_and_drift
 from .sensors import site_readings
+from .state_rows import pose_twist_rows
 from .stepping import SCRATCH_ROWS, add_pending, advance, check_members, clear_wrenches, integrate, new_buffers, \
     step_reduced
 
 __all__ = ["compile_kernels", "ENTRY_POINTS"]
 
 #: The compiled functions called from Python (core/simulator.py, core/stepping.py, core/integrators.py).
-ENTRY_POINTS = (advance, step_reduced, check_members, add_pending, clear_wrenches, integrate, kick_and_drift,
-                final_kick, derivatives, impulse_response, add_wrench, project_twist, site_readings)
+ENTRY_POINTS = (advance, advance_controlled, add_controls, step_reduced, check_members, add_pending, clear_wrenches, integrate, kick_and_drift,
+                final_kick, derivatives, impulse_response, add_wrench, project_twist, site_readings, pose_twist_rows)
 
 
 def compile_kernels() -> None:
@@ -45,6 +47,10 @@ def compile_kernels() -> None:
             advance(Ys, prm, wrenches, members, status, control, inputs, 1, np.zeros(1, dtype=np.int64))
             integrate(method.code, Ys[0], Ys[1], prm, wrenches, members, status, 0.01, np.inf,
                       np.empty((SCRATCH_ROWS, L.ROW_WIDTH)))
+    table = new_table(1)
+    table[1, 0] = 1
+    advance_controlled(Ys, prm, wrenches, members, status, control, inputs, 1, np.zeros(1, dtype=np.int64), table)
+    add_controls(wrenches, prm, table)
     bodies = step_reduced(Ys, prm, wrenches, members, status, control, inputs)
     kick_and_drift(Ys[0], Ys[1], prm, wrenches, bodies, 0.01)
     final_kick(Ys[1], prm, wrenches, bodies, 0.01)
@@ -56,5 +62,6 @@ def compile_kernels() -> None:
     add_wrench(row, prm[0], L.FRAME_BODY, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     impulse_response(Ys[0][0], prm[0], row, np.empty(L.ROW_WIDTH))
     project_twist(prm[0], np.zeros(6))
+    pose_twist_rows(Ys[0], np.array([[1.0, 0.0, 0.0, 0.0]]), np.empty((n, 7)), np.zeros((n, 7)), np.empty(n, dtype=np.bool_))
     site_readings(Ys[0], prm, wrenches, np.zeros(3), np.zeros(1, dtype=np.int64), np.zeros((1, 3)),
                   np.zeros(1, dtype=np.bool_), np.empty((1, 10)))

@@ -24,11 +24,15 @@ that call them:
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import hashlib
 import os
 from pathlib import Path
+from typing import Iterator
 
-__all__ = ["JIT", "INLINE", "LOOP", "invalidate_stale_cache"]
+__all__ = ["JIT", "INLINE", "LOOP", "invalidate_stale_cache", "cache_lock", "cache_complete", "mark_cache_complete",
+           "sources_unchanged"]
 
 JIT = {"cache": True, "error_model": "numpy", "nogil": True}
 INLINE = {**JIT, "inline": "always"}
@@ -40,6 +44,86 @@ SOURCE_DIR = Path(__file__).resolve().parent
 #: Where numba caches the kernels (next to their sources, when writable).
 CACHE_DIR = SOURCE_DIR / "__pycache__"
 STAMP_NAME = "numba-sources.sha256"
+#: Written (the sources' hash) once every kernel was compiled into the cache under the lock.
+COMPLETE_NAME = "numba-compiled.sha256"
+LOCK_NAME = "numba-compile.lock"
+
+
+def _digest(source_dir: Path) -> str:
+    sources = sorted(p for p in source_dir.rglob("*.py") if "__pycache__" not in p.parts)
+    return hashlib.sha256(b"".join(p.relative_to(source_dir).as_posix().encode() + p.read_bytes()
+                                   for p in sources)).hexdigest()
+
+
+#: The hash of the kernel sources this process imported (what its compiled code is built from).
+SOURCE_DIGEST = _digest(SOURCE_DIR)
+
+
+def _lock_dir() -> Path | None:
+    """Where numba writes this process's kernel cache, if it can be locked there: NUMBA_CACHE_DIR
+    when set, else next to the sources when writable, else None (a read-only install)."""
+    user_dir = os.environ.get("NUMBA_CACHE_DIR")
+    folder = Path(user_dir) if user_dir else CACHE_DIR
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError:
+        return None
+    return folder if os.access(folder, os.W_OK) else None
+
+
+_held = False
+
+
+@contextlib.contextmanager
+def cache_lock() -> Iterator[None]:
+    """Hold the kernel cache's lock (an exclusive ``flock``, across processes) while compiling.
+
+    numba's cache is not safe for two processes compiling into it at once: each reads the
+    function's index, numbers its new entry after the entries it saw, and writes the index
+    back, so two processes adding different entries at once can both take number n, and the
+    index of one then points at the other's machine code. Compiling under this lock makes
+    the first process compile and the others wait, then load. Re-entrant within a process;
+    a no-op where the cache is not writable.
+    """
+    global _held
+    folder = _lock_dir()
+    if _held or folder is None:
+        yield
+        return
+    with open(folder / LOCK_NAME, "a+b") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        _held = True
+        try:
+            yield
+        finally:
+            _held = False
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+def sources_unchanged() -> bool:
+    """True if the kernel sources on disk are still the ones this process imported."""
+    return _digest(SOURCE_DIR) == SOURCE_DIGEST
+
+
+def cache_complete() -> bool:
+    """True if every kernel of this process's sources is in the cache (or the cache is not ours
+    to fill: a read-only install)."""
+    folder = _lock_dir()
+    if folder is None:
+        return True
+    try:
+        return (folder / COMPLETE_NAME).read_text() == SOURCE_DIGEST
+    except OSError:
+        return False
+
+
+def mark_cache_complete() -> None:
+    """Record (under :func:`cache_lock`) that every kernel of this process's sources is cached."""
+    folder = _lock_dir()
+    if folder is not None:
+        partial = folder / f"{COMPLETE_NAME}.{os.getpid()}"
+        partial.write_text(SOURCE_DIGEST)
+        os.replace(partial, folder / COMPLETE_NAME)
 
 
 def invalidate_stale_cache(source_dir: Path = SOURCE_DIR, cache_dir: Path = CACHE_DIR) -> bool:
@@ -56,9 +140,7 @@ def invalidate_stale_cache(source_dir: Path = SOURCE_DIR, cache_dir: Path = CACH
     it was dropped. Runs once, at import, before anything is compiled or loaded; a read-only
     install is left alone.
     """
-    sources = sorted(p for p in source_dir.rglob("*.py") if "__pycache__" not in p.parts)
-    digest = hashlib.sha256(b"".join(p.relative_to(source_dir).as_posix().encode() + p.read_bytes()
-                                     for p in sources)).hexdigest()
+    digest = _digest(source_dir)
     stamp = cache_dir / STAMP_NAME
     try:
         if stamp.read_text() == digest:
@@ -69,6 +151,7 @@ def invalidate_stale_cache(source_dir: Path = SOURCE_DIR, cache_dir: Path = CACH
         caches = {cache_dir, *source_dir.rglob("__pycache__")}
         for stale in [path for folder in caches for pattern in ("*.nbi", "*.nbc") for path in folder.glob(pattern)]:
             stale.unlink(missing_ok=True)
+        (cache_dir / COMPLETE_NAME).unlink(missing_ok=True)
         cache_dir.mkdir(exist_ok=True)
         partial = stamp.with_name(f"{STAMP_NAME}.{os.getpid()}")
         partial.write_text(digest)
@@ -78,4 +161,5 @@ def invalidate_stale_cache(source_dir: Path = SOURCE_DIR, cache_dir: Path = CACH
     return True
 
 
-invalidate_stale_cache()
+with cache_lock():
+    invalidate_stale_cache()

@@ -86,7 +86,7 @@ from .reduced_models import isotropic_free, kinematic, planar, symmetric_free, t
 from .jit import INLINE, JIT, LOOP
 
 __all__ = ["new_buffers", "advance", "add_pending", "step_reduced", "check_members", "clear_wrenches",
-           "integrate"]
+           "integrate", "step_group"]
 
 #: Rows of the per-call scratch: stage derivatives and the stage state of the longest tableau.
 SCRATCH_ROWS = 6
@@ -281,6 +281,24 @@ def integrate(method, Y, Ynew, prm, wrenches, bodies, status, dt, limit, k):
 
 
 @njit(**JIT)
+def step_group(method, model, Y, Ynew, prm, wrenches, bodies, status, dt, limit, k, deferred):
+    """One step of ``bodies``, all of model ``model``, with the compiled integrator ``method``; the worst outcome.
+
+    Model full: the integrator. A reduced model: its loop, then the integrator on the bodies it
+    deferred (a torque acts on them), which ``deferred`` (at least as long as ``bodies``) holds.
+    Every body's step reads only its own rows and writes only its own rows and status, so any
+    split of a group into parts (parallel.py) steps each body exactly as the whole group does.
+    """
+    if model == MODEL_FULL:
+        worst = integrate(method, Y, Ynew, prm, wrenches, bodies, status, dt, limit, k)
+    else:
+        worst, added = _MODEL_LOOPS(model, Y, Ynew, prm, wrenches, bodies, status, dt, limit, k, deferred)
+        if added:
+            worst = _worse(worst, integrate(method, Y, Ynew, prm, wrenches, deferred[:added], status, dt, limit, k))
+    return worst
+
+
+@njit(**JIT)
 def _step_all(method, Y, Ynew, prm, wrenches, members, control, status, dt, limit, k, deferred):
     """One step of every moving body, group by group; returns (worst outcome, bodies left in ``deferred``).
 
@@ -291,22 +309,17 @@ def _step_all(method, Y, Ynew, prm, wrenches, members, control, status, dt, limi
     count = 0
     for model in range(MODEL_COUNT):
         start, end = control[GROUPS + 2 * model], control[GROUPS + 2 * model + 1]
-        if start < end and model == MODEL_FULL:
-            if method == HOST_METHOD:
-                deferred[count:count + end - start] = members[start:end]
-                count += end - start
-            else:
-                worst = _worse(worst, integrate(method, Y, Ynew, prm, wrenches, members[start:end], status, dt,
-                                                 limit, k))
+        if start < end and method != HOST_METHOD:
+            worst = _worse(worst, step_group(method, model, Y, Ynew, prm, wrenches, members[start:end], status, dt,
+                                             limit, k, deferred))
+        elif start < end and model == MODEL_FULL:
+            deferred[count:count + end - start] = members[start:end]
+            count += end - start
         elif start < end:
             outcome, added = _MODEL_LOOPS(model, Y, Ynew, prm, wrenches, members[start:end], status, dt,
                                           limit, k, deferred[count:])
             worst = _worse(worst, outcome)
-            if method != HOST_METHOD and added:
-                worst = _worse(worst, integrate(method, Y, Ynew, prm, wrenches, deferred[count:count + added],
-                                                 status, dt, limit, k))
-            elif method == HOST_METHOD:
-                count += added
+            count += added
     return worst, count
 
 

@@ -1,6 +1,6 @@
 """Where the microseconds of one body step go from Python: cProfile of apply + step(1), per frame.
 
-``python -m benchmarks.profile_step [integrator] [frame]`` (default rk4, the site ``b/corner``):
+``python -m benchmarks.profile step [integrator] [frame]`` (default rk4, the site ``b/corner``):
 the Python functions behind ``apply_force_at_point`` in that frame and ``step(1)``, sorted by
 own time — the per-call path that the per-frame table of results.md times
 (benchmarks/apply_cost.py).
@@ -11,13 +11,12 @@ from __future__ import annotations
 import cProfile
 import io
 import pstats
-import sys
 
 import numpy as np
 
 from rigid_body_sim.core import Simulator
 
-from .apply_cost import FRAMES, scene
+from ..apply_cost import FRAMES, scene
 
 
 def profile(integrator: str = "rk4", frame: str = "b/corner", steps: int = 5000, top: int = 18) -> str:
@@ -43,6 +42,3 @@ def profile(integrator: str = "rk4", frame: str = "b/corner", steps: int = 5000,
     stats.sort_stats("cumulative").print_stats(top)
     return out.getvalue()
 
-
-if __name__ == "__main__":
-    print(profile(*sys.argv[1:3]))

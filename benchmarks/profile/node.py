@@ -14,7 +14,10 @@ import time
 from contextlib import contextmanager
 from pathlib import Path
 
-from .node_timing import DOMAIN_ID, _write_scene
+from ..node_batch import write_scene
+
+#: A domain of its own (node_batch.py uses 78).
+DOMAIN_ID = 77
 
 
 @contextmanager
@@ -26,7 +29,7 @@ def _node_in_process(bodies: int, rate_hz: float, domain_offset: int):
 
     from rigid_body_sim.ros.node import RigidBodySimNode
 
-    scene = _write_scene(Path(tempfile.mkdtemp(prefix="rbs_prof_")), bodies)
+    scene = write_scene(Path(tempfile.mkdtemp(prefix="rbs_prof_")), bodies)
     context = Context()
     rclpy.init(context=context, domain_id=DOMAIN_ID + domain_offset)
     try:
@@ -86,9 +89,3 @@ def profile_spin(bodies: int = 100, rate_hz: float = 100.0, seconds: float = 4.0
     pstats.Stats(profiler, stream=out).sort_stats("cumulative").print_stats(top)
     return out.getvalue()
 
-
-if __name__ == "__main__":
-    import sys
-    count = int(sys.argv[1]) if len(sys.argv) > 1 else 100
-    print(profile(count))
-    print(profile_spin(count))

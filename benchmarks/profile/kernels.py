@@ -35,9 +35,9 @@ from numba import njit
 
 from rigid_body_sim.core import Simulator
 
-from . import floors
-from .throughput import ANGULAR_VELOCITY, DT, INERTIA_BOX, scene
-from .timing import Case, interleaved
+from .. import floors
+from ..throughput import ANGULAR_VELOCITY, DT, INERTIA_BOX, scene
+from ..timing import Case, interleaved
 
 PRM_WIDTH = 40   # our parameter rows' width (kernels.PRM_WIDTH at the time of writing)
 INERTIA = 2      # their inertia columns
@@ -312,7 +312,7 @@ def _cases_large(count: int) -> list[Case]:
     v6_full_derivative(Ys, prm, members, aux, DT, LIMIT, 1, 0)
     v4b_checks_tree(Ys, prm, members, aux, DT, LIMIT, 1, 0)
     s = scene(count)
-    ours = {name: Simulator(s, integrator=name, dt=DT) for name in ("euler", "rk4")}
+    ours = {name: Simulator(s, integrator=name, dt=DT, threads=1) for name in ("euler", "rk4")}
     return [
         Case("0 floor (euler)", lambda k: floors.euler_floor(Y, inertia, DT, k), reset),
         Case("1 + parameter rows", lambda k: v1_parameter_rows(Y, prm, DT, k), reset),
@@ -374,6 +374,3 @@ def report(repeats: int = 5, min_seconds: float = 0.05, count: int = 10_000, log
     log("  kernel profile done")
     return "\n".join(lines) + "\n"
 
-
-if __name__ == "__main__":
-    print(report())

@@ -1,0 +1,255 @@
+"""Persistent contact with two ground half-spaces at once: resting in a corner or a groove, sliding along its crease.
+
+A body in persistent contact with its ground A (``ContactSolver.ground_of``) that also touches a
+second half-space B (``ContactSolver.other_ground``, its touching features
+``ContactSolver.other_tracked``) is held by both together: one acceleration-level problem on
+the contact rows of both sets of points, each point with its own half-space's normal, and one
+tangent basis for all of them — t1 along the crease n_A × n_B, t2 = n × t1 — so that a slide
+along the crease is the same direction (±1, 0) at every point and the Coulomb law of
+impacts.pgs applies unchanged (friction −μ f_n along the slip while sliding, on the cone while
+sticking; the normal forces ≥ 0 and complementary). The compiled pieces are the ones the
+one-ground contact uses (persistent.accelerations, impacts.pgs, persistent.add_contact_wrench,
+persistent.project); only the rows are built here, with numpy.
+
+After the step the body is projected onto both contacts by alternating the one-ground
+projections (each is the least-energy correction in the mass metric; alternating them converges
+to the joint one, at once when the two constraints are orthogonal in that metric).
+
+Transitions: a half-space whose normal forces all vanish while its points move away is let go
+(the body goes on with the other, or flies); a slide along the crease whose slip reverses in a
+step stops there (the stop is not located inside the step, unlike on one half-space: first
+order in time). Limits (docs/contact.md): at most MAX_POINTS contact points over both (a sphere
+or a capsule in a groove); with more (a box with a face on each side) the body is held on its
+first half-space alone and projected onto both after each step (:func:`project_second`,
+``ContactSolver.other_projected``: first order in the second one's force, without its friction).
+The smaller of the two pairs' friction coefficients when they differ, no third half-space, and
+no located landing of another feature.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..kernels import layout as L
+from ..kernels.contact.impacts import _A, _ANG, _B, _LAM, _LIN, _row_velocity, pgs
+from ..kernels.contact.layout import MAX_POINTS, NORMAL, PERSISTENT
+from ..kernels.contact.persistent import START_SLIDE_ACCELERATION, accelerations, add_contact_wrench, normal_bias, project
+from ..kernels.contact.shapes import MAX_FEATURES, feature_gaps, feature_points
+from ..quaternion import quat_rotate
+from .events import ContactEvent
+
+__all__ = ["touching_other", "hold", "end_of_step", "project_second", "crease", "start_if_touching"]
+
+#: Alternating projections onto the two contacts: at most this many rounds (each round changing the
+#: state by more than round-off; orthogonal constraints need one).
+PROJECTION_ROUNDS = 60
+
+
+def crease(solver, i: int) -> np.ndarray:
+    """The unit direction n_A × n_B of the crease between body i's two half-spaces (world axes)."""
+    n_a = solver.grounds[int(solver.ground_of[i]), NORMAL:NORMAL + 3]
+    n_b = solver.grounds[int(solver.other_ground[i]), NORMAL:NORMAL + 3]
+    t = np.cross(n_a, n_b)
+    return t / np.linalg.norm(t)
+
+
+def touching_other(solver, sim, y: np.ndarray, i: int, speed_limit: float, gap_limit: float) -> int:
+    """A half-space other than body i's ground that it touches (gap ≤ ``gap_limit``) without moving away
+    from it (contact points slower than ``speed_limit``) and that is not parallel to its ground; -1 if none.
+    Sets :attr:`other_tracked` to the touching features when one is found."""
+    j = int(solver.ground_of[i])
+    prm, shape = sim._prm[i], solver.shapes[i]
+    gaps = np.empty(MAX_FEATURES)
+    for jj in range(len(solver.half_spaces)):  # the half-spaces (static shapes: static_geometry.py)
+        if jj == j or abs(abs(solver.grounds[jj, NORMAL:NORMAL + 3] @ solver.grounds[j, NORMAL:NORMAL + 3]) - 1.0) < 1e-12:
+            continue
+        count = feature_gaps(y, prm, shape, solver.grounds[jj], gaps)
+        mask = sum(1 << k for k in range(count) if gaps[k] <= gap_limit)
+        if not mask:
+            continue
+        points, pgaps, owners = np.empty((MAX_POINTS, 3)), np.empty(MAX_POINTS), np.zeros(MAX_POINTS, dtype=np.int64)
+        n = feature_points(y, prm, shape, solver.grounds[jj], mask, points, pgaps, owners)
+        velocity = _point_velocities(sim, y, i, points[:n])
+        if n and np.max(velocity @ solver.grounds[jj, NORMAL:NORMAL + 3]) <= speed_limit:
+            solver.other_tracked[i] = mask
+            solver.other_projected[i] = False
+            return jj
+    return -1
+
+
+def _point_velocities(sim, y: np.ndarray, i: int, points: np.ndarray) -> np.ndarray:
+    """(k, 3) world velocities of body points ``points`` (world positions) of body i at state row y."""
+    w_W = quat_rotate(y[L.Q:L.Q + 4], y[L.W:L.W + 3])
+    return y[L.V:L.V + 3] + np.cross(w_W, points - y[L.P:L.P + 3])
+
+
+def _points(solver, sim, y: np.ndarray, i: int):
+    """Contact points of both half-spaces: (points (MAX_POINTS, 3), gaps, owners, normals (k, 3), ground of
+    each, k); k = -1 when they are more than MAX_POINTS (the rows have room for MAX_POINTS)."""
+    prm, shape = sim._prm[i], solver.shapes[i]
+    out = []
+    for j, mask in ((int(solver.ground_of[i]), int(solver.tracked[i])),
+                    (int(solver.other_ground[i]), int(solver.other_tracked[i]))):
+        points, gaps, owners = np.empty((MAX_POINTS, 3)), np.empty(MAX_POINTS), np.zeros(MAX_POINTS, dtype=np.int64)
+        n = feature_points(y, prm, shape, solver.grounds[j], mask, points, gaps, owners)
+        bias, rdot, anchors = np.zeros(MAX_POINTS), np.zeros((MAX_POINTS, 3)), np.zeros((MAX_POINTS, 3))
+        normal_bias(y, prm, shape, solver.grounds[j], mask, n, points, owners, bias, rdot, anchors)
+        out.append((j, n, points, gaps, bias, rdot, anchors))
+    total = out[0][1] + out[1][1]
+    if total > MAX_POINTS:
+        return None
+    points, bias, rdot, anchors = (np.zeros((MAX_POINTS, 3)), np.zeros(MAX_POINTS), np.zeros((MAX_POINTS, 3)),
+                                   np.zeros((MAX_POINTS, 3)))
+    normals, which, gaps = np.zeros((total, 3)), np.zeros(total, dtype=np.int64), np.zeros(total)
+    k = 0
+    for j, n, p, g, b, r, a in out:
+        points[k:k + n], bias[k:k + n], rdot[k:k + n], anchors[k:k + n] = p[:n], b[:n], r[:n], a[:n]
+        normals[k:k + n] = solver.grounds[j, NORMAL:NORMAL + 3]
+        which[k:k + n], gaps[k:k + n] = j, g[:n]
+        k += n
+    return points, bias, rdot, anchors, normals, which, gaps, total
+
+
+def _build_rows(y: np.ndarray, prm: np.ndarray, points: np.ndarray, normals: np.ndarray, t1: np.ndarray,
+                work: np.ndarray) -> int:
+    """impacts.build_rows with a normal per point and t1 common to all (the crease): the rows' directions,
+    their angular parts in principal axes, A = J M⁻¹ Jᵀ and b = J u (velocities). Returns the rows."""
+    count = len(normals)
+    rows = 3 * count
+    directions = np.empty((rows, 3))
+    for c in range(count):
+        n = normals[c]
+        directions[3 * c] = n
+        directions[3 * c + 1] = t1
+        directions[3 * c + 2] = np.cross(n, t1)
+    r = np.repeat(points[:count] - y[L.P:L.P + 3], 3, axis=0)
+    q = y[L.Q:L.Q + 4]
+    angular_P = quat_rotate(q * np.array([1.0, -1.0, -1.0, -1.0]), np.cross(r, directions))
+    work[:rows, _LIN:_LIN + 3] = directions
+    work[:rows, _ANG:_ANG + 3] = angular_P
+    inverse = np.concatenate(([prm[L.INV_MASS]] * 3, prm[L.INV_INERTIA:L.INV_INERTIA + 3]))
+    J = np.concatenate((directions, angular_P), axis=1)
+    work[:rows, _A:_A + rows] = (J * inverse) @ J.T
+    work[:rows, _B] = J @ np.concatenate((y[L.V:L.V + 3], y[L.W:L.W + 3]))
+    return rows
+
+
+def _tangential_acceleration(work: np.ndarray, rows: int, count: int) -> float:
+    """Σ over the points of their acceleration along the crease (t1 rows) after the solve in ``work``."""
+    return sum(_row_velocity(work, rows, 3 * c + 1) for c in range(count))
+
+
+def hold(solver, sim, y: np.ndarray, i: int, w: np.ndarray, t: float, lift_off_speed: float,
+         touching_gap: float, slip_tolerance: float) -> bool:
+    """Add the force holding body i on both its half-spaces into the wrench row w (in place).
+
+    A half-space it no longer presses on (all its normal forces zero, or its points moving away
+    or lifted) is let go: the one-ground hold takes over (:meth:`ContactSolver._hold`). Returns
+    False if the body leaves both (lift-off: flight).
+    """
+
+    prm = sim._prm[i]
+    name = solver.names[i]
+    found = _points(solver, sim, y, i)
+    if found is None:  # more points than the rows hold: held on ground_of, projected onto both (counted)
+        solver.counts["two_ground_overflow"] += 1
+        solver.other_projected[i] = True
+        return solver._hold(sim, y, i, w, t)
+    points, bias, rdot, anchors, normals, which, gaps, count = found
+    t1 = crease(solver, i)
+    work, d = solver._work, solver._d
+    rows = _build_rows(y, prm, points, normals, t1, work)
+    slip = sum(work[3 * c + 1, _B] for c in range(count)) / count  # along the crease
+    velocities = work[0:rows:3, _B].copy()  # normal velocities of the points
+    accelerations(y, prm, w, count, rows, points, bias, rdot, work, d)
+    j_a, j_b = int(solver.ground_of[i]), int(solver.other_ground[i])
+    mu = float(min(solver.friction[i, j_a], solver.friction[i, j_b]))
+    work[:rows, _LAM] = 0.0
+    sx = 0.0
+    sliding = mu == 0.0
+    if not sliding and abs(slip) > slip_tolerance:
+        sliding, sx = True, math.copysign(1.0, slip)
+    pgs(work, count, mu, sx, 0.0)
+    if not sliding:  # not slipping: does the cone hold it? (a groove tilted steeper than its friction angle)
+        along = _tangential_acceleration(work, rows, count)
+        if abs(along) > START_SLIDE_ACCELERATION * count:
+            work[:rows, _LAM] = 0.0
+            pgs(work, count, 0.0, 0.0, 0.0)
+            direction = math.copysign(1.0, _tangential_acceleration(work, rows, count))
+            work[:rows, _LAM] = 0.0
+            pgs(work, count, mu, direction, 0.0)
+            if _tangential_acceleration(work, rows, count) * direction > START_SLIDE_ACCELERATION * count:
+                sliding, sx = True, direction
+            else:
+                work[:rows, _LAM] = 0.0
+                pgs(work, count, mu, 0.0, 0.0)
+    normal = work[0:rows:3, _LAM]
+    for j, other in ((j_b, j_a), (j_a, j_b)):
+        on = which == j
+        leaving = (not on.any() or normal[on].sum() <= 0.0 or velocities[on].max() > lift_off_speed
+                   or gaps[on].min() > touching_gap)
+        if leaving:  # let go of half-space j; the other one alone from here
+            speed = float(velocities[on].max()) if on.any() else 0.0
+            solver.events.append(ContactEvent(t, name, j, "lift-off", speed, speed))
+            if j == j_a:
+                solver.ground_of[i], solver.tracked[i] = j_b, solver.other_tracked[i]
+            solver.other_ground[i] = -1
+            return solver._hold(sim, y, i, w, t)
+    solver.sliding[i] = sliding
+    solver.slide_direction[i] = sx, 0.0
+    solver.pressed[i] = int(solver.tracked[i])
+    solver._bare_rows[i] = w
+    add_contact_wrench(w, y, prm, count, points, anchors, work)
+    return True
+
+
+def end_of_step(solver, sim, i: int, end: np.ndarray, t: float, h: float) -> np.ndarray:
+    """End of a step of body i held on two half-spaces: a slide along the crease that reversed stops
+    (``stick`` at the step's end), then the body is projected onto both contacts."""
+
+    end = end.copy()
+    sticking = not solver.sliding[i]
+    if solver.sliding[i] and solver.slide_direction[i][0] != 0.0:
+        if end[L.V:L.V + 3] @ crease(solver, i) * solver.slide_direction[i][0] <= 0.0:
+            solver.sliding[i] = False
+            sticking = True
+            solver.events.append(ContactEvent(t + h, solver.names[i], int(solver.ground_of[i]), "stick"))
+    _alternate(solver, sim, i, end, sticking)
+    return end
+
+
+def project_second(solver, sim, i: int, end: np.ndarray, touching_gap: float) -> None:
+    """Body i, held on its ground alone this step (too many contact points for both), at the step's end
+    ``end`` (in place): projected onto both half-spaces if it still reaches the second one, else that
+    one is let go."""
+    j = int(solver.other_ground[i])
+    gaps = np.empty(MAX_FEATURES)
+    count = feature_gaps(end, sim._prm[i], solver.shapes[i], solver.grounds[j], gaps)
+    if not count or gaps[:count].min() > touching_gap:
+        solver.other_ground[i] = -1
+        solver.other_projected[i] = False
+        return
+    solver.other_tracked[i] = int(solver.other_tracked[i]) | sum(1 << k for k in range(count) if gaps[k] <= 0.0)
+    _alternate(solver, sim, i, end, not solver.sliding[i])
+
+
+def _alternate(solver, sim, i: int, end: np.ndarray, sticking: bool) -> None:
+    """Project body i's row ``end`` (in place) onto both its half-spaces, alternately, to a fixed point."""
+    prm, shape, work = sim._prm[i], solver.shapes[i], solver._work
+    points, gaps, owners = solver._points, solver._gaps, solver._owners
+    pairs = ((int(solver.ground_of[i]), int(solver.tracked[i])), (int(solver.other_ground[i]), int(solver.other_tracked[i])))
+    scale = 4.0 * np.finfo(float).eps * max(1.0, float(np.abs(end[:L.STATE_WIDTH]).max()))
+    for _ in range(PROJECTION_ROUNDS):
+        before = end[:L.STATE_WIDTH].copy()
+        for j, mask in pairs:
+            project(end, prm, shape, solver.grounds[j], mask, sticking, points, gaps, owners, work)
+        if np.abs(end[:L.STATE_WIDTH] - before).max() <= scale:  # a fixed point, to round-off
+            break
+
+
+def start_if_touching(solver, sim, y: np.ndarray, i: int, speed_limit: float, gap_limit: float) -> None:
+    """Hold body i, in persistent contact with its ground, on a second half-space it touches too (if any)."""
+    if solver.modes[i] == PERSISTENT:
+        solver.other_ground[i] = touching_other(solver, sim, y, i, speed_limit, gap_limit)

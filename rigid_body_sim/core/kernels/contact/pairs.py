@@ -1,0 +1,807 @@
+"""Compiled body–body narrow phase: signed distance, normal and contact points of every shape pair.
+
+For a pair (A, B) of shapes (sphere, box, cylinder, capsule; shape rows as in layout.py, each
+posed by its centre c (world, m) and orientation q_WS (w, x, y, z)), :func:`pair_contacts`
+writes
+
+* ``dist[m]``: the signed distance (m): the distance when apart, minus the penetration depth
+  (the shortest translation of B that separates them) when they overlap;
+* ``normal[m]``: the unit normal from A to B (world axes) along which that distance is taken;
+* ``count[m]`` contact points, ``points[m, k, 0:3]`` on A's surface and ``points[m, k, 3:6]``
+  on B's (world, m), with ``seps[m, k]`` = (p_B − p_A)·n; point 0 is the deepest
+  (seps[m, 0] = dist[m], except for GJK/EPA pairs with a cylinder, whose witness points are
+  projected onto the surfaces from blends of support points and only lie near the deepest pair). More than one point where a feature touches flat: two box faces
+  (the incident face clipped to the reference face: up to 8 points), a capsule lying on a box
+  face or parallel to another capsule (2). Every point whose separation is within
+  ``FEATURE_BAND`` × the pair's size of the deepest, or that penetrates, is reported.
+
+Closed forms: sphere–sphere, sphere–capsule, capsule–capsule (closest points of segments),
+sphere–box and sphere–cylinder (nearest point of a box, of a solid cylinder). Polytope cores
+(box–box, capsule–box as segment–box): GJK's exact distance when apart, the separating-axis
+test on the Minkowski difference's face normals (15 axes; 6 for segment–box) when they
+overlap, which is exact for polytopes. Pairs with a cylinder other than sphere–cylinder: GJK
+and EPA on support functions (convex.py), then the points projected onto the surfaces.
+
+One compiled call per batch: no Python call per pair, no allocation per pair.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ..jit import INLINE, JIT
+from ..rotation import matrix
+from .convex import (CORE_BOX, CORE_CYLINDER, CORE_POINT, CORE_SEGMENT, EPA_MAX_FACES, EPA_MAX_VERTICES,
+                     POSE_WIDTH, epa, gjk, support)
+from .layout import DIMS, KIND, SHAPE_BOX, SHAPE_CAPSULE, SHAPE_SPHERE
+from .shapes import FEATURE_BAND
+
+__all__ = ["make_workspace_jit", "MAX_PAIR_POINTS", "FACE_ALIGNMENT", "set_pose", "surface_point", "pair_contact", "pair_contacts"]
+
+#: Most contact points one pair reports (a box face clipped against another: a polygon of up to 8 corners).
+MAX_PAIR_POINTS = 8
+#: A normal within this angle (rad) of a box face's normal makes that face a reference face for clipping.
+FACE_ALIGNMENT = 1e-6
+
+_KIND, _DIM, _C, _R = 0, 1, 4, 7
+
+
+@njit(**INLINE)
+def set_pose(shape_kind, d0, d1, d2, cx, cy, cz, qw, qx, qy, qz, pose):
+    """Write the core of a shape (layout.SHAPE_*) with its pose into a convex.py pose row; returns its margin (m)."""
+    r = matrix(qw, qx, qy, qz)
+    for k in range(9):
+        pose[_R + k] = r[k]
+    pose[_C], pose[_C + 1], pose[_C + 2] = cx, cy, cz
+    margin = 0.0
+    if shape_kind == SHAPE_SPHERE:
+        pose[_KIND] = CORE_POINT
+        pose[_DIM], pose[_DIM + 1], pose[_DIM + 2] = 0.0, 0.0, 0.0
+        margin = d0
+    elif shape_kind == SHAPE_CAPSULE:
+        pose[_KIND] = CORE_SEGMENT
+        pose[_DIM], pose[_DIM + 1], pose[_DIM + 2] = d1, 0.0, 0.0
+        margin = d0
+    elif shape_kind == SHAPE_BOX:
+        pose[_KIND] = CORE_BOX
+        pose[_DIM], pose[_DIM + 1], pose[_DIM + 2] = d0, d1, d2
+    else:
+        pose[_KIND] = CORE_CYLINDER
+        pose[_DIM], pose[_DIM + 1], pose[_DIM + 2] = d0, d1, 0.0
+    return margin
+
+
+@njit(**INLINE)
+def _to_local(pose, x, y, z):
+    dx, dy, dz = x - pose[_C], y - pose[_C + 1], z - pose[_C + 2]
+    return (pose[_R + 0] * dx + pose[_R + 3] * dy + pose[_R + 6] * dz, pose[_R + 1] * dx + pose[_R + 4] * dy + pose[_R + 7] * dz, pose[_R + 2] * dx + pose[_R + 5] * dy + pose[_R + 8] * dz)
+
+
+@njit(**INLINE)
+def _to_world(pose, lx, ly, lz):
+    return (pose[_C] + pose[_R + 0] * lx + pose[_R + 1] * ly + pose[_R + 2] * lz, pose[_C + 1] + pose[_R + 3] * lx + pose[_R + 4] * ly + pose[_R + 5] * lz,
+            pose[_C + 2] + pose[_R + 6] * lx + pose[_R + 7] * ly + pose[_R + 8] * lz)
+
+
+@njit(**INLINE)
+def _axis(pose, i):
+    """The world direction of the core's local axis i."""
+    return pose[_R + i], pose[_R + 3 + i], pose[_R + 6 + i]
+
+
+@njit(**JIT)
+def surface_point(pose, margin, x, y, z, nx, ny, nz):
+    """The point of the shape's surface (core + margin) nearest the world point x (m).
+
+    ``n`` is used only where the nearest point is not unique along a line (x on a point or
+    segment core): the point is then taken along n.
+    """
+    lx, ly, lz = _to_local(pose, x, y, z)
+    kind = int(pose[_KIND])
+    a0, a1, a2 = pose[_DIM], pose[_DIM + 1], pose[_DIM + 2]
+    qx, qy, qz = 0.0, 0.0, 0.0
+    if kind == CORE_SEGMENT:
+        qz = min(a0, max(-a0, lz))
+    elif kind == CORE_BOX:
+        qx, qy, qz = min(a0, max(-a0, lx)), min(a1, max(-a1, ly)), min(a2, max(-a2, lz))
+        if qx == lx and qy == ly and qz == lz:  # inside: to the nearest face
+            g0, g1, g2 = a0 - abs(lx), a1 - abs(ly), a2 - abs(lz)
+            if g0 <= g1 and g0 <= g2:
+                qx = a0 if lx >= 0.0 else -a0
+            elif g1 <= g2:
+                qy = a1 if ly >= 0.0 else -a1
+            else:
+                qz = a2 if lz >= 0.0 else -a2
+    elif kind == CORE_CYLINDER:
+        rho = math.sqrt(lx * lx + ly * ly)
+        qx, qy, qz = lx, ly, min(a1, max(-a1, lz))
+        if rho > a0:
+            qx, qy = lx * a0 / rho, ly * a0 / rho
+        elif qz == lz:  # inside: to the nearer of the side and the end face
+            if a0 - rho <= a1 - abs(lz):
+                if rho > 0.0:
+                    qx, qy = lx * a0 / rho, ly * a0 / rho
+                else:
+                    qx, qy = a0, 0.0
+            else:
+                qz = a1 if lz >= 0.0 else -a1
+    wx, wy, wz = _to_world(pose, qx, qy, qz)
+    if margin > 0.0:
+        dx, dy, dz = x - wx, y - wy, z - wz
+        d = math.sqrt(dx * dx + dy * dy + dz * dz)
+        if d > 0.0:
+            wx, wy, wz = wx + margin * dx / d, wy + margin * dy / d, wz + margin * dz / d
+        else:
+            wx, wy, wz = wx + margin * nx, wy + margin * ny, wz + margin * nz
+    return wx, wy, wz
+
+
+@njit(**JIT)
+def _closest_segments(p1x, p1y, p1z, d1x, d1y, d1z, p2x, p2y, p2z, d2x, d2y, d2z):
+    """Parameters s, t ∈ [0, 1] of the closest points p1 + s d1 and p2 + t d2 of two segments (Ericson 5.1.9)."""
+    rx, ry, rz = p1x - p2x, p1y - p2y, p1z - p2z
+    a = d1x * d1x + d1y * d1y + d1z * d1z
+    e = d2x * d2x + d2y * d2y + d2z * d2z
+    f = d2x * rx + d2y * ry + d2z * rz
+    s, t = 0.0, 0.0
+    if a <= 0.0 and e <= 0.0:
+        pass
+    elif a <= 0.0:
+        t = min(1.0, max(0.0, f / e))
+    else:
+        c = d1x * rx + d1y * ry + d1z * rz
+        if e <= 0.0:
+            s = min(1.0, max(0.0, -c / a))
+        else:
+            b = d1x * d2x + d1y * d2y + d1z * d2z
+            denom = a * e - b * b
+            if denom > 0.0:
+                s = min(1.0, max(0.0, (b * f - c * e) / denom))
+            t = (b * s + f) / e
+            if t < 0.0:
+                t = 0.0
+                s = min(1.0, max(0.0, -c / a))
+            elif t > 1.0:
+                t = 1.0
+                s = min(1.0, max(0.0, (b - c) / a))
+    return s, t
+
+
+@njit(**INLINE)
+def _put(res, seps, k, ax, ay, az, bx, by, bz, nx, ny, nz):
+    res[k, 0], res[k, 1], res[k, 2] = ax, ay, az
+    res[k, 3], res[k, 4], res[k, 5] = bx, by, bz
+    seps[k] = (bx - ax) * nx + (by - ay) * ny + (bz - az) * nz
+
+
+@njit(**INLINE)
+def _round_pair(ax, ay, az, ra, bx, by, bz, rb, fx, fy, fz, res, seps, k):
+    """Points of two balls (centres a, b on the cores; radii ra, rb) along b − a (or f if a = b); returns sd, n."""
+    dx, dy, dz = bx - ax, by - ay, bz - az
+    d = math.sqrt(dx * dx + dy * dy + dz * dz)
+    if d > 0.0:
+        nx, ny, nz = dx / d, dy / d, dz / d
+    else:
+        nx, ny, nz = fx, fy, fz
+    _put(res, seps, k, ax + ra * nx, ay + ra * ny, az + ra * nz, bx - rb * nx, by - rb * ny, bz - rb * nz, nx, ny, nz)
+    return d - ra - rb, nx, ny, nz
+
+
+@njit(**INLINE)
+def _perpendicular(ux, uy, uz, dx, dy, dz):
+    """A unit vector across u, towards d's part across u if it has one."""
+    t = dx * ux + dy * uy + dz * uz
+    px, py, pz = dx - t * ux, dy - t * uy, dz - t * uz
+    p = math.sqrt(px * px + py * py + pz * pz)
+    if p <= 0.0:
+        if abs(ux) < 0.6:
+            px, py, pz = 0.0, -uz, uy
+        else:
+            px, py, pz = -uz, 0.0, ux
+        p = math.sqrt(px * px + py * py + pz * pz)
+    return px / p, py / p, pz / p
+
+
+@njit(**INLINE)
+def _segment_ends(pose):
+    ux, uy, uz = _axis(pose, 2)
+    h = pose[_DIM]
+    return pose[_C] - h * ux, pose[_C + 1] - h * uy, pose[_C + 2] - h * uz, 2.0 * h * ux, 2.0 * h * uy, 2.0 * h * uz
+
+
+@njit(**JIT)
+def _point_segment(pa, ra, pb, rb, res, seps):
+    """Sphere (A) against capsule (B): the ball at the nearest point of B's segment."""
+    px, py, pz, dx, dy, dz = _segment_ends(pb)
+    ee = dx * dx + dy * dy + dz * dz
+    t = 0.0
+    if ee > 0.0:
+        t = min(1.0, max(0.0, ((pa[_C] - px) * dx + (pa[_C + 1] - py) * dy + (pa[_C + 2] - pz) * dz) / ee))
+    ux, uy, uz = _axis(pb, 2)
+    fx, fy, fz = _perpendicular(ux, uy, uz, 0.0, 0.0, 0.0)
+    sd, nx, ny, nz = _round_pair(pa[_C], pa[_C + 1], pa[_C + 2], ra, px + t * dx, py + t * dy, pz + t * dz, rb,
+                                 fx, fy, fz, res, seps, 0)
+    return sd, nx, ny, nz, 1
+
+
+@njit(**JIT)
+def _segment_segment(pa, ra, pb, rb, band, res, seps):
+    """Capsule (A) against capsule (B): closest points of the segments; both overlap ends when parallel."""
+    p1x, p1y, p1z, d1x, d1y, d1z = _segment_ends(pa)
+    p2x, p2y, p2z, d2x, d2y, d2z = _segment_ends(pb)
+    s, t = _closest_segments(p1x, p1y, p1z, d1x, d1y, d1z, p2x, p2y, p2z, d2x, d2y, d2z)
+    ax, ay, az = p1x + s * d1x, p1y + s * d1y, p1z + s * d1z
+    bx, by, bz = p2x + t * d2x, p2y + t * d2y, p2z + t * d2z
+    ux, uy, uz = _axis(pa, 2)
+    vx, vy, vz = _axis(pb, 2)
+    # the axes' common normal, towards B, for crossing cores
+    cx, cy, cz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+    cross = math.sqrt(cx * cx + cy * cy + cz * cz)
+    ox, oy, oz = pb[_C] - pa[_C], pb[_C + 1] - pa[_C + 1], pb[_C + 2] - pa[_C + 2]
+    if cross > 0.0:
+        sgn = 1.0 if cx * ox + cy * oy + cz * oz >= 0.0 else -1.0
+        fx, fy, fz = sgn * cx / cross, sgn * cy / cross, sgn * cz / cross
+    else:
+        fx, fy, fz = _perpendicular(ux, uy, uz, ox, oy, oz)
+    sd, nx, ny, nz = _round_pair(ax, ay, az, ra, bx, by, bz, rb, fx, fy, fz, res, seps, 0)
+    count = 1
+    if cross <= FACE_ALIGNMENT and pa[_DIM] > 0.0 and pb[_DIM] > 0.0:
+        # parallel: the ends of the overlap of B's segment projected on A's, if it has length
+        la = 2.0 * pa[_DIM]
+        t0 = (p2x - p1x) * ux + (p2y - p1y) * uy + (p2z - p1z) * uz
+        t1 = t0 + (d2x * ux + d2y * uy + d2z * uz)
+        lo, hi = max(0.0, min(t0, t1)), min(la, max(t0, t1))
+        if hi - lo > band:
+            count = 0
+            for end in (lo, hi):
+                qx, qy, qz = p1x + end * ux, p1y + end * uy, p1z + end * uz
+                # nearest point of B's segment to q
+                ee = d2x * d2x + d2y * d2y + d2z * d2z
+                tt = min(1.0, max(0.0, ((qx - p2x) * d2x + (qy - p2y) * d2y + (qz - p2z) * d2z) / ee))
+                _round_pair(qx, qy, qz, ra, p2x + tt * d2x, p2y + tt * d2y, p2z + tt * d2z, rb, nx, ny, nz,
+                            res, seps, count)
+                count += 1
+            if seps[1] < seps[0]:
+                for c in range(6):
+                    res[0, c], res[1, c] = res[1, c], res[0, c]
+                seps[0], seps[1] = seps[1], seps[0]
+    return sd, nx, ny, nz, count
+
+
+@njit(**JIT)
+def _point_box(pa, ra, pb, res, seps):
+    """Sphere (A) against box (B): the box point nearest the centre (the nearest face's when inside)."""
+    lx, ly, lz = _to_local(pb, pa[_C], pa[_C + 1], pa[_C + 2])
+    a0, a1, a2 = pb[_DIM], pb[_DIM + 1], pb[_DIM + 2]
+    qx, qy, qz = min(a0, max(-a0, lx)), min(a1, max(-a1, ly)), min(a2, max(-a2, lz))
+    if qx == lx and qy == ly and qz == lz:  # centre inside the box: out through the nearest face
+        g0, g1, g2 = a0 - abs(lx), a1 - abs(ly), a2 - abs(lz)
+        mx, my, mz = 0.0, 0.0, 0.0
+        if g0 <= g1 and g0 <= g2:
+            mx = 1.0 if lx >= 0.0 else -1.0
+            qx, depth = mx * a0, g0
+        elif g1 <= g2:
+            my = 1.0 if ly >= 0.0 else -1.0
+            qy, depth = my * a1, g1
+        else:
+            mz = 1.0 if lz >= 0.0 else -1.0
+            qz, depth = mz * a2, g2
+        # normal from the sphere to the box: into the box, against the face's outward normal m
+        nx = -(pb[_R + 0] * mx + pb[_R + 1] * my + pb[_R + 2] * mz)
+        ny = -(pb[_R + 3] * mx + pb[_R + 4] * my + pb[_R + 5] * mz)
+        nz = -(pb[_R + 6] * mx + pb[_R + 7] * my + pb[_R + 8] * mz)
+        bx, by, bz = _to_world(pb, qx, qy, qz)
+        _put(res, seps, 0, pa[_C] + ra * nx, pa[_C + 1] + ra * ny, pa[_C + 2] + ra * nz, bx, by, bz, nx, ny, nz)
+        return -depth - ra, nx, ny, nz, 1
+    bx, by, bz = _to_world(pb, qx, qy, qz)
+    sd, nx, ny, nz = _round_pair(pa[_C], pa[_C + 1], pa[_C + 2], ra, bx, by, bz, 0.0, 1.0, 0.0, 0.0, res, seps, 0)
+    return sd, nx, ny, nz, 1
+
+
+@njit(**JIT)
+def _point_cylinder(pa, ra, pb, res, seps):
+    """Sphere (A) against cylinder (B): the nearest point of the solid cylinder (its nearest face when inside)."""
+    lx, ly, lz = _to_local(pb, pa[_C], pa[_C + 1], pa[_C + 2])
+    r, h = pb[_DIM], pb[_DIM + 1]
+    rho = math.sqrt(lx * lx + ly * ly)
+    if rho <= r and abs(lz) <= h:
+        mx, my, mz = 0.0, 0.0, 0.0
+        qx, qy, qz = lx, ly, lz
+        if r - rho <= h - abs(lz):
+            if rho > 0.0:
+                mx, my = lx / rho, ly / rho
+            else:
+                mx = 1.0
+            qx, qy, depth = r * mx, r * my, r - rho
+        else:
+            mz = 1.0 if lz >= 0.0 else -1.0
+            qz, depth = mz * h, h - abs(lz)
+        nx = -(pb[_R + 0] * mx + pb[_R + 1] * my + pb[_R + 2] * mz)
+        ny = -(pb[_R + 3] * mx + pb[_R + 4] * my + pb[_R + 5] * mz)
+        nz = -(pb[_R + 6] * mx + pb[_R + 7] * my + pb[_R + 8] * mz)
+        bx, by, bz = _to_world(pb, qx, qy, qz)
+        _put(res, seps, 0, pa[_C] + ra * nx, pa[_C + 1] + ra * ny, pa[_C + 2] + ra * nz, bx, by, bz, nx, ny, nz)
+        return -depth - ra, nx, ny, nz, 1
+    qx, qy = lx, ly
+    if rho > r:
+        qx, qy = lx * r / rho, ly * r / rho
+    qz = min(h, max(-h, lz))
+    bx, by, bz = _to_world(pb, qx, qy, qz)
+    sd, nx, ny, nz = _round_pair(pa[_C], pa[_C + 1], pa[_C + 2], ra, bx, by, bz, 0.0, 1.0, 0.0, 0.0, res, seps, 0)
+    return sd, nx, ny, nz, 1
+
+
+@njit(**INLINE)
+def _box_radius(pose, ux, uy, uz):
+    """Half the width of the box core along the unit world direction u."""
+    return (pose[_DIM] * abs(pose[_R + 0] * ux + pose[_R + 3] * uy + pose[_R + 6] * uz) + pose[_DIM + 1] * abs(pose[_R + 1] * ux + pose[_R + 4] * uy + pose[_R + 7] * uz)
+            + pose[_DIM + 2] * abs(pose[_R + 2] * ux + pose[_R + 5] * uy + pose[_R + 8] * uz))
+
+
+@njit(**INLINE)
+def _core_radius(pose, ux, uy, uz):
+    if int(pose[_KIND]) == CORE_BOX:
+        return _box_radius(pose, ux, uy, uz)
+    return pose[_DIM] * abs(pose[_R + 2] * ux + pose[_R + 5] * uy + pose[_R + 8] * uz)  # segment along local z
+
+
+@njit(**JIT)
+def _sat(pa, pb, scale):
+    """Separating-axis test of two overlapping polytope cores (box or segment A, box B).
+
+    The candidate axes are the face normals of A ⊖ B: the boxes' face normals and the cross
+    products of their edge directions (a segment has one edge and no face). Returns
+    (sd, ux, uy, uz, axis id): the largest separation over the axes (exact while they overlap),
+    u oriented from A to B; ids 0–2 A's faces, 3–5 B's, 6 + 3i + j edge i of A × edge j of B.
+    """
+    ox, oy, oz = pb[_C] - pa[_C], pb[_C + 1] - pa[_C + 1], pb[_C + 2] - pa[_C + 2]
+    a_is_box = int(pa[_KIND]) == CORE_BOX
+    best = -math.inf
+    bx, by, bz = 0.0, 0.0, 1.0
+    best_id = -1
+    # face axes first, so that an edge axis has to be strictly better by round-off to replace them
+    for k in range(6):
+        if k < 3 and not a_is_box:
+            continue
+        ux, uy, uz = _axis(pa, k) if k < 3 else _axis(pb, k - 3)
+        proj = ux * ox + uy * oy + uz * oz
+        sep = abs(proj) - _core_radius(pa, ux, uy, uz) - _box_radius(pb, ux, uy, uz)
+        if sep > best:
+            sgn = 1.0 if proj >= 0.0 else -1.0
+            best, bx, by, bz, best_id = sep, sgn * ux, sgn * uy, sgn * uz, k
+    margin = 1e-12 * scale
+    for i in range(3):
+        if i < 2 and not a_is_box:
+            continue
+        ex, ey, ez = _axis(pa, i)
+        for j in range(3):
+            fx, fy, fz = _axis(pb, j)
+            cx, cy, cz = ey * fz - ez * fy, ez * fx - ex * fz, ex * fy - ey * fx
+            norm = math.sqrt(cx * cx + cy * cy + cz * cz)
+            if norm < 1e-9:
+                continue
+            cx, cy, cz = cx / norm, cy / norm, cz / norm
+            proj = cx * ox + cy * oy + cz * oz
+            sep = abs(proj) - _core_radius(pa, cx, cy, cz) - _box_radius(pb, cx, cy, cz)
+            if sep > best + margin:
+                sgn = 1.0 if proj >= 0.0 else -1.0
+                best, bx, by, bz, best_id = sep, sgn * cx, sgn * cy, sgn * cz, 6 + 3 * i + j
+    return best, bx, by, bz, best_id
+
+
+@njit(**JIT)
+def _support_edge(pose, i, ux, uy, uz):
+    """The edge along local axis i of the box core furthest along u: (start, direction) in world (m)."""
+    lx = pose[_R + 0] * ux + pose[_R + 3] * uy + pose[_R + 6] * uz
+    ly = pose[_R + 1] * ux + pose[_R + 4] * uy + pose[_R + 7] * uz
+    lz = pose[_R + 2] * ux + pose[_R + 5] * uy + pose[_R + 8] * uz
+    sx = pose[_DIM] if lx >= 0.0 else -pose[_DIM]
+    sy = pose[_DIM + 1] if ly >= 0.0 else -pose[_DIM + 1]
+    sz = pose[_DIM + 2] if lz >= 0.0 else -pose[_DIM + 2]
+    if i == 0:
+        sx = -pose[_DIM]
+    elif i == 1:
+        sy = -pose[_DIM + 1]
+    else:
+        sz = -pose[_DIM + 2]
+    px, py, pz = _to_world(pose, sx, sy, sz)
+    ex, ey, ez = _axis(pose, i)
+    length = 2.0 * pose[_DIM + i]
+    return px, py, pz, length * ex, length * ey, length * ez
+
+
+@njit(**JIT)
+def _sat_witness(pa, ma, pb, sd_core, ux, uy, uz, axis_id, res, seps):
+    """One pair of points for a SAT result: the deepest support feature's point and its match on the other core."""
+    if axis_id >= 6:  # edge against edge: closest points of the two support edges
+        i, j = (axis_id - 6) // 3, (axis_id - 6) % 3
+        if int(pa[_KIND]) == CORE_BOX:
+            p1x, p1y, p1z, d1x, d1y, d1z = _support_edge(pa, i, ux, uy, uz)
+        else:
+            p1x, p1y, p1z, d1x, d1y, d1z = _segment_ends(pa)
+        p2x, p2y, p2z, d2x, d2y, d2z = _support_edge(pb, j, -ux, -uy, -uz)
+        s, t = _closest_segments(p1x, p1y, p1z, d1x, d1y, d1z, p2x, p2y, p2z, d2x, d2y, d2z)
+        ax, ay, az = p1x + s * d1x, p1y + s * d1y, p1z + s * d1z
+        bx, by, bz = p2x + t * d2x, p2y + t * d2y, p2z + t * d2z
+    elif axis_id >= 3:  # B's face: A's deepest point, projected onto that face
+        from_a = _support_point(pa, ux, uy, uz)
+        ax, ay, az = from_a
+        h = (pb[_C] * ux + pb[_C + 1] * uy + pb[_C + 2] * uz) - _box_radius(pb, ux, uy, uz)
+        off = ax * ux + ay * uy + az * uz - h
+        bx, by, bz = surface_point(pb, 0.0, ax - off * ux, ay - off * uy, az - off * uz, ux, uy, uz)
+    else:  # A's face: B's deepest point, projected onto it
+        bx, by, bz = _support_point(pb, -ux, -uy, -uz)
+        h = (pa[_C] * ux + pa[_C + 1] * uy + pa[_C + 2] * uz) + _box_radius(pa, ux, uy, uz)
+        off = bx * ux + by * uy + bz * uz - h
+        ax, ay, az = surface_point(pa, 0.0, bx - off * ux, by - off * uy, bz - off * uz, ux, uy, uz)
+    _put(res, seps, 0, ax + ma * ux, ay + ma * uy, az + ma * uz, bx, by, bz, ux, uy, uz)
+
+
+@njit(**INLINE)
+def _support_point(pose, ux, uy, uz):
+    """The core's support point along u; for a face or an edge, the middle of that feature."""
+    lx = pose[_R + 0] * ux + pose[_R + 3] * uy + pose[_R + 6] * uz
+    ly = pose[_R + 1] * ux + pose[_R + 4] * uy + pose[_R + 7] * uz
+    lz = pose[_R + 2] * ux + pose[_R + 5] * uy + pose[_R + 8] * uz
+    tol = FACE_ALIGNMENT
+    kind = int(pose[_KIND])
+    sx, sy, sz = 0.0, 0.0, 0.0
+    if kind == CORE_BOX:
+        sx = 0.0 if abs(lx) <= tol else (pose[_DIM] if lx > 0.0 else -pose[_DIM])
+        sy = 0.0 if abs(ly) <= tol else (pose[_DIM + 1] if ly > 0.0 else -pose[_DIM + 1])
+        sz = 0.0 if abs(lz) <= tol else (pose[_DIM + 2] if lz > 0.0 else -pose[_DIM + 2])
+    elif kind == CORE_SEGMENT:
+        sz = 0.0 if abs(lz) <= tol else (pose[_DIM] if lz > 0.0 else -pose[_DIM])
+    return _to_world(pose, sx, sy, sz)
+
+
+@njit(**INLINE)
+def _face_of(pose, ux, uy, uz):
+    """(axis i, sign, |cos|) of the box face whose outward normal is nearest u."""
+    best, axis, sgn = -1.0, 0, 1.0
+    for i in range(3):
+        ex, ey, ez = _axis(pose, i)
+        c = ex * ux + ey * uy + ez * uz
+        if abs(c) > best:
+            best, axis, sgn = abs(c), i, (1.0 if c >= 0.0 else -1.0)
+    return axis, sgn, best
+
+
+@njit(**JIT)
+def _clip(poly, src, n, px, py, pz, ox, oy, oz, limit):
+    """Sutherland–Hodgman: keep the part of polygon poly[src, :n] with (p − o)·plane ≤ limit; returns its size."""
+    dst = 1 - src
+    m = 0
+    for k in range(n):
+        k1 = (k + 1) % n
+        ax, ay, az = poly[src, k, 0], poly[src, k, 1], poly[src, k, 2]
+        bx, by, bz = poly[src, k1, 0], poly[src, k1, 1], poly[src, k1, 2]
+        da = (ax - ox) * px + (ay - oy) * py + (az - oz) * pz - limit
+        db = (bx - ox) * px + (by - oy) * py + (bz - oz) * pz - limit
+        if da <= 0.0:
+            poly[dst, m, 0], poly[dst, m, 1], poly[dst, m, 2] = ax, ay, az
+            m += 1
+        if (da < 0.0 < db) or (db < 0.0 < da):
+            t = da / (da - db)
+            poly[dst, m, 0], poly[dst, m, 1], poly[dst, m, 2] = ax + t * (bx - ax), ay + t * (by - ay), az + t * (bz - az)
+            m += 1
+    return m
+
+
+@njit(**JIT)
+def _face_manifold(ref, inc, ref_is_a, ma, mb, nx, ny, nz, sd, band, poly, res, seps):
+    """Clip the incident core's feature (box face or segment) against the reference box face nearest n.
+
+    ``ref`` is a box core; ``inc`` a box, a segment (with margin; a segment is always A here) or
+    a cylinder standing on an end (four rim points, as against the ground) or lying on its side
+    (the side's line), else nothing is clipped. Writes the points whose separation is within ``band`` of the
+    deepest or below zero; returns their count (0 if clipping left nothing).
+    """
+    sgn_n = 1.0 if ref_is_a else -1.0  # the reference face's outward normal is ±n
+    i, s_ref, _ = _face_of(ref, sgn_n * nx, sgn_n * ny, sgn_n * nz)
+    rx, ry, rz = _axis(ref, i)
+    rx, ry, rz = s_ref * rx, s_ref * ry, s_ref * rz
+    cx = ref[_C] + ref[_DIM + i] * rx
+    cy = ref[_C + 1] + ref[_DIM + i] * ry
+    cz = ref[_C + 2] + ref[_DIM + i] * rz
+    n = 0
+    if int(inc[_KIND]) == CORE_BOX:
+        l, s_inc, _ = _face_of(inc, -rx, -ry, -rz)
+        j, k = (l + 1) % 3, (l + 2) % 3
+        for corner in range(4):
+            sj = 1.0 if corner == 0 or corner == 1 else -1.0
+            sk = 1.0 if corner == 1 or corner == 2 else -1.0
+            lx, ly, lz = _axis(inc, l)
+            jx, jy, jz = _axis(inc, j)
+            kx, ky, kz = _axis(inc, k)
+            fl, fj, fk = s_inc * inc[_DIM + l], sj * inc[_DIM + j], sk * inc[_DIM + k]
+            wx = inc[_C] + fl * lx + fj * jx + fk * kx
+            wy = inc[_C + 1] + fl * ly + fj * jy + fk * ky
+            wz = inc[_C + 2] + fl * lz + fj * jz + fk * kz
+            poly[0, corner, 0], poly[0, corner, 1], poly[0, corner, 2] = wx, wy, wz
+        n = 4
+    elif int(inc[_KIND]) == CORE_CYLINDER:
+        ux, uy, uz = _axis(inc, 2)
+        c_axis = ux * rx + uy * ry + uz * rz
+        r, h = inc[_DIM], inc[_DIM + 1]
+        if abs(c_axis) >= 1.0 - 0.5 * FACE_ALIGNMENT * FACE_ALIGNMENT:
+            # standing on an end face: four rim points of the end facing the reference face
+            s_end = -1.0 if c_axis > 0.0 else 1.0
+            e1x, e1y, e1z = _axis(inc, 0)
+            e2x, e2y, e2z = _axis(inc, 1)
+            for k in range(4):
+                c1 = 1.0 if k == 0 else (-1.0 if k == 2 else 0.0)
+                c2 = 1.0 if k == 1 else (-1.0 if k == 3 else 0.0)
+                poly[0, k, 0] = inc[_C] + s_end * h * ux + r * (c1 * e1x + c2 * e2x)
+                poly[0, k, 1] = inc[_C + 1] + s_end * h * uy + r * (c1 * e1y + c2 * e2y)
+                poly[0, k, 2] = inc[_C + 2] + s_end * h * uz + r * (c1 * e1z + c2 * e2z)
+            n = 4
+        elif abs(c_axis) <= FACE_ALIGNMENT:
+            # lying on its side: the line of the side nearest the reference face
+            px, py, pz = rx - c_axis * ux, ry - c_axis * uy, rz - c_axis * uz
+            norm = math.sqrt(px * px + py * py + pz * pz)
+            px, py, pz = px / norm, py / norm, pz / norm
+            for k in range(2):
+                sgn = -1.0 if k == 0 else 1.0
+                poly[0, k, 0] = inc[_C] - r * px + sgn * h * ux
+                poly[0, k, 1] = inc[_C + 1] - r * py + sgn * h * uy
+                poly[0, k, 2] = inc[_C + 2] - r * pz + sgn * h * uz
+            n = 2
+    else:
+        p0x, p0y, p0z, dx, dy, dz = _segment_ends(inc)
+        poly[0, 0, 0], poly[0, 0, 1], poly[0, 0, 2] = p0x, p0y, p0z
+        poly[0, 1, 0], poly[0, 1, 1], poly[0, 1, 2] = p0x + dx, p0y + dy, p0z + dz
+        n = 2
+    src = 0
+    for side in range(4):
+        axis = (i + 1 + side // 2) % 3
+        ex, ey, ez = _axis(ref, axis)
+        sgn = 1.0 if side % 2 == 0 else -1.0
+        if n > 0:
+            if n == 2:  # a segment: clip its ends (the polygon routine would treat it as a closed loop)
+                n = _clip_segment(poly, src, sgn * ex, sgn * ey, sgn * ez, cx, cy, cz, ref[_DIM + axis])
+            else:
+                n = _clip(poly, src, n, sgn * ex, sgn * ey, sgn * ez, cx, cy, cz, ref[_DIM + axis])
+                src = 1 - src
+    if n == 0:
+        return 0
+    lowest = math.inf
+    for q in range(n):
+        d = (poly[src, q, 0] - cx) * rx + (poly[src, q, 1] - cy) * ry + (poly[src, q, 2] - cz) * rz - ma - mb
+        lowest = min(lowest, d)
+    keep = max(lowest + band, 0.0)
+    count = 0
+    for q in range(n):
+        px, py, pz = poly[src, q, 0], poly[src, q, 1], poly[src, q, 2]
+        d = (px - cx) * rx + (py - cy) * ry + (pz - cz) * rz
+        if d - ma - mb <= keep and count < MAX_PAIR_POINTS:
+            fx, fy, fz = px - d * rx, py - d * ry, pz - d * rz  # on the reference face
+            m_inc = ma if not ref_is_a else mb
+            gx, gy, gz = px - m_inc * rx, py - m_inc * ry, pz - m_inc * rz  # on the incident surface
+            if ref_is_a:
+                _put(res, seps, count, fx, fy, fz, gx, gy, gz, nx, ny, nz)
+            else:
+                _put(res, seps, count, gx, gy, gz, fx, fy, fz, nx, ny, nz)
+            count += 1
+    # deepest first
+    for q in range(1, count):
+        if seps[q] < seps[0]:
+            for c in range(6):
+                res[0, c], res[q, c] = res[q, c], res[0, c]
+            seps[0], seps[q] = seps[q], seps[0]
+    _pin = sd, ref[0], inc[0], poly[0, 0, 0], res[0, 0], seps[0]
+    return count
+
+
+@njit(**JIT)
+def _clip_segment(poly, src, px, py, pz, ox, oy, oz, limit):
+    """Clip the segment poly[src, 0:2] to (p − o)·plane ≤ limit in place; returns 2, or 0 if nothing is left."""
+    ax, ay, az = poly[src, 0, 0], poly[src, 0, 1], poly[src, 0, 2]
+    bx, by, bz = poly[src, 1, 0], poly[src, 1, 1], poly[src, 1, 2]
+    da = (ax - ox) * px + (ay - oy) * py + (az - oz) * pz - limit
+    db = (bx - ox) * px + (by - oy) * py + (bz - oz) * pz - limit
+    if da > 0.0 and db > 0.0:
+        return 0
+    if da > 0.0:
+        t = da / (da - db)
+        poly[src, 0, 0], poly[src, 0, 1], poly[src, 0, 2] = ax + t * (bx - ax), ay + t * (by - ay), az + t * (bz - az)
+    elif db > 0.0:
+        t = db / (db - da)
+        poly[src, 1, 0], poly[src, 1, 1], poly[src, 1, 2] = bx + t * (ax - bx), by + t * (ay - by), bz + t * (az - bz)
+    return 2
+
+
+@njit(**JIT)
+def _sep(pa, pb, ux, uy, uz):
+    """sep(u) = min over B of u·x − max over A of u·x, from the cores' support functions (m)."""
+    ax, ay, az = support(pa, ux, uy, uz)
+    bx, by, bz = support(pb, -ux, -uy, -uz)
+    return (bx - ax) * ux + (by - ay) * uy + (bz - az) * uz
+
+
+@njit(**JIT)
+def _try(pa, pb, nx, ny, nz, best, bx, by, bz, ux, uy, uz):
+    """Keep the candidate u (turned to n's side) if it separates more than the best so far."""
+    norm = math.sqrt(ux * ux + uy * uy + uz * uz)
+    if norm > 1e-12:
+        ux, uy, uz = ux / norm, uy / norm, uz / norm
+        if ux * nx + uy * ny + uz * nz < 0.0:
+            ux, uy, uz = -ux, -uy, -uz
+        value = _sep(pa, pb, ux, uy, uz)
+        if value > best:
+            best, bx, by, bz = value, ux, uy, uz
+    return best, bx, by, bz
+
+
+@njit(**JIT)
+def _feature_normal(pa, pb, nx, ny, nz):
+    """The normal of a pair with a cylinder: GJK/EPA's n, or a feature direction near it that separates more.
+
+    On a curved rim GJK and EPA find the distance to ~1e-10 but the direction only to ~1e-5
+    rad. Where the contact is between features whose normal is a fixed direction (a box face,
+    an end face, a cylinder's or capsule's side across its axis, two crossing axes), that
+    direction separates at least as much (sd = max over u of sep(u)); it replaces n if it does.
+    """
+    best = _sep(pa, pb, nx, ny, nz)
+    bx, by, bz = nx, ny, nz
+    for side in range(2):
+        pose = pa if side == 0 else pb
+        kind = int(pose[_KIND])
+        if kind == CORE_BOX:
+            for i in range(3):
+                ex, ey, ez = _axis(pose, i)
+                best, bx, by, bz = _try(pa, pb, nx, ny, nz, best, bx, by, bz, ex, ey, ez)
+        elif kind == CORE_CYLINDER or kind == CORE_SEGMENT:
+            ux, uy, uz = _axis(pose, 2)
+            if kind == CORE_CYLINDER:
+                best, bx, by, bz = _try(pa, pb, nx, ny, nz, best, bx, by, bz, ux, uy, uz)
+            c = nx * ux + ny * uy + nz * uz  # across the axis: a side contact
+            best, bx, by, bz = _try(pa, pb, nx, ny, nz, best, bx, by, bz, nx - c * ux, ny - c * uy, nz - c * uz)
+    if int(pa[_KIND]) != CORE_BOX:
+        ux, uy, uz = _axis(pa, 2)
+        vx, vy, vz = _axis(pb, 2)
+        best, bx, by, bz = _try(pa, pb, nx, ny, nz, best, bx, by, bz, uy * vz - uz * vy, uz * vx - ux * vz,
+                                ux * vy - uy * vx)
+    return bx, by, bz
+
+
+@njit(**INLINE)
+def pair_contact(pa, ma, pb, mb, scale, ws_s, ws_lam, ws_tmp, ws_poly, verts, faces, face_nd, edges, out, res, seps):
+    """Signed distance, normal (A to B) and contact points of two posed cores with margins (set_pose).
+
+    Needs core kind of A ≤ core kind of B (CORE_*; the batch function swaps). Writes the points
+    into res (MAX_PAIR_POINTS, 6) and seps; returns (sd, nx, ny, nz, count). ``scale`` (m) is the
+    pair's size, for the tolerances.
+    """
+    ka, kb = int(pa[_KIND]), int(pb[_KIND])
+    band = FEATURE_BAND * scale
+    sd, nx, ny, nz, count = 0.0, 0.0, 0.0, 1.0, 1
+    if ka == CORE_POINT and kb == CORE_POINT:
+        sd, nx, ny, nz = _round_pair(pa[_C], pa[_C + 1], pa[_C + 2], ma, pb[_C], pb[_C + 1], pb[_C + 2], mb,
+                                     0.0, 0.0, 1.0, res, seps, 0)
+    elif ka == CORE_POINT and kb == CORE_SEGMENT:
+        sd, nx, ny, nz, count = _point_segment(pa, ma, pb, mb, res, seps)
+    elif ka == CORE_POINT and kb == CORE_BOX:
+        sd, nx, ny, nz, count = _point_box(pa, ma, pb, res, seps)
+    elif ka == CORE_POINT and kb == CORE_CYLINDER:
+        sd, nx, ny, nz, count = _point_cylinder(pa, ma, pb, res, seps)
+    elif ka == CORE_SEGMENT and kb == CORE_SEGMENT:
+        sd, nx, ny, nz, count = _segment_segment(pa, ma, pb, mb, band, res, seps)
+    else:
+        d, nv, overlap = gjk(pa, pb, ws_s, ws_lam, ws_tmp, scale)
+        polytopes = kb == CORE_BOX  # segment–box or box–box
+        if overlap and polytopes:
+            sd_core, nx, ny, nz, axis_id = _sat(pa, pb, scale)
+            sd = sd_core - ma - mb
+            _sat_witness(pa, ma, pb, sd_core, nx, ny, nz, axis_id, res, seps)
+        elif overlap:
+            epa(pa, pb, ws_s, nv, verts, faces, face_nd, edges, scale, out)
+            nx, ny, nz = _feature_normal(pa, pb, out[1], out[2], out[3])
+            sd = -out[0] - ma - mb
+            ax, ay, az = surface_point(pa, ma, out[4] + ma * nx, out[5] + ma * ny, out[6] + ma * nz, nx, ny, nz)
+            bx, by, bz = surface_point(pb, mb, out[7], out[8], out[9], -nx, -ny, -nz)
+            _put(res, seps, 0, ax, ay, az, bx, by, bz, nx, ny, nz)
+        else:
+            ax = ay = az = bx = by = bz = 0.0
+            for k in range(nv):
+                ax += ws_lam[k] * ws_s[0, k, 0]
+                ay += ws_lam[k] * ws_s[0, k, 1]
+                az += ws_lam[k] * ws_s[0, k, 2]
+                bx += ws_lam[k] * ws_s[1, k, 0]
+                by += ws_lam[k] * ws_s[1, k, 1]
+                bz += ws_lam[k] * ws_s[1, k, 2]
+            if d > 0.0:
+                nx, ny, nz = (bx - ax) / d, (by - ay) / d, (bz - az) / d
+            else:  # touching cores: the normal from the centres
+                ox, oy, oz = pb[_C] - pa[_C], pb[_C + 1] - pa[_C + 1], pb[_C + 2] - pa[_C + 2]
+                norm = math.sqrt(ox * ox + oy * oy + oz * oz)
+                nx, ny, nz = (ox / norm, oy / norm, oz / norm) if norm > 0.0 else (0.0, 0.0, 1.0)
+            sd = d - ma - mb
+            if kb == CORE_CYLINDER and d > 0.0:
+                nx, ny, nz = _feature_normal(pa, pb, nx, ny, nz)
+            if kb == CORE_CYLINDER:  # GJK's witnesses are blends of rim points: put them on the surfaces
+                ax, ay, az = surface_point(pa, 0.0, ax, ay, az, nx, ny, nz)
+                bx, by, bz = surface_point(pb, 0.0, bx, by, bz, -nx, -ny, -nz)
+            _put(res, seps, 0, ax + ma * nx, ay + ma * ny, az + ma * nz, bx - mb * nx, by - mb * ny, bz - mb * nz,
+                 nx, ny, nz)
+        if polytopes:
+            # a box face against a face (or a capsule lying on it): the clipped patch
+            ia, sa, ca = _face_of(pa, nx, ny, nz) if ka == CORE_BOX else (0, 1.0, -1.0)
+            ib, sb, cb = _face_of(pb, -nx, -ny, -nz)
+            flat = 1.0 - 0.5 * FACE_ALIGNMENT * FACE_ALIGNMENT
+            if ka == CORE_SEGMENT:
+                ux, uy, uz = _axis(pa, 2)
+                if cb >= flat and abs(ux * nx + uy * ny + uz * nz) <= FACE_ALIGNMENT and pa[_DIM] > 0.0:
+                    m = _face_manifold(pb, pa, False, ma, mb, nx, ny, nz, sd, band, ws_poly, res, seps)
+                    count = max(m, 1)
+            elif max(ca, cb) >= flat:
+                if ca >= cb:
+                    m = _face_manifold(pa, pb, True, ma, mb, nx, ny, nz, sd, band, ws_poly, res, seps)
+                else:
+                    m = _face_manifold(pb, pa, False, ma, mb, nx, ny, nz, sd, band, ws_poly, res, seps)
+                count = max(m, 1)
+        elif ka == CORE_BOX:  # a cylinder on a box face, standing or lying: its rim or side clipped
+            _, _, ca = _face_of(pa, nx, ny, nz)
+            if ca >= 1.0 - 0.5 * FACE_ALIGNMENT * FACE_ALIGNMENT:
+                m = _face_manifold(pa, pb, True, ma, mb, nx, ny, nz, sd, band, ws_poly, res, seps)
+                count = max(m, 1)
+    _pin = pa[0], pb[0], ws_s[0, 0, 0], ws_lam[0], ws_tmp[0], ws_poly[0, 0, 0], verts[0, 0, 0], faces[0, 0]
+    _pin2 = face_nd[0, 0], edges[0, 0], out[0], res[0, 0], seps[0]
+    return sd, nx, ny, nz, count
+
+
+_CORE_OF = (0, 0, 2, 3, 1)  # layout.SHAPE_* → CORE_* (SHAPE_NONE unused)
+
+
+@njit(**JIT)
+def pair_contacts(pos, quat, shapes, pairs, dist, normal, count, points, seps):
+    """Narrow phase over a batch: for each row (a, b) of ``pairs`` (M, 2) the contact of shapes a and b.
+
+    pos (N, 3): shape centres (world, m); quat (N, 4): q_WS (w, x, y, z); shapes (N, SHAPE_WIDTH)
+    shape rows (layout.py; SHAPE_NONE is not allowed). Writes dist (M,), normal (M, 3) from a to
+    b, count (M,), points (M, MAX_PAIR_POINTS, 6) (on a: 0:3, on b: 3:6, world, m) and seps
+    (M, MAX_PAIR_POINTS); see the module docstring.
+    """
+    poses = np.zeros((2, POSE_WIDTH))
+    out = np.empty(16)
+    poly = np.empty((2, 16, 3))
+    s, lam, verts, faces, face_nd, edges = make_workspace_jit()
+    tmp = np.empty(4)
+    res = np.empty((MAX_PAIR_POINTS, 6))
+    sp = np.empty(MAX_PAIR_POINTS)
+    pose_1, pose_2 = poses[0], poses[1]
+    for m in range(pairs.shape[0]):
+        a, b = pairs[m, 0], pairs[m, 1]
+        ka, kb = int(shapes[a, KIND]), int(shapes[b, KIND])
+        swap = _CORE_OF[ka] > _CORE_OF[kb]
+        first, second = (b, a) if swap else (a, b)
+        m1 = set_pose(int(shapes[first, KIND]), shapes[first, DIMS], shapes[first, DIMS + 1], shapes[first, DIMS + 2],
+                      pos[first, 0], pos[first, 1], pos[first, 2],
+                      quat[first, 0], quat[first, 1], quat[first, 2], quat[first, 3], pose_1)
+        m2 = set_pose(int(shapes[second, KIND]), shapes[second, DIMS], shapes[second, DIMS + 1],
+                      shapes[second, DIMS + 2], pos[second, 0], pos[second, 1], pos[second, 2],
+                      quat[second, 0], quat[second, 1], quat[second, 2], quat[second, 3], pose_2)
+        scale = max(max(shapes[a, DIMS], max(shapes[a, DIMS + 1], shapes[a, DIMS + 2])),
+                    max(shapes[b, DIMS], max(shapes[b, DIMS + 1], shapes[b, DIMS + 2])))
+        sd, nx, ny, nz, c = pair_contact(pose_1, m1, pose_2, m2, scale, s, lam, tmp, poly, verts, faces,
+                                         face_nd, edges, out, res, sp)
+        sgn = (-1.0 if swap else 1.0) / math.sqrt(nx * nx + ny * ny + nz * nz)
+        dist[m] = sd
+        normal[m, 0], normal[m, 1], normal[m, 2] = sgn * nx, sgn * ny, sgn * nz
+        count[m] = c
+        for k in range(c):
+            for j in range(3):
+                points[m, k, j] = res[k, 3 + j] if swap else res[k, j]
+                points[m, k, 3 + j] = res[k, j] if swap else res[k, 3 + j]
+            seps[m, k] = sp[k]
+
+
+@njit(**JIT)
+def make_workspace_jit():
+    """convex.make_workspace, inside compiled code."""
+    return (np.empty((3, 4, 3)), np.empty(4), np.empty((3, EPA_MAX_VERTICES, 3)),
+            np.empty((EPA_MAX_FACES, 3), np.int64), np.empty((EPA_MAX_FACES, 5)),
+            np.empty((3 * EPA_MAX_FACES, 2), np.int64))

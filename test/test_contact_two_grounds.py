@@ -1,0 +1,195 @@
+"""Bodies held by two ground half-spaces at once (core/contact/two_grounds.py), against closed forms.
+
+The groove: two half-spaces n·x ≥ 0 with normals n_A = (0, −sin β, cos β), n_B = (0, sin β, cos β),
+β = 45°: a right-angled V along x. Gravity g = 9.81 tilted by θ in the x–z plane, (g sin θ, 0,
+−g cos θ), so the crease runs downhill along +x. A body touching both faces and moving along the
+crease has the same acceleration along x as on an incline, with the normal forces of the two
+faces summing to m g cos θ / cos β (each m g cos θ / (2 cos β)):
+
+* frictionless, any shape: a = g sin θ;
+* a ball (r, I = ⅖ m r²) rolling without slipping on the two contact points, at r cos β below its
+  centre (the axis of rolling): a = g sin θ / (1 + ⅖ / cos² β);
+* a capsule lying along the crease, sliding with friction μ on both faces: a = g (sin θ − μ cos θ / cos β)
+  (it slides from rest when tan θ > μ / cos β).
+
+The corner: a level floor n = (0, 0, 1) and a wall n = (−1, 0, 0), x ≤ 1, gravity tilted by θ
+towards the wall. A ball (r = 0.1 m) launched on the floor at (0.5, 0.3, 0) m/s, frictionless,
+e = 0: it reaches the wall when 0.5 t + ½ g sin θ t² = 1 − r, stops against it (e = 0), and then
+slides along the crease at 0.3 m/s for ever, held by both.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from helpers import ORDER, loglog_slope
+
+from rigid_body_sim.core import Simulator
+from rigid_body_sim.core.scene import load_scene_text
+
+G = 9.81
+BETA = math.radians(45.0)
+C = math.cos(BETA)
+S45 = math.sqrt(0.5)
+
+
+def groove(theta: float, mu: float, body: str) -> str:
+    return f"""
+gravity: [{G * math.sin(theta)}, 0.0, {-G * math.cos(theta)}]
+ground:
+  - {{normal: [0, {-math.sin(BETA)}, {C}], offset: 0.0, material: {{restitution: 0.0, friction: {mu}}}}}
+  - {{normal: [0, {math.sin(BETA)}, {C}], offset: 0.0, material: {{restitution: 0.0, friction: {mu}}}}}
+bodies:
+{body}"""
+
+
+BALL = """  ball:
+    mass: 1.0
+    inertia: {sphere: 0.1}
+    pose: {position: [0.0, 0.0, %r]}
+""" % (0.1 / C + 1e-13)
+ROD = """  rod:
+    mass: 1.0
+    inertia: {cylinder: [0.05, 0.4]}
+    collision: {capsule: [0.05, 0.3]}
+    pose: {position: [0.0, 0.0, %r], orientation: [0, %r, 0, %r]}
+""" % (0.05 / C + 1e-13, S45, S45)
+
+
+def slide(scene_text: str, body: str, integrator: str, dt: float, seconds: float = 1.0) -> Simulator:
+    sim = Simulator(load_scene_text(scene_text, "groove"), integrator, dt)
+    assert sim.contact.is_resting(body) and sim.contact.other_ground[0] == 1  # held by both faces from the start
+    sim.step(int(round(seconds / dt)))
+    return sim
+
+
+def gaps(sim: Simulator, body: str) -> np.ndarray:
+    """The body's lowest gap to each half-space (m)."""
+    from rigid_body_sim.core.kernels.contact.layout import MAX_POINTS
+    from rigid_body_sim.core.kernels.contact.shapes import body_points
+
+    y = sim._Ys[sim._control[0]][0]
+    points, g = np.empty((MAX_POINTS, 3)), np.empty(MAX_POINTS)
+    out = []
+    for ground in sim.contact.grounds:
+        n = body_points(y, sim._prm[0], sim.contact.shapes[0], ground, points, g)
+        out.append(g[:n].min())
+    return np.array(out)
+
+
+def test_ball_resting_in_a_level_groove_stays_put_held_by_both_faces() -> None:
+    """Level crease (θ = 0), μ = 0.5, dt = 10 ms: no motion at all over 10 s (≤ 1e-12), on both faces (gap ≤ 1e-12),
+    held by m g straight up (the two faces' m g / (2 cos β) each, along their normals)."""
+    sim = slide(groove(0.0, 0.5, BALL), "ball", "rk4", 1e-2, seconds=10.0)
+    state = sim.body_state("ball")
+    assert np.linalg.norm(state.linear_velocity_world) <= 1e-12 and np.linalg.norm(state.angular_velocity_world) <= 1e-12
+    np.testing.assert_allclose(state.position_world, [0.0, 0.0, 0.1 / C], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(gaps(sim, "ball"), 0.0, atol=1e-12)
+    np.testing.assert_allclose(sim.contact.holding_forces[0], [0.0, 0.0, G], rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("integrator", ["rk4", "reference", "splitting", "symmetric_splitting"])
+def test_frictionless_ball_slides_down_the_crease_at_g_sin_theta(integrator) -> None:
+    theta = math.radians(20.0)
+    sim = slide(groove(theta, 0.0, BALL), "ball", integrator, 1e-3)
+    x = sim.body_state("ball").position_world
+    assert abs(x[0] / (0.5 * G * math.sin(theta)) - 1.0) <= 1e-9
+    np.testing.assert_allclose(x[1:], [0.0, 0.1 / C], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(gaps(sim, "ball"), 0.0, atol=1e-12)
+
+
+@pytest.mark.parametrize("integrator", ["rk4", "reference"])
+def test_ball_rolls_down_the_crease_on_its_two_contact_points(integrator) -> None:
+    """μ = 1 (the cone holds both points): a = g sin θ / (1 + ⅖ / cos² β), and ω = v / (r cos β) about y."""
+    theta = math.radians(20.0)
+    sim = slide(groove(theta, 1.0, BALL), "ball", integrator, 1e-3)
+    state = sim.body_state("ball")
+    a = G * math.sin(theta) / (1.0 + 0.4 / C**2)
+    assert abs(state.position_world[0] / (0.5 * a) - 1.0) <= 1e-9
+    assert abs(state.linear_velocity_world[0] / a - 1.0) <= 1e-9
+    np.testing.assert_allclose(state.angular_velocity_world, [0.0, a / (0.1 * C), 0.0], rtol=1e-9, atol=1e-12)
+    assert not sim.contact.sliding[0]
+
+
+@pytest.mark.parametrize("integrator", ["rk4", "reference", "splitting"])
+def test_capsule_slides_down_the_crease_with_friction_from_rest(integrator) -> None:
+    """θ = 30°, μ = 0.2 (tan θ = 0.577 > μ / cos β = 0.283: the cone cannot hold it, it starts to slide):
+    a = g (sin θ − μ cos θ / cos β), without turning."""
+    theta, mu = math.radians(30.0), 0.2
+    sim = slide(groove(theta, mu, ROD), "rod", integrator, 1e-3)
+    state = sim.body_state("rod")
+    a = G * (math.sin(theta) - mu * math.cos(theta) / C)
+    assert abs(state.position_world[0] / (0.5 * a) - 1.0) <= 1e-9
+    assert np.linalg.norm(state.angular_velocity_world) <= 1e-12
+    assert sim.contact.sliding[0]
+    np.testing.assert_allclose(gaps(sim, "rod"), 0.0, atol=1e-12)
+
+
+def test_capsule_sliding_down_the_crease_converges_at_first_order_with_semi_implicit_euler() -> None:
+    theta, mu = math.radians(30.0), 0.2
+    a = G * (math.sin(theta) - mu * math.cos(theta) / C)
+    dts = np.array([4e-3, 2e-3, 1e-3])
+    errors = [abs(slide(groove(theta, mu, ROD), "rod", "semi_implicit_euler", dt, 0.4).body_state("rod")
+                  .position_world[0] / (0.5 * a * 0.4**2) - 1.0) for dt in dts]
+    assert abs(loglog_slope(dts, np.array(errors)) - ORDER["semi_implicit_euler"]) < 0.1, errors
+
+
+def test_ball_sliding_into_a_wall_stops_against_it_and_slides_along_the_crease() -> None:
+    theta, r, v0 = math.radians(10.0), 0.1, 0.5
+    scene = f"""
+gravity: [{G * math.sin(theta)}, 0.0, {-G * math.cos(theta)}]
+ground:
+  - {{normal: [0, 0, 1], offset: 0.0, material: {{restitution: 0.0, friction: 0.0}}}}
+  - {{normal: [-1, 0, 0], offset: -1.0, material: {{restitution: 0.0, friction: 0.0}}}}
+bodies:
+  ball:
+    mass: 1.0
+    inertia: {{sphere: {r}}}
+    pose: {{position: [0.0, 0.0, {r}]}}
+    twist: {{linear: [{v0}, 0.3, 0]}}
+"""
+    sim = Simulator(load_scene_text(scene, "corner"), "rk4", 1e-3)
+    sim.step(2000)
+    a = G * math.sin(theta)
+    t_hit = (-v0 + math.sqrt(v0 * v0 + 2.0 * a * (1.0 - r))) / a
+    impacts = sim.contact.events_of("ball", "impact")
+    assert len(impacts) == 1 and impacts[0].ground == 1 and abs(impacts[0].time - t_hit) <= 1e-9
+    state = sim.body_state("ball")
+    np.testing.assert_allclose(state.position_world, [1.0 - r, 0.3 * 2.0, r], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(state.linear_velocity_world, [0.0, 0.3, 0.0], rtol=0, atol=1e-12)
+    assert sim.contact.other_ground[0] == 1 and sim.contact.counts["second_half_space"] == 1
+    np.testing.assert_allclose(gaps(sim, "ball"), 0.0, atol=1e-12)
+
+
+def test_box_sliding_into_a_wall_stops_against_it_and_slides_along_the_crease() -> None:
+    """The corner with a cube (0.2 m) instead of the ball: a face on each half-space is 8 contact points,
+    more than the rows hold together, so it is held on the floor and projected onto both after each step
+    (first order in the wall's force; frictionless here, so the closed form still holds): the impact when
+    0.5 t + ½ g sin θ t² = 0.9 m, then along the crease at 0.3 m/s, at (0.9, 0.3 t, 0.1) m."""
+    theta, v0 = math.radians(10.0), 0.5
+    scene = f"""
+gravity: [{G * math.sin(theta)}, 0.0, {-G * math.cos(theta)}]
+ground:
+  - {{normal: [0, 0, 1], offset: 0.0, material: {{restitution: 0.0, friction: 0.0}}}}
+  - {{normal: [-1, 0, 0], offset: -1.0, material: {{restitution: 0.0, friction: 0.0}}}}
+bodies:
+  crate:
+    mass: 1.0
+    inertia: {{box: [0.2, 0.2, 0.2]}}
+    pose: {{position: [0.0, 0.0, 0.1]}}
+    twist: {{linear: [{v0}, 0.3, 0]}}
+"""
+    sim = Simulator(load_scene_text(scene, "corner"), "rk4", 1e-3)
+    sim.step(2000)
+    a = G * math.sin(theta)
+    t_hit = (-v0 + math.sqrt(v0 * v0 + 2.0 * a * 0.9)) / a
+    impacts = sim.contact.events_of("crate", "impact")
+    assert len(impacts) == 1 and impacts[0].ground == 1 and abs(impacts[0].time - t_hit) <= 1e-9
+    state = sim.body_state("crate")
+    np.testing.assert_allclose(state.position_world, [0.9, 0.6, 0.1], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(state.linear_velocity_world, [0.0, 0.3, 0.0], rtol=0, atol=1e-12)
+    assert np.linalg.norm(state.angular_velocity_world) <= 1e-12
+    assert sim.contact.other_projected[0] and sim.contact.counts["two_ground_overflow"] >= 1
+    np.testing.assert_allclose(gaps(sim, "crate"), 0.0, atol=1e-12)
