@@ -288,11 +288,12 @@ from rclpy.node import Node
 rclpy.init()
 node = Node("subnet_peer")
 deadline = time.monotonic() + float(sys.argv[1])
+wanted = set(sys.argv[2:])
 seen = set()
-while time.monotonic() < deadline and "/box/pose" not in seen:
+while time.monotonic() < deadline and not wanted <= seen:
     rclpy.spin_once(node, timeout_sec=0.2)
     seen |= {name for name, _ in node.get_topic_names_and_types()}
-print("seen" if "/box/pose" in seen else "not seen")
+print(" ".join(sorted(wanted & seen)) or "none")
 """
 
 
@@ -319,38 +320,43 @@ def test_a_peer_on_the_subnet_does_not_discover_the_node_run_directly(tmp_path):
     """Before: run directly (not through `make run`, which exports the variable), the node was
     discoverable from the subnet. A peer whose only transport is the subnet interface (a Fast
     DDS profile allowing only it) does not discover the node started without
-    ROS_AUTOMATIC_DISCOVERY_RANGE; it does discover one started with SUBNET (so it could)."""
+    ROS_AUTOMATIC_DISCOVERY_RANGE; it does discover one started with SUBNET beside it (so it could)."""
     interface = network_interface()
     assert interface is not None, "this test needs a network interface besides loopback (the subnet a peer uses)"
     profile = tmp_path / "subnet_peer.xml"
     profile.write_text(SUBNET_PEER_PROFILE.format(interface=interface))
     peer_env = {**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": "SYSTEM_DEFAULT",
                 "FASTDDS_DEFAULT_PROFILES_FILE": str(profile)}
-    seen = {}
-    for label, node_range in (("run directly", None), ("asked for SUBNET", "SUBNET")):
-        log = tmp_path / f"node-{node_range}.log"
-        saved = os.environ.pop("ROS_AUTOMATIC_DISCOVERY_RANGE", None)
-        if node_range is not None:
-            os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = node_range
-        try:
-            process = start_process(["-p", "status_period:=0.0", "-p", "diagnostics_period:=0.0"], log)
-        finally:
-            os.environ.pop("ROS_AUTOMATIC_DISCOVERY_RANGE", None)
-            if saved is not None:
-                os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = saved
-        try:
-            deadline = time.monotonic() + START_TIMEOUT_S
+    # Both nodes at once, one per namespace; one peer looks for both for 8 s.
+    processes = {}
+    try:
+        for namespace, node_range in (("direct", None), ("subnet", "SUBNET")):
+            saved = os.environ.pop("ROS_AUTOMATIC_DISCOVERY_RANGE", None)
+            if node_range is not None:
+                os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = node_range
+            try:
+                processes[namespace] = start_process(["-r", f"__ns:=/{namespace}", "-p", "status_period:=0.0",
+                                                      "-p", "diagnostics_period:=0.0"], tmp_path / f"node-{namespace}.log")
+            finally:
+                os.environ.pop("ROS_AUTOMATIC_DISCOVERY_RANGE", None)
+                if saved is not None:
+                    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = saved
+        deadline = time.monotonic() + START_TIMEOUT_S
+        for namespace, process in processes.items():
+            log = tmp_path / f"node-{namespace}.log"
             while "scene " not in log.read_text():
                 assert process.poll() is None and time.monotonic() < deadline, log.read_text()
                 time.sleep(0.05)
-            peer = subprocess.run([sys.executable, "-c", SUBNET_PEER, "8"], capture_output=True, text=True,
-                                  env=peer_env, timeout=120)
-            seen[label] = peer.stdout.strip().splitlines()[-1] if peer.stdout.strip() else peer.stderr[-500:]
-        finally:
+        peer = subprocess.run([sys.executable, "-c", SUBNET_PEER, "8", "/direct/box/pose", "/subnet/box/pose"],
+                              capture_output=True, text=True, env=peer_env, timeout=120)
+        seen = peer.stdout.strip().splitlines()[-1] if peer.stdout.strip() else peer.stderr[-500:]
+    finally:
+        for process in processes.values():
             stop_process(process)
-    assert seen == {"run directly": "not seen", "asked for SUBNET": "seen"}, seen
-    assert "discovery range LOCALHOST" in (tmp_path / "node-None.log").read_text()  # it says which range it uses
-    assert "discovery range SUBNET" in (tmp_path / "node-SUBNET.log").read_text()
+    # run directly: not seen; asked for SUBNET: seen (so the peer could)
+    assert seen == "/subnet/box/pose", seen
+    assert "discovery range LOCALHOST" in (tmp_path / "node-direct.log").read_text()  # it says which range it uses
+    assert "discovery range SUBNET" in (tmp_path / "node-subnet.log").read_text()
 
 
 # ---------------------------------------------------------------------- limits at every door

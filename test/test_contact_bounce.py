@@ -89,7 +89,7 @@ def test_rk4_bounces_as_the_closed_form(dt):
     check_exact(*run("rk4", dt, 1.25))
 
 
-@pytest.mark.parametrize("dt", [1e-2, 1e-3, 1e-4])
+@pytest.mark.parametrize("dt", [1e-2, 1e-3, pytest.param(1e-4, marks=pytest.mark.slow)])  # 1e-4: 12,500 Python steps
 def test_reference_bounces_as_the_closed_form(dt):
     check_exact(*run("reference", dt, 1.25))
 

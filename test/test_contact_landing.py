@@ -214,7 +214,7 @@ def tip_tilt_max(omega: float) -> float:
     return TIP_BETA - math.acos((TIP_B / 2.0 + 0.5 * TIP_I * omega * omega / G) / TIP_R)
 
 
-def tipping_run(integrator: str, omega: float, dt: float = 1e-3, until: float = 2.5):
+def tipping_run(integrator: str, omega: float, dt: float = 1e-3, until: float = 1.6):
     """The box standing on its a × depth face, spun at ω about its bottom edge x = +a/2 (the edge at rest:
     v = ω × (c − edge)), μ = 1 (> the 0.324 the pivot needs), e = 0. Returns (sim, tilts sampled every step)."""
     data = {"gravity": [0.0, 0.0, -G],
@@ -233,7 +233,18 @@ def tipping_run(integrator: str, omega: float, dt: float = 1e-3, until: float = 
     return sim, np.array(tilts)
 
 
-@pytest.mark.parametrize("integrator", list(INTEGRATORS))
+#: The methods the Simulator steps in Python (no compiled ``code``: exact_rotor_splitting, and the adaptive
+#: reference): a tipping run or a three-step-size convergence fit with them takes 5-30 s of CPU, so
+#: their tipping runs are in ``make test-slow``; in the default run they land and bounce as the
+#: closed form (test_contact_bounce.py) and slide (test_contact_sliding.py).
+PYTHON_STEPPED = tuple(name for name, method in INTEGRATORS.items() if method.code is None)
+
+
+def slow_if_python_stepped(names):
+    return [pytest.param(name, marks=pytest.mark.slow) if name in PYTHON_STEPPED else name for name in names]
+
+
+@pytest.mark.parametrize("integrator", slow_if_python_stepped(INTEGRATORS))
 def test_box_spun_one_percent_below_the_tipping_threshold_falls_back(integrator):
     """At 0.99 ω_c it pivots on the edge up to the closed-form tilt, short of β = atan(a/b), falls back and
     ends at rest on the same face. rk4 and reference reach the closed-form largest tilt within 1e-6 rad
@@ -250,7 +261,7 @@ def test_box_spun_one_percent_below_the_tipping_threshold_falls_back(integrator)
     assert np.linalg.norm(sim.state.v_WC_W[0]) <= 1e-12
 
 
-@pytest.mark.parametrize("integrator", list(INTEGRATORS))
+@pytest.mark.parametrize("integrator", slow_if_python_stepped(INTEGRATORS))
 def test_box_spun_one_percent_above_the_tipping_threshold_tips_over(integrator):
     sim, tilts = tipping_run(integrator, 1.01 * TIP_OMEGA)
     assert tilts.max() > TIP_BETA
@@ -272,7 +283,12 @@ def pivot_energy_error(integrator: str, dt: float) -> float:
     return worst
 
 
-@pytest.mark.parametrize("integrator", FIXED_STEP_INTEGRATORS)
+#: The pivot's order in the default run: a first-order method (1) and rk4 (capped at 2); every other in test-slow.
+PIVOT_ORDER_DEFAULT = ("semi_implicit_euler", "rk4")
+
+
+@pytest.mark.parametrize("integrator", [name if name in PIVOT_ORDER_DEFAULT else pytest.param(name, marks=pytest.mark.slow)
+                                        for name in FIXED_STEP_INTEGRATORS])
 def test_pivoting_energy_error_converges_at_most_at_second_order(integrator):
     """Pivoting on an edge the energy is constant. The contact force is held over each step (zero-order
     hold, contact.md), which caps every method at order 2 here: observed min(p, 2) by a log-log fit over
@@ -285,7 +301,7 @@ def test_pivoting_energy_error_converges_at_most_at_second_order(integrator):
 @pytest.mark.xfail(strict=True, reason=(
     "the contact force held over a step makes the pivot second order: rk4's energy error while pivoting "
     "at 0.99 ω_c is 1.59e-6 relative at dt 1 ms (6.3e-6 at 2 ms, 4.0e-7 at 0.5 ms), reference's 1.59e-6"))
-@pytest.mark.parametrize("integrator", ["rk4", "reference"])
+@pytest.mark.parametrize("integrator", slow_if_python_stepped(["rk4", "reference"]))
 def test_pivoting_keeps_the_energy_to_1e_9_with_rk4_and_reference(integrator):
     assert pivot_energy_error(integrator, 1e-3) <= 1e-9
 

@@ -193,9 +193,12 @@ def test_a_long_tick_answers_reports_error_and_stops_at_a_substep(signum, tmp_pa
 # ---------------------------------------------------------------------- a long ~/step_ticks
 
 
-def test_a_signal_ends_step_ticks_and_the_recording_holds_every_message(tmp_path):
-    """``~/step_ticks`` 1,000,000 on one body while recording, then SIGINT: exit 0 within 1 s, the
-    answer logged with the ticks run, and the file complete, holding the count the node logged."""
+def test_the_node_answers_while_step_ticks_runs_and_a_signal_ends_it_with_every_message_recorded(tmp_path):
+    """``~/step_ticks`` 1,000,000 on one body while recording: while it runs, ``get_parameters``
+    answers within 1 s, /diagnostics keeps its 1 s period, ``~/set_paused`` and ``~/step`` answer
+    (busy, naming ``~/step_ticks``). (When the ticks ran inside the executor's callback, no answer
+    and no /diagnostics came until they ended.) Then SIGINT: exit 0 within 1 s, the answer logged
+    with the ticks run, and the file complete, holding the count the node logged."""
     scene = write_tumbling_scene(tmp_path / "one.yaml", 1)
     record, log = tmp_path / "ticks.mcap", tmp_path / "ticks.log"
     process = start_process(["-p", f"scene:={scene}", "-p", "paused:=true", "-p", "status_period:=0.0",
@@ -203,38 +206,6 @@ def test_a_signal_ends_step_ticks_and_the_recording_holds_every_message(tmp_path
     peer = Peer()
     try:
         wait_for_line(log, "recording to", process, 240)
-        step_ticks = peer.client(SetParameters, "/rigid_body_sim/step_ticks")
-        step_ticks.call_async(SetParameters.Request(parameters=[int_parameter("ticks", 1_000_000)]))
-        wait_until_busy(peer, process, 1.0)
-        took = stop_and_check(process, signal.SIGINT, log, record, what="SIGINT during ~/step_ticks 1,000,000")
-    finally:
-        kill_if_running(process)
-        peer.close()
-    text = log.read_text()
-    stopped = re.search(r"~/step_ticks stopped after (\d+) of 1000000 ticks at t = ([0-9.]+) s", text)
-    finished = re.search(r"recording finished: .* \((\d+) messages\)", text)
-    assert stopped and finished, text[-2000:]
-    ticks, t = int(stopped[1]), float(stopped[2])
-    data, _scene = read_recording(record)
-    assert data.meta["status"].startswith("complete"), data.meta["status"]
-    held = recorded_messages(record)
-    assert held == int(finished[1]), f"the node said {finished[1]} messages, the file holds {held}"
-    assert ticks > 0 and abs(data.time[-1] - t) < 1e-9, (ticks, t, data.time[-1])
-    print(f"\n~/step_ticks stopped after {ticks} ticks (t = {t} s); exit 0 {took:.2f} s after SIGINT; "
-          f"{held} messages logged and held")
-    assert took < 1.0, f"exit {took:.2f} s after SIGINT"
-
-
-def test_the_node_answers_while_step_ticks_runs(tmp_path):
-    """``~/step_ticks`` 1,000,000 on one body: while it runs, ``get_parameters`` answers within 1 s,
-    /diagnostics keeps its 1 s period, ``~/set_paused`` and ``~/step`` answer (busy, naming
-    ``~/step_ticks``); then SIGINT ends it, said on the log, with exit 0. (When the ticks ran
-    inside the executor's callback, no answer and no /diagnostics came until they ended.)"""
-    scene = write_tumbling_scene(tmp_path / "one.yaml", 1)
-    log = tmp_path / "answers.log"
-    process = start_process(["-p", f"scene:={scene}", "-p", "paused:=true", "-p", "status_period:=0.0"], log)
-    peer = Peer()
-    try:
         step_ticks = peer.client(SetParameters, "/rigid_body_sim/step_ticks")
         get_parameters = peer.client(GetParameters, "/rigid_body_sim/get_parameters")
         set_paused = peer.client(SetBool, "/rigid_body_sim/set_paused")
@@ -260,15 +231,23 @@ def test_the_node_answers_while_step_ticks_runs(tmp_path):
             assert not answer.success and "busy: ~/step_ticks has been running for" in answer.message, answer.message
             assert took < 1.5, f"{client.srv_name} answered in {took:.2f} s: {answer.message}"
         assert not ticks.done() and process.poll() is None
-        took = stop_and_check(process, signal.SIGINT, log, what="SIGINT during ~/step_ticks 1,000,000")
+        took = stop_and_check(process, signal.SIGINT, log, record, what="SIGINT during ~/step_ticks 1,000,000")
     finally:
         kill_if_running(process)
         peer.close()
-    stopped = re.search(r"~/step_ticks stopped after (\d+) of 1000000 ticks", log.read_text())
-    assert stopped and int(stopped[1]) > 0, log.read_text()[-2000:]
+    text = log.read_text()
+    stopped = re.search(r"~/step_ticks stopped after (\d+) of 1000000 ticks at t = ([0-9.]+) s", text)
+    finished = re.search(r"recording finished: .* \((\d+) messages\)", text)
+    assert stopped and finished, text[-2000:]
+    ticks_run, t = int(stopped[1]), float(stopped[2])
+    data, _scene = read_recording(record)
+    assert data.meta["status"].startswith("complete"), data.meta["status"]
+    held = recorded_messages(record)
+    assert held == int(finished[1]), f"the node said {finished[1]} messages, the file holds {held}"
+    assert ticks_run > 0 and abs(data.time[-1] - t) < 1e-9, (ticks_run, t, data.time[-1])
     print(f"\nduring ~/step_ticks: get_parameters in {min(latencies) * 1e3:.0f}-{max(latencies) * 1e3:.0f} ms "
-          f"({len(latencies)} calls), /diagnostics gaps up to {max(gaps):.2f} s; stopped after {stopped[1]} ticks, "
-          f"exit 0 {took:.2f} s after SIGINT")
+          f"({len(latencies)} calls), /diagnostics gaps up to {max(gaps):.2f} s; stopped after {ticks_run} ticks "
+          f"(t = {t} s), exit 0 {took:.2f} s after SIGINT; {held} messages logged and held")
     assert took < 1.0, f"exit {took:.2f} s after SIGINT"
 
 

@@ -161,7 +161,8 @@ def test_docs_table_is_generated_from_the_table():
 @pytest.mark.timeout(900)
 def test_a_misspelt_start_up_parameter_is_named_with_the_closest_valid_one(tmp_path):
     """``rate_hx:=200`` (and a misspelt key in a params file): the node process warns, naming it
-    and ``rate_hz``; valid names, rclpy's own and qos_overrides give no warning."""
+    and ``rate_hz``; valid names, rclpy's own and qos_overrides give no warning. The node starts
+    with the documented config/params.yaml and a whole number for a float parameter (``status_period:=0``)."""
     import time
 
     from rigid_body_sim.testing import start_process, stop_process
@@ -171,7 +172,8 @@ def test_a_misspelt_start_up_parameter_is_named_with_the_closest_valid_one(tmp_p
     log_path = tmp_path / "node.log"
     process = start_process(["-p", "rate_hx:=200", "-p", "status_period:=0", "-p", "use_sim_time:=false",
                              "-p", "qos_overrides./poses.publisher.depth:=3", "-p", "other_node:rate_hy:=1",
-                             "--params-file", str(params_file)], log_path)
+                             "--params-file", str(ROOT / "config" / "params.yaml"), "--params-file", str(params_file)],
+                            log_path)
     try:
         deadline = time.monotonic() + 600.0  # a fresh installation (colcon test) compiles the kernels first
         while "scene " not in log_path.read_text():

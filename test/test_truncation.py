@@ -3,7 +3,8 @@
 A recording is cut when its writer dies (SIGKILL, a crash), the disk fills up, or a copy stops
 half way: the file then ends at an arbitrary byte. Here a recording written by ``rigid-body-sim
 run --record`` and one written by the node process are each cut at 200 random byte offsets
-(and at the edges: inside the magic, the header, right after it, the last byte). Each cut file
+(40 in the default run; and at the edges: inside the magic, the header, right after it, the last
+byte). Each cut file
 must either read, with a status starting ``cut short``, exactly the samples that lie in the
 chunks written whole before the cut (worked out from the complete file's chunk index, with
 mcap's own reader) with the complete file's values, or, when no whole sample lies before the
@@ -129,7 +130,7 @@ def check_cuts(tmp_path: Path, full: Path, seed: int, cuts: int = CUTS) -> dict[
     return counts
 
 
-def check_plot_on_cuts(tmp_path: Path, full: Path, seed: int, n: int = 6) -> None:
+def check_plot_on_cuts(tmp_path: Path, full: Path, seed: int, n: int = 3) -> None:
     """``rigid-body-sim plot`` on cut files: exit 0 (with the cut-short warning) or 1, one line, no traceback."""
     data = full.read_bytes()
     rng = np.random.default_rng(seed)
@@ -153,21 +154,22 @@ def check_plot_on_cuts(tmp_path: Path, full: Path, seed: int, n: int = 6) -> Non
 @pytest.mark.timeout(300)
 @pytest.mark.parametrize("cuts", [pytest.param(40, id="40 cuts"), pytest.param(CUTS, id="200 cuts", marks=pytest.mark.slow)])
 def test_cli_recording_cut_anywhere_reads_up_to_the_cut(tmp_path: Path, cuts: int) -> None:
-    """The CLI's recording cut at random offsets (40 in the default run, 200 in the slow one; the
-    node's recording below is cut at 200 in every run)."""
+    """The CLI's recording cut at random offsets (40 in the default run, 200 in the slow one)."""
     scene = tmp_path / "scene.yaml"
     scene.write_text(yaml.safe_dump(SCENE), encoding="utf-8")
     full = tmp_path / "run.mcap"
     assert main(["run", str(scene), "--duration", "8", "--dt", "0.01", "--record", str(full), "--quiet"]) == 0
     counts = check_cuts(tmp_path, full, seed=1, cuts=cuts)
     assert counts["cuts"] == cuts + 9
-    check_plot_on_cuts(tmp_path, full, seed=2)
+    check_plot_on_cuts(tmp_path, full, seed=2, n=3 if cuts < CUTS else 6)
 
 
 @pytest.mark.ros
 @pytest.mark.timeout(300)
-def test_node_recording_cut_anywhere_reads_up_to_the_cut(tmp_path: Path) -> None:
-    """The node flushes a chunk every 0.5 s of wall time: 3 s of running gives several chunks."""
+@pytest.mark.parametrize("cuts", [pytest.param(40, id="40 cuts"), pytest.param(CUTS, id="200 cuts", marks=pytest.mark.slow)])
+def test_node_recording_cut_anywhere_reads_up_to_the_cut(tmp_path: Path, cuts: int) -> None:
+    """The node flushes a chunk every 0.5 s of wall time: 3 s of running gives several chunks
+    (cut at 40 random offsets in the default run, 200 in the slow one)."""
     scene = tmp_path / "scene.yaml"
     scene.write_text(yaml.safe_dump(SCENE), encoding="utf-8")
     full = tmp_path / "node.mcap"
@@ -190,9 +192,9 @@ def test_node_recording_cut_anywhere_reads_up_to_the_cut(tmp_path: Path) -> None
         if process.poll() is None:
             process.kill()
             process.wait()
-    counts = check_cuts(tmp_path, full, seed=3)
-    assert counts["cuts"] == CUTS + 9
-    check_plot_on_cuts(tmp_path, full, seed=4)
+    counts = check_cuts(tmp_path, full, seed=3, cuts=cuts)
+    assert counts["cuts"] == cuts + 9
+    check_plot_on_cuts(tmp_path, full, seed=4, n=3 if cuts < CUTS else 6)
 
 
 _FULL_DISK = """\
@@ -205,7 +207,9 @@ sys.exit(main(sys.argv[1:]))
 """
 
 
-@pytest.mark.parametrize("limit", [3_000, 40_000, 90_000, 150_000, 260_000])
+# in the header, inside the first 256 KiB chunk, after it; the other two sizes in test-slow
+@pytest.mark.parametrize("limit", [3_000, pytest.param(40_000, marks=pytest.mark.slow), 90_000,
+                                   pytest.param(150_000, marks=pytest.mark.slow), 260_000])
 def test_recordings_of_a_full_disk_read_up_to_where_the_disk_filled(tmp_path: Path, limit: int) -> None:
     """``run --record`` with the file size capped (a write fails with EFBIG, as on a full disk):
     the run says it could not write, and the recording it left reads up to the cut, as cut short."""
