@@ -59,7 +59,6 @@ from ..kernels.contact.layout import (
     SHAPE_WIDTH,
 )
 from .materials import DEFAULT_FRICTION, DEFAULT_RESTITUTION, pair_material
-from .static_geometry import check_not_inside_statics
 
 __all__ = ["ContactSpec", "read_contact", "apart_shapes", "without_contact_keys", "pair_material", "DEFAULT_RESTITUTION", "DEFAULT_FRICTION",
            "MAX_GROUNDS", "BODY_KEYS", "TOP_KEYS"]
@@ -211,6 +210,8 @@ def read_contact(check: Any, top: Mapping, model: Any, state: Any, *, apart: boo
         for j in range(g):
             restitution[i, j], friction[i, j] = pair_material(shapes[i], grounds[j])
     _check_not_inside(check, model, state, shapes, grounds)
+    from .static_geometry import check_not_inside_statics  # compiled: imported only when a scene has a ground
+
     check_not_inside_statics(check, model, state, shapes)
     if apart:
         _check_apart(check, model, state, shapes)
