@@ -42,7 +42,9 @@ def free_bodies(n: int, seed: int = 0) -> dict:
     for k in range(n):
         q = rng.normal(size=4)
         bodies[f"b{k}"] = {"mass": 1.0 + k % 3, "inertia": {"box": [1.0, 0.6, 0.4]},
-                           "pose": {"position": rng.normal(size=3).tolist(), "orientation": (q / np.linalg.norm(q)).tolist()},
+                           # 3 m apart along x: a scene with a ground refuses overlapping shapes
+                           "pose": {"position": (rng.normal(size=3) * 0.1 + [3.0 * k, 0.0, 0.0]).tolist(),
+                                    "orientation": (q / np.linalg.norm(q)).tolist()},
                            "twist": {"linear": rng.normal(size=3).tolist(), "angular": (2.0 * rng.normal(size=3)).tolist()},
                            "sites": {"tip": {"position": [0.5, 0.0, 0.0]}}}
     return bodies

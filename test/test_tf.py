@@ -84,6 +84,11 @@ def test_bodies_and_sites_on_tf_with_a_prefix():
         # The body-axes site is fixed in B: its offset in B is the scene's, whatever the principal axes.
         assert np.allclose([corner.transform.translation.x, corner.transform.translation.y,
                             corner.transform.translation.z], [0.5, 0.3, -0.2], rtol=0, atol=1e-15)
+        # The listener's subscription goes now, not when the collector gets to the executor-node cycle
+        # (test_nothing_built_while_nobody_listens needs a domain without a /tf subscriber).
+        executor.shutdown()
+        peer.destroy_node()
+        node.destroy_node()
     finally:
         rclpy.try_shutdown(context=context)
 
