@@ -10,7 +10,7 @@
 #   make bench-contact  contact beside MuJoCo and PyBullet (docs/contact_benchmarks.md; about 10 min)
 #   make clean      remove caches and build output (keeps .venv); make distclean also .venv
 #
-# Variables: PYTHON=/path/to/python3.11, PYTEST_ARGS="-k foo -x", RUN_ARGS="--ros-args ...",
+# Variables: PYTHON=/path/to/python3.11, PYTEST_ARGS="-k foo -x", TEST_WORKERS=auto|N|0, RUN_ARGS="--ros-args ...",
 # TEST_TIMEOUT_S / SLOW_TIMEOUT_S (wall-clock limit of the whole pytest run).
 
 SHELL := /bin/bash
@@ -134,8 +134,11 @@ browser-deps:
 	fi
 
 # --foreground: Ctrl-C still reaches pytest; SIGINT first so pytest prints its summary.
+# The test files run in TEST_WORKERS processes (pytest-xdist; one file stays in one process, with its
+# module fixtures; each process claims its own ROS_DOMAIN_ID). TEST_WORKERS=0: one process.
+TEST_WORKERS ?= auto
 test: $(STAMP) $(FOXGLOVE_STAMP) browser-deps
-	timeout --foreground -s INT -k 60 $(TEST_TIMEOUT_S) $(VENV_PY) -m pytest $(PYTEST_ARGS)
+	timeout --foreground -s INT -k 60 $(TEST_TIMEOUT_S) $(VENV_PY) -m pytest -n $(TEST_WORKERS) --dist loadfile $(PYTEST_ARGS)
 
 test-slow: $(STAMP)
 	@rc=0
