@@ -45,7 +45,7 @@ __all__ = ["PARALLEL", "MIN_BODIES", "PART_BODIES", "max_threads", "parts_of", "
 #: JIT with numba's parallel loops (``prange``).
 PARALLEL = {**JIT, "parallel": True}
 #: Moving bodies from which the step runs in parallel (benchmarks/threads.py measures where it starts to pay).
-MIN_BODIES = 4096
+MIN_BODIES = 8192
 #: Bodies per part: large enough that a part costs far more than its scheduling.
 PART_BODIES = 1024
 
