@@ -145,7 +145,7 @@ class Ours(Engine):
                            "ground": [{"normal": [0, 0, 1], "offset": 0.0,
                                        "material": {"restitution": body.restitution, "friction": body.friction}}],
                            "bodies": bodies}
-        self.sim = Simulator(load_scene(self.scene_data), integrator=integrator, dt=dt)
+        self.sim = Simulator(load_scene(self.scene_data), integrator=integrator, dt=dt, threads=1)  # as the peers run
         self._saved = None
 
     def step(self, k: int) -> None:

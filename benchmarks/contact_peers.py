@@ -409,8 +409,9 @@ def measure_free(quick: bool, baseline: str | None, log) -> list[dict]:
     """Body-steps/s at N = FREE_BODIES: no ground key vs a ground with no collision body (vs ``baseline``'s core)."""
     from .throughput import DT, MAX_STEPS_PER_SAMPLE, scene as free_scene
 
-    plain = Simulator(free_scene(FREE_BODIES), integrator="rk4", dt=DT)
-    grounded = Simulator(_no_collision_scene(FREE_BODIES), integrator="rk4", dt=DT)
+    # one thread, as the core before contact ran (the parallel step would make this a threads benchmark)
+    plain = Simulator(free_scene(FREE_BODIES), integrator="rk4", dt=DT, threads=1)
+    grounded = Simulator(_no_collision_scene(FREE_BODIES), integrator="rk4", dt=DT, threads=1)
     assert grounded.contact is None, "a scene without collision geometry must run the contact-free step"
     cases = [Case(("no ground key", "this checkout"), plain.step, plain.reset, MAX_STEPS_PER_SAMPLE),
              Case(("ground, every body collision: none", "this checkout"), grounded.step, grounded.reset,
