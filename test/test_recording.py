@@ -402,8 +402,10 @@ def test_cdr_encoder_writes_the_bytes_rclpy_writes() -> None:
         # same layout (the middleware leaves its alignment padding unset, so compare all else)
         assert len(ours) == len(theirs) and ours[:4] == theirs[:4], type_name
         assert deserialize_message(ours, msg_type) == message, type_name
+        # Padding only: where the bytes differ, ours are zero (the middleware leaves its padding as the
+        # memory held it, so how many differ varies from run to run), and the decode above is equal.
         differing = [i for i in range(len(ours)) if ours[i] != theirs[i]]
-        assert all(ours[i] == 0 for i in differing) and len(differing) < 8, (type_name, differing)  # padding only
+        assert all(ours[i] == 0 for i in differing), (type_name, differing)
 
 
 def _ros_message(msg_type: Any, fields: dict[str, Any]) -> Any:
