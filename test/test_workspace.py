@@ -57,13 +57,13 @@ def copy_kernel_cache(package_dir: Path) -> None:
     """Copy the checkout's compiled numba kernels beside ``package_dir``'s core (same sources),
     with the stamp of the sources they were compiled from (core/kernels/jit.py keeps a cache only with
     its stamp)."""
-    from rigid_body_sim.core.kernels.jit import STAMP_NAME
+    from rigid_body_sim.core.kernels.jit import COMPLETE_NAME, STAMP_NAME
 
     kernels = ROOT / PACKAGE / "core" / "kernels"
     for cache in [kernels / "__pycache__", *(p for p in kernels.rglob("__pycache__") if p.parent != kernels)]:
         target = package_dir / cache.relative_to(ROOT / PACKAGE)
         target.mkdir(parents=True, exist_ok=True)
-        for path in [*cache.glob("*.nbi"), *cache.glob("*.nbc"), *cache.glob(STAMP_NAME)]:
+        for path in [*cache.glob("*.nbi"), *cache.glob("*.nbc"), *cache.glob(STAMP_NAME), *cache.glob(COMPLETE_NAME)]:
             shutil.copy2(path, target / path.name)
 
 
@@ -77,6 +77,9 @@ def make_workspace(base: Path, *, kernel_cache: bool) -> Path:
         shutil.copy2(path, target)
     if kernel_cache:
         copy_kernel_cache(src / PACKAGE)
+    modules = ROOT / "test" / "foxglove" / "node_modules"  # Foxglove's readers (make foxglove-deps; git ignores them)
+    if modules.is_dir():
+        (src / "test" / "foxglove" / "node_modules").symlink_to(modules, target_is_directory=True)
     return base
 
 
