@@ -36,7 +36,7 @@ from ..layout import INERTIA, INV_INERTIA, INV_MASS, MASS, P, Q, V, W
 from ..rotation import rotate_back
 from .layout import MAX_POINTS
 
-__all__ = ["IMPACT_WORK_SHAPE", "PGS_MAX_SWEEPS", "PGS_TOLERANCE", "tangents", "build_rows", "pgs",
+__all__ = ["IMPACT_WORK_SHAPE", "restitution", "PGS_MAX_SWEEPS", "PGS_TOLERANCE", "tangents", "build_rows", "pgs",
            "kinetic_energy_row", "apply_impulses", "impact"]
 
 _OPTS = {"cache": True, "nogil": True, "error_model": "numpy"}
@@ -191,6 +191,29 @@ def apply_impulses(y0, y, p, work, rows, column, scale):
 
 
 @njit(**_OPTS)
+def restitution(work, rows, linear, before, compressed, e):
+    """The restitution of an impact, capped so that the energy never rises: α ≤ e scaling the
+    normal multipliers saved in ``work[:, _SAVED]``, with E(α) = E1 + α·linear + ½ α² λ_nᵀ A λ_n
+    ≤ ``before`` (E1 = ``compressed``, ``linear`` = λ_nᵀ u1, u1 the normal velocities after the
+    compression). Adds α λ_n to ``work[:, _LAM]``; returns (α, Σ (1 + α) λ_n). For one body
+    against the ground (:func:`impact`) and for two bodies (pair_impacts.py)."""
+    quadratic = 0.0
+    for a in range(0, rows, 3):
+        for b in range(0, rows, 3):
+            quadratic += work[a, _SAVED] * work[a, _A + b] * work[b, _SAVED]
+    alpha = e
+    if quadratic > 0.0:
+        room = max(0.0, before - compressed)
+        largest = (-linear + math.sqrt(max(0.0, linear * linear + 2.0 * quadratic * room))) / quadratic
+        alpha = min(e, max(0.0, largest))
+    total = 0.0
+    for a in range(0, rows, 3):
+        total += (1.0 + alpha) * work[a, _LAM]
+        work[a, _LAM] += alpha * work[a, _SAVED]
+    return alpha, total
+
+
+@njit(**_OPTS)
 def impact(y0, y, p, count, points, nx, ny, nz, e, mu, work):
     """y ← y0 after the impact of ``count`` simultaneous contacts (the law in the module docstring).
 
@@ -214,23 +237,12 @@ def impact(y0, y, p, count, points, nx, ny, nz, e, mu, work):
     # restitution: the normal multipliers only, scaled by e (Poisson), capped so that E never rises
     for a in range(rows):
         work[a, _SAVED] = work[a, _LAM] if a % 3 == 0 else 0.0
-    linear = 0.0  # E(α) = E1 + α λ_nᵀ u1 + ½ α² λ_nᵀ A λ_n
-    quadratic = 0.0
+    linear = 0.0  # λ_nᵀ u1
     for a in range(0, rows, 3):
         u1 = (work[a, _LIN] * y[V] + work[a, _LIN + 1] * y[V + 1] + work[a, _LIN + 2] * y[V + 2]
               + work[a, _ANG] * y[W] + work[a, _ANG + 1] * y[W + 1] + work[a, _ANG + 2] * y[W + 2])
         linear += work[a, _SAVED] * u1
-        for b in range(0, rows, 3):
-            quadratic += work[a, _SAVED] * work[a, _A + b] * work[b, _SAVED]
-    alpha = e
-    if quadratic > 0.0:
-        room = max(0.0, before - compressed)
-        largest = (-linear + math.sqrt(max(0.0, linear * linear + 2.0 * quadratic * room))) / quadratic
-        alpha = min(e, max(0.0, largest))
-    total = 0.0
-    for a in range(0, rows, 3):
-        total += (1.0 + alpha) * work[a, _LAM]
-        work[a, _LAM] += alpha * work[a, _SAVED]
+    alpha, total = restitution(work, rows, linear, before, compressed, e)
     apply_impulses(y0, y, p, work, rows, _LAM, 1.0)
     after = kinetic_energy_row(y, p)
     if after > before:  # round-off of the cap: take the compression alone

@@ -15,14 +15,13 @@ world axes (m). ``jac`` is the caller's scratch (3 MAX_POINTS, 12), ``work`` imp
 
 from __future__ import annotations
 
-import math
 
 from numba import njit
 
 from ..jit import JIT
 from ..layout import INV_INERTIA, INV_MASS, P, Q, V, W
 from ..rotation import rotate_back
-from .impacts import _A, _B, _LAM, _SAVED, kinetic_energy_row, pgs, tangents
+from .impacts import _A, _B, _LAM, _SAVED, kinetic_energy_row, pgs, restitution, tangents
 from .layout import MAX_POINTS
 
 __all__ = ["PAIR_JACOBIAN_SHAPE", "pair_rows", "pair_impact"]
@@ -117,24 +116,13 @@ def pair_impact(y0a, ya, pa, y0b, yb, pb, count, points, nx, ny, nz, e, mu, jac,
     # restitution: the normal multipliers scaled by α ≤ e, E(α) = E1 + α λ_nᵀ u1 + ½ α² λ_nᵀ A λ_n ≤ E0
     for a in range(rows):
         work[a, _SAVED] = work[a, _LAM] if a % 3 == 0 else 0.0
-    linear = 0.0
-    quadratic = 0.0
+    linear = 0.0  # λ_nᵀ u1
     for a in range(0, rows, 3):
         u1 = 0.0
         for j in range(3):
             u1 += jac[a, j] * ya[V + j] + jac[a, 3 + j] * ya[W + j] + jac[a, 6 + j] * yb[V + j] + jac[a, 9 + j] * yb[W + j]
         linear += work[a, _SAVED] * u1
-        for b in range(0, rows, 3):
-            quadratic += work[a, _SAVED] * work[a, _A + b] * work[b, _SAVED]
-    alpha = e
-    if quadratic > 0.0:
-        room = max(0.0, before - compressed)
-        largest = (-linear + math.sqrt(max(0.0, linear * linear + 2.0 * quadratic * room))) / quadratic
-        alpha = min(e, max(0.0, largest))
-    total = 0.0
-    for a in range(0, rows, 3):
-        total += (1.0 + alpha) * work[a, _LAM]
-        work[a, _LAM] += alpha * work[a, _SAVED]
+    alpha, total = restitution(work, rows, linear, before, compressed, e)
     _apply(y0a, ya, pa, y0b, yb, pb, jac, work, rows, _LAM)
     after = _energy(ya, pa, yb, pb)
     if after > before:  # round-off of the cap: the compression alone
