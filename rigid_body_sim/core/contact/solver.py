@@ -72,6 +72,7 @@ from ..kernels.contact.persistent import (
     normal_speeds,
     project,
 )
+from ..kernels.contact.stage import hold_in_row, stage_rows, stepped_by_integrator
 from ..kernels.contact.shapes import (
     FEATURE_BAND,
     MAX_FEATURES,
@@ -138,6 +139,8 @@ class ContactSolver:
         self.sliding = np.zeros(n, dtype=bool)
         self.slide_direction = np.zeros((n, 2))
         self._bare_rows = np.zeros((n, L.WRENCH_WIDTH))  # each body's wrench row before its holding force
+        self._held_rows = np.zeros((n, L.WRENCH_WIDTH))  # a staged body's row with the step start's holding force
+        self._staged = np.zeros(n, dtype=np.int64)  # 1: the body's row carries its contact to every stage (stage.py)
         self._anchors = np.zeros((MAX_POINTS, 3))  # normal_bias: the body points the contact forces act at
         # the features (shapes.feature_gaps) touching the ground in persistent contact, as bits
         self.tracked = np.zeros(n, dtype=np.int64)
@@ -151,7 +154,7 @@ class ContactSolver:
         self._rdot = np.zeros((MAX_POINTS, 3))
         self.pressed = np.zeros(n, dtype=np.int64)  # the tracked features the holding force pushes on, as bits
         self.events: list[ContactEvent] = []
-        #: Per body, the contact force (N, world axes) held over the last step (zero while not resting).
+        #: Per body, the contact force (N, world axes) found at the last step's start (zero while not resting).
         self.holding_forces = np.zeros((n, 3))
         #: Per body, Σ holding force × step (N·s, world axes) since the solver was made (impacts not included).
         self.holding_impulses = np.zeros((n, 3))
@@ -365,6 +368,7 @@ class ContactSolver:
         resting = self.bodies[(self.modes[self.bodies] == PERSISTENT) & ~sim._stopped[self.bodies]]
         self.holding_forces[:] = 0.0
         self._locked[:] = 0
+        self._staged[:] = 0
         if not resting.size:
             return
         two = resting[self.other_ground[resting] >= 0]  # held on two half-spaces: two_grounds.py
@@ -377,7 +381,7 @@ class ContactSolver:
                  SLIP_TOLERANCE, LIFT_OFF_SPEED, TOUCHING_GAP, self._bare_rows, self.pressed,
                  self.sliding, self.slide_direction, self._status, self._locked, self._hold_cache)
         for i in one[self._status[one] != OK]:  # lifting off: the solver says so and records it
-            self._hold(sim, Y[i], i, wrenches[i], sim.time)
+            self._hold(sim, Y[i], i, wrenches[i], sim.time, stages=False)
         for i in two:
             self._hold(sim, Y[i], i, wrenches[i], sim.time)
         held = resting[self.modes[resting] == PERSISTENT]
@@ -386,9 +390,19 @@ class ContactSolver:
         self.holding_impulses[held] += self.holding_forces[held] * sim.dt
         if self.track_torques:
             self.holding_angular_impulses[held] += _torques_about_com(Y[held], added) * sim.dt
+        if sim._method.derivative_stages:  # the force found at every stage instead (stage.py)
+            one = one[self.modes[one] == PERSISTENT]
+            stage_rows(wrenches, self._bare_rows, self._held_rows, Y, sim._prm, self.shapes, self.grounds, one,
+                       self.ground_of, self.tracked, self.friction, self.sliding, self.slide_direction, SLIP_TOLERANCE,
+                       self._locked, self._staged)
 
-    def _hold(self, sim, y: np.ndarray, i: int, w: np.ndarray, t: float) -> bool:
-        """Add the holding force of body i at y into the wrench row w; False (and flight) if it lifts off."""
+    def _hold(self, sim, y: np.ndarray, i: int, w: np.ndarray, t: float, stages: bool = True) -> bool:
+        """Add the holding force of body i at y into the wrench row w; False (and flight) if it lifts off.
+
+        With ``stages`` and an integrator that evaluates dynamics.derivative at every stage, a body
+        on one half-space stepped by it gets instead its contact in the row, found at every stage
+        (kernels/contact/stage.py; the row with the force found here kept in ``_held_rows``).
+        """
         if self.other_ground[i] >= 0 and not self.other_projected[i]:
             return two_grounds.hold(self, sim, y, i, w, t, LIFT_OFF_SPEED, TOUCHING_GAP, SLIP_TOLERANCE)
         j = int(self.ground_of[i])
@@ -412,6 +426,12 @@ class ContactSolver:
         self.pressed[i] = int(sum(1 << int(self._owners[c]) for c in range(count) if lam[c] > 0.0))
         self._bare_rows[i] = w
         add_contact_wrench(w, y, sim._prm[i], count, self._points, self._anchors, self._work)
+        if (stages and sim._method.derivative_stages and j < len(self.half_spaces) and self.other_ground[i] < 0
+                and stepped_by_integrator(sim._prm[i])):
+            self._held_rows[i] = w
+            hold_in_row(w, self._bare_rows[i], y, sim._prm[i], self.shapes[i], self.grounds[j], int(self.tracked[i]),
+                        float(self.friction[i, j]), mode, sx, sy, SLIP_TOLERANCE)
+            self._staged[i] = 1
         return True
 
     def _painleve(self, count: int, mu: float, sx: float, sy: float) -> bool:

@@ -402,7 +402,11 @@ class Method:
     ``step`` the compiled per-body step ``step(y, out, p, w, dt, k)`` (None: a numpy/scipy
     method the Simulator runs group by group, core/integrators.py: exact_rotor_splitting,
     reference); ``code`` its position in :data:`COMPILED`, the number stepping.integrate
-    dispatches on (None with ``step``).
+    dispatches on (None with ``step``). ``derivative_stages``: every stage evaluates
+    dynamics.derivative from its own state, so a persistent contact carried in the wrench row
+    (layout.HELD) is found at every stage (kernels/contact/stage.py); the other methods
+    evaluate the forces on a frozen pose (kicks) and are given the contact force found at the
+    step's start.
     """
 
     name: str
@@ -410,13 +414,15 @@ class Method:
     step: Any
     summary: str
     code: int | None = None
+    derivative_stages: bool = False
 
 
 #: Every integrator, by name: the one place to add one. A compiled one is a per-body step
 #: function (as above) in a row here; stepping.py builds its loop over bodies from the row.
 INTEGRATORS: dict[str, Method] = {}
 for _method in (
-    Method("euler", 1, euler, "explicit Euler with the gyroscopic term; q += dq·dt, then normalised"),
+    Method("euler", 1, euler, "explicit Euler with the gyroscopic term; q += dq·dt, then normalised",
+           derivative_stages=True),
     Method("semi_implicit_euler", 1, semi_implicit_euler,
            "velocities first, then positions; orientation by the exponential map"),
     Method("implicit_gyroscopic", 2, implicit_gyroscopic,
@@ -426,8 +432,9 @@ for _method in (
            "half kicks around an exact symmetric top and a one-axis remainder"),
     Method("exact_rotor_splitting", 2, None, "half kicks around the exact free-rotor flow (elliptic functions): "
                                              "exact when torque-free, at any |ω|·dt"),
-    Method("rk4", 4, rk4, "classic fourth-order Runge–Kutta, forces evaluated at every stage"),
-    Method("reference", None, None, "scipy DOP853 at tight tolerances (the accuracy end)"),
+    Method("rk4", 4, rk4, "classic fourth-order Runge–Kutta, forces evaluated at every stage",
+           derivative_stages=True),
+    Method("reference", None, None, "scipy DOP853 at tight tolerances (the accuracy end)", derivative_stages=True),
 ):
     _code = None if _method.step is None else sum(m.step is not None for m in INTEGRATORS.values())
     INTEGRATORS[_method.name] = replace(_method, code=_code)

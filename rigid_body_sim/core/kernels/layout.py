@@ -25,7 +25,14 @@ Wrench row (``WRENCH_WIDTH`` floats per body)
     ``SITE_MOMENT``            Σ f_W ⊗ r_P (3 × 3, row-major) over world-axes sites: the
                                moment Σ (R r_P) × f_W of forces fixed in world axes at
                                body-fixed points, which turns with the body.
-    ``ACTIVE``                 non-zero if anything was added to the row.
+    ``HELD`` …                 persistent contact evaluated at every stage (dynamics.derivative,
+                               kernels/contact/stage.py): ``HELD`` its mode (0 none, else
+                               persistent.STICK or SLIDE), ``HELD_SHAPE`` the body's shape
+                               (kind, 3 dims: contact/layout.py's shape row), ``HELD_GROUND``
+                               the plane (normal, offset), ``HELD_FEATURES`` the tracked
+                               features (bits), ``HELD_MU`` the friction, ``HELD_SLIDE`` the
+                               slip direction (t1, t2) at the step's start.
+    ``ACTIVE``                 non-zero if anything was added to the row (the last column).
 
 Parameter row (``PRM_WIDTH`` floats per body, ``core/stepping.pack_parameters``)
     Mass properties, damping, gravity as the body's motion allows it, the energy-bound
@@ -42,7 +49,8 @@ from __future__ import annotations
 
 __all__ = [
     "P", "Q", "V", "W", "STATE_WIDTH", "BOUND", "ROW_WIDTH",
-    "F_WORLD", "T_WORLD", "F_COM_W", "T_COM_W", "F_COM_P", "T_COM_P", "SITE_MOMENT", "ACTIVE", "WRENCH_WIDTH",
+    "F_WORLD", "T_WORLD", "F_COM_W", "T_COM_W", "F_COM_P", "T_COM_P", "SITE_MOMENT", "HELD", "HELD_SHAPE", "HELD_GROUND",
+    "HELD_FEATURES", "HELD_MU", "HELD_SLIDE", "ACTIVE", "WRENCH_WIDTH",
     "FRAME_WORLD", "FRAME_BODY", "FRAME_WORLD_ALIGNED", "FRAME_SITE_BODY_AXES", "FRAME_SITE_WORLD_AXES",
 ]
 
@@ -60,8 +68,14 @@ T_COM_W = 9
 F_COM_P = 12
 T_COM_P = 15
 SITE_MOMENT = 18  # 9 columns, M[j, l] at SITE_MOMENT + 3 j + l
-ACTIVE = 27
-WRENCH_WIDTH = 28
+HELD = 27  # 0: no held contact; else persistent.STICK or SLIDE
+HELD_SHAPE = 28  # 4 columns: KIND, DIMS (3) of the body's shape row (kernels/contact/layout.py)
+HELD_GROUND = 32  # 4 columns: the plane's unit normal (world axes) and offset (m)
+HELD_FEATURES = 36  # the tracked features (shapes.feature_points' mask), as bits
+HELD_MU = 37  # Coulomb friction coefficient
+HELD_SLIDE = 38  # 2 × 4 columns (contact/layout.MAX_POINTS): each contact's slip direction (t1, t2), step start
+ACTIVE = 46
+WRENCH_WIDTH = 47
 
 #: How a frame's origin and axes relate to its body (core/frames.parse_frame; forces.add_wrench).
 FRAME_WORLD = 0  # world origin, world axes

@@ -8,7 +8,8 @@ of a rigid body,
     a_site = a_C + ω̇ × r + ω × (ω × r),        specific force = a_site − g,
 
 with a_C and ω̇ those the body's model gives it at its state under the wrenches of the step it
-just took (dynamics.derivative, and the constraints of static, kinematic, planar and
+just took (dynamics.derivative — with a persistent contact carried in the wrench row, its
+force found at the state read — and the constraints of static, kinematic, planar and
 translation-only bodies: a body that cannot move has a = 0, so at rest it reads +g upward).
 A site's axes are the body's axes B, or world axes if the site says ``axes: world``.
 Noise, bias and rates belong to the sensor model that uses these readings.
@@ -18,12 +19,14 @@ from __future__ import annotations
 
 from numba import njit
 
+from .contact.stage import held_acceleration
 from .dynamics import angular_acceleration
 from .forces import body_wrench
 from .jit import INLINE, JIT
 from .layout import (
     DAMP_ANG,
     DAMP_LIN,
+    HELD,
     INERTIA_NORMAL,
     INV_MASS,
     MODEL,
@@ -57,6 +60,8 @@ def body_acceleration(y, p, w):
     rate = p[DAMP_LIN] * inv_m
     ax, ay, az = fx * inv_m - rate * y[V], fy * inv_m - rate * y[V + 1], fz * inv_m - rate * y[V + 2]
     bx, by, bz = angular_acceleration(p, y[W], y[W + 1], y[W + 2], tx, ty, tz)
+    if w[HELD] != 0.0:  # a persistent contact carried in the row: its force at this state (contact/stage.py)
+        ax, ay, az, bx, by, bz = held_acceleration(y, p, w, ax, ay, az, bx, by, bz)
     if model == MODEL_STATIC or model == MODEL_KINEMATIC:
         ax, ay, az, bx, by, bz = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     elif model == MODEL_TRANSLATION:

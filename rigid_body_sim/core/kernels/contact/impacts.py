@@ -30,13 +30,14 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 from ..layout import INERTIA, INV_INERTIA, INV_MASS, MASS, P, Q, V, W
 from ..rotation import rotate_back
 from .layout import MAX_POINTS
 
-__all__ = ["IMPACT_WORK_SHAPE", "restitution", "PGS_MAX_SWEEPS", "PGS_TOLERANCE", "tangents", "build_rows", "pgs",
+__all__ = ["IMPACT_WORK_SHAPE", "restitution", "PGS_MAX_SWEEPS", "PGS_TOLERANCE", "tangents", "build_rows", "pgs", "pgs_each",
            "kinetic_energy_row", "apply_impulses", "impact"]
 
 _OPTS = {"cache": True, "nogil": True, "error_model": "numpy"}
@@ -125,14 +126,25 @@ def pgs(work, count, mu, sx, sy):
     which case λ_t = −μ λ_n s and the normal update accounts for it. Stops when no
     multiplier moves by more than PGS_TOLERANCE × their size. Returns the sweeps done.
     """
+    directions = np.empty((work.shape[0] // 3, 2))
+    for c in range(count):
+        directions[c, 0], directions[c, 1] = sx, sy
+    return pgs_each(work, count, mu, directions)
+
+
+@njit(**_OPTS)
+def pgs_each(work, count, mu, directions):
+    """:func:`pgs` with a slip direction per contact: contact c slides along ``directions[c]`` (t1, t2), or
+    sticks inside the cone where both are zero."""
     rows = 3 * count
-    sliding = sx != 0.0 or sy != 0.0
     sweeps = 0
     for sweeps in range(1, PGS_MAX_SWEEPS + 1):
         change = 0.0
         size = 0.0
         for c in range(count):
             n, t1, t2 = 3 * c, 3 * c + 1, 3 * c + 2
+            sx, sy = directions[c, 0], directions[c, 1]
+            sliding = sx != 0.0 or sy != 0.0
             u = _row_velocity(work, rows, n)
             if sliding and mu > 0.0:
                 diag = work[n, _A + n] - mu * (work[n, _A + t1] * sx + work[n, _A + t2] * sy)

@@ -3,7 +3,7 @@
 A body at rest on the ground (or sliding, or rolling on it) is held by contact forces found at
 the acceleration level at the start of each step: with a_c the acceleration of each contact
 point under everything else (gravity, applied and scripted wrenches, the gyroscopic term —
-dynamics.derivative), the normal forces f_n ≥ 0 make the normal accelerations ≥ 0 with
+newton_euler.free_derivative), the normal forces f_n ≥ 0 make the normal accelerations ≥ 0 with
 f_n a_n = 0; friction is −μ f_n ŝ along the slip ŝ while the contact slides, and otherwise
 whatever keeps the tangential acceleration zero inside the cone |f_t| ≤ μ f_n (projected
 Gauss–Seidel, impacts.pgs, on the same contact rows as the impact law). The force is added to
@@ -24,7 +24,7 @@ import math
 
 from numba import njit
 
-from ..dynamics import derivative
+from ..newton_euler import free_derivative
 from ..forces import add_wrench
 from ..layout import FRAME_SITE_WORLD_AXES, INV_INERTIA, INV_MASS, P, Q, Q_PB, V, W
 from ..rotation import exp_map, normalise, qmul, rotate, rotate_back
@@ -32,7 +32,7 @@ from .impacts import _A, _ANG, _B, _LAM, _LIN, _row_velocity, apply_impulses, bu
 from .layout import DIMS, KIND, NORMAL, SHAPE_CAPSULE, SHAPE_CYLINDER, SHAPE_SPHERE
 from .shapes import FEATURE_BAND, feature_points
 
-__all__ = ["LIFT_OFF", "STICK", "SLIDE", "START_SLIDE_ACCELERATION", "add_contact_wrench", "accelerations", "normal_bias", "normal_motion", "holding_wrench", "project",
+__all__ = ["LIFT_OFF", "STICK", "SLIDE", "START_SLIDE_ACCELERATION", "add_contact_wrench", "accelerations", "accelerations_from", "normal_bias", "normal_motion", "holding_wrench", "project",
            "normal_speeds", "slip_velocity"]
 
 _OPTS = {"cache": True, "nogil": True, "error_model": "numpy"}
@@ -59,16 +59,27 @@ def accelerations(y, p, w, count, rows, points, bias, rdot, work, d):
     """work[:, B] ← the rows' components of the contact points' accelerations without contact force.
 
     a_c = a + α × r (+ ω × (ω × r) when the contact points are ``vertex`` es, fixed in the body:
-    box corners) from dynamics.derivative at y under the wrench row ``w`` (gravity, applied
-    and scripted wrenches, damping, the gyroscopic term); ``d`` is a 13-float scratch. On a
-    curved surface (sphere, the round side of a cylinder or capsule) the contact point moves
-    over the body as it rolls, and the surface's curvature cancels the centripetal term in the
-    gap's second derivative (exactly for a sphere: gap = n·c − r, so g̈ = n·a), so it is left out.
+    box corners) from the Newton–Euler equations at y under the wrench row ``w`` (gravity,
+    applied and scripted wrenches, damping, the gyroscopic term — newton_euler.free_derivative,
+    into ``d``, a 13-float scratch): :func:`accelerations_from`. The rows (build_rows) must be
+    built for y.
+    """
+    free_derivative(y, p, w, d)
+    accelerations_from(y, count, rdot, bias, work, d)
+    _pin = y[P], p[0], w[0], d[0], points[0, 0], bias[0], rdot[0, 0]
+
+
+@njit(**_OPTS)
+def accelerations_from(y, count, rdot, bias, work, d):
+    """work[:, B] ← the rows' components of the contact points' accelerations, the body's own in ``d``.
+
+    ``d`` holds dy/dt without contact force (newton_euler.free_derivative at y). On a curved
+    surface (sphere, the round side of a cylinder or capsule) the contact point moves over the
+    body as it rolls, and the surface's curvature cancels the centripetal term in the gap's
+    second derivative (exactly for a sphere: gap = n·c − r, so g̈ = n·a), so it is left out.
     The normal rows take ``bias[c]`` instead: the velocity-product part of the second
     derivative of each contact's gap function (:func:`normal_bias`, exact for every shape).
-    The rows (build_rows) must be built for y.
     """
-    derivative(y, p, w, d)
     qw, qx, qy, qz = y[Q], y[Q + 1], y[Q + 2], y[Q + 3]
     ox, oy, oz = rotate(qw, qx, qy, qz, y[W], y[W + 1], y[W + 2])  # ω_W
     for c in range(count):
@@ -82,7 +93,7 @@ def accelerations(y, p, w, count, rows, points, bias, rdot, work, d):
                            + work[a, _ANG] * d[W] + work[a, _ANG + 1] * d[W + 1] + work[a, _ANG + 2] * d[W + 2])
             if k == 0:  # the normal row: n·a + α·(r × n) + the gap's own velocity-product term
                 work[a, _B] += bias[c] - (lx * cx + ly * cy + lz * cz)
-    _pin = y[P], p[0], w[0], d[0], points[0, 0], bias[0], rdot[0, 0]
+    _pin = y[P], d[0], bias[0], rdot[0, 0], work[0, 0]
 
 
 @njit(**_OPTS)

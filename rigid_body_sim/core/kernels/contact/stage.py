@@ -1,0 +1,182 @@
+"""The holding force of persistent contact found at an integrator stage, from the stage's own state.
+
+A body in persistent contact stepped by a method whose stages call dynamics.derivative (euler,
+rk4, the scipy ``reference``) carries its contact in its wrench row (layout.HELD …: the mode,
+the shape, the plane, the tracked features, μ, the slip direction at the step's start:
+:func:`hold_in_row` writes them). At every stage, :func:`held_accelerations` solves the same
+law persistent.holding_wrench solves at the step's start — normal forces f_n ≥ 0 that make
+the contact points' normal accelerations ≥ 0 with f_n a_n = 0; friction −μ f_n ŝ along the
+slip while sliding, else inside the cone |f_t| ≤ μ f_n keeping the tangential acceleration
+zero — at the stage's state, and adds the accelerations it gives to the stage's derivative.
+The force is then a smooth function of the state along the step (while the contact's mode
+holds), so each method keeps its order while the body pivots on an edge or rolls on a rim.
+
+The mode (sticking or sliding) is the step's: it changes between steps, at events the solver
+locates (core/contact/solver.py). While sliding, each contact point's friction opposes that
+point's own slip at the stage (Coulomb's law per point: it never does positive work, where
+one direction for the whole contact would on a body spinning as it slides); a point whose
+slip has turned against its direction at the step's start (the slide stopped inside the
+step) keeps that direction, so the slip goes on reversing and the solver locates the stop on
+the step map, as for the methods given the force of the step's start.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ..forces import project
+from ..layout import (ACTIVE, HELD, HELD_FEATURES, HELD_GROUND, HELD_MU, HELD_SHAPE, HELD_SLIDE, INV_INERTIA,
+                      INV_MASS, MODEL, MODEL_FULL, MODEL_ISOTROPIC, MODEL_SYMMETRIC, NORMAL as PLANE_NORMAL, P,
+                      PROJECT, PROJECT_NONE, Q, V, W)
+from ..rotation import rotate, rotate_back
+from .impacts import _ANG, _B, _LAM, _LIN, IMPACT_WORK_SHAPE, build_rows, pgs_each
+from .layout import DIMS, KIND, MAX_POINTS, NORMAL, OFFSET
+from .persistent import SLIDE, STICK, accelerations_from, normal_bias
+from .shapes import feature_points
+
+__all__ = ["held_accelerations", "held_acceleration", "hold_in_row", "stage_rows", "stepped_by_integrator"]
+
+_OPTS = {"cache": True, "nogil": True, "error_model": "numpy"}
+
+
+@njit(**_OPTS)
+def held_accelerations(y, p, w, d):
+    """d[V:V+3], d[W:W+3] += the accelerations of the contact force holding the body at state ``y``.
+
+    ``d`` holds dy/dt at y without contact (newton_euler.free_derivative); ``w`` is the wrench
+    row with the contact (layout.HELD …). The force, world axes at the contact points, is
+    projected onto the body's motion like any wrench (forces.project). A stage at which no
+    tracked feature has a contact point, or the normal forces come out zero, adds nothing.
+    """
+    shape = w[HELD_SHAPE:HELD_SHAPE + 4]  # KIND, DIMS: the columns of a shape row
+    ground = w[HELD_GROUND:HELD_GROUND + 4]  # NORMAL, OFFSET: the columns of a ground row
+    mask = np.int64(w[HELD_FEATURES])
+    mu = w[HELD_MU]
+    points = np.empty((MAX_POINTS, 3))
+    gaps = np.empty(MAX_POINTS)
+    owners = np.zeros(MAX_POINTS, dtype=np.int64)
+    bias = np.empty(MAX_POINTS)
+    rdot = np.empty((MAX_POINTS, 3))
+    anchors = np.empty((MAX_POINTS, 3))
+    work = np.zeros(IMPACT_WORK_SHAPE)
+    count = feature_points(y, p, shape, ground, mask, points, gaps, owners)
+    if count > 0:
+        nx, ny, nz = ground[NORMAL], ground[NORMAL + 1], ground[NORMAL + 2]
+        normal_bias(y, p, shape, ground, mask, count, points, owners, bias, rdot, anchors)
+        rows = build_rows(y, p, count, points, nx, ny, nz, work)
+        directions = np.zeros((MAX_POINTS, 2))  # per contact: the direction (t1, t2) its friction opposes
+        if mu != 0.0 and w[HELD] == SLIDE:
+            for c in range(count):
+                ux, uy = w[HELD_SLIDE + 2 * c], w[HELD_SLIDE + 2 * c + 1]  # its slip direction at the step's start
+                vx, vy = work[3 * c + 1, _B], work[3 * c + 2, _B]  # its slip at this stage
+                slip = math.sqrt(vx * vx + vy * vy)
+                if slip > 0.0 and vx * ux + vy * uy > 0.0:  # against its own slip at this stage
+                    ux, uy = vx / slip, vy / slip
+                directions[c, 0], directions[c, 1] = ux, uy  # reversed since the start: on along the start's
+        accelerations_from(y, count, rdot, bias, work, d)
+        pgs_each(work, count, mu, directions)
+        fx = fy = fz = 0.0
+        hx = hy = hz = 0.0  # the moment about the centre of mass, principal axes
+        for a in range(rows):
+            lam = work[a, _LAM]
+            fx += work[a, _LIN] * lam
+            fy += work[a, _LIN + 1] * lam
+            fz += work[a, _LIN + 2] * lam
+            hx += work[a, _ANG] * lam
+            hy += work[a, _ANG + 1] * lam
+            hz += work[a, _ANG + 2] * lam
+        if p[PROJECT] != PROJECT_NONE:  # onto the body's motion, in world axes, as forces.body_wrench does
+            qw, qx, qy, qz = y[Q], y[Q + 1], y[Q + 2], y[Q + 3]
+            tx, ty, tz = rotate(qw, qx, qy, qz, hx, hy, hz)
+            fx, fy, fz, tx, ty, tz = project(p[PROJECT], p[PLANE_NORMAL], p[PLANE_NORMAL + 1],
+                                             p[PLANE_NORMAL + 2], fx, fy, fz, tx, ty, tz)
+            hx, hy, hz = rotate_back(qw, qx, qy, qz, tx, ty, tz)
+        inv_m = p[INV_MASS]
+        d[V] += fx * inv_m
+        d[V + 1] += fy * inv_m
+        d[V + 2] += fz * inv_m
+        d[W] += hx * p[INV_INERTIA]
+        d[W + 1] += hy * p[INV_INERTIA + 1]
+        d[W + 2] += hz * p[INV_INERTIA + 2]
+    _pin = y[P], p[0], w[0], d[0]
+
+
+@njit(**_OPTS)
+def hold_in_row(w, bare, y, p, shape, ground, mask, mu, mode, sx, sy, slip_tolerance):
+    """Wrench row ``w`` ← ``bare`` (the row without contact) carrying the contact, to be found at every stage.
+
+    ``y``, ``p`` the body's state and parameter rows at the step's start, ``shape`` and
+    ``ground`` its shape row and the plane's ground row (contact/layout.py), ``mask`` the
+    tracked features, ``mode`` persistent.STICK or SLIDE and (sx, sy) the body's slip direction
+    along (t1, t2) (persistent.holding_wrench). Each contact point's slip direction at y goes in
+    ``HELD_SLIDE`` (while sliding; (sx, sy) for a point slipping slower than ``slip_tolerance``).
+    """
+    for k in range(w.shape[0]):
+        w[k] = bare[k]
+    w[HELD] = mode
+    w[HELD_SHAPE] = shape[KIND]
+    for k in range(3):
+        w[HELD_SHAPE + 1 + k] = shape[DIMS + k]
+        w[HELD_GROUND + k] = ground[NORMAL + k]
+    w[HELD_GROUND + 3] = ground[OFFSET]
+    w[HELD_FEATURES] = mask
+    w[HELD_MU] = mu
+    if mode == SLIDE:
+        points = np.empty((MAX_POINTS, 3))
+        gaps = np.empty(MAX_POINTS)
+        owners = np.zeros(MAX_POINTS, dtype=np.int64)
+        work = np.zeros(IMPACT_WORK_SHAPE)
+        count = feature_points(y, p, shape, ground, mask, points, gaps, owners)
+        build_rows(y, p, count, points, ground[NORMAL], ground[NORMAL + 1], ground[NORMAL + 2], work)
+        for c in range(MAX_POINTS):
+            ux, uy = sx, sy
+            if c < count:
+                vx, vy = work[3 * c + 1, _B], work[3 * c + 2, _B]
+                slip = math.sqrt(vx * vx + vy * vy)
+                if slip > slip_tolerance:
+                    ux, uy = vx / slip, vy / slip
+            w[HELD_SLIDE + 2 * c], w[HELD_SLIDE + 2 * c + 1] = ux, uy
+    w[ACTIVE] = 1.0  # so that the row is cleared before the next step (stepping.clear_wrenches)
+
+
+@njit(**_OPTS)
+def stage_rows(wrenches, bare, held_rows, Y, prm, shapes, grounds, bodies, ground_of, tracked, friction, sliding,
+               slide_direction, slip_tolerance, locked, staged):
+    """The wrench rows of ``bodies`` (held by batch.hold_all) turned into rows carrying their contact (hold_in_row).
+
+    Each body not locked (a locked body's held row is exact over its step: it stays) whose
+    model the integrator steps (full, and the isotropic and symmetric models, which leave a
+    body with a held contact to the integrator: reduced_models.torque_free): ``held_rows[i]``
+    ← its row with the holding force of the step's start (what the records report), then
+    ``wrenches[i]`` ← ``bare[i]`` with the contact; ``staged[i]`` ← 1.
+    """
+    for m in range(bodies.shape[0]):
+        i = bodies[m]
+        if locked[i] != 0 or not stepped_by_integrator(prm[i]):
+            continue
+        for k in range(wrenches.shape[1]):
+            held_rows[i, k] = wrenches[i, k]
+        j = ground_of[i]
+        hold_in_row(wrenches[i], bare[i], Y[i], prm[i], shapes[i], grounds[j], tracked[i], friction[i, j],
+                    SLIDE if sliding[i] else STICK, slide_direction[i, 0], slide_direction[i, 1], slip_tolerance)
+        staged[i] = 1
+
+
+@njit(**_OPTS)
+def stepped_by_integrator(p):
+    """True for a body whose model leaves a held contact to the integrator (full, isotropic, symmetric)."""
+    model = p[MODEL]
+    return model == MODEL_FULL or model == MODEL_ISOTROPIC or model == MODEL_SYMMETRIC
+
+
+@njit(**_OPTS)
+def held_acceleration(y, p, w, ax, ay, az, bx, by, bz):
+    """(a_C, ω̇_P) of :func:`held_accelerations` for a body whose accelerations without contact are given."""
+    d = np.zeros(y.shape[0])
+    d[V], d[V + 1], d[V + 2] = ax, ay, az
+    d[W], d[W + 1], d[W + 2] = bx, by, bz
+    held_accelerations(y, p, w, d)
+    return d[V], d[V + 1], d[V + 2], d[W], d[W + 1], d[W + 2]
