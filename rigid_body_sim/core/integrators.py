@@ -13,7 +13,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from .free_rotor import exact_rotor
-from .kernels.dynamics import derivatives
+from .kernels.contact.stage import held_derivatives
 from .kernels.integrators import INTEGRATORS, Method, final_kick, get_integrator, kick_and_drift
 from .kernels.layout import INERTIA, Q, STATE_WIDTH, W
 
@@ -46,6 +46,9 @@ def step_reference(Y: np.ndarray, Ynew: np.ndarray, prm: np.ndarray, wrenches: n
                    dt: float, rtol: float = REFERENCE_RTOL, atol: float = REFERENCE_ATOL) -> None:
     """scipy DOP853 over one step of :func:`~rigid_body_sim.core.dynamics.derivative`, rows ``bodies`` of Y into Ynew.
 
+    A body whose wrench row carries a persistent contact (layout.HELD) has its holding force
+    found at every evaluation (kernels/contact/stage.held_derivative).
+
     q is normalised after the step. A body DOP853 gives up on (step size underflow on a
     stiff or exploding body) is left non-finite, so the step checks name it.
     """
@@ -56,7 +59,7 @@ def step_reference(Y: np.ndarray, Ynew: np.ndarray, prm: np.ndarray, wrenches: n
     rates = np.empty((n, STATE_WIDTH))
 
     def rhs(_t: float, flat: np.ndarray) -> np.ndarray:
-        derivatives(flat.reshape(n, STATE_WIDTH), sub_prm, sub_w, rates)
+        held_derivatives(flat.reshape(n, STATE_WIDTH), sub_prm, sub_w, rates)
         return rates.ravel().copy()
 
     with np.errstate(all="ignore"):

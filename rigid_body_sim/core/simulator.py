@@ -1060,9 +1060,13 @@ def _compile_all() -> None:
                                             "pose": {"position": [-0.2, 0.0, 1.1]}},
                                    "crate": {"mass": 2.0, "inertia": {"box": [0.2, 0.2, 0.2]},
                                              "pose": {"position": [0.25, 0.1, 0.7]}}}})
-    for integrator in ("rk4", "semi_implicit_euler"):
+    for integrator in ("rk4", "euler", "semi_implicit_euler"):  # with the contact found per stage, and held
         Simulator(scene, integrator=integrator, dt=0.01).step(200)
         Simulator(table, integrator=integrator, dt=0.01).step(150)
+    from .kernels.contact.stage import held_derivatives
+
+    one = Simulator(scene, integrator="rk4", dt=0.01)  # reference's right-hand side (core/integrators.py)
+    held_derivatives(one._Ys[0][:, :L.STATE_WIDTH].copy(), one._prm, one._wrenches, np.empty((len(one._prm), L.STATE_WIDTH)))
     from .contact.compile_pairs import compile_pair_kernels
 
     compile_pair_kernels()  # body–body geometry (the scene loader's overlap check) and the pair impact

@@ -349,6 +349,8 @@ class ContactSolver:
         with np.errstate(all="ignore"):
             if method.code is not None:
                 advance(Y1, prm1, w1, self._members1, self._status1, control, inputs, 1, self._never)
+                if w[L.HELD] != 0.0 and method.held is not None:  # its contact found at every stage (stage.py)
+                    method.held(Y1[0], Y1[1], prm1, w1, self._members1, h)
             else:
                 deferred = step_reduced(Y1, prm1, w1, self._members1, self._status1, control, inputs)
                 if len(deferred):
@@ -458,6 +460,9 @@ class ContactSolver:
         Y0, Y1 = sim._Ys[1 - cur], sim._Ys[cur]
         h = sim.dt
         t0 = sim.time - h
+        staged = np.flatnonzero(self._staged)
+        if staged.size and sim._method.held is not None:  # their steps with the contact found at every stage
+            sim._method.held(Y0, Y1, sim._prm, wrenches, staged, h)
         self._static_skipped.clear()
         moving = ~sim._stopped[self.bodies]
         modes = self.modes[self.bodies]

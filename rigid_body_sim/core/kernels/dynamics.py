@@ -1,12 +1,17 @@
-"""The right-hand side of a body's equations of motion (compiled; energy and momentum: core/mechanics.py).
+"""Newton–Euler equations of a free rigid body, written once (compiled; energy and momentum: core/mechanics.py).
 
-:func:`derivative` is the one implementation; every integrator that needs the right-hand side
-calls it at each of its stages, the scipy ``reference`` included. It is the Newton–Euler
-equations of a free rigid body (newton_euler.py, where they are written once, with the
-gyroscopic term) under the body's wrench row, plus, for a body in persistent contact whose
-wrench row holds the contact (layout.HELD), the force that holds it on the ground found
-from the stage's own state (kernels/contact/stage.py). Bodies without a held contact take
-the free equations alone: one branch on one column of the row.
+In the principal frame P (diagonal inertia I = (I1, I2, I3)):
+
+    m · dv_W/dt      = F_W − c_v v_W                        (F_W includes m g)
+    I · dw_P/dt      = τ_P − c_w w_P − w_P × (I w_P)        ← the gyroscopic term
+    dp_W/dt          = v_W
+    dq_WP/dt         = ½ q_WP ⊗ (0, w_P)                    (w, x, y, z)
+
+``F_W`` and ``τ_P`` are what :func:`~rigid_body_sim.core.forces.body_wrench` returns for the
+state at hand: the applied wrenches evaluated in their frames, plus gravity. The gyroscopic
+term is what makes a phone flip about its intermediate axis; leaving it out is the classic
+textbook bug. :func:`derivative` is the one implementation (compiled); every integrator that
+needs the right-hand side calls it, the scipy ``reference`` included.
 """
 
 from __future__ import annotations
@@ -15,17 +20,15 @@ import math
 
 from numba import njit
 
-from .contact.stage import held_accelerations
-from .forces import resolve_wrench
-from .layout import HELD, INERTIA_NORMAL, INV_INERTIA, INV_MASS, MODEL, MODEL_PLANAR, NORMAL, P, Q, V, W
+from .forces import body_wrench, resolve_wrench
+from .layout import (DAMP_ANG, DAMP_LIN, INERTIA, INERTIA_NORMAL, INV_INERTIA, INV_MASS, MODEL, MODEL_PLANAR, NORMAL,
+                     P, Q, V, W)
 from .jit import INLINE, JIT
-from .newton_euler import angular_acceleration, free_derivative, gyroscopic_torque
 from .rotation import normalise, rotate_back
 
 __all__ = [
     "gyroscopic_torque",
     "angular_acceleration",
-    "free_derivative",
     "derivative",
     "derivatives",
     "impulse_response",
@@ -33,17 +36,39 @@ __all__ = [
 
 
 @njit(**INLINE)
-def derivative(y, p, w, d):
-    """d ← dy/dt of one body: state row ``y``, parameter row ``p``, wrench row ``w`` (layout.py).
+def gyroscopic_torque(p, wx, wy, wz):
+    """The gyroscopic term −w × (I w), N·m, principal axes, of a body with parameter row ``p``."""
+    hx, hy, hz = p[INERTIA] * wx, p[INERTIA + 1] * wy, p[INERTIA + 2] * wz
+    return -(wy * hz - wz * hy), -(wz * hx - wx * hz), -(wx * hy - wy * hx)
 
-    The Newton–Euler equations (newton_euler.free_derivative) and, for a body whose wrench row
-    holds a persistent contact (``w[HELD]`` not 0), the contact force that holds it found at
-    this state (contact/stage.held_accelerations): at every stage of the methods that call this.
-    """
-    free_derivative(y, p, w, d)
-    if w[HELD] != 0.0:
-        held_accelerations(y, p, w, d)
-    _pin = y[P], p[0], w[HELD], d[P]  # the arrays' last use, out of the branch (jit.py)
+
+@njit(**INLINE)
+def angular_acceleration(p, wx, wy, wz, tx, ty, tz):
+    """dw_P/dt = I⁻¹(τ_P − c_w w − w × I w), rad/s², principal axes."""
+    gx, gy, gz = gyroscopic_torque(p, wx, wy, wz)
+    c = p[DAMP_ANG]
+    return ((tx - c * wx + gx) * p[INV_INERTIA], (ty - c * wy + gy) * p[INV_INERTIA + 1],
+            (tz - c * wz + gz) * p[INV_INERTIA + 2])
+
+
+@njit(**INLINE)
+def derivative(y, p, w, d):
+    """d ← dy/dt of one body: state row ``y``, parameter row ``p``, wrench row ``w`` (layout.py)."""
+    fx, fy, fz, tx, ty, tz = body_wrench(y, p, w)
+    qw, qx, qy, qz = y[Q], y[Q + 1], y[Q + 2], y[Q + 3]
+    wx, wy, wz = y[W], y[W + 1], y[W + 2]
+    vx, vy, vz = y[V], y[V + 1], y[V + 2]
+    d[P], d[P + 1], d[P + 2] = vx, vy, vz
+    d[Q] = 0.5 * (-qx * wx - qy * wy - qz * wz)
+    d[Q + 1] = 0.5 * (qw * wx + qy * wz - qz * wy)
+    d[Q + 2] = 0.5 * (qw * wy - qx * wz + qz * wx)
+    d[Q + 3] = 0.5 * (qw * wz + qx * wy - qy * wx)
+    inv_m = p[INV_MASS]
+    rate = p[DAMP_LIN] * inv_m
+    d[V] = fx * inv_m - rate * vx
+    d[V + 1] = fy * inv_m - rate * vy
+    d[V + 2] = fz * inv_m - rate * vz
+    d[W], d[W + 1], d[W + 2] = angular_acceleration(p, wx, wy, wz, tx, ty, tz)
 
 
 @njit(**JIT)

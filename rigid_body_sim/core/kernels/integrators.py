@@ -46,6 +46,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
+from .contact.stage import held_derivative
 from .dynamics import angular_acceleration, derivative
 from .forces import body_wrench
 from .layout import (
@@ -65,10 +66,10 @@ from .layout import (
     V,
     W,
 )
-from .jit import INLINE, JIT
+from .jit import INLINE, JIT, LOOP
 from .rotation import exp_map, normalise, qmul, rotate
 
-__all__ = ["Method", "INTEGRATORS", "COMPILED", "get_integrator", "kick_and_drift", "final_kick", "EULER_TABLEAU", "RK4_TABLEAU"]
+__all__ = ["Method", "INTEGRATORS", "COMPILED", "euler_held", "rk4_held", "get_integrator", "kick_and_drift", "final_kick", "EULER_TABLEAU", "RK4_TABLEAU"]
 
 
 # ----------------------------------------------------------------------------- explicit Runge–Kutta
@@ -97,27 +98,38 @@ _EULER_A, _EULER_B = EULER_TABLEAU.A, EULER_TABLEAU.b
 _RK4_A, _RK4_B = RK4_TABLEAU.A, RK4_TABLEAU.b
 
 
-@njit(**INLINE)
-def explicit_rk(A, b, y, out, p, w, dt, k):
-    """One step of the explicit tableau (A, b): stage derivatives in k[0..s), the stage state in k[s]."""
-    s = b.shape[0]
-    derivative(y, p, w, k[0])  # the first stage is at y (A's first row is zero: explicit)
-    stage = k[s]
-    for i in range(1, s):
+def _explicit_rk_on(rhs):
+    """The explicit tableau's step on the right-hand side ``rhs(y, p, w, d)`` (inlined where it is called)."""
+
+    @njit(**LOOP, inline="always")  # a closure: compiled into its cached callers (jit.py)
+    def explicit_rk(A, b, y, out, p, w, dt, k):
+        """One step of the explicit tableau (A, b): stage derivatives in k[0..s), the stage state in k[s]."""
+        s = b.shape[0]
+        rhs(y, p, w, k[0])  # the first stage is at y (A's first row is zero: explicit)
+        stage = k[s]
+        for i in range(1, s):
+            for j in range(STATE_WIDTH):
+                stage[j] = y[j]
+            for l in range(i):
+                if A[i, l] != 0.0:
+                    for j in range(STATE_WIDTH):
+                        stage[j] += dt * A[i, l] * k[l, j]
+            rhs(stage, p, w, k[i])
         for j in range(STATE_WIDTH):
-            stage[j] = y[j]
-        for l in range(i):
-            if A[i, l] != 0.0:
-                for j in range(STATE_WIDTH):
-                    stage[j] += dt * A[i, l] * k[l, j]
-        derivative(stage, p, w, k[i])
-    for j in range(STATE_WIDTH):
-        total = 0.0
-        for i in range(s):
-            total += b[i] * k[i, j]
-        out[j] = y[j] + dt * total
-    out[Q], out[Q + 1], out[Q + 2], out[Q + 3] = normalise(out[Q], out[Q + 1], out[Q + 2], out[Q + 3])
-    _pin = y[P], out[P], p[0], w[0], k[0, 0], stage[0]  # the arrays' last use, out of branches and loops (jit.py)
+            total = 0.0
+            for i in range(s):
+                total += b[i] * k[i, j]
+            out[j] = y[j] + dt * total
+        out[Q], out[Q + 1], out[Q + 2], out[Q + 3] = normalise(out[Q], out[Q + 1], out[Q + 2], out[Q + 3])
+        _pin = y[P], out[P], p[0], w[0], k[0, 0], stage[0]  # the arrays' last use, out of branches and loops (jit.py)
+
+    return explicit_rk
+
+
+#: The explicit tableau on dynamics.derivative (every body), and on contact/stage.held_derivative (a body whose
+#: wrench row carries its persistent contact: the holding force found at every stage). One tableau code.
+explicit_rk = _explicit_rk_on(derivative)
+_explicit_rk_held = _explicit_rk_on(held_derivative)
 
 
 @njit(**INLINE)
@@ -130,6 +142,22 @@ def euler(y, out, p, w, dt, k):
 def rk4(y, out, p, w, dt, k):
     """Classic RK4 on the 13 components, the forces evaluated at each of the four stages; q normalised after."""
     explicit_rk(_RK4_A, _RK4_B, y, out, p, w, dt, k)
+
+
+@njit(**JIT)
+def euler_held(Y, Ynew, prm, wrenches, bodies, dt):
+    """:func:`euler` of ``bodies`` (rows of Y into Ynew, the state columns), whose wrench rows carry their contact."""
+    k = np.empty((_EULER_B.shape[0] + 1, Y.shape[1]))
+    for i in bodies:
+        _explicit_rk_held(_EULER_A, _EULER_B, Y[i], Ynew[i], prm[i], wrenches[i], dt, k)
+
+
+@njit(**JIT)
+def rk4_held(Y, Ynew, prm, wrenches, bodies, dt):
+    """:func:`rk4` of ``bodies`` (rows of Y into Ynew, the state columns), whose wrench rows carry their contact."""
+    k = np.empty((_RK4_B.shape[0] + 1, Y.shape[1]))
+    for i in bodies:
+        _explicit_rk_held(_RK4_A, _RK4_B, Y[i], Ynew[i], prm[i], wrenches[i], dt, k)
 
 
 # ----------------------------------------------------------------------------- semi-implicit Euler
@@ -406,7 +434,11 @@ class Method:
     dynamics.derivative from its own state, so a persistent contact carried in the wrench row
     (layout.HELD) is found at every stage (kernels/contact/stage.py); the other methods
     evaluate the forces on a frozen pose (kicks) and are given the contact force found at the
-    step's start.
+    step's start. ``held``: the compiled step ``held(Y, Ynew, prm, wrenches, bodies, dt)`` of
+    bodies whose wrench rows carry their contact (layout.HELD): the same tableau on
+    contact/stage.held_derivative. The contact solver takes those bodies' steps again with it
+    (core/contact/solver.py), so the step loops, and every body without a held contact, run
+    exactly the plain step.
     """
 
     name: str
@@ -415,6 +447,7 @@ class Method:
     summary: str
     code: int | None = None
     derivative_stages: bool = False
+    held: Any = None
 
 
 #: Every integrator, by name: the one place to add one. A compiled one is a per-body step
@@ -422,7 +455,7 @@ class Method:
 INTEGRATORS: dict[str, Method] = {}
 for _method in (
     Method("euler", 1, euler, "explicit Euler with the gyroscopic term; q += dq·dt, then normalised",
-           derivative_stages=True),
+           derivative_stages=True, held=euler_held),
     Method("semi_implicit_euler", 1, semi_implicit_euler,
            "velocities first, then positions; orientation by the exponential map"),
     Method("implicit_gyroscopic", 2, implicit_gyroscopic,
@@ -433,7 +466,7 @@ for _method in (
     Method("exact_rotor_splitting", 2, None, "half kicks around the exact free-rotor flow (elliptic functions): "
                                              "exact when torque-free, at any |ω|·dt"),
     Method("rk4", 4, rk4, "classic fourth-order Runge–Kutta, forces evaluated at every stage",
-           derivative_stages=True),
+           derivative_stages=True, held=rk4_held),
     Method("reference", None, None, "scipy DOP853 at tight tolerances (the accuracy end)", derivative_stages=True),
 ):
     _code = None if _method.step is None else sum(m.step is not None for m in INTEGRATORS.values())

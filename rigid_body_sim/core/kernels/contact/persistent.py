@@ -3,7 +3,7 @@
 A body at rest on the ground (or sliding, or rolling on it) is held by contact forces found at
 the acceleration level at the start of each step: with a_c the acceleration of each contact
 point under everything else (gravity, applied and scripted wrenches, the gyroscopic term —
-newton_euler.free_derivative), the normal forces f_n ≥ 0 make the normal accelerations ≥ 0 with
+dynamics.derivative), the normal forces f_n ≥ 0 make the normal accelerations ≥ 0 with
 f_n a_n = 0; friction is −μ f_n ŝ along the slip ŝ while the contact slides, and otherwise
 whatever keeps the tangential acceleration zero inside the cone |f_t| ≤ μ f_n (projected
 Gauss–Seidel, impacts.pgs, on the same contact rows as the impact law). The force is added to
@@ -24,7 +24,7 @@ import math
 
 from numba import njit
 
-from ..newton_euler import free_derivative
+from ..dynamics import derivative
 from ..forces import add_wrench
 from ..layout import FRAME_SITE_WORLD_AXES, INV_INERTIA, INV_MASS, P, Q, Q_PB, V, W
 from ..rotation import exp_map, normalise, qmul, rotate, rotate_back
@@ -59,12 +59,11 @@ def accelerations(y, p, w, count, rows, points, bias, rdot, work, d):
     """work[:, B] ← the rows' components of the contact points' accelerations without contact force.
 
     a_c = a + α × r (+ ω × (ω × r) when the contact points are ``vertex`` es, fixed in the body:
-    box corners) from the Newton–Euler equations at y under the wrench row ``w`` (gravity,
-    applied and scripted wrenches, damping, the gyroscopic term — newton_euler.free_derivative,
-    into ``d``, a 13-float scratch): :func:`accelerations_from`. The rows (build_rows) must be
-    built for y.
+    box corners) from dynamics.derivative at y under the wrench row ``w`` (gravity, applied and
+    scripted wrenches, damping, the gyroscopic term), into ``d``, a 13-float scratch:
+    :func:`accelerations_from`. The rows (build_rows) must be built for y.
     """
-    free_derivative(y, p, w, d)
+    derivative(y, p, w, d)
     accelerations_from(y, count, rdot, bias, work, d)
     _pin = y[P], p[0], w[0], d[0], points[0, 0], bias[0], rdot[0, 0]
 
@@ -73,7 +72,7 @@ def accelerations(y, p, w, count, rows, points, bias, rdot, work, d):
 def accelerations_from(y, count, rdot, bias, work, d):
     """work[:, B] ← the rows' components of the contact points' accelerations, the body's own in ``d``.
 
-    ``d`` holds dy/dt without contact force (newton_euler.free_derivative at y). On a curved
+    ``d`` holds dy/dt without contact force (dynamics.derivative at y). On a curved
     surface (sphere, the round side of a cylinder or capsule) the contact point moves over the
     body as it rolls, and the surface's curvature cancels the centripetal term in the gap's
     second derivative (exactly for a sphere: gap = n·c − r, so g̈ = n·a), so it is left out.

@@ -27,6 +27,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ..dynamics import derivative
 from ..forces import project
 from ..layout import (ACTIVE, HELD, HELD_FEATURES, HELD_GROUND, HELD_MU, HELD_SHAPE, HELD_SLIDE, INV_INERTIA,
                       INV_MASS, MODEL, MODEL_FULL, MODEL_ISOTROPIC, MODEL_SYMMETRIC, NORMAL as PLANE_NORMAL, P,
@@ -37,16 +38,35 @@ from .layout import DIMS, KIND, MAX_POINTS, NORMAL, OFFSET
 from .persistent import SLIDE, STICK, accelerations_from, normal_bias
 from .shapes import feature_points
 
-__all__ = ["held_accelerations", "held_acceleration", "hold_in_row", "stage_rows", "stepped_by_integrator"]
+__all__ = ["held_derivative", "held_derivatives", "held_accelerations", "held_acceleration", "hold_in_row",
+           "stage_rows", "stepped_by_integrator"]
 
 _OPTS = {"cache": True, "nogil": True, "error_model": "numpy"}
+
+
+@njit(**_OPTS)
+def held_derivative(y, p, w, d):
+    """d ← dy/dt of a body whose wrench row ``w`` carries its contact: dynamics.derivative, then the force
+    holding it found at this state (:func:`held_accelerations`). The right-hand side every stage of
+    euler and rk4 (integrators.py: their ``held`` steps) and of ``reference`` (:func:`held_derivatives`)
+    evaluates for such a body."""
+    derivative(y, p, w, d)
+    if w[HELD] != 0.0:
+        held_accelerations(y, p, w, d)
+
+
+@njit(**_OPTS)
+def held_derivatives(Y, prm, wrenches, D):
+    """D ← dY/dt for every body (dynamics.derivatives), a body whose row carries its contact by :func:`held_derivative`."""
+    for i in range(Y.shape[0]):
+        held_derivative(Y[i], prm[i], wrenches[i], D[i])
 
 
 @njit(**_OPTS)
 def held_accelerations(y, p, w, d):
     """d[V:V+3], d[W:W+3] += the accelerations of the contact force holding the body at state ``y``.
 
-    ``d`` holds dy/dt at y without contact (newton_euler.free_derivative); ``w`` is the wrench
+    ``d`` holds dy/dt at y without contact (dynamics.derivative); ``w`` is the wrench
     row with the contact (layout.HELD …). The force, world axes at the contact points, is
     projected onto the body's motion like any wrench (forces.project). A stage at which no
     tracked feature has a contact point, or the normal forces come out zero, adds nothing.
