@@ -7,8 +7,9 @@ the tick**: (Σ holding force × step + Σ impact impulses) / the tick's length 
 likewise the torque about B's centre of mass; world axes, ``header.frame_id`` = ``B/world_aligned``
 (the centre of mass with world axes, as in /tf; ``frame_prefix`` applied), ``header.stamp`` =
 sim time at the end of the tick. Gravity and the applied wrenches are not in it; a body in
-flight reads zero. The holding torque of a step is the one at its start (the force is held over
-the step, core/contact/solver.py). It starts with the first tick that begins after the
+flight reads zero. The holding force and torque of a step are those found at its start (held
+over the step, or standing for its mean with the methods that find the force at every stage:
+core/contact/solver.py). It starts with the first tick that begins after the
 parameter is set, and follows spawns, deletes, resets and new scenes.
 """
 

@@ -25,8 +25,8 @@ Wrench row (``WRENCH_WIDTH`` floats per body)
     ``SITE_MOMENT``            Σ f_W ⊗ r_P (3 × 3, row-major) over world-axes sites: the
                                moment Σ (R r_P) × f_W of forces fixed in world axes at
                                body-fixed points, which turns with the body.
-    ``HELD`` …                 persistent contact evaluated at every stage (dynamics.derivative,
-                               kernels/contact/stage.py): ``HELD`` its mode (0 none, else
+    ``HELD`` …                 a persistent contact whose force is found at every stage
+                               (kernels/contact/stage.py): ``HELD`` its mode (0 none, else
                                persistent.STICK or SLIDE), ``HELD_SHAPE`` the body's shape
                                (kind, 3 dims: contact/layout.py's shape row), ``HELD_GROUND``
                                the plane (normal, offset), ``HELD_FEATURES`` the tracked

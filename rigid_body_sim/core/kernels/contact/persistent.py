@@ -1,14 +1,17 @@
 """Compiled persistent contact: the force that holds a body on the ground, and the projection onto the contact.
 
 A body at rest on the ground (or sliding, or rolling on it) is held by contact forces found at
-the acceleration level at the start of each step: with a_c the acceleration of each contact
+the acceleration level (at the start of each step here; at every integrator stage for the
+methods of kernels/contact/stage.py): with a_c the acceleration of each contact
 point under everything else (gravity, applied and scripted wrenches, the gyroscopic term —
 dynamics.derivative), the normal forces f_n ≥ 0 make the normal accelerations ≥ 0 with
 f_n a_n = 0; friction is −μ f_n ŝ along the slip ŝ while the contact slides, and otherwise
 whatever keeps the tangential acceleration zero inside the cone |f_t| ≤ μ f_n (projected
-Gauss–Seidel, impacts.pgs, on the same contact rows as the impact law). The force is added to
-the step's wrench rows (world axes at the centre of mass, forces.add_wrench), so every
-integrator stage sees it and the site readings see it (a resting IMU reads +g up).
+Gauss–Seidel, impacts.pgs, on the same contact rows as the impact law). The force found at the
+step's start decides the contact's mode; for the methods that do not find it per stage (and
+for a locked body) it is added to the step's wrench rows (world axes at the contact points'
+anchors, forces.add_wrench) and held over the step; the site readings see it either way (a
+resting IMU reads +g up).
 
 After the step, :func:`project` puts the body back onto the contact exactly: the smallest
 displacement in the body's mass metric that closes the gaps of the touching features, and the

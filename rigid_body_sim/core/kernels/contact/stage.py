@@ -1,15 +1,25 @@
 """The holding force of persistent contact found at an integrator stage, from the stage's own state.
 
-A body in persistent contact stepped by a method whose stages call dynamics.derivative (euler,
-rk4, the scipy ``reference``) carries its contact in its wrench row (layout.HELD …: the mode,
-the shape, the plane, the tracked features, μ, the slip direction at the step's start:
-:func:`hold_in_row` writes them). At every stage, :func:`held_accelerations` solves the same
-law persistent.holding_wrench solves at the step's start — normal forces f_n ≥ 0 that make
+A body in persistent contact stepped by a method whose stages evaluate the right-hand side
+from their own state (euler, rk4, the scipy ``reference``: integrators.Method.derivative_stages)
+carries its contact in its wrench row (layout.HELD …: the mode, the shape, the plane, the
+tracked features, μ, each contact point's slip direction at the step's start:
+:func:`hold_in_row`, :func:`stage_rows`). Its right-hand side is :func:`held_derivative`:
+dynamics.derivative, the one force evaluation of every body, then :func:`held_accelerations`,
+which solves at that stage's state the same law persistent.holding_wrench solves at the step's
+start — normal forces f_n ≥ 0 that make
 the contact points' normal accelerations ≥ 0 with f_n a_n = 0; friction −μ f_n ŝ along the
 slip while sliding, else inside the cone |f_t| ≤ μ f_n keeping the tangential acceleration
 zero — at the stage's state, and adds the accelerations it gives to the stage's derivative.
 The force is then a smooth function of the state along the step (while the contact's mode
 holds), so each method keeps its order while the body pivots on an edge or rolls on a rim.
+
+The step loops (stepping.py) and dynamics.derivative are those of a free body, untouched: a
+branch on the contact there, even one never taken, made euler and rk4 several times slower on
+free bodies. The loops step a held body as if free (its wrench row has no contact force), and
+the contact solver then takes its step again with the method's ``held`` step
+(integrators.euler_held, rk4_held: the same tableau on :func:`held_derivative`), in the
+simulator's step and in its step map alike; ``reference`` evaluates :func:`held_derivatives`.
 
 The mode (sticking or sliding) is the step's: it changes between steps, at events the solver
 locates (core/contact/solver.py). While sliding, each contact point's friction opposes that
