@@ -356,8 +356,8 @@ def project(y, p, shape, ground, mask, sticking, points, gaps, owners, work):
     in ``mask`` (shapes.feature_points), twice (the second pass takes the first's round-off).
     Velocities: the normal velocities of the contact points (and their tangential ones when
     ``sticking``) removed by the impulse of least kinetic energy (the same solve on
-    velocities); sticking points that span the body (rank 6: a face, three corners) leave it
-    exactly at rest. Never adds energy. Returns the number of contact points.
+    velocities); sticking points that span the body (rank 6, three or more points: a face,
+    three corners) leave it exactly at rest. Never adds energy. Returns the number of contact points.
     """
     nx, ny, nz = ground[NORMAL], ground[NORMAL + 1], ground[NORMAL + 2]
     inv_m = p[INV_MASS]
@@ -391,7 +391,9 @@ def project(y, p, shape, ground, mask, sticking, points, gaps, owners, work):
         count = feature_points(y, p, shape, ground, mask, points, gaps, owners)
         rows = build_rows(y, p, count, points, nx, ny, nz, work)
         rank = _solve_normal_rows(work, rows, 1 if sticking else 3)
-        if sticking and rank == 6:  # the contact points span the body: no velocity is left, exactly
+        # the contact points span the body (three or more: two points leave the turn about their line free,
+        # whatever the factorisation's pivots say): no velocity is left, exactly
+        if sticking and rank == 6 and count >= 3:
             for j in range(3):
                 y[V + j] = 0.0
                 y[W + j] = 0.0
