@@ -283,11 +283,11 @@ Largest change of the kinetic energy across an impact: {impact:.1e} J (negative:
 gained). Largest rise of E = KE + m g z over one step, relative to the drop's energy: contact-free
 steps {flight:.1e} (rk4's own error on the tumbling phone), steps with an event {event:.1e},
 steps in persistent contact {rest:.1e}. **{gaining} of {n} drops gained energy (more than 1e-12
-of theirs) in some step of persistent contact**: the contact force is held over a step
-(zero-order hold), and while the phone slides or pivots on an edge spinning fast that force does
-work ([contact.md](contact.md), "What is not done yet"). test/test_contact_landing.py runs a
-handful of these drops and checks the rest state, the impacts and the flight steps; one drop
-with such a gain is an expected failure there, with its measured size.
+of theirs) in some step of persistent contact** (rk4 finds the contact force at every stage, each
+contact point's sliding friction against its own slip: [contact.md](contact.md), "Persistent
+contact"). test/test_contact_landing.py runs a handful of these drops and checks the rest state,
+the impacts and the flight steps, and for one drop that slides on an edge while spinning, the
+steps in persistent contact.
 
 What this does not model: the floor's and the phone's compliance (real restitution depends on
 the impact speed), the hand's release (a phone slipping off a finger also picks up a little
