@@ -130,6 +130,9 @@ class ContactSolver:
                                                              self.statics.friction)
         n = model.count
         self.bodies = np.array(spec.bodies, dtype=np.int64)  # free bodies with a collision shape
+        #: The body–body pass (body_pairs.py), or None: a scene with fewer than two moving bodies with a
+        #: shape and no static shape has no pair that can meet, and runs without it.
+        self.pairs = None
         self.names = model.names
         # contact points fixed in the body (box corners) see the centripetal acceleration (persistent.accelerations)
         self.vertex = spec.shapes[:, KIND] == SHAPE_BOX
@@ -200,12 +203,18 @@ class ContactSolver:
         self._control1 = np.zeros(L.CONTROL_WIDTH, dtype=np.int64)
         self._inputs1 = np.zeros(L.INPUT_WIDTH)
         self._never = np.zeros(1, dtype=np.int64)  # the step map's cancel flag (kernels.stepping.advance): never set
+        if len(self.bodies) >= 2 or (len(self.bodies) and statics.size):
+            from .body_pairs import BodyPairs
+
+            self.pairs = BodyPairs(self, sim, statics)
 
     # ----------------------------------------------------------------- modes
 
     def reset(self, sim) -> None:
         """Modes from the current state: touching and not moving away means persistent; the events cleared."""
         self.events.clear()
+        if self.pairs is not None:
+            self.pairs.impacts = 0
         self.impact_impulses[:] = 0.0
         self.holding_angular_impulses[:] = 0.0
         for key in self.counts:
@@ -439,7 +448,11 @@ class ContactSolver:
         h = sim.dt
         t0 = sim.time - h
         self._static_skipped.clear()
+        # body–body events first (body_pairs.py): the bodies it stepped are done
+        done = self.pairs.after_step(sim, wrenches, Y0, Y1, t0, h) if self.pairs is not None else None
         moving = ~sim._stopped[self.bodies]
+        if done is not None:
+            moving &= ~done[self.bodies]
         modes = self.modes[self.bodies]
         flying = self.bodies[(modes == FLIGHT) & moving]
         resting = self.bodies[(modes == PERSISTENT) & moving]

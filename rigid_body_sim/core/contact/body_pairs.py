@@ -1,0 +1,462 @@
+"""Impacts between moving bodies, and no tunnelling through thin shapes: the body–body pass of the contact solver.
+
+The ground's mechanism (solver.py) extended to pairs of bodies: events are located on the
+bodies' own step maps, the impact law acts at the located state, the rest of the step follows.
+After each step, before the ground pass:
+
+1. **Swept broad phase** (compiled, no allocation; kernels/contact/swept.py): every moving body
+   with a shape and every static shape gets the world box its bounding sphere stays in over the
+   step; overlapping boxes are the candidate pairs. A step without a candidate costs these two
+   compiled loops and nothing else (no Python per body or per pair).
+2. **Narrow phase** on the candidates (one compiled call at the step's end, one at its start;
+   kernels/contact/pairs.py). A pair of moving bodies meets in the step if its signed distance
+   is negative at the end, or it overlaps at the start while approaching; a pair apart at both
+   ends whose centres' chords come within the sum of the bounding radii is followed along the
+   step by **conservative advancement** (below), so that an event which starts and ends inside
+   one step is still found. A body against a static shape is looked at here only in that
+   last case (a passage through it inside the step); a negative distance at the step's end is
+   the ground pass's (static_geometry.py).
+3. **Groups**: bodies linked by such pairs are stepped together, event after event, from the
+   step's start. Each event time is the first root of s ↦ F(s), F the least of the group's pair
+   signed distances d(Φ_a(y_a0, s h), Φ_b(y_b0, s h)) and of its flying members' gaps to the
+   ground and the static shapes, Φ each body's own step map (solver.step_map). Conservative
+   advancement finds a sample where F < 0: from s, the next sample is s + (F_k + ε_k)/(B_k h)
+   over the components k, with B_k a bound on |dF_k/dt| (relative speed plus spin × bounding
+   radius, the largest over the piece; a sphere's spin does not count) and ε_k = 1e-4 × the
+   pair's size; no component can cross zero between samples. The root in the bracket is found
+   by the solver's Illinois method, to round-off.
+4. **At a pair's root** the two-body impact law (kernels/contact/pair_impacts.py) acts at the
+   narrow phase's contact points (mid-way between the two surfaces' points) with the pair's
+   material (materials.pair_material); one event per body is recorded (``other`` names the other
+   body). A body of the pair that was resting on the ground is set in flight; if the impulse
+   drives it into its ground, the ground's impact law acts at once after the pair's (sequential
+   impacts: a model choice, see docs/contact.md). At a flying member's ground or static-shape
+   root, the ground's impact law (solver._impact). After an event, the bodies it touched finish
+   the step on their own (solver._with_events); their pairs are looked at again from the next
+   step (a pair that overlaps then and approaches has its impact at the step's start).
+
+Not modelled: persistent (resting) contact between bodies. A body lying on another is kept up by
+an impact each step (e = 0: the approach of the step is removed), so it may sink into it by up
+to about a h²/2 per step (a its acceleration towards it), and the pair's normal impulse is not
+a force on ``contacts`` or the IMU's specific force.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..kernels import layout as L
+from ..kernels.contact.impacts import IMPACT_WORK_SHAPE
+from ..kernels.contact.layout import DIMS, KIND, NORMAL, PERSISTENT, FLIGHT, SHAPE_SPHERE
+from ..kernels.contact.pair_impacts import PAIR_JACOBIAN_SHAPE, pair_impact
+from ..kernels.contact.pairs import MAX_PAIR_POINTS, pair_contacts
+from ..kernels.contact.persistent import normal_speeds
+from ..kernels.contact.swept import swept_bounds, swept_pairs
+from ..quaternion import quat_multiply, quat_rotate
+from .events import ContactEvent
+from .materials import pair_material
+from .static_geometry import bounding_radius
+
+__all__ = ["BodyPairs", "ADVANCE_SKIN", "MAX_ADVANCE"]
+
+#: Conservative advancement aims at this × the pair's size below contact (m per m), so that it ends on a
+#: sample inside; a passage shallower than this that starts and ends inside one step may be missed.
+ADVANCE_SKIN = 1e-4
+#: Most conservative-advancement samples in one piece of a step (then the step's end is trusted).
+MAX_ADVANCE = 400
+
+
+class BodyPairs:
+    """The body–body pass of a :class:`~rigid_body_sim.core.contact.solver.ContactSolver` (module docstring).
+
+    Parameters
+    ----------
+    solver : ContactSolver
+    sim : Simulator
+    statics : ndarray of int
+        The static bodies with a shape (static_geometry.static_shapes).
+    """
+
+    def __init__(self, solver, sim, statics: np.ndarray) -> None:
+        self.solver = solver
+        shapes = solver.shapes
+        #: Members of the broad phase: the moving bodies with a shape, then the static shapes.
+        self.members = np.concatenate((solver.bodies, statics)).astype(np.int64)
+        m = len(self.members)
+        self.movable = np.zeros(m, dtype=np.bool_)
+        self.movable[:len(solver.bodies)] = True
+        self.reach = np.array([bounding_radius(shapes[i]) for i in self.members])
+        #: Per body: the radius its spin sweeps (0 for a sphere, whose distance its spin does not change).
+        self.spin_reach = np.array([0.0 if shapes[i, KIND] == SHAPE_SPHERE else bounding_radius(shapes[i])
+                                    for i in range(len(shapes))])
+        self.size = shapes[:, DIMS:DIMS + 3].max(axis=1)
+        self.is_static = np.zeros(len(shapes), dtype=bool)
+        self.is_static[statics] = True
+        self._lo, self._hi = np.empty((m, 3)), np.empty((m, 3))
+        self._order = np.arange(m, dtype=np.int64)
+        self._pairs = np.empty((max(4 * m, 16), 2), dtype=np.int64)
+        self._q_PB = sim._prm[:, L.Q_PB:L.Q_PB + 4].copy()
+        self._shapes = np.ascontiguousarray(shapes)
+        spread = np.ptp(sim._Ys[sim._control[L.CUR]][self.members, L.P:L.P + 3], axis=0)
+        self._axis = int(np.argmax(spread))
+        # two-shape narrow-phase buffers
+        self._pos2, self._quat2 = np.zeros((2, 3)), np.zeros((2, 4))
+        self._shape2 = np.zeros((2, shapes.shape[1]))
+        self._pair2 = np.array([[0, 1]], dtype=np.int64)
+        self._dist1, self._normal1, self._count1 = np.empty(1), np.empty((1, 3)), np.zeros(1, dtype=np.int64)
+        self._points1, self._seps1 = np.empty((1, MAX_PAIR_POINTS, 6)), np.empty((1, MAX_PAIR_POINTS))
+        self._jac = np.zeros(PAIR_JACOBIAN_SHAPE)
+        self._work = np.zeros(IMPACT_WORK_SHAPE)
+        self._gpoints = np.empty((MAX_PAIR_POINTS, 3))
+        #: Impacts between moving bodies since the solver was made or reset.
+        self.impacts = 0
+
+    # ----------------------------------------------------------------- geometry
+
+    def _shape_pose(self, y: np.ndarray, i: int) -> tuple[np.ndarray, np.ndarray]:
+        return y[L.P:L.P + 3], quat_multiply(y[L.Q:L.Q + 4], self._q_PB[i])
+
+    def contact(self, ya: np.ndarray, a: int, yb: np.ndarray, b: int) -> float:
+        """Signed distance (m) of bodies a and b at state rows ya, yb; normal, points left in the buffers."""
+        self._pos2[0], self._quat2[0] = self._shape_pose(ya, a)
+        self._pos2[1], self._quat2[1] = self._shape_pose(yb, b)
+        self._shape2[0], self._shape2[1] = self._shapes[a], self._shapes[b]
+        pair_contacts(self._pos2, self._quat2, self._shape2, self._pair2, self._dist1, self._normal1, self._count1,
+                      self._points1, self._seps1)
+        return float(self._dist1[0])
+
+    def _batch(self, Y: np.ndarray, pairs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(signed distances (k,), normals (k, 3)) of the body pairs (k, 2) at state rows Y."""
+        bodies = np.unique(pairs)
+        pos = np.ascontiguousarray(Y[bodies, L.P:L.P + 3])
+        quat = np.ascontiguousarray(quat_multiply(Y[bodies, L.Q:L.Q + 4], self._q_PB[bodies]))
+        rows = np.ascontiguousarray(self._shapes[bodies])
+        local = np.ascontiguousarray(np.searchsorted(bodies, pairs))
+        k = len(local)
+        dist, normal = np.empty(k), np.empty((k, 3))
+        pair_contacts(pos, quat, rows, local, dist, normal, np.zeros(k, dtype=np.int64),
+                      np.empty((k, MAX_PAIR_POINTS, 6)), np.empty((k, MAX_PAIR_POINTS)))
+        return dist, normal
+
+    def _relative_normal_speed(self, ya, pa, yb, pb, count) -> float:
+        """The least normal velocity of b over a at the buffers' contact points (m/s, < 0 approaching)."""
+        n = self._normal1[0]
+        lowest = math.inf
+        w_a = quat_rotate(ya[L.Q:L.Q + 4], ya[L.W:L.W + 3])
+        w_b = quat_rotate(yb[L.Q:L.Q + 4], yb[L.W:L.W + 3])
+        for c in range(count):
+            x = 0.5 * (self._points1[0, c, 0:3] + self._points1[0, c, 3:6])
+            u = (yb[L.V:L.V + 3] + np.cross(w_b, x - yb[L.P:L.P + 3])) - (ya[L.V:L.V + 3] + np.cross(w_a, x - ya[L.P:L.P + 3]))
+            lowest = min(lowest, float(u @ n))
+        return lowest
+
+    # ----------------------------------------------------------------- after the step
+
+    def after_step(self, sim, wrenches: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, t0: float,
+                   h: float) -> np.ndarray | None:
+        """Find and resolve the step's body–body events; the bodies done here as a bool mask (None: none)."""
+        swept_bounds(Y0, Y1, self.members, self.reach, h, self._lo, self._hi)
+        found = swept_pairs(self._lo, self._hi, self._order, self._axis, self.movable, self._pairs)
+        if found == 0:
+            return None
+        if found > len(self._pairs):
+            self._pairs = np.empty((2 * found, 2), dtype=np.int64)
+            found = swept_pairs(self._lo, self._hi, self._order, self._axis, self.movable, self._pairs)
+        pairs = self.members[self._pairs[:found]]
+        stopped = sim._stopped
+        pairs = pairs[~(stopped[pairs[:, 0]] | stopped[pairs[:, 1]])]
+        if not len(pairs):
+            return None
+        self._step_wrenches = wrenches
+        hits = self._hits(sim, pairs, Y0, Y1, h)
+        if not hits:
+            return None
+        done = np.zeros(len(sim._stopped), dtype=bool)
+        for group in _groups(hits, self.is_static):
+            links = [p for p in map(tuple, pairs.tolist()) if p[0] in group and p[1] in group]
+            members = sorted(group)
+            self._group_step(sim, members, links, Y0, Y1, wrenches, t0, h)
+            done[members] = True
+        return done
+
+    def _hits(self, sim, pairs: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, h: float) -> list[tuple[int, int]]:
+        """The candidate pairs that meet inside the step (module docstring, 2); a static shape is never first."""
+        solver = self.solver
+        static_a = self.is_static[pairs[:, 0]]
+        pairs = np.where(static_a[:, None], pairs[:, ::-1], pairs)  # a moving body first
+        d1, _ = self._batch(Y1, pairs)
+        d0, _ = self._batch(Y0, pairs)
+        hits = []
+        for k in range(len(pairs)):
+            a, b = int(pairs[k, 0]), int(pairs[k, 1])
+            static = bool(self.is_static[b])
+            if d1[k] < 0.0 and not static:
+                hits.append((a, b))
+            elif d0[k] < 0.0 and not static:
+                if self._approaching(sim, Y0[a], a, Y0[b], b):
+                    hits.append((a, b))
+            elif d1[k] >= 0.0 and d0[k] >= 0.0 and not (static and solver.modes[a] == PERSISTENT):
+                if self._passes(sim, pairs[k], Y0, Y1, h) and self._advance_hits(sim, a, b, Y0, h):
+                    hits.append((a, b))
+        return hits
+
+    def _approaching(self, sim, ya, a, yb, b) -> bool:
+        self.contact(ya, a, yb, b)
+        return self._relative_normal_speed(ya, sim._prm[a], yb, sim._prm[b], int(self._count1[0])) < 0.0
+
+    def _passes(self, sim, pair, Y0, Y1, h) -> bool:
+        """Whether the two bounding spheres may meet along the step (their centres' chords, grown by the sag bound)."""
+        a, b = int(pair[0]), int(pair[1])
+        r = bounding_radius(self._shapes[a]) + bounding_radius(self._shapes[b])
+        c0 = Y0[b, L.P:L.P + 3] - Y0[a, L.P:L.P + 3]
+        c1 = Y1[b, L.P:L.P + 3] - Y1[a, L.P:L.P + 3]
+        dv = (Y1[b, L.V:L.V + 3] - Y0[b, L.V:L.V + 3]) - (Y1[a, L.V:L.V + 3] - Y0[a, L.V:L.V + 3])
+        grow = 0.25 * h * float(np.linalg.norm(dv))
+        d = c1 - c0
+        dd = float(d @ d)
+        s = 0.0 if dd == 0.0 else min(1.0, max(0.0, -float(c0 @ d) / dd))
+        return float(np.linalg.norm(c0 + s * d)) <= r + grow
+
+    def _advance_hits(self, sim, a: int, b: int, Y0: np.ndarray, h: float) -> bool:
+        """Whether conservative advancement of pair (a, b) over the step finds it overlapping."""
+        solver = self.solver
+        ya, yb = Y0[a].copy(), Y0[b].copy()
+        wa, wb = self._wrench_of(sim, a), self._wrench_of(sim, b)
+        static = self.is_static[b]
+
+        def states(s):
+            return (solver.step_map(sim, a, ya, s * h, wa) if s > 0.0 else ya,
+                    yb if static or s == 0.0 else solver.step_map(sim, b, yb, s * h, wb))
+
+        ends = states(1.0)
+        bound = self._pair_bound((ya, ends[0]), (yb, ends[1]), a, b) * h
+        if bound <= 0.0:
+            return False
+        skin = ADVANCE_SKIN * max(self.size[a], self.size[b])
+        s, d = 0.0, self.contact(ya, a, yb, b)
+        for _ in range(MAX_ADVANCE):
+            s += (d + skin) / bound
+            if s >= 1.0:
+                return False
+            at = states(s)
+            d = self.contact(at[0], a, at[1], b)
+            if d < 0.0:
+                return True
+        return False
+
+    def _wrench_of(self, sim, i: int) -> np.ndarray:
+        """The wrench row body i's step ran with (static shapes: none)."""
+        return self._step_wrenches[i] if not self.is_static[i] else np.zeros(L.WRENCH_WIDTH)
+
+    def _pair_bound(self, A, B, a: int, b: int) -> float:
+        """A bound (m/s) on |d'(t)| of pair a, b over a piece whose end states are A = (ya0, ya1), B = (yb0, yb1)."""
+        rel0 = B[0][L.V:L.V + 3] - A[0][L.V:L.V + 3]
+        rel1 = B[1][L.V:L.V + 3] - A[1][L.V:L.V + 3]
+        speed = max(np.linalg.norm(rel0), np.linalg.norm(rel1)) + np.linalg.norm(rel1 - rel0)
+        for y, i in ((A, a), (B, b)):
+            spin = max(np.linalg.norm(y[0][L.W:L.W + 3]), np.linalg.norm(y[1][L.W:L.W + 3]))
+            spin += np.linalg.norm(y[1][L.W:L.W + 3] - y[0][L.W:L.W + 3])
+            speed += spin * self.spin_reach[i]
+        return float(speed)
+
+    def _body_bound(self, y0, y1, i: int) -> float:
+        """A bound (m/s) on how fast body i's surface moves over a piece from y0 to y1 (against fixed geometry)."""
+        speed = max(np.linalg.norm(y0[L.V:L.V + 3]), np.linalg.norm(y1[L.V:L.V + 3]))
+        speed += np.linalg.norm(y1[L.V:L.V + 3] - y0[L.V:L.V + 3])
+        spin = max(np.linalg.norm(y0[L.W:L.W + 3]), np.linalg.norm(y1[L.W:L.W + 3]))
+        spin += np.linalg.norm(y1[L.W:L.W + 3] - y0[L.W:L.W + 3])
+        return float(speed + spin * self.spin_reach[i])
+
+    # ----------------------------------------------------------------- a group's step
+
+    def _group_step(self, sim, members: list[int], links: list[tuple[int, int]], Y0: np.ndarray, Y1: np.ndarray,
+                    wrenches: np.ndarray, t: float, h: float) -> None:
+        """Step the bodies of one group together from Y0 over h, event after event; results into Y1."""
+        solver = self.solver
+        y = {i: Y0[i].copy() for i in members}
+        w = {i: wrenches[i].copy() for i in members}
+        pairs = [(a, b) for a, b in links if not self.is_static[b]]
+        active = set(members)
+        #: members still held on their ground with the holding force of the step's start (w[i] holds it)
+        held = {i for i in members if solver.modes[i] == PERSISTENT}
+        masked: set = set()
+        while h > 0.0 and active:
+            live = [(a, b) for a, b in pairs if a in active and b in active and (a, b) not in masked]
+            if not live and not any(solver.modes[i] == FLIGHT for i in active):
+                break
+            # a pair overlapping at the piece's start: an impact at once if it approaches, else left to separate
+            now = [(a, b) for a, b in live if self.contact(y[a], a, y[b], b) <= 0.0]
+            if now:
+                a, b = now[0]
+                masked.add((a, b))
+                if self._approaching(sim, y[a], a, y[b], b):
+                    self._after_pair(sim, a, b, y, w, t, h, held, active)
+                continue
+            flying = [i for i in active if solver.modes[i] == FLIGHT]
+            touching = [i for i in flying if solver._gap(sim, y[i], i)[0] <= 0.0]
+            for i in touching:  # on its ground already (just after an impact): on its own from here
+                active.discard(i)
+                self._finish(sim, i, y, w, t, h, held)
+            if touching:
+                continue
+            cache: dict[float, dict[int, np.ndarray]] = {}
+
+            def at(s: float) -> dict[int, np.ndarray]:
+                if s not in cache:
+                    cache[s] = {i: (solver.step_map(sim, i, y[i], s * h, w[i]) if s > 0.0 else y[i]) for i in active}
+                return cache[s]
+
+            def components(s: float) -> list[tuple[float, tuple]]:
+                states = at(s)
+                values = [(self.contact(states[a], a, states[b], b), ("pair", a, b)) for a, b in live]
+                values += [(solver._gap(sim, states[i], i)[0], ("env", i)) for i in flying]
+                return values
+
+            end = at(1.0)
+            bounds, skins = {}, {}
+            for a, b in live:
+                bounds[("pair", a, b)] = self._pair_bound((y[a], end[a]), (y[b], end[b]), a, b) * h
+                skins[("pair", a, b)] = ADVANCE_SKIN * max(self.size[a], self.size[b])
+            for i in flying:
+                bounds[("env", i)] = self._body_bound(y[i], end[i], i) * h
+                skins[("env", i)] = ADVANCE_SKIN * self.size[i]
+            s_lo, values = 0.0, components(0.0)
+            s_hi = None
+            for _ in range(MAX_ADVANCE):  # conservative advancement to a sample below zero
+                step = math.inf
+                for v, key in values:
+                    if bounds[key] > 0.0:
+                        step = min(step, (max(v, 0.0) + skins[key]) / bounds[key])
+                s = min(1.0, s_lo + step)
+                values_s = components(s)
+                if min(v for v, _ in values_s) < 0.0:
+                    s_hi = s
+                    break
+                if s >= 1.0:
+                    break
+                s_lo, values = s, values_s
+            if s_hi is None:  # no event in the rest of the step
+                for i in list(active):
+                    if i in held:
+                        y[i] = solver._persistent_end(sim, i, y[i], end[i], w[i], t, h)
+                    else:
+                        y[i] = end[i].copy()
+                active.clear()
+                break
+            lo, hi = s_lo, s_hi
+            u = solver._locate(lambda u: min(v for v, _ in components(lo + u * (hi - lo))),
+                               min(v for v, _ in values), -1.0)
+            s = lo + (1.0 if u is None else u) * (hi - lo)
+            states = at(s)
+            key = min(components(s), key=lambda vk: vk[0])[1]
+            for i in active:
+                y[i] = states[i].copy()
+            t, h = t + s * h, h - s * h
+            if key[0] == "pair":
+                _, a, b = key
+                masked.add((a, b))
+                self._after_pair(sim, a, b, y, w, t, h, held, active)
+            else:
+                i = key[1]
+                solver._impact(sim, i, y[i], w[i], t, h)
+                active.discard(i)
+                self._finish(sim, i, y, w, t, h, held)
+        for i in list(active):
+            self._finish(sim, i, y, w, t, h, held)
+        for i in members:
+            Y1[i, :L.STATE_WIDTH] = y[i][:L.STATE_WIDTH]
+
+    def _after_pair(self, sim, a: int, b: int, y: dict, w: dict, t: float, h: float, held: set, active: set) -> None:
+        """The impact of pair a, b at y; a member that was held on its ground goes on on its own from there."""
+        self._pair_event(sim, a, b, y, w, t, h, held)
+        for i in (a, b):
+            if i in held:
+                held.discard(i)
+                active.discard(i)
+                self._finish(sim, i, y, w, t, h, held)
+
+    def _finish(self, sim, i: int, y: dict, w: dict, t: float, h: float, held: set) -> None:
+        """Body i's rest of the step (h from y[i]) on its own: the ground pass's flight or resting path."""
+        solver = self.solver
+        if h <= 0.0:
+            return
+        if i in held:  # still under the holding force of the step's start
+            end = solver.step_map(sim, i, y[i], h, w[i])
+            y[i] = solver._persistent_end(sim, i, y[i], end, w[i], t, h)
+        else:
+            y[i] = solver._with_events(sim, i, y[i], w[i], t, h)
+
+    def _pair_event(self, sim, a: int, b: int, y: dict, w: dict, t: float, h: float, held: set) -> None:
+        """The impact of bodies a and b at y[a], y[b] (in place): the two-body law, two events, the grounds after."""
+        solver = self.solver
+        d = self.contact(y[a], a, y[b], b)
+        count = int(self._count1[0])
+        n = self._normal1[0].copy()
+        for c in range(count):
+            self._gpoints[c] = 0.5 * (self._points1[0, c, 0:3] + self._points1[0, c, 3:6])
+        points = self._gpoints[:count].copy()
+        pa, pb = sim._prm[a], sim._prm[b]
+        before = self._relative_normal_speed(y[a], pa, y[b], pb, count)
+        e, mu = pair_material(self._shapes[a], self._shapes[b])
+        ya, yb = y[a].copy(), y[b].copy()
+        impulse, e0, e1, alpha = pair_impact(y[a], ya, pa, y[b], yb, pb, count, points, n[0], n[1], n[2], e, mu,
+                                             self._jac, self._work)
+        self.contact(ya, a, yb, b)
+        after = self._relative_normal_speed(ya, pa, yb, pb, count)
+        self.impacts += 1
+        if alpha < e:
+            solver.counts["restitution_capped"] += 1
+        if count > 1 and e > 0.0:
+            solver.counts["multi_contact_elastic"] += 1
+        point = tuple(points.mean(axis=0).tolist())
+        for i, other, y_before, y_after, sign in ((a, b, y[a], ya, -1.0), (b, a, y[b], yb, 1.0)):
+            prm = sim._prm[i]
+            dv = y_after[L.V:L.V + 3] - y_before[L.V:L.V + 3]
+            dw = y_after[L.W:L.W + 3] - y_before[L.W:L.W + 3]
+            q = y_before[L.Q:L.Q + 4]
+            solver.impact_impulses[i, 0:3] += prm[L.MASS] * dv
+            solver.impact_impulses[i, 3:6] += quat_rotate(q, prm[L.INERTIA:L.INERTIA + 3] * dw)
+            solver.events.append(ContactEvent(
+                t, solver.names[i], -1, "impact", before, after, impulse, e0, e1, tuple(dv.tolist()),
+                tuple(dw.tolist()), tuple(q.tolist()), count, float(alpha), other=solver.names[other],
+                point_world=point, normal_world=tuple((sign * n).tolist()), distance=d))
+        y[a][L.V:L.W + 3] = ya[L.V:L.W + 3]
+        y[b][L.V:L.W + 3] = yb[L.V:L.W + 3]
+        for i in (a, b):
+            if i not in held:
+                continue
+            # set in flight by the impact; if it is now driven into its ground, that ground's impact follows
+            j = int(solver.ground_of[i])
+            w[i] = solver._bare_rows[i].copy()
+            solver.modes[i] = FLIGHT
+            solver.sliding[i] = False
+            g = solver.grounds[j, NORMAL:NORMAL + 3]
+            k = solver._tracked_points(sim, y[i], i)
+            toward, _ = normal_speeds(y[i], sim._prm[i], k, solver._points, g[0], g[1], g[2], solver._work)
+            if k and toward < 0.0:
+                solver._impact(sim, i, y[i], w[i], t, h)
+            else:
+                solver.events.append(ContactEvent(t, solver.names[i], j, "lift-off", toward, toward))
+
+
+def _groups(hits: list[tuple[int, int]], is_static: np.ndarray) -> list[set[int]]:
+    """The connected groups of moving bodies linked by ``hits`` (a static shape links nothing)."""
+    parent: dict[int, int] = {}
+
+    def root(i: int) -> int:
+        while parent.setdefault(i, i) != i:
+            i = parent[i]
+        return i
+
+    for a, b in hits:
+        ra = root(a)
+        if not is_static[b]:
+            rb = root(b)
+            if ra != rb:
+                parent[rb] = ra
+    groups: dict[int, set[int]] = {}
+    for i in list(parent):
+        groups.setdefault(root(i), set()).add(i)
+    return list(groups.values())
