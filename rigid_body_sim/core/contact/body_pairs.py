@@ -48,7 +48,7 @@ import math
 import numpy as np
 
 from ..kernels import layout as L
-from ..kernels.contact.impacts import IMPACT_WORK_SHAPE
+from ..kernels.contact.impacts import IMPACT_WORK_SHAPE, impact, kinetic_energy_row
 from ..kernels.contact.layout import DIMS, KIND, NORMAL, PERSISTENT, FLIGHT, SHAPE_SPHERE
 from ..kernels.contact.pair_impacts import PAIR_JACOBIAN_SHAPE, pair_impact
 from ..kernels.contact.pairs import MAX_PAIR_POINTS, pair_contacts
@@ -66,6 +66,18 @@ __all__ = ["BodyPairs", "ADVANCE_SKIN", "MAX_ADVANCE"]
 ADVANCE_SKIN = 1e-4
 #: Most conservative-advancement samples in one piece of a step (then the step's end is trusted).
 MAX_ADVANCE = 400
+#: Most rounds of a pair's impact and its members' ground impacts at one instant (module docstring, 4).
+MAX_SEQUENTIAL = 200
+#: Most events of one group in one step (more is reported as an error, not looped on).
+MAX_GROUP_EVENTS = 10_000
+#: Rounds of impacts at one piece's start before the pairs still approaching are left for the piece.
+MAX_ROUNDS = 10
+#: A pair whose signed distance is below this × its size (m per m) touches.
+TOUCHING = 1e-12
+#: A relative normal velocity below −this (m/s) approaches.
+APPROACH_SPEED = 1e-12
+#: A resting body whose contact points move away from its ground faster than this (m/s) lifts off.
+LIFT_OFF_SPEED = 1e-9
 
 
 class BodyPairs:
@@ -112,6 +124,8 @@ class BodyPairs:
         self._gpoints = np.empty((MAX_PAIR_POINTS, 3))
         #: Impacts between moving bodies since the solver was made or reset.
         self.impacts = 0
+        #: Pairs found overlapping at a step's start and moved apart (a body lying on another: module docstring).
+        self.separations = 0
 
     # ----------------------------------------------------------------- geometry
 
@@ -140,14 +154,20 @@ class BodyPairs:
                       np.empty((k, MAX_PAIR_POINTS, 6)), np.empty((k, MAX_PAIR_POINTS)))
         return dist, normal
 
-    def _relative_normal_speed(self, ya, pa, yb, pb, count) -> float:
-        """The least normal velocity of b over a at the buffers' contact points (m/s, < 0 approaching)."""
-        n = self._normal1[0]
+    def _geometry(self) -> tuple[np.ndarray, np.ndarray, float]:
+        """(normal from a to b (3,), contact points (k, 3) mid-way between the surfaces, signed distance) of the
+        last :meth:`contact` call."""
+        count = int(self._count1[0])
+        points = 0.5 * (self._points1[0, :count, 0:3] + self._points1[0, :count, 3:6])
+        return self._normal1[0].copy(), points, float(self._dist1[0])
+
+    @staticmethod
+    def _relative_normal_speed(ya, yb, n, points) -> float:
+        """The least normal velocity of b over a at the contact points (k, 3) (m/s, < 0 approaching)."""
         lowest = math.inf
         w_a = quat_rotate(ya[L.Q:L.Q + 4], ya[L.W:L.W + 3])
         w_b = quat_rotate(yb[L.Q:L.Q + 4], yb[L.W:L.W + 3])
-        for c in range(count):
-            x = 0.5 * (self._points1[0, c, 0:3] + self._points1[0, c, 3:6])
+        for x in points:
             u = (yb[L.V:L.V + 3] + np.cross(w_b, x - yb[L.P:L.P + 3])) - (ya[L.V:L.V + 3] + np.cross(w_a, x - ya[L.P:L.P + 3]))
             lowest = min(lowest, float(u @ n))
         return lowest
@@ -204,7 +224,8 @@ class BodyPairs:
 
     def _approaching(self, sim, ya, a, yb, b) -> bool:
         self.contact(ya, a, yb, b)
-        return self._relative_normal_speed(ya, sim._prm[a], yb, sim._prm[b], int(self._count1[0])) < 0.0
+        n, points, _ = self._geometry()
+        return self._relative_normal_speed(ya, yb, n, points) < -APPROACH_SPEED
 
     def _passes(self, sim, pair, Y0, Y1, h) -> bool:
         """Whether the two bounding spheres may meet along the step (their centres' chords, grown by the sag bound)."""
@@ -281,25 +302,32 @@ class BodyPairs:
         active = set(members)
         #: members still held on their ground with the holding force of the step's start (w[i] holds it)
         held = {i for i in members if solver.modes[i] == PERSISTENT}
-        masked: set = set()
-        while h > 0.0 and active:
-            live = [(a, b) for a, b in pairs if a in active and b in active and (a, b) not in masked]
-            if not live and not any(solver.modes[i] == FLIGHT for i in active):
+        rounds = 0
+        grazed: set = set()
+        for _ in range(MAX_GROUP_EVENTS):
+            if h <= 0.0 or not active:
                 break
-            # a pair overlapping at the piece's start: an impact at once if it approaches, else left to separate
-            now = [(a, b) for a, b in live if self.contact(y[a], a, y[b], b) <= 0.0]
-            if now:
-                a, b = now[0]
-                masked.add((a, b))
-                if self._approaching(sim, y[a], a, y[b], b):
-                    self._after_pair(sim, a, b, y, w, t, h, held, active)
+            pairs_now = [(a, b) for a, b in pairs if a in active and b in active and (a, b) not in grazed]
+            if not pairs_now and not any(solver.modes[i] == FLIGHT for i in active):
+                break
+            # pairs touching at the piece's start: those that approach have their impacts now, all together
+            # (sequential rounds, so that a chain passes its impulse on); the others are left for this piece
+            touching = [(a, b) for a, b in pairs_now if self.contact(y[a], a, y[b], b)
+                        <= TOUCHING * max(self.size[a], self.size[b])]
+            closing = [(a, b) for a, b in touching if self._approaching(sim, y[a], a, y[b], b)]
+            if closing and rounds < MAX_ROUNDS:
+                rounds += 1
+                for a, b in closing:
+                    self._separate(sim, a, b, y, held)
+                self._after_impacts(sim, touching, y, w, t, h, held, active)
                 continue
+            live = [p for p in pairs_now if p not in touching]
             flying = [i for i in active if solver.modes[i] == FLIGHT]
-            touching = [i for i in flying if solver._gap(sim, y[i], i)[0] <= 0.0]
-            for i in touching:  # on its ground already (just after an impact): on its own from here
+            on_ground = [i for i in flying if solver._gap(sim, y[i], i)[0] <= 0.0]
+            for i in on_ground:  # on its ground already (just after an impact): on its own from here
                 active.discard(i)
                 self._finish(sim, i, y, w, t, h, held)
-            if touching:
+            if on_ground:
                 continue
             cache: dict[float, dict[int, np.ndarray]] = {}
 
@@ -356,26 +384,34 @@ class BodyPairs:
             t, h = t + s * h, h - s * h
             if key[0] == "pair":
                 _, a, b = key
-                masked.add((a, b))
-                self._after_pair(sim, a, b, y, w, t, h, held, active)
+                if self._approaching(sim, y[a], a, y[b], b):  # with every other pair touching now
+                    touching = [p for p in pairs_now if p == (a, b) or p in touching or self.contact(
+                        y[p[0]], p[0], y[p[1]], p[1]) <= TOUCHING * max(self.size[p[0]], self.size[p[1]])]
+                    self._after_impacts(sim, touching, y, w, t, h, held, active)
+                    rounds = 0
+                else:  # grazing: it does not approach at its root; looked at again from the next step
+                    grazed.add((a, b))
             else:
                 i = key[1]
                 solver._impact(sim, i, y[i], w[i], t, h)
                 active.discard(i)
                 self._finish(sim, i, y, w, t, h, held)
+        else:
+            names = ", ".join(repr(solver.names[i]) for i in members)
+            raise RuntimeError(f"bodies {names}: more than {MAX_GROUP_EVENTS} body–body events in one step at t = {t}")
         for i in list(active):
             self._finish(sim, i, y, w, t, h, held)
         for i in members:
             Y1[i, :L.STATE_WIDTH] = y[i][:L.STATE_WIDTH]
 
-    def _after_pair(self, sim, a: int, b: int, y: dict, w: dict, t: float, h: float, held: set, active: set) -> None:
-        """The impact of pair a, b at y; a member that was held on its ground goes on on its own from there."""
-        self._pair_event(sim, a, b, y, w, t, h, held)
-        for i in (a, b):
-            if i in held:
-                held.discard(i)
-                active.discard(i)
-                self._finish(sim, i, y, w, t, h, held)
+    def _after_impacts(self, sim, pairs: list, y: dict, w: dict, t: float, h: float, held: set,
+                       active: set) -> None:
+        """The impacts of ``pairs`` at y; a member that lifted off its ground goes on on its own from there."""
+        was = held & {i for pair in pairs for i in pair}
+        self._impacts(sim, pairs, y, w, t, held)
+        for i in was - held:
+            active.discard(i)
+            self._finish(sim, i, y, w, t, h, held)
 
     def _finish(self, sim, i: int, y: dict, w: dict, t: float, h: float, held: set) -> None:
         """Body i's rest of the step (h from y[i]) on its own: the ground pass's flight or resting path."""
@@ -388,57 +424,109 @@ class BodyPairs:
         else:
             y[i] = solver._with_events(sim, i, y[i], w[i], t, h)
 
-    def _pair_event(self, sim, a: int, b: int, y: dict, w: dict, t: float, h: float, held: set) -> None:
-        """The impact of bodies a and b at y[a], y[b] (in place): the two-body law, two events, the grounds after."""
+    def _impacts(self, sim, pairs: list, y: dict, w: dict, t: float, held: set) -> None:
+        """The impacts of ``pairs`` (of bodies at y, in place) at one instant: each pair's two-body law in turn,
+        and the ground's law for a member held on one that it drives in, round after round while any pair
+        still approaches (sequential impacts, module docstring 4); one event per body and pair."""
         solver = self.solver
-        d = self.contact(y[a], a, y[b], b)
-        count = int(self._count1[0])
-        n = self._normal1[0].copy()
-        for c in range(count):
-            self._gpoints[c] = 0.5 * (self._points1[0, c, 0:3] + self._points1[0, c, 3:6])
-        points = self._gpoints[:count].copy()
-        pa, pb = sim._prm[a], sim._prm[b]
-        before = self._relative_normal_speed(y[a], pa, y[b], pb, count)
-        e, mu = pair_material(self._shapes[a], self._shapes[b])
-        ya, yb = y[a].copy(), y[b].copy()
-        impulse, e0, e1, alpha = pair_impact(y[a], ya, pa, y[b], yb, pb, count, points, n[0], n[1], n[2], e, mu,
-                                             self._jac, self._work)
-        self.contact(ya, a, yb, b)
-        after = self._relative_normal_speed(ya, pa, yb, pb, count)
-        self.impacts += 1
-        if alpha < e:
-            solver.counts["restitution_capped"] += 1
-        if count > 1 and e > 0.0:
-            solver.counts["multi_contact_elastic"] += 1
-        point = tuple(points.mean(axis=0).tolist())
-        for i, other, y_before, y_after, sign in ((a, b, y[a], ya, -1.0), (b, a, y[b], yb, 1.0)):
-            prm = sim._prm[i]
-            dv = y_after[L.V:L.V + 3] - y_before[L.V:L.V + 3]
-            dw = y_after[L.W:L.W + 3] - y_before[L.W:L.W + 3]
-            q = y_before[L.Q:L.Q + 4]
-            solver.impact_impulses[i, 0:3] += prm[L.MASS] * dv
-            solver.impact_impulses[i, 3:6] += quat_rotate(q, prm[L.INERTIA:L.INERTIA + 3] * dw)
-            solver.events.append(ContactEvent(
-                t, solver.names[i], -1, "impact", before, after, impulse, e0, e1, tuple(dv.tolist()),
-                tuple(dw.tolist()), tuple(q.tolist()), count, float(alpha), other=solver.names[other],
-                point_world=point, normal_world=tuple((sign * n).tolist()), distance=d))
-        y[a][L.V:L.W + 3] = ya[L.V:L.W + 3]
-        y[b][L.V:L.W + 3] = yb[L.V:L.W + 3]
-        for i in (a, b):
-            if i not in held:
-                continue
-            # set in flight by the impact; if it is now driven into its ground, that ground's impact follows
+        geometry = []
+        for a, b in pairs:
+            self.contact(y[a], a, y[b], b)
+            geometry.append(self._geometry() + pair_material(self._shapes[a], self._shapes[b]))
+        bodies = sorted({i for pair in pairs for i in pair})
+        energy_before = sum(kinetic_energy_row(y[i], sim._prm[i]) for i in bodies)
+        befores = [self._relative_normal_speed(y[a], y[b], g[0], g[1]) for (a, b), g in zip(pairs, geometry)]
+        totals = [0.0] * len(pairs)
+        alphas = [g[3] for g in geometry]
+        jumps = [{a: np.zeros(6), b: np.zeros(6)} for a, b in pairs]  # per pair, each body's share of its jump
+        grounded = held & set(bodies)
+        for _ in range(MAX_SEQUENTIAL):
+            moved = False
+            for k, (a, b) in enumerate(pairs):
+                n, points, _, e, mu = geometry[k]
+                if self._relative_normal_speed(y[a], y[b], n, points) >= -APPROACH_SPEED:
+                    continue
+                moved = True
+                start = {a: y[a].copy(), b: y[b].copy()}
+                ya, yb = y[a].copy(), y[b].copy()
+                impulse, _, _, alpha = pair_impact(y[a], ya, sim._prm[a], y[b], yb, sim._prm[b], len(points), points,
+                                                   n[0], n[1], n[2], e, mu, self._jac, self._work)
+                totals[k] += impulse
+                alphas[k] = min(alphas[k], alpha)
+                y[a][L.V:L.W + 3] = ya[L.V:L.W + 3]
+                y[b][L.V:L.W + 3] = yb[L.V:L.W + 3]
+                for i in (a, b):
+                    if i in grounded:  # its ground takes what drives it in
+                        self._ground_push(sim, i, y[i])
+                    jumps[k][i] += np.concatenate((y[i][L.V:L.V + 3] - start[i][L.V:L.V + 3],
+                                                   y[i][L.W:L.W + 3] - start[i][L.W:L.W + 3]))
+            if not moved:
+                break
+        energy_after = sum(kinetic_energy_row(y[i], sim._prm[i]) for i in bodies)
+        for k, (a, b) in enumerate(pairs):
+            if totals[k] == 0.0 and not jumps[k][a].any() and not jumps[k][b].any():
+                continue  # touching, but it took no part
+            n, points, d, e, _ = geometry[k]
+            after = self._relative_normal_speed(y[a], y[b], n, points)
+            self.impacts += 1
+            if alphas[k] < e:
+                solver.counts["restitution_capped"] += 1
+            if len(points) > 1 and e > 0.0:
+                solver.counts["multi_contact_elastic"] += 1
+            point = tuple(points.mean(axis=0).tolist())
+            for i, other, sign in ((a, b, -1.0), (b, a, 1.0)):
+                prm = sim._prm[i]
+                dv, dw = jumps[k][i][0:3], jumps[k][i][3:6]
+                q = y[i][L.Q:L.Q + 4]
+                solver.impact_impulses[i, 0:3] += prm[L.MASS] * dv
+                solver.impact_impulses[i, 3:6] += quat_rotate(q, prm[L.INERTIA:L.INERTIA + 3] * dw)
+                solver.events.append(ContactEvent(
+                    t, solver.names[i], -1, "impact", befores[k], after, totals[k], energy_before, energy_after,
+                    tuple(dv.tolist()), tuple(dw.tolist()), tuple(q.tolist()), len(points), float(alphas[k]),
+                    other=solver.names[other], point_world=point, normal_world=tuple((sign * n).tolist()), distance=d))
+        for i in sorted(grounded):  # still resting on its ground unless all its contact points now move away from it
             j = int(solver.ground_of[i])
-            w[i] = solver._bare_rows[i].copy()
-            solver.modes[i] = FLIGHT
-            solver.sliding[i] = False
             g = solver.grounds[j, NORMAL:NORMAL + 3]
             k = solver._tracked_points(sim, y[i], i)
-            toward, _ = normal_speeds(y[i], sim._prm[i], k, solver._points, g[0], g[1], g[2], solver._work)
-            if k and toward < 0.0:
-                solver._impact(sim, i, y[i], w[i], t, h)
-            else:
-                solver.events.append(ContactEvent(t, solver.names[i], j, "lift-off", toward, toward))
+            lowest, _ = normal_speeds(y[i], sim._prm[i], k, solver._points, g[0], g[1], g[2], solver._work)
+            if k == 0 or lowest > LIFT_OFF_SPEED:
+                held.discard(i)
+                w[i] = solver._bare_rows[i].copy()
+                solver.modes[i] = FLIGHT
+                solver.sliding[i] = False
+                solver.events.append(ContactEvent(t, solver.names[i], j, "lift-off", lowest, lowest))
+
+    def _ground_push(self, sim, i: int, y: np.ndarray) -> bool:
+        """Body i, resting on its ground, after a pair impulse: the ground's impact law if its contact points
+        now move into the ground (in place); whether it did."""
+        solver = self.solver
+        j = int(solver.ground_of[i])
+        g = solver.grounds[j, NORMAL:NORMAL + 3]
+        k = solver._tracked_points(sim, y, i)
+        lowest, _ = normal_speeds(y, sim._prm[i], k, solver._points, g[0], g[1], g[2], solver._work)
+        if k == 0 or lowest >= -APPROACH_SPEED:
+            return False
+        out = y.copy()
+        impact(y, out, sim._prm[i], k, solver._points, g[0], g[1], g[2], float(solver.restitution[i, j]),
+               float(solver.friction[i, j]), solver._work)
+        y[L.V:L.W + 3] = out[L.V:L.W + 3]
+        return True
+
+    def _separate(self, sim, a: int, b: int, y: dict, held: set) -> float:
+        """Bodies a and b overlapping at y (a step's start): moved apart along the normal by the depth (a held one
+        stays: its ground is under it), shared by inverse mass otherwise; returns the depth (m)."""
+        d = self.contact(y[a], a, y[b], b)
+        if d >= 0.0:
+            return 0.0
+        n = self._normal1[0]
+        inv_a = 0.0 if a in held else sim._prm[a, L.INV_MASS]
+        inv_b = 0.0 if b in held else sim._prm[b, L.INV_MASS]
+        if inv_a + inv_b == 0.0:
+            return 0.0
+        y[a][L.P:L.P + 3] += d * n * inv_a / (inv_a + inv_b)
+        y[b][L.P:L.P + 3] -= d * n * inv_b / (inv_a + inv_b)
+        self.separations += 1
+        return -d
 
 
 def _groups(hits: list[tuple[int, int]], is_static: np.ndarray) -> list[set[int]]:
