@@ -6,14 +6,14 @@ After each step, before the ground pass:
 
 1. **Swept broad phase** (compiled, no allocation; kernels/contact/swept.py): every moving body
    with a shape and every static shape gets the world box its bounding sphere stays in over the
-   step; overlapping boxes are the candidate pairs. A step without a candidate costs these two
+   step; overlapping boxes, found with a hashed uniform grid, are the candidate pairs. A step without a candidate costs these two
    compiled loops and nothing else (no Python per body or per pair).
 2. **Narrow phase** on the candidates (one compiled call at the step's end, one at its start;
    kernels/contact/pairs.py). A pair of moving bodies meets in the step if its signed distance
    is negative at the end, or it overlaps at the start while approaching; a pair apart at both
-   ends whose centres' chords come within the sum of the bounding radii is followed along the
-   step by **conservative advancement** (below), so that an event which starts and ends inside
-   one step is still found. A body against a static shape is looked at here only in that
+   ends (d₀, d₁ ≥ 0) that could have met in between (d₀ + d₁ ≤ B h, B the bound on |d′| below)
+   is followed along the step by **conservative advancement** (below), so that an event which
+   starts and ends inside one step is still found. A body against a static shape is looked at here only in that
    last case (a passage through it inside the step); a negative distance at the step's end is
    the ground pass's (static_geometry.py).
 3. **Groups**: bodies linked by such pairs are stepped together, event after event, from the
@@ -53,7 +53,7 @@ from ..kernels.contact.layout import DIMS, KIND, NORMAL, PERSISTENT, FLIGHT, SHA
 from ..kernels.contact.pair_impacts import PAIR_JACOBIAN_SHAPE, pair_impact
 from ..kernels.contact.pairs import MAX_PAIR_POINTS, pair_contacts
 from ..kernels.contact.persistent import normal_speeds
-from ..kernels.contact.swept import swept_bounds, swept_pairs
+from ..kernels.contact.swept import grid_swept_pairs, swept_bounds
 from ..quaternion import quat_multiply, quat_rotate
 from .events import ContactEvent
 from .materials import pair_material
@@ -107,12 +107,11 @@ class BodyPairs:
         self.is_static = np.zeros(len(shapes), dtype=bool)
         self.is_static[statics] = True
         self._lo, self._hi = np.empty((m, 3)), np.empty((m, 3))
-        self._order = np.arange(m, dtype=np.int64)
+        self._cells, self._chain = np.empty((m, 3), dtype=np.int64), np.empty(m, dtype=np.int64)
+        self._heads = np.empty(1 << max(4, int(2 * m - 1).bit_length()), dtype=np.int64)  # ≥ 2 M buckets
         self._pairs = np.empty((max(4 * m, 16), 2), dtype=np.int64)
         self._q_PB = sim._prm[:, L.Q_PB:L.Q_PB + 4].copy()
         self._shapes = np.ascontiguousarray(shapes)
-        spread = np.ptp(sim._Ys[sim._control[L.CUR]][self.members, L.P:L.P + 3], axis=0)
-        self._axis = int(np.argmax(spread))
         # two-shape narrow-phase buffers
         self._pos2, self._quat2 = np.zeros((2, 3)), np.zeros((2, 4))
         self._shape2 = np.zeros((2, shapes.shape[1]))
@@ -178,12 +177,13 @@ class BodyPairs:
                    h: float) -> np.ndarray | None:
         """Find and resolve the step's body–body events; the bodies done here as a bool mask (None: none)."""
         swept_bounds(Y0, Y1, self.members, self.reach, h, self._lo, self._hi)
-        found = swept_pairs(self._lo, self._hi, self._order, self._axis, self.movable, self._pairs)
+        found = grid_swept_pairs(self._lo, self._hi, self.movable, self._cells, self._heads, self._chain, self._pairs)
         if found == 0:
             return None
         if found > len(self._pairs):
             self._pairs = np.empty((2 * found, 2), dtype=np.int64)
-            found = swept_pairs(self._lo, self._hi, self._order, self._axis, self.movable, self._pairs)
+            found = grid_swept_pairs(self._lo, self._hi, self.movable, self._cells, self._heads, self._chain,
+                                     self._pairs)
         pairs = self.members[self._pairs[:found]]
         stopped = sim._stopped
         pairs = pairs[~(stopped[pairs[:, 0]] | stopped[pairs[:, 1]])]
@@ -202,43 +202,51 @@ class BodyPairs:
         return done
 
     def _hits(self, sim, pairs: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, h: float) -> list[tuple[int, int]]:
-        """The candidate pairs that meet inside the step (module docstring, 2); a static shape is never first."""
+        """The candidate pairs that meet inside the step (module docstring, 2); a static shape is never first.
+
+        Vectorised over the candidates; Python per pair only for those that overlap at an end of the
+        step or that may have passed through each other: apart at both ends with d₀ + d₁ ≤ B h (B the
+        bound on |d′| of :meth:`_pair_bounds`; if |d′| ≤ B, d stays ≥ (d₀ + d₁ − B h)/2 > 0 otherwise).
+        """
         solver = self.solver
         static_a = self.is_static[pairs[:, 0]]
         pairs = np.where(static_a[:, None], pairs[:, ::-1], pairs)  # a moving body first
         d1, _ = self._batch(Y1, pairs)
         d0, _ = self._batch(Y0, pairs)
+        static = self.is_static[pairs[:, 1]]
+        resting = solver.modes[pairs[:, 0]] == PERSISTENT
+        ends = ~static & ((d1 < 0.0) | (d0 < 0.0))
+        inside = (d0 >= 0.0) & (d1 >= 0.0) & ~(static & resting)
+        inside &= d0 + d1 <= self._pair_bounds(pairs, Y0, Y1) * h
         hits = []
-        for k in range(len(pairs)):
+        for k in np.flatnonzero(ends | inside):
             a, b = int(pairs[k, 0]), int(pairs[k, 1])
-            static = bool(self.is_static[b])
-            if d1[k] < 0.0 and not static:
+            if d1[k] < 0.0:
                 hits.append((a, b))
-            elif d0[k] < 0.0 and not static:
+            elif d0[k] < 0.0:
                 if self._approaching(sim, Y0[a], a, Y0[b], b):
                     hits.append((a, b))
-            elif d1[k] >= 0.0 and d0[k] >= 0.0 and not (static and solver.modes[a] == PERSISTENT):
-                if self._passes(sim, pairs[k], Y0, Y1, h) and self._advance_hits(sim, a, b, Y0, h):
-                    hits.append((a, b))
+            elif self._advance_hits(sim, a, b, Y0, h):
+                hits.append((a, b))
         return hits
+
+    def _pair_bounds(self, pairs: np.ndarray, Y0: np.ndarray, Y1: np.ndarray) -> np.ndarray:
+        """(k,) bounds (m/s) on |d′| of the pairs over the step (:meth:`_pair_bound`, vectorised)."""
+        a, b = pairs[:, 0], pairs[:, 1]
+        V = slice(L.V, L.V + 3)
+        rel0, rel1 = Y0[b, V] - Y0[a, V], Y1[b, V] - Y1[a, V]
+        bound = np.maximum(np.linalg.norm(rel0, axis=1), np.linalg.norm(rel1, axis=1))
+        bound += np.linalg.norm(rel1 - rel0, axis=1)
+        W = slice(L.W, L.W + 3)
+        for i in (a, b):
+            spin = np.maximum(np.linalg.norm(Y0[i, W], axis=1), np.linalg.norm(Y1[i, W], axis=1))
+            bound += (spin + np.linalg.norm(Y1[i, W] - Y0[i, W], axis=1)) * self.spin_reach[i]
+        return bound
 
     def _approaching(self, sim, ya, a, yb, b) -> bool:
         self.contact(ya, a, yb, b)
         n, points, _ = self._geometry()
         return self._relative_normal_speed(ya, yb, n, points) < -APPROACH_SPEED
-
-    def _passes(self, sim, pair, Y0, Y1, h) -> bool:
-        """Whether the two bounding spheres may meet along the step (their centres' chords, grown by the sag bound)."""
-        a, b = int(pair[0]), int(pair[1])
-        r = bounding_radius(self._shapes[a]) + bounding_radius(self._shapes[b])
-        c0 = Y0[b, L.P:L.P + 3] - Y0[a, L.P:L.P + 3]
-        c1 = Y1[b, L.P:L.P + 3] - Y1[a, L.P:L.P + 3]
-        dv = (Y1[b, L.V:L.V + 3] - Y0[b, L.V:L.V + 3]) - (Y1[a, L.V:L.V + 3] - Y0[a, L.V:L.V + 3])
-        grow = 0.25 * h * float(np.linalg.norm(dv))
-        d = c1 - c0
-        dd = float(d @ d)
-        s = 0.0 if dd == 0.0 else min(1.0, max(0.0, -float(c0 @ d) / dd))
-        return float(np.linalg.norm(c0 + s * d)) <= r + grow
 
     def _advance_hits(self, sim, a: int, b: int, Y0: np.ndarray, h: float) -> bool:
         """Whether conservative advancement of pair (a, b) over the step finds it overlapping."""
