@@ -30,6 +30,13 @@ is a plane row of :attr:`ContactSolver.grounds` after the half-spaces (a static 
 body's tangent row); bodies resting on such a row take the Python path. Without static shapes
 ``grounds`` are the half-spaces and the code path is the one without them.
 
+Moving bodies meet each other in a pass before the ground's (body_pairs.py, :attr:`ContactSolver.pairs`):
+a swept broad phase and the narrow phase find the pairs that met inside the step, the bodies of
+such a pair are stepped again together from the step's start and the two-body impact law acts at
+the root of their signed distance along both step maps; those bodies are then left out of the
+ground's pass for this step. Without two moving bodies with a shape, and without static shapes,
+``pairs`` is None and nothing of it runs.
+
 Persistent contact tracks *features* (shapes.feature_gaps: box corners, capsule ends, cylinder
 rims), so resting on a face, pivoting on an edge or rolling on a rim are one mechanism. The
 holding force is found at the start of each step and held over it (zero-order hold): exact
