@@ -194,7 +194,7 @@ def test_set_state_into_a_static_shape_is_refused_naming_it() -> None:
 def test_recording_carries_contacts_and_foxglove_decodes_them(tmp_path: Path) -> None:
     import base64
 
-    from test_foxglove_readers import (by_topic, check_everything_decodes, check_schema_text, foxglove_decode,
+    from foxglove_support import (by_topic, check_everything_decodes, check_schema_text, foxglove_decode,
                                        graph_qos, recorded_qos, stamp_ns)
 
     out = tmp_path / "ball.mcap"
