@@ -296,6 +296,9 @@ def main(argv: list[str] | None = None) -> int:
     cases = [c for c in CASES if (not args.bodies or c[0] in args.bodies)
              and args.recording in ("both", "yes" if c[2] else "no")]
     rows = []
+    # Stopped with SIGTERM (kill, a CI timeout) as with Ctrl-C: the finally blocks stop the node and the
+    # listener and the temporary directory goes, rather than a node left recording into it.
+    signal.signal(signal.SIGTERM, lambda signum, frame: sys.exit(128 + signum))
     domain, _lock = claim_domain()  # held until the process ends
     load_before = os.getloadavg()
     with tempfile.TemporaryDirectory() as directory:
