@@ -166,7 +166,7 @@ def claim_domain() -> tuple[int, object]:
 
 
 def measure(scene: Path, n: int, rate_hz: float, seconds: float, depth: int, record: Path | None = None,
-            domain: int = 78) -> dict:
+            domain: int = 78, publisher_depth: int = 1) -> dict:
     """One run of the node on ``scene`` (recording to ``record`` if given): the figures of the module docstring."""
     env = {**os.environ, "ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
     work = Path(tempfile.mkdtemp(prefix="node_batch_"))
@@ -180,7 +180,9 @@ def measure(scene: Path, n: int, rate_hz: float, seconds: float, depth: int, rec
     start = time.monotonic()
     process = subprocess.Popen([str(NODE), "--ros-args", "-p", f"scene:={scene}", "-p", f"rate_hz:={rate_hz}",
                                 "-p", "per_body_topics:=false", "-p", "status_period:=0.0", "-p", "integrator:=rk4",
-                                "-p", "substeps:=1", *(["-p", f"record_path:={record}"] if record else [])],
+                                "-p", "substeps:=1", *(["-p", f"record_path:={record}"] if record else []),
+                                *(["-p", f"qos_overrides./poses.publisher.depth:={publisher_depth}"]
+                                  if publisher_depth != 1 else [])],
                                stdout=log, stderr=subprocess.STDOUT, env=env)
     row: dict = {"bodies": n, "rate_hz": rate_hz, "recording": record is not None}
     try:
@@ -284,6 +286,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seconds", type=float)
     parser.add_argument("--bodies", type=int, nargs="*", help="only these body counts")
     parser.add_argument("--depth", type=int, default=10, help="the subscriber's history depth (default 10)")
+    parser.add_argument("--publisher-depth", type=int, default=1,
+                        help="the node's poses history depth (qos_overrides./poses.publisher.depth; default 1, the node's)")
     parser.add_argument("--recording", choices=("both", "yes", "no"), default="both",
                         help="only the cases with (yes) or without (no) a recording")
     parser.add_argument("--out", type=Path, default=REPO / "benchmarks" / "results")
@@ -307,7 +311,7 @@ def main(argv: list[str] | None = None) -> int:
             runs = []
             for k in range(repeats):
                 record = Path(directory) / f"run{k}.mcap" if recording else None
-                runs.append(measure(scene, n, rate, seconds, args.depth, record, domain))
+                runs.append(measure(scene, n, rate, seconds, args.depth, record, domain, args.publisher_depth))
                 if record is not None:
                     record.unlink(missing_ok=True)
             rows.append(_median_row(runs))
@@ -317,7 +321,8 @@ def main(argv: list[str] | None = None) -> int:
             + __doc__.split("\n\n", 1)[1] + "\n" + machine.text()
             + f"    load average before the runs: {' '.join(f'{x:.2f}' for x in load_before)}, after: "
             + f"{' '.join(f'{x:.2f}' for x in load_after)}\n"
-            + f"    subscriber: keep last {args.depth}, reliable, transient local, raw, rclpy.spin\n\n"
+            + f"    subscriber: keep last {args.depth}, reliable, transient local, raw, rclpy.spin; "
+            + f"the node's poses publisher: keep last {args.publisher_depth}\n\n"
             + markdown(rows) + "\n## Targets\n\n" + targets(rows))
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "node_batch.md").write_text(text)
