@@ -12,6 +12,8 @@
   spins, materials and offsets (within the smallest half-size: they must meet) flying at each
   other (hypothesis): the kinetic energy after the step holding the impact ≤ before
   (1 + 1e-12); every impact event's too.
+* A box flying face on at a box (four contact points) and at a sphere: the impact time and the
+  1-D textbook velocities, within 1e-9.
 * A box falls onto a box (face on face) and a sphere onto a box: they do not pass through.
 * A scene with one moving body and no static shape has no body–body pass at all.
 """
@@ -80,6 +82,31 @@ def test_two_spheres_meet_the_closed_form(name):
     np.testing.assert_allclose(ev_b[0].normal_world, n, atol=1e-9)
     # and the bodies now separate along the straight lines after the impact
     assert np.linalg.norm(s.p_WC_W[1] - s.p_WC_W[0]) > RA + RB
+
+
+@pytest.mark.parametrize("kind_b", ["box", "sphere"])
+def test_a_box_meets_a_box_or_a_sphere_face_on(kind_b):
+    """A box (0.2 m cube, 1 kg) flying face on at a box (0.2 m cube, 2 kg: four contact points, the
+    clipped face) or centrally at a sphere (r = 0.1 m, 2 kg), no gravity, frictionless, e = 0.6:
+    the impact at the closed-form time (gap 0.3 m closed at 3 m/s) and the 1-D textbook velocities
+    v_a' = ((m_a − e m_b) v_a + (1 + e) m_b v_b)/(m_a + m_b), no spin (the impulses are symmetric
+    about the line of the centres), within 1e-9."""
+    e, ma, mb, va, vb = 0.6, 1.0, 2.0, 1.0, -2.0
+    shape_b = {"box": [0.2, 0.2, 0.2]} if kind_b == "box" else {"sphere": 0.1}
+    bodies = {"a": {"mass": ma, "inertia": {"box": [0.2, 0.2, 0.2]}, "material": {"restitution": e, "friction": 0.0},
+                    "pose": {"position": [0.0, 0.0, 1.0]}, "twist": {"linear": [va, 0.0, 0.0]}},
+              "b": {"mass": mb, "inertia": shape_b, "material": {"restitution": e, "friction": 0.0},
+                    "pose": {"position": [0.5, 0.0, 1.0]}, "twist": {"linear": [vb, 0.0, 0.0]}}}
+    sim = Simulator(load_scene({"gravity": [0.0, 0.0, 0.0], "ground": [], "bodies": bodies}), "rk4", 1e-3)
+    sim.step(120)
+    impacts = sim.contact.events_of("a", "impact")
+    assert len(impacts) == 1 and impacts[0].other == "b"
+    assert impacts[0].contacts == (4 if kind_b == "box" else 1)
+    assert impacts[0].time == pytest.approx(0.3 / 3.0, rel=1e-9)
+    va_after = ((ma - e * mb) * va + (1 + e) * mb * vb) / (ma + mb)
+    vb_after = ((mb - e * ma) * vb + (1 + e) * ma * va) / (ma + mb)
+    np.testing.assert_allclose(sim.state.v_WC_W, [[va_after, 0, 0], [vb_after, 0, 0]], rtol=0.0, atol=1e-9)
+    np.testing.assert_allclose(sim.state.w_WP_P, 0.0, atol=1e-9)
 
 
 _KINDS = {"sphere": lambda d: {"sphere": d[0]}, "box": lambda d: {"box": list(d)},

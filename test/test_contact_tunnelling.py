@@ -88,7 +88,8 @@ def test_a_fast_sphere_passing_the_wall_edge_is_not_stopped():
 
 def test_swept_grid_finds_every_overlapping_pair_once():
     """The hashed grid of kernels/contact/swept.py against the brute force over random boxes (the
-    definition: overlap on all three axes), with movable and fixed members."""
+    definition: overlap on all three axes), with movable members and fixed ones up to 20 times
+    larger (static shapes: tested against every movable one, outside the grid)."""
     from rigid_body_sim.core.kernels.contact.swept import grid_swept_pairs
 
     rng = np.random.default_rng(0)
@@ -97,6 +98,8 @@ def test_swept_grid_finds_every_overlapping_pair_once():
         half = rng.uniform(0.02, 0.2, (n, 3))
         lo, hi = centre - half, centre + half
         movable = rng.random(n) < 0.7
+        half[~movable] *= rng.uniform(1.0, 20.0, (int((~movable).sum()), 1))  # fixed ones of any size
+        lo, hi = centre - half, centre + half
         pairs = np.empty((n * n, 2), dtype=np.int64)
         heads = np.empty(1 << (2 * n - 1).bit_length(), dtype=np.int64)
         found = grid_swept_pairs(lo, hi, movable, np.empty((n, 3), dtype=np.int64), heads,

@@ -6,16 +6,17 @@ After each step, before the ground pass:
 
 1. **Swept broad phase** (compiled, no allocation; kernels/contact/swept.py): every moving body
    with a shape and every static shape gets the world box its bounding sphere stays in over the
-   step; overlapping boxes, found with a hashed uniform grid, are the candidate pairs. A step without a candidate costs these two
-   compiled loops and nothing else (no Python per body or per pair).
+   step; overlapping boxes, found with a hashed uniform grid, are the candidate pairs. A step
+   without a candidate costs these two compiled loops and nothing else (no Python per body or
+   per pair).
 2. **Narrow phase** on the candidates (one compiled call at the step's end, one at its start;
    kernels/contact/pairs.py). A pair of moving bodies meets in the step if its signed distance
    is negative at the end, or it overlaps at the start while approaching; a pair apart at both
    ends (d₀, d₁ ≥ 0) that could have met in between (d₀ + d₁ ≤ B h, B the bound on |d′| below)
    is followed along the step by **conservative advancement** (below), so that an event which
-   starts and ends inside one step is still found. A body against a static shape is looked at here only in that
-   last case (a passage through it inside the step); a negative distance at the step's end is
-   the ground pass's (static_geometry.py).
+   starts and ends inside one step is still found. A body against a static shape is looked at
+   here only in that last case (a passage through it inside the step); a negative distance at
+   the step's end is the ground pass's (static_geometry.py).
 3. **Groups**: bodies linked by such pairs are stepped together, event after event, from the
    step's start. Each event time is the first root of s ↦ F(s), F the least of the group's pair
    signed distances d(Φ_a(y_a0, s h), Φ_b(y_b0, s h)) and of its flying members' gaps to the
@@ -26,19 +27,28 @@ After each step, before the ground pass:
    pair's size; no component can cross zero between samples. The root in the bracket is found
    by the solver's Illinois method, to round-off.
 4. **At a pair's root** the two-body impact law (kernels/contact/pair_impacts.py) acts at the
-   narrow phase's contact points (mid-way between the two surfaces' points) with the pair's
-   material (materials.pair_material); one event per body is recorded (``other`` names the other
-   body). A body of the pair that was resting on the ground is set in flight; if the impulse
-   drives it into its ground, the ground's impact law acts at once after the pair's (sequential
-   impacts: a model choice, see docs/contact.md). At a flying member's ground or static-shape
-   root, the ground's impact law (solver._impact). After an event, the bodies it touched finish
-   the step on their own (solver._with_events); their pairs are looked at again from the next
-   step (a pair that overlaps then and approaches has its impact at the step's start).
+   narrow phase's contact points (mid-way between the two surfaces' points) and normal, with the
+   pair's material (materials.pair_material). The pairs touching at that instant are solved
+   together in sequential rounds (:meth:`BodyPairs._impacts`): each approaching pair's law in
+   turn and, for a member resting on the ground that a pair drives into it, the ground's law
+   (impacts.impact on its tracked contact points), until nothing approaches (MAX_SEQUENTIAL
+   rounds at most): for e = 0 the simultaneous inelastic impact, for e > 0 a sequential answer
+   (docs/contact.md, "Between bodies"). A resting member stays held if any of its contact points
+   still presses on its ground, else it lifts off. One event per body and pair (``other`` names
+   the other body; a body's velocity jumps are split over its events so that they add up). At
+   a flying member's ground or static-shape root, the ground's impact law (solver._impact).
+   After an event the bodies it touched finish the step on their own (solver._with_events, or
+   solver._persistent_end for a held one); the others go on together. A pair that does not
+   approach at its root (grazing) is not looked at again in that step.
+5. **Touching at a piece's start**: a pair overlapping (or touching, TOUCHING) at the start of
+   a step or of a piece and approaching has its impacts there; if it overlaps, it is first moved
+   apart along the normal by the depth, shared by inverse mass (a held member does not move).
 
 Not modelled: persistent (resting) contact between bodies. A body lying on another is kept up by
-an impact each step (e = 0: the approach of the step is removed), so it may sink into it by up
-to about a h²/2 per step (a its acceleration towards it), and the pair's normal impulse is not
-a force on ``contacts`` or the IMU's specific force.
+the impacts of item 5 at each step's start (e = 0 removes the approach of the step), so it sinks
+into it by up to about a h²/2 within a step (a its acceleration towards it) and is moved back out
+at the next step's start (a position correction, counted in :attr:`BodyPairs.separations`); the
+pair's normal impulse is not a force on ``contacts``.
 """
 
 from __future__ import annotations
@@ -120,7 +130,7 @@ class BodyPairs:
         self._points1, self._seps1 = np.empty((1, MAX_PAIR_POINTS, 6)), np.empty((1, MAX_PAIR_POINTS))
         self._jac = np.zeros(PAIR_JACOBIAN_SHAPE)
         self._work = np.zeros(IMPACT_WORK_SHAPE)
-        self._gpoints = np.empty((MAX_PAIR_POINTS, 3))
+        self._step_wrenches = np.zeros((len(shapes), L.WRENCH_WIDTH))  # the wrench rows of the step being looked at
         #: Impacts between moving bodies since the solver was made or reset.
         self.impacts = 0
         #: Pairs found overlapping at a step's start and moved apart (a body lying on another: module docstring).

@@ -221,7 +221,7 @@ class ContactSolver:
         """Modes from the current state: touching and not moving away means persistent; the events cleared."""
         self.events.clear()
         if self.pairs is not None:
-            self.pairs.impacts = 0
+            self.pairs.impacts = self.pairs.separations = 0
         self.impact_impulses[:] = 0.0
         self.holding_angular_impulses[:] = 0.0
         for key in self.counts:

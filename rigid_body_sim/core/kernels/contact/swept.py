@@ -5,11 +5,12 @@ met inside the step, not only at its end, so that a small fast body cannot pass 
 one unseen. :func:`swept_bounds` writes, for each shape, a world-axis box that holds its
 bounding sphere (radius ``reach``, about the centre of mass) all along the step: the box of the
 sphere at the step's start and end, grown by ``|v₁ − v₀| h / 4``, twice the furthest a path of
-constant acceleration strays from its chord (|a| h²/8 = |Δv| h/8). :func:`grid_swept_pairs` files each box under
-the cell of its centre in a hashed uniform grid (cell = the largest box's widest side, so two
-overlapping boxes sit in the same or neighbouring cells) and writes every overlapping pair with
-at least one movable shape: about linear in the number of shapes while they have comparable
-sizes (one huge box, a large static shape or a very fast body's sweep, makes every cell huge).
+constant acceleration strays from its chord (|a| h²/8 = |Δv| h/8). :func:`grid_swept_pairs` files each movable box
+under the cell of its centre in a hashed uniform grid (cell = the largest movable box's widest
+side, so two overlapping boxes sit in the same or neighbouring cells) and writes every
+overlapping pair: about linear in the number of shapes while the moving ones have comparable
+sizes (one huge box, a very fast body's sweep, makes every cell huge). The fixed boxes (static
+shapes, any size) are tested against every movable box: S × N tests for S of them.
 No allocation: the caller owns every array, so a step without any candidate pair
 costs two compiled loops over the shapes and nothing else.
 """
@@ -52,32 +53,43 @@ def _cell_key(cx, cy, cz, mask):
 def grid_swept_pairs(lo, hi, movable, cells, heads, chain, pairs):
     """Overlapping boxes (lo, hi (M, 3)) into pairs (capacity, 2) as rows (m, k), m < k, from a hashed grid.
 
-    Each shape meets those of its own cell and of the 13 neighbouring cells on one side (the
-    other 13 see it from theirs): every overlapping pair once.
+    Each movable shape meets those of its own cell and of the 13 neighbouring cells on one side
+    (the other 13 see it from theirs): every overlapping pair once.
 
     Scratch owned by the caller: cells (M, 3) int64, heads (2^p ≥ M,) int64 (the hash table),
-    chain (M,) int64. A pair of two members that are not ``movable`` is skipped. Returns the
-    number found (beyond the capacity only the first ``capacity`` are written).
+    chain (M,) int64. Only movable members are filed in the grid; each one that is not is
+    tested against every movable one (a pair of two fixed members is never written). Returns
+    the number found (beyond the capacity only the first ``capacity`` are written).
     """
     n = lo.shape[0]
     cell = 0.0
     for i in range(n):
-        for k in range(3):
-            cell = max(cell, hi[i, k] - lo[i, k])
+        if movable[i]:
+            for k in range(3):
+                cell = max(cell, hi[i, k] - lo[i, k])
     if not cell > 0.0:
         cell = 1.0
     mask = heads.shape[0] - 1
     for b in range(heads.shape[0]):
         heads[b] = -1
     for i in range(n):
-        for k in range(3):
-            cells[i, k] = int(math.floor(0.5 * (lo[i, k] + hi[i, k]) / cell))
-        key = _cell_key(cells[i, 0], cells[i, 1], cells[i, 2], mask)
-        chain[i] = heads[key]
-        heads[key] = i
+        if movable[i]:
+            for k in range(3):
+                cells[i, k] = int(math.floor(0.5 * (lo[i, k] + hi[i, k]) / cell))
+            key = _cell_key(cells[i, 0], cells[i, 1], cells[i, 2], mask)
+            chain[i] = heads[key]
+            heads[key] = i
     count = 0
     capacity = pairs.shape[0]
     for i in range(n):
+        if not movable[i]:  # a fixed box: against every movable one
+            for j in range(n):
+                if (movable[j] and lo[j, 0] <= hi[i, 0] and lo[i, 0] <= hi[j, 0] and lo[j, 1] <= hi[i, 1]
+                        and lo[i, 1] <= hi[j, 1] and lo[j, 2] <= hi[i, 2] and lo[i, 2] <= hi[j, 2]):
+                    if count < capacity:
+                        pairs[count, 0], pairs[count, 1] = min(i, j), max(i, j)
+                    count += 1
+            continue
         for nb in range(14):  # its own cell, then the 13 neighbours "after" it (each neighbour pair once)
             dx, dy, dz = 0, 0, 0
             if nb > 0:
@@ -87,7 +99,6 @@ def grid_swept_pairs(lo, hi, movable, cells, heads, chain, pairs):
             j = heads[_cell_key(cx, cy, cz, mask)]
             while j >= 0:
                 if ((nb > 0 or j > i) and cells[j, 0] == cx and cells[j, 1] == cy and cells[j, 2] == cz
-                        and (movable[i] or movable[j])
                         and lo[j, 0] <= hi[i, 0] and lo[i, 0] <= hi[j, 0] and lo[j, 1] <= hi[i, 1]
                         and lo[i, 1] <= hi[j, 1] and lo[j, 2] <= hi[i, 2] and lo[i, 2] <= hi[j, 2]):
                     if count < capacity:
