@@ -567,7 +567,8 @@ absolute; the energy change: relative to the exact change:
 
 {accuracy_table(bodies["figures"])}
 **Tunnelling** (a sphere of diameter 1 cm, 10 g, at 100 m/s; "held": it ends on its side,
-"passed": through, "inside": stuck in it; dt = 10 ms / 1 ms / 0.1 ms):
+"passed": through ("slowed": a contact acted but did not stop it), "inside": stuck in it;
+dt = 10 ms / 1 ms / 0.1 ms):
 
 {B.tunnel_table(bodies["tunnels"])}
 **Cost between bodies** (µs per step from Python of each case's scene from its start, over the
