@@ -14,6 +14,8 @@
   (1 + 1e-12); every impact event's too.
 * A box flying face on at a box (four contact points) and at a sphere: the impact time and the
   1-D textbook velocities, within 1e-9.
+* A ball dropped onto a box resting on the ground, e = 0: it stops on it (the ground takes the
+  box's share, round after round), the box stays resting.
 * A box falls onto a box (face on face) and a sphere onto a box: they do not pass through.
 * A scene with one moving body and no static shape has no body–body pass at all.
 """
@@ -159,6 +161,29 @@ def test_energy_never_rises_at_a_body_body_impact(kinds, dims, quats, spins, off
     assert _energy(sim) <= before * (1.0 + 1e-12)
     for event in sim.contact.events:
         assert event.energy_after <= event.energy_before * (1.0 + 1e-12)
+
+
+def test_a_ball_dropped_onto_a_resting_box_stops_on_it():
+    """A ball (0.5 kg, r = 0.05 m) dropped 0.3 m onto the middle of a box (2 kg) resting on the ground,
+    e = 0 everywhere: the ground under the box takes what the ball drives in, round after round
+    (body_pairs.py), which for e = 0 converges to the ball stopped by an immovable box: the impact
+    at t = √(2h/g), the ball's velocity jump +√(2gh) (1e-9 relative), the box still resting."""
+    g, drop = 9.81, 0.3
+    bodies = {"box": {"mass": 2.0, "inertia": {"box": [0.4, 0.4, 0.2]}, "material": {"restitution": 0.0, "friction": 0.5},
+                      "pose": {"position": [0.0, 0.0, 0.1]}},
+              "ball": {"mass": 0.5, "inertia": {"sphere": 0.05}, "material": {"restitution": 0.0, "friction": 0.5},
+                       "pose": {"position": [0.0, 0.0, 0.2 + 0.05 + drop]}}}
+    sim = Simulator(load_scene({"gravity": [0.0, 0.0, -g], "ground": [{"normal": [0, 0, 1], "material":
+                                                                     {"restitution": 0.0, "friction": 0.5}}],
+                                "bodies": bodies}), "rk4", 1e-3)
+    t_hit = math.sqrt(2.0 * drop / g)
+    sim.step(int(t_hit / 1e-3) + 2)
+    ball = sim.contact.events_of("ball", "impact")
+    assert len(ball) >= 1 and ball[0].other == "box"
+    assert ball[0].time == pytest.approx(t_hit, rel=1e-9)
+    assert ball[0].delta_v_world[2] == pytest.approx(math.sqrt(2.0 * g * drop), rel=1e-9)
+    assert sim.contact.is_resting("box") and not sim.contact.events_of("box", "lift-off")
+    assert abs(sim.state.v_WC_W[0]).max() <= 1e-9
 
 
 def test_a_box_lies_on_a_box_and_a_ball_on_both():

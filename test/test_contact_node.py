@@ -176,10 +176,25 @@ def test_set_state_into_the_ground_is_refused_with_a_reason() -> None:
         assert abs(h.latest_pose("ball").pose.position.z - R) < 1e-9  # resting on the ground from there
 
 
+def test_set_state_into_a_static_shape_is_refused_naming_it() -> None:
+    """The check the set_state above goes through (contacts.into_ground) covers the static world:
+    a static body's shape as well as the half-spaces."""
+    from rigid_body_sim.core import Simulator, load_scene
+    from rigid_body_sim.ros.contacts import into_ground
+
+    sim = Simulator(load_scene(CONFIG / "contact_static_table.yaml"), "rk4", TICK)
+    top, level = 0.5, [0.0, 0.0, 0.0, 1.0]  # the table's top face z = 0.5 m
+    refusal = into_ground(sim, "ball", [0.0, 0.0, top + R - 0.02], level)
+    assert refusal is not None and refusal.reason == "into_ground"
+    assert "'ball' would reach 0.02 m into static body 'table'" in refusal.detail
+    assert into_ground(sim, "ball", [0.0, 0.0, top + R], level) is None  # touching: allowed
+    assert into_ground(sim, "ball", [3.0, 0.0, R + 0.01], level) is None  # over the floor, beside the table
+
+
 def test_recording_carries_contacts_and_foxglove_decodes_them(tmp_path: Path) -> None:
     import base64
 
-    from test_foxglove_readers import (by_topic, check_everything_decodes, check_schema_text, foxglove_decode,
+    from foxglove_support import (by_topic, check_everything_decodes, check_schema_text, foxglove_decode,
                                        graph_qos, recorded_qos, stamp_ns)
 
     out = tmp_path / "ball.mcap"

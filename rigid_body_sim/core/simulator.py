@@ -652,6 +652,8 @@ class Simulator:
         self.state = state
         self._Ys[:, b, L.BOUND] = np.sqrt(kinetic_energy(self.model, state)[b])  # a new start for the bound
         self._replan()
+        if self.contact is not None and self.model.motions[b] == "static":
+            self.contact.reset(self)  # contact: the static geometry moved; modes anew from the state, as at a reset
 
     def _constrain(self, b: int, state: State) -> None:
         """Keep body b's motion in ``state`` (in place): velocities projected as wrenches are (a

@@ -1,5 +1,5 @@
 """``contacts`` (sensor_msgs/PointCloud2): the ground contacts of each tick, their /diagnostics
-counts, and the refusal of a ``set_state`` into the ground.
+counts, and the refusal of a ``set_state`` into the ground or a static shape.
 
 Published after every tick that stepped a scene with contact (``Simulator.contact`` is a
 ContactSolver: the scene has ``ground`` and a body with a ``collision`` shape), also when the
@@ -56,7 +56,7 @@ from rclpy.serialization import serialize_message
 from sensor_msgs.msg import PointCloud2, PointField
 
 from ..core import Simulator
-from ..core.contact.query import lowest_gap, lowest_gaps, lowest_point, resting_bodies, touching_points
+from ..core.contact.query import lowest_gap, lowest_gaps, nearest_static, lowest_point, resting_bodies, touching_points
 from .conversions import RejectedMessage, time_msg_from_seconds
 
 __all__ = ["CONTACT_FIELDS", "CONTACT_POINT_STEP", "STATES", "NO_INDEX", "INTO_GROUND_TOLERANCE", "ContactPublisher",
@@ -87,12 +87,17 @@ CONTACT_DTYPE = np.dtype({"names": [f[0] for f in CONTACT_FIELDS], "formats": [_
 
 def into_ground(sim: Simulator, body: str, position_world: Any, orientation_xyzw: Any) -> RejectedMessage | None:
     """The refusal (reason ``into_ground``) of putting ``body`` at that pose, if its collision shape
-    would reach into a ground half-space deeper than :data:`INTO_GROUND_TOLERANCE`; else None."""
+    would reach deeper than :data:`INTO_GROUND_TOLERANCE` into a ground half-space or into a
+    static body's shape (the static world); else None."""
     gap, ground = lowest_gap(sim, body, position_world, orientation_xyzw)
-    if gap >= -INTO_GROUND_TOLERANCE:
-        return None
-    return RejectedMessage("into_ground", f"{body!r} would reach {-gap:.6g} m into ground {ground} (n·x >= offset): "
-                                          "lift it to gap >= 0")
+    if gap < -INTO_GROUND_TOLERANCE:
+        return RejectedMessage("into_ground", f"{body!r} would reach {-gap:.6g} m into ground {ground} (n·x >= offset): "
+                                              "lift it to gap >= 0")
+    dist, static = nearest_static(sim, body, position_world, orientation_xyzw)
+    if dist < -INTO_GROUND_TOLERANCE:
+        return RejectedMessage("into_ground", f"{body!r} would reach {-dist:.6g} m into static body {static!r}: "
+                                              "move it out to a distance >= 0")
+    return None
 
 
 def contact_points(rows: list[dict[str, Any]]) -> np.ndarray:
