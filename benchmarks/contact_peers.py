@@ -558,8 +558,20 @@ def cost_table(costs: list[dict]) -> str:
     return head + body
 
 
+#: Column order of the two-body tables: ours, then each peer's settings side by side.
+BODY_COLUMNS = [("rigid_body_sim", "rk4"), ("rigid_body_sim", "semi_implicit_euler"), ("MuJoCo", "oscillator"),
+                ("MuJoCo", "calibrated"), ("MuJoCo", "default"), ("PyBullet", "default"), ("PyBullet", "tuned"),
+                ("PyBullet", "ccd")]
+
+
+def _by_column(rows: list[dict]) -> list[dict]:
+    rank = {k: i for i, k in enumerate(BODY_COLUMNS)}
+    return sorted(rows, key=lambda r: rank.get((r["engine"], r["setting"]), len(rank)))  # stable
+
+
 def bodies_text(bodies: dict) -> str:
     """The two-body section of the block: accuracy, tunnelling, cost."""
+    bodies = {k: _by_column(v) for k, v in bodies.items()}
     return f"""**Between bodies** (no gravity; benchmarks/contact_bodies.py): the error against the closed form
 of ours' law (`exact/sphere_impact.py`) at dt = 10 ms / 1 ms / 0.1 ms; a velocity or a spin
 after the impact: |x − x_exact| / |x_exact| in % (the exact |x| in brackets); the impact time:
