@@ -73,6 +73,7 @@ from .layout import (
     PENDING_FORCE,
     PENDING_FRAME,
     PENDING_TORQUE,
+    Q,
     ROW_WIDTH,
     SITE_MOMENT,
     SPENT,
@@ -158,11 +159,17 @@ def check_body(y, out, p, w, dt, limit):
     v2 = out[V] * out[V] + out[V + 1] * out[V + 1] + out[V + 2] * out[V + 2]
     energy = 0.5 * (p[MASS] * v2 + p[INERTIA] * out[W] ** 2 + p[INERTIA + 1] * out[W + 1] ** 2
                     + p[INERTIA + 2] * out[W + 2] ** 2)
+    # The energy is a sum of m·v_i² and I_i·w_i², none negative, so it is finite only if v and w
+    # are: with p, q and the energy finite the row is finite (eight numbers tested, not
+    # thirteen); otherwise all thirteen are tested. The same outcome as finite_row alone.
+    pq = (((out[P] * 0.0 + out[P + 1] * 0.0) + (out[P + 2] * 0.0 + out[Q] * 0.0))
+          + ((out[Q + 1] * 0.0 + out[Q + 2] * 0.0) + (out[Q + 3] * 0.0 + energy * 0.0)))
     outcome = OK
-    if not finite_row(out):
+    if pq != 0.0 and not finite_row(out):
         outcome = NON_FINITE
     elif energy > limit * bound * bound:
         outcome = DIVERGED
+    _pin = y[P], out[P], p[0], w[0]  # the arrays' last use, out of branches and loops (jit.py)
     return outcome
 
 
@@ -184,8 +191,9 @@ HOST_METHOD = -1
 @njit(**INLINE)
 def _checked(i, y, out, p, w, status, dt, limit, worst):
     """Check body i's step y → out (check_body), record its status; the worse of it and ``worst``."""
-    status[i] = check_body(y, out, p, w, dt, limit)
-    return _worse(worst, status[i])
+    outcome = check_body(y, out, p, w, dt, limit)
+    status[i] = outcome
+    return _worse(worst, outcome)
 
 
 def _group_loop(step, when_torque_free=False):
@@ -208,7 +216,8 @@ def _group_loop(step, when_torque_free=False):
         def loop(Y, Ynew, prm, wrenches, bodies, status, dt, limit, k, deferred):
             worst = OK
             count = 0
-            for i in bodies:
+            for m in range(bodies.shape[0]):
+                i = np.uint64(bodies[m])  # an index (≥ 0): unsigned, so no negative-index wraparound per array
                 y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[i]
                 free = torque_free(w)
                 step(y, out, p, w, dt, k)
@@ -224,7 +233,8 @@ def _group_loop(step, when_torque_free=False):
         @njit(**LOOP)
         def loop(Y, Ynew, prm, wrenches, bodies, status, dt, limit, k, deferred):
             worst = OK
-            for i in bodies:
+            for m in range(bodies.shape[0]):
+                i = np.uint64(bodies[m])  # an index (≥ 0): unsigned, so no negative-index wraparound per array
                 y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[i]
                 step(y, out, p, w, dt, k)
                 worst = _checked(i, y, out, p, w, status, dt, limit, worst)
