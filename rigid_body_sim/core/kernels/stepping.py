@@ -86,7 +86,7 @@ from .layout import (
 from .reduced_models import isotropic_free, kinematic, planar, symmetric_free, torque_free, translation
 from .jit import INLINE, JIT, LOOP
 
-__all__ = ["new_buffers", "advance", "add_pending", "step_reduced", "check_members", "clear_wrenches",
+__all__ = ["new_buffers", "advance", "add_pending", "step_reduced", "check_members", "clear_wrenches", "wrench_rows",
            "integrate", "step_group"]
 
 #: Rows of the per-call scratch: stage derivatives and the stage state of the longest tableau.
@@ -216,9 +216,10 @@ def _group_loop(step, when_torque_free=False):
         def loop(Y, Ynew, prm, wrenches, bodies, status, dt, limit, k, deferred):
             worst = OK
             count = 0
+            last = np.uint64(wrenches.shape[0] - 1)
             for m in range(bodies.shape[0]):
                 i = np.uint64(bodies[m])  # an index (≥ 0): unsigned, so no negative-index wraparound per array
-                y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[i]
+                y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[min(i, last)]  # one row for all: see wrench_rows
                 free = torque_free(w)
                 step(y, out, p, w, dt, k)
                 outcome = check_body(y, out, p, w, dt, limit)
@@ -233,9 +234,10 @@ def _group_loop(step, when_torque_free=False):
         @njit(**LOOP)
         def loop(Y, Ynew, prm, wrenches, bodies, status, dt, limit, k, deferred):
             worst = OK
+            last = np.uint64(wrenches.shape[0] - 1)
             for m in range(bodies.shape[0]):
                 i = np.uint64(bodies[m])  # an index (≥ 0): unsigned, so no negative-index wraparound per array
-                y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[i]
+                y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[min(i, last)]  # one row for all: see wrench_rows
                 step(y, out, p, w, dt, k)
                 worst = _checked(i, y, out, p, w, status, dt, limit, worst)
             return worst, 0
@@ -354,6 +356,23 @@ def add_pending(wrenches, prm, inputs):
 
 
 @njit(**JIT)
+def wrench_rows(wrenches):
+    """The wrench rows the group loops read: ``wrenches``, or its first row alone when no row holds anything.
+
+    Every reader of a wrench row ignores a row whose ACTIVE is zero (forces.body_wrench,
+    energy_bound_rate, reduced_models.torque_free), and such a row is all zeros; so when no row
+    is active every body may read the same one, which stays in cache, instead of a row of its
+    own. The loops read row min(i, rows − 1): body i's own row, or that one row.
+    """
+    rows = wrenches[:1]
+    for i in range(wrenches.shape[0]):
+        if wrenches[i, ACTIVE] != 0.0:
+            rows = wrenches
+            break
+    return rows
+
+
+@njit(**JIT)
 def clear_wrenches(wrenches):
     """Zero every wrench row that holds something."""
     for i in range(wrenches.shape[0]):
@@ -375,13 +394,14 @@ def advance(Ys, prm, wrenches, members, status, control, inputs, n_steps, cancel
     and control[OUTCOME] (OK, NON_FINITE, DIVERGED); returns the number of steps done.
     """
     add_pending(wrenches, prm, inputs)
+    rows = wrench_rows(wrenches)
     k = np.empty((SCRATCH_ROWS, ROW_WIDTH))
     deferred = np.empty(members.shape[0], dtype=np.int64)
     cur = control[CUR]
     done = 0
     outcome = OK
     while done < n_steps and cancel[0] == 0:
-        outcome, _ = _step_all(control[METHOD], Ys[cur], Ys[1 - cur], prm, wrenches, members, control, status,
+        outcome, _ = _step_all(control[METHOD], Ys[cur], Ys[1 - cur], prm, rows, members, control, status,
                                inputs[DT], inputs[LIMIT], k, deferred)
         if outcome != OK:
             break
