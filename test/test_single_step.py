@@ -73,8 +73,14 @@ def _general(b: dict) -> int:
 
 def _single(b: dict, block: np.ndarray, sizes: np.ndarray) -> int:
     single_step.fill_block(block, sizes, b["Ys"], b["prm"], b["wrenches"], b["members"], b["status"], b["control"],
-                           b["inputs"], b["cancel"], b.get("table"))
+                           b["inputs"], b["cancel"], b.get("table"), *_scratch(b))
     return single_step.entry()(block.ctypes.data)
+
+
+def _scratch(b: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Scratch for the block, filled with NaN and junk: its contents must not matter."""
+    return (np.full((stepping.SCRATCH_ROWS, L.ROW_WIDTH), np.nan), np.full(b["members"].shape[0], -7, dtype=np.int64),
+            np.full(L.WRENCH_WIDTH, np.nan))
 
 
 def _set_inputs(b: dict, k: int) -> None:
@@ -129,10 +135,10 @@ def test_the_block_refuses_buffers_of_the_wrong_kind() -> None:
     block, sizes = single_step.new_block()
     with pytest.raises(ValueError, match="single-step block: buffer 1 has dtype float64, shape"):
         single_step.fill_block(block, sizes, b["Ys"], b["prm"][:, :10], b["wrenches"], b["members"], b["status"],
-                               b["control"], b["inputs"], b["cancel"], None)
+                               b["control"], b["inputs"], b["cancel"], None, *_scratch(b))
     with pytest.raises(ValueError, match="buffer 3 has dtype float64"):
         single_step.fill_block(block, sizes, b["Ys"], b["prm"], b["wrenches"], b["members"].astype(float),
-                               b["status"], b["control"], b["inputs"], b["cancel"], None)
+                               b["status"], b["control"], b["inputs"], b["cancel"], None, *_scratch(b))
 
 
 @pytest.mark.parametrize("integrator", COMPILED)

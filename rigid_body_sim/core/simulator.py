@@ -298,6 +298,10 @@ class Simulator:
         self._block, self._block_sizes = single_step.new_block()
         self._block_address = int(self._block.ctypes.data)
         self._single = None
+        # The scratch the single-step path lends the compiled step (what stepping.advance allocates per call).
+        self._scratch_k = np.empty((stepping.SCRATCH_ROWS, L.ROW_WIDTH))
+        self._scratch_deferred = np.empty(0, dtype=np.int64)  # as long as _members (_point_block)
+        self._scratch_wrench = np.empty(L.WRENCH_WIDTH)
         self.threads = threads
         self.reset()
 
@@ -349,8 +353,11 @@ class Simulator:
         """Point the single-step block at the current buffers (after _members or the control table changes)."""
         from .kernels import single_step
 
+        if self._scratch_deferred.shape[0] != self._members.shape[0]:
+            self._scratch_deferred = np.empty(self._members.shape[0], dtype=np.int64)
         single_step.fill_block(self._block, self._block_sizes, self._Ys, self._prm, self._wrenches, self._members,
-                               self._status, self._control, self._inputs, self._cancel, self._control_table)
+                               self._status, self._control, self._inputs, self._cancel, self._control_table,
+                               self._scratch_k, self._scratch_deferred, self._scratch_wrench)
 
     def _advance_with(self, wrenches: np.ndarray, n: int, cancel: np.ndarray) -> int:
         """stepping.advance of ``n`` steps with ``wrenches``, on the threads _choose_parallel chose; the steps done."""

@@ -71,5 +71,6 @@ def compile_kernels() -> None:
     block, sizes = single_step.new_block()
     for rows in (None, table):
         single_step.fill_block(block, sizes, Ys, prm, wrenches, members, status, control, inputs,
-                               np.zeros(1, dtype=np.int64), rows)
+                               np.zeros(1, dtype=np.int64), rows, np.empty((SCRATCH_ROWS, L.ROW_WIDTH)),
+                               np.empty(n, dtype=np.int64), np.empty(L.WRENCH_WIDTH))
         single_step.entry()(block.ctypes.data)

@@ -5,13 +5,16 @@ numba's dispatcher types and unboxes every argument of every call; stepping.adva
 what the step itself computes. :func:`step_block` is a ``numba.cfunc`` (a C function, numba's
 public API for callbacks) of one pointer, to a block of the buffers' addresses
 (:func:`new_block`); it rebuilds the arrays in place with ``numba.carray`` and calls the very
-same compiled stepping.advance, or controls.advance_controlled when a control table exists,
-with one step: the same machine code on the same buffers as Simulator.step's general path, so
-the results are the same to the bit (test_single_step.py).
+same compiled stepping.advance_in, or controls.advance_controlled_in when a control table
+exists (what stepping.advance and controls.advance_controlled call, after allocating their
+scratch), with one step: the same machine code on the same buffers as Simulator.step's general
+path, so the results are the same to the bit (test_single_step.py). The scratch is the
+Simulator's own, allocated once.
 
 Block (``BLOCK_WIDTH`` pointers, ``uintp``): the addresses of Ys, prm, wrenches, members,
-status, control, inputs, cancel, the control table (0 when none), and ``SIZES``, the address
-of an int64 array of (bodies, members, table rows). The Simulator builds it whenever it
+status, control, inputs, cancel, the control table (0 when none), ``SIZES`` (the address of an
+int64 array of (bodies, members, table rows)), then the scratch: ``k`` (SCRATCH_ROWS,
+ROW_WIDTH), ``deferred`` (members) and a wrench row. The Simulator builds it whenever it
 replaces one of these arrays (:func:`fill_block`) and keeps the arrays alive.
 
 What the call does besides the step: it clears the cancel flag (Simulator.step's ``finally``).
@@ -27,16 +30,16 @@ import numpy as np
 from numba import carray, cfunc, types
 
 from .controls import CONTROL_WIDTH as TABLE_WIDTH
-from .controls import advance_controlled
+from .controls import advance_controlled_in
 from .jit import JIT
 from .layout import CONTROL_WIDTH, INPUT_WIDTH, PRM_WIDTH, ROW_WIDTH, WRENCH_WIDTH
-from .stepping import advance
+from .stepping import SCRATCH_ROWS, advance_in
 
 __all__ = ["BLOCK_WIDTH", "SIZES", "new_block", "fill_block", "step_block", "entry"]
 
 #: Slots of the block: the buffers' addresses, then the sizes array's.
-YS, PRM, WRENCHES, MEMBERS, STATUS, CONTROL, INPUTS, CANCEL, TABLE, SIZES = range(10)
-BLOCK_WIDTH = 10
+YS, PRM, WRENCHES, MEMBERS, STATUS, CONTROL, INPUTS, CANCEL, TABLE, SIZES, K, DEFERRED, SCRATCH = range(13)
+BLOCK_WIDTH = 13
 #: Slots of the sizes array.
 BODIES, MEMBER_COUNT, TABLE_ROWS = range(3)
 
@@ -56,11 +59,15 @@ def step_block(block):
     control = carray(block[CONTROL], (CONTROL_WIDTH,), dtype=np.int64)
     inputs = carray(block[INPUTS], (INPUT_WIDTH,), dtype=np.float64)
     cancel = carray(block[CANCEL], (1,), dtype=np.int64)
+    k = carray(block[K], (SCRATCH_ROWS, ROW_WIDTH), dtype=np.float64)
+    deferred = carray(block[DEFERRED], (m,), dtype=np.int64)
     if rows:
         table = carray(block[TABLE], (rows, TABLE_WIDTH), dtype=np.float64)
-        done = advance_controlled(Ys, prm, wrenches, members, status, control, inputs, 1, cancel, table)
+        scratch = carray(block[SCRATCH], (WRENCH_WIDTH,), dtype=np.float64)
+        done = advance_controlled_in(Ys, prm, wrenches, members, status, control, inputs, 1, cancel, table, k,
+                                     deferred, scratch)
     else:
-        done = advance(Ys, prm, wrenches, members, status, control, inputs, 1, cancel)
+        done = advance_in(Ys, prm, wrenches, members, status, control, inputs, 1, cancel, k, deferred)
     cancel[0] = 0
     return done
 
@@ -73,15 +80,20 @@ def new_block() -> tuple[np.ndarray, np.ndarray]:
     return block, sizes
 
 
-def fill_block(block, sizes, Ys, prm, wrenches, members, status, control, inputs, cancel, table) -> None:
-    """Point ``block`` at the buffers (stepping.advance's, C-contiguous, of its dtypes; ``table`` may be None).
+def fill_block(block, sizes, Ys, prm, wrenches, members, status, control, inputs, cancel, table, k, deferred,
+               scratch) -> None:
+    """Point ``block`` at the buffers (stepping.advance's, C-contiguous, of its dtypes; ``table`` may be None)
+    and the scratch (``k`` (SCRATCH_ROWS, ROW_WIDTH) float64, ``deferred`` int64 as long as ``members``,
+    ``scratch`` (WRENCH_WIDTH,) float64).
 
     The caller keeps every array alive, and unchanged in shape, while the block may be called.
     """
     arrays = ((YS, Ys, np.float64, (2, -1, ROW_WIDTH)), (PRM, prm, np.float64, (-1, PRM_WIDTH)),
               (WRENCHES, wrenches, np.float64, (-1, WRENCH_WIDTH)), (MEMBERS, members, np.int64, (-1,)),
               (STATUS, status, np.int64, (-1,)), (CONTROL, control, np.int64, (CONTROL_WIDTH,)),
-              (INPUTS, inputs, np.float64, (INPUT_WIDTH,)), (CANCEL, cancel, np.int64, (1,)))
+              (INPUTS, inputs, np.float64, (INPUT_WIDTH,)), (CANCEL, cancel, np.int64, (1,)),
+              (K, k, np.float64, (SCRATCH_ROWS, ROW_WIDTH)), (DEFERRED, deferred, np.int64, (members.shape[0],)),
+              (SCRATCH, scratch, np.float64, (WRENCH_WIDTH,)))
     for slot, array, dtype, shape in arrays:
         if (array.dtype != dtype or not array.flags.c_contiguous or array.ndim != len(shape)
                 or any(s >= 0 and s != t for s, t in zip(shape, array.shape))):

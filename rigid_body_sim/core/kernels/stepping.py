@@ -86,7 +86,7 @@ from .layout import (
 from .reduced_models import isotropic_free, kinematic, planar, symmetric_free, torque_free, translation
 from .jit import INLINE, JIT, LOOP
 
-__all__ = ["new_buffers", "advance", "add_pending", "step_reduced", "check_members", "clear_wrenches", "wrench_rows",
+__all__ = ["new_buffers", "advance", "advance_in", "add_pending", "step_reduced", "check_members", "clear_wrenches", "wrench_rows",
            "integrate", "step_group"]
 
 #: Rows of the per-call scratch: stage derivatives and the stage state of the longest tableau.
@@ -393,10 +393,16 @@ def advance(Ys, prm, wrenches, members, status, control, inputs, n_steps, cancel
     sensors and are dropped before the next step or the next wrench. Reports control[DONE]
     and control[OUTCOME] (OK, NON_FINITE, DIVERGED); returns the number of steps done.
     """
+    return advance_in(Ys, prm, wrenches, members, status, control, inputs, n_steps, cancel,
+                      np.empty((SCRATCH_ROWS, ROW_WIDTH)), np.empty(members.shape[0], dtype=np.int64))
+
+
+@njit(**JIT)
+def advance_in(Ys, prm, wrenches, members, status, control, inputs, n_steps, cancel, k, deferred):
+    """:func:`advance` with its scratch given (what it allocates per call): ``k`` (SCRATCH_ROWS, ROW_WIDTH)
+    float64 and ``deferred`` int64 of at least ``members``' length; their contents do not matter."""
     add_pending(wrenches, prm, inputs)
     rows = wrench_rows(wrenches)
-    k = np.empty((SCRATCH_ROWS, ROW_WIDTH))
-    deferred = np.empty(members.shape[0], dtype=np.int64)
     cur = control[CUR]
     done = 0
     outcome = OK
