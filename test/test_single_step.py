@@ -16,13 +16,22 @@ import pytest
 
 from rigid_body_sim.core import INTEGRATORS, Simulator, load_scene
 from rigid_body_sim.core import reduction
-from rigid_body_sim.core.kernels import controls, single_step, stepping
+from rigid_body_sim.core.kernels import controls, stepping
 from rigid_body_sim.core.kernels import layout as L
-from rigid_body_sim.core.simulator import ControlRejectedWarning, DivergenceError
+from rigid_body_sim.core.simulator import ControlRejectedWarning, DivergenceError, ensure_kernels
 from rigid_body_sim.core.mechanics import kinetic_energy
 from rigid_body_sim.core.stepping import pack_parameters
 
 COMPILED = [name for name, method in INTEGRATORS.items() if method.code is not None]
+
+
+def _module():
+    """kernels/single_step, imported once the kernel cache is complete: a cfunc is compiled where it is
+    defined, so importing it first (at collection, in several workers) would compile outside the cache's lock."""
+    ensure_kernels()
+    from rigid_body_sim.core.kernels import single_step
+
+    return single_step
 
 
 def _body(inertia, angular=(0.3, 1.0, 0.2), linear=(0.1, -0.2, 0.3), **extra) -> dict:
@@ -72,6 +81,7 @@ def _general(b: dict) -> int:
 
 
 def _single(b: dict, block: np.ndarray, sizes: np.ndarray) -> int:
+    single_step = _module()
     single_step.fill_block(block, sizes, b["Ys"], b["prm"], b["wrenches"], b["members"], b["status"], b["control"],
                            b["inputs"], b["cancel"], b.get("table"), *_scratch(b))
     return single_step.entry()(block.ctypes.data)
@@ -104,6 +114,7 @@ def _assert_same(a: dict, b: dict) -> None:
 @pytest.mark.parametrize("integrator", COMPILED)
 def test_the_block_steps_bitwise_as_the_general_call(integrator: str, with_table: bool) -> None:
     general, single = _buffers(integrator, with_table), _buffers(integrator, with_table)
+    single_step = _module()
     block, sizes = single_step.new_block()
     for k in range(8):
         _set_inputs(general, k)
@@ -116,6 +127,7 @@ def test_the_block_steps_bitwise_as_the_general_call(integrator: str, with_table
 @pytest.mark.parametrize("with_table", [False, True], ids=["advance", "advance_controlled"])
 def test_a_failed_or_cancelled_step_is_the_same_and_the_block_clears_the_cancel_flag(with_table: bool) -> None:
     general, single = _buffers("euler", with_table), _buffers("euler", with_table)
+    single_step = _module()
     block, sizes = single_step.new_block()
     for b in (general, single):
         b["Ys"][:, 0, L.W:L.W + 3] = 1e200  # the box's gyroscopic term overflows: NON_FINITE
@@ -132,6 +144,7 @@ def test_a_failed_or_cancelled_step_is_the_same_and_the_block_clears_the_cancel_
 
 def test_the_block_refuses_buffers_of_the_wrong_kind() -> None:
     b = _buffers("rk4", False)
+    single_step = _module()
     block, sizes = single_step.new_block()
     with pytest.raises(ValueError, match="single-step block: buffer 1 has dtype float64, shape"):
         single_step.fill_block(block, sizes, b["Ys"], b["prm"][:, :10], b["wrenches"], b["members"], b["status"],
