@@ -76,10 +76,11 @@ INERTIA = 2  # 3 columns: I1, I2, I3 (kg·m²)
 DAMP_LIN, DAMP_ANG = 5, 6  # c_v (N·s/m), c_w (N·m·s/rad)
 GRAVITY = 7  # 3 columns, m/s², projected onto the body's motion
 GRAVITY_BUDGET_RATE = 10  # |m g| / √(2m): the energy bound's growth rate under gravity alone
-BUDGET_FORCE, BUDGET_TORQUE = 11, 12  # 1/√(2m), 1/√(2 I_min)
-MODEL = 13  # MODEL_* below
-PROJECT = 14  # PROJECT_* below
-INV_INERTIA = 15  # 3 columns
+INV_INERTIA = 11  # 3 columns
+# Columns 0–13 are what a step with no wrench reads of every body (fewer cache lines a row).
+BUDGET_FORCE, BUDGET_TORQUE = 14, 15  # 1/√(2m), 1/√(2 I_min)
+MODEL = 16  # MODEL_* below
+PROJECT = 17  # PROJECT_* below
 Q_PB = 18  # 4 columns: q_PB (w, x, y, z), principal frame → the user's body frame B
 # The rotation increment of a constant-rate step, kept for the next step with the same rate
 # and dt (kinematic bodies, undamped isotropic ones): the same numbers without sin and cos.
