@@ -199,7 +199,8 @@ bench-oracle: bench-deps
 	$(VENV_PY) -m benchmarks.pair_oracle --out $(BENCH_OUT)
 
 # Contact beside MuJoCo and PyBullet (benchmarks/contact_peers.py): every closed-form contact case at
-# dt = 10, 1, 0.1 ms (errors and µs per step), 1000 cubes resting on a plane (body-steps/s), and the
+# dt = 10, 1, 0.1 ms (errors and µs per step), with the ground and between two bodies (tunnelling too),
+# 1000 cubes resting on a plane (body-steps/s), and the
 # free-body scene at N = 1e4 with and without a ground (and the core before contact: BENCH_CONTACT_ARGS=--baseline '' skips it).
 # Writes benchmarks/results/contact_peers.csv and .md and the generated block of docs/contact_benchmarks.md.
 BENCH_CONTACT_ARGS ?=

@@ -28,6 +28,11 @@ Cases (g = 9.81 m/s², exact answers from rigid_body_sim/exact/contact.py), each
   the creep), μ = 0.3 slides with a = g (sin θ − μ cos θ) (measured as the velocity change over
   t = 0.5 … 1.5 s).
 
+Between bodies (part ``bodies``, benchmarks/contact_bodies.py, whose docstring has the
+conventions): two spheres head-on (equal and unequal masses, e = 0.5, frictionless) and oblique
+with friction and spin, against rigid_body_sim/exact/sphere_impact.py; a 1 cm sphere at 100 m/s
+toward a 1 cm static box and two such spheres at each other (held or passed), at the same dts.
+
 Peers start a launched case at rest on the ground, settle 0.5 s, then get the launch velocity;
 ours starts touching (persistent contact) with its launch velocity. The cost of each case (µs
 per step) is timed apart from the sampling: the median (min–max) of ≥ 5 interleaved samples
@@ -58,6 +63,7 @@ import numpy as np
 from rigid_body_sim.core import Simulator, load_scene
 from rigid_body_sim.exact import contact as exact
 
+from . import contact_bodies as B
 from . import contact_engines as E
 from . import machine
 from .timing import MIN_REPEATS, Case, interleaved
@@ -552,7 +558,40 @@ def cost_table(costs: list[dict]) -> str:
     return head + body
 
 
-def report(figures, costs, settings, cubes, free, prov: str, quick: bool) -> tuple[str, str]:
+#: Column order of the two-body tables: ours, then each peer's settings side by side.
+BODY_COLUMNS = [("rigid_body_sim", "rk4"), ("rigid_body_sim", "semi_implicit_euler"), ("MuJoCo", "oscillator"),
+                ("MuJoCo", "calibrated"), ("MuJoCo", "default"), ("PyBullet", "default"), ("PyBullet", "tuned"),
+                ("PyBullet", "ccd")]
+
+
+def _by_column(rows: list[dict]) -> list[dict]:
+    rank = {k: i for i, k in enumerate(BODY_COLUMNS)}
+    return sorted(rows, key=lambda r: rank.get((r["engine"], r["setting"]), len(rank)))  # stable
+
+
+def bodies_text(bodies: dict) -> str:
+    """The two-body section of the block: accuracy, tunnelling, cost."""
+    bodies = {k: _by_column(v) for k, v in bodies.items()}
+    return f"""**Between bodies** (no gravity; benchmarks/contact_bodies.py): the error against the closed form
+of ours' law (`exact/sphere_impact.py`) at dt = 10 ms / 1 ms / 0.1 ms; a velocity or a spin
+after the impact: |x − x_exact| / |x_exact| in % (the exact |x| in brackets); the impact time:
+absolute; the energy change: relative to the exact change:
+
+{accuracy_table(bodies["figures"])}
+**Tunnelling** (a sphere of diameter 1 cm, 10 g, at 100 m/s; "held": it ends on its side,
+"passed": through ("slowed": a contact acted but did not stop it), "inside": stuck in it;
+dt = 10 ms / 1 ms / 0.1 ms):
+
+{B.tunnel_table(bodies["tunnels"])}
+**Cost between bodies** (µs per step from Python of each case's scene from its start, over the
+case's run, at dt = 10 ms / 1 ms / 0.1 ms, median of {MIN_REPEATS} interleaved samples):
+
+{cost_table(bodies["costs"])}
+"""
+
+
+def report(figures, costs, settings, cubes, free, prov: str, quick: bool, bodies: dict | None = None
+           ) -> tuple[str, str]:
     """(results markdown, docs block)."""
     best_mj = max((r for r in cubes if r["engine"] == "MuJoCo"), key=lambda r: r["body_steps_per_s"], default=None)
     ours = max((r for r in cubes if r["engine"] == "rigid_body_sim"), key=lambda r: r["body_steps_per_s"])
@@ -593,7 +632,7 @@ whose exact answer is 0):
 `sim.step(k)`, MuJoCo: `mj_step(m, d, nstep=k)`, PyBullet: `stepSimulation()` in a loop):
 
 {cost_tables(costs)}
-**{CUBES} cubes resting on a plane** (0.2 m, 1 kg, μ = 0.5, dt = 1 ms, settled 0.5 s first):
+{bodies_text(bodies) if bodies else ""}**{CUBES} cubes resting on a plane** (0.2 m, 1 kg, μ = 0.5, dt = 1 ms, settled 0.5 s first):
 
 {cube_table}
 {goal}
@@ -627,7 +666,8 @@ def main(argv=None) -> int:
     ap.add_argument("--docs", default=None, help="page whose generated block to rewrite (docs/contact_benchmarks.md)")
     ap.add_argument("--baseline", default=PRE_CONTACT,
                     help=f"git revision whose core is timed on the free-body scene too ('' to skip; default {PRE_CONTACT})")
-    ap.add_argument("--parts", default="cases,cubes,free", help="comma-separated subset of cases,cubes,free")
+    ap.add_argument("--parts", default="cases,bodies,cubes,free",
+                    help="comma-separated subset of cases,bodies,cubes,free")
     args = ap.parse_args(argv)
     if E.mujoco is None or E.pybullet is None:
         print("the bench extra is missing (MuJoCo and PyBullet): make bench-deps, or "
@@ -645,6 +685,12 @@ def main(argv=None) -> int:
     if "cases" in parts:
         log("contact cases, every engine, dt = 10, 1, 0.1 ms")
         figures, costs, settings = measure_cases(args.quick, log)
+    bodies = {"figures": [], "tunnels": [], "costs": []}
+    if "bodies" in parts:
+        log("between bodies, every engine, dt = 10, 1, 0.1 ms")
+        b_figures, b_tunnels, b_costs, b_settings = B.measure(args.quick, log)
+        bodies = {"figures": b_figures, "tunnels": b_tunnels, "costs": b_costs}
+        settings.update(b_settings)
     if "cubes" in parts:
         log(f"{CUBES} cubes resting on a plane")
         cubes = measure_cubes(args.quick, log)
@@ -655,9 +701,10 @@ def main(argv=None) -> int:
                                             ":(glob)benchmarks/*.py") else ""
     prov = (f"{'quick' if args.quick else 'full'} mode, commit {_git('rev-parse', '--short', 'HEAD')}{dirty}, "
             f"{datetime.date.today().isoformat()}, {machine.one_line()}, PyBullet {E.versions()['pybullet']}")
-    _write_csv(out / "contact_peers.csv", figures + costs + cubes + free)
-    if parts == {"cases", "cubes", "free"}:
-        results, block = report(figures, costs, settings, cubes, free, prov, args.quick)
+    _write_csv(out / "contact_peers.csv", figures + costs + bodies["figures"] + bodies["tunnels"] + bodies["costs"]
+               + cubes + free)
+    if parts == {"cases", "bodies", "cubes", "free"}:
+        results, block = report(figures, costs, settings, cubes, free, prov, args.quick, bodies)
         (out / "contact_peers.md").write_text(results)
         if args.docs:
             update_block(Path(args.docs), block)

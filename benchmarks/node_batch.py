@@ -4,7 +4,8 @@ For each case (bodies, rate_hz, recording) and each repeat, ``rigid_body_sim_nod
 subprocess on N free asymmetric bodies (random poses and spins, no gravity; the scene file in
 JSON, which the loader reads ~20× faster than YAML), rk4, 1 substep,
 ``per_body_topics:=false`` (so the inputs are the three shared topics ``wrench``, ``impulse``,
-``set_state``), on a private ROS_DOMAIN_ID over loopback. A plain rclpy subscriber to
+``set_state``), with the ``poses`` publisher's history depth of each ``--publisher-depth`` (1, the
+node's own: the latest state; 10: for a consumer of every tick), on a private ROS_DOMAIN_ID over loopback. A plain rclpy subscriber to
 ``poses`` runs in a third process (``rclpy.spin`` on one node: raw CDR bytes, reliable,
 transient local, keep last ``--depth``, default 10, as a user writes it), started and matched
 before the node. Measured:
@@ -166,7 +167,7 @@ def claim_domain() -> tuple[int, object]:
 
 
 def measure(scene: Path, n: int, rate_hz: float, seconds: float, depth: int, record: Path | None = None,
-            domain: int = 78) -> dict:
+            domain: int = 78, publisher_depth: int = 1) -> dict:
     """One run of the node on ``scene`` (recording to ``record`` if given): the figures of the module docstring."""
     env = {**os.environ, "ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
     work = Path(tempfile.mkdtemp(prefix="node_batch_"))
@@ -180,9 +181,11 @@ def measure(scene: Path, n: int, rate_hz: float, seconds: float, depth: int, rec
     start = time.monotonic()
     process = subprocess.Popen([str(NODE), "--ros-args", "-p", f"scene:={scene}", "-p", f"rate_hz:={rate_hz}",
                                 "-p", "per_body_topics:=false", "-p", "status_period:=0.0", "-p", "integrator:=rk4",
-                                "-p", "substeps:=1", *(["-p", f"record_path:={record}"] if record else [])],
+                                "-p", "substeps:=1", *(["-p", f"record_path:={record}"] if record else []),
+                                *(["-p", f"qos_overrides./poses.publisher.depth:={publisher_depth}"]
+                                  if publisher_depth != 1 else [])],
                                stdout=log, stderr=subprocess.STDOUT, env=env)
-    row: dict = {"bodies": n, "rate_hz": rate_hz, "recording": record is not None}
+    row: dict = {"bodies": n, "rate_hz": rate_hz, "recording": record is not None, "publisher_depth": publisher_depth}
     try:
         # The listener says "first" at the first poses (its arrival time is in its file).
         ready, _, _ = select.select([listener.stdout], [], [], 180.0)
@@ -231,7 +234,7 @@ def measure(scene: Path, n: int, rate_hz: float, seconds: float, depth: int, rec
 
 def _median_row(rows: list[dict]) -> dict:
     out = {"bodies": rows[0]["bodies"], "rate_hz": rows[0]["rate_hz"], "recording": rows[0]["recording"],
-           "repeats": len(rows)}
+           "publisher_depth": rows[0]["publisher_depth"], "repeats": len(rows)}
     for key in ("first_poses_s", "sim_over_wall", "achieved_hz", "delivered", "cpu_ms_per_tick", "cpu_share",
                 "rss_mb", "stop_s", "recorded"):
         values = np.array([r[key] for r in rows])
@@ -242,16 +245,17 @@ def _median_row(rows: list[dict]) -> dict:
 
 def markdown(rows: list[dict]) -> str:
     """The table of node_batch.md."""
-    lines = ["| bodies | rate (Hz) | recording | sim/wall | ticks delivered to a `poses` subscriber | ticks recorded "
-             "| CPU per tick (ms) | CPU share (cores) | RSS (MB) | start to first `poses` (s) "
+    lines = ["| bodies | rate (Hz) | recording | `poses` depth | sim/wall | ticks delivered to a `poses` subscriber "
+             "| ticks recorded | CPU per tick (ms) | CPU share (cores) | RSS (MB) | start to first `poses` (s) "
              "| SIGINT to exit (s), exit status |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         def f(key, fmt):
             if np.isnan(r[key]):
                 return "—"
             return f"{r[key]:{fmt}} ({r[key + '_min']:{fmt}}–{r[key + '_max']:{fmt}})"
-        lines.append(f"| {r['bodies']} | {r['rate_hz']:g} | {'yes' if r['recording'] else 'no'} | {f('sim_over_wall', '.3f')} "
+        lines.append(f"| {r['bodies']} | {r['rate_hz']:g} | {'yes' if r['recording'] else 'no'} | {r['publisher_depth']} "
+                     f"| {f('sim_over_wall', '.3f')} "
                      f"| {f('delivered', '.1%')} | {f('recorded', '.1%')} "
                      f"| {f('cpu_ms_per_tick', '.3f')} | {f('cpu_share', '.2f')} | {f('rss_mb', '.0f')} "
                      f"| {f('first_poses_s', '.2f')} | {f('stop_s', '.2f')}, {r['exits']} |")
@@ -260,7 +264,8 @@ def markdown(rows: list[dict]) -> str:
 
 def targets(rows: list[dict]) -> str:
     """The targets table: each target case's medians against the node's targets (met or not)."""
-    lines = ["| bodies | rate (Hz) | recording | figure | target | median | met |", "|---|---|---|---|---|---|---|"]
+    lines = ["| bodies | rate (Hz) | recording | `poses` depth | figure | target | median | met |",
+             "|---|---|---|---|---|---|---|---|"]
     names = {"first_poses_s": ("start to first `poses` (s)", ".2f"), "rss_mb": ("RSS (MB)", ".0f"),
              "sim_over_wall": ("sim/wall", ".3f"), "delivered": ("ticks delivered", ".1%")}
     for r in rows:
@@ -268,11 +273,13 @@ def targets(rows: list[dict]) -> str:
         for key, (op, limit) in (goal or {}).items():
             label, fmt = names[key]
             met = r[key] <= limit if op == "<=" else r[key] >= limit
-            lines.append(f"| {r['bodies']} | {r['rate_hz']:g} | {'yes' if r['recording'] else 'no'} | {label} "
+            lines.append(f"| {r['bodies']} | {r['rate_hz']:g} | {'yes' if r['recording'] else 'no'} "
+                         f"| {r['publisher_depth']} | {label} "
                          f"| {op} {limit:{fmt}} | {r[key]:{fmt}} | {'yes' if met else 'no'} |")
         if goal and r["recording"]:
             met = r["recorded"] >= 1.0 and r["sim_over_wall"] >= 0.99
-            lines.append(f"| {r['bodies']} | {r['rate_hz']:g} | yes | recording keeps up (every tick, sim/wall >= 0.99) "
+            lines.append(f"| {r['bodies']} | {r['rate_hz']:g} | yes | {r['publisher_depth']} "
+                         "| recording keeps up (every tick, sim/wall >= 0.99) "
                          f"| every tick | {r['recorded']:.1%} | {'yes' if met else 'no'} |")
     return "\n".join(lines) + "\n"
 
@@ -284,6 +291,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seconds", type=float)
     parser.add_argument("--bodies", type=int, nargs="*", help="only these body counts")
     parser.add_argument("--depth", type=int, default=10, help="the subscriber's history depth (default 10)")
+    parser.add_argument("--publisher-depth", type=int, nargs="+", default=[1, 10],
+                        help="the node's poses history depths to run (qos_overrides./poses.publisher.depth; "
+                             "default 1, the node's own, and 10, for a consumer of every tick)")
     parser.add_argument("--recording", choices=("both", "yes", "no"), default="both",
                         help="only the cases with (yes) or without (no) a recording")
     parser.add_argument("--out", type=Path, default=REPO / "benchmarks" / "results")
@@ -296,25 +306,30 @@ def main(argv: list[str] | None = None) -> int:
     cases = [c for c in CASES if (not args.bodies or c[0] in args.bodies)
              and args.recording in ("both", "yes" if c[2] else "no")]
     rows = []
+    # Stopped with SIGTERM (kill, a CI timeout) as with Ctrl-C: the finally blocks stop the node and the
+    # listener and the temporary directory goes, rather than a node left recording into it.
+    signal.signal(signal.SIGTERM, lambda signum, frame: sys.exit(128 + signum))
     domain, _lock = claim_domain()  # held until the process ends
     load_before = os.getloadavg()
     with tempfile.TemporaryDirectory() as directory:
         for n, rate, recording in cases:
             scene = write_scene(Path(directory), n)
-            runs = []
-            for k in range(repeats):
-                record = Path(directory) / f"run{k}.mcap" if recording else None
-                runs.append(measure(scene, n, rate, seconds, args.depth, record, domain))
-                if record is not None:
-                    record.unlink(missing_ok=True)
-            rows.append(_median_row(runs))
-            print(markdown(rows[-1:]).splitlines()[-1], flush=True)
+            for publisher_depth in args.publisher_depth:
+                runs = []
+                for k in range(repeats):
+                    record = Path(directory) / f"run{k}.mcap" if recording else None
+                    runs.append(measure(scene, n, rate, seconds, args.depth, record, domain, publisher_depth))
+                    if record is not None:
+                        record.unlink(missing_ok=True)
+                rows.append(_median_row(runs))
+                print(markdown(rows[-1:]).splitlines()[-1], flush=True)
     load_after = os.getloadavg()
     text = (f"# The node benchmark ({repeats} repeats, {seconds:g} s windows; medians, min–max)\n\n"
             + __doc__.split("\n\n", 1)[1] + "\n" + machine.text()
             + f"    load average before the runs: {' '.join(f'{x:.2f}' for x in load_before)}, after: "
             + f"{' '.join(f'{x:.2f}' for x in load_after)}\n"
-            + f"    subscriber: keep last {args.depth}, reliable, transient local, raw, rclpy.spin\n\n"
+            + f"    subscriber: keep last {args.depth}, reliable, transient local, raw, rclpy.spin; "
+            + "node's `poses` publisher: reliable, transient local, keep last the depth of the table\n\n"
             + markdown(rows) + "\n## Targets\n\n" + targets(rows))
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "node_batch.md").write_text(text)

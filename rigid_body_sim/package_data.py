@@ -1,9 +1,12 @@
 """The package's own data files: the default scene, shipped inside the package.
 
-``config/default_scene.yaml`` is package data of ``rigid_body_sim.config`` (setup.py maps that
-package to the repository's ``config/``), so :mod:`importlib.resources` finds it in an editable
-install, a wheel and a colcon install alike; a ``setup.py develop`` install (colcon
-``--symlink-install``), which does not apply that mapping, reads ``config/`` beside the package. setup.py also still installs
+setup.py maps the package ``rigid_body_sim.config`` to the repository's ``config/``, so a wheel
+and a colcon install put ``config/default_scene.yaml`` inside the installed package, where
+:mod:`importlib.resources` finds it beside the imported ``rigid_body_sim``. Imported from a source
+tree instead (an editable or ``setup.py develop`` install, colcon ``--symlink-install``, tests
+run from a checkout or a workspace's ``src/``), the package has no ``config/`` inside it and the
+data is the tree's ``config/`` beside it. Either way the data is that of the ``rigid_body_sim``
+actually imported, never another copy an import hook knows of. setup.py also still installs
 ``config/`` to ``share/rigid_body_sim/config`` for ROS users (``ros2 launch``, params files).
 """
 
@@ -30,10 +33,10 @@ def default_scene_path() -> Path:
     FileNotFoundError
         If the installation lacks it.
     """
-    try:
-        data = Path(str(files("rigid_body_sim.config")))  # installed unzipped: a real directory
-    except ModuleNotFoundError:  # `setup.py develop` (colcon --symlink-install) ignores package_dir: the source tree
-        data = Path(__file__).resolve().parent.parent / "config"
+    package = Path(str(files(__package__)))  # the imported package, installed unzipped: a real directory
+    data = package / "config"  # a wheel or a colcon install (package_dir applied)
+    if not data.is_dir():  # a source tree: config/ beside the package
+        data = package.parent / "config"
     path = data / DEFAULT_SCENE_FILE
     if not path.is_file():
         raise FileNotFoundError(f"default scene {path} is not installed with rigid_body_sim")

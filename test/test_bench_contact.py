@@ -7,6 +7,11 @@
   (a free sphere keeps its speed over 1 s, the damping PyBullet applies by default would take
   7.5 % of it); MuJoCo's calibrated solref gives the first apex of the closed form; and the
   sampled-impact reading finds a peer's first impact within one step of the closed form.
+* Between bodies (benchmarks/contact_bodies.py): the bench's reading of ours meets the closed
+  forms (two spheres head-on and oblique within 1e-9, both tunnelling scenes held at dt = 10 ms)
+  and its tables print; a peer's impact time read from samples is the end of the step holding
+  the first velocity change (synthetic samples of a known impact); (bench) one dt of every case on
+  every engine runs, PyBullet's spheres carry √e and √μ and its ccd setting its swept sphere.
 """
 
 from __future__ import annotations
@@ -70,3 +75,72 @@ def test_mujoco_calibrated_solref_gives_the_first_apex_and_impacts_are_read_with
     impacts, flights = C._impacts(r, 3)
     assert C._apexes(r, flights, 1)[0] == pytest.approx(exact.bounce_apex(1, C.H0, C.E_BOUNCE), rel=1e-6)
     assert abs(impacts[0] - exact.bounce_impact_time(1, C.H0, C.E_BOUNCE, C.G)) <= dt
+
+
+def _our_rows(case, items, dt, spins):
+    from benchmarks import contact_bodies as B
+
+    rows = B.case_impact(case, items, B.Ours(items, dt, "rk4"), dt, spins)
+    for r in rows:
+        r.update(engine="rigid_body_sim", setting="rk4", dt=dt)
+    return rows
+
+
+def test_two_body_cases_read_ours_at_the_closed_form_and_print():
+    from benchmarks import contact_bodies as B
+    from benchmarks import contact_peers as C
+
+    rows = _our_rows("head-on, unequal", B.head_on(False), 1e-3, False)
+    rows += _our_rows("oblique", B.oblique(False), 1e-3, True)
+    rows += _our_rows("oblique", B.oblique(True), 1e-3, True)
+    for r in rows:
+        scale = 1e-9 if r["relative"] or r["unit"] != "s" else 1e-9 * r["exact"]
+        assert abs(r["error"]) <= scale, r
+    tunnels = []
+    for case, items in (("wall", B.tunnel_wall()), ("pair", B.tunnel_pair())):
+        row = B.case_tunnel(case, items, B.Ours(items, 1e-2, "rk4"), 1e-2)
+        assert row["outcome"] == "held", row
+        tunnels.append({**row, "engine": "rigid_body_sim", "setting": "rk4", "dt": 1e-2})
+    text = C.bodies_text({"figures": rows, "tunnels": tunnels,
+                          "costs": [{"case": "wall", "dt": 1e-2, "engine": "rigid_body_sim", "setting": "rk4",
+                                     "us_per_step": 12.5}]})
+    assert "| oblique | ω_b after" in text and "| wall | held / — / — |" in text and "12.5 / — / —" in text
+
+
+def test_a_peers_impact_time_is_read_at_the_end_of_the_step_holding_the_first_velocity_change():
+    """Synthetic samples: two spheres on straight lines whose velocities jump at a known t* inside
+    a step; the reading is the end of that step."""
+    from benchmarks import contact_bodies as B
+
+    items = B.head_on(False)
+    a, b = items
+    t_star, dt = B.contact_time(a, b), 1e-2
+    after = B.exact_after(a, b)[1]
+    t = np.arange(40) * dt
+    samples = np.zeros((len(t), 2, 9))
+    for k, it in enumerate(items):
+        before = np.add(it.position, np.outer(np.minimum(t, t_star), it.velocity))
+        samples[:, k, 0:3] = before + np.outer(np.maximum(t - t_star, 0.0), after[2 * k])
+        samples[:, k, 3:6] = np.where((t > t_star)[:, None], after[2 * k], it.velocity)
+    assert B.sampled_impact_time(samples, dt) == t[np.argmax(t > t_star)]
+    assert 0.0 < B.sampled_impact_time(samples, dt) - t_star <= dt
+    assert np.isnan(B.sampled_impact_time(samples[:2], dt))
+
+
+@pytest.mark.bench
+def test_every_two_body_case_runs_on_every_engine_at_one_dt():
+    from benchmarks import contact_bodies as B
+
+    figures, tunnels, costs, settings = B.measure(True, lambda msg: None, dts=(1e-3,), min_seconds=1e-3)
+    engines = {(r["engine"], r["setting"]) for r in figures}
+    assert {("MuJoCo", "oscillator"), ("MuJoCo", "calibrated"), ("PyBullet", "default"),
+            ("PyBullet", "tuned"), ("rigid_body_sim", "rk4")} <= engines
+    assert {(r["engine"], r["setting"]) for r in tunnels} >= {("PyBullet", "ccd"), ("MuJoCo", "default")}
+    assert all(r["outcome"] == "held" for r in tunnels if r["engine"] == "rigid_body_sim")
+    assert {r["case"] for r in figures} >= {"oblique, spin, sticking", "oblique, spin, sliding"}
+    assert len(costs) == len({(r["case"], r["engine"], r["setting"]) for r in figures + tunnels})
+    assert "ccdSweptSphereRadius" in settings["PyBullet, ccd (tunnelling)"]
+    pb = B.PyBullet(B.oblique(True), 1e-3, "default")
+    info = B.pybullet.getDynamicsInfo(pb.ids[0], -1, physicsClientId=pb.c)
+    assert info[1] == pytest.approx(B.MU_OBLIQUE ** 0.5) and info[5] == pytest.approx(B.E_PAIR ** 0.5)
+    pb.close()

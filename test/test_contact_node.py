@@ -176,10 +176,25 @@ def test_set_state_into_the_ground_is_refused_with_a_reason() -> None:
         assert abs(h.latest_pose("ball").pose.position.z - R) < 1e-9  # resting on the ground from there
 
 
+def test_set_state_into_a_static_shape_is_refused_naming_it() -> None:
+    """The check the set_state above goes through (contacts.into_ground) covers the static world:
+    a static body's shape as well as the half-spaces."""
+    from rigid_body_sim.core import Simulator, load_scene
+    from rigid_body_sim.ros.contacts import into_ground
+
+    sim = Simulator(load_scene(CONFIG / "contact_static_table.yaml"), "rk4", TICK)
+    top, level = 0.5, [0.0, 0.0, 0.0, 1.0]  # the table's top face z = 0.5 m
+    refusal = into_ground(sim, "ball", [0.0, 0.0, top + R - 0.02], level)
+    assert refusal is not None and refusal.reason == "into_ground"
+    assert "'ball' would reach 0.02 m into static body 'table'" in refusal.detail
+    assert into_ground(sim, "ball", [0.0, 0.0, top + R], level) is None  # touching: allowed
+    assert into_ground(sim, "ball", [3.0, 0.0, R + 0.01], level) is None  # over the floor, beside the table
+
+
 def test_recording_carries_contacts_and_foxglove_decodes_them(tmp_path: Path) -> None:
     import base64
 
-    from test_foxglove_readers import (by_topic, check_everything_decodes, check_schema_text, foxglove_decode,
+    from foxglove_support import (by_topic, check_everything_decodes, check_schema_text, foxglove_decode,
                                        graph_qos, recorded_qos, stamp_ns)
 
     out = tmp_path / "ball.mcap"
@@ -259,3 +274,43 @@ def test_contacts_start_afresh_after_reset() -> None:
         points = np.concatenate([cloud_points(c) for c in part])
         impacts = points[points["state"] == 0]
         assert len(impacts) == 1 and abs(impacts["time"][0] - T1) < 1e-9
+
+
+TWO_BALLS = """\
+# two balls flying at each other in free fall (the same fall for both: their relative motion is a
+# straight line), e = max(0.8, 0.8); b (2 kg) 0.6 m from a (1 kg) along x, closing at 3 m/s
+gravity: [0.0, 0.0, -9.81]
+ground: []
+bodies:
+  a: {mass: 1.0, inertia: {sphere: 0.1}, material: {restitution: 0.8, friction: 0.0},
+      pose: {position: [0.0, 0.0, 5.0]}, twist: {linear: [1.0, 0.0, 0.0]}}
+  b: {mass: 2.0, inertia: {sphere: 0.1}, material: {restitution: 0.8, friction: 0.0},
+      pose: {position: [0.6, 0.0, 5.0]}, twist: {linear: [-2.0, 0.0, 0.0]}}
+"""
+
+
+def test_contacts_name_both_bodies_of_a_body_body_impact(tmp_path: Path) -> None:
+    """Two balls meet in flight: ``contacts`` has one point per body, each naming the other (``other``),
+    ``ground`` NO_INDEX, at the closed-form time (0.6 − 0.2)/3 s with the normal impulse
+    (1 + e) m_a m_b/(m_a + m_b) × 3 m/s and the normal from the other body towards each."""
+    scene = tmp_path / "two_balls.yaml"
+    scene.write_text(TWO_BALLS)
+    ticks = 20
+    with SimHarness(scene, PARAMETERS) as h:
+        clouds = collect(h, "/contacts", PointCloud2)
+        for k in range(1, ticks + 1):
+            h.step(1)
+            h.spin_until(lambda: len(clouds) >= k, f"contacts of tick {k}")
+        status = contact_status(h)
+    points = np.concatenate([cloud_points(c) for c in clouds])
+    impacts = points[points["state"] == 0]
+    assert sorted(zip(impacts["body"].tolist(), impacts["other"].tolist())) == [(0, 1), (1, 0)]
+    assert set(impacts["ground"].tolist()) == {0xFFFFFFFF}
+    t_hit = (0.6 - 0.2) / 3.0
+    np.testing.assert_allclose(impacts["time"], t_hit, rtol=1e-9)
+    np.testing.assert_allclose(impacts["impulse"], 1.8 * (2.0 / 3.0) * 3.0, rtol=1e-9)
+    for row in impacts:
+        sign = 1.0 if row["body"] == 1 else -1.0  # from a to b on b's point, from b to a on a's
+        np.testing.assert_allclose([row["nx"], row["ny"], row["nz"]], [sign, 0.0, 0.0], atol=1e-9)
+        np.testing.assert_allclose([row["x"], row["y"]], [1.0 * t_hit + 0.1, 0.0], atol=1e-9)
+    assert int(status["impacts (window)"]) == 1

@@ -179,6 +179,35 @@ def test_a_body_starting_inside_a_static_shape_is_refused():
         _scene({"ball": _ball([0.0, 0.0, TOP + R - 0.05])})
 
 
+def test_a_static_body_moved_by_set_body_state_is_met_where_it_now_is():
+    """set_body_state of a static body moves its geometry: a ball dropped over the table's new
+    place lands on its top at the closed-form time, where it would have fallen past it before."""
+    sim = Simulator(_scene({"ball": _ball([3.0, 0.0, 1.0])}), "rk4", 1e-3)
+    sim.set_body_state("table", position_world=[3.0, 0.0, 0.0])
+    t1 = math.sqrt(2.0 * (1.0 - R - TOP) / G)
+    while sim.time < 1.2:  # at rest from t1 (1 + e) / (1 − e) = 1.09 s
+        sim.step()
+    impact = sim.contact.events_of("ball", "impact")[0]
+    assert impact.time == pytest.approx(t1, rel=1e-9) and sim.contact.static_body_of(impact.ground) == "table"
+    assert sim.contact.is_resting("ball")
+    assert sim.body_state("ball").position_world[2] == pytest.approx(TOP + R, abs=1e-12)
+
+
+def test_nearest_static_is_the_distance_to_the_static_shape_at_a_pose():
+    """query.nearest_static (what refuses a set_state into a static shape): a ball centred d above
+    the top face is d − R from it, above a top edge (outside the face) the distance to the edge."""
+    from rigid_body_sim.core.contact.query import nearest_static
+
+    sim = Simulator(_scene({"ball": _ball([0.0, 0.0, 2.0])}), "rk4", 1e-3)
+    for d in (0.3, R, 0.06):
+        dist, static = nearest_static(sim, "ball", [0.1, -0.2, TOP + d], [0.0, 0.0, 0.0, 1.0])
+        assert static == "table" and dist == pytest.approx(d - R, abs=1e-12)
+    # beside the edge x = 0.5, z = TOP: the centre 0.05 out and 0.05 up is 0.05·√2 from the edge
+    dist, _ = nearest_static(sim, "ball", [0.55, 0.0, TOP + 0.05], [0.3, 0.1, 0.0, math.sqrt(0.9)])
+    assert dist == pytest.approx(0.05 * math.sqrt(2.0) - R, abs=1e-12)
+    assert sim.body_state("ball").position_world[2] == 2.0  # a question: nothing moved
+
+
 def test_the_example_scene_drops_a_ball_and_a_crate_on_its_table():
     sim = Simulator(load_scene(CONFIG / "contact_static_table.yaml"), "rk4", 1e-3)
     while sim.time < 1.2:

@@ -256,8 +256,9 @@ def test_flood_keeps_rate_memory_and_holds(tmp_path):
 
 def test_flood_in_process_short(tmp_path):
     """The default suite's flood: in-process, 1.5 s, one publisher at 10× the tick rate alternating a
-    valid force with a NaN one. The node keeps ticking (≥ 80 % of 100 Hz on one shared thread), the
-    hold is replaced rather than summed, it expires after the flood, the NaNs taken are counted."""
+    valid force with a NaN one. The node keeps ticking (at ≥ 80 % of its rate in the 1 s before the
+    flood, on the same shared thread: the machine's load is in both), the hold is replaced rather
+    than summed, it expires after the flood, the NaNs taken are counted."""
     scene_path = tmp_path / "flood.yaml"
     scene_path.write_text(yaml.safe_dump({"bodies": {"b0": SCENE["bodies"]["b0"]}}))
     parameters = {"integrator": "semi_implicit_euler", "wrench_timeout": 0.05, "diagnostics_period": 0.0}
@@ -267,7 +268,11 @@ def test_flood_in_process_short(tmp_path):
         good.wrench.force.x = FORCES["b0"][0]
         bad.wrench.force.x = math.nan
         publisher = node._publishers[("b0", "wrench")]
-        node.node.diagnostics()  # a fresh window
+        node.node.diagnostics()  # a fresh window: the rate without the flood
+        quiet = time.monotonic()
+        while time.monotonic() - quiet < 1.0:
+            node.executor.spin_once(timeout_sec=0.0005)
+        quiet_rate = float(status_values(node.node.diagnostics().status[0])["tick rate [1/s]"])
         start_time, sent, held = node.node.simulator.time, 0, set()
         start = time.monotonic()
         while time.monotonic() - start < 1.5:
@@ -284,11 +289,12 @@ def test_flood_in_process_short(tmp_path):
         n = v[0] / (FORCES["b0"][0] / MASS * DT)
         rejected = node.node.rejected["non_finite"]
         taken = node.messages_seen()
-    print(f"\n[flood, in-process] {sent} messages in 1.5 s; {ticks} ticks ({window['tick rate [1/s]']} /s, lateness "
+    print(f"\n[flood, in-process] {sent} messages in 1.5 s; {ticks} ticks ({window['tick rate [1/s]']} /s against "
+          f"{quiet_rate:g} /s before the flood, lateness "
           f"median {window['tick lateness median [ms]']} ms, max {window['tick lateness max [ms]']} ms); hold applied "
           f"on {n:.0f} ticks; the node took {taken} messages (the rest overflowed the depth-10 queue), "
           f"{rejected} of them NaN and counted")
     assert abs(n - round(n)) < 1e-9 and 0.5 * ticks <= n <= ticks + WRENCH_TIMEOUT / DT
     assert held <= {0, 1}
-    assert float(window["tick rate [1/s]"]) >= 80.0
+    assert float(window["tick rate [1/s]"]) >= 0.8 * quiet_rate
     assert 0 < rejected <= sent // 2 + sent % 2 and taken <= sent

@@ -1,4 +1,5 @@
-"""No import circles in rigid_body_sim/, not even through imports made only for type checking.
+"""No import circles in rigid_body_sim/, not even through imports made only for type checking;
+no test module importing another.
 
 The graph is read from the sources (AST), so it sees every kind of import at once: top-level
 ones, lazy ones inside functions, and those under ``if TYPE_CHECKING:``. A circle of lazy or
@@ -146,3 +147,17 @@ def test_the_graph_sees_lazy_and_type_checking_imports(tmp_path: Path) -> None:
     assert graph["pkg.c"] == {"pkg.a": [(2, "lazy")]}
     assert graph["pkg.d"] == {"pkg.c": [(1, "top-level")]}
     assert cycles(graph) == [["pkg.a", "pkg.b", "pkg.c"]]
+
+
+def test_no_test_module_imports_another() -> None:
+    """What tests share lives in support modules (helpers.py, foxglove_support.py,
+    session_support.py): a test module imported by another would run its collection-time code
+    twice and tie one file's tests to another's."""
+    offenders = []
+    for path in sorted((REPO / "test").glob("test_*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            names = ([alias.name for alias in node.names] if isinstance(node, ast.Import)
+                     else [node.module or ""] if isinstance(node, ast.ImportFrom) and node.level == 0 else [])
+            offenders += [f"{path.name}:{node.lineno} imports {name}" for name in names
+                          if name.split(".")[0].startswith("test_")]
+    assert not offenders, offenders

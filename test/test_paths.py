@@ -20,23 +20,31 @@ def test_default_scene_is_the_repository_file_in_a_checkout() -> None:
 
 
 def test_default_scene_is_found_with_importlib_resources(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    """Wherever the package data is (a wheel, a colcon install), that is where the scene is taken from."""
-    (tmp_path / package_data.DEFAULT_SCENE_FILE).write_text("bodies: {}\n")
-    monkeypatch.setattr(package_data, "files", lambda package: tmp_path if package == "rigid_body_sim.config" else None)
-    assert package_data.default_scene_path() == tmp_path / package_data.DEFAULT_SCENE_FILE
+    """Wherever the imported package is installed (a wheel, a colcon install), the scene is taken
+    from the config/ inside it."""
+    installed = tmp_path / "site-packages" / "rigid_body_sim"
+    (installed / "config").mkdir(parents=True)
+    (installed / "config" / package_data.DEFAULT_SCENE_FILE).write_text("bodies: {}\n")
+    (tmp_path / "site-packages" / "config").mkdir()  # another package's config/ beside it is not looked at
+    (tmp_path / "site-packages" / "config" / package_data.DEFAULT_SCENE_FILE).write_text("bodies: {}\n")
+    monkeypatch.setattr(package_data, "files", lambda package: installed if package == "rigid_body_sim" else None)
+    assert package_data.default_scene_path() == installed / "config" / package_data.DEFAULT_SCENE_FILE
 
 
-def test_a_develop_install_reads_config_beside_the_package(monkeypatch: pytest.MonkeyPatch) -> None:
-    """`setup.py develop` (colcon --symlink-install) does not apply package_dir: no rigid_body_sim.config."""
-    def missing(package: str):
-        raise ModuleNotFoundError(f"No module named {package!r}")
-
-    monkeypatch.setattr(package_data, "files", missing)
-    assert package_data.default_scene_path() == REPO_ROOT / "config" / package_data.DEFAULT_SCENE_FILE
+def test_a_develop_install_reads_config_beside_the_package(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """`setup.py develop` (colcon --symlink-install) does not apply package_dir: no config/ inside
+    the package, the source tree's beside it."""
+    source = tmp_path / "src" / "rigid_body_sim"
+    (source / "rigid_body_sim").mkdir(parents=True)
+    (source / "config").mkdir()
+    (source / "config" / package_data.DEFAULT_SCENE_FILE).write_text("bodies: {}\n")
+    monkeypatch.setattr(package_data, "files", lambda package: source / "rigid_body_sim")
+    assert package_data.default_scene_path() == source / "config" / package_data.DEFAULT_SCENE_FILE
 
 
 def test_missing_default_scene_is_reported(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(package_data, "files", lambda package: tmp_path)
+    (tmp_path / "rigid_body_sim").mkdir()
+    monkeypatch.setattr(package_data, "files", lambda package: tmp_path / "rigid_body_sim")
     with pytest.raises(FileNotFoundError, match=r"default scene .*default_scene\.yaml is not installed"):
         package_data.default_scene_path()
 

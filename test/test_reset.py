@@ -10,7 +10,7 @@ from rosgraph_msgs.msg import Clock
 
 from rigid_body_sim.testing import SimHarness
 
-from test_session import TICK_S, X0, make_session
+from session_support import TICK_S, X0, make_session
 
 pytestmark = pytest.mark.ros
 

@@ -184,8 +184,12 @@ def test_colcon_test_runs_the_package_tests(built):
 @pytest.mark.slow
 @pytest.mark.timeout(3600)
 def test_colcon_test_runs_the_whole_suite(tmp_path):
-    workspace = make_workspace(tmp_path, kernel_cache=False)
+    """The whole suite from the workspace: in-process tests import the copy in src/, the node
+    processes they start the installed copy; both get the checkout's kernels (the cold compile is
+    the test below)."""
+    workspace = make_workspace(tmp_path, kernel_cache=True)
     _, build_s = colcon(workspace, "build")
+    copy_kernel_cache(site_packages(workspace) / PACKAGE)
     _, test_s = colcon(workspace, "test", timeout=3000.0)
     summary, _ = colcon(workspace, "test-result", "--all", "--verbose")
     print(f"\n[workspace] colcon build {build_s:.1f} s, colcon test (whole suite) {test_s:.1f} s: "

@@ -290,6 +290,18 @@ class Simulator:
         self._rejected_controls: tuple[tuple[str, str, tuple[float, ...]], ...] = ()
         self._parts = np.zeros((0, 3), dtype=np.int64)  # the parallel step's parts (_replan)
         self._parallel = 0  # threads of the parallel step, 0 for the serial one (_replan)
+        # The single-step path (kernels/single_step.py): the buffers' addresses in one block, so that
+        # a step(1) of a serial scene is one compiled call of one argument; _single is its ctypes
+        # function when the scene allows it (_choose_single), else None.
+        from .kernels import single_step  # loaded after ensure_kernels: a cfunc is compiled at import
+
+        self._block, self._block_sizes = single_step.new_block()
+        self._block_address = int(self._block.ctypes.data)
+        self._single = None
+        # The scratch the single-step path lends the compiled step (what stepping.advance allocates per call).
+        self._scratch_k = np.empty((stepping.SCRATCH_ROWS, L.ROW_WIDTH))
+        self._scratch_deferred = np.empty(0, dtype=np.int64)  # as long as _members (_point_block)
+        self._scratch_wrench = np.empty(L.WRENCH_WIDTH)
         self.threads = threads
         self.reset()
 
@@ -307,6 +319,8 @@ class Simulator:
         self._control[L.METHOD] = -1 if method.code is None else method.code
         # Scripted wrenches and the numpy/scipy integrators step one step per call (_step_once).
         self._step_by_step = bool(self._script) or method.code is None or self.contact is not None  # contact
+        if hasattr(self, "_single"):
+            self._choose_single()
 
     @property
     def threads(self) -> int:
@@ -327,6 +341,23 @@ class Simulator:
         """The parallel step when more than one thread may run and enough bodies move (parallel.MIN_BODIES)."""
         threads = self._threads or parallel.max_threads()
         self._parallel = threads if threads > 1 and len(self._members) >= parallel.MIN_BODIES else 0
+        self._choose_single()
+
+    def _choose_single(self) -> None:
+        """The single-step path for step(1) when the step is the one serial compiled call (kernels/single_step.py)."""
+        from .kernels import single_step
+
+        self._single = None if self._step_by_step or self._parallel else single_step.entry()
+
+    def _point_block(self) -> None:
+        """Point the single-step block at the current buffers (after _members or the control table changes)."""
+        from .kernels import single_step
+
+        if self._scratch_deferred.shape[0] != self._members.shape[0]:
+            self._scratch_deferred = np.empty(self._members.shape[0], dtype=np.int64)
+        single_step.fill_block(self._block, self._block_sizes, self._Ys, self._prm, self._wrenches, self._members,
+                               self._status, self._control, self._inputs, self._cancel, self._control_table,
+                               self._scratch_k, self._scratch_deferred, self._scratch_wrench)
 
     def _advance_with(self, wrenches: np.ndarray, n: int, cancel: np.ndarray) -> int:
         """stepping.advance of ``n`` steps with ``wrenches``, on the threads _choose_parallel chose; the steps done."""
@@ -428,6 +459,7 @@ class Simulator:
         # The buffers of stepping.advance, in its order: one tuple, so a step(1) builds no arguments.
         self._buffers = (self._Ys, self._prm, self._wrenches, self._members, self._status, self._control,
                          self._inputs)
+        self._point_block()
         # Bodies that no longer move keep their row in both buffers (the step never writes it).
         cur = self._control[L.CUR]
         self._Ys[1 - cur] = self._Ys[cur]
@@ -551,6 +583,7 @@ class Simulator:
                 # site), allocated once so that the views handed out stay valid.
                 table = self._control_table = controls.new_table(3 * self.model.count + len(self.model.site_names))
                 self._advance, self._advance_tail = controls.advance_controlled, (self._cancel, table)
+                self._point_block()
             row = int(table[-1, 0])
             table[row, controls.HEAD:controls.REJECTED] = (ref.body_index, ref.kind, *ref.arm_P)
             table[-1, 0] = row + 1
@@ -570,13 +603,13 @@ class Simulator:
         else:
             self._rejected_controls = ()
 
-    def _report_controls(self) -> None:
+    def _report_controls(self, stacklevel: int = 3) -> None:
         """Record and warn about the control rows the step skipped (marked in the table)."""
         table = self._control_table
         names = {row: key for key, row in self._control_rows.items()}
         rows = np.flatnonzero(table[:-1, controls.REJECTED])
         self._rejected_controls = tuple((*names[k], tuple(table[k, :6].tolist())) for k in rows)
-        warnings.warn(ControlRejectedWarning(self._rejected_controls), stacklevel=3)
+        warnings.warn(ControlRejectedWarning(self._rejected_controls), stacklevel=stacklevel)
 
     def apply_impulse(self, body: str, linear: Any = (0.0, 0.0, 0.0), angular: Any = (0.0, 0.0, 0.0),
                       frame: str = "world") -> None:
@@ -652,6 +685,8 @@ class Simulator:
         self.state = state
         self._Ys[:, b, L.BOUND] = np.sqrt(kinetic_energy(self.model, state)[b])  # a new start for the bound
         self._replan()
+        if self.contact is not None and self.model.motions[b] == "static":
+            self.contact.reset(self)  # contact: the static geometry moved; modes anew from the state, as at a reset
 
     def _constrain(self, b: int, state: State) -> None:
         """Keep body b's motion in ``state`` (in place): velocities projected as wrenches are (a
@@ -727,6 +762,17 @@ class Simulator:
             ``energy_growth_limit`` times the most its initial energy and inputs could give
             it (the rule is in :class:`DivergenceError`); handled the same way.
         """
+        single = self._single
+        if n == 1 and single is not None and type(n) is int:
+            # The single-step path (kernels/single_step.py): stepping.advance, or controls.advance_controlled
+            # once a control exists, as below, through one compiled call; it clears the cancel flag.
+            done = single(self._block_address)
+            if done == 1 and not self._rejected_controls:
+                self._pending = False  # advance took the pending wrench
+                self.step_count += 1
+                self._last_wrenches = self._wrenches
+                return 1
+            return self._finish_serial(done, 1)
         if type(n) is not int:
             if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
                 raise ValueError(f"n: expected a whole number of steps ≥ 0, got {n!r}")
@@ -754,20 +800,28 @@ class Simulator:
                 done = self._advance_with(self._wrenches, n, self._cancel)
             else:
                 # stepping.advance, or controls.advance_controlled once a control exists (control()).
-                done = self._advance(*self._buffers, n, *self._advance_tail)
-                if done < 0:  # a control row was rejected (controls.advance_controlled)
-                    done = -1 - done
-                    self._report_controls()
-                elif self._rejected_controls:
-                    self._rejected_controls = ()
-            self._pending = False  # advance took the pending wrench
-            self.step_count += done
-            if done != n and self._control[L.OUTCOME]:  # all n done: every step passed its checks
-                self._raise_step_failure(int(self._control[L.OUTCOME]))  # the wrenches are kept, for the caller
-            self._last_wrenches = self._wrenches  # spent: they stay for the sensors until something new is applied
-            return done
+                return self._finish_serial(self._advance(*self._buffers, n, *self._advance_tail), n)
+            return self._finish(done, n)
         finally:
             self._cancel[0] = 0
+
+    def _finish_serial(self, done: int, n: int) -> int:
+        """After the serial compiled step: report rejected control rows (``done`` < 0 says so), then :meth:`_finish`."""
+        if done < 0:  # a control row was rejected (controls.advance_controlled)
+            done = -1 - done
+            self._report_controls(stacklevel=4)  # the warning names the caller of step()
+        elif self._rejected_controls:
+            self._rejected_controls = ()
+        return self._finish(done, n)
+
+    def _finish(self, done: int, n: int) -> int:
+        """Count the ``done`` steps of the compiled step; raise its failure if it stopped at one."""
+        self._pending = False  # advance took the pending wrench
+        self.step_count += done
+        if done != n and self._control[L.OUTCOME]:  # all n done: every step passed its checks
+            self._raise_step_failure(int(self._control[L.OUTCOME]))  # the wrenches are kept, for the caller
+        self._last_wrenches = self._wrenches  # spent: they stay for the sensors until something new is applied
+        return done
 
     def cancel(self) -> None:
         """Stop the :meth:`step` running in another thread at its next step boundary (or, if none runs, the next one).

@@ -1,5 +1,5 @@
 """``contacts`` (sensor_msgs/PointCloud2): the ground contacts of each tick, their /diagnostics
-counts, and the refusal of a ``set_state`` into the ground.
+counts, and the refusal of a ``set_state`` into the ground or a static shape.
 
 Published after every tick that stepped a scene with contact (``Simulator.contact`` is a
 ContactSolver: the scene has ``ground`` and a body with a ``collision`` shape), also when the
@@ -7,17 +7,22 @@ tick had none (``width`` 0). ``header.stamp`` = sim time at the end of the tick,
 ``header.frame_id`` = ``world_frame``; ``height`` 1, little endian, ``point_step``
 :data:`CONTACT_POINT_STEP` (112), ``is_dense`` true. One point per event the tick had (in the
 order the solver recorded them), then one per body in persistent contact at the end of the
-tick. Fields (:data:`CONTACT_FIELDS`; bytes 105 to 111 are zero padding):
+tick. An impact between two moving bodies (core/contact/body_pairs.py) has two points, one per
+body (``body`` and ``other`` swapped). Fields (:data:`CONTACT_FIELDS`; bytes 105 to 107 are zero
+padding):
 
 ============== ====== ======= ===================================================================
 name           offset type    meaning
 ============== ====== ======= ===================================================================
 x, y, z        0..16  FLOAT64 contact point, world (m): a persistent contact's touching points'
                               centre; an event's: the body's lowest point at the end of the tick
-                              projected onto the half-space's boundary
-nx, ny, nz     24..40 FLOAT64 the half-space's unit normal, world axes
+                              projected onto the half-space's boundary; between two bodies: the
+                              mean of the contact points at the impact
+nx, ny, nz     24..40 FLOAT64 the half-space's unit normal, world axes; between two bodies: the
+                              contact normal at the impact, from ``other`` towards ``body``
 gap            48     FLOAT64 lowest gap of the body against that half-space at the end of the
-                              tick (m; negative: inside)
+                              tick (m; negative: inside); between two bodies: their signed
+                              distance at the end of the tick
 normal_force   56     FLOAT64 persistent contact: the holding force along the normal, mean over
                               the tick (N); events: 0
 friction_force 64     FLOAT64 persistent contact: magnitude of its tangential part, mean over the
@@ -25,13 +30,17 @@ friction_force 64     FLOAT64 persistent contact: magnitude of its tangential pa
 impulse        72     FLOAT64 impact: Σ normal impulse (N·s); else 0
 time           80     FLOAT64 event: its sim time, located inside the step (s); persistent
                               contact: the stamp's time
-energy_change  88     FLOAT64 impact: kinetic energy after − before (J, ≤ 0); else 0
+energy_change  88     FLOAT64 impact: kinetic energy after − before (J, ≤ 0; between two bodies:
+                              of both, on each of the two points); else 0
 body           96     UINT32  index of the body in scene order (``body_names``)
 ground         100    UINT32  index of the half-space in the scene's ``ground`` list; from its
-                              length on, a static shape's plane (ContactSolver.static_body_of)
+                              length on, a static shape's plane (ContactSolver.static_body_of);
+                              :data:`NO_INDEX` between two moving bodies
 state          104    UINT8   :data:`STATES`: 0 impact, 1 resting, 2 sliding (persistent contact),
                               3 rest (came to rest; a Zeno sequence's accumulation time), 4 stick
                               (a slide stopped), 5 lift_off
+other          108    UINT32  between two moving bodies: the other body's index in scene order;
+                              else :data:`NO_INDEX`
 ============== ====== ======= ===================================================================
 """
 
@@ -47,10 +56,10 @@ from rclpy.serialization import serialize_message
 from sensor_msgs.msg import PointCloud2, PointField
 
 from ..core import Simulator
-from ..core.contact.query import lowest_gap, lowest_gaps, lowest_point, resting_bodies, touching_points
+from ..core.contact.query import lowest_gap, lowest_gaps, nearest_static, lowest_point, resting_bodies, touching_points
 from .conversions import RejectedMessage, time_msg_from_seconds
 
-__all__ = ["CONTACT_FIELDS", "CONTACT_POINT_STEP", "STATES", "INTO_GROUND_TOLERANCE", "ContactPublisher",
+__all__ = ["CONTACT_FIELDS", "CONTACT_POINT_STEP", "STATES", "NO_INDEX", "INTO_GROUND_TOLERANCE", "ContactPublisher",
            "contact_points", "into_ground"]
 
 #: (name, byte offset, PointField datatype) of each point of ``contacts``.
@@ -60,9 +69,12 @@ CONTACT_FIELDS: tuple[tuple[str, int, int], ...] = (
     ("gap", 48, PointField.FLOAT64), ("normal_force", 56, PointField.FLOAT64),
     ("friction_force", 64, PointField.FLOAT64), ("impulse", 72, PointField.FLOAT64),
     ("time", 80, PointField.FLOAT64), ("energy_change", 88, PointField.FLOAT64),
-    ("body", 96, PointField.UINT32), ("ground", 100, PointField.UINT32), ("state", 104, PointField.UINT8))
+    ("body", 96, PointField.UINT32), ("ground", 100, PointField.UINT32), ("state", 104, PointField.UINT8),
+    ("other", 108, PointField.UINT32))
 #: Bytes per point of ``contacts``.
 CONTACT_POINT_STEP = 112
+#: ``ground`` of a contact between two moving bodies, ``other`` of one with the ground or a static shape.
+NO_INDEX = 0xFFFFFFFF
 #: The ``state`` field's values.
 STATES = {"impact": 0, "resting": 1, "sliding": 2, "rest": 3, "stick": 4, "lift-off": 5}
 #: A set_state whose shape would reach deeper than this (m) into a ground half-space is refused.
@@ -75,12 +87,17 @@ CONTACT_DTYPE = np.dtype({"names": [f[0] for f in CONTACT_FIELDS], "formats": [_
 
 def into_ground(sim: Simulator, body: str, position_world: Any, orientation_xyzw: Any) -> RejectedMessage | None:
     """The refusal (reason ``into_ground``) of putting ``body`` at that pose, if its collision shape
-    would reach into a ground half-space deeper than :data:`INTO_GROUND_TOLERANCE`; else None."""
+    would reach deeper than :data:`INTO_GROUND_TOLERANCE` into a ground half-space or into a
+    static body's shape (the static world); else None."""
     gap, ground = lowest_gap(sim, body, position_world, orientation_xyzw)
-    if gap >= -INTO_GROUND_TOLERANCE:
-        return None
-    return RejectedMessage("into_ground", f"{body!r} would reach {-gap:.6g} m into ground {ground} (n·x >= offset): "
-                                          "lift it to gap >= 0")
+    if gap < -INTO_GROUND_TOLERANCE:
+        return RejectedMessage("into_ground", f"{body!r} would reach {-gap:.6g} m into ground {ground} (n·x >= offset): "
+                                              "lift it to gap >= 0")
+    dist, static = nearest_static(sim, body, position_world, orientation_xyzw)
+    if dist < -INTO_GROUND_TOLERANCE:
+        return RejectedMessage("into_ground", f"{body!r} would reach {-dist:.6g} m into static body {static!r}: "
+                                              "move it out to a distance >= 0")
+    return None
 
 
 def contact_points(rows: list[dict[str, Any]]) -> np.ndarray:
@@ -170,9 +187,18 @@ class ContactPublisher:
             if event.body not in names:
                 continue
             i = names.index(event.body)
+            self.totals["events"] += 1
+            if event.other:  # between two moving bodies (body_pairs.py): counted once, on the first body's point
+                if event.other not in names:
+                    continue
+                j = names.index(event.other)
+                if i < j:
+                    self.totals["impacts"] += 1
+                    self.energy_change += event.energy_after - event.energy_before
+                rows.append(self._pair_row(sim, event, i, j))
+                continue
             n = solver.grounds[event.ground, 0:3]
             point, gap = lowest_point(sim, i, event.ground)
-            self.totals["events"] += 1
             if event.kind == "impact":
                 self.totals["impacts"] += 1
                 self.energy_change += event.energy_after - event.energy_before
@@ -183,10 +209,21 @@ class ContactPublisher:
             rows.append({"x": point[0] - gap * n[0], "y": point[1] - gap * n[1], "z": point[2] - gap * n[2],
                          "nx": n[0], "ny": n[1], "nz": n[2], "gap": gap, "impulse": event.impulse,
                          "time": event.time, "body": i, "ground": event.ground, "state": STATES[event.kind],
-                         "energy_change": (event.energy_after - event.energy_before) if event.kind == "impact" else 0.0})
+                         "energy_change": (event.energy_after - event.energy_before) if event.kind == "impact" else 0.0,
+                         "other": NO_INDEX})
         self._seen = len(events)
         self._last = events[-1] if events else None
         return rows
+
+    @staticmethod
+    def _pair_row(sim: Simulator, event: Any, i: int, j: int) -> dict[str, Any]:
+        """The point of an impact between bodies i and j (the event of body i)."""
+        rows = sim.state.rows()
+        gap = sim.contact.pairs.contact(rows[i], i, rows[j], j)
+        (x, y, z), (nx, ny, nz) = event.point_world, event.normal_world
+        return {"x": x, "y": y, "z": z, "nx": nx, "ny": ny, "nz": nz, "gap": gap, "impulse": event.impulse,
+                "time": event.time, "body": i, "ground": NO_INDEX, "state": STATES[event.kind],
+                "energy_change": event.energy_after - event.energy_before, "other": j}
 
     def _resting_rows(self, sim: Simulator, solver: Any) -> list[dict[str, Any]]:
         rows = []
@@ -206,7 +243,8 @@ class ContactPublisher:
             rows.append({"x": centre[0], "y": centre[1], "z": centre[2], "nx": n[0], "ny": n[1], "nz": n[2],
                          "gap": float(gaps.min()), "normal_force": normal,
                          "friction_force": float(np.linalg.norm(force - normal * n)), "time": sim.time, "body": i,
-                         "ground": j, "state": STATES["sliding" if solver.sliding[i] else "resting"]})
+                         "ground": j, "state": STATES["sliding" if solver.sliding[i] else "resting"],
+                         "other": NO_INDEX})
         return rows
 
     # ------------------------------------------------------------------ /diagnostics

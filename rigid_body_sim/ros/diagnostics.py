@@ -44,7 +44,8 @@ __all__ = [
 #: conversions.MAX_WRENCH_COMPONENT in magnitude), ``non_finite_result`` (an impulse that would
 #: make the body's velocity non-finite; dropped at the step it was due), ``non_unit_quaternion``
 #: (a set_state pose whose orientation is not a unit quaternion; set_state.py), ``into_ground`` (a
-#: set_state that would put a body's collision shape into a ground half-space; contacts.py).
+#: set_state that would put a body's collision shape into a ground half-space or a static shape;
+#: contacts.py).
 REJECTION_REASONS = ("unknown_frame", "non_finite", "too_large", "non_finite_result", "non_unit_quaternion",
                      "into_ground")
 #: The simulation status is WARN when, while running, the timer ticked at less than this

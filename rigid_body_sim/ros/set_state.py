@@ -20,7 +20,7 @@ wrench inputs' counters (inputs.py), by reason: ``unknown_frame`` (header.frame_
 child_frame_id), ``non_finite``, ``too_large`` (a component above :data:`MAX_STATE_COMPONENT`),
 ``non_unit_quaternion`` (| |q| − 1 | > :data:`~rigid_body_sim.core.scene.ORIENTATION_TOLERANCE`),
 ``non_finite_result`` (the core refused it at the tick), ``into_ground`` (the body's collision
-shape would reach into a ground half-space: contacts.py).
+shape would reach into a ground half-space or a static body's shape: contacts.py).
 
 Subscriptions change in the three steps of :mod:`.publishers` (prepare, commit, release).
 """
@@ -178,7 +178,7 @@ class SetStateInputs:
         for body, (p_W, q_xyzw, v_W, w_W) in pending.items():
             if body not in sim.body_names:
                 continue
-            refusal = into_ground(sim, body, p_W, q_xyzw)  # contacts.py: never into a ground half-space
+            refusal = into_ground(sim, body, p_W, q_xyzw)  # contacts.py: never into the static world
             if refusal is not None:
                 self._inputs.count_rejection(body, "set_state", refusal)
                 continue

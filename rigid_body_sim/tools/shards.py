@@ -1,11 +1,11 @@
 """Split a scene into shard scenes, one node each, and join the shards' batches back by stamp.
 
-A scene's bodies interact only with the ground (each body with each half-space on its own:
-core/contact), never with each other, so any split of the bodies steps every body exactly as
-the whole scene does: the same integrator on the same numbers. What must stay together is
-what couples bodies: contact between bodies (bodies that can touch each other). The scene
-format has no such coupling today, so every scene splits; should it gain one, coupled bodies
-must go into one shard.
+A scene's bodies interact with the ground (each body with each half-space on its own:
+core/contact) and, in a scene with contact, moving bodies with a collision shape with each other
+(core/contact/body_pairs.py). Bodies that never meet are stepped by any split exactly as the
+whole scene steps them: the same integrator on the same numbers. What must stay together is
+what couples bodies: bodies that can touch each other. This module does not check it (two
+bodies in different shards pass through each other): docs/shards.md.
 
 ``rigid-body-sim shard SCENE --shards K --out DIR`` (:func:`write_shards`) writes
 

@@ -22,6 +22,10 @@ kernels/contact/persistent
     Compiled holding force of a persistent contact and the projection onto the contact manifold.
 kernels/contact/batch
     The compiled passes over every body in persistent contact (holding forces, projection).
+kernels/contact/swept
+    The compiled swept broad phase of the body–body pass (boxes over the step, a hashed grid).
+body_pairs
+    Impacts between moving bodies, located on both step maps; no tunnelling through thin shapes.
 solver
     :class:`~rigid_body_sim.core.contact.solver.ContactSolver`, the driver a Simulator holds when its
     scene has collision geometry.

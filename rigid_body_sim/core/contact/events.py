@@ -17,7 +17,8 @@ class ContactEvent:
         s of sim time (located inside the step).
     body : str
     ground : int
-        Index into the scene's ``ground`` list.
+        Index into the solver's plane rows (the scene's ``ground`` list first, then static shapes'
+        planes: ContactSolver.static_body_of); -1 for an impact with another moving body.
     kind : str
         ``impact``, ``rest`` (persistent contact from here; for a Zeno sequence, dated at its
         accumulation time), ``lift-off`` or ``stick`` (a sliding contact stopped).
@@ -38,6 +39,18 @@ class ContactEvent:
     restitution_used : float
         Impacts: the restitution factor the impact law applied (below the pair's e when the energy
         cap acted, :mod:`~rigid_body_sim.core.kernels.contact.impacts`); else 0.
+    other : str
+        An impact between two moving bodies (body_pairs.py): the other body's name (it has an
+        event of its own at the same time, naming this one); else "". Then ``normal_speed_*``
+        are the relative normal velocity of the pair (m/s), ``impulse`` the normal impulse
+        between them, ``energy_*`` the kinetic energy of both, ``contacts`` the pair's contact points.
+    point_world : tuple of 3 floats
+        Between two bodies: the mean of the contact points (world, m); else ().
+    normal_world : tuple of 3 floats
+        Between two bodies: the unit contact normal, world axes, from the other body towards this
+        one (the direction of the normal impulse on this body); else ().
+    distance : float
+        Between two bodies: their signed distance at the located impact (m; round-off of the root); else 0.
     """
 
     time: float
@@ -54,3 +67,7 @@ class ContactEvent:
     q_WP: tuple = ()
     contacts: int = 0
     restitution_used: float = 0.0
+    other: str = ""
+    point_world: tuple = ()
+    normal_world: tuple = ()
+    distance: float = 0.0

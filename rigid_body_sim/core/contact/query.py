@@ -16,12 +16,12 @@ import math
 import numpy as np
 
 from ..kernels import layout as L
-from ..kernels.contact.layout import DIMS, MAX_POINTS, PERSISTENT
+from ..kernels.contact.layout import DIMS, KIND, MAX_POINTS, PERSISTENT, SHAPE_NONE
 from ..kernels.contact.broadphase import grid_pairs, shape_aabbs
 from ..kernels.contact.pairs import MAX_PAIR_POINTS, pair_contacts
 from ..kernels.contact.shapes import body_gap, body_points, feature_points, min_gaps
 
-__all__ = ["TOUCHING", "overlapping_bodies", "lowest_gap", "lowest_gaps", "lowest_gaps_along", "lowest_point", "resting_bodies", "touching_points"]
+__all__ = ["TOUCHING", "overlapping_bodies", "lowest_gap", "lowest_gaps", "lowest_gaps_along", "nearest_static", "lowest_point", "resting_bodies", "touching_points"]
 
 
 #: A penetration up to this × the pair's size (its largest shape dimension) counts as touching: the
@@ -103,6 +103,24 @@ def lowest_gap(sim, body: str, position_world, orientation_xyzw) -> tuple[float,
     gap, j = body_gap(y, sim._prm[i], solver.shapes[i], solver.half_spaces, np.empty((MAX_POINTS, 3)),
                       np.empty(MAX_POINTS))
     return float(gap), int(j)
+
+
+def nearest_static(sim, body: str, position_world, orientation_xyzw) -> tuple[float, str | None]:
+    """(signed distance in m, name) of the static body whose collision shape is nearest to
+    ``body``'s placed at that pose (as :func:`lowest_gap`); (inf, None) without static shapes or
+    without a shape. Negative: how deep the two shapes overlap."""
+    solver = sim.contact
+    i = sim.body_names.index(body)
+    if solver is None or solver.statics is None or solver.shapes[i, KIND] == SHAPE_NONE:
+        return math.inf, None
+    y = np.zeros(L.ROW_WIDTH)
+    y[L.P:L.P + 3] = np.asarray(position_world, dtype=float)
+    x, yy, z, w = (float(c) for c in orientation_xyzw)
+    y[L.Q:L.Q + 4] = _product((w, x, yy, z), sim.model.q_BP[i])
+    dist, s = solver.statics.nearest(y, i, solver.shapes[i])
+    if s < 0:
+        return math.inf, None
+    return dist, sim.body_names[int(solver.statics.statics[s])]
 
 
 def lowest_gaps_along(sim, body: str, positions_world, orientations_xyzw) -> np.ndarray:

@@ -35,6 +35,13 @@ is a plane row of :attr:`ContactSolver.grounds` after the half-spaces (a static 
 body's tangent row); bodies resting on such a row take the Python path. Without static shapes
 ``grounds`` are the half-spaces and the code path is the one without them.
 
+Moving bodies meet each other in a pass before the ground's (body_pairs.py, :attr:`ContactSolver.pairs`):
+a swept broad phase and the narrow phase find the pairs that met inside the step, the bodies of
+such a pair are stepped again together from the step's start and the two-body impact law acts at
+the root of their signed distance along both step maps; those bodies are then left out of the
+ground's pass for this step. Without two moving bodies with a shape, and without static shapes,
+``pairs`` is None and nothing of it runs.
+
 Persistent contact tracks *features* (shapes.feature_gaps: box corners, capsule ends, cylinder
 rims), so resting on a face, pivoting on an edge or rolling on a rim are one mechanism. With
 ``euler``, ``rk4`` and ``reference`` the holding force is found at every stage from the
@@ -141,6 +148,9 @@ class ContactSolver:
                                                              self.statics.friction)
         n = model.count
         self.bodies = np.array(spec.bodies, dtype=np.int64)  # free bodies with a collision shape
+        #: The body–body pass (body_pairs.py), or None: a scene with fewer than two moving bodies with a
+        #: shape and no static shape has no pair that can meet, and runs without it.
+        self.pairs = None
         self.names = model.names
         # contact points fixed in the body (box corners) see the centripetal acceleration (persistent.accelerations)
         self.vertex = spec.shapes[:, KIND] == SHAPE_BOX
@@ -213,12 +223,18 @@ class ContactSolver:
         self._control1 = np.zeros(L.CONTROL_WIDTH, dtype=np.int64)
         self._inputs1 = np.zeros(L.INPUT_WIDTH)
         self._never = np.zeros(1, dtype=np.int64)  # the step map's cancel flag (kernels.stepping.advance): never set
+        if len(self.bodies) >= 2 or (len(self.bodies) and statics.size):
+            from .body_pairs import BodyPairs
+
+            self.pairs = BodyPairs(self, sim, statics)
 
     # ----------------------------------------------------------------- modes
 
     def reset(self, sim) -> None:
         """Modes from the current state: touching and not moving away means persistent; the events cleared."""
         self.events.clear()
+        if self.pairs is not None:
+            self.pairs.impacts = self.pairs.separations = 0
         self.impact_impulses[:] = 0.0
         self.holding_angular_impulses[:] = 0.0
         for key in self.counts:
@@ -476,7 +492,11 @@ class ContactSolver:
         if staged.size and sim._method.held is not None:  # their steps with the contact found at every stage
             sim._method.held(Y0, Y1, sim._prm, wrenches, staged, h)
         self._static_skipped.clear()
+        # body–body events first (body_pairs.py): the bodies it stepped are done
+        done = self.pairs.after_step(sim, wrenches, Y0, Y1, t0, h) if self.pairs is not None else None
         moving = ~sim._stopped[self.bodies]
+        if done is not None:
+            moving &= ~done[self.bodies]
         modes = self.modes[self.bodies]
         flying = self.bodies[(modes == FLIGHT) & moving]
         resting = self.bodies[(modes == PERSISTENT) & moving]

@@ -65,3 +65,12 @@ def compile_kernels() -> None:
     pose_twist_rows(Ys[0], np.array([[1.0, 0.0, 0.0, 0.0]]), np.empty((n, 7)), np.zeros((n, 7)), np.empty(n, dtype=np.bool_))
     site_readings(Ys[0], prm, wrenches, np.zeros(3), np.zeros(1, dtype=np.int64), np.zeros((1, 3)),
                   np.zeros(1, dtype=np.bool_), np.empty((1, 10)))
+    # A cfunc is compiled (or loaded) where it is defined: imported here, under the caller's cache lock.
+    from . import single_step
+
+    block, sizes = single_step.new_block()
+    for rows in (None, table):
+        single_step.fill_block(block, sizes, Ys, prm, wrenches, members, status, control, inputs,
+                               np.zeros(1, dtype=np.int64), rows, np.empty((SCRATCH_ROWS, L.ROW_WIDTH)),
+                               np.empty(n, dtype=np.int64), np.empty(L.WRENCH_WIDTH))
+        single_step.entry()(block.ctypes.data)

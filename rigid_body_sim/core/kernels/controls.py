@@ -28,10 +28,10 @@ from numba import njit
 
 from .forces import add_wrench
 from .jit import JIT
-from .layout import ACTIVE, WRENCH_WIDTH
-from .stepping import add_pending, advance
+from .layout import ACTIVE, ROW_WIDTH, WRENCH_WIDTH
+from .stepping import SCRATCH_ROWS, add_pending, advance_in
 
-__all__ = ["add_controls", "advance_controlled", "CONTROL_WIDTH", "VALUES", "HEAD", "REJECTED", "new_table"]
+__all__ = ["add_controls", "add_controls_in", "advance_controlled", "advance_controlled_in", "CONTROL_WIDTH", "VALUES", "HEAD", "REJECTED", "new_table"]
 
 #: Columns of a control row: the six values, then the head, then the rejected flag.
 VALUES, HEAD, REJECTED, CONTROL_WIDTH = 0, 6, 11, 12
@@ -45,8 +45,13 @@ def new_table(capacity: int) -> np.ndarray:
 @njit(**JIT)
 def add_controls(wrenches, prm, table):
     """Add the table's rows in use to their bodies' wrench rows; returns how many were rejected (and marks them)."""
+    return add_controls_in(wrenches, prm, table, np.empty(WRENCH_WIDTH))
+
+
+@njit(**JIT)
+def add_controls_in(wrenches, prm, table, scratch):
+    """:func:`add_controls` with its scratch given: ``scratch`` (WRENCH_WIDTH,) float64, contents irrelevant."""
     count = int(table[table.shape[0] - 1, 0])
-    scratch = np.empty(WRENCH_WIDTH)
     bad = 0
     for k in range(count):
         row = table[k]
@@ -81,9 +86,19 @@ def advance_controlled(Ys, prm, wrenches, members, status, control, inputs, n_st
     then spent with them. Returns the steps done, or −1 − the steps done when a row was
     rejected (one integer, so that a step with controls costs Python one comparison more).
     """
+    return advance_controlled_in(Ys, prm, wrenches, members, status, control, inputs, n_steps, cancel, table,
+                                 np.empty((SCRATCH_ROWS, ROW_WIDTH)), np.empty(members.shape[0], dtype=np.int64),
+                                 np.empty(WRENCH_WIDTH))
+
+
+@njit(**JIT)
+def advance_controlled_in(Ys, prm, wrenches, members, status, control, inputs, n_steps, cancel, table, k, deferred,
+                          scratch):
+    """:func:`advance_controlled` with its scratch given (stepping.advance_in's ``k`` and ``deferred``, and
+    :func:`add_controls_in`'s ``scratch``)."""
     add_pending(wrenches, prm, inputs)
-    bad = add_controls(wrenches, prm, table)
-    done = advance(Ys, prm, wrenches, members, status, control, inputs, n_steps, cancel)
+    bad = add_controls_in(wrenches, prm, table, scratch)
+    done = advance_in(Ys, prm, wrenches, members, status, control, inputs, n_steps, cancel, k, deferred)
     if bad:
         done = -1 - done
     return done

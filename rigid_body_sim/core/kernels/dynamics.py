@@ -29,6 +29,7 @@ from .rotation import normalise, rotate_back
 __all__ = [
     "gyroscopic_torque",
     "angular_acceleration",
+    "rates",
     "derivative",
     "derivatives",
     "impulse_response",
@@ -52,23 +53,29 @@ def angular_acceleration(p, wx, wy, wz, tx, ty, tz):
 
 
 @njit(**INLINE)
-def derivative(y, p, w, d):
-    """d ← dy/dt of one body: state row ``y``, parameter row ``p``, wrench row ``w`` (layout.py)."""
+def rates(y, p, w):
+    """dy/dt of one body as 13 scalars (layout order: dp, dq, dv, dw): state row ``y``, parameter row ``p``,
+    wrench row ``w`` (layout.py). :func:`derivative` stores them; explicit Euler uses them as they are."""
     fx, fy, fz, tx, ty, tz = body_wrench(y, p, w)
     qw, qx, qy, qz = y[Q], y[Q + 1], y[Q + 2], y[Q + 3]
     wx, wy, wz = y[W], y[W + 1], y[W + 2]
     vx, vy, vz = y[V], y[V + 1], y[V + 2]
-    d[P], d[P + 1], d[P + 2] = vx, vy, vz
-    d[Q] = 0.5 * (-qx * wx - qy * wy - qz * wz)
-    d[Q + 1] = 0.5 * (qw * wx + qy * wz - qz * wy)
-    d[Q + 2] = 0.5 * (qw * wy - qx * wz + qz * wx)
-    d[Q + 3] = 0.5 * (qw * wz + qx * wy - qy * wx)
+    dqw = 0.5 * (-qx * wx - qy * wy - qz * wz)
+    dqx = 0.5 * (qw * wx + qy * wz - qz * wy)
+    dqy = 0.5 * (qw * wy - qx * wz + qz * wx)
+    dqz = 0.5 * (qw * wz + qx * wy - qy * wx)
     inv_m = p[INV_MASS]
     rate = p[DAMP_LIN] * inv_m
-    d[V] = fx * inv_m - rate * vx
-    d[V + 1] = fy * inv_m - rate * vy
-    d[V + 2] = fz * inv_m - rate * vz
-    d[W], d[W + 1], d[W + 2] = angular_acceleration(p, wx, wy, wz, tx, ty, tz)
+    ax, ay, az = angular_acceleration(p, wx, wy, wz, tx, ty, tz)
+    return (vx, vy, vz, dqw, dqx, dqy, dqz, fx * inv_m - rate * vx, fy * inv_m - rate * vy, fz * inv_m - rate * vz,
+            ax, ay, az)
+
+
+@njit(**INLINE)
+def derivative(y, p, w, d):
+    """d ← dy/dt of one body: state row ``y``, parameter row ``p``, wrench row ``w`` (layout.py)."""
+    (d[P], d[P + 1], d[P + 2], d[Q], d[Q + 1], d[Q + 2], d[Q + 3], d[V], d[V + 1], d[V + 2], d[W], d[W + 1],
+     d[W + 2]) = rates(y, p, w)
 
 
 @njit(**JIT)

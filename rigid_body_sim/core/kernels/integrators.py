@@ -47,7 +47,7 @@ import numpy as np
 from numba import njit
 
 from .contact.stage import held_derivative
-from .dynamics import angular_acceleration, derivative
+from .dynamics import angular_acceleration, derivative, rates
 from .forces import body_wrench
 from .layout import (
     AXIS_K,
@@ -134,8 +134,20 @@ _explicit_rk_held = _explicit_rk_on(held_derivative)
 
 @njit(**INLINE)
 def euler(y, out, p, w, dt, k):
-    """Textbook explicit Euler: every rate at the start of the step; q += dq·dt, then normalise."""
-    explicit_rk(_EULER_A, _EULER_B, y, out, p, w, dt, k)
+    """Textbook explicit Euler: every rate at the start of the step; q += dq·dt, then normalise.
+
+    :func:`explicit_rk` of the one-stage tableau written out on scalars (no scratch row): the
+    same operations in the same order, ``y + dt·(0 + 1·d)``, so the same numbers to the bit.
+    """
+    d = rates(y, p, w)
+    out[P], out[P + 1], out[P + 2] = y[P] + dt * (0.0 + d[0]), y[P + 1] + dt * (0.0 + d[1]), y[P + 2] + dt * (0.0 + d[2])
+    out[Q], out[Q + 1], out[Q + 2], out[Q + 3] = normalise(
+        y[Q] + dt * (0.0 + d[3]), y[Q + 1] + dt * (0.0 + d[4]), y[Q + 2] + dt * (0.0 + d[5]),
+        y[Q + 3] + dt * (0.0 + d[6]))
+    out[V], out[V + 1], out[V + 2] = y[V] + dt * (0.0 + d[7]), y[V + 1] + dt * (0.0 + d[8]), y[V + 2] + dt * (0.0 + d[9])
+    out[W], out[W + 1], out[W + 2] = (y[W] + dt * (0.0 + d[10]), y[W + 1] + dt * (0.0 + d[11]),
+                                      y[W + 2] + dt * (0.0 + d[12]))
+    _pin = y[P], out[P], p[0], w[0], k[0, 0]  # the arrays' last use, out of branches and loops (jit.py)
 
 
 @njit(**INLINE)

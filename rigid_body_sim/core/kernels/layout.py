@@ -30,8 +30,8 @@ Wrench row (``WRENCH_WIDTH`` floats per body)
                                persistent.STICK or SLIDE), ``HELD_SHAPE`` the body's shape
                                (kind, 3 dims: contact/layout.py's shape row), ``HELD_GROUND``
                                the plane (normal, offset), ``HELD_FEATURES`` the tracked
-                               features (bits), ``HELD_MU`` the friction, ``HELD_SLIDE`` the
-                               slip direction (t1, t2) at the step's start.
+                               features (bits), ``HELD_MU`` the friction, ``HELD_SLIDE`` each
+                               contact point's slip direction (t1, t2) at the step's start.
     ``ACTIVE``                 non-zero if anything was added to the row (the last column).
 
 Parameter row (``PRM_WIDTH`` floats per body, ``core/stepping.pack_parameters``)
@@ -90,10 +90,11 @@ INERTIA = 2  # 3 columns: I1, I2, I3 (kg·m²)
 DAMP_LIN, DAMP_ANG = 5, 6  # c_v (N·s/m), c_w (N·m·s/rad)
 GRAVITY = 7  # 3 columns, m/s², projected onto the body's motion
 GRAVITY_BUDGET_RATE = 10  # |m g| / √(2m): the energy bound's growth rate under gravity alone
-BUDGET_FORCE, BUDGET_TORQUE = 11, 12  # 1/√(2m), 1/√(2 I_min)
-MODEL = 13  # MODEL_* below
-PROJECT = 14  # PROJECT_* below
-INV_INERTIA = 15  # 3 columns
+INV_INERTIA = 11  # 3 columns
+# Columns 0–13 are what a step with no wrench reads of every body (fewer cache lines a row).
+BUDGET_FORCE, BUDGET_TORQUE = 14, 15  # 1/√(2m), 1/√(2 I_min)
+MODEL = 16  # MODEL_* below
+PROJECT = 17  # PROJECT_* below
 Q_PB = 18  # 4 columns: q_PB (w, x, y, z), principal frame → the user's body frame B
 # The rotation increment of a constant-rate step, kept for the next step with the same rate
 # and dt (kinematic bodies, undamped isotropic ones): the same numbers without sin and cos.

@@ -37,7 +37,7 @@ from numba import njit, prange
 from .jit import JIT
 from . import layout as L
 from .layout import CUR, DONE, DT, LIMIT, METHOD, OK, OUTCOME, ROW_WIDTH, SPENT
-from .stepping import SCRATCH_ROWS, _worse, add_pending, new_buffers, step_group
+from .stepping import SCRATCH_ROWS, _worse, add_pending, new_buffers, step_group, wrench_rows
 
 __all__ = ["PARALLEL", "MIN_BODIES", "PART_BODIES", "max_threads", "parts_of", "advance_parallel", "run_parallel",
            "compile_parallel"]
@@ -79,6 +79,7 @@ def advance_parallel(Ys, prm, wrenches, members, status, control, inputs, n_step
     Only for a compiled integrator (control[METHOD] ≥ 0). Returns the number of steps done.
     """
     add_pending(wrenches, prm, inputs)
+    rows = wrench_rows(wrenches)
     count = parts.shape[0]
     k = np.empty((count, SCRATCH_ROWS, ROW_WIDTH))
     deferred = np.empty(members.shape[0], dtype=np.int64)
@@ -92,7 +93,7 @@ def advance_parallel(Ys, prm, wrenches, members, status, control, inputs, n_step
         Y, Ynew = Ys[cur], Ys[1 - cur]
         for c in prange(count):
             start, end = parts[c, 0], parts[c, 1]
-            worst_of[c] = step_group(method, parts[c, 2], Y, Ynew, prm, wrenches, members[start:end], status, dt,
+            worst_of[c] = step_group(method, parts[c, 2], Y, Ynew, prm, rows, members[start:end], status, dt,
                                      limit, k[c], deferred[start:end])
         outcome = OK
         for c in range(count):

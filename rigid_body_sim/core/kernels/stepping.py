@@ -73,6 +73,7 @@ from .layout import (
     PENDING_FORCE,
     PENDING_FRAME,
     PENDING_TORQUE,
+    Q,
     ROW_WIDTH,
     SITE_MOMENT,
     SPENT,
@@ -85,7 +86,7 @@ from .layout import (
 from .reduced_models import isotropic_free, kinematic, planar, symmetric_free, torque_free, translation
 from .jit import INLINE, JIT, LOOP
 
-__all__ = ["new_buffers", "advance", "add_pending", "step_reduced", "check_members", "clear_wrenches",
+__all__ = ["new_buffers", "advance", "advance_in", "add_pending", "step_reduced", "check_members", "clear_wrenches", "wrench_rows",
            "integrate", "step_group"]
 
 #: Rows of the per-call scratch: stage derivatives and the stage state of the longest tableau.
@@ -158,11 +159,17 @@ def check_body(y, out, p, w, dt, limit):
     v2 = out[V] * out[V] + out[V + 1] * out[V + 1] + out[V + 2] * out[V + 2]
     energy = 0.5 * (p[MASS] * v2 + p[INERTIA] * out[W] ** 2 + p[INERTIA + 1] * out[W + 1] ** 2
                     + p[INERTIA + 2] * out[W + 2] ** 2)
+    # The energy is a sum of m·v_i² and I_i·w_i², none negative, so it is finite only if v and w
+    # are: with p, q and the energy finite the row is finite (eight numbers tested, not
+    # thirteen); otherwise all thirteen are tested. The same outcome as finite_row alone.
+    pq = (((out[P] * 0.0 + out[P + 1] * 0.0) + (out[P + 2] * 0.0 + out[Q] * 0.0))
+          + ((out[Q + 1] * 0.0 + out[Q + 2] * 0.0) + (out[Q + 3] * 0.0 + energy * 0.0)))
     outcome = OK
-    if not finite_row(out):
+    if pq != 0.0 and not finite_row(out):
         outcome = NON_FINITE
     elif energy > limit * bound * bound:
         outcome = DIVERGED
+    _pin = y[P], out[P], p[0], w[0]  # the arrays' last use, out of branches and loops (jit.py)
     return outcome
 
 
@@ -184,8 +191,9 @@ HOST_METHOD = -1
 @njit(**INLINE)
 def _checked(i, y, out, p, w, status, dt, limit, worst):
     """Check body i's step y → out (check_body), record its status; the worse of it and ``worst``."""
-    status[i] = check_body(y, out, p, w, dt, limit)
-    return _worse(worst, status[i])
+    outcome = check_body(y, out, p, w, dt, limit)
+    status[i] = outcome
+    return _worse(worst, outcome)
 
 
 def _group_loop(step, when_torque_free=False):
@@ -208,8 +216,10 @@ def _group_loop(step, when_torque_free=False):
         def loop(Y, Ynew, prm, wrenches, bodies, status, dt, limit, k, deferred):
             worst = OK
             count = 0
-            for i in bodies:
-                y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[i]
+            last = np.uint64(wrenches.shape[0] - 1)
+            for m in range(bodies.shape[0]):
+                i = np.uint64(bodies[m])  # an index (≥ 0): unsigned, so no negative-index wraparound per array
+                y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[min(i, last)]  # one row for all: see wrench_rows
                 free = torque_free(w)
                 step(y, out, p, w, dt, k)
                 outcome = check_body(y, out, p, w, dt, limit)
@@ -224,8 +234,10 @@ def _group_loop(step, when_torque_free=False):
         @njit(**LOOP)
         def loop(Y, Ynew, prm, wrenches, bodies, status, dt, limit, k, deferred):
             worst = OK
-            for i in bodies:
-                y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[i]
+            last = np.uint64(wrenches.shape[0] - 1)
+            for m in range(bodies.shape[0]):
+                i = np.uint64(bodies[m])  # an index (≥ 0): unsigned, so no negative-index wraparound per array
+                y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[min(i, last)]  # one row for all: see wrench_rows
                 step(y, out, p, w, dt, k)
                 worst = _checked(i, y, out, p, w, status, dt, limit, worst)
             return worst, 0
@@ -344,6 +356,23 @@ def add_pending(wrenches, prm, inputs):
 
 
 @njit(**JIT)
+def wrench_rows(wrenches):
+    """The wrench rows the group loops read: ``wrenches``, or its first row alone when no row holds anything.
+
+    Every reader of a wrench row ignores a row whose ACTIVE is zero (forces.body_wrench,
+    energy_bound_rate, reduced_models.torque_free), and such a row is all zeros; so when no row
+    is active every body may read the same one, which stays in cache, instead of a row of its
+    own. The loops read row min(i, rows − 1): body i's own row, or that one row.
+    """
+    rows = wrenches[:1]
+    for i in range(wrenches.shape[0]):
+        if wrenches[i, ACTIVE] != 0.0:
+            rows = wrenches
+            break
+    return rows
+
+
+@njit(**JIT)
 def clear_wrenches(wrenches):
     """Zero every wrench row that holds something."""
     for i in range(wrenches.shape[0]):
@@ -364,14 +393,21 @@ def advance(Ys, prm, wrenches, members, status, control, inputs, n_steps, cancel
     sensors and are dropped before the next step or the next wrench. Reports control[DONE]
     and control[OUTCOME] (OK, NON_FINITE, DIVERGED); returns the number of steps done.
     """
+    return advance_in(Ys, prm, wrenches, members, status, control, inputs, n_steps, cancel,
+                      np.empty((SCRATCH_ROWS, ROW_WIDTH)), np.empty(members.shape[0], dtype=np.int64))
+
+
+@njit(**JIT)
+def advance_in(Ys, prm, wrenches, members, status, control, inputs, n_steps, cancel, k, deferred):
+    """:func:`advance` with its scratch given (what it allocates per call): ``k`` (SCRATCH_ROWS, ROW_WIDTH)
+    float64 and ``deferred`` int64 of at least ``members``' length; their contents do not matter."""
     add_pending(wrenches, prm, inputs)
-    k = np.empty((SCRATCH_ROWS, ROW_WIDTH))
-    deferred = np.empty(members.shape[0], dtype=np.int64)
+    rows = wrench_rows(wrenches)
     cur = control[CUR]
     done = 0
     outcome = OK
     while done < n_steps and cancel[0] == 0:
-        outcome, _ = _step_all(control[METHOD], Ys[cur], Ys[1 - cur], prm, wrenches, members, control, status,
+        outcome, _ = _step_all(control[METHOD], Ys[cur], Ys[1 - cur], prm, rows, members, control, status,
                                inputs[DT], inputs[LIMIT], k, deferred)
         if outcome != OK:
             break

@@ -1,0 +1,568 @@
+"""Impacts between moving bodies, and no tunnelling through thin shapes: the body–body pass of the contact solver.
+
+The ground's mechanism (solver.py) extended to pairs of bodies: events are located on the
+bodies' own step maps, the impact law acts at the located state, the rest of the step follows.
+After each step, before the ground pass:
+
+1. **Swept broad phase** (compiled, no allocation; kernels/contact/swept.py): every moving body
+   with a shape and every static shape gets the world box its bounding sphere stays in over the
+   step; overlapping boxes, found with a hashed uniform grid, are the candidate pairs. A step
+   without a candidate costs these two compiled loops and nothing else (no Python per body or
+   per pair).
+2. **Narrow phase** on the candidates (one compiled call at the step's end, one at its start;
+   kernels/contact/pairs.py). A pair of moving bodies meets in the step if its signed distance
+   is negative at the end, or it overlaps at the start while approaching; a pair apart at both
+   ends (d₀, d₁ ≥ 0) that could have met in between (d₀ + d₁ ≤ B h, B the bound on |d′| below)
+   is followed along the step by **conservative advancement** (below), so that an event which
+   starts and ends inside one step is still found. A body against a static shape is looked at
+   here only in that last case (a passage through it inside the step); a negative distance at
+   the step's end is the ground pass's (static_geometry.py).
+3. **Groups**: bodies linked by such pairs are stepped together, event after event, from the
+   step's start. Each event time is the first root of s ↦ F(s), F the least of the group's pair
+   signed distances d(Φ_a(y_a0, s h), Φ_b(y_b0, s h)) and of its flying members' gaps to the
+   ground and the static shapes, Φ each body's own step map (solver.step_map). Conservative
+   advancement finds a sample where F < 0: from s, the next sample is s + (F_k + ε_k)/(B_k h)
+   over the components k, with B_k a bound on |dF_k/dt| (relative speed plus spin × bounding
+   radius, the largest over the piece; a sphere's spin does not count) and ε_k = 1e-4 × the
+   pair's size; no component can cross zero between samples. The root in the bracket is found
+   by the solver's Illinois method, to round-off.
+4. **At a pair's root** the two-body impact law (kernels/contact/pair_impacts.py) acts at the
+   narrow phase's contact points (mid-way between the two surfaces' points) and normal, with the
+   pair's material (materials.pair_material). The pairs touching at that instant are solved
+   together in sequential rounds (:meth:`BodyPairs._impacts`): each approaching pair's law in
+   turn and, for a member resting on the ground that a pair drives into it, the ground's law
+   (impacts.impact on its tracked contact points), until nothing approaches (MAX_SEQUENTIAL
+   rounds at most): for e = 0 the simultaneous inelastic impact, for e > 0 a sequential answer
+   (docs/contact.md, "Between bodies"). A resting member stays held if any of its contact points
+   still presses on its ground, else it lifts off. One event per body and pair (``other`` names
+   the other body; a body's velocity jumps are split over its events so that they add up). At
+   a flying member's ground or static-shape root, the ground's impact law (solver._impact).
+   After an event the bodies it touched finish the step on their own (solver._with_events, or
+   solver._persistent_end for a held one); the others go on together. A pair that does not
+   approach at its root (grazing) is not looked at again in that step.
+5. **Touching at a piece's start**: a pair overlapping (or touching, TOUCHING) at the start of
+   a step or of a piece and approaching has its impacts there; if it overlaps, it is first moved
+   apart along the normal by the depth, shared by inverse mass (a held member does not move).
+
+Not modelled: persistent (resting) contact between bodies. A body lying on another is kept up by
+the impacts of item 5 at each step's start (e = 0 removes the approach of the step), so it sinks
+into it by up to about a h²/2 within a step (a its acceleration towards it) and is moved back out
+at the next step's start (a position correction, counted in :attr:`BodyPairs.separations`); the
+pair's normal impulse is not a force on ``contacts``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..kernels import layout as L
+from ..kernels.contact.impacts import IMPACT_WORK_SHAPE, impact, kinetic_energy_row
+from ..kernels.contact.layout import DIMS, KIND, NORMAL, PERSISTENT, FLIGHT, SHAPE_SPHERE
+from ..kernels.contact.pair_impacts import PAIR_JACOBIAN_SHAPE, pair_impact
+from ..kernels.contact.pairs import MAX_PAIR_POINTS, pair_contacts
+from ..kernels.contact.persistent import normal_speeds
+from ..kernels.contact.swept import grid_swept_pairs, swept_bounds
+from ..quaternion import quat_multiply, quat_rotate
+from .events import ContactEvent
+from .materials import pair_material
+from .static_geometry import bounding_radius
+
+__all__ = ["BodyPairs", "ADVANCE_SKIN", "MAX_ADVANCE"]
+
+#: Conservative advancement aims at this × the pair's size below contact (m per m), so that it ends on a
+#: sample inside; a passage shallower than this that starts and ends inside one step may be missed.
+ADVANCE_SKIN = 1e-4
+#: Most conservative-advancement samples in one piece of a step (then the step's end is trusted).
+MAX_ADVANCE = 400
+#: Most rounds of a pair's impact and its members' ground impacts at one instant (module docstring, 4).
+MAX_SEQUENTIAL = 200
+#: Most events of one group in one step (more is reported as an error, not looped on).
+MAX_GROUP_EVENTS = 10_000
+#: Rounds of impacts at one piece's start before the pairs still approaching are left for the piece.
+MAX_ROUNDS = 10
+#: A pair whose signed distance is below this × its size (m per m) touches.
+TOUCHING = 1e-12
+#: A relative normal velocity below −this (m/s) approaches.
+APPROACH_SPEED = 1e-12
+#: A resting body whose contact points move away from its ground faster than this (m/s) lifts off.
+LIFT_OFF_SPEED = 1e-9
+
+
+class BodyPairs:
+    """The body–body pass of a :class:`~rigid_body_sim.core.contact.solver.ContactSolver` (module docstring).
+
+    Parameters
+    ----------
+    solver : ContactSolver
+    sim : Simulator
+    statics : ndarray of int
+        The static bodies with a shape (static_geometry.static_shapes).
+    """
+
+    def __init__(self, solver, sim, statics: np.ndarray) -> None:
+        self.solver = solver
+        shapes = solver.shapes
+        #: Members of the broad phase: the moving bodies with a shape, then the static shapes.
+        self.members = np.concatenate((solver.bodies, statics)).astype(np.int64)
+        m = len(self.members)
+        self.movable = np.zeros(m, dtype=np.bool_)
+        self.movable[:len(solver.bodies)] = True
+        self.reach = np.array([bounding_radius(shapes[i]) for i in self.members])
+        #: Per body: the radius its spin sweeps (0 for a sphere, whose distance its spin does not change).
+        self.spin_reach = np.array([0.0 if shapes[i, KIND] == SHAPE_SPHERE else bounding_radius(shapes[i])
+                                    for i in range(len(shapes))])
+        self.size = shapes[:, DIMS:DIMS + 3].max(axis=1)
+        self.is_static = np.zeros(len(shapes), dtype=bool)
+        self.is_static[statics] = True
+        self._lo, self._hi = np.empty((m, 3)), np.empty((m, 3))
+        self._cells, self._chain = np.empty((m, 3), dtype=np.int64), np.empty(m, dtype=np.int64)
+        self._heads = np.empty(1 << max(4, int(2 * m - 1).bit_length()), dtype=np.int64)  # ≥ 2 M buckets
+        self._pairs = np.empty((max(4 * m, 16), 2), dtype=np.int64)
+        self._q_PB = sim._prm[:, L.Q_PB:L.Q_PB + 4].copy()
+        self._shapes = np.ascontiguousarray(shapes)
+        # two-shape narrow-phase buffers
+        self._pos2, self._quat2 = np.zeros((2, 3)), np.zeros((2, 4))
+        self._shape2 = np.zeros((2, shapes.shape[1]))
+        self._pair2 = np.array([[0, 1]], dtype=np.int64)
+        self._dist1, self._normal1, self._count1 = np.empty(1), np.empty((1, 3)), np.zeros(1, dtype=np.int64)
+        self._points1, self._seps1 = np.empty((1, MAX_PAIR_POINTS, 6)), np.empty((1, MAX_PAIR_POINTS))
+        self._jac = np.zeros(PAIR_JACOBIAN_SHAPE)
+        self._work = np.zeros(IMPACT_WORK_SHAPE)
+        self._step_wrenches = np.zeros((len(shapes), L.WRENCH_WIDTH))  # the wrench rows of the step being looked at
+        #: Impacts between moving bodies since the solver was made or reset.
+        self.impacts = 0
+        #: Pairs found overlapping at a step's start and moved apart (a body lying on another: module docstring).
+        self.separations = 0
+
+    # ----------------------------------------------------------------- geometry
+
+    def _shape_pose(self, y: np.ndarray, i: int) -> tuple[np.ndarray, np.ndarray]:
+        return y[L.P:L.P + 3], quat_multiply(y[L.Q:L.Q + 4], self._q_PB[i])
+
+    def contact(self, ya: np.ndarray, a: int, yb: np.ndarray, b: int) -> float:
+        """Signed distance (m) of bodies a and b at state rows ya, yb; normal, points left in the buffers."""
+        self._pos2[0], self._quat2[0] = self._shape_pose(ya, a)
+        self._pos2[1], self._quat2[1] = self._shape_pose(yb, b)
+        self._shape2[0], self._shape2[1] = self._shapes[a], self._shapes[b]
+        pair_contacts(self._pos2, self._quat2, self._shape2, self._pair2, self._dist1, self._normal1, self._count1,
+                      self._points1, self._seps1)
+        return float(self._dist1[0])
+
+    def _batch(self, Y: np.ndarray, pairs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(signed distances (k,), normals (k, 3)) of the body pairs (k, 2) at state rows Y."""
+        bodies = np.unique(pairs)
+        pos = np.ascontiguousarray(Y[bodies, L.P:L.P + 3])
+        quat = np.ascontiguousarray(quat_multiply(Y[bodies, L.Q:L.Q + 4], self._q_PB[bodies]))
+        rows = np.ascontiguousarray(self._shapes[bodies])
+        local = np.ascontiguousarray(np.searchsorted(bodies, pairs))
+        k = len(local)
+        dist, normal = np.empty(k), np.empty((k, 3))
+        pair_contacts(pos, quat, rows, local, dist, normal, np.zeros(k, dtype=np.int64),
+                      np.empty((k, MAX_PAIR_POINTS, 6)), np.empty((k, MAX_PAIR_POINTS)))
+        return dist, normal
+
+    def _geometry(self) -> tuple[np.ndarray, np.ndarray, float]:
+        """(normal from a to b (3,), contact points (k, 3) mid-way between the surfaces, signed distance) of the
+        last :meth:`contact` call."""
+        count = int(self._count1[0])
+        points = 0.5 * (self._points1[0, :count, 0:3] + self._points1[0, :count, 3:6])
+        return self._normal1[0].copy(), points, float(self._dist1[0])
+
+    @staticmethod
+    def _relative_normal_speed(ya, yb, n, points) -> float:
+        """The least normal velocity of b over a at the contact points (k, 3) (m/s, < 0 approaching)."""
+        lowest = math.inf
+        w_a = quat_rotate(ya[L.Q:L.Q + 4], ya[L.W:L.W + 3])
+        w_b = quat_rotate(yb[L.Q:L.Q + 4], yb[L.W:L.W + 3])
+        for x in points:
+            u = (yb[L.V:L.V + 3] + np.cross(w_b, x - yb[L.P:L.P + 3])) - (ya[L.V:L.V + 3] + np.cross(w_a, x - ya[L.P:L.P + 3]))
+            lowest = min(lowest, float(u @ n))
+        return lowest
+
+    # ----------------------------------------------------------------- after the step
+
+    def after_step(self, sim, wrenches: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, t0: float,
+                   h: float) -> np.ndarray | None:
+        """Find and resolve the step's body–body events; the bodies done here as a bool mask (None: none)."""
+        swept_bounds(Y0, Y1, self.members, self.reach, h, self._lo, self._hi)
+        found = grid_swept_pairs(self._lo, self._hi, self.movable, self._cells, self._heads, self._chain, self._pairs)
+        if found == 0:
+            return None
+        if found > len(self._pairs):
+            self._pairs = np.empty((2 * found, 2), dtype=np.int64)
+            found = grid_swept_pairs(self._lo, self._hi, self.movable, self._cells, self._heads, self._chain,
+                                     self._pairs)
+        pairs = self.members[self._pairs[:found]]
+        stopped = sim._stopped
+        pairs = pairs[~(stopped[pairs[:, 0]] | stopped[pairs[:, 1]])]
+        if not len(pairs):
+            return None
+        self._step_wrenches = wrenches
+        hits = self._hits(sim, pairs, Y0, Y1, h)
+        if not hits:
+            return None
+        done = np.zeros(len(sim._stopped), dtype=bool)
+        for group in _groups(hits, self.is_static):
+            links = [p for p in map(tuple, pairs.tolist()) if p[0] in group and p[1] in group]
+            members = sorted(group)
+            self._group_step(sim, members, links, Y0, Y1, wrenches, t0, h)
+            done[members] = True
+        return done
+
+    def _hits(self, sim, pairs: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, h: float) -> list[tuple[int, int]]:
+        """The candidate pairs that meet inside the step (module docstring, 2); a static shape is never first.
+
+        Vectorised over the candidates; Python per pair only for those that overlap at an end of the
+        step or that may have passed through each other: apart at both ends with d₀ + d₁ ≤ B h (B the
+        bound on |d′| of :meth:`_pair_bounds`; if |d′| ≤ B, d stays ≥ (d₀ + d₁ − B h)/2 > 0 otherwise).
+        """
+        solver = self.solver
+        static_a = self.is_static[pairs[:, 0]]
+        pairs = np.where(static_a[:, None], pairs[:, ::-1], pairs)  # a moving body first
+        d1, _ = self._batch(Y1, pairs)
+        d0, _ = self._batch(Y0, pairs)
+        static = self.is_static[pairs[:, 1]]
+        resting = solver.modes[pairs[:, 0]] == PERSISTENT
+        ends = ~static & ((d1 < 0.0) | (d0 < 0.0))
+        inside = (d0 >= 0.0) & (d1 >= 0.0) & ~(static & resting)
+        inside &= d0 + d1 <= self._pair_bounds(pairs, Y0, Y1) * h
+        hits = []
+        for k in np.flatnonzero(ends | inside):
+            a, b = int(pairs[k, 0]), int(pairs[k, 1])
+            if d1[k] < 0.0:
+                hits.append((a, b))
+            elif d0[k] < 0.0:
+                if self._approaching(sim, Y0[a], a, Y0[b], b):
+                    hits.append((a, b))
+            elif self._advance_hits(sim, a, b, Y0, h):
+                hits.append((a, b))
+        return hits
+
+    def _pair_bounds(self, pairs: np.ndarray, Y0: np.ndarray, Y1: np.ndarray) -> np.ndarray:
+        """(k,) bounds (m/s) on |d′| of the pairs over the step (:meth:`_pair_bound`, vectorised)."""
+        a, b = pairs[:, 0], pairs[:, 1]
+        V = slice(L.V, L.V + 3)
+        rel0, rel1 = Y0[b, V] - Y0[a, V], Y1[b, V] - Y1[a, V]
+        bound = np.maximum(np.linalg.norm(rel0, axis=1), np.linalg.norm(rel1, axis=1))
+        bound += np.linalg.norm(rel1 - rel0, axis=1)
+        W = slice(L.W, L.W + 3)
+        for i in (a, b):
+            spin = np.maximum(np.linalg.norm(Y0[i, W], axis=1), np.linalg.norm(Y1[i, W], axis=1))
+            bound += (spin + np.linalg.norm(Y1[i, W] - Y0[i, W], axis=1)) * self.spin_reach[i]
+        return bound
+
+    def _approaching(self, sim, ya, a, yb, b) -> bool:
+        self.contact(ya, a, yb, b)
+        n, points, _ = self._geometry()
+        return self._relative_normal_speed(ya, yb, n, points) < -APPROACH_SPEED
+
+    def _advance_hits(self, sim, a: int, b: int, Y0: np.ndarray, h: float) -> bool:
+        """Whether conservative advancement of pair (a, b) over the step finds it overlapping."""
+        solver = self.solver
+        ya, yb = Y0[a].copy(), Y0[b].copy()
+        wa, wb = self._wrench_of(sim, a), self._wrench_of(sim, b)
+        static = self.is_static[b]
+
+        def states(s):
+            return (solver.step_map(sim, a, ya, s * h, wa) if s > 0.0 else ya,
+                    yb if static or s == 0.0 else solver.step_map(sim, b, yb, s * h, wb))
+
+        ends = states(1.0)
+        bound = self._pair_bound((ya, ends[0]), (yb, ends[1]), a, b) * h
+        if bound <= 0.0:
+            return False
+        skin = ADVANCE_SKIN * max(self.size[a], self.size[b])
+        s, d = 0.0, self.contact(ya, a, yb, b)
+        for _ in range(MAX_ADVANCE):
+            s += (d + skin) / bound
+            if s >= 1.0:
+                return False
+            at = states(s)
+            d = self.contact(at[0], a, at[1], b)
+            if d < 0.0:
+                return True
+        return False
+
+    def _wrench_of(self, sim, i: int) -> np.ndarray:
+        """The wrench row body i's step ran with (static shapes: none)."""
+        return self._step_wrenches[i] if not self.is_static[i] else np.zeros(L.WRENCH_WIDTH)
+
+    def _pair_bound(self, A, B, a: int, b: int) -> float:
+        """A bound (m/s) on |d'(t)| of pair a, b over a piece whose end states are A = (ya0, ya1), B = (yb0, yb1)."""
+        rel0 = B[0][L.V:L.V + 3] - A[0][L.V:L.V + 3]
+        rel1 = B[1][L.V:L.V + 3] - A[1][L.V:L.V + 3]
+        speed = max(np.linalg.norm(rel0), np.linalg.norm(rel1)) + np.linalg.norm(rel1 - rel0)
+        for y, i in ((A, a), (B, b)):
+            spin = max(np.linalg.norm(y[0][L.W:L.W + 3]), np.linalg.norm(y[1][L.W:L.W + 3]))
+            spin += np.linalg.norm(y[1][L.W:L.W + 3] - y[0][L.W:L.W + 3])
+            speed += spin * self.spin_reach[i]
+        return float(speed)
+
+    def _body_bound(self, y0, y1, i: int) -> float:
+        """A bound (m/s) on how fast body i's surface moves over a piece from y0 to y1 (against fixed geometry)."""
+        speed = max(np.linalg.norm(y0[L.V:L.V + 3]), np.linalg.norm(y1[L.V:L.V + 3]))
+        speed += np.linalg.norm(y1[L.V:L.V + 3] - y0[L.V:L.V + 3])
+        spin = max(np.linalg.norm(y0[L.W:L.W + 3]), np.linalg.norm(y1[L.W:L.W + 3]))
+        spin += np.linalg.norm(y1[L.W:L.W + 3] - y0[L.W:L.W + 3])
+        return float(speed + spin * self.spin_reach[i])
+
+    # ----------------------------------------------------------------- a group's step
+
+    def _group_step(self, sim, members: list[int], links: list[tuple[int, int]], Y0: np.ndarray, Y1: np.ndarray,
+                    wrenches: np.ndarray, t: float, h: float) -> None:
+        """Step the bodies of one group together from Y0 over h, event after event; results into Y1."""
+        solver = self.solver
+        y = {i: Y0[i].copy() for i in members}
+        w = {i: wrenches[i].copy() for i in members}
+        pairs = [(a, b) for a, b in links if not self.is_static[b]]
+        active = set(members)
+        #: members still held on their ground with the holding force of the step's start (w[i] holds it)
+        held = {i for i in members if solver.modes[i] == PERSISTENT}
+        rounds = 0
+        grazed: set = set()
+        for _ in range(MAX_GROUP_EVENTS):
+            if h <= 0.0 or not active:
+                break
+            pairs_now = [(a, b) for a, b in pairs if a in active and b in active and (a, b) not in grazed]
+            if not pairs_now and not any(solver.modes[i] == FLIGHT for i in active):
+                break
+            # pairs touching at the piece's start: those that approach have their impacts now, all together
+            # (sequential rounds, so that a chain passes its impulse on); the others are left for this piece
+            touching = [(a, b) for a, b in pairs_now if self.contact(y[a], a, y[b], b)
+                        <= TOUCHING * max(self.size[a], self.size[b])]
+            closing = [(a, b) for a, b in touching if self._approaching(sim, y[a], a, y[b], b)]
+            if closing and rounds < MAX_ROUNDS:
+                rounds += 1
+                for a, b in closing:
+                    self._separate(sim, a, b, y, held)
+                self._after_impacts(sim, touching, y, w, t, h, held, active)
+                continue
+            live = [p for p in pairs_now if p not in touching]
+            flying = [i for i in active if solver.modes[i] == FLIGHT]
+            on_ground = [i for i in flying if solver._gap(sim, y[i], i)[0] <= 0.0]
+            for i in on_ground:  # on its ground already (just after an impact): on its own from here
+                active.discard(i)
+                self._finish(sim, i, y, w, t, h, held)
+            if on_ground:
+                continue
+            cache: dict[float, dict[int, np.ndarray]] = {}
+
+            def at(s: float) -> dict[int, np.ndarray]:
+                if s not in cache:
+                    cache[s] = {i: (solver.step_map(sim, i, y[i], s * h, w[i]) if s > 0.0 else y[i]) for i in active}
+                return cache[s]
+
+            def components(s: float) -> list[tuple[float, tuple]]:
+                states = at(s)
+                values = [(self.contact(states[a], a, states[b], b), ("pair", a, b)) for a, b in live]
+                values += [(solver._gap(sim, states[i], i)[0], ("env", i)) for i in flying]
+                return values
+
+            end = at(1.0)
+            bounds, skins = {}, {}
+            for a, b in live:
+                bounds[("pair", a, b)] = self._pair_bound((y[a], end[a]), (y[b], end[b]), a, b) * h
+                skins[("pair", a, b)] = ADVANCE_SKIN * max(self.size[a], self.size[b])
+            for i in flying:
+                bounds[("env", i)] = self._body_bound(y[i], end[i], i) * h
+                skins[("env", i)] = ADVANCE_SKIN * self.size[i]
+            s_lo, values = 0.0, components(0.0)
+            s_hi = None
+            for _ in range(MAX_ADVANCE):  # conservative advancement to a sample below zero
+                step = math.inf
+                for v, key in values:
+                    if bounds[key] > 0.0:
+                        step = min(step, (max(v, 0.0) + skins[key]) / bounds[key])
+                s = min(1.0, s_lo + step)
+                values_s = components(s)
+                if min(v for v, _ in values_s) < 0.0:
+                    s_hi = s
+                    break
+                if s >= 1.0:
+                    break
+                s_lo, values = s, values_s
+            if s_hi is None:  # no event in the rest of the step
+                for i in list(active):
+                    if i in held:
+                        y[i] = solver._persistent_end(sim, i, y[i], end[i], w[i], t, h)
+                    else:
+                        y[i] = end[i].copy()
+                active.clear()
+                break
+            lo, hi = s_lo, s_hi
+            u = solver._locate(lambda u: min(v for v, _ in components(lo + u * (hi - lo))),
+                               min(v for v, _ in values), -1.0)
+            s = lo + (1.0 if u is None else u) * (hi - lo)
+            states = at(s)
+            key = min(components(s), key=lambda vk: vk[0])[1]
+            for i in active:
+                y[i] = states[i].copy()
+            t, h = t + s * h, h - s * h
+            if key[0] == "pair":
+                _, a, b = key
+                if self._approaching(sim, y[a], a, y[b], b):  # with every other pair touching now
+                    touching = [p for p in pairs_now if p == (a, b) or p in touching or self.contact(
+                        y[p[0]], p[0], y[p[1]], p[1]) <= TOUCHING * max(self.size[p[0]], self.size[p[1]])]
+                    self._after_impacts(sim, touching, y, w, t, h, held, active)
+                    rounds = 0
+                else:  # grazing: it does not approach at its root; looked at again from the next step
+                    grazed.add((a, b))
+            else:
+                i = key[1]
+                solver._impact(sim, i, y[i], w[i], t, h)
+                active.discard(i)
+                self._finish(sim, i, y, w, t, h, held)
+        else:
+            names = ", ".join(repr(solver.names[i]) for i in members)
+            raise RuntimeError(f"bodies {names}: more than {MAX_GROUP_EVENTS} body–body events in one step at t = {t}")
+        for i in list(active):
+            self._finish(sim, i, y, w, t, h, held)
+        for i in members:
+            Y1[i, :L.STATE_WIDTH] = y[i][:L.STATE_WIDTH]
+
+    def _after_impacts(self, sim, pairs: list, y: dict, w: dict, t: float, h: float, held: set,
+                       active: set) -> None:
+        """The impacts of ``pairs`` at y; a member that lifted off its ground goes on on its own from there."""
+        was = held & {i for pair in pairs for i in pair}
+        self._impacts(sim, pairs, y, w, t, held)
+        for i in was - held:
+            active.discard(i)
+            self._finish(sim, i, y, w, t, h, held)
+
+    def _finish(self, sim, i: int, y: dict, w: dict, t: float, h: float, held: set) -> None:
+        """Body i's rest of the step (h from y[i]) on its own: the ground pass's flight or resting path."""
+        solver = self.solver
+        if h <= 0.0:
+            return
+        if i in held:  # still under the holding force of the step's start
+            end = solver.step_map(sim, i, y[i], h, w[i])
+            y[i] = solver._persistent_end(sim, i, y[i], end, w[i], t, h)
+        else:
+            y[i] = solver._with_events(sim, i, y[i], w[i], t, h)
+
+    def _impacts(self, sim, pairs: list, y: dict, w: dict, t: float, held: set) -> None:
+        """The impacts of ``pairs`` (of bodies at y, in place) at one instant: each pair's two-body law in turn,
+        and the ground's law for a member held on one that it drives in, round after round while any pair
+        still approaches (sequential impacts, module docstring 4); one event per body and pair."""
+        solver = self.solver
+        geometry = []
+        for a, b in pairs:
+            self.contact(y[a], a, y[b], b)
+            geometry.append(self._geometry() + pair_material(self._shapes[a], self._shapes[b]))
+        bodies = sorted({i for pair in pairs for i in pair})
+        energy_before = sum(kinetic_energy_row(y[i], sim._prm[i]) for i in bodies)
+        befores = [self._relative_normal_speed(y[a], y[b], g[0], g[1]) for (a, b), g in zip(pairs, geometry)]
+        totals = [0.0] * len(pairs)
+        alphas = [g[3] for g in geometry]
+        jumps = [{a: np.zeros(6), b: np.zeros(6)} for a, b in pairs]  # per pair, each body's share of its jump
+        grounded = held & set(bodies)
+        for _ in range(MAX_SEQUENTIAL):
+            moved = False
+            for k, (a, b) in enumerate(pairs):
+                n, points, _, e, mu = geometry[k]
+                if self._relative_normal_speed(y[a], y[b], n, points) >= -APPROACH_SPEED:
+                    continue
+                moved = True
+                start = {a: y[a].copy(), b: y[b].copy()}
+                ya, yb = y[a].copy(), y[b].copy()
+                impulse, _, _, alpha = pair_impact(y[a], ya, sim._prm[a], y[b], yb, sim._prm[b], len(points), points,
+                                                   n[0], n[1], n[2], e, mu, self._jac, self._work)
+                totals[k] += impulse
+                alphas[k] = min(alphas[k], alpha)
+                y[a][L.V:L.W + 3] = ya[L.V:L.W + 3]
+                y[b][L.V:L.W + 3] = yb[L.V:L.W + 3]
+                for i in (a, b):
+                    if i in grounded:  # its ground takes what drives it in
+                        self._ground_push(sim, i, y[i])
+                    jumps[k][i] += np.concatenate((y[i][L.V:L.V + 3] - start[i][L.V:L.V + 3],
+                                                   y[i][L.W:L.W + 3] - start[i][L.W:L.W + 3]))
+            if not moved:
+                break
+        energy_after = sum(kinetic_energy_row(y[i], sim._prm[i]) for i in bodies)
+        for k, (a, b) in enumerate(pairs):
+            if totals[k] == 0.0 and not jumps[k][a].any() and not jumps[k][b].any():
+                continue  # touching, but it took no part
+            n, points, d, e, _ = geometry[k]
+            after = self._relative_normal_speed(y[a], y[b], n, points)
+            self.impacts += 1
+            if alphas[k] < e:
+                solver.counts["restitution_capped"] += 1
+            if len(points) > 1 and e > 0.0:
+                solver.counts["multi_contact_elastic"] += 1
+            point = tuple(points.mean(axis=0).tolist())
+            for i, other, sign in ((a, b, -1.0), (b, a, 1.0)):
+                prm = sim._prm[i]
+                dv, dw = jumps[k][i][0:3], jumps[k][i][3:6]
+                q = y[i][L.Q:L.Q + 4]
+                solver.impact_impulses[i, 0:3] += prm[L.MASS] * dv
+                solver.impact_impulses[i, 3:6] += quat_rotate(q, prm[L.INERTIA:L.INERTIA + 3] * dw)
+                solver.events.append(ContactEvent(
+                    t, solver.names[i], -1, "impact", befores[k], after, totals[k], energy_before, energy_after,
+                    tuple(dv.tolist()), tuple(dw.tolist()), tuple(q.tolist()), len(points), float(alphas[k]),
+                    other=solver.names[other], point_world=point, normal_world=tuple((sign * n).tolist()), distance=d))
+        for i in sorted(grounded):  # still resting on its ground unless all its contact points now move away from it
+            j = int(solver.ground_of[i])
+            g = solver.grounds[j, NORMAL:NORMAL + 3]
+            k = solver._tracked_points(sim, y[i], i)
+            lowest, _ = normal_speeds(y[i], sim._prm[i], k, solver._points, g[0], g[1], g[2], solver._work)
+            if k == 0 or lowest > LIFT_OFF_SPEED:
+                held.discard(i)
+                w[i] = solver._bare_rows[i].copy()
+                solver.modes[i] = FLIGHT
+                solver.sliding[i] = False
+                solver.events.append(ContactEvent(t, solver.names[i], j, "lift-off", lowest, lowest))
+
+    def _ground_push(self, sim, i: int, y: np.ndarray) -> bool:
+        """Body i, resting on its ground, after a pair impulse: the ground's impact law if its contact points
+        now move into the ground (in place); whether it did."""
+        solver = self.solver
+        j = int(solver.ground_of[i])
+        g = solver.grounds[j, NORMAL:NORMAL + 3]
+        k = solver._tracked_points(sim, y, i)
+        lowest, _ = normal_speeds(y, sim._prm[i], k, solver._points, g[0], g[1], g[2], solver._work)
+        if k == 0 or lowest >= -APPROACH_SPEED:
+            return False
+        out = y.copy()
+        impact(y, out, sim._prm[i], k, solver._points, g[0], g[1], g[2], float(solver.restitution[i, j]),
+               float(solver.friction[i, j]), solver._work)
+        y[L.V:L.W + 3] = out[L.V:L.W + 3]
+        return True
+
+    def _separate(self, sim, a: int, b: int, y: dict, held: set) -> float:
+        """Bodies a and b overlapping at y (a step's start): moved apart along the normal by the depth (a held one
+        stays: its ground is under it), shared by inverse mass otherwise; returns the depth (m)."""
+        d = self.contact(y[a], a, y[b], b)
+        if d >= 0.0:
+            return 0.0
+        n = self._normal1[0]
+        inv_a = 0.0 if a in held else sim._prm[a, L.INV_MASS]
+        inv_b = 0.0 if b in held else sim._prm[b, L.INV_MASS]
+        if inv_a + inv_b == 0.0:
+            return 0.0
+        y[a][L.P:L.P + 3] += d * n * inv_a / (inv_a + inv_b)
+        y[b][L.P:L.P + 3] -= d * n * inv_b / (inv_a + inv_b)
+        self.separations += 1
+        return -d
+
+
+def _groups(hits: list[tuple[int, int]], is_static: np.ndarray) -> list[set[int]]:
+    """The connected groups of moving bodies linked by ``hits`` (a static shape links nothing)."""
+    parent: dict[int, int] = {}
+
+    def root(i: int) -> int:
+        while parent.setdefault(i, i) != i:
+            i = parent[i]
+        return i
+
+    for a, b in hits:
+        ra = root(a)
+        if not is_static[b]:
+            rb = root(b)
+            if ra != rb:
+                parent[rb] = ra
+    groups: dict[int, set[int]] = {}
+    for i in list(parent):
+        groups.setdefault(root(i), set()).add(i)
+    return list(groups.values())
