@@ -168,7 +168,7 @@ def _newton_piece(terms, u):
     """
     signs = np.sign(terms.abs_g @ u) if len(terms.abs_w) else np.zeros(0)
     converged = False
-    for _ in range(100):
+    for _ in range(40):
         g, h = terms.derivatives(u, signs)
         if g is None:
             return u, False
@@ -189,7 +189,7 @@ def _newton_piece(terms, u):
             step = 0.3 * step / np.linalg.norm(step)
         if np.linalg.norm(step) > 1e-6:
             here = terms.piece(u, signs)
-            for _ in range(40):
+            for _ in range(20):
                 w = u + tb @ step
                 w /= np.linalg.norm(w)
                 if terms.piece(w, signs) >= here:
