@@ -19,19 +19,24 @@ sep is smooth on the unit sphere except on the great circles g·u = 0 of the ter
 the poles ±a of the cylinders' radial terms. Its maximum is therefore one of
 
 1. a pole ±a, or a point where two of those circles cross (±g₁×g₂/|g₁×g₂|): evaluated directly;
-2. a stationary point of sep restricted to one circle (the term of that circle is 0 on it):
-   every sign change of d sep/dθ over 4096 angles bracketed and solved by ``scipy.optimize.brentq``
-   (xtol 1e-15);
+2. a stationary point of sep restricted to one circle (the term of that circle is 0 on it): the
+   sign change of the analytic d sep/dθ around every local maximum of sep over 4096 angles, solved
+   by ``scipy.optimize.brentq`` (xtol 1e-15);
 3. a stationary point of a smooth piece: Newton's method on the sphere (Riemannian gradient and
-   Hessian of the piece with the signs fixed) from every local maximum of sep over a
-   Fibonacci grid of 6000 directions (each compared with its 10 nearest neighbours), polished
-   by ``scipy.optimize.root`` on the tangent gradient.
+   Hessian of the piece with the signs fixed; backtracking on the piece's value while the step
+   is above 1e-6 rad) from every local maximum of sep over a Fibonacci grid of 6000 directions
+   (each compared with its 10 nearest neighbours, scipy's cKDTree), kept as stationary when the
+   gradient vanished at a point of the same piece.
 
 sd is the largest sep over all candidates (sep evaluated with the full formula, so every candidate
-is a lower bound and the answer is attained along the returned u). Apart, sep is concave on the ball
-and the maximum is unique; overlapping, it can have several local maxima, all of which the
-enumeration visits. ``certified`` reports that no direction within 1e-3 rad (400 random
-directions at radii 1e-8 to 1e-3) separates more than sd + 1e-13 × the size.
+is a lower bound and the answer is attained along the returned u). Values alone cannot place a
+smooth maximum closer than ~1e-8 rad (sep is flat to second order there), so among candidates
+equal to the largest within round-off (1e-14 × the sizes) the most precise kind wins: a
+stationary point inside a smooth piece, then one on a circle, then a pole or crossing, then a
+sample. Apart, sep is concave on the ball and the maximum is unique; overlapping, it can have
+several local maxima, all of which the enumeration visits. ``certified`` reports that no
+direction within 1e-3 rad (400 random directions at radii 1e-8 to 1e-3) separates more than
+sd + 1e-13 × the size.
 
 Shapes are given as ``(kind, dims, centre (3,), R_WS (3, 3))`` with kind one of "sphere", "box",
 "cylinder", "capsule" and dims as in a shape row (sphere r; box half extents; cylinder and
