@@ -26,7 +26,9 @@ the poles ±a of the cylinders' radial terms. Its maximum is therefore one of
    Hessian of the piece with the signs fixed; backtracking on the piece's value while the step
    is above 1e-6 rad) from every local maximum of sep over a Fibonacci grid of 6000 directions
    (each compared with its 10 nearest neighbours, scipy's cKDTree), kept as stationary when the
-   gradient vanished at a point of the same piece.
+   gradient vanished at a point of the same piece; and from five points next to each pole (1e-4 to
+   0.2 rad from it, towards the tangent gradient of the other terms), where the radial term's
+   cone makes starts from the grid unreliable.
 
 sd is the largest sep over all candidates (sep evaluated with the full formula, so every candidate
 is a lower bound and the answer is attained along the returned u). Values alone cannot place a
@@ -274,6 +276,23 @@ def signed_distance(a, b):
         cands.append((grid[k], 0))
         u, stationary = _newton_piece(terms, grid[k])
         cands.append((u, 3 if stationary else 0))
+    # 4. next to each pole: the cone of the radial term makes Newton from the grid unreliable there;
+    # starts along the tangent gradient of the other terms (where the maximum leaves the pole)
+    for w, axis in zip(terms.rad_w, terms.rad_a):
+        for pole in (axis, -axis):
+            signs = np.sign(terms.abs_g @ pole)
+            rest = terms.offset - (signs * terms.abs_w) @ terms.abs_g
+            for w2, a2 in zip(terms.rad_w, terms.rad_a):
+                p2 = pole - (pole @ a2) * a2
+                if np.linalg.norm(p2) > 1e-12:
+                    rest = rest - w2 * p2 / np.linalg.norm(p2)
+            t = rest - (rest @ pole) * pole
+            if np.linalg.norm(t) <= w:  # the cone wins: the pole itself is a local maximum
+                continue
+            t /= np.linalg.norm(t)
+            for theta in (1e-4, 1e-3, 1e-2, 0.05, 0.2):
+                u, stationary = _newton_piece(terms, math.cos(theta) * pole + math.sin(theta) * t)
+                cands.append((u, 3 if stationary else 0))
     dirs = np.array([c[0] for c in cands])
     dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
     ranks = np.array([c[1] for c in cands])
