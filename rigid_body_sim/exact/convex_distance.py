@@ -21,7 +21,8 @@ the poles ±a of the cylinders' radial terms. Its maximum is therefore one of
 1. a pole ±a, or a point where two of those circles cross (±g₁×g₂/|g₁×g₂|): evaluated directly;
 2. a stationary point of sep restricted to one circle (the term of that circle is 0 on it): the
    sign change of the analytic d sep/dθ around every local maximum of sep over 4096 angles, solved
-   by ``scipy.optimize.brentq`` (xtol 1e-15);
+   by ``scipy.optimize.brentq`` (xtol 1e-15), and Newton on the smooth pieces from 1e-3 and
+   3e-2 rad off each such point on both sides (a maximum just off a circle);
 3. a stationary point of a smooth piece: Newton's method on the sphere (Riemannian gradient and
    Hessian of the piece with the signs fixed; backtracking on the piece's value while the step
    is above 1e-6 rad) from every local maximum of sep over a Fibonacci grid of 6000 directions
@@ -241,7 +242,13 @@ def _circle_candidates(terms, g, out):
             s_lo, s_hi = slope(lo), slope(hi)
             if s_lo > 0.0 > s_hi:
                 t = brentq(slope, lo, hi, xtol=1e-15, rtol=4 * np.finfo(float).eps)
-                out.append((at(np.array(t)), 2))
+                u = at(np.array(t))
+                out.append((u, 2))
+                # a maximum just off the circle, inside a smooth piece: Newton from both sides
+                gn = g / np.linalg.norm(g)
+                for delta in (-3e-2, -1e-3, 1e-3, 3e-2):
+                    w, stationary = _newton_piece(terms, (u + delta * gn) / math.hypot(1.0, delta))
+                    out.append((w, 3 if stationary else 0))
         except ValueError:
             pass
 
