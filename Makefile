@@ -191,7 +191,8 @@ bench-full: bench-deps
 bench-threads: $(STAMP)
 	$(VENV_PY) -m benchmarks.threads --performance docs/performance.md
 
-# Body–body narrow phase against MuJoCo (mj_geomDistance, 10,000 random poses per pair), its ns per pair, and
+# Body–body narrow phase against MuJoCo (mj_geomDistance, 10,000 random poses per pair) and, for the pairs with a
+# cylinder, against the independent reference exact/convex_distance.py (~15 min of it); its ns per pair, and
 # the broad phase's cost at 1e3, 1e4, 1e5 bodies: writes benchmarks/results/pair_oracle.md (docs/contact.md quotes it).
 .PHONY: bench-oracle
 bench-oracle: bench-deps

@@ -9,8 +9,7 @@ writes
 * ``normal[m]``: the unit normal from A to B (world axes) along which that distance is taken;
 * ``count[m]`` contact points, ``points[m, k, 0:3]`` on A's surface and ``points[m, k, 3:6]``
   on B's (world, m), with ``seps[m, k]`` = (p_B − p_A)·n; point 0 is the deepest
-  (seps[m, 0] = dist[m], except for GJK/EPA pairs with a cylinder, whose witness points are
-  projected onto the surfaces from blends of support points and only lie near the deepest pair). More than one point where a feature touches flat: two box faces
+  (seps[m, 0] = dist[m]). More than one point where a feature touches flat: two box faces
   (the incident face clipped to the reference face: up to 8 points), a capsule lying on a box
   face or parallel to another capsule (2). Every point whose separation is within
   ``FEATURE_BAND`` × the pair's size of the deepest, or that penetrates, is reported.
@@ -20,7 +19,9 @@ sphere–box and sphere–cylinder (nearest point of a box, of a solid cylinder)
 (box–box, capsule–box as segment–box): GJK's exact distance when apart, the separating-axis
 test on the Minkowski difference's face normals (15 axes; 6 for segment–box) when they
 overlap, which is exact for polytopes. Pairs with a cylinder other than sphere–cylinder: GJK
-and EPA on support functions (convex.py), then the points projected onto the surfaces.
+and EPA on support functions (convex.py) give the direction to ~1e-5 rad; Newton's method on
+the support functions, stratum by stratum (refine.py), takes it to round-off; point 0 is on
+both support sets along it (refine.feature_point), nearest GJK/EPA's witness points.
 
 One compiled call per batch: no Python call per pair, no allocation per pair.
 """
@@ -37,6 +38,7 @@ from ..rotation import matrix
 from .convex import (CORE_BOX, CORE_CYLINDER, CORE_POINT, CORE_SEGMENT, EPA_MAX_FACES, EPA_MAX_VERTICES,
                      POSE_WIDTH, epa, gjk, support)
 from .layout import DIMS, KIND, SHAPE_BOX, SHAPE_CAPSULE, SHAPE_SPHERE
+from .refine import feature_point, refine_normal
 from .shapes import FEATURE_BAND
 
 __all__ = ["make_workspace_jit", "MAX_PAIR_POINTS", "FACE_ALIGNMENT", "set_pose", "surface_point", "pair_contact", "pair_contacts"]
@@ -668,6 +670,25 @@ def _feature_normal(pa, pb, nx, ny, nz):
     return bx, by, bz
 
 
+@njit(**JIT)
+def _exact_normal(pa, pb, nx, ny, nz):
+    """(sep, normal) of a pair with a cylinder from GJK/EPA's direction n: refine.refine_normal from the
+    better of n and the feature directions near it (_feature_normal)."""
+    fx, fy, fz = _feature_normal(pa, pb, nx, ny, nz)
+    return refine_normal(pa, pb, fx, fy, fz)
+
+
+@njit(**JIT)
+def _put_feature_points(pa, ma, pb, mb, nx, ny, nz, wax, way, waz, wbx, wby, wbz, res, seps):
+    """Contact point 0: on A's support set along n nearest A's witness w_a, on B's along −n nearest w_b, plus margins.
+
+    Both points lie on their surfaces and (p_B − p_A)·n = sep(n) − ma − mb.
+    """
+    ax, ay, az = feature_point(pa, nx, ny, nz, wax, way, waz)
+    bx, by, bz = feature_point(pb, -nx, -ny, -nz, wbx, wby, wbz)
+    _put(res, seps, 0, ax + ma * nx, ay + ma * ny, az + ma * nz, bx - mb * nx, by - mb * ny, bz - mb * nz, nx, ny, nz)
+
+
 @njit(**INLINE)
 def pair_contact(pa, ma, pb, mb, scale, ws_s, ws_lam, ws_tmp, ws_poly, verts, faces, face_nd, edges, out, res, seps):
     """Signed distance, normal (A to B) and contact points of two posed cores with margins (set_pose).
@@ -699,11 +720,9 @@ def pair_contact(pa, ma, pb, mb, scale, ws_s, ws_lam, ws_tmp, ws_poly, verts, fa
             _sat_witness(pa, ma, pb, sd_core, nx, ny, nz, axis_id, res, seps)
         elif overlap:
             epa(pa, pb, ws_s, nv, verts, faces, face_nd, edges, scale, out)
-            nx, ny, nz = _feature_normal(pa, pb, out[1], out[2], out[3])
-            sd = -out[0] - ma - mb
-            ax, ay, az = surface_point(pa, ma, out[4] + ma * nx, out[5] + ma * ny, out[6] + ma * nz, nx, ny, nz)
-            bx, by, bz = surface_point(pb, mb, out[7], out[8], out[9], -nx, -ny, -nz)
-            _put(res, seps, 0, ax, ay, az, bx, by, bz, nx, ny, nz)
+            sd_core, nx, ny, nz = _exact_normal(pa, pb, out[1], out[2], out[3])
+            sd = sd_core - ma - mb
+            _put_feature_points(pa, ma, pb, mb, nx, ny, nz, out[4], out[5], out[6], out[7], out[8], out[9], res, seps)
         else:
             ax = ay = az = bx = by = bz = 0.0
             for k in range(nv):
@@ -720,13 +739,16 @@ def pair_contact(pa, ma, pb, mb, scale, ws_s, ws_lam, ws_tmp, ws_poly, verts, fa
                 norm = math.sqrt(ox * ox + oy * oy + oz * oz)
                 nx, ny, nz = (ox / norm, oy / norm, oz / norm) if norm > 0.0 else (0.0, 0.0, 1.0)
             sd = d - ma - mb
-            if kb == CORE_CYLINDER and d > 0.0:
-                nx, ny, nz = _feature_normal(pa, pb, nx, ny, nz)
-            if kb == CORE_CYLINDER:  # GJK's witnesses are blends of rim points: put them on the surfaces
-                ax, ay, az = surface_point(pa, 0.0, ax, ay, az, nx, ny, nz)
-                bx, by, bz = surface_point(pb, 0.0, bx, by, bz, -nx, -ny, -nz)
-            _put(res, seps, 0, ax + ma * nx, ay + ma * ny, az + ma * nz, bx - mb * nx, by - mb * ny, bz - mb * nz,
-                 nx, ny, nz)
+            if kb == CORE_CYLINDER and d > 0.0:  # GJK's direction on a rim is ~1e-5 rad off: refined
+                sd_core, nx, ny, nz = _exact_normal(pa, pb, nx, ny, nz)
+                sd = sd_core - ma - mb
+                _put_feature_points(pa, ma, pb, mb, nx, ny, nz, ax, ay, az, bx, by, bz, res, seps)
+            else:
+                if kb == CORE_CYLINDER:  # touching: GJK's witnesses are blends of rim points, put on the surfaces
+                    ax, ay, az = surface_point(pa, 0.0, ax, ay, az, nx, ny, nz)
+                    bx, by, bz = surface_point(pb, 0.0, bx, by, bz, -nx, -ny, -nz)
+                _put(res, seps, 0, ax + ma * nx, ay + ma * ny, az + ma * nz, bx - mb * nx, by - mb * ny,
+                     bz - mb * nz, nx, ny, nz)
         if polytopes:
             # a box face against a face (or a capsule lying on it): the clipped patch
             ia, sa, ca = _face_of(pa, nx, ny, nz) if ka == CORE_BOX else (0, 1.0, -1.0)
