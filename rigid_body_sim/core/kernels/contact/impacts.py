@@ -38,7 +38,7 @@ from ..rotation import rotate_back
 from .layout import MAX_POINTS
 
 __all__ = ["IMPACT_WORK_SHAPE", "restitution", "PGS_MAX_SWEEPS", "PGS_TOLERANCE", "tangents", "build_rows", "pgs", "pgs_each",
-           "kinetic_energy_row", "apply_impulses", "impact"]
+           "kinetic_energy_row", "apply_impulses", "impact", "summed_wrench"]
 
 _OPTS = {"cache": True, "nogil": True, "error_model": "numpy"}
 
@@ -68,6 +68,24 @@ def tangents(nx, ny, nz):
     s = math.sqrt(tx * tx + ty * ty + tz * tz)
     tx, ty, tz = tx / s, ty / s, tz / s
     return tx, ty, tz, ny * tz - nz * ty, nz * tx - nx * tz, nx * ty - ny * tx
+
+
+@njit(**_OPTS)
+def summed_wrench(work, rows):
+    """(fx, fy, fz, hx, hy, hz): Σ λ × row over the first ``rows`` rows of ``work`` (as
+    :func:`build_rows` fills it and a solve sets λ): the force in world axes and its moment about
+    the centre of mass in principal axes."""
+    fx = fy = fz = 0.0
+    hx = hy = hz = 0.0
+    for a in range(rows):
+        lam = work[a, _LAM]
+        fx += work[a, _LIN] * lam
+        fy += work[a, _LIN + 1] * lam
+        fz += work[a, _LIN + 2] * lam
+        hx += work[a, _ANG] * lam
+        hy += work[a, _ANG + 1] * lam
+        hz += work[a, _ANG + 2] * lam
+    return fx, fy, fz, hx, hy, hz
 
 
 @njit(**_OPTS)

@@ -31,7 +31,7 @@ from ..dynamics import derivative
 from ..forces import add_wrench
 from ..layout import FRAME_SITE_WORLD_AXES, INV_INERTIA, INV_MASS, P, Q, Q_PB, V, W
 from ..rotation import exp_map, normalise, qmul, rotate, rotate_back
-from .impacts import _A, _ANG, _B, _LAM, _LIN, _row_velocity, apply_impulses, build_rows, pgs
+from .impacts import _A, _ANG, _B, _LAM, _LIN, _row_velocity, apply_impulses, build_rows, pgs, summed_wrench
 from .layout import DIMS, KIND, NORMAL, SHAPE_CAPSULE, SHAPE_CYLINDER, SHAPE_SPHERE
 from .shapes import FEATURE_BAND, feature_points
 
@@ -244,16 +244,7 @@ def holding_wrench(y, p, w, count, points, nx, ny, nz, mu, slip_tolerance, bias,
         normal += work[3 * c, _LAM]
     if normal <= 0.0:
         mode = LIFT_OFF
-    fx = fy = fz = 0.0
-    hx = hy = hz = 0.0
-    for a in range(rows):
-        lam = work[a, _LAM]
-        fx += work[a, _LIN] * lam
-        fy += work[a, _LIN + 1] * lam
-        fz += work[a, _LIN + 2] * lam
-        hx += work[a, _ANG] * lam
-        hy += work[a, _ANG + 1] * lam
-        hz += work[a, _ANG + 2] * lam
+    fx, fy, fz, hx, hy, hz = summed_wrench(work, rows)
     tx, ty, tz = rotate(qw, qx, qy, qz, hx, hy, hz)
     out[0], out[1], out[2], out[3], out[4], out[5] = fx, fy, fz, tx, ty, tz
     _pin = y[P], p[0], w[0], d[0]

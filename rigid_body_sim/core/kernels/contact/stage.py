@@ -43,7 +43,7 @@ from ..layout import (ACTIVE, HELD, HELD_FEATURES, HELD_GROUND, HELD_MU, HELD_SH
                       INV_MASS, MODEL, MODEL_FULL, MODEL_ISOTROPIC, MODEL_SYMMETRIC, NORMAL as PLANE_NORMAL, P,
                       PROJECT, PROJECT_NONE, Q, V, W)
 from ..rotation import rotate, rotate_back
-from .impacts import _ANG, _B, _LAM, _LIN, IMPACT_WORK_SHAPE, build_rows, pgs_each
+from .impacts import _B, IMPACT_WORK_SHAPE, build_rows, pgs_each, summed_wrench
 from .layout import DIMS, KIND, MAX_POINTS, NORMAL, OFFSET
 from .persistent import SLIDE, STICK, accelerations_from, normal_bias
 from .shapes import feature_points
@@ -108,16 +108,7 @@ def held_accelerations(y, p, w, d):
                 directions[c, 0], directions[c, 1] = ux, uy  # reversed since the start: on along the start's
         accelerations_from(y, count, rdot, bias, work, d)
         pgs_each(work, count, mu, directions)
-        fx = fy = fz = 0.0
-        hx = hy = hz = 0.0  # the moment about the centre of mass, principal axes
-        for a in range(rows):
-            lam = work[a, _LAM]
-            fx += work[a, _LIN] * lam
-            fy += work[a, _LIN + 1] * lam
-            fz += work[a, _LIN + 2] * lam
-            hx += work[a, _ANG] * lam
-            hy += work[a, _ANG + 1] * lam
-            hz += work[a, _ANG + 2] * lam
+        fx, fy, fz, hx, hy, hz = summed_wrench(work, rows)  # moment about the centre of mass, principal axes
         if p[PROJECT] != PROJECT_NONE:  # onto the body's motion, in world axes, as forces.body_wrench does
             qw, qx, qy, qz = y[Q], y[Q + 1], y[Q + 2], y[Q + 3]
             tx, ty, tz = rotate(qw, qx, qy, qz, hx, hy, hz)
