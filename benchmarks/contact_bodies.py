@@ -520,22 +520,4 @@ def measure(quick: bool, log, dts=DTS, repeats: int = MIN_REPEATS, min_seconds: 
 
 
 def tunnel_table(tunnels: list[dict]) -> str:
-    keys, cases = [], []
-    for r in tunnels:
-        if (r["engine"], r["setting"]) not in keys:
-            keys.append((r["engine"], r["setting"]))
-        if r["case"] not in cases:
-            cases.append(r["case"])
-    head = "| case | " + " | ".join(f"{e} {s}" for e, s in keys) + " |\n|" + "---|" * (1 + len(keys)) + "\n"
-    body = ""
-    for case in cases:
-        cells = []
-        for k in keys:
-            parts = []
-            for dt in DTS:
-                r = next((r for r in tunnels if r["case"] == case and r["dt"] == dt
-                          and (r["engine"], r["setting"]) == k), None)
-                parts.append("—" if r is None else r["outcome"])
-            cells.append(" / ".join(parts))
-        body += f"| {case} | " + " | ".join(cells) + " |\n"
-    return head + body
+    return E.dt_grid_table(tunnels, DTS, lambda r: r["outcome"])

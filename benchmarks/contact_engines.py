@@ -318,3 +318,28 @@ def versions() -> dict[str, str]:
         except metadata.PackageNotFoundError:
             out[name] = "not installed"
     return out
+
+
+def dt_grid_table(rows: list[dict], dts, cell) -> str:
+    """A markdown table: a line per ``case``, a column per (``engine``, ``setting``) in the order
+    met, each cell the rows of that case and column at ``dts`` as ``cell(row)`` joined by " / "
+    ("—" where there is none)."""
+    keys, cases = [], []
+    for r in rows:
+        if (r["engine"], r["setting"]) not in keys:
+            keys.append((r["engine"], r["setting"]))
+        if r["case"] not in cases:
+            cases.append(r["case"])
+    head = "| case | " + " | ".join(f"{e} {s}" for e, s in keys) + " |\n|" + "---|" * (1 + len(keys)) + "\n"
+    body = ""
+    for case in cases:
+        cells = []
+        for k in keys:
+            parts = []
+            for dt in dts:
+                r = next((r for r in rows if r["case"] == case and r["dt"] == dt
+                          and (r["engine"], r["setting"]) == k), None)
+                parts.append("—" if r is None else cell(r))
+            cells.append(" / ".join(parts))
+        body += f"| {case} | " + " | ".join(cells) + " |\n"
+    return head + body

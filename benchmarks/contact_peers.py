@@ -534,28 +534,7 @@ def cost_tables(costs: list[dict]) -> str:
 
 
 def cost_table(costs: list[dict]) -> str:
-    keys = []
-    for r in costs:
-        k = (r["engine"], r["setting"])
-        if k not in keys:
-            keys.append(k)
-    cases = []
-    for r in costs:
-        if r["case"] not in cases:
-            cases.append(r["case"])
-    head = "| case | " + " | ".join(f"{e} {s}" for e, s in keys) + " |\n|" + "---|" * (1 + len(keys)) + "\n"
-    body = ""
-    for case in cases:
-        cells = []
-        for k in keys:
-            parts = []
-            for dt in DTS:
-                r = next((r for r in costs if r["case"] == case and r["dt"] == dt
-                          and (r["engine"], r["setting"]) == k), None)
-                parts.append("—" if r is None else f"{r['us_per_step']:.3g}")
-            cells.append(" / ".join(parts))
-        body += f"| {case} | " + " | ".join(cells) + " |\n"
-    return head + body
+    return E.dt_grid_table(costs, DTS, lambda r: f"{r['us_per_step']:.3g}")
 
 
 #: Column order of the two-body tables: ours, then each peer's settings side by side.
