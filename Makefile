@@ -140,7 +140,8 @@ TEST_WORKERS ?= auto
 test: $(STAMP) $(FOXGLOVE_STAMP) browser-deps
 	timeout --foreground -s INT -k 60 $(TEST_TIMEOUT_S) $(VENV_PY) -m pytest -n $(TEST_WORKERS) --dist loadfile $(PYTEST_ARGS)
 
-test-slow: $(STAMP)
+# The slow run also runs the whole suite from a colcon workspace (test_workspace.py): the same readers and browser.
+test-slow: $(STAMP) $(FOXGLOVE_STAMP) browser-deps
 	@rc=0
 	timeout --foreground -s INT -k 60 $(SLOW_TIMEOUT_S) $(VENV_PY) -m pytest -m slow $(PYTEST_ARGS) || rc=$$?
 	if [ "$$rc" = 5 ]; then echo "[make test-slow] no test is marked slow yet"; rc=0; fi
