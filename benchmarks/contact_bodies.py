@@ -235,7 +235,7 @@ class MuJoCo:
         pass
 
 
-class PyBullet:
+class PyBullet(E.PyBulletClient):
     name = "PyBullet"
 
     def __init__(self, items: list[Item], dt: float, setting: str):
@@ -294,15 +294,6 @@ class PyBullet:
             v, w = p.getBaseVelocity(b, physicsClientId=self.c)
             out.append(np.concatenate((pos, v, w)))
         return np.array(out)
-
-    def snapshot(self) -> None:
-        self._saved = pybullet.saveState(physicsClientId=self.c)
-
-    def restore(self) -> None:
-        pybullet.restoreState(self._saved, physicsClientId=self.c)
-
-    def close(self) -> None:
-        pybullet.disconnect(physicsClientId=self.c)
 
 
 mujoco, pybullet = E.mujoco, E.pybullet

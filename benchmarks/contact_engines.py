@@ -237,7 +237,20 @@ class MuJoCo(Engine):
         d.time, d.qpos[:], d.qvel[:], d.qacc_warmstart[:] = self._saved[0], *self._saved[1:]
 
 
-class PyBullet(Engine):
+class PyBulletClient:
+    """Snapshot, restore and close of a PyBullet connection ``self.c`` (the two PyBullet set-ups share them)."""
+
+    def snapshot(self) -> None:
+        self._saved = pybullet.saveState(physicsClientId=self.c)
+
+    def restore(self) -> None:
+        pybullet.restoreState(self._saved, physicsClientId=self.c)
+
+    def close(self) -> None:
+        pybullet.disconnect(physicsClientId=self.c)
+
+
+class PyBullet(PyBulletClient, Engine):
     name = "PyBullet"
 
     def __init__(self, body: Body, dt: float, setting: str):
@@ -298,14 +311,6 @@ class PyBullet(Engine):
         for b in self.ids:
             pybullet.resetBaseVelocity(b, list(v), list(w), physicsClientId=self.c)
 
-    def snapshot(self) -> None:
-        self._saved = pybullet.saveState(physicsClientId=self.c)
-
-    def restore(self) -> None:
-        pybullet.restoreState(self._saved, physicsClientId=self.c)
-
-    def close(self) -> None:
-        pybullet.disconnect(physicsClientId=self.c)
 
 
 def versions() -> dict[str, str]:
