@@ -174,7 +174,7 @@ class Ours:
         pass
 
 
-class MuJoCo:
+class MuJoCo(E.MuJoCoData):
     name = "MuJoCo"
 
     def __init__(self, items: list[Item], dt: float, setting: str, dampratio: float | None = None):
@@ -222,17 +222,6 @@ class MuJoCo:
             R = d.xmat[k + 1].reshape(3, 3)  # world body 0; the free bodies in order
             out.append(np.concatenate((qpos[k, 0:3], qvel[k, 0:3], R @ qvel[k, 3:6])))
         return np.array(out)
-
-    def snapshot(self) -> None:
-        d = self.d
-        self._saved = (d.time, d.qpos.copy(), d.qvel.copy(), d.qacc_warmstart.copy())
-
-    def restore(self) -> None:
-        d = self.d
-        d.time, d.qpos[:], d.qvel[:], d.qacc_warmstart[:] = self._saved[0], *self._saved[1:]
-
-    def close(self) -> None:
-        pass
 
 
 class PyBullet(E.PyBulletClient):

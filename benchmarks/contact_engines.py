@@ -167,7 +167,23 @@ class Ours(Engine):
         self.sim.reset()
 
 
-class MuJoCo(Engine):
+class MuJoCoData:
+    """Snapshot and restore of a MuJoCo ``self.d`` (time, qpos, qvel, the warm start), shared by
+    the two MuJoCo set-ups; nothing to close."""
+
+    def snapshot(self) -> None:
+        d = self.d
+        self._saved = (d.time, d.qpos.copy(), d.qvel.copy(), d.qacc_warmstart.copy())
+
+    def restore(self) -> None:
+        d = self.d
+        d.time, d.qpos[:], d.qvel[:], d.qacc_warmstart[:] = self._saved[0], *self._saved[1:]
+
+    def close(self) -> None:
+        pass
+
+
+class MuJoCo(MuJoCoData, Engine):
     name = "MuJoCo"
 
     def __init__(self, body: Body, dt: float, setting: str, dampratio: float | None = None):
@@ -228,13 +244,6 @@ class MuJoCo(Engine):
         qvel[:, 0:3] = v
         qvel[:, 3:6] = R.T @ np.asarray(w, float)
 
-    def snapshot(self) -> None:
-        d = self.d
-        self._saved = (d.time, d.qpos.copy(), d.qvel.copy(), d.qacc_warmstart.copy())
-
-    def restore(self) -> None:
-        d = self.d
-        d.time, d.qpos[:], d.qvel[:], d.qacc_warmstart[:] = self._saved[0], *self._saved[1:]
 
 
 class PyBulletClient:
