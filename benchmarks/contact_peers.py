@@ -53,7 +53,6 @@ import argparse
 import csv
 import datetime
 import math
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -441,14 +440,6 @@ def measure_free(quick: bool, baseline: str | None, log) -> list[dict]:
 
 # ----------------------------------------------------------------------------- output
 
-def _git(*args: str) -> str:
-    try:
-        return subprocess.run(["git", *args], cwd=Path(__file__).resolve().parent.parent, capture_output=True,
-                              text=True, check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "?"
-
-
 def _write_csv(path: Path, rows: list[dict]) -> None:
     keys: list[str] = []
     for r in rows:
@@ -676,9 +667,9 @@ def main(argv=None) -> int:
     if "free" in parts:
         log(f"no collision geometry, N = {FREE_BODIES}")
         free = measure_free(args.quick, args.baseline or None, log)
-    dirty = " + uncommitted changes" if _git("status", "--porcelain", "--", "rigid_body_sim",
+    dirty = " + uncommitted changes" if machine.git("status", "--porcelain", "--", "rigid_body_sim",
                                             ":(glob)benchmarks/*.py") else ""
-    prov = (f"{'quick' if args.quick else 'full'} mode, commit {_git('rev-parse', '--short', 'HEAD')}{dirty}, "
+    prov = (f"{'quick' if args.quick else 'full'} mode, commit {machine.git('rev-parse', '--short', 'HEAD')}{dirty}, "
             f"{datetime.date.today().isoformat()}, {machine.one_line()}, PyBullet {E.versions()['pybullet']}")
     _write_csv(out / "contact_peers.csv", figures + costs + bodies["figures"] + bodies["tunnels"] + bodies["costs"]
                + cubes + free)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 import platform
+import subprocess
 from importlib import metadata
 from pathlib import Path
 
@@ -74,3 +75,13 @@ def one_line(info: dict[str, object] | None = None) -> str:
     """The machine in one line, for a headline."""
     d = describe() if info is None else info
     return f"{d['cpu']}, {d['logical_cpus']} CPUs, {'AVX-512' if d['avx512'] else 'no AVX-512'}, MuJoCo {d['mujoco']}"
+
+
+def git(*args: str) -> str:
+    """The output of ``git *args`` in this repository ("?" without git or outside a checkout):
+    the commit a benchmark's results name."""
+    try:
+        return subprocess.run(["git", *args], cwd=Path(__file__).resolve().parent.parent, capture_output=True,
+                              text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "?"

@@ -19,7 +19,6 @@ import argparse
 import csv
 import datetime
 import math
-import subprocess
 import sys
 import time
 from dataclasses import dataclass
@@ -99,19 +98,11 @@ def _table(rows: list[dict], columns: list[tuple[str, object]]) -> str:
     return head + body
 
 
-def _git(*args: str) -> str:
-    try:
-        return subprocess.run(["git", *args], cwd=Path(__file__).resolve().parent.parent, capture_output=True,
-                              text=True, check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "?"
-
-
 def provenance(mode: Mode) -> str:
     # code only: the results and docs a previous run left uncommitted do not make the code dirty
-    dirty = " + uncommitted changes" if _git("status", "--porcelain", "--", "rigid_body_sim", ":(glob)benchmarks/*.py",
+    dirty = " + uncommitted changes" if machine.git("status", "--porcelain", "--", "rigid_body_sim", ":(glob)benchmarks/*.py",
                                             "requirements*.txt") else ""
-    return (f"`make bench` {mode.name} mode, commit {_git('rev-parse', '--short', 'HEAD')}{dirty}, "
+    return (f"`make bench` {mode.name} mode, commit {machine.git('rev-parse', '--short', 'HEAD')}{dirty}, "
             f"{datetime.date.today().isoformat()}, {machine.one_line()}")
 
 
