@@ -211,6 +211,15 @@ bench-contact: bench-deps
 	$(VENV_PY) -m benchmarks.contact_peers --out $(BENCH_OUT) \
 		$(if $(BENCH_DEFAULT_OUT),--docs docs/contact_benchmarks.md) $(BENCH_CONTACT_ARGS)
 
+# Bodies resting on bodies beside MuJoCo and PyBullet (benchmarks/contact_stacks.py): a 10-cube tower at rest for 60 s
+# (sink, drift, speed) and a pile of STACK_BODIES cubes dropped into a bin (penetration, energy rise, body-steps/s
+# landing and settled, sleeping off and on). Writes benchmarks/results/contact_stacks.{csv,md}.
+STACK_BODIES ?= 1000
+BENCH_STACKS_ARGS ?=
+.PHONY: bench-stacks
+bench-stacks: bench-deps
+	$(VENV_PY) -m benchmarks.contact_stacks --out $(BENCH_OUT) --bodies $(STACK_BODIES) $(BENCH_STACKS_ARGS)
+
 # The node benchmark: batched output and shared inputs, 1 to 10000 bodies at 100 Hz, 100 at 1 kHz, 100000 at
 # 10 Hz, the 10000 and 100000 cases also recording; rk4, 1 substep, a plain rclpy `poses` subscriber in its own
 # process; start to first poses, RSS, sim/wall, ticks delivered and recorded, CPU per tick, stop time, and the
