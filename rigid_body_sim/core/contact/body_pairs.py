@@ -66,6 +66,7 @@ from ..kernels.contact.persistent import normal_speeds
 from ..kernels.contact.swept import grid_swept_pairs, swept_bounds
 from ..quaternion import quat_multiply, quat_rotate
 from .events import ContactEvent
+from .island import Islands
 from .materials import pair_material
 from .static_geometry import bounding_radius
 
@@ -135,6 +136,8 @@ class BodyPairs:
         self.impacts = 0
         #: Pairs found overlapping at a step's start and moved apart (a body lying on another: module docstring).
         self.separations = 0
+        #: Bodies resting on bodies, stepped together (island.py).
+        self.islands = Islands(solver, sim, self)
 
     # ----------------------------------------------------------------- geometry
 
@@ -188,22 +191,32 @@ class BodyPairs:
         """Find and resolve the step's body–body events; the bodies done here as a bool mask (None: none)."""
         swept_bounds(Y0, Y1, self.members, self.reach, h, self._lo, self._hi)
         found = grid_swept_pairs(self._lo, self._hi, self.movable, self._cells, self._heads, self._chain, self._pairs)
-        if found == 0:
+        islands = self.islands
+        if found == 0 and not (islands.was_island.any() or islands.asleep.any()):
             return None
         if found > len(self._pairs):
             self._pairs = np.empty((2 * found, 2), dtype=np.int64)
             found = grid_swept_pairs(self._lo, self._hi, self.movable, self._cells, self._heads, self._chain,
                                      self._pairs)
         pairs = self.members[self._pairs[:found]]
+        # a moving body first (a static shape is never first)
+        pairs = np.ascontiguousarray(np.where(self.is_static[pairs[:, 0]][:, None], pairs[:, ::-1], pairs))
+        in_island = None
+        if found or islands.was_island.any() or islands.asleep.any():  # islands first (island.py)
+            in_island = islands.step(sim, wrenches, Y0, Y1, pairs, h)
+            if in_island.any():
+                pairs = pairs[~(in_island[pairs[:, 0]] | in_island[pairs[:, 1]])]
+            else:
+                in_island = None
         stopped = sim._stopped
         pairs = pairs[~(stopped[pairs[:, 0]] | stopped[pairs[:, 1]])]
         if not len(pairs):
-            return None
+            return in_island
         self._step_wrenches = wrenches
         hits = self._hits(sim, pairs, Y0, Y1, h)
         if not hits:
-            return None
-        done = np.zeros(len(sim._stopped), dtype=bool)
+            return in_island
+        done = np.zeros(len(sim._stopped), dtype=bool) if in_island is None else in_island.copy()
         for group in _groups(hits, self.is_static):
             links = [p for p in map(tuple, pairs.tolist()) if p[0] in group and p[1] in group]
             members = sorted(group)

@@ -197,11 +197,12 @@ class ContactSolver:
         #: Painlevé configuration (:meth:`_painleve`); ``static_tangent`` body-steps held on a static shape's
         #: tangent plane (a curved support, an edge or a rim: first order; static_geometry.py);
         #: ``static_pressed`` impacts of a resting body against a static shape it stays pressed on (not held
-        #: there: it may reach into it by up to a h²/2 per step, a its acceleration towards it).
+        #: there: it may reach into it by up to a h²/2 per step, a its acceleration towards it);
+        #: ``island_body_steps`` body-steps taken by the islands' first-order velocity step (island.py).
         self._static_skipped: set[int] = set()  # bodies not looked at against static shapes for the rest of the step
         self.counts = dict.fromkeys(("restitution_capped", "multi_contact_elastic", "refined_steps",
                                      "second_half_space", "two_ground_overflow", "painleve",
-                                     "static_tangent", "static_pressed"), 0)
+                                     "static_tangent", "static_pressed", "island_body_steps"), 0)
         #: Per body, a second half-space it is held on besides ``ground_of`` (two_grounds.py), or -1.
         self.other_ground = np.full(n, -1, dtype=np.int64)
         #: The features touching ``other_ground``, as bits.
@@ -223,6 +224,10 @@ class ContactSolver:
         self._control1 = np.zeros(L.CONTROL_WIDTH, dtype=np.int64)
         self._inputs1 = np.zeros(L.INPUT_WIDTH)
         self._never = np.zeros(1, dtype=np.int64)  # the step map's cancel flag (kernels.stepping.advance): never set
+        #: Islands at rest are locked (no step, no narrow phase inside them) until something touches or pushes
+        #: them (island.py). Off by default: a sleeping island's bodies keep their state exactly, but a locked
+        #: island does not see gravity change or a slow creep below island.SLEEP_SPEED.
+        self.sleeping = False
         if len(self.bodies) >= 2 or (len(self.bodies) and statics.size):
             from .body_pairs import BodyPairs
 
@@ -247,17 +252,23 @@ class ContactSolver:
         Y = sim._Ys[sim._control[L.CUR]]
         if self.statics is not None:
             self.statics.place(sim)
+        if self.pairs is not None:
+            self.pairs.islands.reset()
         for i in self.bodies:
-            gap, j = self._gap(sim, Y[i], i)
-            if gap <= TOUCHING_GAP:
-                count = self._contact_points(sim, Y[i], i, j)
-                speed, _, _, _ = self._normal_motion(sim, Y[i], i, j, count, np.zeros(L.WRENCH_WIDTH))
-                if speed <= LIFT_OFF_SPEED:
-                    self.modes[i] = PERSISTENT
-                    self.ground_of[i] = j
-                    self.tracked[i] = self._staying(sim, Y[i], i, j, self._touching(sim, Y[i], i, j))
-                    self.events.append(ContactEvent(sim.time, self.names[i], int(j), "rest", speed, speed))
-                    two_grounds.start_if_touching(self, sim, Y[i], i, LIFT_OFF_SPEED, TOUCHING_GAP)
+            self.classify(sim, Y, i)
+
+    def classify(self, sim, Y: np.ndarray, i: int) -> None:
+        """Body i (in flight) at state rows Y: persistent contact if it touches its ground and does not move away."""
+        gap, j = self._gap(sim, Y[i], i)
+        if gap <= TOUCHING_GAP:
+            count = self._contact_points(sim, Y[i], i, j)
+            speed, _, _, _ = self._normal_motion(sim, Y[i], i, j, count, np.zeros(L.WRENCH_WIDTH))
+            if speed <= LIFT_OFF_SPEED:
+                self.modes[i] = PERSISTENT
+                self.ground_of[i] = j
+                self.tracked[i] = self._staying(sim, Y[i], i, j, self._touching(sim, Y[i], i, j))
+                self.events.append(ContactEvent(sim.time, self.names[i], int(j), "rest", speed, speed))
+                two_grounds.start_if_touching(self, sim, Y[i], i, LIFT_OFF_SPEED, TOUCHING_GAP)
 
     def is_resting(self, body: str) -> bool:
         """True while ``body`` is in persistent contact with the ground."""

@@ -1,0 +1,119 @@
+"""Islands: bodies resting on bodies stepped together by a first-order velocity step (driver of kernels/contact/island.py).
+
+Each step, before the body–body event pass, the swept broad phase's candidate pairs are joined by
+union-find; a component with a pair touching at the step's start (or a sleeping body) is an
+island and is stepped by one compiled call (:func:`~rigid_body_sim.core.kernels.contact.island.island_pass`:
+Moreau–Jean / Stewart–Trinkle velocity step with normal non-penetration and Coulomb friction, the
+sticking case solved exactly, else projected Gauss–Seidel, then the projection of the positions
+onto the contact manifold). Its bodies are then left out of the event-driven passes for that
+step, and kept in flight mode (``ContactSolver.modes``): a body whose island dissolves starts
+again as after a reset (persistent contact if it touches its ground and does not move away).
+Bodies in no island run exactly the event-driven code they ran before islands existed.
+
+Sleeping (``ContactSolver.sleeping``, default False): an island whose bodies stayed slower than
+SLEEP_SPEED is locked, its rows copied forward, until a wrench on one of its bodies, a changed
+state (an impulse, ``set_state``, ``set_body_state``) or another awake body within reach wakes it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..kernels import layout as L
+from ..kernels.contact.island import C_FLOATS, DENSE_MAX, OUT_BODIES, OUT_DEPTH, OUT_SLEPT, OUT_WIDTH, OUT_WOKEN, \
+    island_pass
+from ..kernels.contact.layout import DIMS, FLIGHT, PERSISTENT
+from ..kernels.contact.pairs import MAX_PAIR_POINTS
+from .materials import DEFAULT_FRICTION
+
+__all__ = ["Islands"]
+
+
+class Islands:
+    """The island pass of a ContactSolver (module docstring); made by BodyPairs, run from ContactSolver.after_step."""
+
+    def __init__(self, solver, sim, pairs) -> None:
+        self.solver, self.pairs = solver, pairs
+        n = len(solver.shapes)
+        shapes = solver.shapes
+        self.members = np.ascontiguousarray(solver.bodies, dtype=np.int64)
+        self.size = np.ascontiguousarray(shapes[:, DIMS:DIMS + 3].max(axis=1) * 2.0)
+        self.island = np.zeros(n, dtype=np.int64)  # 1: stepped by the island pass this step, 2: asleep
+        self.was_island = np.zeros(n, dtype=bool)
+        self.asleep = np.zeros(n, dtype=np.int64)
+        self.quiet = np.zeros(n, dtype=np.int64)
+        self.saved = np.zeros((n, L.STATE_WIDTH))
+        self._parent = np.arange(n, dtype=np.int64)
+        self._flags = np.zeros(n, dtype=np.int64)
+        self._pos, self._quat = np.zeros((n, 3)), np.zeros((n, 4))
+        self._vel, self._iw, self._dx = np.zeros((n, 6)), np.zeros((n, 9)), np.zeros((n, 6))
+        self._cstart = np.zeros(n, dtype=np.int64)
+        self._A, self._L = np.zeros((DENSE_MAX, DENSE_MAX)), np.zeros((DENSE_MAX, DENSE_MAX))
+        self._vec = np.zeros((3, DENSE_MAX))
+        self.out = np.zeros(OUT_WIDTH)
+        self._grow_pairs(16)
+        self._grow_contacts(64)
+        #: Body-steps taken by the island pass (first order) since the solver was made or reset.
+        self.body_steps = 0
+        #: Largest depth (m) the position projection closed since the solver was made or reset.
+        self.deepest = 0.0
+
+    def _grow_pairs(self, k: int) -> None:
+        n = len(self.island)
+        self._nlist = np.zeros((k, 2), dtype=np.int64)
+        self._pdist, self._pnormal = np.zeros(k), np.zeros((k, 3))
+        self._pcount = np.zeros(k, dtype=np.int64)
+        self._ppoints, self._pseps = np.zeros((k, MAX_PAIR_POINTS, 6)), np.zeros((k, MAX_PAIR_POINTS))
+        self._bound = np.zeros(k + n)
+
+    def _grow_contacts(self, c: int) -> None:
+        self._cint, self._cflt = np.zeros((c, 2), dtype=np.int64), np.zeros((c, C_FLOATS))
+        self._order = np.zeros(c, dtype=np.int64)
+        r = 3 * c
+        self._rj, self._rw = np.zeros((r, 12)), np.zeros((r, 12))
+        self._rdiag, self._rbias, self._rlam = np.zeros(r), np.zeros(r), np.zeros(r)
+        self._rbody = np.zeros((r, 2), dtype=np.int64)
+
+    def reset(self) -> None:
+        """Every body awake and out of the islands; the counts cleared."""
+        self.island[:] = 0
+        self.was_island[:] = False
+        self.asleep[:] = 0
+        self.quiet[:] = 0
+        self.body_steps = 0
+        self.deepest = 0.0
+
+    def step(self, sim, wrenches: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, cand: np.ndarray, h: float) -> np.ndarray:
+        """The islands' step over the candidate pairs ``cand`` (k, 2) of global body indices; returns the mask of
+        the bodies it stepped (or kept asleep)."""
+        solver = self.solver
+        if len(cand) > len(self._nlist):
+            self._grow_pairs(2 * len(cand))
+        G = len(solver.half_spaces)
+        gmu = solver.friction[:, :G] if solver.friction.shape[1] > G else solver.friction
+        args_head = (Y0, Y1, sim._prm, wrenches, solver._bare_rows, solver.modes, self.saved, solver.shapes,
+                     solver.half_spaces, np.ascontiguousarray(gmu), self.members, cand, len(cand),
+                     self.pairs.is_static, sim._stopped, self.pairs.spin_reach, self.size, self.asleep, self.quiet, h,
+                     bool(solver.sleeping), DEFAULT_FRICTION, self.island, self._parent, self._flags)
+        while True:
+            code = island_pass(*args_head, self._nlist, self._pos, self._quat, self._pdist, self._pnormal,
+                               self._pcount, self._ppoints, self._pseps, self._bound, self._cint, self._cflt, self._vel,
+                               self._iw, self._dx, self._rj, self._rw, self._rdiag, self._rbias, self._rlam,
+                               self._rbody, self._order, self._cstart, self._A, self._L, self._vec, self.out)
+            if code >= 0:
+                break
+            self._grow_contacts(2 * -code)
+        out = self.out
+        self.body_steps += int(out[OUT_BODIES])
+        solver.counts["island_body_steps"] += int(out[OUT_BODIES])
+        self.deepest = max(self.deepest, float(out[OUT_DEPTH]))
+        now = self.island != 0
+        if now.any():
+            solver.modes[now] = FLIGHT  # in the island: not held by the ground pass
+            solver.ground_of[now] = -1
+            solver.sliding[now] = False
+        left = np.flatnonzero(self.was_island & ~now)
+        self.was_island = now
+        for i in left:  # out of its island: persistent contact if it touches its ground and stays on it
+            solver.classify(sim, Y1, int(i))
+        return now

@@ -1,0 +1,628 @@
+"""Compiled islands of bodies resting on bodies: union-find, contact rows, the velocity step, the projection, sleeping.
+
+Bodies in persistent contact with each other (and the ground and static shapes they touch) are
+stepped together by :func:`island_pass`, one compiled call per simulator step (driver:
+core/contact/island.py). The step is **first order** (Moreau–Jean / Stewart–Trinkle):
+
+    v⁺ = v + h M⁻¹ (f_ext + gyroscopic) + M⁻¹ Jᵀ λ,   p⁺ = p + h v⁺,   q⁺ = q ⊗ exp(h ω_P⁺)
+
+with, at each contact point (normal n, tangents t1, t2, gap g ≥ 0 at the step's start),
+u_n⁺ + g/h ≥ 0 ⊥ λ_n ≥ 0 (Stewart–Trinkle's gap term: a gap closes exactly within the step,
+never more) and Coulomb's cone |λ_t| ≤ μ λ_n, e = 0. The sticking case is solved exactly first:
+every row as an equality (J M⁻¹ Jᵀ λ = −(J v* + g/h)), by a Cholesky factorisation of
+J M⁻¹ Jᵀ + εI refined by iterated Tikhonov steps (the minimum-norm λ of the consistent
+rank-deficient system: four coplanar corners of a face share its load evenly; v⁺ does not depend
+on which λ). It is kept when every λ_n ≥ 0 and every λ_t is in its cone (to round-off); else
+projected Gauss–Seidel on the island's rows. Then the positions: every point found penetrating
+at the new poses (narrow phase again) is closed by a mass-metric least correction (Gauss–Seidel
+on the linearised gaps, λ ≥ 0), the narrow phase iterated PROJECT_ROUNDS times.
+
+Islands: union-find over the swept broad phase's candidate pairs of moving bodies; a component
+is an island when one of its pairs touches at the step's start (signed distance ≤ TOUCH × the
+pair's size), or when it holds a sleeping body. Sleeping (when enabled): an island whose bodies
+all moved slower than SLEEP_SPEED at the step's start and after its solve is locked (velocities
+set to zero, its rows copied forward, no narrow phase between its bodies) until a wrench, a
+changed state or another body within reach wakes it (the driver and this pass).
+
+Scratch is owned by the caller and preallocated; nothing here allocates per pair or per body
+(pair_contacts allocates its small workspace once per call).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ..forces import body_wrench
+from ..jit import JIT
+from ..layout import ACTIVE, BOUND, INV_INERTIA, INV_MASS, INERTIA, P, Q, Q_PB, STATE_WIDTH, V, W
+from ..rotation import exp_map, matrix, normalise, qmul
+from .layout import DIMS, FRICTION, HAS_MATERIAL, NORMAL
+from .pairs import MAX_PAIR_POINTS, pair_contacts
+from .shapes import MAX_FEATURES, feature_gaps, feature_points
+
+__all__ = ["island_pass", "TOUCH", "SLEEP_SPEED", "DENSE_MAX", "PROJECT_TOL", "C_FLOATS", "OUT_WIDTH"]
+
+#: A pair whose signed distance is at most this × its size (m per m) touches: its component is an island.
+TOUCH = 1e-6
+#: Bodies slower than this (m/s, and spin × bounding radius) at a step's start and after its solve are at rest.
+SLEEP_SPEED = 1e-9
+#: Most rows (3 per contact point) of an island solved densely for the sticking case.
+DENSE_MAX = 360
+#: Points deeper than this × the pair's size (m per m) after the step are projected out.
+PROJECT_TOL = 1e-12
+#: Narrow-phase rounds of the position projection; Gauss–Seidel sweeps per round.
+PROJECT_ROUNDS, PROJECT_SWEEPS = 4, 60
+#: Most projected Gauss–Seidel sweeps of the velocity problem; it stops earlier below PGS_TOL (m/s).
+PGS_SWEEPS, PGS_TOL = 200, 1e-13
+#: Iterated Tikhonov steps of the sticking solve, and its regularisation (× the largest diagonal).
+TIKHONOV_STEPS, TIKHONOV_EPS = 6, 1e-9
+#: Columns of a contact's float row: point (3), normal a → b (3), gap, μ.
+C_X, C_N, C_GAP, C_MU, C_FLOATS = 0, 3, 6, 7, 8
+#: Columns of the per-call outputs: island body-steps, contact points, sticking solves kept, PGS islands,
+#: projected points, largest depth projected (m), bodies woken, bodies put to sleep.
+OUT_BODIES, OUT_CONTACTS, OUT_STICK, OUT_PGS, OUT_PROJECTED, OUT_DEPTH, OUT_WOKEN, OUT_SLEPT = range(8)
+OUT_WIDTH = 8
+
+
+@njit(**JIT)
+def _find(parent, i):
+    while parent[i] != i:
+        parent[i] = parent[parent[i]]
+        i = parent[i]
+    return i
+
+
+@njit(**JIT)
+def _union(parent, a, b):
+    ra, rb = _find(parent, a), _find(parent, b)
+    if ra != rb:
+        if ra < rb:
+            parent[rb] = ra
+        else:
+            parent[ra] = rb
+
+
+@njit(**JIT)
+def _pose(Y, prm, i, pos, quat):
+    pos[i, 0], pos[i, 1], pos[i, 2] = Y[i, P], Y[i, P + 1], Y[i, P + 2]
+    qw, qx, qy, qz = qmul(Y[i, Q], Y[i, Q + 1], Y[i, Q + 2], Y[i, Q + 3],
+                          prm[i, Q_PB], prm[i, Q_PB + 1], prm[i, Q_PB + 2], prm[i, Q_PB + 3])
+    quat[i, 0], quat[i, 1], quat[i, 2], quat[i, 3] = qw, qx, qy, qz
+
+
+@njit(**JIT)
+def _speed(Y, i, spin_reach):
+    v = math.sqrt(Y[i, V] ** 2 + Y[i, V + 1] ** 2 + Y[i, V + 2] ** 2)
+    w = math.sqrt(Y[i, W] ** 2 + Y[i, W + 1] ** 2 + Y[i, W + 2] ** 2)
+    return v + w * spin_reach[i]
+
+
+@njit(**JIT)
+def _reach_bound(Y0, Y1, i, spin_reach):
+    """A bound (m/s) on how fast body i's surface moves over the step (the larger end plus the change)."""
+    s0, s1 = _speed(Y0, i, spin_reach), _speed(Y1, i, spin_reach)
+    dv = math.sqrt((Y1[i, V] - Y0[i, V]) ** 2 + (Y1[i, V + 1] - Y0[i, V + 1]) ** 2 + (Y1[i, V + 2] - Y0[i, V + 2]) ** 2)
+    return max(s0, s1) + dv
+
+
+@njit(**JIT)
+def _pair_mu(shapes, a, b, default_mu):
+    if shapes[a, HAS_MATERIAL] == 0.0 and shapes[b, HAS_MATERIAL] == 0.0:
+        return default_mu
+    ma = shapes[a, FRICTION] if shapes[a, HAS_MATERIAL] != 0.0 else shapes[b, FRICTION]
+    mb = shapes[b, FRICTION] if shapes[b, HAS_MATERIAL] != 0.0 else shapes[a, FRICTION]
+    return math.sqrt(ma * mb)
+
+
+@njit(**JIT)
+def _gather(Y, prm, shapes, grounds, gmu, island, nlist, n_pairs, pdist, pnormal, pcount, ppoints, pseps,
+            members, bound, size, is_static, default_mu, deep_only, cint, cflt):
+    """Contacts of the island bodies (island[i] == 1) at state rows Y into cint (a, b; −1: fixed) and cflt.
+
+    Pairs: the narrow phase's points (mid-way between the surfaces) whose separation is at most
+    ``bound`` of the pair (or, with ``deep_only``, below −PROJECT_TOL × its size). Half-spaces:
+    each feature's point likewise (a = −1, the normal the plane's). Returns the count.
+    """
+    count = 0
+    for k in range(n_pairs):
+        a, b = nlist[k, 0], nlist[k, 1]
+        if not (island[a] == 1 or island[b] == 1):
+            continue
+        scale = max(size[a], size[b])
+        limit = -PROJECT_TOL * scale if deep_only else bound[k]
+        mu = _pair_mu(shapes, a, b, default_mu)
+        for c in range(pcount[k]):
+            if pseps[k, c] <= limit:
+                cint[count, 0] = -1 if is_static[a] else a
+                cint[count, 1] = -1 if is_static[b] else b
+                for j in range(3):
+                    cflt[count, C_X + j] = 0.5 * (ppoints[k, c, j] + ppoints[k, c, 3 + j])
+                    cflt[count, C_N + j] = pnormal[k, j]
+                cflt[count, C_GAP] = pseps[k, c]
+                cflt[count, C_MU] = mu
+                count += 1
+    gaps = np.empty(MAX_FEATURES)
+    points = np.empty((4, 3))
+    pg = np.empty(4)
+    owners = np.zeros(4, dtype=np.int64)
+    for m in range(members.shape[0]):
+        i = members[m]
+        if island[i] != 1:
+            continue
+        for j in range(grounds.shape[0]):
+            nf = feature_gaps(Y[i], prm[i], shapes[i], grounds[j], gaps)
+            limit = -PROJECT_TOL * size[i] if deep_only else bound[n_pairs + m]
+            for f in range(nf):
+                if gaps[f] <= limit:
+                    npts = feature_points(Y[i], prm[i], shapes[i], grounds[j], 1 << f, points, pg, owners)
+                    for c in range(npts):
+                        if pg[c] <= limit:
+                            cint[count, 0] = -1
+                            cint[count, 1] = i
+                            for d in range(3):
+                                cflt[count, C_X + d] = points[c, d]
+                                cflt[count, C_N + d] = grounds[j, NORMAL + d]
+                            cflt[count, C_GAP] = pg[c]
+                            cflt[count, C_MU] = gmu[i, j]
+                            count += 1
+    _pin = Y[0, 0], nlist[0, 0], cint[0, 0], cflt[0, 0], members[0], bound[0], island[0]
+    return count
+
+
+@njit(**JIT)
+def _rows(Y, prm, n_contacts, cint, cflt, iw, normal_only, h, rj, rw, rdiag, rbias, rbody):
+    """Each contact's rows (normal, t1, t2; or the normal alone): J (per side 6: linear, angular world), M⁻¹Jᵀ,
+    the diagonal of J M⁻¹ Jᵀ, the bias (the gap term g/h, g ≥ 0), the two bodies (−1: fixed)."""
+    per = 1 if normal_only else 3
+    for c in range(n_contacts):
+        nx, ny, nz = cflt[c, C_N], cflt[c, C_N + 1], cflt[c, C_N + 2]
+        # tangents: t1 ⟂ n from the world axis least aligned with n
+        if abs(nx) < 0.57735:
+            ex, ey, ez = 1.0, 0.0, 0.0
+        elif abs(ny) < 0.57735:
+            ex, ey, ez = 0.0, 1.0, 0.0
+        else:
+            ex, ey, ez = 0.0, 0.0, 1.0
+        t1x, t1y, t1z = ny * ez - nz * ey, nz * ex - nx * ez, nx * ey - ny * ex
+        s = 1.0 / math.sqrt(t1x * t1x + t1y * t1y + t1z * t1z)
+        t1x, t1y, t1z = t1x * s, t1y * s, t1z * s
+        t2x, t2y, t2z = ny * t1z - nz * t1y, nz * t1x - nx * t1z, nx * t1y - ny * t1x
+        for k in range(per):
+            r = per * c + k
+            if k == 0:
+                dx, dy, dz = nx, ny, nz
+            elif k == 1:
+                dx, dy, dz = t1x, t1y, t1z
+            else:
+                dx, dy, dz = t2x, t2y, t2z
+            diag = 0.0
+            for side in range(2):
+                i = cint[c, side]
+                rbody[r, side] = i
+                o = 6 * side
+                if i < 0:
+                    for j in range(6):
+                        rj[r, o + j] = 0.0
+                        rw[r, o + j] = 0.0
+                    continue
+                sign = -1.0 if side == 0 else 1.0
+                arx = cflt[c, C_X] - Y[i, P]
+                ary = cflt[c, C_X + 1] - Y[i, P + 1]
+                arz = cflt[c, C_X + 2] - Y[i, P + 2]
+                cx, cy, cz = ary * dz - arz * dy, arz * dx - arx * dz, arx * dy - ary * dx
+                rj[r, o], rj[r, o + 1], rj[r, o + 2] = sign * dx, sign * dy, sign * dz
+                rj[r, o + 3], rj[r, o + 4], rj[r, o + 5] = sign * cx, sign * cy, sign * cz
+                im = prm[i, INV_MASS]
+                rw[r, o], rw[r, o + 1], rw[r, o + 2] = sign * im * dx, sign * im * dy, sign * im * dz
+                for j in range(3):
+                    rw[r, o + 3 + j] = sign * (iw[i, 3 * j] * cx + iw[i, 3 * j + 1] * cy + iw[i, 3 * j + 2] * cz)
+                for j in range(6):
+                    diag += rj[r, o + j] * rw[r, o + j]
+            rdiag[r] = diag
+            rbias[r] = max(cflt[c, C_GAP], 0.0) / h if k == 0 else 0.0
+    _pin = Y[0, 0], prm[0, 0], cint[0, 0], cflt[0, 0], iw[0, 0], rj[0, 0], rw[0, 0], rdiag[0], rbias[0], rbody[0, 0]
+
+
+@njit(**JIT)
+def _row_speed(vel, rj, rbody, r):
+    u = 0.0
+    for side in range(2):
+        i = rbody[r, side]
+        if i >= 0:
+            for j in range(6):
+                u += rj[r, 6 * side + j] * vel[i, j]
+    return u
+
+
+@njit(**JIT)
+def _apply(vel, rw, rbody, r, dl):
+    for side in range(2):
+        i = rbody[r, side]
+        if i >= 0:
+            for j in range(6):
+                vel[i, j] += rw[r, 6 * side + j] * dl
+
+
+@njit(**JIT)
+def _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, start, stop, A, L, rhs, lam, res):
+    """The sticking case of one island's contacts order[start:stop] (3 rows each) solved as equalities;
+    True (and vel, rlam updated) when every λ_n ≥ 0 and every λ_t is in its cone, to round-off."""
+    m = 3 * (stop - start)
+    for x in range(m):
+        rx = 3 * order[start + x // 3] + x % 3
+        rhs[x] = -(_row_speed(vel, rj, rbody, rx) + rbias[rx])
+        for y in range(x + 1):
+            ry = 3 * order[start + y // 3] + y % 3
+            a = 0.0
+            for sx in range(2):
+                bx = rbody[rx, sx]
+                if bx < 0:
+                    continue
+                for sy in range(2):
+                    if rbody[ry, sy] == bx:
+                        for j in range(6):
+                            a += rj[rx, 6 * sx + j] * rw[ry, 6 * sy + j]
+            A[x, y] = a
+            A[y, x] = a
+    top = 0.0
+    for x in range(m):
+        top = max(top, A[x, x])
+    eps = TIKHONOV_EPS * top
+    ok = top > 0.0
+    # Cholesky of A + εI (lower, in L)
+    for x in range(m):
+        for y in range(x + 1):
+            s = A[x, y] + (eps if x == y else 0.0)
+            for k in range(y):
+                s -= L[x, k] * L[y, k]
+            if x == y:
+                if s <= 0.0:
+                    ok = False
+                    s = 1.0
+                L[x, x] = math.sqrt(s)
+            else:
+                L[x, y] = s / L[y, y]
+    for x in range(m):
+        lam[x] = 0.0
+        res[x] = rhs[x]
+    for _ in range(TIKHONOV_STEPS):
+        # solve (A + εI) δ = res: forward, backward (δ in res)
+        for x in range(m):
+            s = res[x]
+            for k in range(x):
+                s -= L[x, k] * res[k]
+            res[x] = s / L[x, x]
+        for x in range(m - 1, -1, -1):
+            s = res[x]
+            for k in range(x + 1, m):
+                s -= L[k, x] * res[k]
+            res[x] = s / L[x, x]
+        for x in range(m):
+            lam[x] += res[x]
+        for x in range(m):
+            s = rhs[x]
+            for y in range(m):
+                s -= A[x, y] * lam[y]
+            res[x] = s
+    biggest = 0.0
+    for x in range(0, m, 3):
+        biggest = max(biggest, abs(lam[x]))
+    tol = 1e-9 * biggest
+    for c in range(stop - start):
+        ln, l1, l2 = lam[3 * c], lam[3 * c + 1], lam[3 * c + 2]
+        mu = cflt[order[start + c], C_MU]
+        if ln < -tol or math.sqrt(l1 * l1 + l2 * l2) > mu * max(ln, 0.0) + tol:
+            ok = False
+    if ok:
+        for x in range(m):
+            rx = 3 * order[start + x // 3] + x % 3
+            rlam[rx] = lam[x]
+            _apply(vel, rw, rbody, rx, lam[x])
+    _pin = vel[0, 0], rj[0, 0], rw[0, 0], rbody[0, 0], rbias[0], rlam[0], cflt[0, 0], order[0], A[0, 0], L[0, 0]
+    _pin2 = rhs[0], lam[0], res[0]
+    return ok
+
+
+@njit(**JIT)
+def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, start, stop):
+    """Projected Gauss–Seidel on contacts order[start:stop] (normal, then the two tangents in Coulomb's disk)."""
+    for c in range(start, stop):
+        for k in range(3):
+            rlam[3 * order[c] + k] = 0.0
+    for _ in range(PGS_SWEEPS):
+        change = 0.0
+        for c in range(start, stop):
+            q = order[c]
+            r = 3 * q
+            if rdiag[r] > 0.0:
+                u = _row_speed(vel, rj, rbody, r) + rbias[r]
+                new = max(rlam[r] - u / rdiag[r], 0.0)
+                dl = new - rlam[r]
+                rlam[r] = new
+                _apply(vel, rw, rbody, r, dl)
+                change = max(change, abs(dl) * rdiag[r])
+            limit = cflt[q, C_MU] * rlam[r]
+            l1, l2 = rlam[r + 1], rlam[r + 2]
+            if rdiag[r + 1] > 0.0:
+                l1 = l1 - _row_speed(vel, rj, rbody, r + 1) / rdiag[r + 1]
+            if rdiag[r + 2] > 0.0:
+                l2 = l2 - _row_speed(vel, rj, rbody, r + 2) / rdiag[r + 2]
+            norm = math.sqrt(l1 * l1 + l2 * l2)
+            if norm > limit:
+                s = limit / norm if norm > 0.0 else 0.0
+                l1, l2 = l1 * s, l2 * s
+            d1, d2 = l1 - rlam[r + 1], l2 - rlam[r + 2]
+            rlam[r + 1], rlam[r + 2] = l1, l2
+            _apply(vel, rw, rbody, r + 1, d1)
+            _apply(vel, rw, rbody, r + 2, d2)
+            change = max(change, max(abs(d1) * rdiag[r + 1], abs(d2) * rdiag[r + 2]))
+        if change <= PGS_TOL:
+            break
+    _pin = vel[0, 0], rj[0, 0], rw[0, 0], rbody[0, 0], rdiag[0], rbias[0], rlam[0], cflt[0, 0], order[0]
+
+
+@njit(**JIT)
+def _narrow(Y, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps):
+    for k in range(n_pairs):
+        _pose(Y, prm, nlist[k, 0], pos, quat)
+        _pose(Y, prm, nlist[k, 1], pos, quat)
+    if n_pairs > 0:
+        pair_contacts(pos, quat, shapes, nlist[:n_pairs], pdist, pnormal, pcount, ppoints, pseps)
+    _pin = Y[0, 0], prm[0, 0], nlist[0, 0], pos[0, 0], quat[0, 0], pdist[0], pcount[0]
+
+
+@njit(**JIT)
+def _inertia_world(Y, prm, i, iw):
+    qw, qx, qy, qz = normalise(Y[i, Q], Y[i, Q + 1], Y[i, Q + 2], Y[i, Q + 3])
+    R = matrix(qw, qx, qy, qz)
+    for a in range(3):
+        for b in range(3):
+            s = 0.0
+            for k in range(3):
+                s += R[3 * a + k] * prm[i, INV_INERTIA + k] * R[3 * b + k]
+            iw[i, 3 * a + b] = s
+
+
+@njit(**JIT)
+def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, members, cand, n_cand, is_static, stopped, spin_reach, size,
+                asleep, quiet, h, sleeping, default_mu, island, parent, flags, nlist, pos, quat, pdist, pnormal, pcount,
+                ppoints, pseps, bound, cint, cflt, vel, iw, dx, rj, rw, rdiag, rbias, rlam, rbody, order, cstart,
+                A, L, vec, out):
+    """One step of every island (module docstring): results into Y1 for the bodies marked island[i] = 1 (solved)
+    or 2 (asleep: their rows copied from Y0). Returns 0, or −(contacts needed) when cint is too small
+    (then nothing was changed but ``asleep`` and the outputs; call again with room)."""
+    n = members.shape[0]
+    for k in range(OUT_WIDTH):
+        out[k] = 0.0
+    woken = 0
+    for m in range(n):  # a sleeping body pushed (a wrench) or whose state was set wakes
+        i = members[m]
+        if asleep[i]:
+            changed = wr[i, ACTIVE] != 0.0 or stopped[i]
+            for j in range(STATE_WIDTH):
+                changed = changed or Y0[i, j] != saved[i, j]
+            if changed:
+                asleep[i] = 0
+                quiet[i] = 0
+                woken += 1
+    for m in range(n):
+        i = members[m]
+        parent[i] = i
+        flags[i] = 0
+        island[i] = 0
+    # candidate pairs: sleeping with sleeping are linked without a narrow phase; the others looked at
+    n_pairs = 0
+    for k in range(n_cand):
+        a, b = cand[k, 0], cand[k, 1]
+        if stopped[a] or stopped[b]:
+            continue
+        if asleep[a] and (asleep[b] or is_static[b]):
+            if not is_static[b]:
+                _union(parent, a, b)
+            continue
+        if is_static[a] and asleep[b]:
+            continue
+        nlist[n_pairs, 0], nlist[n_pairs, 1] = a, b
+        n_pairs += 1
+    _narrow(Y0, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps)
+    for k in range(n_pairs):
+        a, b = nlist[k, 0], nlist[k, 1]
+        touch = TOUCH * max(size[a], size[b])
+        reach = 0.0
+        for i in (a, b):
+            if not is_static[i]:
+                reach += _reach_bound(Y0, Y1, i, spin_reach)
+        bound[k] = reach * h + touch
+        if is_static[a] or is_static[b]:
+            continue
+        if pdist[k] <= touch:
+            _union(parent, a, b)
+            flags[a] |= 8  # marks a touching pair's body; moved to its root below
+        elif pdist[k] <= bound[k]:
+            _union(parent, a, b)
+    for m in range(n):
+        i = members[m]
+        r = _find(parent, i)
+        flags[r] |= (2 if asleep[i] else 4) | (1 if flags[i] & 8 else 0)
+    for m in range(n):
+        i = members[m]
+        r = _find(parent, i)
+        if flags[r] & 2 and flags[r] & 4:  # something awake within reach of a sleeping island: it wakes
+            if asleep[i]:
+                asleep[i] = 0
+                quiet[i] = 0
+                woken += 1
+            island[i] = 1
+        elif flags[r] & 2:
+            island[i] = 2
+        elif flags[r] & 1:
+            island[i] = 1
+    out[OUT_WOKEN] = woken
+    # room for the contacts (pairs' points and each island body's features against each half-space)
+    need = 0
+    for k in range(n_pairs):
+        if island[nlist[k, 0]] == 1 or island[nlist[k, 1]] == 1:
+            need += pcount[k]
+    for m in range(n):
+        if island[members[m]] == 1:
+            need += MAX_FEATURES * 4 * grounds.shape[0]
+        bound[n_pairs + m] = 0.0
+    if need > cint.shape[0]:
+        return -need
+    bodies = 0
+    for m in range(n):
+        i = members[m]
+        if island[i] == 2:
+            for j in range(STATE_WIDTH):
+                Y1[i, j] = Y0[i, j]
+            Y1[i, BOUND] = Y0[i, BOUND]
+        elif island[i] == 1:
+            bodies += 1
+            bound[n_pairs + m] = _reach_bound(Y0, Y1, i, spin_reach) * h + TOUCH * size[i]
+            # the free velocity: v + h f/m, ω_P + h I⁻¹ (τ_P − ω × I ω), then ω in world axes
+            row = bare[i] if modes[i] != 0 else wr[i]  # a body held on its ground until now: without that force
+            fx, fy, fz, tx, ty, tz = body_wrench(Y0[i], prm[i], row)
+            im = prm[i, INV_MASS]
+            vel[i, 0] = Y0[i, V] + h * im * fx
+            vel[i, 1] = Y0[i, V + 1] + h * im * fy
+            vel[i, 2] = Y0[i, V + 2] + h * im * fz
+            w0, w1, w2 = Y0[i, W], Y0[i, W + 1], Y0[i, W + 2]
+            I0, I1, I2 = prm[i, INERTIA], prm[i, INERTIA + 1], prm[i, INERTIA + 2]
+            g0 = tx - (w1 * I2 * w2 - w2 * I1 * w1)
+            g1 = ty - (w2 * I0 * w0 - w0 * I2 * w2)
+            g2 = tz - (w0 * I1 * w1 - w1 * I0 * w0)
+            w0 += h * prm[i, INV_INERTIA] * g0
+            w1 += h * prm[i, INV_INERTIA + 1] * g1
+            w2 += h * prm[i, INV_INERTIA + 2] * g2
+            qw, qx, qy, qz = normalise(Y0[i, Q], Y0[i, Q + 1], Y0[i, Q + 2], Y0[i, Q + 3])
+            R = matrix(qw, qx, qy, qz)
+            for a in range(3):
+                vel[i, 3 + a] = R[3 * a] * w0 + R[3 * a + 1] * w1 + R[3 * a + 2] * w2
+            _inertia_world(Y0, prm, i, iw)
+    out[OUT_BODIES] = bodies
+    if bodies == 0:
+        _pin = Y0[0, 0], Y1[0, 0], prm[0, 0], wr[0, 0], bare[0, 0], modes[0], saved[0, 0], cand[0, 0], A[0, 0], L[0, 0], vec[0, 0], order[0], cstart[0]
+        return 0
+    # the velocity problem
+    nc = _gather(Y0, prm, shapes, grounds, gmu, island, nlist, n_pairs, pdist, pnormal, pcount, ppoints, pseps,
+                 members, bound, size, is_static, default_mu, False, cint, cflt)
+    out[OUT_CONTACTS] = nc
+    _rows(Y0, prm, nc, cint, cflt, iw, False, h, rj, rw, rdiag, rbias, rbody)
+    # contacts sorted by island (counting sort on the root of their moving body)
+    for m in range(n):
+        cstart[members[m]] = 0
+    for c in range(nc):
+        i = cint[c, 1] if cint[c, 1] >= 0 else cint[c, 0]
+        cstart[_find(parent, i)] += 1
+    total = 0
+    for m in range(n):
+        i = members[m]
+        if _find(parent, i) == i:
+            k = cstart[i]
+            cstart[i] = total
+            total += k
+    for c in range(nc):
+        i = cint[c, 1] if cint[c, 1] >= 0 else cint[c, 0]
+        r = _find(parent, i)
+        order[cstart[r]] = c
+        cstart[r] += 1
+    lo = 0
+    for m in range(n):
+        i = members[m]
+        if _find(parent, i) != i or island[i] != 1:
+            continue
+        hi = cstart[i]
+        if hi == lo:
+            continue
+        kept = False
+        if 3 * (hi - lo) <= A.shape[0]:
+            kept = _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, lo, hi, A, L, vec[0], vec[1], vec[2])
+        if kept:
+            out[OUT_STICK] += 1
+        else:
+            _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, lo, hi)
+            out[OUT_PGS] += 1
+        lo = hi
+    # positions: p + h v, q ⊗ exp(h ω_P)
+    for m in range(n):
+        i = members[m]
+        if island[i] != 1:
+            continue
+        qw, qx, qy, qz = normalise(Y0[i, Q], Y0[i, Q + 1], Y0[i, Q + 2], Y0[i, Q + 3])
+        R = matrix(qw, qx, qy, qz)
+        wp0 = R[0] * vel[i, 3] + R[3] * vel[i, 4] + R[6] * vel[i, 5]
+        wp1 = R[1] * vel[i, 3] + R[4] * vel[i, 4] + R[7] * vel[i, 5]
+        wp2 = R[2] * vel[i, 3] + R[5] * vel[i, 4] + R[8] * vel[i, 5]
+        for a in range(3):
+            Y1[i, P + a] = Y0[i, P + a] + h * vel[i, a]
+            Y1[i, V + a] = vel[i, a]
+        Y1[i, W], Y1[i, W + 1], Y1[i, W + 2] = wp0, wp1, wp2
+        ew, ex, ey, ez = exp_map(h * wp0, h * wp1, h * wp2)
+        q = qmul(qw, qx, qy, qz, ew, ex, ey, ez)
+        Y1[i, Q], Y1[i, Q + 1], Y1[i, Q + 2], Y1[i, Q + 3] = normalise(q[0], q[1], q[2], q[3])
+    # the projection: points deeper than PROJECT_TOL closed by the least mass-metric correction
+    deepest = 0.0
+    for _ in range(PROJECT_ROUNDS):
+        _narrow(Y1, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps)
+        nd = _gather(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pdist, pnormal, pcount, ppoints, pseps,
+                     members, bound, size, is_static, default_mu, True, cint, cflt)
+        if nd == 0:
+            break
+        out[OUT_PROJECTED] += nd
+        for m in range(n):
+            i = members[m]
+            if island[i] == 1:
+                _inertia_world(Y1, prm, i, iw)
+                for j in range(6):
+                    dx[i, j] = 0.0
+        _rows(Y1, prm, nd, cint, cflt, iw, True, h, rj, rw, rdiag, rbias, rbody)
+        for c in range(nd):
+            rlam[c] = 0.0
+            deepest = max(deepest, -cflt[c, C_GAP])
+        for _s in range(PROJECT_SWEEPS):
+            change = 0.0
+            for c in range(nd):
+                if rdiag[c] <= 0.0:
+                    continue
+                g = cflt[c, C_GAP] + _row_speed(dx, rj, rbody, c)
+                new = max(rlam[c] - g / rdiag[c], 0.0)
+                dl = new - rlam[c]
+                rlam[c] = new
+                _apply(dx, rw, rbody, c, dl)
+                change = max(change, abs(dl) * rdiag[c])
+            if change <= 1e-16:
+                break
+        for m in range(n):
+            i = members[m]
+            if island[i] != 1:
+                continue
+            for a in range(3):
+                Y1[i, P + a] += dx[i, a]
+            ew, ex, ey, ez = exp_map(dx[i, 3], dx[i, 4], dx[i, 5])  # a world-axes turn: exp(δθ) ⊗ q
+            q = qmul(ew, ex, ey, ez, Y1[i, Q], Y1[i, Q + 1], Y1[i, Q + 2], Y1[i, Q + 3])
+            Y1[i, Q], Y1[i, Q + 1], Y1[i, Q + 2], Y1[i, Q + 3] = normalise(q[0], q[1], q[2], q[3])
+    out[OUT_DEPTH] = deepest
+    # sleeping: an island whose bodies were and stay slower than SLEEP_SPEED is locked at rest
+    for m in range(n):
+        i = members[m]
+        if island[i] == 1:
+            still = _speed(Y0, i, spin_reach) <= SLEEP_SPEED and _speed(Y1, i, spin_reach) <= SLEEP_SPEED
+            quiet[i] = quiet[i] + 1 if still else 0
+            r = _find(parent, i)
+            if not still:
+                flags[r] |= 16
+    if sleeping:
+        for m in range(n):
+            i = members[m]
+            if island[i] == 1 and not flags[_find(parent, i)] & 16:
+                asleep[i] = 1
+                out[OUT_SLEPT] += 1
+                for j in range(6):
+                    Y1[i, V + j] = 0.0
+                for j in range(STATE_WIDTH):
+                    saved[i, j] = Y1[i, j]
+    _pin = Y0[0, 0], Y1[0, 0], prm[0, 0], wr[0, 0], bare[0, 0], modes[0], saved[0, 0], cand[0, 0], A[0, 0], L[0, 0], vec[0, 0], order[0], cstart[0]
+    return 0
