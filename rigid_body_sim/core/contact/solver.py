@@ -274,6 +274,10 @@ class ContactSolver:
         """True while ``body`` is in persistent contact with the ground."""
         return bool(self.modes[self.names.index(body)] == PERSISTENT)
 
+    def in_island(self, body: str) -> bool:
+        """True while ``body`` is stepped with the bodies it rests on or carries (island.py; asleep included)."""
+        return self.pairs is not None and bool(self.pairs.islands.island[self.names.index(body)])
+
     def static_body_of(self, ground: int) -> str | None:
         """The static body whose shape plane row ``ground`` (a ContactEvent's) belongs to; None for a
         half-space of the scene's ``ground`` list (static_geometry.py; a tangent row names its latest owner)."""

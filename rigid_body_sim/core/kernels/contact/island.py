@@ -123,7 +123,7 @@ def _gather(Y, prm, shapes, grounds, gmu, island, nlist, n_pairs, pdist, pnormal
     """Contacts of the island bodies (island[i] == 1) at state rows Y into cint (a, b; −1: fixed) and cflt.
 
     Pairs: the narrow phase's points (mid-way between the surfaces) whose separation is at most
-    ``bound`` of the pair (or, with ``deep_only``, below −PROJECT_TOL × its size). Half-spaces:
+    ``bound`` of the pair (or, with ``deep_only``, TOUCH × its size: the projection's rows). Half-spaces:
     each feature's point likewise (a = −1, the normal the plane's). Returns the count.
     """
     count = 0
@@ -132,7 +132,7 @@ def _gather(Y, prm, shapes, grounds, gmu, island, nlist, n_pairs, pdist, pnormal
         if not (island[a] == 1 or island[b] == 1):
             continue
         scale = max(size[a], size[b])
-        limit = -PROJECT_TOL * scale if deep_only else bound[k]
+        limit = TOUCH * scale if deep_only else bound[k]
         mu = _pair_mu(shapes, a, b, default_mu)
         for c in range(pcount[k]):
             if pseps[k, c] <= limit:
@@ -154,7 +154,7 @@ def _gather(Y, prm, shapes, grounds, gmu, island, nlist, n_pairs, pdist, pnormal
             continue
         for j in range(grounds.shape[0]):
             nf = feature_gaps(Y[i], prm[i], shapes[i], grounds[j], gaps)
-            limit = -PROJECT_TOL * size[i] if deep_only else bound[n_pairs + m]
+            limit = TOUCH * size[i] if deep_only else bound[n_pairs + m]
             for f in range(nf):
                 if gaps[f] <= limit:
                     npts = feature_points(Y[i], prm[i], shapes[i], grounds[j], 1 << f, points, pg, owners)
@@ -569,9 +569,14 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         _narrow(Y1, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps)
         nd = _gather(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pdist, pnormal, pcount, ppoints, pseps,
                      members, bound, size, is_static, default_mu, True, cint, cflt)
-        if nd == 0:
+        deep = 0
+        for c in range(nd):
+            i = cint[c, 1] if cint[c, 1] >= 0 else cint[c, 0]
+            if cflt[c, C_GAP] < -PROJECT_TOL * size[i]:
+                deep += 1
+        if deep == 0:
             break
-        out[OUT_PROJECTED] += nd
+        out[OUT_PROJECTED] += deep
         for m in range(n):
             i = members[m]
             if island[i] == 1:
@@ -579,7 +584,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                 for j in range(6):
                     dx[i, j] = 0.0
         _rows(Y1, prm, nd, cint, cflt, iw, True, h, rj, rw, rdiag, rbias, rbody)
-        for c in range(nd):
+        for c in range(nd):  # every touching point is a row (λ ≥ 0): closing one gap must not open another
             rlam[c] = 0.0
             deepest = max(deepest, -cflt[c, C_GAP])
         for _s in range(PROJECT_SWEEPS):
