@@ -4,6 +4,11 @@
   exact motion is none. Over 60 s nothing sinks, drifts or moves by more than 1e-9 (m, m/s):
   the sticking case is solved exactly (the velocity problem as an equality, to round-off) and
   the gap term closes round-off gaps within a step. Sleeping off and on.
+* A box (turned, off-centre) or a ball dropped onto a two-cube stack comes to rest on it at the
+  closed-form height, without penetration beyond the projection's tolerance and without a rise of
+  K + U beyond round-off.
+* Sleeping: a locked tower does not change by a bit; it wakes on a wrench, an impulse,
+  set_body_state and being hit, with the first-order step's exact answers for a constant force.
 """
 
 from __future__ import annotations
@@ -34,7 +39,7 @@ def simulator(bodies: dict, dt: float = 0.01, integrator: str = "rk4", sleeping:
 
 
 def tower(count: int = 10, x: float = 0.0, y: float = 0.0) -> dict:
-    return {f"c{x:g}_{y:g}_{k}": cube((x, y, EDGE * (k + 0.5))) for k in range(count)}
+    return {f"c{int(round(x * 10))}_{int(round(y * 10))}_{k}": cube((x, y, EDGE * (k + 0.5))) for k in range(count)}
 
 
 def speeds(sim: Simulator) -> float:
@@ -113,3 +118,77 @@ def test_a_body_dropped_onto_a_two_box_stack_comes_to_rest_on_it(what, dt):
     assert z[2] == pytest.approx(0.5 if what == "box" else 0.45, abs=1e-12)
     assert speeds(sim) <= 1e-9
     assert sim.contact.counts["island_body_steps"] > 0
+
+
+def asleep_tower(count: int = 3) -> Simulator:
+    sim = simulator(tower(count), sleeping=True)
+    sim.step(5)
+    assert sim.contact.pairs.islands.asleep[:count].all()
+    return sim
+
+
+def test_a_sleeping_tower_is_locked_exactly():
+    """Asleep, the tower's rows are copied forward: its state does not change by a bit in 10 s."""
+    sim = asleep_tower()
+    rows = sim.state.rows().copy()
+    steps = sim.contact.counts["island_body_steps"]
+    sim.step(1000)
+    assert np.array_equal(sim.state.rows()[:, :13], rows[:, :13])
+    assert sim.contact.counts["island_body_steps"] == steps  # no island step taken while asleep
+
+
+def test_a_sleeping_tower_wakes_on_a_wrench():
+    """20 N up on the top cube (1 kg): it wakes and lifts off; the island step is first order (Euler in
+    velocity), exact for a constant force: v = h (F/m − g) after one step."""
+    sim = asleep_tower()
+    sim.apply_wrench("c0_0_2", force=(0.0, 0.0, 20.0))
+    sim.step(1)
+    assert not sim.contact.pairs.islands.asleep[:3].any()
+    assert sim.state.v_WC_W[2, 2] == pytest.approx(0.01 * (20.0 - G), rel=1e-9)
+    assert speeds_of(sim, [0, 1]) <= 1e-9
+
+
+def test_a_sleeping_tower_wakes_on_an_impulse():
+    sim = asleep_tower()
+    sim.apply_impulse("c0_0_2", linear=(0.0, 0.0, 1.0))
+    sim.step(1)
+    assert not sim.contact.pairs.islands.asleep[:3].any()
+    assert sim.state.v_WC_W[2, 2] == pytest.approx(1.0 - G * 0.01, rel=1e-9)
+    assert speeds_of(sim, [0, 1]) <= 1e-9
+
+
+def test_a_sleeping_tower_wakes_on_set_body_state():
+    """The top cube put 0.1 m higher: it falls freely (v = −g h after a step), the rest stays."""
+    sim = asleep_tower()
+    sim.set_body_state("c0_0_2", position_world=(0.0, 0.0, 0.6))
+    sim.step(1)
+    assert not sim.contact.pairs.islands.asleep[2]
+    assert sim.state.v_WC_W[2, 2] == pytest.approx(-G * 0.01, rel=1e-9)
+    assert sim.state.p_WC_W[:2, 2] == pytest.approx([0.1, 0.3], abs=1e-12)
+
+
+def test_a_sleeping_tower_wakes_when_hit():
+    """A ball dropped onto a sleeping tower wakes it, comes to rest on it, and the island sleeps again."""
+    bodies = tower(3)
+    bodies["ball"] = DROPPED["ball"]
+    bodies["ball"]["pose"] = {"position": [0.04, 0.03, 0.95]}
+    sim = simulator(bodies, sleeping=True)
+    sim.step(5)
+    islands = sim.contact.pairs.islands
+    assert islands.asleep[:3].all() and not islands.asleep[3]
+    woke = False
+    for _ in range(300):
+        sim.step()
+        woke = woke or not islands.asleep[:3].any()
+        assert deepest(sim) >= -1e-12
+    assert woke
+    assert islands.asleep[:4].all()
+    assert sim.state.p_WC_W[:, 2] == pytest.approx([0.1, 0.3, 0.5, 0.65], abs=1e-12)
+    assert speeds(sim) == 0.0
+
+
+def speeds_of(sim: Simulator, bodies: list[int]) -> float:
+    v = np.linalg.norm(sim.linear_velocities_world()[bodies], axis=1)
+    w = np.linalg.norm(sim.angular_velocities_world()[bodies], axis=1) * 0.5 * EDGE
+    return float(max(v.max(), w.max()))
+

@@ -287,5 +287,6 @@ class ContactPublisher:
             _kv("two half-spaces with too many contact points: projected (total)", solver.counts["two_ground_overflow"]),
             _kv("steps held on a static shape's tangent plane, first order (total)", solver.counts["static_tangent"]),
             _kv("impacts of a resting body pressed on a static shape, not held (total)", solver.counts["static_pressed"]),
+            _kv("island body-steps, first order (total)", solver.counts["island_body_steps"]),
         ]
         return status

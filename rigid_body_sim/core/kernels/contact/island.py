@@ -387,6 +387,29 @@ def _inertia_world(Y, prm, i, iw):
 
 
 @njit(**JIT)
+def _link(Y0, Y1, nlist, lo, hi, pdist, bound, is_static, spin_reach, size, h, parent, flags):
+    """Pairs nlist[lo:hi] after their narrow phase: each one's reach over the step (bound), and moving pairs
+    within it joined (flags bit 8 on a touching pair's first body)."""
+    for k in range(lo, hi):
+        a, b = nlist[k, 0], nlist[k, 1]
+        touch = TOUCH * max(size[a], size[b])
+        reach = 0.0
+        if not is_static[a]:
+            reach += _reach_bound(Y0, Y1, a, spin_reach)
+        if not is_static[b]:
+            reach += _reach_bound(Y0, Y1, b, spin_reach)
+        bound[k] = reach * h + touch
+        if is_static[a] or is_static[b]:
+            continue
+        if pdist[k] <= touch:
+            _union(parent, a, b)
+            flags[a] |= 8
+        elif pdist[k] <= bound[k]:
+            _union(parent, a, b)
+    _pin = Y0[0, 0], Y1[0, 0], nlist[0, 0], pdist[0], bound[0], is_static[0], spin_reach[0], size[0], parent[0]
+
+
+@njit(**JIT)
 def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, members, cand, n_cand, is_static, stopped, spin_reach, size,
                 asleep, quiet, h, sleeping, default_mu, island, parent, flags, nlist, pos, quat, pdist, pnormal, pcount,
                 ppoints, pseps, bound, cint, cflt, vel, iw, dx, rj, rw, rdiag, rbias, rlam, rbody, order, cstart,
@@ -411,7 +434,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     for m in range(n):
         i = members[m]
         parent[i] = i
-        flags[i] = 0
+        flags[i] = 32 if asleep[i] else 0  # bit 32: asleep when the pairs are first looked at
         island[i] = 0
     # candidate pairs: sleeping with sleeping are linked without a narrow phase; the others looked at
     n_pairs = 0
@@ -428,21 +451,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         nlist[n_pairs, 0], nlist[n_pairs, 1] = a, b
         n_pairs += 1
     _narrow(Y0, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps)
-    for k in range(n_pairs):
-        a, b = nlist[k, 0], nlist[k, 1]
-        touch = TOUCH * max(size[a], size[b])
-        reach = 0.0
-        for i in (a, b):
-            if not is_static[i]:
-                reach += _reach_bound(Y0, Y1, i, spin_reach)
-        bound[k] = reach * h + touch
-        if is_static[a] or is_static[b]:
-            continue
-        if pdist[k] <= touch:
-            _union(parent, a, b)
-            flags[a] |= 8  # marks a touching pair's body; moved to its root below
-        elif pdist[k] <= bound[k]:
-            _union(parent, a, b)
+    _link(Y0, Y1, nlist, 0, n_pairs, pdist, bound, is_static, spin_reach, size, h, parent, flags)
     for m in range(n):
         i = members[m]
         r = _find(parent, i)
@@ -460,6 +469,18 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             island[i] = 2
         elif flags[r] & 1:
             island[i] = 1
+    if woken:  # the woken islands' own pairs, skipped above, get their narrow phase now
+        n0 = n_pairs
+        for k in range(n_cand):
+            a, b = cand[k, 0], cand[k, 1]
+            if stopped[a] or stopped[b] or island[a] != 1:
+                continue
+            if flags[a] & 32 and (is_static[b] or flags[b] & 32):  # skipped above (asleep with asleep)
+                nlist[n_pairs, 0], nlist[n_pairs, 1] = a, b
+                n_pairs += 1
+        _narrow(Y0, prm, shapes, nlist[n0:], n_pairs - n0, pos, quat, pdist[n0:], pnormal[n0:], pcount[n0:],
+                ppoints[n0:], pseps[n0:])
+        _link(Y0, Y1, nlist, n0, n_pairs, pdist, bound, is_static, spin_reach, size, h, parent, flags)
     out[OUT_WOKEN] = woken
     # room for the contacts (pairs' points and each island body's features against each half-space)
     need = 0
