@@ -17,8 +17,8 @@ projected Gauss–Seidel on the island's rows. Then the positions: every point f
 at the new poses (narrow phase again) is closed by a mass-metric least correction (Gauss–Seidel
 on the linearised gaps, λ ≥ 0), the narrow phase iterated PROJECT_ROUNDS times.
 
-Islands: union-find over the swept broad phase's candidate pairs of moving bodies; a component
-is an island when one of its pairs touches at the step's start (signed distance ≤ TOUCH × the
+Islands: union-find over the swept broad phase's candidate pairs of moving bodies (a sleeping
+body's only when the other is within the step's reach); a component is an island when one of its pairs touches at the step's start (signed distance ≤ TOUCH × the
 pair's size), or when it holds a sleeping body. Sleeping (when enabled): an island whose bodies
 all moved slower than SLEEP_SPEED at the step's start and after its solve is locked (velocities
 set to zero, its rows copied forward, no narrow phase between its bodies) until a wrench, a
@@ -38,8 +38,8 @@ from numba import njit
 from ..forces import body_wrench
 from ..jit import JIT
 from ..layout import ACTIVE, BOUND, INV_INERTIA, INV_MASS, INERTIA, P, Q, Q_PB, STATE_WIDTH, V, W
-from ..rotation import exp_map, matrix, normalise, qmul
-from .layout import DIMS, FRICTION, HAS_MATERIAL, NORMAL
+from ..rotation import exp_map, matrix, normalise, qmul, rotate, rotate_back
+from .layout import DIMS, FRICTION, HAS_MATERIAL, KIND, NORMAL, SHAPE_BOX
 from .pairs import MAX_PAIR_POINTS, pair_contacts
 from .shapes import MAX_FEATURES, feature_gaps, feature_points
 
@@ -54,7 +54,7 @@ DENSE_MAX = 360
 #: Points deeper than this × the pair's size (m per m) after the step are projected out.
 PROJECT_TOL = 1e-12
 #: Narrow-phase rounds of the position projection; Gauss–Seidel sweeps per round.
-PROJECT_ROUNDS, PROJECT_SWEEPS = 4, 60
+PROJECT_ROUNDS, PROJECT_SWEEPS = 8, 100
 #: Most projected Gauss–Seidel sweeps of the velocity problem; it stops earlier below PGS_TOL (m/s).
 PGS_SWEEPS, PGS_TOL = 200, 1e-13
 #: Iterated Tikhonov steps of the sticking solve, and its regularisation (× the largest diagonal).
@@ -118,8 +118,68 @@ def _pair_mu(shapes, a, b, default_mu):
 
 
 @njit(**JIT)
-def _gather(Y, prm, shapes, grounds, gmu, island, nlist, n_pairs, pdist, pnormal, pcount, ppoints, pseps,
-            members, bound, size, is_static, default_mu, deep_only, cint, cflt):
+def _inside(pos, quat, shapes, i, x, y, z, slack):
+    """Whether the world point (x, y, z) is inside box i grown by ``slack`` (m)."""
+    lx, ly, lz = rotate_back(quat[i, 0], quat[i, 1], quat[i, 2], quat[i, 3], x - pos[i, 0], y - pos[i, 1], z - pos[i, 2])
+    return (abs(lx) <= shapes[i, DIMS] + slack and abs(ly) <= shapes[i, DIMS + 1] + slack
+            and abs(lz) <= shapes[i, DIMS + 2] + slack)
+
+
+@njit(**JIT)
+def _box_corners(pos, quat, shapes, k, a, b, pnormal, pcount, ppoints, limit, scale, is_static, mu, cint, cflt,
+                 count):
+    """Box–box pair k: besides the narrow phase's points (the deepest feature), each corner of one box whose
+    separation along the pair's normal from the other's supporting plane is within ``limit`` and whose
+    foot on that plane lies on the other box: a tilted box's other corners, which a spin brings in."""
+    nx, ny, nz = pnormal[k, 0], pnormal[k, 1], pnormal[k, 2]
+    plane_a = nx * ppoints[k, 0, 0] + ny * ppoints[k, 0, 1] + nz * ppoints[k, 0, 2]  # a's support along n
+    plane_b = nx * ppoints[k, 0, 3] + ny * ppoints[k, 0, 4] + nz * ppoints[k, 0, 5]  # b's support along −n
+    slack = 1e-9 * scale
+    for side in range(2):
+        i = b if side == 0 else a
+        other = a if side == 0 else b
+        for corner in range(8):
+            sx = 1.0 if corner & 1 else -1.0
+            sy = 1.0 if corner & 2 else -1.0
+            sz = 1.0 if corner & 4 else -1.0
+            ox, oy, oz = rotate(quat[i, 0], quat[i, 1], quat[i, 2], quat[i, 3], sx * shapes[i, DIMS],
+                                sy * shapes[i, DIMS + 1], sz * shapes[i, DIMS + 2])
+            x, y, z = pos[i, 0] + ox, pos[i, 1] + oy, pos[i, 2] + oz
+            along = nx * x + ny * y + nz * z
+            sep = along - plane_a if side == 0 else plane_b - along
+            if sep > limit:
+                continue
+            # its foot on the other box's supporting plane, on that box
+            fx = x - sep * nx if side == 0 else x + sep * nx
+            fy = y - sep * ny if side == 0 else y + sep * ny
+            fz = z - sep * nz if side == 0 else z + sep * nz
+            if not _inside(pos, quat, shapes, other, fx, fy, fz, slack):
+                continue
+            mx, my, mz = 0.5 * (x + fx), 0.5 * (y + fy), 0.5 * (z + fz)
+            seen = False
+            for c in range(pcount[k]):  # already one of the narrow phase's points
+                px = 0.5 * (ppoints[k, c, 0] + ppoints[k, c, 3])
+                py = 0.5 * (ppoints[k, c, 1] + ppoints[k, c, 4])
+                pz = 0.5 * (ppoints[k, c, 2] + ppoints[k, c, 5])
+                if abs(px - mx) + abs(py - my) + abs(pz - mz) <= 1e-6 * scale:
+                    seen = True
+            if seen:
+                continue
+            cint[count, 0] = -1 if is_static[a] else a
+            cint[count, 1] = -1 if is_static[b] else b
+            cflt[count, C_X], cflt[count, C_X + 1], cflt[count, C_X + 2] = mx, my, mz
+            cflt[count, C_N], cflt[count, C_N + 1], cflt[count, C_N + 2] = nx, ny, nz
+            cflt[count, C_GAP] = sep
+            cflt[count, C_MU] = mu
+            count += 1
+    _pin = pos[0, 0], quat[0, 0], shapes[0, 0], pnormal[0, 0], pcount[0], ppoints[0, 0, 0], is_static[0], cint[0, 0]
+    _pin2 = cflt[0, 0]
+    return count
+
+
+@njit(**JIT)
+def _gather(Y, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps,
+            members, bound, size, is_static, default_mu, deep_only, extra, cint, cflt):
     """Contacts of the island bodies (island[i] == 1) at state rows Y into cint (a, b; −1: fixed) and cflt.
 
     Pairs: the narrow phase's points (mid-way between the surfaces) whose separation is at most
@@ -132,7 +192,7 @@ def _gather(Y, prm, shapes, grounds, gmu, island, nlist, n_pairs, pdist, pnormal
         if not (island[a] == 1 or island[b] == 1):
             continue
         scale = max(size[a], size[b])
-        limit = TOUCH * scale if deep_only else bound[k]
+        limit = TOUCH * scale + extra if deep_only else bound[k]
         mu = _pair_mu(shapes, a, b, default_mu)
         for c in range(pcount[k]):
             if pseps[k, c] <= limit:
@@ -144,6 +204,9 @@ def _gather(Y, prm, shapes, grounds, gmu, island, nlist, n_pairs, pdist, pnormal
                 cflt[count, C_GAP] = pseps[k, c]
                 cflt[count, C_MU] = mu
                 count += 1
+        if shapes[a, KIND] == SHAPE_BOX and shapes[b, KIND] == SHAPE_BOX and pcount[k] > 0:
+            count = _box_corners(pos, quat, shapes, k, a, b, pnormal, pcount, ppoints, limit, scale, is_static,
+                                 mu, cint, cflt, count)
     gaps = np.empty(MAX_FEATURES)
     points = np.empty((4, 3))
     pg = np.empty(4)
@@ -154,7 +217,7 @@ def _gather(Y, prm, shapes, grounds, gmu, island, nlist, n_pairs, pdist, pnormal
             continue
         for j in range(grounds.shape[0]):
             nf = feature_gaps(Y[i], prm[i], shapes[i], grounds[j], gaps)
-            limit = TOUCH * size[i] if deep_only else bound[n_pairs + m]
+            limit = TOUCH * size[i] + extra if deep_only else bound[n_pairs + m]
             for f in range(nf):
                 if gaps[f] <= limit:
                     npts = feature_points(Y[i], prm[i], shapes[i], grounds[j], 1 << f, points, pg, owners)
@@ -388,8 +451,8 @@ def _inertia_world(Y, prm, i, iw):
 
 @njit(**JIT)
 def _link(Y0, Y1, nlist, lo, hi, pdist, bound, is_static, spin_reach, size, h, parent, flags):
-    """Pairs nlist[lo:hi] after their narrow phase: each one's reach over the step (bound), and moving pairs
-    within it joined (flags bit 8 on a touching pair's first body)."""
+    """Pairs nlist[lo:hi] after their narrow phase: each one's reach over the step (bound); moving pairs joined
+    (flags bit 8 on a touching pair's first body)."""
     for k in range(lo, hi):
         a, b = nlist[k, 0], nlist[k, 1]
         touch = TOUCH * max(size[a], size[b])
@@ -401,10 +464,15 @@ def _link(Y0, Y1, nlist, lo, hi, pdist, bound, is_static, spin_reach, size, h, p
         bound[k] = reach * h + touch
         if is_static[a] or is_static[b]:
             continue
-        if pdist[k] <= touch:
+        if pdist[k] <= touch or (flags[a] & 64 and flags[b] & 64 and pdist[k] <= bound[k]):
+            # touching; or both stepped in an island last step and still within reach: the island holds
+            # them while they settle (a Gauss–Seidel residue may part them by more than TOUCH)
             _union(parent, a, b)
             flags[a] |= 8
-        elif pdist[k] <= bound[k]:
+        elif pdist[k] <= bound[k] or not (flags[a] & 32 or flags[b] & 32):
+            # awake pairs whose swept boxes overlap are joined whatever their distance: an island's solve
+            # and projection can move its bodies beyond the free step's reach; a sleeping island is woken
+            # only by a body within that reach
             _union(parent, a, b)
     _pin = Y0[0, 0], Y1[0, 0], nlist[0, 0], pdist[0], bound[0], is_static[0], spin_reach[0], size[0], parent[0]
 
@@ -434,7 +502,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     for m in range(n):
         i = members[m]
         parent[i] = i
-        flags[i] = 32 if asleep[i] else 0  # bit 32: asleep when the pairs are first looked at
+        flags[i] = (32 if asleep[i] else 0) | (64 if island[i] == 1 else 0)  # asleep now; in an island last step
         island[i] = 0
     # candidate pairs: sleeping with sleeping are linked without a narrow phase; the others looked at
     n_pairs = 0
@@ -486,7 +554,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     need = 0
     for k in range(n_pairs):
         if island[nlist[k, 0]] == 1 or island[nlist[k, 1]] == 1:
-            need += pcount[k]
+            need += pcount[k] + 16  # a box–box pair's corners besides (_box_corners)
     for m in range(n):
         if island[members[m]] == 1:
             need += MAX_FEATURES * 4 * grounds.shape[0]
@@ -528,8 +596,8 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         _pin = Y0[0, 0], Y1[0, 0], prm[0, 0], wr[0, 0], bare[0, 0], modes[0], saved[0, 0], cand[0, 0], A[0, 0], L[0, 0], vec[0, 0], order[0], cstart[0]
         return 0
     # the velocity problem
-    nc = _gather(Y0, prm, shapes, grounds, gmu, island, nlist, n_pairs, pdist, pnormal, pcount, ppoints, pseps,
-                 members, bound, size, is_static, default_mu, False, cint, cflt)
+    nc = _gather(Y0, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps,
+                 members, bound, size, is_static, default_mu, False, 0.0, cint, cflt)
     out[OUT_CONTACTS] = nc
     _rows(Y0, prm, nc, cint, cflt, iw, False, h, rj, rw, rdiag, rbias, rbody)
     # contacts sorted by island (counting sort on the root of their moving body)
@@ -588,15 +656,21 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     deepest = 0.0
     for _ in range(PROJECT_ROUNDS):
         _narrow(Y1, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps)
-        nd = _gather(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pdist, pnormal, pcount, ppoints, pseps,
-                     members, bound, size, is_static, default_mu, True, cint, cflt)
+        nd = _gather(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps,
+                     members, bound, size, is_static, default_mu, True, 0.0, cint, cflt)
         deep = 0
+        depth = 0.0
         for c in range(nd):
             i = cint[c, 1] if cint[c, 1] >= 0 else cint[c, 0]
             if cflt[c, C_GAP] < -PROJECT_TOL * size[i]:
                 deep += 1
+                depth = max(depth, -cflt[c, C_GAP])
         if deep == 0:
             break
+        # the rows: every point within twice the depth above contact too, so that turning a body out of one
+        # penetration does not drive its neighbouring corners into another
+        nd = _gather(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount,
+                     ppoints, pseps, members, bound, size, is_static, default_mu, True, 2.0 * depth, cint, cflt)
         out[OUT_PROJECTED] += deep
         for m in range(n):
             i = members[m]
