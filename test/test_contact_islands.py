@@ -254,8 +254,3 @@ def test_a_pile_of_27_cubes_settles():
     sim = settle_pile(27, 1.5)
     assert sim.contact.counts["island_body_steps"] > 0
 
-
-@pytest.mark.slow
-def test_a_pile_of_1000_cubes_settles():
-    sim = settle_pile(1000, 3.0)
-    assert sim.contact.counts["island_body_steps"] > 0
