@@ -44,11 +44,12 @@ After each step, before the ground pass:
    a step or of a piece and approaching has its impacts there; if it overlaps, it is first moved
    apart along the normal by the depth, shared by inverse mass (a held member does not move).
 
-Not modelled: persistent (resting) contact between bodies. A body lying on another is kept up by
-the impacts of item 5 at each step's start (e = 0 removes the approach of the step), so it sinks
-into it by up to about a h²/2 within a step (a its acceleration towards it) and is moved back out
-at the next step's start (a position correction, counted in :attr:`BodyPairs.separations`); the
-pair's normal impulse is not a force on ``contacts``.
+Resting contact between bodies is the islands' (island.py): before the pass, components of the
+candidate pairs with a pair touching at the step's start are stepped together by a first-order
+velocity step and left out of this pass. A body meeting another outside an island is kept up by
+the impacts of item 5 at each step's start until the two form an island at the next step (it may
+sink into the other by up to about a h²/2 within that step: counted in :attr:`BodyPairs.separations`
+when moved back out).
 """
 
 from __future__ import annotations
