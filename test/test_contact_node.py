@@ -10,6 +10,7 @@ time, with the impulse m (1 + e) e^{k−1} v1; /diagnostics its counts. An ideal
 resting on the ground (config/contact_resting_box_imu.yaml) reads the specific force +g up; a
 ``set_state`` that puts the ball into the ground is refused (``into_ground``) and changes nothing.
 A recording of the ball carries ``contacts`` and Foxglove's readers decode it.
+A box spawned onto a two-box stack through ``~/spawn`` comes to rest on it.
 """
 
 from __future__ import annotations
@@ -314,3 +315,45 @@ def test_contacts_name_both_bodies_of_a_body_body_impact(tmp_path: Path) -> None
         np.testing.assert_allclose([row["nx"], row["ny"], row["nz"]], [sign, 0.0, 0.0], atol=1e-9)
         np.testing.assert_allclose([row["x"], row["y"]], [1.0 * t_hit + 0.1, 0.0], atol=1e-9)
     assert int(status["impacts (window)"]) == 1
+
+
+STACK = """\
+# two 0.2 m boxes stacked exactly on the ground, at rest (e = 0, μ = 0.5 everywhere)
+gravity: [0.0, 0.0, -9.81]
+ground:
+  - {normal: [0, 0, 1], offset: 0.0, material: {restitution: 0.0, friction: 0.5}}
+bodies:
+  bottom: {mass: 1.0, inertia: {box: [0.2, 0.2, 0.2]}, material: {restitution: 0.0, friction: 0.5},
+           pose: {position: [0.0, 0.0, 0.1]}}
+  middle: {mass: 1.0, inertia: {box: [0.2, 0.2, 0.2]}, material: {restitution: 0.0, friction: 0.5},
+           pose: {position: [0.0, 0.0, 0.3]}}
+"""
+CRATE = """\
+mass: 2.0
+inertia: {box: [0.2, 0.2, 0.2]}
+material: {restitution: 0.0, friction: 0.5}
+pose: {position: [0.0, 0.0, 0.55]}
+"""
+
+
+def test_a_box_spawned_onto_a_stack_rests_on_it(tmp_path: Path) -> None:
+    """``~/spawn`` puts a crate 5 cm above a two-box stack: it falls and lands (e = 0), then rests
+    on the stack (an island): its centre at 0.5 m (the stack's top + half its edge) and
+    every speed zero to round-off, the stack where it stood."""
+    scene = tmp_path / "stack.yaml"
+    scene.write_text(STACK)
+    with SimHarness(scene, PARAMETERS) as h:
+        result = h.spawn(crate=CRATE)
+        assert result.successful, result.reason
+        h.watch_body("crate")
+        h.step(100)  # 1 s: the crate lands after √(2 × 0.05 / g) = 0.101 s
+        h.wait_for_latest_state()
+        poses = {b: h.latest_pose(b).pose for b in ("bottom", "middle", "crate")}
+        twists = {b: h.latest_twist(b) for b in ("bottom", "middle", "crate")}
+    for body, z in (("bottom", 0.1), ("middle", 0.3), ("crate", 0.5)):
+        p, q = poses[body].position, poses[body].orientation
+        np.testing.assert_allclose([p.x, p.y, p.z], [0.0, 0.0, z], atol=1e-9)
+        np.testing.assert_allclose([q.x, q.y, q.z, q.w], [0.0, 0.0, 0.0, 1.0], atol=1e-9)
+        t = twists[body]
+        assert max(abs(v) for v in (t.linear.x, t.linear.y, t.linear.z, t.angular.x, t.angular.y,
+                                    t.angular.z)) <= 1e-9, (body, t)
