@@ -184,19 +184,21 @@ def _worse(a, b):
     return max(a, b)
 
 
+# One bit per failed outcome, so a loop can gather its bodies' outcomes with one OR each (_worst_seen).
+assert (OK, NON_FINITE, DIVERGED) == (0, 1, 2)
+
+
+@njit(**JIT)
+def _worst_seen(seen):
+    """The worst of the outcomes OR-ed into ``seen``: the same as :func:`_worse` over them."""
+    return NON_FINITE if seen & NON_FINITE else seen
+
+
 # ----------------------------------------------------------------------------- one step of every moving body
 
 
 #: control[METHOD] of the numpy/scipy integrators: the step loop leaves their bodies to the caller.
 HOST_METHOD = -1
-
-
-@njit(**INLINE)
-def _checked(i, y, out, p, w, status, dt, limit, worst):
-    """Check body i's step y → out (check_body), record its status; the worse of it and ``worst``."""
-    outcome = check_body(y, out, p, w, dt, limit)
-    status[i] = outcome
-    return _worse(worst, outcome)
 
 
 def _group_loop(step, when_torque_free=False):
@@ -217,10 +219,10 @@ def _group_loop(step, when_torque_free=False):
     if when_torque_free:
         @njit(**LOOP)
         def loop(Y, Ynew, prm, wrenches, bodies, status, dt, limit, k, deferred):
-            worst = OK
+            seen = OK
             count = 0
             last = np.uint64(wrenches.shape[0] - 1)
-            for m in range(bodies.shape[0]):
+            for m in range(np.uint64(bodies.shape[0])):  # unsigned: m and i index without wraparound code
                 i = np.uint64(bodies[m])  # an index (≥ 0): unsigned, so no negative-index wraparound per array
                 y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[min(i, last)]  # one row for all: see wrench_rows
                 free = torque_free(w)
@@ -228,22 +230,24 @@ def _group_loop(step, when_torque_free=False):
                 outcome = check_body(y, out, p, w, dt, limit)
                 if free:
                     status[i] = outcome
-                    worst = _worse(worst, outcome)
+                    seen |= outcome
                 else:
                     deferred[count] = i
                     count += 1
-            return worst, count
+            return _worst_seen(seen), count
     else:
         @njit(**LOOP)
         def loop(Y, Ynew, prm, wrenches, bodies, status, dt, limit, k, deferred):
-            worst = OK
+            seen = OK
             last = np.uint64(wrenches.shape[0] - 1)
-            for m in range(bodies.shape[0]):
+            for m in range(np.uint64(bodies.shape[0])):  # unsigned: m and i index without wraparound code
                 i = np.uint64(bodies[m])  # an index (≥ 0): unsigned, so no negative-index wraparound per array
                 y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[min(i, last)]  # one row for all: see wrench_rows
                 step(y, out, p, w, dt, k)
-                worst = _checked(i, y, out, p, w, status, dt, limit, worst)
-            return worst, 0
+                outcome = check_body(y, out, p, w, dt, limit)
+                status[i] = outcome
+                seen |= outcome  # the worst at the end (_worst_seen): one OR a body, not _worse's compares
+            return _worst_seen(seen), 0
 
     return loop
 
