@@ -59,6 +59,54 @@ def test_the_check_gives_the_rule_for_every_non_finite_or_huge_number_anywhere()
     assert outcomes == {L.OK, L.NON_FINITE, L.DIVERGED}
 
 
+
+def test_the_check_gives_the_rule_where_its_one_test_of_the_common_case_cannot_decide() -> None:
+    """check_body passes a row at once when the sum of p, q and the energy is finite and the energy is
+    within limit·B²; otherwise it applies the rule. Against the rule: finite rows whose sum overflows,
+    energies that overflow, an energy a few ulps either side of limit·B², bounds of 0, inf and NaN,
+    and signed zeros."""
+    p = np.zeros(L.PRM_WIDTH)
+    p[L.MASS], p[L.INERTIA:L.INERTIA + 3] = 2.0, (0.1, 0.2, 0.3)
+    p[L.GRAVITY_BUDGET_RATE] = 1.0
+    w = np.zeros(L.WRENCH_WIDTH)
+    dt = 0.01
+
+    def row(pos=(0.0, 0.0, 0.0), q=(1.0, 0.0, 0.0, 0.0), v=(0.1, 0.0, 0.0), omega=(0.0, 0.2, 0.0)) -> np.ndarray:
+        out = np.zeros(L.ROW_WIDTH)
+        out[L.P:L.P + 3], out[L.Q:L.Q + 4], out[L.V:L.V + 3], out[L.W:L.W + 3] = pos, q, v, omega
+        return out
+
+    rows = [row(pos=(1e308, 1e308, 0.0)), row(pos=(-1e308, 0.0, -1e308)), row(q=(1e308, 1e308, 1e308, 1e308)),
+            row(pos=(1e308, 1e308, 0.0), v=(1e10, 0.0, 0.0)), row(v=(1e200, 0.0, 0.0)), row(omega=(0.0, 0.0, -1e200)),
+            row(pos=(1e308, 1e308, 0.0), v=(1e200, 0.0, 0.0)), row(pos=(-0.0, -0.0, -0.0), q=(-0.0, -1.0, -0.0, -0.0)),
+            row(v=(-0.0, 0.0, -0.0), omega=(-0.0, -0.0, 0.0)), row(v=(3.0, -4.0, 12.0), omega=(5.0, -6.0, 7.0))]
+    outcomes = set()
+    for out0 in rows:
+        for y_bound in (0.0, 1.0, 1e155, np.inf, np.nan):
+            y = np.zeros(L.ROW_WIDTH)
+            y[L.Q], y[L.BOUND] = 1.0, y_bound
+            bound = y[L.BOUND] + dt * p[L.GRAVITY_BUDGET_RATE]
+            v, omega = out0[L.V:L.V + 3], out0[L.W:L.W + 3]
+            with np.errstate(all="ignore"):
+                energy = 0.5 * (p[L.MASS] * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) + p[L.INERTIA] * omega[0] ** 2
+                                + p[L.INERTIA + 1] * omega[1] ** 2 + p[L.INERTIA + 2] * omega[2] ** 2)
+                at_limit = energy / (bound * bound) if 0.0 < bound < np.inf and 0.0 < energy < np.inf else 1e6
+            limits = [1.0, 1e6, np.inf]
+            step = at_limit
+            for _ in range(3):  # the limit where limit·B² meets the energy, and a few ulps either side
+                step = np.nextafter(step, 0.0)
+            for _ in range(7):
+                limits.append(step)
+                step = np.nextafter(step, np.inf)
+            for limit in limits:
+                out = out0.copy()
+                got = _check(y, out, p, w, dt, limit)
+                assert got == _rule(out, p, bound, limit), (out0, y_bound, limit)
+                assert np.array_equal(out[L.BOUND], bound, equal_nan=True)
+                outcomes.add(got)
+    assert outcomes == {L.OK, L.DIVERGED}
+
+
 COMPILED = [name for name, method in INTEGRATORS.items() if method.code is not None]
 
 

@@ -143,7 +143,7 @@ def finite_row(y):
     """True when all 13 state numbers of row ``y`` are finite.
 
     x·0 is 0 for a finite x and NaN for inf or NaN; the products are summed as a tree (depth
-    4, not a chain of 13 dependent additions: this check runs for every body every step).
+    4, not a chain of 13 dependent additions). check_body's rule for a row that fails its sum.
     """
     a = (y[0] * 0.0 + y[1] * 0.0) + (y[2] * 0.0 + y[3] * 0.0)
     b = (y[4] * 0.0 + y[5] * 0.0) + (y[6] * 0.0 + y[7] * 0.0)
@@ -154,21 +154,24 @@ def finite_row(y):
 @njit(**INLINE)
 def check_body(y, out, p, w, dt, limit):
     """Outcome of one body's step y → out: NON_FINITE, DIVERGED (kinetic energy > limit·B²) or OK; sets out's bound B."""
-    bound = y[BOUND] + dt * energy_bound_rate(y, p, w)
-    out[BOUND] = bound
+    # The new row is read first, straight after the step wrote it: the compiler then keeps the
+    # numbers in registers instead of reading them back after the bound's branch below.
     v2 = out[V] * out[V] + out[V + 1] * out[V + 1] + out[V + 2] * out[V + 2]
     energy = 0.5 * (p[MASS] * v2 + p[INERTIA] * out[W] ** 2 + p[INERTIA + 1] * out[W + 1] ** 2
                     + p[INERTIA + 2] * out[W + 2] ** 2)
     # The energy is a sum of m·v_i² and I_i·w_i², none negative, so it is finite only if v and w
-    # are: with p, q and the energy finite the row is finite (eight numbers tested, not
-    # thirteen); otherwise all thirteen are tested. The same outcome as finite_row alone.
-    pq = (((out[P] * 0.0 + out[P + 1] * 0.0) + (out[P + 2] * 0.0 + out[Q] * 0.0))
-          + ((out[Q + 1] * 0.0 + out[Q + 2] * 0.0) + (out[Q + 3] * 0.0 + energy * 0.0)))
+    # are; a sum is finite only if every term is. So when s, the sum of p, q and the energy, is
+    # finite, the row is (s − s is then 0, else NaN): one test of the common case, which also
+    # compares the energy with the limit. A finite row whose s overflows goes the long way.
+    s = ((out[P] + out[P + 1]) + (out[P + 2] + out[Q])) + ((out[Q + 1] + out[Q + 2]) + (out[Q + 3] + energy))
+    bound = y[BOUND] + dt * energy_bound_rate(y, p, w)
+    out[BOUND] = bound
     outcome = OK
-    if pq != 0.0 and not finite_row(out):
-        outcome = NON_FINITE
-    elif energy > limit * bound * bound:
-        outcome = DIVERGED
+    if not energy + (s - s) <= limit * bound * bound:  # NaN compares false: the long way, the rule itself
+        if not finite_row(out):
+            outcome = NON_FINITE
+        elif energy > limit * bound * bound:
+            outcome = DIVERGED
     _pin = y[P], out[P], p[0], w[0]  # the arrays' last use, out of branches and loops (jit.py)
     return outcome
 
@@ -181,19 +184,21 @@ def _worse(a, b):
     return max(a, b)
 
 
+# One bit per failed outcome, so a loop can gather its bodies' outcomes with one OR each (_worst_seen).
+assert (OK, NON_FINITE, DIVERGED) == (0, 1, 2)
+
+
+@njit(**JIT)
+def _worst_seen(seen):
+    """The worst of the outcomes OR-ed into ``seen``: the same as :func:`_worse` over them."""
+    return NON_FINITE if seen & NON_FINITE else seen
+
+
 # ----------------------------------------------------------------------------- one step of every moving body
 
 
 #: control[METHOD] of the numpy/scipy integrators: the step loop leaves their bodies to the caller.
 HOST_METHOD = -1
-
-
-@njit(**INLINE)
-def _checked(i, y, out, p, w, status, dt, limit, worst):
-    """Check body i's step y → out (check_body), record its status; the worse of it and ``worst``."""
-    outcome = check_body(y, out, p, w, dt, limit)
-    status[i] = outcome
-    return _worse(worst, outcome)
 
 
 def _group_loop(step, when_torque_free=False):
@@ -214,10 +219,10 @@ def _group_loop(step, when_torque_free=False):
     if when_torque_free:
         @njit(**LOOP)
         def loop(Y, Ynew, prm, wrenches, bodies, status, dt, limit, k, deferred):
-            worst = OK
+            seen = OK
             count = 0
             last = np.uint64(wrenches.shape[0] - 1)
-            for m in range(bodies.shape[0]):
+            for m in range(np.uint64(bodies.shape[0])):  # unsigned: m and i index without wraparound code
                 i = np.uint64(bodies[m])  # an index (≥ 0): unsigned, so no negative-index wraparound per array
                 y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[min(i, last)]  # one row for all: see wrench_rows
                 free = torque_free(w)
@@ -225,22 +230,24 @@ def _group_loop(step, when_torque_free=False):
                 outcome = check_body(y, out, p, w, dt, limit)
                 if free:
                     status[i] = outcome
-                    worst = _worse(worst, outcome)
+                    seen |= outcome
                 else:
                     deferred[count] = i
                     count += 1
-            return worst, count
+            return _worst_seen(seen), count
     else:
         @njit(**LOOP)
         def loop(Y, Ynew, prm, wrenches, bodies, status, dt, limit, k, deferred):
-            worst = OK
+            seen = OK
             last = np.uint64(wrenches.shape[0] - 1)
-            for m in range(bodies.shape[0]):
+            for m in range(np.uint64(bodies.shape[0])):  # unsigned: m and i index without wraparound code
                 i = np.uint64(bodies[m])  # an index (≥ 0): unsigned, so no negative-index wraparound per array
                 y, out, p, w = Y[i], Ynew[i], prm[i], wrenches[min(i, last)]  # one row for all: see wrench_rows
                 step(y, out, p, w, dt, k)
-                worst = _checked(i, y, out, p, w, status, dt, limit, worst)
-            return worst, 0
+                outcome = check_body(y, out, p, w, dt, limit)
+                status[i] = outcome
+                seen |= outcome  # the worst at the end (_worst_seen): one OR a body, not _worse's compares
+            return _worst_seen(seen), 0
 
     return loop
 
