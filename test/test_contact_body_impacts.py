@@ -112,6 +112,28 @@ def test_a_box_meets_a_box_or_a_sphere_face_on(kind_b):
     np.testing.assert_allclose(sim.state.w_WP_P, 0.0, atol=1e-9)
 
 
+def test_a_box_meets_a_box_turned_45_degrees_face_on():
+    """The same with b turned 45° about the line of the centres: the clipped faces overlap in an octagon
+    (8 contact points, more than the impact law's 4 rows: the 4 spanning ones are kept,
+    body_pairs._spanning). The 1-D textbook velocities within 1e-9, momentum conserved."""
+    e, ma, mb, va, vb = 0.6, 1.0, 2.0, 1.0, -2.0
+    s45 = math.sin(math.pi / 8.0)
+    bodies = {"a": {"mass": ma, "inertia": {"box": [0.2, 0.2, 0.2]}, "material": {"restitution": e, "friction": 0.0},
+                    "pose": {"position": [0.0, 0.0, 1.0]}, "twist": {"linear": [va, 0.0, 0.0]}},
+              "b": {"mass": mb, "inertia": {"box": [0.2, 0.2, 0.2]}, "material": {"restitution": e, "friction": 0.0},
+                    "pose": {"position": [0.5, 0.0, 1.0], "orientation": [s45, 0.0, 0.0, math.cos(math.pi / 8.0)]},
+                    "twist": {"linear": [vb, 0.0, 0.0]}}}
+    sim = Simulator(load_scene({"gravity": [0.0, 0.0, 0.0], "ground": [], "bodies": bodies}), "rk4", 1e-3)
+    sim.step(120)
+    impacts = sim.contact.events_of("a", "impact")
+    assert len(impacts) == 1 and impacts[0].other == "b" and impacts[0].contacts == 4
+    va_after = ((ma - e * mb) * va + (1 + e) * mb * vb) / (ma + mb)
+    vb_after = ((mb - e * ma) * vb + (1 + e) * ma * va) / (ma + mb)
+    np.testing.assert_allclose(sim.state.v_WC_W, [[va_after, 0, 0], [vb_after, 0, 0]], rtol=0.0, atol=1e-9)
+    np.testing.assert_allclose(ma * sim.state.v_WC_W[0] + mb * sim.state.v_WC_W[1], [ma * va + mb * vb, 0, 0],
+                               rtol=0.0, atol=1e-12)
+
+
 _KINDS = {"sphere": lambda d: {"sphere": d[0]}, "box": lambda d: {"box": list(d)},
           "capsule": lambda d: {"capsule": [d[0], d[1]]}, "cylinder": lambda d: {"cylinder": [d[0], d[1]]}}
 

@@ -60,7 +60,7 @@ import numpy as np
 
 from ..kernels import layout as L
 from ..kernels.contact.impacts import IMPACT_WORK_SHAPE, impact, kinetic_energy_row
-from ..kernels.contact.layout import DIMS, KIND, NORMAL, PERSISTENT, FLIGHT, SHAPE_SPHERE
+from ..kernels.contact.layout import DIMS, KIND, MAX_POINTS, NORMAL, PERSISTENT, FLIGHT, SHAPE_SPHERE
 from ..kernels.contact.pair_impacts import PAIR_JACOBIAN_SHAPE, pair_impact
 from ..kernels.contact.pairs import MAX_PAIR_POINTS, pair_contacts
 from ..kernels.contact.persistent import normal_speeds
@@ -172,7 +172,7 @@ class BodyPairs:
         last :meth:`contact` call."""
         count = int(self._count1[0])
         points = 0.5 * (self._points1[0, :count, 0:3] + self._points1[0, :count, 3:6])
-        return self._normal1[0].copy(), points, float(self._dist1[0])
+        return self._normal1[0].copy(), _spanning(points), float(self._dist1[0])
 
     @staticmethod
     def _relative_normal_speed(ya, yb, n, points) -> float:
@@ -559,6 +559,20 @@ class BodyPairs:
         y[b][L.P:L.P + 3] -= d * n * inv_b / (inv_a + inv_b)
         self.separations += 1
         return -d
+
+
+def _spanning(points: np.ndarray) -> np.ndarray:
+    """At most MAX_POINTS of the contact points (k, 3), the impact law's capacity (pair_impacts.py): the deepest
+    (the first), then each time the one farthest from those kept (a face on a face may give up to 8 points)."""
+    if len(points) <= MAX_POINTS:
+        return points
+    kept = [0]
+    far = np.linalg.norm(points - points[0], axis=1)
+    while len(kept) < MAX_POINTS:
+        k = int(np.argmax(far))
+        kept.append(k)
+        far = np.minimum(far, np.linalg.norm(points - points[k], axis=1))
+    return points[sorted(kept)]
 
 
 def _groups(hits: list[tuple[int, int]], is_static: np.ndarray) -> list[set[int]]:
