@@ -1114,9 +1114,15 @@ def _compile_all() -> None:
                                             "pose": {"position": [-0.2, 0.0, 1.1]}},
                                    "crate": {"mass": 2.0, "inertia": {"box": [0.2, 0.2, 0.2]},
                                              "pose": {"position": [0.25, 0.1, 0.7]}}}})
+    # islands (contact/island.py): a box resting on a box, stepped together by one compiled call
+    cube = {"mass": 1.0, "inertia": {"box": [0.2, 0.2, 0.2]}}
+    stack = load_scene({"gravity": [0.0, 0.0, -9.81], "ground": [{"normal": [0.0, 0.0, 1.0], "offset": 0.0}],
+                        "bodies": {"low": {**cube, "pose": {"position": [0.0, 0.0, 0.1]}},
+                                   "high": {**cube, "pose": {"position": [0.0, 0.0, 0.3]}}}})
     for integrator in ("rk4", "euler", "semi_implicit_euler"):  # with the contact found per stage, and held
         Simulator(scene, integrator=integrator, dt=0.01).step(200)
         Simulator(table, integrator=integrator, dt=0.01).step(150)
+    Simulator(stack, integrator="rk4", dt=0.01).step(5)
     from .kernels.contact.stage import held_derivatives
 
     one = Simulator(scene, integrator="rk4", dt=0.01)  # reference's right-hand side (core/integrators.py)
