@@ -193,7 +193,8 @@ class BodyPairs:
         swept_bounds(Y0, Y1, self.members, self.reach, h, self._lo, self._hi)
         found = grid_swept_pairs(self._lo, self._hi, self.movable, self._cells, self._heads, self._chain, self._pairs)
         islands = self.islands
-        if found == 0 and not (islands.was_island.any() or islands.asleep.any()):
+        held = islands.was_island.any() or islands.asleep.any()  # islands from the last step to go on with
+        if found == 0 and not held:
             return None
         if found > len(self._pairs):
             self._pairs = np.empty((2 * found, 2), dtype=np.int64)
@@ -203,7 +204,7 @@ class BodyPairs:
         # a moving body first (a static shape is never first)
         pairs = np.ascontiguousarray(np.where(self.is_static[pairs[:, 0]][:, None], pairs[:, ::-1], pairs))
         in_island = None
-        if found or islands.was_island.any() or islands.asleep.any():  # islands first (island.py)
+        if found or held:  # islands first (island.py)
             in_island = islands.step(sim, wrenches, Y0, Y1, pairs, h)
             if in_island.any():
                 pairs = pairs[~(in_island[pairs[:, 0]] | in_island[pairs[:, 1]])]
