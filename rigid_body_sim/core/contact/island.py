@@ -20,8 +20,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..kernels import layout as L
-from ..kernels.contact.island import C_FLOATS, DENSE_MAX, OUT_BODIES, OUT_DEPTH, OUT_SLEPT, OUT_WIDTH, OUT_WOKEN, \
-    island_pass
+from ..kernels.contact.island import C_FLOATS, C_INTS, DENSE_MAX, OUT_BODIES, OUT_CONTACTS, OUT_DEPTH, OUT_SLEPT, \
+    OUT_WIDTH, OUT_WOKEN, island_pass
 from ..kernels.contact.layout import DIMS, FLIGHT, PERSISTENT
 from ..kernels.contact.pairs import MAX_PAIR_POINTS
 from .materials import DEFAULT_FRICTION
@@ -57,6 +57,8 @@ class Islands:
         self.body_steps = 0
         #: Largest depth (m) the position projection closed since the solver was made or reset.
         self.deepest = 0.0
+        #: How many contacts the last step's velocity problem had (rows of :meth:`contacts`).
+        self.n_contacts = 0
 
     def _grow_pairs(self, k: int) -> None:
         n = len(self.island)
@@ -67,9 +69,10 @@ class Islands:
         self._bound = np.zeros(k + n)
 
     def _grow_contacts(self, c: int) -> None:
-        self._cint, self._cflt = np.zeros((c, 2), dtype=np.int64), np.zeros((c, C_FLOATS))
+        """Room for c contacts in each half of the scratch (the velocity step's, the projection's)."""
+        self._cint, self._cflt = np.zeros((2 * c, C_INTS), dtype=np.int64), np.zeros((2 * c, C_FLOATS))
         self._order = np.zeros(c, dtype=np.int64)
-        r = 3 * c
+        r = 4 * c  # 3 rows per velocity contact, then 1 per projection contact
         self._rj, self._rw = np.zeros((r, 12)), np.zeros((r, 12))
         self._rdiag, self._rbias, self._rlam = np.zeros(r), np.zeros(r), np.zeros(r)
         self._rbody = np.zeros((r, 2), dtype=np.int64)
@@ -82,6 +85,16 @@ class Islands:
         self.quiet[:] = 0
         self.body_steps = 0
         self.deepest = 0.0
+        self.n_contacts = 0
+
+    def contacts(self) -> tuple[np.ndarray, np.ndarray]:
+        """The last step's island contacts (views, valid until the next step): ints (n, C_INTS) — bodies a and b
+        (−1: fixed), the static body (−1: none), the half-space index (−1: none) — and floats (n, C_FLOATS) —
+        point (world, m, mid-way between the surfaces at the step's start), normal from a to b (world), gap at
+        the step's start (m), μ, the impulse on b over the step (world, N·s; a takes its opposite). Column
+        indices: kernels/contact/island.py (I_A ..., C_X ...)."""
+        n = self.n_contacts
+        return self._cint[:n], self._cflt[:n]
 
     def step(self, sim, wrenches: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, cand: np.ndarray, h: float) -> np.ndarray:
         """The islands' step over the candidate pairs ``cand`` (k, 2) of global body indices; returns the mask of
@@ -104,6 +117,7 @@ class Islands:
                 break
             self._grow_contacts(2 * -code)
         out = self.out
+        self.n_contacts = int(out[OUT_CONTACTS])
         self.body_steps += int(out[OUT_BODIES])
         solver.counts["island_body_steps"] += int(out[OUT_BODIES])
         self.deepest = max(self.deepest, float(out[OUT_DEPTH]))

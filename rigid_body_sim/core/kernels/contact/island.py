@@ -43,7 +43,7 @@ from .layout import DIMS, FRICTION, HAS_MATERIAL, KIND, NORMAL, SHAPE_BOX
 from .pairs import MAX_PAIR_POINTS, pair_contacts
 from .shapes import MAX_FEATURES, feature_gaps, feature_points
 
-__all__ = ["island_pass", "TOUCH", "SLEEP_SPEED", "DENSE_MAX", "PROJECT_TOL", "C_FLOATS", "OUT_WIDTH"]
+__all__ = ["island_pass", "TOUCH", "SLEEP_SPEED", "DENSE_MAX", "PROJECT_TOL", "C_FLOATS", "C_INTS", "OUT_WIDTH"]
 
 #: A pair whose signed distance is at most this × its size (m per m) touches: its component is an island.
 TOUCH = 1e-6
@@ -59,8 +59,11 @@ PROJECT_ROUNDS, PROJECT_SWEEPS = 8, 100
 PGS_SWEEPS, PGS_TOL = 200, 1e-13
 #: Iterated Tikhonov steps of the sticking solve, and its regularisation (× the largest diagonal).
 TIKHONOV_STEPS, TIKHONOV_EPS = 6, 1e-9
-#: Columns of a contact's float row: point (3), normal a → b (3), gap, μ.
-C_X, C_N, C_GAP, C_MU, C_FLOATS = 0, 3, 6, 7, 8
+#: Columns of a contact's float row: point (3), normal a → b (3), gap, μ, and after the velocity step the
+#: impulse on b (3, world, N·s; a gets its opposite).
+C_X, C_N, C_GAP, C_MU, C_IMPULSE, C_FLOATS = 0, 3, 6, 7, 8, 11
+#: Columns of a contact's int row: the two bodies (−1: fixed), the static body (−1: none), the half-space (−1: none).
+I_A, I_B, I_STATIC, I_GROUND, C_INTS = 0, 1, 2, 3, 4
 #: Columns of the per-call outputs: island body-steps, contact points, sticking solves kept, PGS islands,
 #: projected points, largest depth projected (m), bodies woken, bodies put to sleep.
 OUT_BODIES, OUT_CONTACTS, OUT_STICK, OUT_PGS, OUT_PROJECTED, OUT_DEPTH, OUT_WOKEN, OUT_SLEPT = range(8)
@@ -126,6 +129,15 @@ def _inside(pos, quat, shapes, i, x, y, z, slack):
 
 
 @njit(**JIT)
+def _owners(cint, c, a, b, is_static):
+    """Contact c's int row for the pair (a, b): its moving bodies (−1: static) and the static body, if any."""
+    cint[c, I_A] = -1 if is_static[a] else a
+    cint[c, I_B] = -1 if is_static[b] else b
+    cint[c, I_STATIC] = a if is_static[a] else (b if is_static[b] else -1)
+    cint[c, I_GROUND] = -1
+
+
+@njit(**JIT)
 def _box_corners(pos, quat, shapes, k, a, b, pnormal, pcount, ppoints, limit, scale, is_static, mu, cint, cflt,
                  count):
     """Box–box pair k: besides the narrow phase's points (the deepest feature), each corner of one box whose
@@ -165,8 +177,7 @@ def _box_corners(pos, quat, shapes, k, a, b, pnormal, pcount, ppoints, limit, sc
                     seen = True
             if seen:
                 continue
-            cint[count, 0] = -1 if is_static[a] else a
-            cint[count, 1] = -1 if is_static[b] else b
+            _owners(cint, count, a, b, is_static)
             cflt[count, C_X], cflt[count, C_X + 1], cflt[count, C_X + 2] = mx, my, mz
             cflt[count, C_N], cflt[count, C_N + 1], cflt[count, C_N + 2] = nx, ny, nz
             cflt[count, C_GAP] = sep
@@ -196,8 +207,7 @@ def _gather(Y, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdi
         mu = _pair_mu(shapes, a, b, default_mu)
         for c in range(pcount[k]):
             if pseps[k, c] <= limit:
-                cint[count, 0] = -1 if is_static[a] else a
-                cint[count, 1] = -1 if is_static[b] else b
+                _owners(cint, count, a, b, is_static)
                 for j in range(3):
                     cflt[count, C_X + j] = 0.5 * (ppoints[k, c, j] + ppoints[k, c, 3 + j])
                     cflt[count, C_N + j] = pnormal[k, j]
@@ -223,8 +233,8 @@ def _gather(Y, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdi
                     npts = feature_points(Y[i], prm[i], shapes[i], grounds[j], 1 << f, points, pg, owners)
                     for c in range(npts):
                         if pg[c] <= limit:
-                            cint[count, 0] = -1
-                            cint[count, 1] = i
+                            cint[count, I_A], cint[count, I_B] = -1, i
+                            cint[count, I_STATIC], cint[count, I_GROUND] = -1, j
                             for d in range(3):
                                 cflt[count, C_X + d] = points[c, d]
                                 cflt[count, C_N + d] = grounds[j, NORMAL + d]
@@ -428,6 +438,24 @@ def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, start, stop):
 
 
 @njit(**JIT)
+def _impulses(nc, rj, rbody, rlam, cflt):
+    """Each contact's impulse on its body b (world, N·s) from its three rows' λ, into cflt[:, C_IMPULSE:]."""
+    for c in range(nc):
+        ix = iy = iz = 0.0
+        for k in range(3):
+            r = 3 * c + k
+            if rbody[r, 1] >= 0:  # the row's direction: J's linear part on b, or minus a's
+                dx, dy, dz = rj[r, 6], rj[r, 7], rj[r, 8]
+            else:
+                dx, dy, dz = -rj[r, 0], -rj[r, 1], -rj[r, 2]
+            ix += rlam[r] * dx
+            iy += rlam[r] * dy
+            iz += rlam[r] * dz
+        cflt[c, C_IMPULSE], cflt[c, C_IMPULSE + 1], cflt[c, C_IMPULSE + 2] = ix, iy, iz
+    _pin = rj[0, 0], rbody[0, 0], rlam[0], cflt[0, 0]
+
+
+@njit(**JIT)
 def _narrow(Y, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps):
     for k in range(n_pairs):
         _pose(Y, prm, nlist[k, 0], pos, quat)
@@ -475,6 +503,67 @@ def _link(Y0, Y1, nlist, lo, hi, pdist, bound, is_static, spin_reach, size, h, p
             # only by a body within that reach
             _union(parent, a, b)
     _pin = Y0[0, 0], Y1[0, 0], nlist[0, 0], pdist[0], bound[0], is_static[0], spin_reach[0], size[0], parent[0]
+
+
+@njit(**JIT)
+def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps,
+             members, bound, size, is_static, default_mu, h, iw, dx, cint, cflt, rj, rw, rdiag, rbias, rlam, rbody, out):
+    """The projection of the island bodies' poses Y1: points deeper than PROJECT_TOL × their pair's size closed by
+    the least mass-metric correction (module docstring); returns the largest depth it took on (m)."""
+    n = members.shape[0]
+    deepest = 0.0
+    for _ in range(PROJECT_ROUNDS):
+        _narrow(Y1, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps)
+        nd = _gather(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps,
+                     members, bound, size, is_static, default_mu, True, 0.0, cint, cflt)
+        deep = 0
+        depth = 0.0
+        for c in range(nd):
+            i = cint[c, 1] if cint[c, 1] >= 0 else cint[c, 0]
+            if cflt[c, C_GAP] < -PROJECT_TOL * size[i]:
+                deep += 1
+                depth = max(depth, -cflt[c, C_GAP])
+        if deep == 0:
+            break
+        # the rows: every point within twice the depth above contact too, so that turning a body out of one
+        # penetration does not drive its neighbouring corners into another
+        nd = _gather(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount,
+                     ppoints, pseps, members, bound, size, is_static, default_mu, True, 2.0 * depth, cint, cflt)
+        out[OUT_PROJECTED] += deep
+        for m in range(n):
+            i = members[m]
+            if island[i] == 1:
+                _inertia_world(Y1, prm, i, iw)
+                for j in range(6):
+                    dx[i, j] = 0.0
+        _rows(Y1, prm, nd, cint, cflt, iw, True, h, rj, rw, rdiag, rbias, rbody)
+        for c in range(nd):  # every touching point is a row (λ ≥ 0): closing one gap must not open another
+            rlam[c] = 0.0
+            deepest = max(deepest, -cflt[c, C_GAP])
+        for _s in range(PROJECT_SWEEPS):
+            change = 0.0
+            for c in range(nd):
+                if rdiag[c] <= 0.0:
+                    continue
+                g = cflt[c, C_GAP] + _row_speed(dx, rj, rbody, c)
+                new = max(rlam[c] - g / rdiag[c], 0.0)
+                dl = new - rlam[c]
+                rlam[c] = new
+                _apply(dx, rw, rbody, c, dl)
+                change = max(change, abs(dl) * rdiag[c])
+            if change <= 1e-16:
+                break
+        for m in range(n):
+            i = members[m]
+            if island[i] != 1:
+                continue
+            for a in range(3):
+                Y1[i, P + a] += dx[i, a]
+            ew, ex, ey, ez = exp_map(dx[i, 3], dx[i, 4], dx[i, 5])  # a world-axes turn: exp(δθ) ⊗ q
+            q = qmul(ew, ex, ey, ez, Y1[i, Q], Y1[i, Q + 1], Y1[i, Q + 2], Y1[i, Q + 3])
+            Y1[i, Q], Y1[i, Q + 1], Y1[i, Q + 2], Y1[i, Q + 3] = normalise(q[0], q[1], q[2], q[3])
+    _pin = Y1[0, 0], prm[0, 0], nlist[0, 0], members[0], cint[0, 0], cflt[0, 0], rj[0, 0], rbody[0, 0], out[0]
+    return deepest
 
 
 @njit(**JIT)
@@ -559,7 +648,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         if island[members[m]] == 1:
             need += MAX_FEATURES * 4 * grounds.shape[0]
         bound[n_pairs + m] = 0.0
-    if need > cint.shape[0]:
+    if need > cint.shape[0] // 2:  # the first half: the velocity step's contacts; the second: the projection's
         return -need
     bodies = 0
     for m in range(n):
@@ -635,6 +724,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, lo, hi)
             out[OUT_PGS] += 1
         lo = hi
+    _impulses(nc, rj, rbody, rlam, cflt)
     # positions: p + h v, q ⊗ exp(h ω_P)
     for m in range(n):
         i = members[m]
@@ -652,58 +742,12 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         ew, ex, ey, ez = exp_map(h * wp0, h * wp1, h * wp2)
         q = qmul(qw, qx, qy, qz, ew, ex, ey, ez)
         Y1[i, Q], Y1[i, Q + 1], Y1[i, Q + 2], Y1[i, Q + 3] = normalise(q[0], q[1], q[2], q[3])
-    # the projection: points deeper than PROJECT_TOL closed by the least mass-metric correction
-    deepest = 0.0
-    for _ in range(PROJECT_ROUNDS):
-        _narrow(Y1, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps)
-        nd = _gather(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps,
-                     members, bound, size, is_static, default_mu, True, 0.0, cint, cflt)
-        deep = 0
-        depth = 0.0
-        for c in range(nd):
-            i = cint[c, 1] if cint[c, 1] >= 0 else cint[c, 0]
-            if cflt[c, C_GAP] < -PROJECT_TOL * size[i]:
-                deep += 1
-                depth = max(depth, -cflt[c, C_GAP])
-        if deep == 0:
-            break
-        # the rows: every point within twice the depth above contact too, so that turning a body out of one
-        # penetration does not drive its neighbouring corners into another
-        nd = _gather(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount,
-                     ppoints, pseps, members, bound, size, is_static, default_mu, True, 2.0 * depth, cint, cflt)
-        out[OUT_PROJECTED] += deep
-        for m in range(n):
-            i = members[m]
-            if island[i] == 1:
-                _inertia_world(Y1, prm, i, iw)
-                for j in range(6):
-                    dx[i, j] = 0.0
-        _rows(Y1, prm, nd, cint, cflt, iw, True, h, rj, rw, rdiag, rbias, rbody)
-        for c in range(nd):  # every touching point is a row (λ ≥ 0): closing one gap must not open another
-            rlam[c] = 0.0
-            deepest = max(deepest, -cflt[c, C_GAP])
-        for _s in range(PROJECT_SWEEPS):
-            change = 0.0
-            for c in range(nd):
-                if rdiag[c] <= 0.0:
-                    continue
-                g = cflt[c, C_GAP] + _row_speed(dx, rj, rbody, c)
-                new = max(rlam[c] - g / rdiag[c], 0.0)
-                dl = new - rlam[c]
-                rlam[c] = new
-                _apply(dx, rw, rbody, c, dl)
-                change = max(change, abs(dl) * rdiag[c])
-            if change <= 1e-16:
-                break
-        for m in range(n):
-            i = members[m]
-            if island[i] != 1:
-                continue
-            for a in range(3):
-                Y1[i, P + a] += dx[i, a]
-            ew, ex, ey, ez = exp_map(dx[i, 3], dx[i, 4], dx[i, 5])  # a world-axes turn: exp(δθ) ⊗ q
-            q = qmul(ew, ex, ey, ez, Y1[i, Q], Y1[i, Q + 1], Y1[i, Q + 2], Y1[i, Q + 3])
-            Y1[i, Q], Y1[i, Q + 1], Y1[i, Q + 2], Y1[i, Q + 3] = normalise(q[0], q[1], q[2], q[3])
+    # the projection, on the second half of the contact and row scratch (the first keeps the velocity step's)
+    half = cint.shape[0] // 2
+    deepest = _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount,
+                       ppoints, pseps, members, bound, size, is_static, default_mu, h, iw, dx, cint[half:],
+                       cflt[half:], rj[3 * half:], rw[3 * half:], rdiag[3 * half:], rbias[3 * half:],
+                       rlam[3 * half:], rbody[3 * half:], out)
     out[OUT_DEPTH] = deepest
     # sleeping: an island whose bodies were and stay slower than SLEEP_SPEED is locked at rest
     for m in range(n):
