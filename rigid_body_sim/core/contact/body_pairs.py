@@ -193,9 +193,9 @@ class BodyPairs:
         swept_bounds(Y0, Y1, self.members, self.reach, h, self._lo, self._hi)
         found = grid_swept_pairs(self._lo, self._hi, self.movable, self._cells, self._heads, self._chain, self._pairs)
         islands = self.islands
-        islands.n_contacts = 0  # until its step runs
         held = islands.was_island.any() or islands.asleep.any()  # islands from the last step to go on with
         if found == 0 and not held:
+            islands.n_contacts = 0
             return None
         if found > len(self._pairs):
             self._pairs = np.empty((2 * found, 2), dtype=np.int64)

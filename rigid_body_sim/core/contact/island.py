@@ -47,6 +47,7 @@ class Islands:
         self._flags = np.zeros(n, dtype=np.int64)
         self._pos, self._quat = np.zeros((n, 3)), np.zeros((n, 4))
         self._vel, self._iw, self._dx = np.zeros((n, 6)), np.zeros((n, 9)), np.zeros((n, 6))
+        self._acc = np.zeros((n, 6))
         self._cstart = np.zeros(n, dtype=np.int64)
         self._A, self._L = np.zeros((DENSE_MAX, DENSE_MAX)), np.zeros((DENSE_MAX, DENSE_MAX))
         self._vec = np.zeros((3, DENSE_MAX))
@@ -57,7 +58,8 @@ class Islands:
         self.body_steps = 0
         #: Largest depth (m) the position projection closed since the solver was made or reset.
         self.deepest = 0.0
-        #: How many contacts the last step's velocity problem had (rows of :meth:`contacts`).
+        #: How many contacts the last step's velocity problem had (rows of :meth:`contacts`; its λ warm-start the
+        #: next step's); 0 after a step without islands.
         self.n_contacts = 0
 
     def _grow_pairs(self, k: int) -> None:
@@ -69,8 +71,13 @@ class Islands:
         self._bound = np.zeros(k + n)
 
     def _grow_contacts(self, c: int) -> None:
-        """Room for c contacts in each half of the scratch (the velocity step's, the projection's)."""
+        """Room for c contacts in each half of the scratch (the velocity step's, the projection's); the last
+        step's contacts (the first half) kept."""
+        old_int, old_flt = getattr(self, "_cint", None), getattr(self, "_cflt", None)
         self._cint, self._cflt = np.zeros((2 * c, C_INTS), dtype=np.int64), np.zeros((2 * c, C_FLOATS))
+        if old_int is not None:
+            kept = min(len(old_int) // 2, c)
+            self._cint[:kept], self._cflt[:kept] = old_int[:kept], old_flt[:kept]
         self._order = np.zeros(c, dtype=np.int64)
         r = 4 * c  # 3 rows per velocity contact, then 1 per projection contact
         self._rj, self._rw = np.zeros((r, 12)), np.zeros((r, 12))
@@ -107,11 +114,12 @@ class Islands:
         args_head = (Y0, Y1, sim._prm, wrenches, solver._bare_rows, solver.modes, self.saved, solver.shapes,
                      solver.half_spaces, np.ascontiguousarray(gmu), self.members, cand, len(cand),
                      self.pairs.is_static, sim._stopped, self.pairs.spin_reach, self.size, self.asleep, self.quiet, h,
-                     bool(solver.sleeping), DEFAULT_FRICTION, self.island, self._parent, self._flags)
+                     bool(solver.sleeping), DEFAULT_FRICTION, self.n_contacts, self.island, self._parent,
+                     self._flags)
         while True:
             code = island_pass(*args_head, self._nlist, self._pos, self._quat, self._pdist, self._pnormal,
                                self._pcount, self._ppoints, self._pseps, self._bound, self._cint, self._cflt, self._vel,
-                               self._iw, self._dx, self._rj, self._rw, self._rdiag, self._rbias, self._rlam,
+                               self._acc, self._iw, self._dx, self._rj, self._rw, self._rdiag, self._rbias, self._rlam,
                                self._rbody, self._order, self._cstart, self._A, self._L, self._vec, self.out)
             if code >= 0:
                 break
