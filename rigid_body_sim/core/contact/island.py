@@ -47,7 +47,6 @@ class Islands:
         self._flags = np.zeros(n, dtype=np.int64)
         self._pos, self._quat = np.zeros((n, 3)), np.zeros((n, 4))
         self._vel, self._iw, self._dx = np.zeros((n, 6)), np.zeros((n, 9)), np.zeros((n, 6))
-        self._acc = np.zeros((n, 6))
         self._cstart = np.zeros(n, dtype=np.int64)
         self._A, self._L = np.zeros((DENSE_MAX, DENSE_MAX)), np.zeros((DENSE_MAX, DENSE_MAX))
         self._vec = np.zeros((3, DENSE_MAX))
@@ -119,7 +118,7 @@ class Islands:
         while True:
             code = island_pass(*args_head, self._nlist, self._pos, self._quat, self._pdist, self._pnormal,
                                self._pcount, self._ppoints, self._pseps, self._bound, self._cint, self._cflt, self._vel,
-                               self._acc, self._iw, self._dx, self._rj, self._rw, self._rdiag, self._rbias, self._rlam,
+                               self._iw, self._dx, self._rj, self._rw, self._rdiag, self._rbias, self._rlam,
                                self._rbody, self._order, self._cstart, self._A, self._L, self._vec, self.out)
             if code >= 0:
                 break

@@ -56,9 +56,8 @@ PROJECT_TOL = 1e-12
 #: Narrow-phase rounds of the position projection, the first TURN_ROUNDS in the mass metric (turning and
 #: translating), the others translating only; Gauss–Seidel sweeps per round.
 PROJECT_ROUNDS, TURN_ROUNDS, PROJECT_SWEEPS = 8, 2, 100
-#: Substeps of an island's velocity step when it is not solved exactly, Gauss–Seidel sweeps per substep and in
-#: the last (fewer when a sweep changes no row's speed by more than PGS_TOL, m/s).
-SUBSTEPS, SUBSTEP_SWEEPS, LAST_SWEEPS, PGS_TOL = 20, 4, 200, 1e-13
+#: Most projected Gauss–Seidel sweeps of the velocity problem; it stops earlier below PGS_TOL (m/s).
+PGS_SWEEPS, PGS_TOL = 200, 1e-13
 #: Iterated Tikhonov steps of the sticking solve, and its regularisation (× the largest diagonal).
 TIKHONOV_STEPS, TIKHONOV_EPS = 6, 1e-9
 #: Columns of a contact's float row: point (3), normal a → b (3), gap, μ, and after the velocity step the
@@ -439,64 +438,18 @@ def _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, start, stop):
 
 
 @njit(**JIT)
-def _substeps(Y0, vel, acc, dx, bodies, n_bodies, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop, h):
-    """The velocity step of the islands not solved exactly: contacts order[:stop], bodies[:n_bodies], by SUBSTEPS
-    substeps of h/SUBSTEPS, each up to SUBSTEP_SWEEPS Gauss–Seidel sweeps (the last LAST_SWEEPS: the velocity
-    the step ends with) from the last substep's λ (the first
-    from the warm start's λ / SUBSTEPS), the gaps moved on by the rows' linear map of the displacement so far.
-    Leaves vel the velocity at the step's end, dx the displacement over the step (world: translation, turn
-    vector), rlam and the contacts' C_IMPULSE the impulse over the whole step."""
-    hs = h / SUBSTEPS
-    for k in range(n_bodies):  # the free velocity's change per substep, from the start's velocity (world)
-        i = bodies[k]
-        qw, qx, qy, qz = normalise(Y0[i, Q], Y0[i, Q + 1], Y0[i, Q + 2], Y0[i, Q + 3])
-        R = matrix(qw, qx, qy, qz)
-        for a in range(3):
-            v0 = Y0[i, V + a]
-            w0 = R[3 * a] * Y0[i, W] + R[3 * a + 1] * Y0[i, W + 1] + R[3 * a + 2] * Y0[i, W + 2]
-            acc[i, a] = (vel[i, a] - v0) / SUBSTEPS
-            acc[i, 3 + a] = (vel[i, 3 + a] - w0) / SUBSTEPS
-            vel[i, a], vel[i, 3 + a] = v0, w0
-        for j in range(6):
-            dx[i, j] = 0.0
+def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop):
+    """Projected Gauss–Seidel on contacts order[:stop] from their λ in rlam (the warm start): sweeps until none
+    changes a row's speed by more than PGS_TOL (m/s), at most PGS_SWEEPS."""
     for c in range(stop):
-        q = order[c]
         for k in range(3):
-            rlam[3 * q + k] /= SUBSTEPS
-            cflt[q, C_IMPULSE + k] = 0.0
-    for _s in range(SUBSTEPS):
-        for k in range(n_bodies):
-            i = bodies[k]
-            for j in range(6):
-                vel[i, j] += acc[i, j]
-        for c in range(stop):
-            q = order[c]
-            r = 3 * q
-            rbias[r] = max(cflt[q, C_GAP] + _row_speed(dx, rj, rbody, r), 0.0) / hs
-            for k in range(3):
-                if rlam[r + k] != 0.0:
-                    _apply(vel, rw, rbody, r + k, rlam[r + k])
-        for _ in range(SUBSTEP_SWEEPS if _s < SUBSTEPS - 1 else LAST_SWEEPS):
-            if _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, 0, stop) <= PGS_TOL:
-                break
-        for c in range(stop):
-            q = order[c]
-            for k in range(3):
-                ux, uy, uz = _row_dir(rj, rbody, 3 * q + k)
-                cflt[q, C_IMPULSE] += rlam[3 * q + k] * ux
-                cflt[q, C_IMPULSE + 1] += rlam[3 * q + k] * uy
-                cflt[q, C_IMPULSE + 2] += rlam[3 * q + k] * uz
-        for k in range(n_bodies):
-            i = bodies[k]
-            for j in range(6):
-                dx[i, j] += hs * vel[i, j]
-    for c in range(stop):  # λ over the step: the summed impulse on the rows (orthonormal directions)
-        q = order[c]
-        for k in range(3):
-            ux, uy, uz = _row_dir(rj, rbody, 3 * q + k)
-            rlam[3 * q + k] = cflt[q, C_IMPULSE] * ux + cflt[q, C_IMPULSE + 1] * uy + cflt[q, C_IMPULSE + 2] * uz
-    _pin = Y0[0, 0], vel[0, 0], acc[0, 0], dx[0, 0], bodies[0], rj[0, 0], rw[0, 0], rbody[0, 0], rdiag[0]
-    _pin2 = rbias[0], rlam[0], cflt[0, 0], order[0]
+            r = 3 * order[c] + k
+            if rlam[r] != 0.0:
+                _apply(vel, rw, rbody, r, rlam[r])
+    for _ in range(PGS_SWEEPS):
+        if _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, 0, stop) <= PGS_TOL:
+            break
+    _pin = vel[0, 0], rj[0, 0], rw[0, 0], rbody[0, 0], rdiag[0], rbias[0], rlam[0], cflt[0, 0], order[0]
 
 
 @njit(**INLINE)
@@ -732,7 +685,7 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
 @njit(**JIT)
 def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, members, cand, n_cand, is_static, stopped, spin_reach, size,
                 asleep, quiet, h, sleeping, default_mu, n_prev, island, parent, flags, nlist, pos, quat, pdist, pnormal, pcount,
-                ppoints, pseps, bound, cint, cflt, vel, acc, iw, dx, rj, rw, rdiag, rbias, rlam, rbody, order, cstart,
+                ppoints, pseps, bound, cint, cflt, vel, iw, dx, rj, rw, rdiag, rbias, rlam, rbody, order, cstart,
                 A, L, vec, out):
     """One step of every island (module docstring): results into Y1 for the bodies marked island[i] = 1 (solved)
     or 2 (asleep: their rows copied from Y0). Returns 0, or −(contacts needed) when cint is too small
@@ -880,7 +833,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         order[cstart[r]] = c
         cstart[r] += 1
     lo = 0
-    stop = 0  # the contacts of the islands not solved exactly, moved to the front of order
+    stop = 0  # the contacts of the islands not solved exactly, moved to the front of order (one PGS over all)
     for m in range(n):
         i = members[m]
         if _find(parent, i) != i or island[i] != 1:
@@ -893,43 +846,32 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             kept = _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, lo, hi, A, L, vec[0], vec[1], vec[2])
         if kept:
             out[OUT_STICK] += 1
-            flags[i] |= 128
         else:
             for c in range(lo, hi):
                 order[stop] = order[c]
                 stop += 1
             out[OUT_PGS] += 1
         lo = hi
-    _impulses(nc, rj, rbody, rlam, cflt)
-    n_sub = 0  # their bodies (cstart is free now)
-    for m in range(n):
-        i = members[m]
-        if island[i] == 1 and not flags[_find(parent, i)] & 128:
-            cstart[n_sub] = i
-            n_sub += 1
     if stop > 0:
-        _substeps(Y0, vel, acc, dx, cstart, n_sub, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop, h)
-    # positions: solved exactly, p + h v and q ⊗ exp(h ω_P); substepped, p + Δp and exp(Δθ) ⊗ q
+        _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop)
+    _impulses(nc, rj, rbody, rlam, cflt)
+    # positions: p + h v, q ⊗ exp(h ω_P)
     for m in range(n):
         i = members[m]
         if island[i] != 1:
             continue
         qw, qx, qy, qz = normalise(Y0[i, Q], Y0[i, Q + 1], Y0[i, Q + 2], Y0[i, Q + 3])
-        if flags[_find(parent, i)] & 128 or stop == 0:
-            for a in range(3):
-                dx[i, a] = h * vel[i, a]
-                dx[i, 3 + a] = h * vel[i, 3 + a]
-        for a in range(3):
-            Y1[i, P + a] = Y0[i, P + a] + dx[i, a]
-            Y1[i, V + a] = vel[i, a]
-        ew, ex, ey, ez = exp_map(dx[i, 3], dx[i, 4], dx[i, 5])  # a world-axes turn
-        q = qmul(ew, ex, ey, ez, qw, qx, qy, qz)
-        qw, qx, qy, qz = normalise(q[0], q[1], q[2], q[3])
-        Y1[i, Q], Y1[i, Q + 1], Y1[i, Q + 2], Y1[i, Q + 3] = qw, qx, qy, qz
         R = matrix(qw, qx, qy, qz)
-        Y1[i, W] = R[0] * vel[i, 3] + R[3] * vel[i, 4] + R[6] * vel[i, 5]
-        Y1[i, W + 1] = R[1] * vel[i, 3] + R[4] * vel[i, 4] + R[7] * vel[i, 5]
-        Y1[i, W + 2] = R[2] * vel[i, 3] + R[5] * vel[i, 4] + R[8] * vel[i, 5]
+        wp0 = R[0] * vel[i, 3] + R[3] * vel[i, 4] + R[6] * vel[i, 5]
+        wp1 = R[1] * vel[i, 3] + R[4] * vel[i, 4] + R[7] * vel[i, 5]
+        wp2 = R[2] * vel[i, 3] + R[5] * vel[i, 4] + R[8] * vel[i, 5]
+        for a in range(3):
+            Y1[i, P + a] = Y0[i, P + a] + h * vel[i, a]
+            Y1[i, V + a] = vel[i, a]
+        Y1[i, W], Y1[i, W + 1], Y1[i, W + 2] = wp0, wp1, wp2
+        ew, ex, ey, ez = exp_map(h * wp0, h * wp1, h * wp2)
+        q = qmul(qw, qx, qy, qz, ew, ex, ey, ez)
+        Y1[i, Q], Y1[i, Q + 1], Y1[i, Q + 2], Y1[i, Q + 3] = normalise(q[0], q[1], q[2], q[3])
     # the projection, on the second half of the contact and row scratch (the first keeps the velocity step's),
     # looking at the pairs within their reach over the step as solved
     _bounds(Y0, Y1, nlist, 0, n_pairs, is_static, spin_reach, size, h, bound)
