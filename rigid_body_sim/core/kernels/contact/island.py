@@ -618,12 +618,62 @@ def _link(nlist, lo, hi, pdist, bound, is_static, size, parent, flags):
 
 
 @njit(**JIT)
+def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdiag, rbias, rbody, rlam, vel):
+    """After the projection: the island bodies' velocities in Y1 made not to approach at the nd touching points
+    cint/cflt (normal rows, λ ≥ 0, Gauss–Seidel in the kinetic metric, e = 0): the projection moved them out,
+    they must not be left moving in again. Only removes kinetic energy."""
+    n = members.shape[0]
+    for m in range(n):
+        i = members[m]
+        if island[i] == 1:
+            _inertia_world(Y1, prm, i, iw)
+    _rows(Y1, prm, nd, cint, cflt, iw, True, h, rj, rw, rdiag, rbias, rbody)
+    for m in range(n):
+        i = members[m]
+        if island[i] != 1:
+            continue
+        R = matrix(Y1[i, Q], Y1[i, Q + 1], Y1[i, Q + 2], Y1[i, Q + 3])
+        for a in range(3):
+            vel[i, a] = Y1[i, V + a]
+            vel[i, 3 + a] = R[3 * a] * Y1[i, W] + R[3 * a + 1] * Y1[i, W + 1] + R[3 * a + 2] * Y1[i, W + 2]
+    for c in range(nd):
+        rlam[c] = 0.0
+    for _s in range(PROJECT_SWEEPS):
+        change = 0.0
+        for c in range(nd):
+            if rdiag[c] <= 0.0:
+                continue
+            new = max(rlam[c] - _row_speed(vel, rj, rbody, c) / rdiag[c], 0.0)
+            dl = new - rlam[c]
+            rlam[c] = new
+            _apply(vel, rw, rbody, c, dl)
+            change = max(change, abs(dl) * rdiag[c])
+        if change <= PGS_TOL:
+            break
+    for m in range(n):
+        i = members[m]
+        if island[i] != 1:
+            continue
+        R = matrix(Y1[i, Q], Y1[i, Q + 1], Y1[i, Q + 2], Y1[i, Q + 3])
+        for a in range(3):
+            Y1[i, V + a] = vel[i, a]
+        Y1[i, W] = R[0] * vel[i, 3] + R[3] * vel[i, 4] + R[6] * vel[i, 5]
+        Y1[i, W + 1] = R[1] * vel[i, 3] + R[4] * vel[i, 4] + R[7] * vel[i, 5]
+        Y1[i, W + 2] = R[2] * vel[i, 3] + R[5] * vel[i, 4] + R[8] * vel[i, 5]
+    _pin = Y1[0, 0], prm[0, 0], members[0], island[0], cint[0, 0], cflt[0, 0], iw[0, 0], rj[0, 0], rw[0, 0]
+    _pin2 = rdiag[0], rbias[0], rbody[0, 0], rlam[0], vel[0, 0]
+
+
+@njit(**JIT)
 def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps,
-             members, bound, size, is_static, default_mu, h, iw, dx, cint, cflt, rj, rw, rdiag, rbias, rlam, rbody, out):
+             members, bound, size, is_static, default_mu, h, iw, dx, vel, cint, cflt, rj, rw, rdiag, rbias, rlam, rbody,
+             out):
     """The projection of the island bodies' poses Y1: points deeper than PROJECT_TOL × their pair's size closed by
-    the least mass-metric correction (module docstring); returns the largest depth it took on (m)."""
+    the least mass-metric correction (module docstring), then their velocities kept from approaching where it
+    moved them (_stop_approach); returns the largest depth it took on (m)."""
     n = members.shape[0]
     deepest = 0.0
+    settled = False
     for rnd in range(PROJECT_ROUNDS):
         _narrow(Y1, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound)
         nd = _gather(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps,
@@ -636,6 +686,7 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
                 deep += 1
                 depth = max(depth, -cflt[c, C_GAP])
         if deep == 0:
+            settled = True  # nd: the touching points at the final poses
             break
         # the rows: every point within twice the depth above contact too, so that turning a body out of one
         # penetration does not drive its neighbouring corners into another
@@ -678,6 +729,12 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
             ew, ex, ey, ez = exp_map(dx[i, 3], dx[i, 4], dx[i, 5])  # a world-axes turn: exp(δθ) ⊗ q
             q = qmul(ew, ex, ey, ez, Y1[i, Q], Y1[i, Q + 1], Y1[i, Q + 2], Y1[i, Q + 3])
             Y1[i, Q], Y1[i, Q + 1], Y1[i, Q + 2], Y1[i, Q + 3] = normalise(q[0], q[1], q[2], q[3])
+    if deepest > 0.0:
+        if not settled:  # the touching points at the final poses
+            _narrow(Y1, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound)
+        nd = _gather(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints,
+                     pseps, members, bound, size, is_static, default_mu, True, 0.0, cint, cflt)
+        _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdiag, rbias, rbody, rlam, vel)
     _pin = Y1[0, 0], prm[0, 0], nlist[0, 0], members[0], cint[0, 0], cflt[0, 0], rj[0, 0], rbody[0, 0], out[0]
     return deepest
 
@@ -876,7 +933,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     # looking at the pairs within their reach over the step as solved
     _bounds(Y0, Y1, nlist, 0, n_pairs, is_static, spin_reach, size, h, bound)
     deepest = _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount,
-                       ppoints, pseps, members, bound, size, is_static, default_mu, h, iw, dx, cint[half:],
+                       ppoints, pseps, members, bound, size, is_static, default_mu, h, iw, dx, vel, cint[half:],
                        cflt[half:], rj[3 * half:], rw[3 * half:], rdiag[3 * half:], rbias[3 * half:],
                        rlam[3 * half:], rbody[3 * half:], out)
     out[OUT_DEPTH] = deepest
