@@ -620,13 +620,15 @@ def _link(nlist, lo, hi, pdist, bound, is_static, size, parent, flags):
 @njit(**JIT)
 def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdiag, rbias, rbody, rlam, vel):
     """After the projection: the island bodies' velocities in Y1 made not to approach at the nd touching points
-    cint/cflt (normal rows, λ ≥ 0, Gauss–Seidel in the kinetic metric, e = 0): the projection moved them out,
-    they must not be left moving in again. Only removes kinetic energy."""
+    cint/cflt (normal rows, λ ≥ 0, Gauss–Seidel on the linear velocities in the mass metric, e = 0, as the
+    projection's converging rounds): the projection moved them out, they must not be left moving in again.
+    Only removes kinetic energy (the translational part; spins are kept)."""
     n = members.shape[0]
     for m in range(n):
         i = members[m]
         if island[i] == 1:
-            _inertia_world(Y1, prm, i, iw)
+            for j in range(9):
+                iw[i, j] = 0.0
     _rows(Y1, prm, nd, cint, cflt, iw, True, h, rj, rw, rdiag, rbias, rbody)
     for m in range(n):
         i = members[m]
