@@ -620,16 +620,10 @@ def _link(nlist, lo, hi, pdist, bound, is_static, size, parent, flags):
 @njit(**JIT)
 def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdiag, rbias, rbody, rlam, vel):
     """After the projection: the island bodies' velocities in Y1 made not to approach at the nd touching points
-    cint/cflt (normal rows, λ ≥ 0, Gauss–Seidel on the linear velocities in the mass metric, e = 0, as the
-    projection's converging rounds): the projection moved them out, they must not be left moving in again.
-    Only removes kinetic energy (the translational part; spins are kept)."""
+    cint/cflt (normal rows, λ ≥ 0, e = 0): the projection moved them out, they must not be left moving in
+    again. Gauss–Seidel in the kinetic metric first, then on the linear velocities alone for what approach is
+    left (that one converges in a pile, as the projection's translating rounds do). Only removes kinetic energy."""
     n = members.shape[0]
-    for m in range(n):
-        i = members[m]
-        if island[i] == 1:
-            for j in range(9):
-                iw[i, j] = 0.0
-    _rows(Y1, prm, nd, cint, cflt, iw, True, h, rj, rw, rdiag, rbias, rbody)
     for m in range(n):
         i = members[m]
         if island[i] != 1:
@@ -638,20 +632,30 @@ def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdia
         for a in range(3):
             vel[i, a] = Y1[i, V + a]
             vel[i, 3 + a] = R[3 * a] * Y1[i, W] + R[3 * a + 1] * Y1[i, W + 1] + R[3 * a + 2] * Y1[i, W + 2]
-    for c in range(nd):
-        rlam[c] = 0.0
-    for _s in range(PROJECT_SWEEPS):
-        change = 0.0
+    for metric in range(2):
+        for m in range(n):
+            i = members[m]
+            if island[i] == 1:
+                if metric == 0:
+                    _inertia_world(Y1, prm, i, iw)
+                else:
+                    for j in range(9):
+                        iw[i, j] = 0.0
+        _rows(Y1, prm, nd, cint, cflt, iw, True, h, rj, rw, rdiag, rbias, rbody)
         for c in range(nd):
-            if rdiag[c] <= 0.0:
-                continue
-            new = max(rlam[c] - _row_speed(vel, rj, rbody, c) / rdiag[c], 0.0)
-            dl = new - rlam[c]
-            rlam[c] = new
-            _apply(vel, rw, rbody, c, dl)
-            change = max(change, abs(dl) * rdiag[c])
-        if change <= PGS_TOL:
-            break
+            rlam[c] = 0.0
+        for _s in range(PROJECT_SWEEPS):
+            change = 0.0
+            for c in range(nd):
+                if rdiag[c] <= 0.0:
+                    continue
+                new = max(rlam[c] - _row_speed(vel, rj, rbody, c) / rdiag[c], 0.0)
+                dl = new - rlam[c]
+                rlam[c] = new
+                _apply(vel, rw, rbody, c, dl)
+                change = max(change, abs(dl) * rdiag[c])
+            if change <= PGS_TOL:
+                break
     for m in range(n):
         i = members[m]
         if island[i] != 1:
@@ -664,7 +668,6 @@ def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdia
         Y1[i, W + 2] = R[2] * vel[i, 3] + R[5] * vel[i, 4] + R[8] * vel[i, 5]
     _pin = Y1[0, 0], prm[0, 0], members[0], island[0], cint[0, 0], cflt[0, 0], iw[0, 0], rj[0, 0], rw[0, 0]
     _pin2 = rdiag[0], rbias[0], rbody[0, 0], rlam[0], vel[0, 0]
-
 
 @njit(**JIT)
 def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps,
