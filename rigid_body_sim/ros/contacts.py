@@ -270,7 +270,9 @@ class ContactPublisher:
         the last step's (impulse / h) when there is no earlier publish of this run to take the mean from."""
         if solver.pairs is None:
             return np.zeros(0, dtype=CONTACT_DTYPE)
-        keys, impulses = solver.pairs.islands.log.take()
+        log = solver.pairs.islands.log
+        log.summing = True  # from now on: the pairs' impulses summed over each tick
+        keys, impulses = log.take()
         span = sim.time - self._time if self._time is not None else 0.0
         sides = pair_sides(solver, keys, impulses, span)
         points = np.zeros(len(sides), dtype=CONTACT_DTYPE)

@@ -2,10 +2,11 @@
 
 An island's velocity step (island.py, kernels/contact/island.py) has several contact points per
 touching pair: a box face's corners against another box, a body's features against a half-space.
-:class:`IslandContactLog`, fed by the island driver after each of its steps, sums each pair's
-impulse over the steps since it was last taken (sorted keys and one ``np.unique`` per step: no
-Python per pair; 50 µs per step for 640 points) and keeps the last step's start and end states of
-its bodies. :func:`pair_sides` groups the last step's points by pair and gives one row per pair
+:class:`IslandContactLog`, fed by the island driver after each of its steps, keeps the step's
+start and end states of its bodies and, once a consumer has set :attr:`IslandContactLog.summing`
+(the node's ``contacts`` publisher does), sums each pair's impulse over the steps since it was
+last taken (sorted keys and one ``np.unique`` per step: no Python per pair; 50 µs per step for
+640 points). :func:`pair_sides` groups the last step's points by pair and gives one row per pair
 side: two for two moving bodies (each naming the other), one for a body against a half-space or
 a static shape, with the pair's mean force and whether it slides (:data:`SLIDE_SPEED`).
 
@@ -92,6 +93,9 @@ class IslandContactLog:
         self.start, self.end = np.zeros((n_bodies, L.STATE_WIDTH)), np.zeros((n_bodies, L.STATE_WIDTH))
         #: The last island step's length (s).
         self.h = 0.0
+        #: Sum the impulses (set by a consumer that takes them); off, nothing is summed and :func:`pair_sides`
+        #: gives the last step's forces. Off by default: a run nobody reads pays no grouping per step.
+        self.summing = False
 
     def clear(self) -> None:
         """Forget the sums (a reset)."""
@@ -104,7 +108,7 @@ class IslandContactLog:
         self.h = h
         self.start[bodies] = Y0[bodies, :L.STATE_WIDTH]
         self.end[bodies] = Y1[bodies, :L.STATE_WIDTH]
-        if not len(ints):
+        if not self.summing or not len(ints):
             return
         keys, _, sign = pair_keys(ints, self.n_bodies, self.width)
         keys = np.concatenate((self.keys, keys))
