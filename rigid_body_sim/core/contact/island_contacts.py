@@ -195,8 +195,7 @@ def pair_sides(solver, keys: np.ndarray | None = None, impulses: np.ndarray | No
         summed = keys[at] == pair_key  # every pair of the last step, when the sums were kept through it
         force[summed] = impulses[at[summed]] / span
     pair_body, code = body[first], pair_key % log.width
-    between = ints[first, I_A] >= 0
-    between &= ints[first, I_B] >= 0
+    between = (ints[first, I_A] >= 0) & (ints[first, I_B] >= 0)
     other = np.where(between, code, -1)
     ground = np.where(code >= log.n_bodies, code - log.n_bodies, -1)
     on_static = ~between & (code < log.n_bodies)
