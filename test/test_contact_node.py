@@ -357,3 +357,81 @@ def test_a_box_spawned_onto_a_stack_rests_on_it(tmp_path: Path) -> None:
         t = twists[body]
         assert max(abs(v) for v in (t.linear.x, t.linear.y, t.linear.z, t.angular.x, t.angular.y,
                                     t.angular.z)) <= 1e-9, (body, t)
+
+
+def test_contacts_list_an_islands_pairs_with_the_weight_they_carry(tmp_path: Path) -> None:
+    """The crate spawned onto the two-box stack, after 1 s at rest: ``contacts`` has one point per
+    side of each island pair, naming both bodies, the normal from ``other`` towards ``body``:
+    crate on middle and middle under crate carry the crate's weight (2 kg × g), middle on bottom
+    and bottom under middle 3 kg × g, the ground under bottom 4 kg × g; no friction, resting, no
+    persistent row besides (every body is in the island). 1e-9 relative: the sticking solve is exact
+    to round-off. /diagnostics counts the island points in the points published."""
+    scene = tmp_path / "stack.yaml"
+    scene.write_text(STACK)
+    with SimHarness(scene, PARAMETERS) as h:
+        assert h.spawn(crate=CRATE).successful
+        h.watch_body("crate")
+        clouds = collect(h, "/contacts", PointCloud2)
+        h.step(100)
+        h.spin_until(lambda: len(clouds) >= 100, "100 contacts")
+        status = contact_status(h)
+    bottom, middle, crate, none = 0, 1, 2, 0xFFFFFFFF
+    points = cloud_points(clouds[-1])
+    got = {(int(p["body"]), int(p["other"]), int(p["ground"])): p for p in points}
+    assert len(got) == len(points) == 5
+    for body, other, ground, mass, nz in ((crate, middle, none, 2.0, 1.0), (middle, crate, none, 2.0, -1.0),
+                                          (middle, bottom, none, 3.0, 1.0), (bottom, middle, none, 3.0, -1.0),
+                                          (bottom, none, 0, 4.0, 1.0)):
+        p = got[(body, other, ground)]
+        assert p["state"] == 1 and p["time"] == pytest.approx(1.0, abs=1e-12)
+        np.testing.assert_allclose([p["nx"], p["ny"], p["nz"]], [0.0, 0.0, nz], atol=1e-12)
+        assert p["normal_force"] == pytest.approx(mass * G, rel=1e-9)
+        assert abs(p["friction_force"]) <= 1e-9 * mass * G
+        assert abs(p["gap"]) <= 1e-12
+    assert int(status["island contact points published (window)"]) >= 5 * 90  # resting from ~0.2 s on
+    assert int(status["contact points published (window)"]) >= int(status["island contact points published (window)"])
+    assert int(status["bodies in islands"]) == 3
+
+
+PUSHED = """\
+# a cube (1 kg, 0.2 m) 5 cm behind the centre of one resting on the ground, pushed along x by 6 N at
+# its centre of mass (μ = 0.5 everywhere: it slides on the lower cube, which sticks)
+gravity: [0.0, 0.0, -9.81]
+ground:
+  - {normal: [0, 0, 1], offset: 0.0, material: {restitution: 0.0, friction: 0.5}}
+bodies:
+  low: {mass: 1.0, inertia: {box: [0.2, 0.2, 0.2]}, material: {restitution: 0.0, friction: 0.5},
+        pose: {position: [0.0, 0.0, 0.1]}}
+  top: {mass: 1.0, inertia: {box: [0.2, 0.2, 0.2]}, material: {restitution: 0.0, friction: 0.5},
+        pose: {position: [-0.05, 0.0, 0.3]}}
+wrenches:
+  - {body: top, frame: top/world_aligned, force: [6.0, 0.0, 0.0], torque: [0.0, 0.0, 0.0], start: 0.0}
+"""
+
+
+def test_contacts_of_a_box_sliding_on_a_box_carry_mu_times_its_weight(tmp_path: Path) -> None:
+    """The pushed cube slides on the lower one (F = 6 N > μ m g): every tick (4 steps, the mean over
+    them), the pair's two points are sliding with m g along the normal and μ m g of friction; the
+    ground holds the lower cube (resting) with 2 m g and μ m g of friction. Closed forms, 1e-9
+    relative; 20 ticks (0.2 s: the top's centre stays behind x = 5 cm, where it would tip)."""
+    scene = tmp_path / "pushed.yaml"
+    scene.write_text(PUSHED)
+    mu, m, ticks = 0.5, 1.0, 20
+    with SimHarness(scene, {**PARAMETERS, "substeps": 4}) as h:
+        clouds = collect(h, "/contacts", PointCloud2)
+        for k in range(1, ticks + 1):
+            h.step(1)
+            h.spin_until(lambda: len(clouds) >= k, f"contacts of tick {k}")
+    low, top, none = 0, 1, 0xFFFFFFFF
+    for cloud in clouds:
+        points = cloud_points(cloud)
+        points = points[np.isin(points["state"], (1, 2))]  # contacts (the first tick has the rest events of t = 0)
+        got = {(int(p["body"]), int(p["other"]), int(p["ground"])): p for p in points}
+        assert len(got) == len(points) and set(got) == {(top, low, none), (low, top, none), (low, none, 0)}
+        for key, normal, friction, state in (((top, low, none), m * G, mu * m * G, 2),
+                                             ((low, top, none), m * G, mu * m * G, 2),
+                                             ((low, none, 0), 2 * m * G, mu * m * G, 1)):
+            p = got[key]
+            assert p["state"] == state, key
+            assert p["normal_force"] == pytest.approx(normal, rel=1e-9), key
+            assert p["friction_force"] == pytest.approx(friction, rel=1e-9), key

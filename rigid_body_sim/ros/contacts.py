@@ -1,5 +1,5 @@
-"""``contacts`` (sensor_msgs/PointCloud2): the ground contacts of each tick, their /diagnostics
-counts, and the refusal of a ``set_state`` into the ground or a static shape.
+"""``contacts`` (sensor_msgs/PointCloud2): the contacts of each tick, their /diagnostics counts, and
+the refusal of a ``set_state`` into the ground or a static shape.
 
 Published after every tick that stepped a scene with contact (``Simulator.contact`` is a
 ContactSolver: the scene has ``ground`` and a body with a ``collision`` shape), also when the
@@ -7,9 +7,12 @@ tick had none (``width`` 0). ``header.stamp`` = sim time at the end of the tick,
 ``header.frame_id`` = ``world_frame``; ``height`` 1, little endian, ``point_step``
 :data:`CONTACT_POINT_STEP` (112), ``is_dense`` true. One point per event the tick had (in the
 order the solver recorded them), then one per body in persistent contact at the end of the
-tick. An impact between two moving bodies (core/contact/body_pairs.py) has two points, one per
-body (``body`` and ``other`` swapped). Fields (:data:`CONTACT_FIELDS`; bytes 105 to 107 are zero
-padding):
+tick, then one per side of each island pair of the tick's last step (bodies resting on bodies,
+core/contact/island_contacts.py; in the order of their lower body). An impact between two moving
+bodies (core/contact/body_pairs.py) and an island pair of two moving bodies have two points, one
+per body (``body`` and ``other`` swapped); an island body on a half-space or a static shape has
+one. An island body is in flight mode, never also a persistent contact. Fields
+(:data:`CONTACT_FIELDS`; bytes 105 to 107 are zero padding):
 
 ============== ====== ======= ===================================================================
 name           offset type    meaning
@@ -17,31 +20,40 @@ name           offset type    meaning
 x, y, z        0..16  FLOAT64 contact point, world (m): a persistent contact's touching points'
                               centre; an event's: the body's lowest point at the end of the tick
                               projected onto the half-space's boundary; between two bodies: the
-                              mean of the contact points at the impact
-nx, ny, nz     24..40 FLOAT64 the half-space's unit normal, world axes; between two bodies: the
-                              contact normal at the impact, from ``other`` towards ``body``
+                              mean of the contact points at the impact; island pair: the centre
+                              of its points at the last step's start (mid-way between surfaces)
+nx, ny, nz     24..40 FLOAT64 the half-space's unit normal, world axes; between two bodies and in
+                              an island: the contact normal, from ``other`` (or the half-space or
+                              static shape) towards ``body``
 gap            48     FLOAT64 lowest gap of the body against that half-space at the end of the
                               tick (m; negative: inside); between two bodies: their signed
-                              distance at the end of the tick
-normal_force   56     FLOAT64 persistent contact: the holding force along the normal, mean over
-                              the tick (N); events: 0
-friction_force 64     FLOAT64 persistent contact: magnitude of its tangential part, mean over the
-                              tick (N); events: 0
+                              distance at the end of the tick; island pair: its points' smallest
+                              gap at the last step's start
+normal_force   56     FLOAT64 persistent contact and island pair: the force on ``body`` along the
+                              normal, mean over the tick (N); events: 0
+friction_force 64     FLOAT64 persistent contact and island pair: magnitude of its tangential
+                              part, mean over the tick (N); events: 0
 impulse        72     FLOAT64 impact: Σ normal impulse (N·s); else 0
 time           80     FLOAT64 event: its sim time, located inside the step (s); persistent
-                              contact: the stamp's time
+                              contact and island pair: the stamp's time
 energy_change  88     FLOAT64 impact: kinetic energy after − before (J, ≤ 0; between two bodies:
                               of both, on each of the two points); else 0
 body           96     UINT32  index of the body in scene order (``body_names``)
 ground         100    UINT32  index of the half-space in the scene's ``ground`` list; from its
                               length on, a static shape's plane (ContactSolver.static_body_of);
                               :data:`NO_INDEX` between two moving bodies
-state          104    UINT8   :data:`STATES`: 0 impact, 1 resting, 2 sliding (persistent contact),
-                              3 rest (came to rest; a Zeno sequence's accumulation time), 4 stick
-                              (a slide stopped), 5 lift_off
+state          104    UINT8   :data:`STATES`: 0 impact, 1 resting, 2 sliding (persistent contact,
+                              island pair), 3 rest (came to rest; a Zeno sequence's accumulation
+                              time), 4 stick (a slide stopped), 5 lift_off
 other          108    UINT32  between two moving bodies: the other body's index in scene order;
                               else :data:`NO_INDEX`
 ============== ====== ======= ===================================================================
+
+An island pair's force is its impulses summed over the tick's steps divided by the tick's length
+(the mean over the tick, a step without the pair counting as zero); at the first publish of a run
+(or after a reset), when there is no earlier publish to start from, its last step's impulse / h.
+It slides (2) when one of its points slipped faster than island_contacts.SLIDE_SPEED (1e-9 m/s)
+after the last step, else rests (1).
 """
 
 from __future__ import annotations
@@ -56,6 +68,7 @@ from rclpy.serialization import serialize_message
 from sensor_msgs.msg import PointCloud2, PointField
 
 from ..core import Simulator
+from ..core.contact.island_contacts import pair_sides
 from ..core.contact.query import lowest_gap, lowest_gaps, nearest_static, lowest_point, resting_bodies, touching_points
 from .conversions import RejectedMessage, time_msg_from_seconds
 
@@ -133,7 +146,7 @@ class ContactPublisher:
         self._last: Any = None  # the last of them (a reset clears the list: then it is gone)
         self._impulses = np.zeros((0, 3))  # its holding_impulses at the last publish
         self._time: float | None = None  # sim time of the last publish
-        self.totals = {"events": 0, "impacts": 0, "zeno_guards": 0, "contact_points": 0}
+        self.totals = {"events": 0, "impacts": 0, "zeno_guards": 0, "contact_points": 0, "island_contacts": 0}
         self.energy_change = 0.0  # J, Σ over impacts
         self._at_open: dict[str, float] = {}
         self.window_violation = 0.0  # m, the deepest gap seen at a tick end in the window (≥ 0)
@@ -153,23 +166,27 @@ class ContactPublisher:
             self._time = None
         event_rows = self._event_rows(sim, solver)
         self.window_most_events = max(self.window_most_events, len(event_rows))
-        rows = event_rows + self._resting_rows(sim, solver)
+        rows = contact_points(event_rows + self._resting_rows(sim, solver))
+        island = self._island_points(sim, solver)
+        points = np.zeros(len(rows) + len(island), dtype=CONTACT_DTYPE)  # (np.concatenate would drop the padding)
+        points[:len(rows)], points[len(rows):] = rows, island
         self._impulses, self._time = solver.holding_impulses.copy(), sim.time
         gaps = lowest_gaps(sim)
         if gaps.size:
             self.window_violation = max(self.window_violation, -float(gaps.min()))
-        self.totals["contact_points"] += len(rows)
+        self.totals["contact_points"] += len(points)
+        self.totals["island_contacts"] += len(island)
         msg = PointCloud2()
         msg.header.stamp = time_msg_from_seconds(sim.time)
         msg.header.frame_id = self.frame_id
-        msg.height, msg.width = 1, len(rows)
+        msg.height, msg.width = 1, len(points)
         msg.fields = [PointField(name=name, offset=offset, datatype=datatype, count=1)
                       for name, offset, datatype in CONTACT_FIELDS]
         msg.is_bigendian = False
         msg.point_step = CONTACT_POINT_STEP
-        msg.row_step = CONTACT_POINT_STEP * len(rows)
+        msg.row_step = CONTACT_POINT_STEP * len(points)
         msg.is_dense = True
-        msg.data = contact_points(rows).tobytes()
+        msg.data = points.tobytes()
         self._publisher.publish(msg)
         return msg
 
@@ -247,6 +264,35 @@ class ContactPublisher:
                          "other": NO_INDEX})
         return rows
 
+    def _island_points(self, sim: Simulator, solver: Any) -> np.ndarray:
+        """The points of the last step's island contacts, one per pair side (core/contact/island_contacts.py):
+        forces the mean over the tick (the pairs' impulses summed since the last publish / its length), or
+        the last step's (impulse / h) when there is no earlier publish of this run to take the mean from."""
+        if solver.pairs is None:
+            return np.zeros(0, dtype=CONTACT_DTYPE)
+        log = solver.pairs.islands.log
+        log.summing = True  # from now on: the pairs' impulses summed over each tick
+        keys, impulses = log.take()
+        span = sim.time - self._time if self._time is not None else 0.0
+        sides = pair_sides(solver, keys, impulses, span)
+        points = np.zeros(len(sides), dtype=CONTACT_DTYPE)
+        if not len(sides):
+            return points
+        n = sides.normal_W
+        normal = np.einsum("ka,ka->k", sides.force_W, n)
+        for k, name in enumerate("xyz"):
+            points[name] = sides.point_W[:, k]
+            points["n" + name] = n[:, k]
+        points["gap"] = sides.gap
+        points["normal_force"] = normal
+        points["friction_force"] = np.linalg.norm(sides.force_W - normal[:, None] * n, axis=1)
+        points["time"] = sim.time
+        points["body"] = sides.body
+        points["ground"] = np.where(sides.ground >= 0, sides.ground, NO_INDEX)
+        points["state"] = np.where(sides.sliding, STATES["sliding"], STATES["resting"])
+        points["other"] = np.where(sides.other >= 0, sides.other, NO_INDEX)
+        return points
+
     # ------------------------------------------------------------------ /diagnostics
 
     def open_window(self) -> None:
@@ -263,13 +309,16 @@ class ContactPublisher:
         window = {key: value - self._at_open.get(key, 0) for key, value in self.totals.items()}
         energy = self.energy_change - self._at_open.get("energy_change", 0.0)
         resting = len(resting_bodies(sim))
+        in_islands = int(np.count_nonzero(solver.pairs.islands.island)) if solver.pairs is not None else 0
         status = DiagnosticStatus(name=f"{node_name}: contact", hardware_id="none")
         status.level = DiagnosticStatus.OK
         status.message = (f"{resting} resting, {window['events']} events ({window['impacts']} impacts) "
                           f"in the window")
         status.values = [
             _kv("contacts (resting bodies)", resting),
+            _kv("bodies in islands", in_islands),
             _kv("contact points published (window)", window["contact_points"]),
+            _kv("island contact points published (window)", window["island_contacts"]),
             _kv("events (window)", window["events"]),
             _kv("most events in one tick (window)", self.window_most_events),
             _kv("impacts (window)", window["impacts"]),

@@ -24,6 +24,7 @@ from ..kernels.contact.island import C_FLOATS, C_INTS, DENSE_MAX, OUT_BODIES, OU
     OUT_WIDTH, OUT_WOKEN, island_pass
 from ..kernels.contact.layout import DIMS, FLIGHT, PERSISTENT
 from ..kernels.contact.pairs import MAX_PAIR_POINTS
+from .island_contacts import IslandContactLog
 from .materials import DEFAULT_FRICTION
 
 __all__ = ["Islands"]
@@ -60,6 +61,8 @@ class Islands:
         #: How many contacts the last step's velocity problem had (rows of :meth:`contacts`; its λ warm-start the
         #: next step's); 0 after a step without islands.
         self.n_contacts = 0
+        #: Each pair's impulse summed over the steps since last taken; the last step's states (island_contacts.py).
+        self.log = IslandContactLog(n, len(solver.half_spaces))
 
     def _grow_pairs(self, k: int) -> None:
         n = len(self.island)
@@ -92,6 +95,7 @@ class Islands:
         self.body_steps = 0
         self.deepest = 0.0
         self.n_contacts = 0
+        self.log.clear()
 
     def contacts(self) -> tuple[np.ndarray, np.ndarray]:
         """The last step's island contacts (views, valid until the next step): ints (n, C_INTS) — bodies a and b
@@ -125,6 +129,7 @@ class Islands:
             self._grow_contacts(2 * -code)
         out = self.out
         self.n_contacts = int(out[OUT_CONTACTS])
+        self.log.add(Y0, Y1, np.flatnonzero(self.island == 1), *self.contacts(), h)
         self.body_steps += int(out[OUT_BODIES])
         solver.counts["island_body_steps"] += int(out[OUT_BODIES])
         self.deepest = max(self.deepest, float(out[OUT_DEPTH]))

@@ -265,6 +265,38 @@ class StaticGeometry:
         self.restitution[i, j], self.friction[i, j] = self._pair_e[i, s], self._pair_mu[i, s]
         return j
 
+    def plane_rows(self, bodies: np.ndarray, static_bodies: np.ndarray, normals_W: np.ndarray,
+                   points_W: np.ndarray) -> np.ndarray:
+        """The plane row of each contact of a body in an island with a static shape (island_contacts.py).
+
+        bodies, static_bodies : (k,) int, body indices (the moving body, the static one); normals_W : (k, 3),
+        unit, from the static shape towards the body; points_W : (k, 3), on the contact (m). A static
+        box's face row where its outward normal is the contact's (as :meth:`plane_for`); else body i's
+        tangent row, written here through the point (the solver does not hold an island body on it: it
+        is rewritten when the body next meets a static shape outside an island). A body against two
+        such shapes at once has one tangent row: it names the last of them.
+        """
+        index = np.full(self._pair_e.shape[0], -1, dtype=np.int64)  # body index → index into statics
+        index[self.statics] = np.arange(len(self.statics))
+        s = index[static_bodies]
+        first = self.first_face[s]
+        rows = self.first_tangent + bodies
+        box = np.flatnonzero(first >= 0)
+        if box.size:
+            faces = self.rows[first[box, None] + np.arange(6), NORMAL:NORMAL + 3]  # (b, 6, 3)
+            alignment = np.einsum("kfa,ka->kf", faces, normals_W[box])
+            best = np.argmax(alignment, axis=1)
+            on_face = alignment[np.arange(box.size), best] >= 1.0 - 0.5 * FACE_ALIGNMENT * FACE_ALIGNMENT
+            rows[box[on_face]] = first[box[on_face]] + best[on_face]
+        tangent = rows >= self.first_tangent
+        if tangent.any():
+            j, i, t = rows[tangent], bodies[tangent], s[tangent]
+            self.rows[j, NORMAL:NORMAL + 3] = normals_W[tangent]
+            self.rows[j, OFFSET] = np.einsum("ka,ka->k", normals_W[tangent], points_W[tangent])
+            self.row_owner[j] = t
+            self.restitution[i, j], self.friction[i, j] = self._pair_e[i, t], self._pair_mu[i, t]
+        return rows
+
     def within_face(self, j: int, points: np.ndarray) -> bool:
         """Whether every point (k, 3), world, lies within the rectangle of face row j (to FACE_MARGIN)."""
         s = int(self.row_owner[j])
