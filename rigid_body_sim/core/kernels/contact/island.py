@@ -51,6 +51,9 @@ TOUCH = 1e-6
 SLEEP_SPEED = 1e-9
 #: Most rows (3 per contact point) of an island solved densely for the sticking case.
 DENSE_MAX = 360
+#: A box corner counts as over the other box when its foot is within this × the pair's size of that box's face:
+#: two boxes with edges in line (a box slid along another) keep the corners on their common edges.
+CORNER_SLACK = 1e-6
 #: Points deeper than this × the pair's size (m per m) after the step are projected out.
 PROJECT_TOL = 1e-12
 #: Narrow-phase rounds of the position projection, the first TURN_ROUNDS in the mass metric (turning and
@@ -69,9 +72,10 @@ I_A, I_B, I_STATIC, I_GROUND, I_NEXT, C_INTS = 0, 1, 2, 3, 4, 5
 #: A contact takes the λ of the last step's contact of its pair nearest to its point within this × the body's size.
 WARM_REACH = 0.1
 #: Columns of the per-call outputs: island body-steps, contact points, sticking solves kept, PGS islands,
-#: projected points, largest depth projected (m), bodies woken, bodies put to sleep.
-OUT_BODIES, OUT_CONTACTS, OUT_STICK, OUT_PGS, OUT_PROJECTED, OUT_DEPTH, OUT_WOKEN, OUT_SLEPT = range(8)
-OUT_WIDTH = 8
+#: projected points, largest depth projected (m), bodies woken, bodies put to sleep, points whose approach was
+#: stopped after the projection.
+OUT_BODIES, OUT_CONTACTS, OUT_STICK, OUT_PGS, OUT_PROJECTED, OUT_DEPTH, OUT_WOKEN, OUT_SLEPT, OUT_STOPPED = range(9)
+OUT_WIDTH = 9
 
 
 @njit(**JIT)
@@ -150,7 +154,7 @@ def _box_corners(pos, quat, shapes, k, a, b, pnormal, pcount, ppoints, limit, sc
     nx, ny, nz = pnormal[k, 0], pnormal[k, 1], pnormal[k, 2]
     plane_a = nx * ppoints[k, 0, 0] + ny * ppoints[k, 0, 1] + nz * ppoints[k, 0, 2]  # a's support along n
     plane_b = nx * ppoints[k, 0, 3] + ny * ppoints[k, 0, 4] + nz * ppoints[k, 0, 5]  # b's support along −n
-    slack = 1e-9 * scale
+    slack = CORNER_SLACK * scale
     for side in range(2):
         i = b if side == 0 else a
         other = a if side == 0 else b
@@ -656,6 +660,13 @@ def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdia
                 change = max(change, abs(dl) * rdiag[c])
             if change <= PGS_TOL:
                 break
+        for c in range(nd):  # each point's impulse on b (world, N·s), both passes summed
+            ux, uy, uz = _row_dir(rj, rbody, c)
+            if metric == 0:
+                cflt[c, C_IMPULSE], cflt[c, C_IMPULSE + 1], cflt[c, C_IMPULSE + 2] = 0.0, 0.0, 0.0
+            cflt[c, C_IMPULSE] += rlam[c] * ux
+            cflt[c, C_IMPULSE + 1] += rlam[c] * uy
+            cflt[c, C_IMPULSE + 2] += rlam[c] * uz
     for m in range(n):
         i = members[m]
         if island[i] != 1:
@@ -668,6 +679,30 @@ def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdia
         Y1[i, W + 2] = R[2] * vel[i, 3] + R[5] * vel[i, 4] + R[8] * vel[i, 5]
     _pin = Y1[0, 0], prm[0, 0], members[0], island[0], cint[0, 0], cflt[0, 0], iw[0, 0], rj[0, 0], rw[0, 0]
     _pin2 = rdiag[0], rbias[0], rbody[0, 0], rlam[0], vel[0, 0]
+
+@njit(**JIT)
+def _attribute(nc, cint, cflt, nd, sint, sflt, members, head):
+    """The impulses of the nd points whose approach was stopped after the projection (sint/sflt) added to the
+    step's contacts (cint/cflt[:nc]) of the same pair (the first listed), so that a pair's summed impulse is all
+    it gave. head (per body) and cint[:, I_NEXT] are overwritten."""
+    for m in range(members.shape[0]):
+        head[members[m]] = -1
+    for c in range(nc - 1, -1, -1):
+        i = cint[c, I_B] if cint[c, I_B] >= 0 else cint[c, I_A]
+        cint[c, I_NEXT] = head[i]
+        head[i] = c
+    for p in range(nd):
+        i = sint[p, I_B] if sint[p, I_B] >= 0 else sint[p, I_A]
+        c = head[i]
+        while c >= 0:
+            if (cint[c, I_A] == sint[p, I_A] and cint[c, I_B] == sint[p, I_B] and cint[c, I_STATIC] == sint[p, I_STATIC]
+                    and cint[c, I_GROUND] == sint[p, I_GROUND]):
+                for k in range(3):
+                    cflt[c, C_IMPULSE + k] += sflt[p, C_IMPULSE + k]
+                break
+            c = cint[c, I_NEXT]
+    _pin = cint[0, 0], cflt[0, 0], sint[0, 0], sflt[0, 0], members[0], head[0]
+
 
 @njit(**JIT)
 def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps,
@@ -740,6 +775,7 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
         nd = _gather(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints,
                      pseps, members, bound, size, is_static, default_mu, True, 0.0, cint, cflt)
         _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdiag, rbias, rbody, rlam, vel)
+        out[OUT_STOPPED] = nd
     _pin = Y1[0, 0], prm[0, 0], nlist[0, 0], members[0], cint[0, 0], cflt[0, 0], rj[0, 0], rbody[0, 0], out[0]
     return deepest
 
@@ -942,6 +978,8 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                        cflt[half:], rj[3 * half:], rw[3 * half:], rdiag[3 * half:], rbias[3 * half:],
                        rlam[3 * half:], rbody[3 * half:], out)
     out[OUT_DEPTH] = deepest
+    if out[OUT_STOPPED] > 0:
+        _attribute(nc, cint, cflt, int(out[OUT_STOPPED]), cint[half:], cflt[half:], members, cstart)
     # sleeping: an island whose bodies were and stay slower than SLEEP_SPEED is locked at rest
     for m in range(n):
         i = members[m]
