@@ -51,9 +51,6 @@ TOUCH = 1e-6
 SLEEP_SPEED = 1e-9
 #: Most rows (3 per contact point) of an island solved densely for the sticking case.
 DENSE_MAX = 360
-#: A box corner counts as over the other box when its foot is within this × the pair's size of that box's face:
-#: two boxes with edges in line (a box slid along another) keep the corners on their common edges.
-CORNER_SLACK = 1e-6
 #: Points deeper than this × the pair's size (m per m) after the step are projected out.
 PROJECT_TOL = 1e-12
 #: Narrow-phase rounds of the position projection, the first TURN_ROUNDS in the mass metric (turning and
@@ -154,7 +151,7 @@ def _box_corners(pos, quat, shapes, k, a, b, pnormal, pcount, ppoints, limit, sc
     nx, ny, nz = pnormal[k, 0], pnormal[k, 1], pnormal[k, 2]
     plane_a = nx * ppoints[k, 0, 0] + ny * ppoints[k, 0, 1] + nz * ppoints[k, 0, 2]  # a's support along n
     plane_b = nx * ppoints[k, 0, 3] + ny * ppoints[k, 0, 4] + nz * ppoints[k, 0, 5]  # b's support along −n
-    slack = CORNER_SLACK * scale
+    slack = 1e-9 * scale
     for side in range(2):
         i = b if side == 0 else a
         other = a if side == 0 else b
