@@ -767,10 +767,10 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
             q = qmul(ew, ex, ey, ez, Y1[i, Q], Y1[i, Q + 1], Y1[i, Q + 2], Y1[i, Q + 3])
             Y1[i, Q], Y1[i, Q + 1], Y1[i, Q + 2], Y1[i, Q + 3] = normalise(q[0], q[1], q[2], q[3])
     if deepest > 0.0:
-        if not settled:  # the touching points at the final poses
+        if not settled:  # the touching points at the final poses (settled: the last round's first gather)
             _narrow(Y1, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound)
-        nd = _gather(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints,
-                     pseps, members, bound, size, is_static, default_mu, True, 0.0, cint, cflt)
+            nd = _gather(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount,
+                         ppoints, pseps, members, bound, size, is_static, default_mu, True, 0.0, cint, cflt)
         _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdiag, rbias, rbody, rlam, vel)
         out[OUT_STOPPED] = nd
     _pin = Y1[0, 0], prm[0, 0], nlist[0, 0], members[0], cint[0, 0], cflt[0, 0], rj[0, 0], rbody[0, 0], out[0]
