@@ -62,7 +62,7 @@ from ..kernels import layout as L
 from ..kernels.contact.impacts import IMPACT_WORK_SHAPE, impact, kinetic_energy_row
 from ..kernels.contact.layout import DIMS, KIND, MAX_POINTS, NORMAL, PERSISTENT, FLIGHT, SHAPE_SPHERE
 from ..kernels.contact.pair_impacts import PAIR_JACOBIAN_SHAPE, pair_impact
-from ..kernels.contact.pairs import MAX_PAIR_POINTS, pair_contacts
+from ..kernels.contact.pairs import MAX_PAIR_POINTS, apart_bounds, pair_contacts
 from ..kernels.contact.persistent import normal_speeds
 from ..kernels.contact.swept import grid_swept_pairs, swept_bounds
 from ..quaternion import quat_multiply, quat_rotate
@@ -154,18 +154,31 @@ class BodyPairs:
                       self._points1, self._seps1)
         return float(self._dist1[0])
 
-    def _batch(self, Y: np.ndarray, pairs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(signed distances (k,), normals (k, 3)) of the body pairs (k, 2) at state rows Y."""
+    def _shape_rows(self, Y: np.ndarray, pairs: np.ndarray) -> tuple:
+        """(shape centres (m, 3), q_WS (m, 4), shape rows (m, ·), pairs (k, 2) into them) of the bodies of the
+        pairs (k, 2) at state rows Y: the arguments of the batched kernels."""
         bodies = np.unique(pairs)
         pos = np.ascontiguousarray(Y[bodies, L.P:L.P + 3])
         quat = np.ascontiguousarray(quat_multiply(Y[bodies, L.Q:L.Q + 4], self._q_PB[bodies]))
-        rows = np.ascontiguousarray(self._shapes[bodies])
-        local = np.ascontiguousarray(np.searchsorted(bodies, pairs))
+        return pos, quat, np.ascontiguousarray(self._shapes[bodies]), np.ascontiguousarray(np.searchsorted(bodies, pairs))
+
+    @staticmethod
+    def _batch(rows: tuple) -> np.ndarray:
+        """(k,) signed distances of the pairs of :meth:`_shape_rows`'s ``rows``."""
+        pos, quat, shapes, local = rows
         k = len(local)
-        dist, normal = np.empty(k), np.empty((k, 3))
-        pair_contacts(pos, quat, rows, local, dist, normal, np.zeros(k, dtype=np.int64),
+        dist = np.empty(k)
+        pair_contacts(pos, quat, shapes, local, dist, np.empty((k, 3)), np.zeros(k, dtype=np.int64),
                       np.empty((k, MAX_PAIR_POINTS, 6)), np.empty((k, MAX_PAIR_POINTS)))
-        return dist, normal
+        return dist
+
+    @staticmethod
+    def _apart(rows: tuple) -> np.ndarray:
+        """(k,) lower bounds on the distances of :meth:`_shape_rows`'s pairs (−1: none; two boxes only)."""
+        pos, quat, shapes, local = rows
+        out = np.empty(len(local))
+        apart_bounds(pos, quat, shapes, local, out)
+        return out
 
     def _geometry(self) -> tuple[np.ndarray, np.ndarray, float]:
         """(normal from a to b (3,), contact points (k, 3) mid-way between the surfaces, signed distance) of the
@@ -237,13 +250,21 @@ class BodyPairs:
         solver = self.solver
         static_a = self.is_static[pairs[:, 0]]
         pairs = np.where(static_a[:, None], pairs[:, ::-1], pairs)  # a moving body first
-        d1, _ = self._batch(Y1, pairs)
-        d0, _ = self._batch(Y0, pairs)
+        reach = self._pair_bounds(pairs, Y0, Y1) * h
+        rows0, rows1 = self._shape_rows(Y0, pairs), self._shape_rows(Y1, pairs)
+        lo0, lo1 = self._apart(rows0), self._apart(rows1)
+        near = ~((lo0 > 0.0) & (lo1 > 0.0) & (lo0 + lo1 > reach))  # the others cannot be either kind below
+        if not near.any():
+            return []
+        if not near.all():
+            pairs, reach = pairs[near], reach[near]
+            rows0, rows1 = self._shape_rows(Y0, pairs), self._shape_rows(Y1, pairs)
+        d1, d0 = self._batch(rows1), self._batch(rows0)
         static = self.is_static[pairs[:, 1]]
         resting = solver.modes[pairs[:, 0]] == PERSISTENT
         ends = ~static & ((d1 < 0.0) | (d0 < 0.0))
         inside = (d0 >= 0.0) & (d1 >= 0.0) & ~(static & resting)
-        inside &= d0 + d1 <= self._pair_bounds(pairs, Y0, Y1) * h
+        inside &= d0 + d1 <= reach
         hits = []
         for k in np.flatnonzero(ends | inside):
             a, b = int(pairs[k, 0]), int(pairs[k, 1])

@@ -18,14 +18,14 @@ from ..kernels.contact.broadphase import grid_pairs, shape_aabbs, sweep_pairs
 from ..kernels.contact.impacts import IMPACT_WORK_SHAPE
 from ..kernels.contact.layout import DIMS, KIND, SHAPE_BOX, SHAPE_CAPSULE, SHAPE_CYLINDER, SHAPE_SPHERE, SHAPE_WIDTH
 from ..kernels.contact.pair_impacts import PAIR_JACOBIAN_SHAPE, pair_impact
-from ..kernels.contact.pairs import MAX_PAIR_POINTS, pair_contacts
+from ..kernels.contact.pairs import MAX_PAIR_POINTS, apart_bounds, pair_contacts
 from ..kernels.contact.swept import grid_swept_pairs, swept_bounds
 from ..kernels.layout import INERTIA, INV_INERTIA, INV_MASS, MASS, PRM_WIDTH, P, Q, STATE_WIDTH, V
 
 __all__ = ["PAIR_ENTRY_POINTS", "compile_pair_kernels"]
 
 #: The body–body contact kernels called from Python.
-PAIR_ENTRY_POINTS = (shape_aabbs, grid_pairs, sweep_pairs, pair_contacts, pair_impact, swept_bounds,
+PAIR_ENTRY_POINTS = (shape_aabbs, grid_pairs, sweep_pairs, pair_contacts, apart_bounds, pair_impact, swept_bounds,
                      grid_swept_pairs)
 
 
@@ -50,6 +50,7 @@ def compile_pair_kernels() -> None:
         m = len(batch)
         pair_contacts(pos, quat, shapes, batch, np.empty(m), np.empty((m, 3)), np.zeros(m, dtype=np.int64),
                       np.empty((m, MAX_PAIR_POINTS, 6)), np.empty((m, MAX_PAIR_POINTS)))
+    apart_bounds(pos, quat, shapes, pairs, np.empty(len(pairs)))
     # the solver's body–body pass (body_pairs.py): state rows of the simulator's buffers, int64 members
     Ys = np.zeros((2, n, STATE_WIDTH + 1))
     members = np.arange(n, dtype=np.int64)

@@ -41,7 +41,8 @@ from .layout import DIMS, KIND, SHAPE_BOX, SHAPE_CAPSULE, SHAPE_SPHERE
 from .refine import feature_point, refine_normal
 from .shapes import FEATURE_BAND
 
-__all__ = ["make_workspace_jit", "MAX_PAIR_POINTS", "FACE_ALIGNMENT", "set_pose", "surface_point", "pair_contact", "pair_contacts"]
+__all__ = ["make_workspace_jit", "MAX_PAIR_POINTS", "FACE_ALIGNMENT", "set_pose", "surface_point", "pair_contact", "pair_contacts",
+           "boxes_apart", "apart_bounds"]
 
 #: Most contact points one pair reports (a box face clipped against another: a polygon of up to 8 corners).
 MAX_PAIR_POINTS = 8
@@ -776,6 +777,41 @@ def pair_contact(pa, ma, pb, mb, scale, ws_s, ws_lam, ws_tmp, ws_poly, verts, fa
 
 
 _CORE_OF = (0, 0, 2, 3, 1)  # layout.SHAPE_* → CORE_* (SHAPE_NONE unused)
+
+
+@njit(**JIT)
+def boxes_apart(quat, pos, shapes, a, b):
+    """A lower bound (m) on the distance of boxes a and b: their largest separation along the six face normals
+    (negative when none separates them)."""
+    Ra = matrix(quat[a, 0], quat[a, 1], quat[a, 2], quat[a, 3])
+    Rb = matrix(quat[b, 0], quat[b, 1], quat[b, 2], quat[b, 3])
+    ox, oy, oz = pos[b, 0] - pos[a, 0], pos[b, 1] - pos[a, 1], pos[b, 2] - pos[a, 2]
+    best = -math.inf
+    for side in range(2):
+        for k in range(3):
+            if side == 0:
+                ux, uy, uz = Ra[k], Ra[3 + k], Ra[6 + k]
+            else:
+                ux, uy, uz = Rb[k], Rb[3 + k], Rb[6 + k]
+            reach = 0.0
+            for j in range(3):
+                reach += shapes[a, DIMS + j] * abs(Ra[j] * ux + Ra[3 + j] * uy + Ra[6 + j] * uz)
+                reach += shapes[b, DIMS + j] * abs(Rb[j] * ux + Rb[3 + j] * uy + Rb[6 + j] * uz)
+            best = max(best, abs(ux * ox + uy * oy + uz * oz) - reach)
+    return best
+
+
+@njit(**JIT)
+def apart_bounds(pos, quat, shapes, pairs, out):
+    """For each row (a, b) of ``pairs`` (M, 2): a lower bound (m) on the distance of shapes a and b into out (M,),
+    for two boxes their :func:`boxes_apart`, ~40 ns against pair_contacts' ~1 µs; −1 for other pairs (no bound).
+    pos, quat, shapes as for :func:`pair_contacts`."""
+    for m in range(pairs.shape[0]):
+        a, b = pairs[m, 0], pairs[m, 1]
+        if shapes[a, KIND] == SHAPE_BOX and shapes[b, KIND] == SHAPE_BOX:
+            out[m] = boxes_apart(quat, pos, shapes, a, b)
+        else:
+            out[m] = -1.0
 
 
 @njit(**JIT)
