@@ -1,0 +1,172 @@
+"""How a pile's cost grows with its bodies: 1e3 → 1e5 cubes in bins side by side, and one pile of 10,000.
+
+``python -m benchmarks.contact_scaling [--part cost|pile] [--quick] [--out benchmarks/results]``
+(``make bench-scaling``). Writes ``contact_scaling_<part>.{csv,md}`` to ``--out``. The scene, engines,
+settings and readings are those of benchmarks/contact_stacks.py (0.1 m cubes of 1 kg, μ = 0.5, e = 0,
+dt = 1 ms, one thread), ours with rk4 (the default) and MuJoCo with its default pyramidal cone.
+
+* **cost**: the 1000-cube pile dropped into its bin by our engine for ``SETTLE_SECONDS``; its cubes'
+  poses (at rest: velocities zero) copied into k bins side by side, k = 1, 10, 100 (1e3, 1e4, 1e5
+  cubes; 1 and 10 with ``--quick``). Each engine steps the copies ``WARM`` steps, then is timed from
+  that state: µs per step and body-steps/s, medians of ≥ 5 with min–max. Linear cost is a flat
+  body-steps/s down the column.
+* **pile**: ``TEN_K`` cubes dropped together into one bin (contact_stacks' lattice, 22 cubes a side)
+  for ``TEN_K_SECONDS`` (0.3 s with ``--quick``): finite, deepest penetration and largest energy rise
+  read every 10 ms as in contact_stacks, and the cost timed from the state at the end.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from . import contact_stacks as S
+from . import machine
+from .timing import MIN_REPEATS, Case, interleaved
+
+SETTLE_SECONDS = 3.0
+BINS, BINS_QUICK = (1, 10, 100), (1, 10)
+WARM = 20  # steps each engine takes from the copied poses before it is timed
+TEN_K, TEN_K_SECONDS, TEN_K_SECONDS_QUICK = 10_000, 1.2, 0.3
+BIN_GAP = 0.1  # m between two bins' walls
+
+
+def settled_pile(seconds: float) -> list[S.Cube]:
+    """contact_stacks' 1000-cube pile after ``seconds`` in our engine: its cubes at their poses then, and its walls."""
+    cubes = S.pile(1000)
+    ours = S.Ours(cubes, "rk4", False)
+    ours.step(int(round(seconds / S.DT)))
+    p, q, _, _ = ours.sample()
+    moving = iter(zip(p, q))
+    out = []
+    for c in cubes:
+        if c.static:
+            out.append(c)
+        else:
+            pos, (w, x, y, z) = next(moving)
+            out.append(S.Cube(c.edge, c.mass, tuple(pos), (x, y, z, w)))
+    return out
+
+
+def bins(one: list[S.Cube], k: int) -> list[S.Cube]:
+    """``k`` copies of the bin ``one`` (cubes and walls) on a square grid, BIN_GAP between neighbouring walls."""
+    walls = [c for c in one if c.static]
+    pitch = max(max(abs(w.position[0]) + 0.5 * w.sizes[0], abs(w.position[1]) + 0.5 * w.sizes[1]) for w in walls)
+    pitch = 2.0 * pitch + BIN_GAP
+    side = math.ceil(math.sqrt(k))
+    moving, static = [], []
+    for n in range(k):
+        dx, dy = pitch * (n % side), pitch * (n // side)
+        for c in one:
+            x, y, z = c.position
+            copy = S.Cube(c.edge, c.mass, (x + dx, y + dy, z), c.orientation, c.static, c.size)
+            (static if c.static else moving).append(copy)
+    return moving + static
+
+
+def engines(cubes: list[S.Cube]) -> list:
+    out = [S.Ours(cubes, "rk4", False)]
+    if S.mujoco is not None:
+        out.append(S.MuJoCo(cubes, "pyramidal", False))
+    return out
+
+
+def cost_rows(quick: bool, log) -> tuple[list[dict], dict[str, str]]:
+    log(f"  settling the 1000-cube pile for {SETTLE_SECONDS:g} s")
+    one = settled_pile(SETTLE_SECONDS)
+    rows, settings = [], {}
+    for k in BINS_QUICK if quick else BINS:
+        cubes = bins(one, k)
+        count = sum(not c.static for c in cubes)
+        cases, owners = [], []
+        for engine in engines(cubes):
+            if engine.name != S.Ours.name:
+                settings[f"{engine.name}, {engine.setting}"] = engine.settings_text()
+            engine.step(WARM)
+            start = engine.snapshot()
+            cases.append(Case((engine.name, engine.setting, count), run=engine.step,
+                              setup=lambda e=engine, s=start: e.restore(s), max_units=WARM))
+            owners.append(engine)
+        log(f"  {count} cubes in {k} bins: timing")
+        stats = interleaved(cases, MIN_REPEATS, 0.5, log=log)
+        for key, s in stats.items():
+            rows.append({"part": "cost", "engine": key[0], "setting": key[1], "bodies": key[2], "bins": k,
+                         **s.scaled(1e6).as_row("us_per_step"), **s.rate(key[2]).as_row("body_steps_per_s")})
+        for engine in owners:
+            engine.close()
+    return rows, settings
+
+
+def pile_rows(quick: bool, log) -> tuple[list[dict], dict[str, str]]:
+    seconds = TEN_K_SECONDS_QUICK if quick else TEN_K_SECONDS
+    cubes = S.pile(TEN_K)
+    depth = S.Depth(cubes)
+    rows, settings = [], {}
+    for engine in engines(cubes):
+        if engine.name != S.Ours.name:
+            settings[f"{engine.name}, {engine.setting}"] = engine.settings_text()
+        readings = S.PileReadings(cubes, depth)
+        readings.run(engine, seconds)
+        log(f"  pile of {TEN_K} {engine.name}: finite {readings.finite}, penetration {readings.deepest:.3g} m, "
+            f"energy rise {readings.rise:.3g} J")
+        end = engine.snapshot()
+        stats = interleaved([Case(0, run=engine.step, setup=lambda e=engine, s=end: e.restore(s), max_units=5)],
+                            MIN_REPEATS, 0.5, log=log)[0]
+        row = readings.row(engine)
+        row.update(part="pile", seconds=seconds, **stats.scaled(1e6).as_row("us_per_step"),
+                   **stats.rate(TEN_K).as_row("body_steps_per_s"))
+        rows.append(row)
+        engine.close()
+    return rows, settings
+
+
+def report(part: str, rows: list[dict], settings: dict[str, str], quick: bool) -> str:
+    rate = lambda r: f"{r['body_steps_per_s']:.3g} ({r['body_steps_per_s_min']:.3g}–{r['body_steps_per_s_max']:.3g})"
+    step = lambda r: f"{r['us_per_step']:.3g} ({r['us_per_step_min']:.3g}–{r['us_per_step_max']:.3g})"
+    lines = [f"From `python -m benchmarks.contact_scaling --part {part}{' --quick' if quick else ''}` "
+             f"({datetime.date.today().isoformat()}, commit {machine.git('rev-parse', '--short', 'HEAD')}), "
+             f"dt = {S.DT:g} s, μ = {S.MU}, e = 0, one thread.", "", machine.text(), ""]
+    if part == "cost":
+        lines += [f"**Cost against bodies**: the 1000-cube pile after {SETTLE_SECONDS:g} s in our engine, its poses "
+                  f"copied into bins side by side, {WARM} steps, then timed:", "",
+                  "| engine | setting | cubes | bins | µs per step | body-steps/s |", "|---|---|---|---|---|---|"]
+        lines += [f"| {r['engine']} | {r['setting']} | {r['bodies']} | {r['bins']} | {step(r)} | {rate(r)} |"
+                  for r in rows]
+    else:
+        lines += [f"**One pile of {TEN_K}** cubes dropped into one bin, {rows[0]['seconds']:g} s (readings every "
+                  f"{S.SAMPLE_EVERY * S.DT * 1e3:g} ms; cost timed from the state at the end):", "",
+                  "| engine | setting | finite | deepest penetration (m) | largest energy rise (J) | µs per step | "
+                  "body-steps/s |", "|---|---|---|---|---|---|---|"]
+        lines += [f"| {r['engine']} | {r['setting']} | {'yes' if r['finite'] else 'no'} | {r['penetration']:.3g} | "
+                  f"{r['energy_rise']:.3g} | {step(r)} | {rate(r)} |" for r in rows]
+    lines += ["", "Settings:", ""] + [f"* **{k}**: {v}" for k, v in settings.items()]
+    return "\n".join(lines) + "\n"
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n", 1)[0])
+    ap.add_argument("--part", choices=("cost", "pile"), default="cost",
+                    help="cost: 1e3 → 1e5 cubes in bins; pile: one pile of 10,000 (default cost)")
+    ap.add_argument("--quick", action="store_true", help="fewer bins, a shorter pile")
+    ap.add_argument("--out", type=Path, default=Path("benchmarks/results"))
+    args = ap.parse_args(argv)
+
+    def log(msg: str) -> None:
+        print(msg, file=sys.stderr, flush=True)
+
+    rows, settings = (cost_rows if args.part == "cost" else pile_rows)(args.quick, log)
+    args.out.mkdir(parents=True, exist_ok=True)
+    S._write_csv(args.out / f"contact_scaling_{args.part}.csv", rows)
+    text = report(args.part, rows, settings, args.quick)
+    (args.out / f"contact_scaling_{args.part}.md").write_text(text)
+    print(text)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
