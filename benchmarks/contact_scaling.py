@@ -36,37 +36,52 @@ TEN_K, TEN_K_SECONDS, TEN_K_SECONDS_QUICK = 10_000, 1.2, 0.3
 BIN_GAP = 0.1  # m between two bins' walls
 
 
-def settled_pile(seconds: float) -> list[S.Cube]:
-    """contact_stacks' 1000-cube pile after ``seconds`` in our engine: its cubes at their poses then, and its walls."""
-    cubes = S.pile(1000)
-    ours = S.Ours(cubes, "rk4", False)
+def settled_pile(seconds: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """contact_stacks' 1000-cube pile after ``seconds`` in our engine: its cubes' state rows (1000, 13) with
+    velocities zeroed, positions (1000, 3) and orientations (1000, 4) (w, x, y, z)."""
+    ours = S.Ours(S.pile(1000), "rk4", False)
     ours.step(int(round(seconds / S.DT)))
+    rows = ours.snapshot()[ours.moving]
+    rows[:, 7:13] = 0.0  # (p, q, v, w): at rest
     p, q, _, _ = ours.sample()
-    moving = iter(zip(p, q))
-    out = []
-    for c in cubes:
-        if c.static:
-            out.append(c)
-        else:
-            pos, (w, x, y, z) = next(moving)
-            out.append(S.Cube(c.edge, c.mass, tuple(pos), (x, y, z, w)))
-    return out
+    return rows, p, q
 
 
-def bins(one: list[S.Cube], k: int) -> list[S.Cube]:
-    """``k`` copies of the bin ``one`` (cubes and walls) on a square grid, BIN_GAP between neighbouring walls."""
+def bins(k: int) -> tuple[list[S.Cube], np.ndarray]:
+    """``k`` copies of contact_stacks' 1000-cube bin (lattice and walls) on a square grid, BIN_GAP between
+    neighbouring walls: (cubes, the moving cubes' offsets (1000 k, 3))."""
+    one = S.pile(1000)
     walls = [c for c in one if c.static]
     pitch = max(max(abs(w.position[0]) + 0.5 * w.sizes[0], abs(w.position[1]) + 0.5 * w.sizes[1]) for w in walls)
     pitch = 2.0 * pitch + BIN_GAP
     side = math.ceil(math.sqrt(k))
-    moving, static = [], []
+    moving, static, offsets = [], [], []
     for n in range(k):
         dx, dy = pitch * (n % side), pitch * (n // side)
         for c in one:
             x, y, z = c.position
             copy = S.Cube(c.edge, c.mass, (x + dx, y + dy, z), c.orientation, c.static, c.size)
             (static if c.static else moving).append(copy)
-    return moving + static
+            if not c.static:
+                offsets.append((dx, dy, 0.0))
+    return moving + static, np.array(offsets)
+
+
+def place(engine, rows: np.ndarray, p: np.ndarray, q: np.ndarray, offsets: np.ndarray) -> None:
+    """The bins' moving cubes put at the settled pile's poses (each bin's by its offset), at rest."""
+    k = len(offsets) // len(rows)
+    if isinstance(engine, S.Ours):
+        Y = engine.snapshot()
+        tiled = np.tile(rows, (k, 1))
+        tiled[:, 0:3] += offsets
+        Y[engine.moving] = tiled
+        engine.restore(Y)
+    else:  # MuJoCo: a free joint's qpos is (x, y, z, qw, qx, qy, qz)
+        qpos = engine.d.qpos.reshape(-1, 7)
+        qpos[:, 0:3] = np.tile(p, (k, 1)) + offsets
+        qpos[:, 3:7] = np.tile(q, (k, 1))
+        engine.d.qvel[:] = 0.0
+        S.mujoco.mj_forward(engine.m, engine.d)
 
 
 def engines(cubes: list[S.Cube]) -> list:
@@ -78,15 +93,16 @@ def engines(cubes: list[S.Cube]) -> list:
 
 def cost_rows(quick: bool, log) -> tuple[list[dict], dict[str, str]]:
     log(f"  settling the 1000-cube pile for {SETTLE_SECONDS:g} s")
-    one = settled_pile(SETTLE_SECONDS)
+    settled = settled_pile(SETTLE_SECONDS)
     rows, settings = [], {}
     for k in BINS_QUICK if quick else BINS:
-        cubes = bins(one, k)
-        count = sum(not c.static for c in cubes)
+        cubes, offsets = bins(k)
+        count = len(offsets)
         cases, owners = [], []
         for engine in engines(cubes):
             if engine.name != S.Ours.name:
                 settings[f"{engine.name}, {engine.setting}"] = engine.settings_text()
+            place(engine, *settled, offsets)
             engine.step(WARM)
             start = engine.snapshot()
             cases.append(Case((engine.name, engine.setting, count), run=engine.step,
