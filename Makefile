@@ -220,6 +220,15 @@ BENCH_STACKS_ARGS ?=
 bench-stacks: bench-deps
 	$(VENV_PY) -m benchmarks.contact_stacks --out $(BENCH_OUT) --bodies $(STACK_BODIES) $(BENCH_STACKS_ARGS)
 
+# How a pile's cost grows with its bodies (benchmarks/contact_scaling.py), ours beside MuJoCo: 1e3, 1e4 and 1e5 cubes
+# in bins side by side (the settled 1000-cube pile copied), and one pile of 10,000 cubes dropped into one bin.
+# Writes benchmarks/results/contact_scaling_cost.{csv,md} and contact_scaling_pile.{csv,md}.
+BENCH_SCALING_ARGS ?=
+.PHONY: bench-scaling
+bench-scaling: bench-deps
+	$(VENV_PY) -m benchmarks.contact_scaling --part cost --out $(BENCH_OUT) $(BENCH_SCALING_ARGS)
+	$(VENV_PY) -m benchmarks.contact_scaling --part pile --out $(BENCH_OUT) $(BENCH_SCALING_ARGS)
+
 # The node benchmark: batched output and shared inputs, 1 to 10000 bodies at 100 Hz, 100 at 1 kHz, 100000 at
 # 10 Hz, the 10000 and 100000 cases also recording; rk4, 1 substep, a plain rclpy `poses` subscriber in its own
 # process; start to first poses, RSS, sim/wall, ticks delivered and recorded, CPU per tick, stop time, and the

@@ -5,11 +5,11 @@
 settings and readings are those of benchmarks/contact_stacks.py (0.1 m cubes of 1 kg, μ = 0.5, e = 0,
 dt = 1 ms, one thread), ours with rk4 (the default) and MuJoCo with its default pyramidal cone.
 
-* **cost**: the 1000-cube pile dropped into its bin by our engine for ``SETTLE_SECONDS``; its cubes'
-  poses (at rest: velocities zero) copied into k bins side by side, k = 1, 10, 100 (1e3, 1e4, 1e5
-  cubes; 1 and 10 with ``--quick``). Each engine steps the copies ``WARM`` steps, then is timed from
-  that state: µs per step and body-steps/s, medians of ≥ 5 with min–max. Linear cost is a flat
-  body-steps/s down the column.
+* **cost**: each engine drops the 1000-cube pile into its bin for ``SETTLE_SECONDS``; its cubes'
+  poses (at rest: velocities zero) are copied into k bins side by side, k = 1, 10, 100 (1e3, 1e4,
+  1e5 cubes; 1 and 10 with ``--quick``). Each engine steps its copies ``WARM`` steps, then is timed
+  from that state: µs per step and body-steps/s, medians of ≥ 5 with min–max. Linear cost is a
+  flat body-steps/s down the column. MuJoCo's arena: ``MUJOCO_MB_PER_CUBE`` MB per cube.
 * **pile**: ``TEN_K`` cubes dropped together into one bin (contact_stacks' lattice, 22 cubes a side)
   for ``TEN_K_SECONDS`` (0.3 s with ``--quick``): finite, deepest penetration and largest energy rise
   read every 10 ms as in contact_stacks, and the cost timed from the state at the end.
@@ -34,17 +34,19 @@ BINS, BINS_QUICK = (1, 10, 100), (1, 10)
 WARM = 20  # steps each engine takes from the copied poses before it is timed
 TEN_K, TEN_K_SECONDS, TEN_K_SECONDS_QUICK = 10_000, 1.2, 0.3
 BIN_GAP = 0.1  # m between two bins' walls
+MUJOCO_MB_PER_CUBE = 0.5  # its arena: 0.1 MB per cube (contact_stacks) runs out in the pile of 10,000
 
 
-def settled_pile(seconds: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """contact_stacks' 1000-cube pile after ``seconds`` in our engine: its cubes' state rows (1000, 13) with
-    velocities zeroed, positions (1000, 3) and orientations (1000, 4) (w, x, y, z)."""
-    ours = S.Ours(S.pile(1000), "rk4", False)
-    ours.step(int(round(seconds / S.DT)))
-    rows = ours.snapshot()[ours.moving]
-    rows[:, 7:13] = 0.0  # (p, q, v, w): at rest
-    p, q, _, _ = ours.sample()
-    return rows, p, q
+def settled_piles(seconds: float) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Each engine's own 1000-cube pile of contact_stacks after ``seconds``: {engine name: (positions (1000, 3),
+    orientations (1000, 4) (w, x, y, z))}."""
+    out = {}
+    for engine in engines(S.pile(1000)):
+        engine.step(int(round(seconds / S.DT)))
+        p, q, _, _ = engine.sample()
+        out[engine.name] = (p, q)
+        engine.close()
+    return out
 
 
 def bins(k: int) -> tuple[list[S.Cube], np.ndarray]:
@@ -67,19 +69,17 @@ def bins(k: int) -> tuple[list[S.Cube], np.ndarray]:
     return moving + static, np.array(offsets)
 
 
-def place(engine, rows: np.ndarray, p: np.ndarray, q: np.ndarray, offsets: np.ndarray) -> None:
-    """The bins' moving cubes put at the settled pile's poses (each bin's by its offset), at rest."""
-    k = len(offsets) // len(rows)
+def place(engine, p: np.ndarray, q: np.ndarray, offsets: np.ndarray) -> None:
+    """The bins' moving cubes put at the poses p, q (w, x, y, z) of a pile (each bin's by its offset), at rest."""
+    k = len(offsets) // len(p)
+    p, q = np.tile(p, (k, 1)) + offsets, np.tile(q, (k, 1))
     if isinstance(engine, S.Ours):
         Y = engine.snapshot()
-        tiled = np.tile(rows, (k, 1))
-        tiled[:, 0:3] += offsets
-        Y[engine.moving] = tiled
+        Y[engine.moving, 0:3], Y[engine.moving, 3:7], Y[engine.moving, 7:13] = p, q, 0.0  # rows (p, q_WP, v, w)
         engine.restore(Y)
     else:  # MuJoCo: a free joint's qpos is (x, y, z, qw, qx, qy, qz)
         qpos = engine.d.qpos.reshape(-1, 7)
-        qpos[:, 0:3] = np.tile(p, (k, 1)) + offsets
-        qpos[:, 3:7] = np.tile(q, (k, 1))
+        qpos[:, 0:3], qpos[:, 3:7] = p, q
         engine.d.qvel[:] = 0.0
         S.mujoco.mj_forward(engine.m, engine.d)
 
@@ -87,13 +87,13 @@ def place(engine, rows: np.ndarray, p: np.ndarray, q: np.ndarray, offsets: np.nd
 def engines(cubes: list[S.Cube]) -> list:
     out = [S.Ours(cubes, "rk4", False)]
     if S.mujoco is not None:
-        out.append(S.MuJoCo(cubes, "pyramidal", False))
+        out.append(S.MuJoCo(cubes, "pyramidal", False, memory_per_cube=MUJOCO_MB_PER_CUBE))
     return out
 
 
 def cost_rows(quick: bool, log) -> tuple[list[dict], dict[str, str]]:
-    log(f"  settling the 1000-cube pile for {SETTLE_SECONDS:g} s")
-    settled = settled_pile(SETTLE_SECONDS)
+    log(f"  each engine's 1000-cube pile for {SETTLE_SECONDS:g} s")
+    settled = settled_piles(SETTLE_SECONDS)
     rows, settings = [], {}
     for k in BINS_QUICK if quick else BINS:
         cubes, offsets = bins(k)
@@ -102,7 +102,7 @@ def cost_rows(quick: bool, log) -> tuple[list[dict], dict[str, str]]:
         for engine in engines(cubes):
             if engine.name != S.Ours.name:
                 settings[f"{engine.name}, {engine.setting}"] = engine.settings_text()
-            place(engine, *settled, offsets)
+            place(engine, *settled[engine.name], offsets)
             engine.step(WARM)
             start = engine.snapshot()
             cases.append(Case((engine.name, engine.setting, count), run=engine.step,
@@ -148,8 +148,8 @@ def report(part: str, rows: list[dict], settings: dict[str, str], quick: bool) -
              f"({datetime.date.today().isoformat()}, commit {machine.git('rev-parse', '--short', 'HEAD')}), "
              f"dt = {S.DT:g} s, μ = {S.MU}, e = 0, one thread.", "", machine.text(), ""]
     if part == "cost":
-        lines += [f"**Cost against bodies**: the 1000-cube pile after {SETTLE_SECONDS:g} s in our engine, its poses "
-                  f"copied into bins side by side, {WARM} steps, then timed:", "",
+        lines += [f"**Cost against bodies**: each engine's 1000-cube pile after {SETTLE_SECONDS:g} s, its poses "
+                  f"copied into bins side by side at rest, {WARM} steps, then timed:", "",
                   "| engine | setting | cubes | bins | µs per step | body-steps/s |", "|---|---|---|---|---|---|"]
         lines += [f"| {r['engine']} | {r['setting']} | {r['bodies']} | {r['bins']} | {step(r)} | {rate(r)} |"
                   for r in rows]

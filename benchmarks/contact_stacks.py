@@ -165,7 +165,8 @@ class Ours:
 class MuJoCo:
     name = "MuJoCo"
 
-    def __init__(self, cubes: list[Cube], cone: str, sleep: bool):
+    def __init__(self, cubes: list[Cube], cone: str, sleep: bool, memory_per_cube: float = 0.1):
+        """``memory_per_cube``: MB of MuJoCo's arena per cube (above 16 MB); a pile of 10,000 needs more than 0.1."""
         self.cubes, self.setting = cubes, cone + (", sleep" if sleep else "")
         friction = f'friction="{MU} 0.005 0.0001"'
         static, moving = "", ""
@@ -179,7 +180,7 @@ class MuJoCo:
                 moving += (f'<body pos="{pos}" quat="{w:.17g} {x:.17g} {y:.17g} {z:.17g}"><freejoint/>'
                            f'<geom type="box" size="{size}" mass="{c.mass:.17g}" {friction}/></body>')
         flag = '<flag sleep="enable"/>' if sleep else ""
-        memory = 16 + len(cubes) // 10
+        memory = 16 + int(len(cubes) * memory_per_cube)
         xml = (f'<mujoco><option timestep="{DT:.17g}" gravity="0 0 {-G}" integrator="Euler" cone="{cone}">{flag}'
                f'</option><size memory="{memory}M"/><worldbody><geom type="plane" size="0 0 1" {friction}/>'
                f'{static}{moving}</worldbody></mujoco>')
