@@ -1,15 +1,17 @@
-"""How a pile's cost grows with its bodies: 1e3 → 1e5 cubes in bins side by side, and one pile of 10,000.
+"""How a pile's cost grows with its bodies: 1e3 → 1e5 cubes in heaps side by side, and one pile of 10,000.
 
 ``python -m benchmarks.contact_scaling [--part cost|pile] [--quick] [--out benchmarks/results]``
 (``make bench-scaling``). Writes ``contact_scaling_<part>.{csv,md}`` to ``--out``. The scene, engines,
 settings and readings are those of benchmarks/contact_stacks.py (0.1 m cubes of 1 kg, μ = 0.5, e = 0,
 dt = 1 ms, one thread), ours with rk4 (the default) and MuJoCo with its default pyramidal cone.
 
-* **cost**: each engine drops the 1000-cube pile into its bin for ``SETTLE_SECONDS``; its cubes'
-  poses (at rest: velocities zero) are copied into k bins side by side, k = 1, 10, 99 (1e3, 1e4,
-  9.9e4 cubes: a scene holds at most 100,000 bodies, walls included; 1 and 10 with ``--quick``). Each engine steps its copies ``WARM`` steps, then is timed
-  from that state: µs per step and body-steps/s, medians of ≥ 5 with min–max. Linear cost is a
-  flat body-steps/s down the column. MuJoCo's arena: ``MUJOCO_MB_PER_CUBE`` MB per cube.
+* **cost**: each engine drops contact_stacks' 1000-cube lattice on the open ground (no bin: our
+  static shapes keep a row per body and static face, n² memory at 1e5 bodies) for
+  ``SETTLE_SECONDS``; the heap's poses (at rest: velocities zero) are copied into k heaps
+  ``HEAP_PITCH`` apart, k = 1, 10, 100 (1e3, 1e4, 1e5 cubes; 1 and 10 with ``--quick``). Each
+  engine steps its copies ``WARM`` steps, then is timed from that state: µs per step and
+  body-steps/s, medians of ≥ 5 with min–max. Linear cost is a flat body-steps/s down the column.
+  MuJoCo's arena: ``MUJOCO_MB_PER_CUBE`` MB per cube.
 * **pile**: ``TEN_K`` cubes dropped together into one bin (contact_stacks' lattice, 22 cubes a side)
   for ``TEN_K_SECONDS`` (0.3 s with ``--quick``): finite, deepest penetration and largest energy rise
   read every 10 ms as in contact_stacks, and the cost timed from the state at the end.
@@ -30,18 +32,23 @@ from . import machine
 from .timing import MIN_REPEATS, Case, interleaved
 
 SETTLE_SECONDS = 3.0
-BINS, BINS_QUICK = (1, 10, 99), (1, 10)  # 99: a scene holds at most 100,000 bodies, the walls included
+HEAPS, HEAPS_QUICK = (1, 10, 100), (1, 10)
+HEAP_PITCH = 4.0  # m between the centres of two heaps (a heap spreads to about 2.5 m across)
 WARM = 20  # steps each engine takes from the copied poses before it is timed
 TEN_K, TEN_K_SECONDS, TEN_K_SECONDS_QUICK = 10_000, 1.2, 0.3
-BIN_GAP = 0.1  # m between two bins' walls
 MUJOCO_MB_PER_CUBE = 0.5  # its arena: 0.1 MB per cube (contact_stacks) runs out in the pile of 10,000
 
 
+def heap() -> list[S.Cube]:
+    """contact_stacks' 1000-cube lattice without its bin: dropped, it heaps on the open ground."""
+    return [c for c in S.pile(1000) if not c.static]
+
+
 def settled_piles(seconds: float) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    """Each engine's own 1000-cube pile of contact_stacks after ``seconds``: {engine name: (positions (1000, 3),
-    orientations (1000, 4) (w, x, y, z))}."""
+    """Each engine's own heap of 1000 cubes after ``seconds``: {engine name: (positions (1000, 3), orientations
+    (1000, 4) (w, x, y, z))}."""
     out = {}
-    for engine in engines(S.pile(1000)):
+    for engine in engines(heap()):
         engine.step(int(round(seconds / S.DT)))
         p, q, _, _ = engine.sample()
         out[engine.name] = (p, q)
@@ -49,28 +56,23 @@ def settled_piles(seconds: float) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     return out
 
 
-def bins(k: int) -> tuple[list[S.Cube], np.ndarray]:
-    """``k`` copies of contact_stacks' 1000-cube bin (lattice and walls) on a square grid, BIN_GAP between
-    neighbouring walls: (cubes, the moving cubes' offsets (1000 k, 3))."""
-    one = S.pile(1000)
-    walls = [c for c in one if c.static]
-    pitch = max(max(abs(w.position[0]) + 0.5 * w.sizes[0], abs(w.position[1]) + 0.5 * w.sizes[1]) for w in walls)
-    pitch = 2.0 * pitch + BIN_GAP
+def heaps(k: int) -> tuple[list[S.Cube], np.ndarray]:
+    """``k`` copies of the 1000-cube lattice of :func:`heap` on a square grid HEAP_PITCH apart: (cubes, their
+    offsets (1000 k, 3))."""
+    one = heap()
     side = math.ceil(math.sqrt(k))
-    moving, static, offsets = [], [], []
+    cubes, offsets = [], []
     for n in range(k):
-        dx, dy = pitch * (n % side), pitch * (n // side)
+        dx, dy = HEAP_PITCH * (n % side), HEAP_PITCH * (n // side)
         for c in one:
             x, y, z = c.position
-            copy = S.Cube(c.edge, c.mass, (x + dx, y + dy, z), c.orientation, c.static, c.size)
-            (static if c.static else moving).append(copy)
-            if not c.static:
-                offsets.append((dx, dy, 0.0))
-    return moving + static, np.array(offsets)
+            cubes.append(S.Cube(c.edge, c.mass, (x + dx, y + dy, z), c.orientation))
+            offsets.append((dx, dy, 0.0))
+    return cubes, np.array(offsets)
 
 
 def place(engine, p: np.ndarray, q: np.ndarray, offsets: np.ndarray) -> None:
-    """The bins' moving cubes put at the poses p, q (w, x, y, z) of a pile (each bin's by its offset), at rest."""
+    """The heaps' cubes put at the poses p, q (w, x, y, z) of a pile (each heap's by its offset), at rest."""
     k = len(offsets) // len(p)
     p, q = np.tile(p, (k, 1)) + offsets, np.tile(q, (k, 1))
     if isinstance(engine, S.Ours):
@@ -95,8 +97,8 @@ def cost_rows(quick: bool, log) -> tuple[list[dict], dict[str, str]]:
     log(f"  each engine's 1000-cube pile for {SETTLE_SECONDS:g} s")
     settled = settled_piles(SETTLE_SECONDS)
     rows, settings = [], {}
-    for k in BINS_QUICK if quick else BINS:
-        cubes, offsets = bins(k)
+    for k in HEAPS_QUICK if quick else HEAPS:
+        cubes, offsets = heaps(k)
         count = len(offsets)
         cases, owners = [], []
         for engine in engines(cubes):
@@ -108,10 +110,10 @@ def cost_rows(quick: bool, log) -> tuple[list[dict], dict[str, str]]:
             cases.append(Case((engine.name, engine.setting, count), run=engine.step,
                               setup=lambda e=engine, s=start: e.restore(s), max_units=WARM))
             owners.append(engine)
-        log(f"  {count} cubes in {k} bins: timing")
+        log(f"  {count} cubes in {k} heaps: timing")
         stats = interleaved(cases, MIN_REPEATS, 0.5, log=log)
         for key, s in stats.items():
-            rows.append({"part": "cost", "engine": key[0], "setting": key[1], "bodies": key[2], "bins": k,
+            rows.append({"part": "cost", "engine": key[0], "setting": key[1], "bodies": key[2], "heaps": k,
                          **s.scaled(1e6).as_row("us_per_step"), **s.rate(key[2]).as_row("body_steps_per_s")})
         for engine in owners:
             engine.close()
@@ -148,10 +150,10 @@ def report(part: str, rows: list[dict], settings: dict[str, str], quick: bool) -
              f"({datetime.date.today().isoformat()}, commit {machine.git('rev-parse', '--short', 'HEAD')}), "
              f"dt = {S.DT:g} s, μ = {S.MU}, e = 0, one thread.", "", machine.text(), ""]
     if part == "cost":
-        lines += [f"**Cost against bodies**: each engine's 1000-cube pile after {SETTLE_SECONDS:g} s, its poses "
-                  f"copied into bins side by side at rest, {WARM} steps, then timed:", "",
-                  "| engine | setting | cubes | bins | µs per step | body-steps/s |", "|---|---|---|---|---|---|"]
-        lines += [f"| {r['engine']} | {r['setting']} | {r['bodies']} | {r['bins']} | {step(r)} | {rate(r)} |"
+        lines += [f"**Cost against bodies**: each engine's heap of 1000 cubes after {SETTLE_SECONDS:g} s on the open "
+                  f"ground, its poses copied into heaps {HEAP_PITCH:g} m apart at rest, {WARM} steps, then timed:", "",
+                  "| engine | setting | cubes | heaps | µs per step | body-steps/s |", "|---|---|---|---|---|---|"]
+        lines += [f"| {r['engine']} | {r['setting']} | {r['bodies']} | {r['heaps']} | {step(r)} | {rate(r)} |"
                   for r in rows]
     else:
         lines += [f"**One pile of {TEN_K}** cubes dropped into one bin, {rows[0]['seconds']:g} s (readings every "
@@ -167,8 +169,8 @@ def report(part: str, rows: list[dict], settings: dict[str, str], quick: bool) -
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n", 1)[0])
     ap.add_argument("--part", choices=("cost", "pile"), default="cost",
-                    help="cost: 1e3 → 1e5 cubes in bins; pile: one pile of 10,000 (default cost)")
-    ap.add_argument("--quick", action="store_true", help="fewer bins, a shorter pile")
+                    help="cost: 1e3 → 1e5 cubes in heaps; pile: one pile of 10,000 (default cost)")
+    ap.add_argument("--quick", action="store_true", help="fewer heaps, a shorter pile")
     ap.add_argument("--out", type=Path, default=Path("benchmarks/results"))
     args = ap.parse_args(argv)
 
