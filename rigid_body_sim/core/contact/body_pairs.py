@@ -414,7 +414,7 @@ class BodyPairs:
                         step = min(step, (max(v, 0.0) + skins[key]) / bounds[key])
                 s = min(1.0, s_lo + step)
                 values_s = components(s)
-                if min(v for v, _ in values_s) < 0.0:
+                if min((v for v, _ in values_s), default=math.inf) < 0.0:  # none: every pair touching, none flying
                     s_hi = s
                     break
                 if s >= 1.0:
