@@ -15,7 +15,8 @@
 * A box flying face on at a box (four contact points) and at a sphere: the impact time and the
   1-D textbook velocities, within 1e-9.
 * A ball dropped onto a box resting on the ground, e = 0: it stops on it (the ground takes the
-  box's share, round after round), the box stays resting.
+  box's share, round after round), the box stays resting. A box sliding on the ground into a
+  resting one: both go on at half its speed.
 * A box falls onto a box (face on face) and a sphere onto a box: they do not pass through, and
   they come to rest on each other exactly (islands, island.py).
 * A scene with one moving body and no static shape has no body–body pass at all.
@@ -211,6 +212,25 @@ def test_a_ball_dropped_onto_a_resting_box_stops_on_it():
     assert abs(sim.state.v_WC_W).max() <= 1e-9 and abs(sim.state.w_WP_P).max() <= 1e-9
     assert sim.state.p_WC_W[0, 2] == pytest.approx(0.1, abs=1e-12)
     assert sim.state.p_WC_W[1, 2] == pytest.approx(0.25, abs=1e-12)
+
+
+def test_a_box_sliding_on_the_ground_into_a_resting_box_pushes_it_on():
+    """A cube (1 kg, 0.1 m) sliding frictionless on the ground at 1 m/s into a resting one 0.5 mm
+    ahead, e = 0: they meet at 0.5 ms inside the first step (neither in flight, every pair then
+    touching: the step's event search has nothing left to advance to) and go on together at
+    0.5 m/s (momentum): positions 0.0005 + 0.5 (t − 0.0005) and 0.1005 + 0.5 (t − 0.0005), 1e-9."""
+    box = {"box": [0.1, 0.1, 0.1]}
+    slick = {"restitution": 0.0, "friction": 0.0}
+    bodies = {name: {"mass": 1.0, "inertia": box, "collision": box, "material": slick,
+                     "pose": {"position": [x, 0.0, 0.05]}, "twist": {"linear": [v, 0.0, 0.0]}}
+              for name, x, v in (("a", 0.0, 1.0), ("b", 0.1005, 0.0))}
+    sim = Simulator(load_scene({"gravity": [0.0, 0.0, -9.81], "bodies": bodies,
+                                "ground": [{"normal": [0, 0, 1], "offset": 0.0, "material": slick}]}), "rk4", 1e-3)
+    sim.step(5)
+    t = 5e-3
+    np.testing.assert_allclose(sim.linear_velocities_world()[:, 0], [0.5, 0.5], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(sim.positions_world()[:, 0], [0.0005 + 0.5 * (t - 0.0005), 0.1005 + 0.5 * (t - 0.0005)],
+                               rtol=0, atol=1e-9)
 
 
 def test_a_box_lies_on_a_box_and_a_ball_on_both():
