@@ -11,7 +11,7 @@ dt = 1 ms, one thread), ours with rk4 (the default) and MuJoCo with its default 
   ``HEAP_PITCH`` apart, k = 1, 10, 100 (1e3, 1e4, 1e5 cubes; 1 and 10 with ``--quick``). Each
   engine steps its copies ``WARM`` steps, then is timed from that state: µs per step and
   body-steps/s, medians of ≥ 5 with min–max. Linear cost is a flat body-steps/s down the column.
-  MuJoCo's arena: ``MUJOCO_MB_PER_CUBE`` MB per cube.
+  MuJoCo's arena: ``MUJOCO_MB_PER_CUBE`` MB per cube; it holds fewer than 65,534 bodies (not 1e5).
 * **pile**: ``TEN_K`` cubes dropped together into one bin (contact_stacks' lattice, 22 cubes a side)
   for ``TEN_K_SECONDS`` (0.3 s with ``--quick``): finite, deepest penetration and largest energy rise
   read every 10 ms as in contact_stacks, and the cost timed from the state at the end.
@@ -36,6 +36,7 @@ HEAPS, HEAPS_QUICK = (1, 10, 100), (1, 10)
 HEAP_PITCH = 4.0  # m between the centres of two heaps (a heap spreads to about 2.5 m across)
 WARM = 20  # steps each engine takes from the copied poses before it is timed
 TEN_K, TEN_K_SECONDS, TEN_K_SECONDS_QUICK = 10_000, 1.2, 0.3
+MUJOCO_MAX_BODIES = 65534  # "number of bodies plus flexes must be less than 65534" (its model compiler)
 MUJOCO_MB_PER_CUBE = 0.5  # its arena: 0.1 MB per cube (contact_stacks) runs out in the pile of 10,000
 
 
@@ -87,8 +88,9 @@ def place(engine, p: np.ndarray, q: np.ndarray, offsets: np.ndarray) -> None:
 
 
 def engines(cubes: list[S.Cube]) -> list:
+    """Ours, and MuJoCo when it can hold the scene (fewer than MUJOCO_MAX_BODIES bodies)."""
     out = [S.Ours(cubes, "rk4", False)]
-    if S.mujoco is not None:
+    if S.mujoco is not None and len(cubes) < MUJOCO_MAX_BODIES:
         out.append(S.MuJoCo(cubes, "pyramidal", False, memory_per_cube=MUJOCO_MB_PER_CUBE))
     return out
 
