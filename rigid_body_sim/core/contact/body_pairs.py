@@ -154,30 +154,25 @@ class BodyPairs:
                       self._points1, self._seps1)
         return float(self._dist1[0])
 
-    def _shape_rows(self, Y: np.ndarray, pairs: np.ndarray) -> tuple:
-        """(shape centres (m, 3), q_WS (m, 4), shape rows (m, ·), pairs (k, 2) into them) of the bodies of the
-        pairs (k, 2) at state rows Y: the arguments of the batched kernels."""
-        bodies = np.unique(pairs)
+    def _poses(self, Y: np.ndarray, bodies: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(shape centres (m, 3), q_WS (m, 4)) of ``bodies`` (m,) at state rows Y: the batched kernels' poses."""
         pos = np.ascontiguousarray(Y[bodies, L.P:L.P + 3])
-        quat = np.ascontiguousarray(quat_multiply(Y[bodies, L.Q:L.Q + 4], self._q_PB[bodies]))
-        return pos, quat, np.ascontiguousarray(self._shapes[bodies]), np.ascontiguousarray(np.searchsorted(bodies, pairs))
+        return pos, np.ascontiguousarray(quat_multiply(Y[bodies, L.Q:L.Q + 4], self._q_PB[bodies]))
 
     @staticmethod
-    def _batch(rows: tuple) -> np.ndarray:
-        """(k,) signed distances of the pairs of :meth:`_shape_rows`'s ``rows``."""
-        pos, quat, shapes, local = rows
+    def _batch(poses: tuple, shapes: np.ndarray, local: np.ndarray) -> np.ndarray:
+        """(k,) signed distances of the pairs ``local`` (k, 2) of shapes (rows ``shapes``) at ``poses``."""
         k = len(local)
         dist = np.empty(k)
-        pair_contacts(pos, quat, shapes, local, dist, np.empty((k, 3)), np.zeros(k, dtype=np.int64),
+        pair_contacts(*poses, shapes, local, dist, np.empty((k, 3)), np.zeros(k, dtype=np.int64),
                       np.empty((k, MAX_PAIR_POINTS, 6)), np.empty((k, MAX_PAIR_POINTS)))
         return dist
 
     @staticmethod
-    def _apart(rows: tuple) -> np.ndarray:
-        """(k,) lower bounds on the distances of :meth:`_shape_rows`'s pairs (−1: none; two boxes only)."""
-        pos, quat, shapes, local = rows
+    def _apart(poses: tuple, shapes: np.ndarray, local: np.ndarray) -> np.ndarray:
+        """(k,) lower bounds on the distances of the pairs ``local`` (−1: none; two boxes only), as :meth:`_batch`."""
         out = np.empty(len(local))
-        apart_bounds(pos, quat, shapes, local, out)
+        apart_bounds(*poses, shapes, local, out)
         return out
 
     def _geometry(self) -> tuple[np.ndarray, np.ndarray, float]:
@@ -251,15 +246,16 @@ class BodyPairs:
         static_a = self.is_static[pairs[:, 0]]
         pairs = np.where(static_a[:, None], pairs[:, ::-1], pairs)  # a moving body first
         reach = self._pair_bounds(pairs, Y0, Y1) * h
-        rows0, rows1 = self._shape_rows(Y0, pairs), self._shape_rows(Y1, pairs)
-        lo0, lo1 = self._apart(rows0), self._apart(rows1)
+        bodies = np.unique(pairs)
+        local = np.ascontiguousarray(np.searchsorted(bodies, pairs))  # the pairs as rows of the arrays below
+        shapes = np.ascontiguousarray(self._shapes[bodies])
+        at0, at1 = self._poses(Y0, bodies), self._poses(Y1, bodies)
+        lo0, lo1 = self._apart(at0, shapes, local), self._apart(at1, shapes, local)
         near = ~((lo0 > 0.0) & (lo1 > 0.0) & (lo0 + lo1 > reach))  # the others cannot be either kind below
         if not near.any():
             return []
-        if not near.all():
-            pairs, reach = pairs[near], reach[near]
-            rows0, rows1 = self._shape_rows(Y0, pairs), self._shape_rows(Y1, pairs)
-        d1, d0 = self._batch(rows1), self._batch(rows0)
+        pairs, reach, local = pairs[near], reach[near], np.ascontiguousarray(local[near])
+        d1, d0 = self._batch(at1, shapes, local), self._batch(at0, shapes, local)
         static = self.is_static[pairs[:, 1]]
         resting = solver.modes[pairs[:, 0]] == PERSISTENT
         ends = ~static & ((d1 < 0.0) | (d0 < 0.0))

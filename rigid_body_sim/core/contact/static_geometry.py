@@ -125,6 +125,9 @@ class StaticGeometry:
     def __init__(self, sim, spec, statics: np.ndarray) -> None:
         n = sim.model.count
         self.statics = statics
+        #: Body index → index into ``statics`` (−1: not a static shape).
+        self._static_index = np.full(n, -1, dtype=np.int64)
+        self._static_index[statics] = np.arange(len(statics))
         self.half_spaces = spec.grounds
         g = len(spec.grounds)
         self.shapes = spec.shapes[statics].copy()
@@ -276,9 +279,7 @@ class StaticGeometry:
         is rewritten when the body next meets a static shape outside an island). A body against two
         such shapes at once has one tangent row: it names the last of them.
         """
-        index = np.full(self._pair_e.shape[0], -1, dtype=np.int64)  # body index → index into statics
-        index[self.statics] = np.arange(len(self.statics))
-        s = index[static_bodies]
+        s = self._static_index[static_bodies]
         first = self.first_face[s]
         rows = self.first_tangent + bodies
         box = np.flatnonzero(first >= 0)

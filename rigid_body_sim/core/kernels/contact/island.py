@@ -461,26 +461,39 @@ def _row_dir(rj, rbody, r):
     return -rj[r, 0], -rj[r, 1], -rj[r, 2]
 
 
+@njit(**INLINE)
+def _same_pair(aint, a, bint, b):
+    """Whether contact a of int rows aint and contact b of bint are between the same two sides."""
+    return (aint[a, I_A] == bint[b, I_A] and aint[a, I_B] == bint[b, I_B] and aint[a, I_STATIC] == bint[b, I_STATIC]
+            and aint[a, I_GROUND] == bint[b, I_GROUND])
+
+
+@njit(**INLINE)
+def _list_per_body(cint, count, members, head):
+    """Contacts cint[:count] listed per moving body (side b, else a), in their order: head[i] the first of body i,
+    cint[c, I_NEXT] the next after c, −1 the end."""
+    for m in range(members.shape[0]):
+        head[members[m]] = -1
+    for c in range(count - 1, -1, -1):
+        i = cint[c, I_B] if cint[c, I_B] >= 0 else cint[c, I_A]
+        cint[c, I_NEXT] = head[i]
+        head[i] = c
+
+
 @njit(**JIT)
 def _warm_start(nc, cint, cflt, n_prev, prev_int, prev_flt, members, size, head, rj, rbody, rlam):
     """Each contact's λ (3 rows) from the last step's contact of the same pair (same static body or half-space)
     nearest to its point within WARM_REACH × its body's size: that impulse taken onto the new rows and into the
     cone (each old contact used once); 0 where none. prev_int[:, I_NEXT], prev_flt[:, C_MU] and head (per body)
     are overwritten."""
-    for m in range(members.shape[0]):
-        head[members[m]] = -1
-    for p in range(n_prev):  # the old contacts listed per moving body
-        i = prev_int[p, I_B] if prev_int[p, I_B] >= 0 else prev_int[p, I_A]
-        prev_int[p, I_NEXT] = head[i]
-        head[i] = p
+    _list_per_body(prev_int, n_prev, members, head)
     for c in range(nc):
         i = cint[c, I_B] if cint[c, I_B] >= 0 else cint[c, I_A]
         best = (WARM_REACH * size[i]) ** 2
         found = -1
         p = head[i]
         while p >= 0:
-            if (prev_flt[p, C_MU] >= 0.0 and prev_int[p, I_A] == cint[c, I_A] and prev_int[p, I_B] == cint[c, I_B]
-                    and prev_int[p, I_STATIC] == cint[c, I_STATIC] and prev_int[p, I_GROUND] == cint[c, I_GROUND]):
+            if prev_flt[p, C_MU] >= 0.0 and _same_pair(prev_int, p, cint, c):
                 d2 = ((prev_flt[p, C_X] - cflt[c, C_X]) ** 2 + (prev_flt[p, C_X + 1] - cflt[c, C_X + 1]) ** 2
                       + (prev_flt[p, C_X + 2] - cflt[c, C_X + 2]) ** 2)
                 if d2 < best:
@@ -655,23 +668,18 @@ def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdia
     _pin = Y1[0, 0], prm[0, 0], members[0], island[0], cint[0, 0], cflt[0, 0], iw[0, 0], rj[0, 0], rw[0, 0]
     _pin2 = rdiag[0], rbias[0], rbody[0, 0], rlam[0], vel[0, 0]
 
+
 @njit(**JIT)
 def _attribute(nc, cint, cflt, nd, sint, sflt, members, head):
     """The impulses of the nd points whose approach was stopped after the projection (sint/sflt) added to the
     step's contacts (cint/cflt[:nc]) of the same pair (the first listed), so that a pair's summed impulse is all
     it gave. head (per body) and cint[:, I_NEXT] are overwritten."""
-    for m in range(members.shape[0]):
-        head[members[m]] = -1
-    for c in range(nc - 1, -1, -1):
-        i = cint[c, I_B] if cint[c, I_B] >= 0 else cint[c, I_A]
-        cint[c, I_NEXT] = head[i]
-        head[i] = c
+    _list_per_body(cint, nc, members, head)
     for p in range(nd):
         i = sint[p, I_B] if sint[p, I_B] >= 0 else sint[p, I_A]
         c = head[i]
         while c >= 0:
-            if (cint[c, I_A] == sint[p, I_A] and cint[c, I_B] == sint[p, I_B] and cint[c, I_STATIC] == sint[p, I_STATIC]
-                    and cint[c, I_GROUND] == sint[p, I_GROUND]):
+            if _same_pair(cint, c, sint, p):
                 for k in range(3):
                     cflt[c, C_IMPULSE + k] += sflt[p, C_IMPULSE + k]
                 break
