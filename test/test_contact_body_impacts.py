@@ -28,7 +28,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from rigid_body_sim.core import Simulator, load_scene
@@ -158,6 +158,8 @@ _unit = st.floats(-1.0, 1.0)
 
 
 @settings(max_examples=25, deadline=None)
+@example(kinds=("box", "box"), dims=(0.125, 0.05078125, 0.0625), quats=[0.0, 1.0, 0.5, 0.0, 0.0, 0.0, 0.0, 1.0],
+         spins=[0.0, 0.0, 0.0, 0.0, -1.0, 1.5], offset=(0.0, 0.0), masses=(1.0, 1.0), e=1.0, mu=0.0)
 @given(kinds=st.tuples(st.sampled_from(sorted(_KINDS)), st.sampled_from(sorted(_KINDS))),
        dims=st.tuples(st.floats(0.05, 0.15), st.floats(0.05, 0.15), st.floats(0.05, 0.15)),
        quats=st.lists(_unit, min_size=8, max_size=8).filter(lambda q: min(np.linalg.norm(q[:4]), np.linalg.norm(q[4:])) > 0.1),
@@ -175,7 +177,9 @@ def test_energy_never_rises_at_a_body_body_impact(kinds, dims, quats, spins, off
                         "pose": {"position": [x, offset[0] * k, 1.0 + offset[1] * k],
                                  "orientation": [float(q[1]), float(q[2]), float(q[3]), float(q[0])]},
                         "twist": {"linear": [vx, 0.0, 0.0], "angular": spins[3 * k:3 * k + 3]}}
-    sim = Simulator(load_scene({"gravity": [0.0, 0.0, 0.0], "ground": [], "bodies": bodies}), "rk4", 2e-3)
+    # implicit_gyroscopic keeps a free body's energy exactly at any |ω|h, so the step's change is the
+    # contact's alone (rk4's own truncation error on the spin an impact leaves reaches 1e-11 of E)
+    sim = Simulator(load_scene({"gravity": [0.0, 0.0, 0.0], "ground": [], "bodies": bodies}), "implicit_gyroscopic", 2e-3)
     before = _energy(sim)
     for _ in range(150):
         sim.step()
