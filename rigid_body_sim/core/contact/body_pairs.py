@@ -558,8 +558,8 @@ class BodyPairs:
         if k == 0 or lowest >= -APPROACH_SPEED:
             return False
         out = y.copy()
-        impact(y, out, sim._prm[i], k, solver._points, g[0], g[1], g[2], float(solver.restitution[i, j]),
-               float(solver.friction[i, j]), solver._work)
+        impact(y, out, sim._prm[i], k, solver._points, g[0], g[1], g[2], solver.restitution_of(i, j),
+               solver.friction_of(i, j), solver._work)
         y[L.V:L.W + 3] = out[L.V:L.W + 3]
         return True
 

@@ -112,10 +112,8 @@ class Islands:
         solver = self.solver
         if len(cand) > len(self._nlist):
             self._grow_pairs(2 * len(cand))
-        G = len(solver.half_spaces)
-        gmu = solver.friction[:, :G] if solver.friction.shape[1] > G else solver.friction
         args_head = (Y0, Y1, sim._prm, wrenches, solver._bare_rows, solver.modes, self.saved, solver.shapes,
-                     solver.half_spaces, np.ascontiguousarray(gmu), self.members, cand, len(cand),
+                     solver.half_spaces, solver.half_space_friction, self.members, cand, len(cand),
                      self.pairs.is_static, sim._stopped, self.pairs.spin_reach, self.size, self.asleep, self.quiet, h,
                      bool(solver.sleeping), DEFAULT_FRICTION, self.n_contacts, self.island, self._parent,
                      self._flags)

@@ -79,6 +79,7 @@ from ..kernels.stepping import advance, step_reduced
 from ..kernels.contact.batch import CACHE_WIDTH, OK, TO_SOLVER, hold_all, settle_all
 from ..kernels.contact.impacts import _A, _LAM, IMPACT_WORK_SHAPE, impact
 from ..kernels.contact.layout import DIMS, FLIGHT, KIND, MAX_POINTS, NORMAL, PERSISTENT, SHAPE_BOX
+from ..kernels.contact.materials import material
 from ..kernels.contact.persistent import (
     LIFT_OFF,
     SLIDE,
@@ -132,8 +133,19 @@ class ContactSolver:
         spec = sim.scene.contact
         self.grounds = spec.grounds
         self.shapes = spec.shapes
+        #: Per body, restitution and friction against the plane rows of :attr:`grounds` below
+        #: :attr:`first_tangent` (the half-spaces, then the static box faces): (n, first_tangent). Read
+        #: through :meth:`restitution_of` and :meth:`friction_of` (kernels/contact/materials.py).
         self.restitution = spec.restitution
         self.friction = spec.friction
+        #: Per body, restitution and friction against its own tangent row first_tangent + i: (n,), or (0,)
+        #: without static shapes (then there is no tangent row).
+        self.tangent_restitution = np.zeros(0)
+        self.tangent_friction = np.zeros(0)
+        #: The first tangent row of :attr:`grounds` (body 0's); the number of half-spaces without static shapes.
+        self.first_tangent = len(spec.grounds)
+        #: Per body, friction against each half-space: (n, G), contiguous (the islands' kernel, island.py).
+        self.half_space_friction = spec.friction
         model = sim.model
         #: The scene's half-spaces (rows 0 … G − 1 of :attr:`grounds`).
         self.half_spaces = spec.grounds
@@ -146,6 +158,7 @@ class ContactSolver:
             # plane rows: half-spaces, static box faces, one tangent row per body (static_geometry.py)
             self.grounds, self.restitution, self.friction = (self.statics.rows, self.statics.restitution,
                                                              self.statics.friction)
+            self.first_tangent = self.statics.restitution.shape[1]
         n = model.count
         self.bodies = np.array(spec.bodies, dtype=np.int64)  # free bodies with a collision shape
         #: The body–body pass (body_pairs.py), or None: a scene with fewer than two moving bodies with a
@@ -283,6 +296,14 @@ class ContactSolver:
         half-space of the scene's ``ground`` list (static_geometry.py; a tangent row names its latest owner)."""
         b = -1 if self.statics is None or ground < len(self.half_spaces) else self.statics.static_of(ground)
         return self.names[b] if b >= 0 else None
+
+    def restitution_of(self, i: int, j: int) -> float:
+        """Body i's restitution against plane row j of :attr:`grounds` (kernels/contact/materials.material)."""
+        return float(material.py_func(self.restitution, self.tangent_restitution, self.first_tangent, i, j))
+
+    def friction_of(self, i: int, j: int) -> float:
+        """Body i's friction coefficient against plane row j of :attr:`grounds` (kernels/contact/materials.material)."""
+        return float(material.py_func(self.friction, self.tangent_friction, self.first_tangent, i, j))
 
     def events_of(self, body: str, kind: str | None = None) -> list[ContactEvent]:
         """The recorded events of ``body`` (of one ``kind`` if given), in time order of their recording."""
@@ -423,8 +444,9 @@ class ContactSolver:
             one = one[self.ground_of[one] < len(self.half_spaces)]
             two = np.concatenate((two, self._refresh_static(sim, Y, on_static)))
         hold_all(Y, sim._prm, wrenches, self.shapes, self.grounds, one, self.ground_of, self.tracked, self.friction,
-                 SLIP_TOLERANCE, LIFT_OFF_SPEED, TOUCHING_GAP, self._bare_rows, self.pressed,
-                 self.sliding, self.slide_direction, self._status, self._locked, self._hold_cache)
+                 self.tangent_friction, self.first_tangent, SLIP_TOLERANCE, LIFT_OFF_SPEED, TOUCHING_GAP,
+                 self._bare_rows, self.pressed, self.sliding, self.slide_direction, self._status, self._locked,
+                 self._hold_cache)
         for i in one[self._status[one] != OK]:  # lifting off: the solver says so and records it
             self._hold(sim, Y[i], i, wrenches[i], sim.time, stages=False)
         for i in two:
@@ -438,8 +460,8 @@ class ContactSolver:
         if sim._method.derivative_stages:  # the force found at every stage instead (stage.py)
             one = one[self.modes[one] == PERSISTENT]
             stage_rows(wrenches, self._bare_rows, self._held_rows, Y, sim._prm, self.shapes, self.grounds, one,
-                       self.ground_of, self.tracked, self.friction, self.sliding, self.slide_direction, SLIP_TOLERANCE,
-                       self._locked, self._staged)
+                       self.ground_of, self.tracked, self.friction, self.tangent_friction, self.first_tangent,
+                       self.sliding, self.slide_direction, SLIP_TOLERANCE, self._locked, self._staged)
 
     def _hold(self, sim, y: np.ndarray, i: int, w: np.ndarray, t: float, stages: bool = True) -> bool:
         """Add the holding force of body i at y into the wrench row w; False (and flight) if it lifts off.
@@ -455,10 +477,10 @@ class ContactSolver:
         n = self.grounds[j, NORMAL:NORMAL + 3]
         lowest = float(self._gaps[:count].min()) if count else math.inf  # set_body_state may have lifted it
         speed, _, _, _ = self._normal_motion(sim, y, i, j, count, w, int(self.tracked[i]))
-        mode, _, sx, sy = holding_wrench(y, sim._prm[i], w, count, self._points, n[0], n[1], n[2],
-                                         float(self.friction[i, j]), SLIP_TOLERANCE, self._bias, self._rdot,
-                                         self._work, self._d, self._force)
-        if count and self._painleve(count, float(self.friction[i, j]), sx, sy):
+        mu = self.friction_of(i, j)
+        mode, _, sx, sy = holding_wrench(y, sim._prm[i], w, count, self._points, n[0], n[1], n[2], mu,
+                                         SLIP_TOLERANCE, self._bias, self._rdot, self._work, self._d, self._force)
+        if count and self._painleve(count, mu, sx, sy):
             self.counts["painleve"] += 1
         if count == 0 or mode == LIFT_OFF or speed > LIFT_OFF_SPEED or lowest > TOUCHING_GAP:
             self.modes[i] = FLIGHT
@@ -475,7 +497,7 @@ class ContactSolver:
                 and stepped_by_integrator(sim._prm[i])):
             self._held_rows[i] = w
             hold_in_row(w, self._bare_rows[i], y, sim._prm[i], self.shapes[i], self.grounds[j], int(self.tracked[i]),
-                        float(self.friction[i, j]), mode, sx, sy, SLIP_TOLERANCE)
+                        mu, mode, sx, sy, SLIP_TOLERANCE)
             self._staged[i] = 1
         return True
 
@@ -682,7 +704,7 @@ class ContactSolver:
         y[L.P:L.P + 3] -= gap * n
         count = self._contact_points(sim, y, i, j)
         before, _, _, _ = self._normal_motion(sim, y, i, j, count, w)
-        e, mu = float(self.restitution[i, j]), float(self.friction[i, j])
+        e, mu = self.restitution_of(i, j), self.friction_of(i, j)
         after_row = y.copy()
         impulse, e0, e1, alpha = impact(y, after_row, sim._prm[i], count, self._points, n[0], n[1], n[2], e, mu,
                                         self._work)
@@ -862,9 +884,9 @@ class ContactSolver:
         count = body_points(y, sim._prm[i], self.shapes[i], self.grounds[jj], self._points, self._gaps)
         before, _ = normal_speeds(y, sim._prm[i], count, self._points, n[0], n[1], n[2], self._work)
         after_row = y.copy()
-        e = float(self.restitution[i, jj])
+        e = self.restitution_of(i, jj)
         impulse, e0, e1, alpha = impact(y, after_row, sim._prm[i], count, self._points, n[0], n[1], n[2],
-                                        e, float(self.friction[i, jj]), self._work)
+                                        e, self.friction_of(i, jj), self._work)
         jump = self._jump(sim, i, y, after_row, count, e, alpha)
         self.counts["second_half_space"] += 1
         y[L.V:L.W + 3] = after_row[L.V:L.W + 3]
@@ -885,7 +907,7 @@ class ContactSolver:
         mask = int(self.tracked[i]) | self._touching(sim, y, i, j)
         count = self._tracked_points(sim, y, i, mask)
         before, _, _, _ = self._normal_motion(sim, y, i, j, count, w, mask)
-        e, mu = float(self.restitution[i, j]), float(self.friction[i, j])
+        e, mu = self.restitution_of(i, j), self.friction_of(i, j)
         after_row = y.copy()
         impulse, e0, e1, alpha = impact(y, after_row, sim._prm[i], count, self._points, n[0], n[1], n[2], e, mu,
                                         self._work)

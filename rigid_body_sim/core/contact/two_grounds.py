@@ -165,7 +165,7 @@ def hold(solver, sim, y: np.ndarray, i: int, w: np.ndarray, t: float, lift_off_s
     velocities = work[0:rows:3, _B].copy()  # normal velocities of the points
     accelerations(y, prm, w, count, rows, points, bias, rdot, work, d)
     j_a, j_b = int(solver.ground_of[i]), int(solver.other_ground[i])
-    mu = float(min(solver.friction[i, j_a], solver.friction[i, j_b]))
+    mu = min(solver.friction_of(i, j_a), solver.friction_of(i, j_b))
     work[:rows, _LAM] = 0.0
     sx = 0.0
     sliding = mu == 0.0

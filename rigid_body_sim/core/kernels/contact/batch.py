@@ -27,6 +27,7 @@ from ..layout import AXIS_S, CACHE_RATE, PRM_WIDTH, Q, STATE_WIDTH, TOP_KEY, V, 
 from ..rotation import rotate
 from .impacts import _LAM, IMPACT_WORK_SHAPE, build_rows
 from .layout import MAX_POINTS, NORMAL
+from .materials import material
 from .persistent import (
     LIFT_OFF,
     SLIDE,
@@ -89,9 +90,14 @@ def _cache_hit(cache, i, y, p, w, j, tracked):
 
 
 @njit(**_OPTS)
-def hold_all(Y, prm, wrenches, shapes, grounds, bodies, ground_of, tracked, friction, slip_tolerance,
-             lift_off_speed, touching_gap, bare, pressed, sliding, slide_direction, status, locked, cache):
+def hold_all(Y, prm, wrenches, shapes, grounds, bodies, ground_of, tracked, friction, tangent_friction,
+             first_tangent, slip_tolerance, lift_off_speed, touching_gap, bare, pressed, sliding, slide_direction,
+             status, locked, cache):
     """Add each body's holding force (persistent.holding_wrench) to its wrench row; flag the ones that lift off.
+
+    Body i's μ on plane row j is ``materials.material(friction, tangent_friction, first_tangent, i, j)``:
+    ``friction`` (n, first_tangent) over the half-spaces and static box faces, ``tangent_friction`` (n,)
+    on each body's own tangent row (empty without static shapes).
 
     ``bare[i]`` keeps body i's wrench row as it was before (for a step taken again in pieces).
     ``locked[i]`` ← 1 for a body locked for this step (module docstring), else 0; ``cache``
@@ -132,8 +138,9 @@ def hold_all(Y, prm, wrenches, shapes, grounds, bodies, ground_of, tracked, fric
             lowest = min(lowest, gaps[c])
         normal_bias(y, p, shapes[i], ground, tracked[i], count, points, owners, bias, rdot, anchors)
         speed = _lowest_normal_speed(y, count, points, nx, ny, nz)
-        mode, _, sx, sy = holding_wrench(y, p, w, count, points, nx, ny, nz, friction[i, j], slip_tolerance, bias,
-                                         rdot, work, d, force)
+        mode, _, sx, sy = holding_wrench(y, p, w, count, points, nx, ny, nz,
+                                         material(friction, tangent_friction, first_tangent, i, j), slip_tolerance,
+                                         bias, rdot, work, d, force)
         if mode == LIFT_OFF or speed > lift_off_speed or lowest > touching_gap:
             status[i] = TO_SOLVER
             continue

@@ -45,6 +45,7 @@ from ..layout import (ACTIVE, HELD, HELD_FEATURES, HELD_GROUND, HELD_MU, HELD_SH
 from ..rotation import rotate, rotate_back
 from .impacts import _B, IMPACT_WORK_SHAPE, build_rows, pgs_each, summed_wrench
 from .layout import DIMS, KIND, MAX_POINTS, NORMAL, OFFSET
+from .materials import material
 from .persistent import SLIDE, STICK, accelerations_from, normal_bias
 from .shapes import feature_points
 
@@ -164,15 +165,16 @@ def hold_in_row(w, bare, y, p, shape, ground, mask, mu, mode, sx, sy, slip_toler
 
 
 @njit(**_OPTS)
-def stage_rows(wrenches, bare, held_rows, Y, prm, shapes, grounds, bodies, ground_of, tracked, friction, sliding,
-               slide_direction, slip_tolerance, locked, staged):
+def stage_rows(wrenches, bare, held_rows, Y, prm, shapes, grounds, bodies, ground_of, tracked, friction,
+               tangent_friction, first_tangent, sliding, slide_direction, slip_tolerance, locked, staged):
     """The wrench rows of ``bodies`` (held by batch.hold_all) turned into rows carrying their contact (hold_in_row).
 
     Each body not locked (a locked body's held row is exact over its step: it stays) whose
     model the integrator steps (full, and the isotropic and symmetric models, which leave a
     body with a held contact to the integrator: reduced_models.torque_free): ``held_rows[i]``
     ← its row with the holding force of the step's start (what the records report), then
-    ``wrenches[i]`` ← ``bare[i]`` with the contact; ``staged[i]`` ← 1.
+    ``wrenches[i]`` ← ``bare[i]`` with the contact; ``staged[i]`` ← 1. Body i's μ on plane row j is
+    ``materials.material(friction, tangent_friction, first_tangent, i, j)`` (as in batch.hold_all).
     """
     for m in range(bodies.shape[0]):
         i = bodies[m]
@@ -181,8 +183,9 @@ def stage_rows(wrenches, bare, held_rows, Y, prm, shapes, grounds, bodies, groun
         for k in range(wrenches.shape[1]):
             held_rows[i, k] = wrenches[i, k]
         j = ground_of[i]
-        hold_in_row(wrenches[i], bare[i], Y[i], prm[i], shapes[i], grounds[j], tracked[i], friction[i, j],
-                    SLIDE if sliding[i] else STICK, slide_direction[i, 0], slide_direction[i, 1], slip_tolerance)
+        hold_in_row(wrenches[i], bare[i], Y[i], prm[i], shapes[i], grounds[j], tracked[i],
+                    material(friction, tangent_friction, first_tangent, i, j), SLIDE if sliding[i] else STICK,
+                    slide_direction[i, 0], slide_direction[i, 1], slip_tolerance)
         staged[i] = 1
 
 
