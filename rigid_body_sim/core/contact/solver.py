@@ -156,9 +156,10 @@ class ContactSolver:
         if statics.size:
             self.statics = static_geometry.StaticGeometry(sim, spec, statics)
             # plane rows: half-spaces, static box faces, one tangent row per body (static_geometry.py)
-            self.grounds, self.restitution, self.friction = (self.statics.rows, self.statics.restitution,
-                                                             self.statics.friction)
-            self.first_tangent = self.statics.restitution.shape[1]
+            self.grounds, self.first_tangent = self.statics.rows, self.statics.first_tangent
+            self.restitution, self.friction = self.statics.restitution, self.statics.friction
+            self.tangent_restitution, self.tangent_friction = (self.statics.tangent_restitution,
+                                                               self.statics.tangent_friction)
         n = model.count
         self.bodies = np.array(spec.bodies, dtype=np.int64)  # free bodies with a collision shape
         #: The body–body pass (body_pairs.py), or None: a scene with fewer than two moving bodies with a

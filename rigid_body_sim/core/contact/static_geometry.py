@@ -12,6 +12,11 @@ module gives it, on top of the scene's half-spaces (rows 0 … G − 1):
   cylinder or capsule, a box's edge or corner, or a face the body overhangs): the plane through
   the contact point on the static surface, normal to the narrow phase's normal.
 
+The materials of the rows (the pair material of the body with the row's half-space or static
+shape) are a table (n, G + 6 × static boxes) over the half-spaces and the face rows, and one
+number per body for its tangent row (``tangent_restitution``, ``tangent_friction``, (n,)):
+linear in the bodies.
+
 In flight the gap is the **signed distance** of the narrow phase, min over the static shapes
 (continuous along the step map, so an impact is located to round-off as on the ground); at the
 impact the solver takes the plane row of that contact (:meth:`StaticGeometry.plane_for`) and
@@ -151,19 +156,25 @@ class StaticGeometry:
         self.row_owner = np.full(len(self.rows), -1, dtype=np.int64)
         for s in boxes:
             self.row_owner[self.first_face[s]:self.first_face[s] + 6] = s
-        # materials of every body against every row (a tangent row's are set when it is written)
+        # every body's pair material with every static shape (n, len(statics))
         self._pair_e = np.zeros((n, len(statics)))
         self._pair_mu = np.zeros((n, len(statics)))
         for i in range(n):
             for s, b in enumerate(statics):
                 self._pair_e[i, s], self._pair_mu[i, s] = pair_material(spec.shapes[i], spec.shapes[b])
-        self.restitution = np.zeros((n, len(self.rows)))
-        self.friction = np.zeros((n, len(self.rows)))
+        #: Per body, restitution and friction against the half-spaces and the face rows: (n, first_tangent).
+        self.restitution = np.zeros((n, self.first_tangent))
+        self.friction = np.zeros((n, self.first_tangent))
         self.restitution[:, :g], self.friction[:, :g] = spec.restitution, spec.friction
         for s in boxes:
             f = self.first_face[s]
             self.restitution[:, f:f + 6] = self._pair_e[:, s:s + 1]
             self.friction[:, f:f + 6] = self._pair_mu[:, s:s + 1]
+        #: Per body, restitution and friction against its own tangent row first_tangent + i: (n,), the pair
+        #: material with the static shape the row was last written for (0 until then). A body is only ever on
+        #: its own tangent row: one number per body (kernels/contact/materials.material reads both).
+        self.tangent_restitution = np.zeros(n)
+        self.tangent_friction = np.zeros(n)
         # narrow-phase buffers: the static shapes, then one moving shape (index S)
         k = len(statics)
         self._pos = np.zeros((k + 1, 3))
@@ -265,7 +276,7 @@ class StaticGeometry:
         self.rows[j, NORMAL:NORMAL + 3] = n
         self.rows[j, OFFSET] = float(n @ self._points[s, 0, 0:3])
         self.row_owner[j] = s
-        self.restitution[i, j], self.friction[i, j] = self._pair_e[i, s], self._pair_mu[i, s]
+        self.tangent_restitution[i], self.tangent_friction[i] = self._pair_e[i, s], self._pair_mu[i, s]
         return j
 
     def plane_rows(self, bodies: np.ndarray, static_bodies: np.ndarray, normals_W: np.ndarray,
@@ -295,7 +306,7 @@ class StaticGeometry:
             self.rows[j, NORMAL:NORMAL + 3] = normals_W[tangent]
             self.rows[j, OFFSET] = np.einsum("ka,ka->k", normals_W[tangent], points_W[tangent])
             self.row_owner[j] = t
-            self.restitution[i, j], self.friction[i, j] = self._pair_e[i, t], self._pair_mu[i, t]
+            self.tangent_restitution[i], self.tangent_friction[i] = self._pair_e[i, t], self._pair_mu[i, t]
         return rows
 
     def within_face(self, j: int, points: np.ndarray) -> bool:
