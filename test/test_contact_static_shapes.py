@@ -16,7 +16,12 @@ A static body (``motion: static``) with a collision shape, in a scene with a ``g
   gap to the face (computed here from the pose) ≤ 1e-12 m and its speed ≤ 1e-12 m/s for 10 s
   (rk4, dt = 10 ms: resting is exact at any step);
 * a box sliding on a frictionless floor into a static wall: the impact at the closed-form time,
-  the rebound e v; a body starting inside a static shape is refused; the example scene.
+  the rebound e v; a body starting inside a static shape is refused; the example scene;
+* per-body materials: two crates with their own μ sliding to a stop on a static box's face
+  (t = v/(μ g), d = v²/(2 μ g), 1e-9), two balls with their own e and μ dropped onto a static ball
+  and a static capsule (their tangent rows: the closed-form impact, one sliding, one sticking,
+  1e-9); 20,000 balls on a static floor: the static geometry's arrays are linear in the bodies
+  and each body's materials on its face and tangent rows are its pair material.
 """
 
 from __future__ import annotations
@@ -28,6 +33,7 @@ import numpy as np
 import pytest
 
 from rigid_body_sim.core import SceneError, Simulator, load_scene
+from rigid_body_sim.core.kernels.contact.layout import PERSISTENT
 from rigid_body_sim.core.quaternion import quat_conjugate, quat_multiply, quat_rotate
 
 CONFIG = Path(__file__).resolve().parents[1] / "config"
@@ -256,3 +262,151 @@ def test_resting_on_a_static_ball_is_held_on_its_tangent_plane_and_counted():
     assert sim.contact.is_resting("ball")
     assert sim.contact.counts["static_tangent"] > 0
     assert abs(sim.state.p_WC_W[1, 2] - 1.4) <= 1e-12 and np.abs(sim.state.v_WC_W[1]).max() <= 1e-12
+
+
+# ----------------------------------------------------------------------------- per-body materials
+
+def _drop_onto(centre, reach, offset_W, height):
+    """A body dropped from rest with its centre ``height`` above a static centre (or axis point) ``centre``,
+    ``offset_W`` (horizontal, m) off it: (start, impact time, velocity at the impact, unit normal there), for
+    contact when the centres are ``reach`` apart (sphere on sphere, or on a capsule's axis)."""
+    offset_W = np.asarray(offset_W, float)
+    rise = math.sqrt(reach * reach - offset_W @ offset_W)  # the centre's height above ``centre`` at the impact
+    t = math.sqrt(2.0 * (height - rise) / G)
+    start = np.asarray(centre, float) + offset_W + [0.0, 0.0, height]
+    return start, t, np.array([0.0, 0.0, -G * t]), (offset_W + [0.0, 0.0, rise]) / reach
+
+
+def test_each_body_meets_static_shapes_with_its_own_pair_material():
+    """Four bodies, four materials, one scene: two crates launched at 1 m/s on a static box's top face stop
+    at t = v/(μ g) after v²/(2 μ g) with their own pair's μ = √(μ_body μ_box) (a face row); two balls
+    dropped onto a static ball and a static capsule (their tangent rows) get the closed-form impact
+    (exact/sphere_impact.py with the static side of infinite mass) of their own pair's e = max(e_body,
+    e_static), μ = √(μ_body μ_static) at the closed-form time: one slides through the impact (45°,
+    tan θ > 3.5 μ), the other sticks. rk4, dt = 1 ms: parabolas and the constant friction are exact for
+    it, the events are located on the step map: 1e-9 relative."""
+    from rigid_body_sim.exact.sphere_impact import two_sphere_impact
+
+    table_e, table_mu = 0.3, 0.5
+    crates = {"crate_a": (0.1, 0.2, 0.25), "crate_b": (0.7, 0.8, -0.25)}  # e, μ, y on the table
+    post_centre, post_r, post_e, post_mu = np.array([3.0, 0.0, 0.0]), 0.3, 0.6, 0.4
+    rail_centre, rail_r, rail_e, rail_mu = np.array([-3.0, 0.0, 0.0]), 0.1, 0.5, 0.3
+    balls = {  # e, μ, the static body, its centre (the capsule's axis point below), reach, horizontal offset, height
+        "ball_c": (0.8, 0.1, "post", post_centre, post_r + R, (0.4 * math.sqrt(0.5), 0.0, 0.0), 1.0),  # θ = 45°
+        "ball_d": (0.2, 0.9, "rail", rail_centre, rail_r + R, (0.0, 0.2 / math.sqrt(5.0), 0.0), 0.8),  # tan θ = 0.5
+    }
+    static_materials = {"post": (post_e, post_mu), "rail": (rail_e, rail_mu)}
+    bodies = {
+        "table": {"mass": 10.0, "inertia": {"box": [1.0, 1.0, 0.5]}, "motion": "static",
+                  "material": {"restitution": table_e, "friction": table_mu}},
+        "post": {"mass": 1.0, "inertia": {"sphere": post_r}, "motion": "static",
+                 "pose": {"position": list(post_centre)}, "material": {"restitution": post_e, "friction": post_mu}},
+        "rail": {"mass": 1.0, "inertia": {"sphere": rail_r}, "collision": {"capsule": [rail_r, 1.6]},
+                 "motion": "static", "material": {"restitution": rail_e, "friction": rail_mu},  # axis along world x
+                 "pose": {"position": list(rail_centre), "orientation": [0.0, math.sqrt(0.5), 0.0, math.sqrt(0.5)]}},
+    }
+    v0 = 1.0
+    for name, (e, mu, y) in crates.items():
+        bodies[name] = {"mass": 1.0, "inertia": {"box": [0.1, 0.1, 0.1]},
+                        "material": {"restitution": e, "friction": mu},
+                        "pose": {"position": [-0.3, y, TOP + 0.05]}, "twist": {"linear": [v0, 0.0, 0.0]}}
+    drops = {}
+    for name, (e, mu, _, centre, reach, offset, height) in balls.items():
+        drops[name] = _drop_onto(centre, reach, offset, height)
+        bodies[name] = {"mass": 1.0, "inertia": {"sphere": R}, "material": {"restitution": e, "friction": mu},
+                        "pose": {"position": list(drops[name][0])}}
+    sim = Simulator(load_scene({"gravity": [0.0, 0.0, -G], "ground": [], "bodies": bodies}), "rk4", 1e-3)
+    names = sim.model.names
+    sim.step(600)
+    contact = sim.contact
+    for name, (e, mu, _) in crates.items():
+        i = names.index(name)
+        mu_pair = math.sqrt(mu * table_mu)
+        (stop,) = contact.events_of(name, "stick")
+        assert stop.time == pytest.approx(v0 / (mu_pair * G), rel=1e-9)
+        assert sim.state.p_WC_W[i, 0] == pytest.approx(-0.3 + v0 * v0 / (2.0 * mu_pair * G), rel=1e-9)
+        j = int(contact.ground_of[i])
+        assert contact.is_resting(name) and contact.static_body_of(j) == "table" and not contact.statics.is_tangent(j)
+        assert contact.friction_of(i, j) == pytest.approx(mu_pair, rel=1e-15)
+        assert contact.restitution_of(i, j) == max(e, table_e)
+    slid = {}
+    for name, (e, mu, static, _, reach, _, _) in balls.items():
+        i = names.index(name)
+        _, t_hit, v_hit, n = drops[name]
+        e_static, mu_static = static_materials[static]
+        e_pair, mu_pair = max(e, e_static), math.sqrt(mu * mu_static)
+        # a ball sticks through the impact while |u_t| ≤ (1 + m R²/I) μ |u_n| = 3.5 μ |u_n|
+        slid[name] = np.linalg.norm(np.cross(n, v_hit)) > 3.5 * mu_pair * abs(n @ v_hit)
+        hit = contact.events_of(name, "impact")[0]
+        assert hit.time == pytest.approx(t_hit, rel=1e-9)
+        assert contact.static_body_of(hit.ground) == static and contact.statics.is_tangent(hit.ground)
+        assert hit.ground == contact.statics.first_tangent + i  # its own tangent row
+        assert contact.restitution_of(i, hit.ground) == e_pair
+        assert contact.friction_of(i, hit.ground) == pytest.approx(mu_pair, rel=1e-15)
+        inertia = 0.4 * R * R
+        _, _, v_after, w_after = two_sphere_impact(math.inf, math.inf, reach - R, np.zeros(3), np.zeros(3), 1.0,
+                                                   inertia, R, v_hit, np.zeros(3), n, e_pair, mu_pair)
+        scale = np.linalg.norm(v_hit)
+        np.testing.assert_allclose(v_hit + hit.delta_v_world, v_after, rtol=0.0, atol=1e-9 * scale)
+        np.testing.assert_allclose(quat_rotate(np.array(hit.q_WP), np.array(hit.delta_w_principal)), w_after,
+                                   rtol=0.0, atol=1e-9 * scale / R)
+        assert hit.normal_speed_after == pytest.approx(-e_pair * hit.normal_speed_before, rel=1e-9)
+    assert slid == {"ball_c": True, "ball_d": False}  # both branches of the impact's cone: a slide, a stick
+
+
+def test_static_shape_materials_are_linear_in_the_bodies():
+    """20,000 balls, each with its own material, resting apart on a static box (a bin's floor), the last one on
+    a static ball: every array the static geometry holds is linear in the bodies (≤ 512 bytes a body; the
+    materials n × (G + 6 per static box) and n for the tangent rows, G = 0 here), and each body's materials
+    are its pair material with the shape it touches (e = max, μ = √ of the product): the floor's face row,
+    the static ball's tangent row (written at the start for the ball on it, and for every body by the
+    island contacts' plane_rows)."""
+    rng = np.random.default_rng(0)
+    nx, ny, pitch = 200, 100, 0.2
+    count = nx * ny
+    e, mu = rng.uniform(0.0, 1.0, count), rng.uniform(0.0, 1.0, count)
+    floor_e, floor_mu, post_e, post_mu = 0.3, 0.6, 0.7, 0.2
+    post_centre = np.array([0.5 * pitch * nx + 2.0, 0.0, 0.2])
+    bodies = {"floor": {"mass": 1.0, "inertia": {"box": [pitch * nx + 1.0, pitch * ny + 1.0, 0.1]},
+                        "motion": "static", "pose": {"position": [0.0, 0.0, -0.05]},
+                        "material": {"restitution": floor_e, "friction": floor_mu}},
+              "post": {"mass": 1.0, "inertia": {"sphere": 0.2}, "motion": "static",
+                       "pose": {"position": list(post_centre)},
+                       "material": {"restitution": post_e, "friction": post_mu}}}
+    radius = 0.05
+    for k in range(count):
+        position = [pitch * (k % nx - 0.5 * (nx - 1)), pitch * (k // nx - 0.5 * (ny - 1)), radius]
+        if k == count - 1:  # the last one on top of the static ball
+            position = list(post_centre + [0.0, 0.0, 0.2 + radius])
+        bodies[f"b{k}"] = {"mass": 1.0, "inertia": {"sphere": radius},
+                           "material": {"restitution": float(e[k]), "friction": float(mu[k])},
+                           "pose": {"position": position}}
+    sim = Simulator(load_scene({"gravity": [0.0, 0.0, -G], "ground": [], "bodies": bodies}), "rk4", 1e-3)
+    contact, statics = sim.contact, sim.contact.statics
+    n, faces = sim.model.count, 6  # one static box
+    assert statics.restitution.shape == statics.friction.shape == (n, faces)
+    assert statics.tangent_restitution.shape == statics.tangent_friction.shape == (n,)
+    held = sum(a.nbytes for a in vars(statics).values() if isinstance(a, np.ndarray))
+    assert held <= 512 * n, f"{held / n:.0f} bytes a body"
+    index = {name: i for i, name in enumerate(sim.model.names)}
+    moving = np.array([index[f"b{k}"] for k in range(count)])
+    floor_e_pair, floor_mu_pair = np.maximum(e, floor_e), np.sqrt(mu * floor_mu)
+    post_e_pair, post_mu_pair = np.maximum(e, post_e), np.sqrt(mu * post_mu)
+    assert np.all(contact.modes[moving] == PERSISTENT)  # every ball touches its support: resting on it
+    on_floor, last = moving[:-1], int(moving[-1])
+    floor_rows = contact.ground_of[on_floor]
+    assert np.all(floor_rows == statics.first_face[0] + 4)  # the floor's +z face
+    np.testing.assert_array_equal([contact.restitution_of(i, j) for i, j in zip(on_floor, floor_rows)],
+                                  floor_e_pair[:-1])
+    np.testing.assert_allclose([contact.friction_of(i, j) for i, j in zip(on_floor, floor_rows)],
+                               floor_mu_pair[:-1], rtol=1e-15)
+    assert contact.ground_of[last] == statics.first_tangent + last
+    assert contact.restitution_of(last, statics.first_tangent + last) == post_e_pair[-1]
+    assert contact.friction_of(last, statics.first_tangent + last) == pytest.approx(post_mu_pair[-1], rel=1e-15)
+    # every body's tangent row written against the static ball (as island_contacts.py does for an island's body)
+    normals = np.tile([1.0, 0.0, 0.0], (count, 1))
+    post = np.full(count, index["post"])
+    rows = statics.plane_rows(moving, post, normals, post_centre + 0.2 * normals)
+    np.testing.assert_array_equal(rows, statics.first_tangent + moving)
+    np.testing.assert_array_equal([contact.restitution_of(i, j) for i, j in zip(moving, rows)], post_e_pair)
+    np.testing.assert_allclose([contact.friction_of(i, j) for i, j in zip(moving, rows)], post_mu_pair, rtol=1e-15)
