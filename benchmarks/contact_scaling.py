@@ -5,8 +5,7 @@
 settings and readings are those of benchmarks/contact_stacks.py (0.1 m cubes of 1 kg, μ = 0.5, e = 0,
 dt = 1 ms, one thread), ours with rk4 (the default) and MuJoCo with its default pyramidal cone.
 
-* **cost**: each engine drops contact_stacks' 1000-cube lattice on the open ground (no bin: our
-  static shapes keep a row per body and static face, n² memory at 1e5 bodies) for
+* **cost**: each engine drops contact_stacks' 1000-cube lattice on the open ground (no bin) for
   ``SETTLE_SECONDS``; the heap's poses (at rest: velocities zero) are copied into k heaps
   ``HEAP_PITCH`` apart, k = 1, 10, 100 (1e3, 1e4, 1e5 cubes; 1 and 10 with ``--quick``). Each
   engine steps its copies ``WARM`` steps, then is timed from that state: µs per step and
