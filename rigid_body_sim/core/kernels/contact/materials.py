@@ -14,12 +14,12 @@ from __future__ import annotations
 
 from numba import njit
 
+from ..jit import INLINE
+
 __all__ = ["material"]
 
-_OPTS = {"cache": True, "nogil": True, "error_model": "numpy"}
 
-
-@njit(**_OPTS)
+@njit(**INLINE)
 def material(table, tangent, first_tangent, i, j):
     """Body i's coefficient (restitution or friction) against plane row j.
 
@@ -35,6 +35,6 @@ def material(table, tangent, first_tangent, i, j):
     i, j : int
         The body and the plane row: j < first_tangent, or j = first_tangent + i (its own tangent row).
     """
-    if j >= first_tangent:
-        return tangent[i]
-    return table[i, j]
+    value = tangent[i] if j >= first_tangent else table[i, j]
+    _pin = table.shape[0], tangent.shape[0]  # the arrays' last use out of the branch (jit.py)
+    return value
