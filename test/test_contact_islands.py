@@ -120,6 +120,27 @@ def test_a_body_dropped_onto_a_two_box_stack_comes_to_rest_on_it(what, dt):
     assert sim.contact.counts["island_body_steps"] > 0
 
 
+@pytest.mark.parametrize("yaw_deg, tilt", [(45.0, 0.01), (30.0, 0.05)])
+def test_a_cube_turned_and_tilted_lands_flat_on_a_cube_and_rests(yaw_deg, tilt):
+    """A cube turned about z and tilted about x, its lowest corner 1 mm above a cube resting on the ground
+    (0.2 m, μ = 0.5, e = 0, rk4 at dt = 10 ms), lands on a corner and rocks down onto its face (the patch of
+    the two faces, an octagon at 45°): by 1 s at rest flat on it — its centre at 0.3 m, its z axis the
+    world's, every speed within 1e-9 — and so to 3 s."""
+    from scipy.spatial.transform import Rotation
+
+    turn = Rotation.from_euler("x", tilt) * Rotation.from_euler("z", yaw_deg, degrees=True)
+    corners = 0.5 * EDGE * np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
+    lowest = turn.apply(corners)[:, 2].min()
+    sim = simulator({"a": cube((0.0, 0.0, 0.5 * EDGE)),
+                     "b": cube((0.02, -0.01, EDGE - lowest + 1e-3), orientation=tuple(turn.as_quat()))})
+    for _ in range(3):
+        sim.step(100)
+        axis = Rotation.from_quat(sim.orientations_xyzw()[1]).apply([0.0, 0.0, 1.0])
+        assert sim.positions_world()[1, 2] == pytest.approx(1.5 * EDGE, abs=1e-9)
+        assert np.linalg.norm(axis - [0.0, 0.0, 1.0]) <= 1e-9
+        assert speeds(sim) <= 1e-9
+
+
 def asleep_tower(count: int = 3) -> Simulator:
     sim = simulator(tower(count), sleeping=True)
     sim.step(5)
@@ -251,9 +272,25 @@ def settle_pile(count: int, seconds: float, dt: float = 1e-3) -> Simulator:
 PILE_DEPTH, PILE_RISE = 2e-4, 2e-4
 
 
-def test_a_pile_of_27_cubes_settles():
+def test_a_pile_of_27_cubes_settles_and_comes_to_rest():
+    """Within the bounds above, and at rest by 1.5 s: every cube slower than 1e-9 m/s (spin × half its edge
+    too). A cube on a cube is held at its whole face (the patch rows), not rocked about one corner."""
     sim = settle_pile(27, 1.5)
     assert sim.contact.counts["island_body_steps"] > 0
+    cubes = [i for i, m in enumerate(sim.model.motions) if m != "static"]
+    assert speeds_of(sim, cubes) <= 1e-9
+
+
+def test_a_pile_of_27_cubes_falls_asleep():
+    """With sleeping on, the pile's island is locked by 1 s (every cube asleep) and then takes no island step."""
+    sim = simulator(pile(27), dt=1e-3, sleeping=True)
+    sim.step(1000)
+    cubes = [i for i, m in enumerate(sim.model.motions) if m != "static"]
+    assert sim.contact.pairs.islands.asleep[cubes].all()
+    steps = sim.contact.counts["island_body_steps"]
+    sim.step(100)
+    assert sim.contact.counts["island_body_steps"] == steps
+    assert speeds_of(sim, cubes) == 0.0
 
 
 @pytest.mark.slow

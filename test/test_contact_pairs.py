@@ -27,8 +27,9 @@ import numpy as np
 import pytest
 
 from rigid_body_sim.core.kernels.contact.broadphase import grid_pairs, shape_aabbs, sweep_pairs
-from rigid_body_sim.core.kernels.contact.layout import DIMS, KIND, SHAPE_WIDTH
-from rigid_body_sim.core.kernels.contact.pairs import MAX_PAIR_POINTS, apart_bounds, pair_contacts
+from rigid_body_sim.core.kernels.contact.layout import DIMS, KIND, SHAPE_BOX, SHAPE_WIDTH
+from rigid_body_sim.core.kernels.contact.convex import POSE_WIDTH
+from rigid_body_sim.core.kernels.contact.pairs import MAX_PAIR_POINTS, apart_bounds, box_patch, pair_contacts
 
 KINDS = {"sphere": 1, "box": 2, "cylinder": 3, "capsule": 4}
 IDENTITY = (1.0, 0.0, 0.0, 0.0)
@@ -277,6 +278,54 @@ def test_two_boxes_apart_bound_is_their_best_face_separation_and_at_most_their_d
     shapes, pos, quat, pairs = random_pair_poses(rng, "box", "sphere", 5)
     apart_bounds(pos, quat, shapes, pairs, out[:5])
     assert np.all(out[:5] == -1.0)
+
+
+def _patch(half_a, half_b, pos_b, quat_b, normal, flat=np.cos(0.1), band=1.0):
+    """box_patch of box a (half extents half_a, at the origin, unturned) and box b; its points sorted."""
+    shapes = np.zeros((2, SHAPE_WIDTH))
+    shapes[:, KIND] = SHAPE_BOX
+    shapes[0, DIMS:DIMS + 3], shapes[1, DIMS:DIMS + 3] = half_a, half_b
+    pos, quat = np.array([[0.0, 0.0, 0.0], pos_b]), np.array([[1.0, 0.0, 0.0, 0.0], quat_b])
+    res, seps = np.empty((MAX_PAIR_POINTS, 6)), np.empty(MAX_PAIR_POINTS)
+    count, *ref = box_patch(pos, quat, shapes, 0, 1, *normal, flat, band, np.zeros((2, POSE_WIDTH)),
+                            np.empty((2, 16, 3)), res, seps)
+    order = np.lexsort(np.round(res[:count, 3:5], 9).T)
+    return count, np.array(ref), res[:count][order], seps[:count][order]
+
+
+def test_a_box_face_on_a_box_face_touches_by_the_clipped_patch():
+    """box_patch (the islands' rows of two boxes face on face, kernels/contact/island.py), against closed forms:
+    a cube tilted 0.02 rad on a larger box touches by its four bottom corners, each at its own height above the
+    top face (numpy rotation, 1e-15 m), its foot straight below; a cube turned 45° about z on an equal cube, a
+    gap 1e-3 m above it, by the regular octagon of the two squares' crossing (1e-15 m); a pair normal 0.3 rad
+    from every face: no patch."""
+    h = 0.05
+    angle = 0.02
+    R = np.array([[1.0, 0.0, 0.0], [0.0, np.cos(angle), -np.sin(angle)], [0.0, np.sin(angle), np.cos(angle)]])
+    centre = np.array([0.01, -0.02, 0.1 + h * (np.cos(angle) + np.sin(angle)) + 1e-4])  # lowest corner 1e-4 above
+    q = [np.cos(angle / 2), np.sin(angle / 2), 0.0, 0.0]
+    count, ref, res, seps = _patch([0.5, 0.5, 0.1], [h, h, h], centre, q, [0.0, np.sin(0.01), np.cos(0.01)])
+    corners = centre + np.array([[sx * h, sy * h, -h] for sx in (-1, 1) for sy in (-1, 1)]) @ R.T
+    corners = corners[np.lexsort(np.round(corners[:, :2], 9).T)]
+    assert count == 4
+    np.testing.assert_allclose(ref, [0.0, 0.0, 1.0], atol=0.0)
+    np.testing.assert_allclose(res[:, 3:6], corners, rtol=0.0, atol=1e-15)
+    np.testing.assert_allclose(res[:, 0:3], np.c_[corners[:, :2], np.full(4, 0.1)], rtol=0.0, atol=1e-15)
+    np.testing.assert_allclose(seps, corners[:, 2] - 0.1, rtol=0.0, atol=1e-15)
+    assert seps.min() == pytest.approx(1e-4, abs=1e-15)
+
+    t = np.tan(np.pi / 8) * h  # the octagon: (±h, ±t) and (±t, ±h)
+    octagon = np.array([[sx * h, sy * t] for sx in (-1, 1) for sy in (-1, 1)] + [[sx * t, sy * h] for sx in (-1, 1) for sy in (-1, 1)])
+    octagon = octagon[np.lexsort(np.round(octagon, 9).T)]
+    yaw = [np.cos(np.pi / 8), 0.0, 0.0, np.sin(np.pi / 8)]
+    count, ref, res, seps = _patch([h, h, h], [h, h, h], [0.0, 0.0, 2 * h + 1e-3], yaw, [0.0, 0.0, 1.0])
+    assert count == 8
+    np.testing.assert_allclose(res[:, 0:2], octagon, rtol=0.0, atol=1e-15)
+    np.testing.assert_allclose(res[:, 3:5], octagon, rtol=0.0, atol=1e-15)
+    np.testing.assert_allclose(res[:, 2], h, rtol=0.0, atol=1e-15)
+    np.testing.assert_allclose(seps, 1e-3, rtol=0.0, atol=1e-15)
+
+    assert _patch([h, h, h], [h, h, h], [0.0, 0.0, 2 * h], [1.0, 0.0, 0.0, 0.0], [0.0, np.sin(0.3), np.cos(0.3)])[0] == 0
 
 
 def test_distance_sign():

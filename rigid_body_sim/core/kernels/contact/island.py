@@ -8,9 +8,14 @@ core/contact/island.py). The step is **first order** (Moreau–Jean / Stewart–
 
 with, at each contact point (normal n, tangents t1, t2, gap g ≥ 0 at the step's start),
 u_n⁺ + g/h ≥ 0 ⊥ λ_n ≥ 0 (Stewart–Trinkle's gap term: a gap closes exactly within the step,
-never more) and Coulomb's cone |λ_t| ≤ μ λ_n, e = 0. The sticking case is solved exactly first:
-every row as an equality (J M⁻¹ Jᵀ λ = −(J v* + g/h)), by a Cholesky factorisation of
-J M⁻¹ Jᵀ + εI refined by iterated Tikhonov steps (the minimum-norm λ of the consistent
+never more) and Coulomb's cone |λ_t| ≤ μ λ_n, e = 0. The points of two boxes face on face (their
+normal within 0.1 rad of a face's) are the clipped patch of the two faces (pairs.box_patch), each
+at its own gap, as far as the pair's reach over the step or PATCH_REACH × its size: the gap term
+lets a row act only where the step would close it, and a box turned or tilted on another is held
+by its whole face, not rocked about the narrow phase's deepest corner.
+
+The sticking case is solved exactly first: every row as an equality (J M⁻¹ Jᵀ λ = −(J v* + g/h)),
+by a Cholesky factorisation of J M⁻¹ Jᵀ + εI refined by iterated Tikhonov steps (the minimum-norm λ of the consistent
 rank-deficient system: four coplanar corners of a face share its load evenly; v⁺ does not depend
 on which λ). It is kept when every λ_n ≥ 0 and every λ_t is in its cone (to round-off); else
 projected Gauss–Seidel on the island's rows. Then the positions: every point found penetrating
@@ -40,7 +45,8 @@ from ..jit import INLINE, JIT
 from ..layout import ACTIVE, BOUND, INV_INERTIA, INV_MASS, INERTIA, P, Q, Q_PB, STATE_WIDTH, V, W
 from ..rotation import exp_map, matrix, normalise, qmul, rotate, rotate_back
 from .layout import DIMS, FRICTION, HAS_MATERIAL, KIND, NORMAL, SHAPE_BOX
-from .pairs import MAX_PAIR_POINTS, boxes_apart, pair_contacts
+from .convex import POSE_WIDTH
+from .pairs import MAX_PAIR_POINTS, box_patch, boxes_apart, pair_contacts
 from .shapes import MAX_FEATURES, feature_gaps, feature_points
 
 __all__ = ["island_pass", "TOUCH", "SLEEP_SPEED", "DENSE_MAX", "PROJECT_TOL", "C_FLOATS", "C_INTS", "OUT_WIDTH"]
@@ -49,6 +55,9 @@ __all__ = ["island_pass", "TOUCH", "SLEEP_SPEED", "DENSE_MAX", "PROJECT_TOL", "C
 TOUCH = 1e-6
 #: Bodies slower than this (m/s, and spin × bounding radius) at a step's start and after its solve are at rest.
 SLEEP_SPEED = 1e-9
+#: Two boxes whose pair normal is within acos(PATCH_FLAT) of a face normal touch by a patch: the other's face
+#: clipped against that one (pairs.box_patch), every point within the pair's reach or PATCH_REACH × its size.
+PATCH_FLAT, PATCH_REACH = math.cos(0.1), 1e-2
 #: Most rows (3 per contact point) of an island solved densely for the sticking case.
 DENSE_MAX = 360
 #: Points deeper than this × the pair's size (m per m) after the step are projected out.
@@ -145,9 +154,10 @@ def _owners(cint, c, a, b, is_static):
 @njit(**JIT)
 def _box_corners(pos, quat, shapes, k, a, b, pnormal, pcount, ppoints, limit, scale, is_static, mu, cint, cflt,
                  count):
-    """Box–box pair k: besides the narrow phase's points (the deepest feature), each corner of one box whose
-    separation along the pair's normal from the other's supporting plane is within ``limit`` and whose
-    foot on that plane lies on the other box: a tilted box's other corners, which a spin brings in."""
+    """Box–box pair k not face on face (no patch): besides the narrow phase's points (the deepest feature), each
+    corner of one box whose separation along the pair's normal from the other's supporting plane is within
+    ``limit`` and whose foot on that plane lies on the other box: a tilted box's other corners, which a spin
+    brings in."""
     nx, ny, nz = pnormal[k, 0], pnormal[k, 1], pnormal[k, 2]
     plane_a = nx * ppoints[k, 0, 0] + ny * ppoints[k, 0, 1] + nz * ppoints[k, 0, 2]  # a's support along n
     plane_b = nx * ppoints[k, 0, 3] + ny * ppoints[k, 0, 4] + nz * ppoints[k, 0, 5]  # b's support along −n
@@ -199,17 +209,35 @@ def _gather(Y, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdi
     """Contacts of the island bodies (island[i] == 1) at state rows Y into cint (a, b; −1: fixed) and cflt.
 
     Pairs: the narrow phase's points (mid-way between the surfaces) whose separation is at most
-    ``bound`` of the pair (or, with ``deep_only``, TOUCH × its size: the projection's rows). Half-spaces:
+    ``bound`` of the pair (or, with ``deep_only``, TOUCH × its size: the projection's rows); two boxes face on
+    face: their patch's (module docstring), as far as PATCH_REACH × the size when that is more. Half-spaces:
     each feature's point likewise (a = −1, the normal the plane's). Returns the count.
     """
     count = 0
+    poses, poly = np.zeros((2, POSE_WIDTH)), np.empty((2, 16, 3))
+    res, seps = np.empty((MAX_PAIR_POINTS, 6)), np.empty(MAX_PAIR_POINTS)
     for k in range(n_pairs):
         a, b = nlist[k, 0], nlist[k, 1]
         if not (island[a] == 1 or island[b] == 1):
             continue
         scale = max(size[a], size[b])
-        limit = TOUCH * scale + extra if deep_only else bound[k]
+        limit = TOUCH * scale + extra if deep_only else max(bound[k], PATCH_REACH * scale)
         mu = _pair_mu(shapes, a, b, default_mu)
+        if shapes[a, KIND] == SHAPE_BOX and shapes[b, KIND] == SHAPE_BOX and pcount[k] > 0:
+            m, rx, ry, rz = box_patch(pos, quat, shapes, a, b, pnormal[k, 0], pnormal[k, 1], pnormal[k, 2],
+                                      PATCH_FLAT, max(limit - pdist[k], 0.0), poses, poly, res, seps)
+            if m > 0:  # a face on a face: the clipped patch, each point at its own gap
+                for c in range(m):
+                    if seps[c] <= limit:
+                        _owners(cint, count, a, b, is_static)
+                        for j in range(3):
+                            cflt[count, C_X + j] = 0.5 * (res[c, j] + res[c, 3 + j])
+                        cflt[count, C_N], cflt[count, C_N + 1], cflt[count, C_N + 2] = rx, ry, rz
+                        cflt[count, C_GAP] = seps[c]
+                        cflt[count, C_MU] = mu
+                        count += 1
+                continue
+        limit = TOUCH * scale + extra if deep_only else bound[k]
         for c in range(pcount[k]):
             if pseps[k, c] <= limit:
                 _owners(cint, count, a, b, is_static)

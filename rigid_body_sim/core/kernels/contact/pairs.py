@@ -42,7 +42,7 @@ from .refine import feature_point, refine_normal
 from .shapes import FEATURE_BAND
 
 __all__ = ["make_workspace_jit", "MAX_PAIR_POINTS", "FACE_ALIGNMENT", "set_pose", "surface_point", "pair_contact", "pair_contacts",
-           "boxes_apart", "apart_bounds"]
+           "boxes_apart", "apart_bounds", "box_patch"]
 
 #: Most contact points one pair reports (a box face clipped against another: a polygon of up to 8 corners).
 MAX_PAIR_POINTS = 8
@@ -799,6 +799,35 @@ def boxes_apart(quat, pos, shapes, a, b):
                 reach += shapes[b, DIMS + j] * abs(Rb[j] * ux + Rb[3 + j] * uy + Rb[6 + j] * uz)
             best = max(best, abs(ux * ox + uy * oy + uz * oz) - reach)
     return best
+
+
+@njit(**JIT)
+def box_patch(pos, quat, shapes, a, b, nx, ny, nz, flat, band, poses, poly, res, seps):
+    """Boxes a and b (rows of pos (N, 3), quat (N, 4) w x y z, shapes) whose pair normal n (unit, a → b) is within
+    acos(flat) of a face normal of either: the other's face most turned towards that reference face, clipped
+    against it (its corners on the face and the crossings of its edges with the face's), every point whose
+    separation along the reference face's normal is within ``band`` (m) of the deepest. res (k, 6): the points
+    on a (0:3) and on b (3:6), world, m; seps (k,) their separations along the reference normal; poses (2,
+    POSE_WIDTH) and poly (2, 16, 3) scratch. Returns (k, the reference normal a → b); k = 0 when no face is
+    within acos(flat) of n."""
+    pa, pb = poses[0], poses[1]
+    set_pose(SHAPE_BOX, shapes[a, DIMS], shapes[a, DIMS + 1], shapes[a, DIMS + 2], pos[a, 0], pos[a, 1], pos[a, 2],
+             quat[a, 0], quat[a, 1], quat[a, 2], quat[a, 3], pa)
+    set_pose(SHAPE_BOX, shapes[b, DIMS], shapes[b, DIMS + 1], shapes[b, DIMS + 2], pos[b, 0], pos[b, 1], pos[b, 2],
+             quat[b, 0], quat[b, 1], quat[b, 2], quat[b, 3], pb)
+    ia, sa, ca = _face_of(pa, nx, ny, nz)
+    ib, sb, cb = _face_of(pb, -nx, -ny, -nz)
+    if max(ca, cb) < flat:
+        return 0, nx, ny, nz
+    if ca >= cb:
+        rx, ry, rz = _axis(pa, ia)
+        rx, ry, rz = sa * rx, sa * ry, sa * rz
+        count = _face_manifold(pa, pb, True, 0.0, 0.0, rx, ry, rz, 0.0, band, poly, res, seps)
+    else:
+        rx, ry, rz = _axis(pb, ib)
+        rx, ry, rz = -sb * rx, -sb * ry, -sb * rz
+        count = _face_manifold(pb, pa, False, 0.0, 0.0, rx, ry, rz, 0.0, band, poly, res, seps)
+    return count, rx, ry, rz
 
 
 @njit(**JIT)
