@@ -59,10 +59,15 @@ def row(sides, body: int, other: int = -1, ground: int = -1) -> int:
     return int(found[0])
 
 
+@pytest.mark.parametrize("sleeping", [False, True])
 @pytest.mark.parametrize("k", [2, 5])
-def test_a_towers_contacts_carry_the_weight_above_them(k):
+def test_a_towers_contacts_carry_the_weight_above_them(k, sleeping):
+    """Awake, and asleep (locked after its first step): an island asleep is listed with the forces it was held
+    by when it fell asleep."""
     sim = simulator({f"c{j}": cube(EDGE * (j + 0.5)) for j in range(k)})
+    sim.contact.sleeping = sleeping
     sim.step(3)
+    assert bool(sim.contact.pairs.islands.asleep[:k].all()) == sleeping
     for sides in (tick(sim, 10), pair_sides(sim.contact)):  # the mean over a tick; the last step alone
         assert len(sides) == 2 * (k - 1) + 1  # two sides per pair of cubes, one on the ground
         assert not resting_bodies(sim)  # every cube in the island: no persistent row besides

@@ -13,6 +13,8 @@ Bodies in no island run exactly the event-driven code they ran before islands ex
 Sleeping (``ContactSolver.sleeping``, default False): an island whose bodies stayed slower than
 SLEEP_SPEED is locked, its rows copied forward, until a wrench on one of its bodies, a changed
 state (an impulse, ``set_state``, ``set_body_state``) or another awake body within reach wakes it.
+Its contacts from the step it fell asleep in are kept and listed with every step's (:meth:`Islands.contacts`),
+each with the force it held its bodies with then: a locked island is still held.
 """
 
 from __future__ import annotations
@@ -20,8 +22,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..kernels import layout as L
-from ..kernels.contact.island import C_FLOATS, C_INTS, DENSE_MAX, OUT_BODIES, OUT_CONTACTS, OUT_DEPTH, OUT_SLEPT, \
-    OUT_WIDTH, OUT_WOKEN, island_pass
+from ..kernels.contact.island import (C_FLOATS, C_IMPULSE, C_INTS, DENSE_MAX, I_A, I_B, OUT_BODIES, OUT_CONTACTS,
+                                      OUT_DEPTH, OUT_SLEPT, OUT_WIDTH, OUT_WOKEN, island_pass)
 from ..kernels.contact.layout import DIMS, FLIGHT, PERSISTENT
 from ..kernels.contact.pairs import MAX_PAIR_POINTS
 from .island_contacts import IslandContactLog
@@ -63,6 +65,10 @@ class Islands:
         self.n_contacts = 0
         #: Each pair's impulse summed over the steps since last taken; the last step's states (island_contacts.py).
         self.log = IslandContactLog(n, len(solver.half_spaces))
+        #: The contacts of the islands asleep, from the step they fell asleep in (ints, floats as :meth:`contacts`,
+        #: the C_IMPULSE columns a force, N): they hold the same bodies still, and are listed with each step's.
+        self._rest_int, self._rest_flt = np.zeros((0, C_INTS), dtype=np.int64), np.zeros((0, C_FLOATS))
+        self._h = 0.0
 
     def _grow_pairs(self, k: int) -> None:
         n = len(self.island)
@@ -96,15 +102,39 @@ class Islands:
         self.deepest = 0.0
         self.n_contacts = 0
         self.log.clear()
+        self._rest_int, self._rest_flt = self._rest_int[:0], self._rest_flt[:0]
 
     def contacts(self) -> tuple[np.ndarray, np.ndarray]:
         """The last step's island contacts (views, valid until the next step): ints (n, C_INTS) — bodies a and b
         (−1: fixed), the static body (−1: none), the half-space index (−1: none) — and floats (n, C_FLOATS) —
         point (world, m, mid-way between the surfaces at the step's start), normal from a to b (world), gap at
         the step's start (m), μ, the impulse on b over the step (world, N·s; a takes its opposite). Column
-        indices: kernels/contact/island.py (I_A ..., C_X ...)."""
+        indices: kernels/contact/island.py (I_A ..., C_X ...). Then the contacts of the islands asleep, from
+        the step they fell asleep in, each impulse its force then × this step's length (copies)."""
         n = self.n_contacts
-        return self._cint[:n], self._cflt[:n]
+        if not len(self._rest_int):
+            return self._cint[:n], self._cflt[:n]
+        resting = self._rest_flt.copy()
+        resting[:, C_IMPULSE:C_IMPULSE + 3] *= self._h  # the force holding them over this step
+        return np.concatenate((self._cint[:n], self._rest_int)), np.concatenate((self._cflt[:n], resting))
+
+    def _keep_resting(self, was_asleep: np.ndarray, h: float) -> None:
+        """After a step: the contacts of the bodies that fell asleep in it kept (as forces), those of the bodies
+        woken dropped."""
+        asleep = self.asleep != 0
+        if len(self._rest_int):
+            side = np.maximum(self._rest_int[:, I_A], self._rest_int[:, I_B])  # a moving body of each
+            keep = asleep[side]
+            self._rest_int, self._rest_flt = self._rest_int[keep], self._rest_flt[keep]
+        fell = asleep & ~was_asleep
+        if fell.any() and self.n_contacts:
+            ints, floats = self._cint[:self.n_contacts], self._cflt[:self.n_contacts]
+            side = np.maximum(ints[:, I_A], ints[:, I_B])
+            new = fell[side]
+            forces = floats[new].copy()
+            forces[:, C_IMPULSE:C_IMPULSE + 3] /= h
+            self._rest_int = np.concatenate((self._rest_int, ints[new]))
+            self._rest_flt = np.concatenate((self._rest_flt, forces))
 
     def step(self, sim, wrenches: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, cand: np.ndarray, h: float) -> np.ndarray:
         """The islands' step over the candidate pairs ``cand`` (k, 2) of global body indices; returns the mask of
@@ -117,6 +147,7 @@ class Islands:
                      self.pairs.is_static, sim._stopped, self.pairs.spin_reach, self.size, self.asleep, self.quiet, h,
                      bool(solver.sleeping), DEFAULT_FRICTION, self.n_contacts, self.island, self._parent,
                      self._flags)
+        was_asleep = self.asleep != 0
         while True:
             code = island_pass(*args_head, self._nlist, self._pos, self._quat, self._pdist, self._pnormal,
                                self._pcount, self._ppoints, self._pseps, self._bound, self._cint, self._cflt, self._vel,
@@ -127,6 +158,8 @@ class Islands:
             self._grow_contacts(2 * -code)
         out = self.out
         self.n_contacts = int(out[OUT_CONTACTS])
+        self._keep_resting(was_asleep, h)
+        self._h = h
         self.log.add(Y0, Y1, np.flatnonzero(self.island == 1), *self.contacts(), h)
         self.body_steps += int(out[OUT_BODIES])
         solver.counts["island_body_steps"] += int(out[OUT_BODIES])

@@ -10,8 +10,9 @@ last taken (sorted keys and one ``np.unique`` per step: no Python per pair; 50 Â
 side: two for two moving bodies (each naming the other), one for a body against a half-space or
 a static shape, with the pair's mean force and whether it slides (:data:`SLIDE_SPEED`).
 
-Not listed: the pairs of an island asleep (``ContactSolver.sleeping``; it has no step, so no
-contacts), and a pair that parted before the last step.
+An island asleep (``ContactSolver.sleeping``) has no step: its contacts are those of the step it fell
+asleep in, with the forces it was held by then (Islands.contacts). Not listed: a pair that parted before
+the last step.
 
 A pair is (body, other): ``body`` the lower index of two moving bodies, else the moving one;
 ``other`` the other moving body's or the static body's index, or ``n_bodies + k`` for half-space k.
