@@ -177,6 +177,54 @@ def test_markers_show_the_contact_points_and_the_holding_force() -> None:
     np.testing.assert_allclose([tip.x, tip.y, tip.z], [0.0, 0.0, scale * 2.0 * G], atol=1e-9)
 
 
+STACK = """gravity: [0.0, 0.0, -9.81]
+ground:
+  - {normal: [0, 0, 1], offset: 0.0, material: {restitution: 0.0, friction: 0.5}}
+bodies:
+  base:
+    {mass: 3.0, inertia: {box: [0.4, 0.4, 0.2]}, collision: {box: [0.4, 0.4, 0.2]},
+     material: {restitution: 0.0, friction: 0.5}, pose: {position: [0.0, 0.0, 0.1]}}
+  crate:
+    {mass: 2.0, inertia: {box: [0.2, 0.2, 0.2]}, collision: {box: [0.2, 0.2, 0.2]},
+     material: {restitution: 0.0, friction: 0.5}, pose: {position: [0.05, 0.0, 0.3]}}
+"""
+
+
+def test_a_stack_s_contact_wrench_and_markers_carry_the_bodies_it_rests_on(tmp_path: Path) -> None:
+    """A 2 kg crate resting off-centre on a 3 kg base on the ground (an island): each at rest, so its mean
+    contact wrench over a tick balances its weight: m g up and no torque about its centre of mass (the
+    base's: the ground's (m_b + m_c) g, shifted towards the crate, less the crate's weight); ``markers`` shows the crate's four bottom corners and the base's eight
+    (the crate's and the ground's), with arrows of those forces × marker_force_scale."""
+    from visualization_msgs.msg import Marker, MarkerArray
+
+    scene = tmp_path / "stack.yaml"
+    scene.write_text(STACK)
+    scale, mb, mc = 0.05, 3.0, 2.0
+    with SimHarness(scene, {**PARAMETERS, "marker_rate_hz": 100.0, "marker_force_scale": scale}) as h:
+        arrays = collect(h, "markers", MarkerArray)
+        crate = collect(h, "crate/contact_wrench", WrenchStamped)
+        base = collect(h, "base/contact_wrench", WrenchStamped)
+        h.step(4)
+        h.spin_until(lambda: len(arrays) >= 4 and len(crate) >= 3 and len(base) >= 3, "markers and wrenches")
+        assert h.node.session.simulator.contact.in_island("crate")
+        array = arrays[-1]
+    for msg in crate[-3:]:
+        np.testing.assert_allclose(force_torque(msg), [0, 0, mc * G, 0, 0, 0], rtol=0, atol=1e-9)
+    for msg in base[-3:]:
+        np.testing.assert_allclose(force_torque(msg), [0, 0, mb * G, 0, 0, 0], rtol=0, atol=1e-9)
+    for body, count, force in (("crate", 4, mc * G), ("base", 8, mb * G)):
+        contact = sorted((m for m in array.markers if m.ns == f"{body}/contact"), key=lambda m: m.id)
+        spheres = [m for m in contact if m.type == Marker.SPHERE]
+        arrows = [m for m in contact if m.type == Marker.ARROW]
+        assert len(spheres) == count and len(arrows) == 1
+        start, tip = arrows[0].points
+        np.testing.assert_allclose([tip.x - start.x, tip.y - start.y, tip.z - start.z],
+                                   [0.0, 0.0, scale * force], atol=1e-9)
+    top = sorted(tuple(round(v, 9) for v in (m.pose.position.x, m.pose.position.y, m.pose.position.z))
+                 for m in array.markers if m.ns == "crate/contact" and m.type == Marker.SPHERE)
+    assert top == sorted((x, y, 0.2) for x in (-0.05, 0.15) for y in (-0.1, 0.1))
+
+
 def test_an_imu_reads_the_impact_as_the_velocity_jump_over_its_sample(tmp_path: Path) -> None:
     """The dropped ball with an ideal IMU at its centre (world axes), sampled every tick through the node:
     0 in free fall, (1 + e) v1 / Δt up in the tick holding the first impact, 0 again in flight after it."""

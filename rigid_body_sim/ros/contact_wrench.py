@@ -1,9 +1,10 @@
-"""``B/contact_wrench`` (geometry_msgs/WrenchStamped): the ground's wrench on each body over a tick.
+"""``B/contact_wrench`` (geometry_msgs/WrenchStamped): the contacts' wrench on each body over a tick.
 
 Optional (parameter ``publish_contact_wrench``, off by default). With it, and a scene with
 contact (``Simulator.contact`` is a ContactSolver), every body B with a collision shape has a
 publisher ``B/contact_wrench``, and after every tick it carries the **mean contact wrench over
-the tick**: (Σ holding force × step + Σ impact impulses) / the tick's length for the force,
+the tick**: (Σ holding force × step + Σ impact impulses + Σ island contact impulses, the bodies
+it rests on or that rest on it included) / the tick's length for the force,
 likewise the torque about B's centre of mass; world axes, ``header.frame_id`` = ``B/world_aligned``
 (the centre of mass with world axes, as in /tf; ``frame_prefix`` applied), ``header.stamp`` =
 sim time at the end of the tick. Gravity and the applied wrenches are not in it; a body in
@@ -34,6 +35,8 @@ def contact_impulses(solver: Any) -> np.ndarray:
     out = solver.impact_impulses.copy()
     out[:, 0:3] += solver.holding_impulses
     out[:, 3:6] += solver.holding_angular_impulses
+    if solver.pairs is not None:  # bodies resting on bodies (islands)
+        out += solver.pairs.islands.impulses
     return out
 
 

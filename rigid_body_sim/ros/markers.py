@@ -15,7 +15,8 @@ or Foxglove shows the scene with the fixed frame set to it. Per body B (namespac
   contact): ids 0, 1, ... a SPHERE of diameter :data:`CONTACT_POINT_DIAMETER_M` at each of its
   touching contact points, then one ARROW from their centre along the ground's holding force of
   the last step (``marker_force_scale`` m per N; the force that holds a 1 kg box at rest on level
-  ground points up, 9.81 N).
+  ground points up, 9.81 N); while B is in an island (resting on bodies, or bodies on it), its
+  island contact points of the last island step and the force they gave it over that step.
 
 Each array starts with a DELETEALL marker, so bodies deleted and wrenches released disappear.
 Published at ``marker_rate_hz`` of sim time (at most once a tick; 0 = never), and only while
@@ -34,7 +35,7 @@ from rclpy.qos import QoSProfile
 from visualization_msgs.msg import Marker, MarkerArray
 
 from ..core import Scene, Simulator
-from ..core.contact.query import resting_bodies, touching_points
+from ..core.contact.query import island_points, resting_bodies, touching_points
 from ..core.quaternion import quat_multiply, quat_rotate, quat_wxyz_from_xyzw, quat_xyzw_from_wxyz
 from .conversions import time_msg_from_seconds
 from .scene_edit import scene_data
@@ -203,15 +204,16 @@ class MarkerPublisher:
 
     @staticmethod
     def _contact_markers(sim: Simulator, marker: Callable[..., Marker], force_scale: float) -> list[Marker]:
-        """The ``B/contact`` markers of every body resting on the ground (see the module docstring)."""
+        """The ``B/contact`` markers of every body resting on the ground or on bodies (the module docstring)."""
         solver = sim.contact
         if solver is None:
             return []
         out = []
         stopped = set(sim.stopped_bodies)
-        for i in resting_bodies(sim):
+        held = [(i, touching_points(sim, i)[0], solver.holding_forces[i]) for i in resting_bodies(sim)]
+        held += [(i, points, force) for i, (points, force) in island_points(sim).items()]
+        for i, points, force in held:
             body = sim.body_names[i]
-            points, _ = touching_points(sim, i)
             if body in stopped or not len(points):
                 continue
             ns = f"{body}/contact"
@@ -221,7 +223,7 @@ class MarkerPublisher:
                 m.scale.x = m.scale.y = m.scale.z = CONTACT_POINT_DIAMETER_M
                 out.append(m)
             centre = points.mean(axis=0)
-            tip = centre + force_scale * solver.holding_forces[i]
+            tip = centre + force_scale * force
             m = marker(ns, len(points), Marker.ARROW, _CONTACT_RGBA)
             _pose(m, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
             m.points = [Point(x=float(centre[0]), y=float(centre[1]), z=float(centre[2])),

@@ -320,8 +320,9 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
                   range=(1e-9, 1e9)),
     ParameterSpec("publish_contact_wrench", _T.BOOL, False,
                   "Publish B/contact_wrench (geometry_msgs/WrenchStamped) after every tick for every body B with a "
-                  "collision shape, in a scene with ground contact: the ground's mean force and torque on B over the "
-                  "tick (holding forces and impacts; frame B/world_aligned).",
+                  "collision shape, in a scene with ground contact: the contacts' mean force and torque on B over the "
+                  "tick (the ground, static shapes, and the bodies it rests on or that rest on it; frame "
+                  "B/world_aligned).",
                   takes_effect="from the first tick that starts after the change"),
 )
 

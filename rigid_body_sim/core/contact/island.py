@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..kernels import layout as L
-from ..kernels.contact.island import (C_FLOATS, C_IMPULSE, C_INTS, DENSE_MAX, I_A, I_B, OUT_BODIES, OUT_CONTACTS,
+from ..kernels.contact.island import (C_FLOATS, C_IMPULSE, C_INTS, C_X, DENSE_MAX, I_A, I_B, OUT_BODIES, OUT_CONTACTS,
                                       OUT_DEPTH, OUT_SLEPT, OUT_WIDTH, OUT_WOKEN, island_pass)
 from ..kernels.contact.layout import DIMS, FLIGHT, PERSISTENT
 from ..kernels.contact.pairs import MAX_PAIR_POINTS
@@ -69,6 +69,9 @@ class Islands:
         #: the C_IMPULSE columns a force, N): they hold the same bodies still, and are listed with each step's.
         self._rest_int, self._rest_flt = np.zeros((0, C_INTS), dtype=np.int64), np.zeros((0, C_FLOATS))
         self._h = 0.0
+        #: Per body, Σ island contact impulse (N·s, then N·m·s about the centre of mass at each step's start),
+        #: world axes, since the solver was made or reset, kept while ``ContactSolver.track_torques``.
+        self.impulses = np.zeros((n, 6))
 
     def _grow_pairs(self, k: int) -> None:
         n = len(self.island)
@@ -103,6 +106,7 @@ class Islands:
         self.n_contacts = 0
         self.log.clear()
         self._rest_int, self._rest_flt = self._rest_int[:0], self._rest_flt[:0]
+        self.impulses[:] = 0.0
 
     def contacts(self) -> tuple[np.ndarray, np.ndarray]:
         """The last step's island contacts (views, valid until the next step): ints (n, C_INTS) — bodies a and b
@@ -117,6 +121,17 @@ class Islands:
         resting = self._rest_flt.copy()
         resting[:, C_IMPULSE:C_IMPULSE + 3] *= self._h  # the force holding them over this step
         return np.concatenate((self._cint[:n], self._rest_int)), np.concatenate((self._cflt[:n], resting))
+
+    def _add_impulses(self, Y0: np.ndarray, ints: np.ndarray, floats: np.ndarray) -> None:
+        """Each contact's impulse (on b; a takes its opposite) and its moment about the body's centre of mass at
+        the step's start, added to :attr:`impulses`."""
+        point, impulse = floats[:, C_X:C_X + 3], floats[:, C_IMPULSE:C_IMPULSE + 3]
+        for side, sign in ((I_B, 1.0), (I_A, -1.0)):
+            on = ints[:, side] >= 0
+            body = ints[on, side]
+            j = sign * impulse[on]
+            np.add.at(self.impulses[:, 0:3], body, j)
+            np.add.at(self.impulses[:, 3:6], body, np.cross(point[on] - Y0[body, L.P:L.P + 3], j))
 
     def _keep_resting(self, was_asleep: np.ndarray, h: float) -> None:
         """After a step: the contacts of the bodies that fell asleep in it kept (as forces), those of the bodies
@@ -160,7 +175,10 @@ class Islands:
         self.n_contacts = int(out[OUT_CONTACTS])
         self._keep_resting(was_asleep, h)
         self._h = h
-        self.log.add(Y0, Y1, np.flatnonzero(self.island == 1), *self.contacts(), h)
+        ints, floats = self.contacts()
+        self.log.add(Y0, Y1, np.flatnonzero(self.island == 1), ints, floats, h)
+        if solver.track_torques and len(ints):
+            self._add_impulses(Y0, ints, floats)
         self.body_steps += int(out[OUT_BODIES])
         solver.counts["island_body_steps"] += int(out[OUT_BODIES])
         self.deepest = max(self.deepest, float(out[OUT_DEPTH]))

@@ -2,8 +2,9 @@
 
 :func:`lowest_gap` answers where a body *would* be against the ground at a given pose (the
 node refuses a ``set_state`` into a half-space with it); :func:`touching_points` gives the
-contact points of a body in persistent contact, as the solver tracks them. Both use the
-compiled gap functions the solver uses (core/kernels/contact/shapes.py). :func:`overlapping_bodies`
+contact points of a body in persistent contact, as the solver tracks them (both use the compiled gap
+functions the solver uses, core/kernels/contact/shapes.py), and :func:`island_points` those of the
+bodies resting on bodies (the islands' last step). :func:`overlapping_bodies`
 finds the bodies whose collision shapes overlap one another (the scene loader and ``~/spawn``
 refuse them) with the compiled broad phase (uniform grid) and narrow phase
 (core/kernels/contact/broadphase.py, pairs.py).
@@ -18,10 +19,12 @@ import numpy as np
 from ..kernels import layout as L
 from ..kernels.contact.layout import DIMS, KIND, MAX_POINTS, PERSISTENT, SHAPE_NONE
 from ..kernels.contact.broadphase import grid_pairs, shape_aabbs
+from ..kernels.contact.island import C_IMPULSE, C_X, I_A, I_B
 from ..kernels.contact.pairs import MAX_PAIR_POINTS, pair_contacts
 from ..kernels.contact.shapes import body_gap, body_points, feature_points, min_gaps
 
-__all__ = ["TOUCHING", "overlapping_bodies", "lowest_gap", "lowest_gaps", "lowest_gaps_along", "nearest_static", "lowest_point", "resting_bodies", "touching_points"]
+__all__ = ["TOUCHING", "overlapping_bodies", "lowest_gap", "lowest_gaps", "lowest_gaps_along", "nearest_static",
+           "lowest_point", "resting_bodies", "touching_points", "island_points"]
 
 
 #: A penetration up to this × the pair's size (its largest shape dimension) counts as touching: the
@@ -150,6 +153,29 @@ def touching_points(sim, index: int) -> tuple[np.ndarray, np.ndarray]:
     count = feature_points(y, sim._prm[index], solver.shapes[index], solver.grounds[int(solver.ground_of[index])],
                            int(solver.tracked[index]), points, gaps, owners)
     return points[:count].copy(), gaps[:count].copy()
+
+
+def island_points(sim) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+    """Per body in an island (asleep included), (its contact points of the last island step, (k, 3) world, m,
+    mid-way between the surfaces; the force on it from them over that step, (3,) N, world axes)."""
+    solver = sim.contact
+    islands = None if solver is None or solver.pairs is None else solver.pairs.islands
+    if islands is None or islands.log.h <= 0.0:
+        return {}
+    ints, floats = islands.contacts()
+    if not len(ints):
+        return {}
+    body = np.concatenate((ints[:, I_B], ints[:, I_A]))  # each contact once per moving side (b, then a)
+    sign = np.concatenate((np.ones(len(ints)), -np.ones(len(ints))))
+    points = np.concatenate((floats[:, C_X:C_X + 3], floats[:, C_X:C_X + 3]))
+    impulses = sign[:, None] * np.concatenate((floats[:, C_IMPULSE:C_IMPULSE + 3], floats[:, C_IMPULSE:C_IMPULSE + 3]))
+    order = np.argsort(np.where(body >= 0, body, len(sim.body_names)), kind="stable")
+    order = order[body[order] >= 0]
+    body, points, impulses = body[order], points[order], impulses[order]
+    bodies, starts = np.unique(body, return_index=True)
+    forces = np.add.reduceat(impulses, starts, axis=0) / islands.log.h
+    ends = np.append(starts[1:], len(body))
+    return {int(i): (points[a:b], forces[k]) for k, (i, a, b) in enumerate(zip(bodies, starts, ends))}
 
 
 def lowest_point(sim, index: int, ground: int) -> tuple[np.ndarray, float]:
