@@ -14,13 +14,16 @@ at its own gap, as far as the pair's reach over the step or PATCH_REACH × its s
 lets a row act only where the step would close it, and a box turned or tilted on another is held
 by its whole face, not rocked about the narrow phase's deepest corner.
 
-The sticking case is solved exactly first: every row as an equality (J M⁻¹ Jᵀ λ = −(J v* + g/h)),
-by a Cholesky factorisation of J M⁻¹ Jᵀ + εI refined by iterated Tikhonov steps (the minimum-norm λ of the consistent
-rank-deficient system: four coplanar corners of a face share its load evenly; v⁺ does not depend
-on which λ). It is kept when every λ_n ≥ 0 and every λ_t is in its cone (to round-off); else
-projected Gauss–Seidel on the island's rows. Then the positions: every point found penetrating
-at the new poses (narrow phase again) is closed by a mass-metric least correction (Gauss–Seidel
-on the linearised gaps, λ ≥ 0), the narrow phase iterated PROJECT_ROUNDS times.
+The sticking case is solved exactly first: every row as an equality (J M⁻¹ Jᵀ λ = −(J v* + g/h)), by
+a Cholesky factorisation of J M⁻¹ Jᵀ + εI refined by iterated Tikhonov steps (the minimum-norm λ of
+the consistent rank-deficient system: four coplanar corners of a face share its load evenly; v⁺ does
+not depend on which λ). It is kept when every λ_n ≥ 0 and every λ_t is in its cone (to round-off);
+else projected Gauss–Seidel on the island's rows (over more than PILE_CONTACTS contacts, from the
+highest against gravity down, then back up, in turn: a weight passes down a pile and a stop up it
+within a sweep). Then the
+positions: every point found penetrating at the new poses (narrow phase again) is closed by a
+mass-metric least correction (Gauss–Seidel on the linearised gaps, λ ≥ 0), the narrow phase iterated
+PROJECT_ROUNDS times.
 
 Islands: union-find over the swept broad phase's candidate pairs of moving bodies (a sleeping
 body's only when the other is within the step's reach); a component is an island when one of its pairs touches at the step's start (signed distance ≤ TOUCH × the
@@ -42,7 +45,7 @@ from numba import njit
 
 from ..forces import body_wrench
 from ..jit import INLINE, JIT
-from ..layout import ACTIVE, BOUND, INV_INERTIA, INV_MASS, INERTIA, P, Q, Q_PB, STATE_WIDTH, V, W
+from ..layout import ACTIVE, BOUND, GRAVITY, INV_INERTIA, INV_MASS, INERTIA, P, Q, Q_PB, STATE_WIDTH, V, W
 from ..rotation import exp_map, matrix, normalise, qmul, rotate, rotate_back
 from .layout import DIMS, FRICTION, HAS_MATERIAL, KIND, NORMAL, SHAPE_BOX
 from .convex import POSE_WIDTH
@@ -67,6 +70,8 @@ PROJECT_TOL = 1e-12
 PROJECT_ROUNDS, TURN_ROUNDS, PROJECT_SWEEPS = 8, 2, 100
 #: Most projected Gauss–Seidel sweeps of the velocity problem; it stops earlier below PGS_TOL (m/s).
 PGS_SWEEPS, PGS_TOL = 200, 1e-13
+#: Gauss–Seidel over more contacts than this (a pile; the dense solve's DENSE_MAX / 3) sweeps them by height.
+PILE_CONTACTS = DENSE_MAX // 3
 #: Iterated Tikhonov steps of the sticking solve, and its regularisation (× the largest diagonal).
 TIKHONOV_STEPS, TIKHONOV_EPS = 6, 1e-9
 #: Columns of a contact's float row: point (3), normal a → b (3), gap, μ, and after the velocity step the
@@ -433,12 +438,13 @@ def _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, start, stop, A, L, r
 
 
 @njit(**JIT)
-def _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, start, stop):
+def _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, start, stop, backward):
     """One projected Gauss–Seidel sweep over contacts order[start:stop] (normal, then the two tangents in
-    Coulomb's disk of the new normal λ); returns the largest change of a row's speed (m/s)."""
+    Coulomb's disk of the new normal λ), in that order or ``backward``; returns the largest change of a row's
+    speed (m/s)."""
     change = 0.0
-    for c in range(start, stop):
-        q = order[c]
+    for k in range(start, stop):
+        q = order[start + stop - 1 - k] if backward else order[k]
         r = 3 * q
         if rdiag[r] > 0.0:
             u = _row_speed(vel, rj, rbody, r) + rbias[r]
@@ -467,16 +473,24 @@ def _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, start, stop):
 
 
 @njit(**JIT)
-def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop):
+def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop, gx, gy, gz):
     """Projected Gauss–Seidel on contacts order[:stop] from their λ in rlam (the warm start): sweeps until none
-    changes a row's speed by more than PGS_TOL (m/s), at most PGS_SWEEPS."""
+    changes a row's speed by more than PGS_TOL (m/s), at most PGS_SWEEPS. More than PILE_CONTACTS contacts (a
+    pile) are taken from the highest against gravity (gx, gy, gz) down, then back up, in turn: a weight passes
+    down a pile, and a stop up it, within one sweep; fewer, in their order."""
+    height = np.empty(stop)
     for c in range(stop):
+        q = order[c]
+        height[c] = gx * cflt[q, C_X] + gy * cflt[q, C_X + 1] + gz * cflt[q, C_X + 2]  # −height × |g|
         for k in range(3):
-            r = 3 * order[c] + k
+            r = 3 * q + k
             if rlam[r] != 0.0:
                 _apply(vel, rw, rbody, r, rlam[r])
-    for _ in range(PGS_SWEEPS):
-        if _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, 0, stop) <= PGS_TOL:
+    ranked = stop > PILE_CONTACTS
+    if ranked:
+        order[:stop] = order[:stop][np.argsort(height)]
+    for sweep in range(PGS_SWEEPS):
+        if _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, 0, stop, ranked and sweep % 2 == 1) <= PGS_TOL:
             break
     _pin = vel[0, 0], rj[0, 0], rw[0, 0], rbody[0, 0], rdiag[0], rbias[0], rlam[0], cflt[0, 0], order[0]
 
@@ -962,7 +976,9 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             out[OUT_PGS] += 1
         lo = hi
     if stop > 0:
-        _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop)
+        body = cint[order[0], I_B] if cint[order[0], I_B] >= 0 else cint[order[0], I_A]
+        g = prm[body, GRAVITY:GRAVITY + 3]  # the order's gravity: any order is Gauss–Seidel
+        _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop, g[0], g[1], g[2])
     _impulses(nc, rj, rbody, rlam, cflt)
     # positions: p + h v, q ⊗ exp(h ω_P)
     for m in range(n):
