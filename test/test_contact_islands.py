@@ -267,8 +267,8 @@ def settle_pile(count: int, seconds: float, dt: float = 1e-3) -> Simulator:
 
 #: The documented bounds of a settling pile of 0.1 m cubes at dt = 1 ms (docs/contact.md, islands): the deepest
 #: overlap of two cubes (m; a cube's first landing on another, taken by the event-driven impact before the two
-#: form an island; measured 7e-18 with 27 cubes over 1.5 s, 1.6e-4 with 1000) and the energy's largest rise
-#: relative to |K + U| (measured 4.4e-5 with 27 cubes).
+#: form an island; measured 4e-14 with 27 cubes over 1.5 s, 1.6e-4 with 1000) and the energy's largest rise
+#: relative to |K + U| (measured 6e-16 with 27 cubes).
 PILE_DEPTH, PILE_RISE = 2e-4, 2e-4
 
 
