@@ -175,7 +175,8 @@ class Islands:
         self.n_contacts = int(out[OUT_CONTACTS])
         self._keep_resting(was_asleep, h)
         self._h = h
-        ints, floats = self.contacts()
+        wanted = self.log.summing or solver.track_torques  # the asleep rows copied only for a reader
+        ints, floats = self.contacts() if wanted else (self._cint[:self.n_contacts], self._cflt[:self.n_contacts])
         self.log.add(Y0, Y1, np.flatnonzero(self.island == 1), ints, floats, h)
         if solver.track_torques and len(ints):
             self._add_impulses(Y0, ints, floats)
