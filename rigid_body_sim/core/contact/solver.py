@@ -545,7 +545,7 @@ class ContactSolver:
             min_gaps(Y1, sim._prm, self.shapes, self.half_spaces, flying, lowest)
         else:  # static shapes: their gaps too (every body's); bodies on their planes in Python
             min_gaps(Y1, sim._prm, self.shapes, self.half_spaces, self.bodies, self._lowest)
-            two = np.concatenate((two, self._static_busy(Y1, resting)))
+            two = np.concatenate((two, self._static_busy(Y1, resting, moving)))
             resting = resting[self.ground_of[resting] < len(self.half_spaces)]
             lowest = self._lowest[(modes == FLIGHT) & moving]
         settle_all(Y0, Y1, sim._prm, self.shapes, self.half_spaces, resting, self.ground_of, self.tracked,
@@ -858,12 +858,14 @@ class ContactSolver:
                 self.ground_of[i] = row
         return on_static
 
-    def _static_busy(self, Y1: np.ndarray, resting: np.ndarray) -> np.ndarray:
-        """After the step: ``_lowest`` lowered, in place, to the bodies' signed distances to the static shapes;
-        returns the resting bodies the solver looks at in Python: those on a static shape's plane, and those
-        on a half-space that reached a static shape (an impact against it, located on the step map)."""
+    def _static_busy(self, Y1: np.ndarray, resting: np.ndarray, moving: np.ndarray) -> np.ndarray:
+        """After the step: ``_lowest`` lowered, in place, to the signed distances to the static shapes of the
+        bodies ``moving`` (a mask over :attr:`bodies`: not stopped, not stepped by the islands, whose own rows
+        hold the static shapes); returns the resting bodies the solver looks at in Python: those on a static
+        shape's plane, and those on a half-space that reached a static shape (an impact against it, located on
+        the step map)."""
         g = len(self.half_spaces)
-        looked = (self.modes[self.bodies] == FLIGHT) | (self.ground_of[self.bodies] < g)  # not those on a static
+        looked = ((self.modes[self.bodies] == FLIGHT) | (self.ground_of[self.bodies] < g)) & moving  # not on a static
         static_gaps = np.full(int(looked.sum()), math.inf)
         self.statics.lower_gaps(Y1, self.shapes, self.bodies[looked], static_gaps)
         self._lowest[looked] = np.minimum(self._lowest[looked], static_gaps)
