@@ -140,7 +140,8 @@ class Islands:
         if len(self._rest_int):
             side = np.maximum(self._rest_int[:, I_A], self._rest_int[:, I_B])  # a moving body of each
             keep = asleep[side]
-            self._rest_int, self._rest_flt = self._rest_int[keep], self._rest_flt[keep]
+            if not keep.all():
+                self._rest_int, self._rest_flt = self._rest_int[keep], self._rest_flt[keep]
         fell = asleep & ~was_asleep
         if fell.any() and self.n_contacts:
             ints, floats = self._cint[:self.n_contacts], self._cflt[:self.n_contacts]
