@@ -22,11 +22,11 @@ from __future__ import annotations
 import numpy as np
 
 from ..kernels import layout as L
-from ..kernels.contact.island import (C_FLOATS, C_IMPULSE, C_INTS, C_X, DENSE_MAX, I_A, I_B, OUT_BODIES, OUT_CONTACTS,
+from ..kernels.contact.island import (C_FLOATS, C_IMPULSE, C_INTS, DENSE_MAX, I_A, I_B, OUT_BODIES, OUT_CONTACTS,
                                       OUT_DEPTH, OUT_SLEPT, OUT_WIDTH, OUT_WOKEN, island_pass)
 from ..kernels.contact.layout import DIMS, FLIGHT, PERSISTENT
 from ..kernels.contact.pairs import MAX_PAIR_POINTS
-from .island_contacts import IslandContactLog
+from .island_contacts import IslandContactLog, body_sides
 from .materials import DEFAULT_FRICTION
 
 __all__ = ["Islands"]
@@ -123,15 +123,11 @@ class Islands:
         return np.concatenate((self._cint[:n], self._rest_int)), np.concatenate((self._cflt[:n], resting))
 
     def _add_impulses(self, Y0: np.ndarray, ints: np.ndarray, floats: np.ndarray) -> None:
-        """Each contact's impulse (on b; a takes its opposite) and its moment about the body's centre of mass at
-        the step's start, added to :attr:`impulses`."""
-        point, impulse = floats[:, C_X:C_X + 3], floats[:, C_IMPULSE:C_IMPULSE + 3]
-        for side, sign in ((I_B, 1.0), (I_A, -1.0)):
-            on = ints[:, side] >= 0
-            body = ints[on, side]
-            j = sign * impulse[on]
-            np.add.at(self.impulses[:, 0:3], body, j)
-            np.add.at(self.impulses[:, 3:6], body, np.cross(point[on] - Y0[body, L.P:L.P + 3], j))
+        """Each contact's impulse on each moving side and its moment about that body's centre of mass at the
+        step's start, added to :attr:`impulses`."""
+        body, point, impulse = body_sides(ints, floats)
+        np.add.at(self.impulses[:, 0:3], body, impulse)
+        np.add.at(self.impulses[:, 3:6], body, np.cross(point - Y0[body, L.P:L.P + 3], impulse))
 
     def _keep_resting(self, was_asleep: np.ndarray, h: float) -> None:
         """After a step: the contacts of the bodies that fell asleep in it kept (as forces), those of the bodies

@@ -30,7 +30,7 @@ from ..kernels import layout as L
 from ..kernels.contact.island import C_FLOATS, C_GAP, C_IMPULSE, C_INTS, C_N, C_X, I_A, I_B, I_GROUND, I_STATIC
 from ..quaternion import quat_to_matrix
 
-__all__ = ["SLIDE_SPEED", "IslandContactLog", "PairSides", "pair_keys", "slip_speeds", "pair_sides"]
+__all__ = ["SLIDE_SPEED", "IslandContactLog", "PairSides", "pair_keys", "body_sides", "slip_speeds", "pair_sides"]
 
 #: A pair slides when, after the last step, one of its points slips faster than this (m/s): the relative
 #: velocity of the two surfaces at the point, tangential part (the island pass's SLEEP_SPEED scale).
@@ -51,6 +51,17 @@ def pair_keys(ints: np.ndarray, n_bodies: int, width: int) -> tuple[np.ndarray, 
     other = np.where(both, np.maximum(a, b), np.where(ground >= 0, n_bodies + ground, static))
     sign = np.where(body == b, 1.0, -1.0)
     return body * width + other, body, sign
+
+
+def body_sides(ints: np.ndarray, floats: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each island contact once per moving side: (body (m,), point (m, 3), world, m, impulse on that body (m, 3),
+    world, N·s); the rows of side b first, then those of side a (its impulse the opposite). Fixed sides are
+    left out. ``ints``, ``floats``: the rows of Islands.contacts()."""
+    on_b, on_a = ints[:, I_B] >= 0, ints[:, I_A] >= 0
+    body = np.concatenate((ints[on_b, I_B], ints[on_a, I_A]))
+    point = np.concatenate((floats[on_b, C_X:C_X + 3], floats[on_a, C_X:C_X + 3]))
+    impulse = np.concatenate((floats[on_b, C_IMPULSE:C_IMPULSE + 3], -floats[on_a, C_IMPULSE:C_IMPULSE + 3]))
+    return body, point, impulse
 
 
 def slip_speeds(Y0: np.ndarray, Y1: np.ndarray, ints: np.ndarray, floats: np.ndarray) -> np.ndarray:

@@ -19,9 +19,9 @@ import numpy as np
 from ..kernels import layout as L
 from ..kernels.contact.layout import DIMS, KIND, MAX_POINTS, PERSISTENT, SHAPE_NONE
 from ..kernels.contact.broadphase import grid_pairs, shape_aabbs
-from ..kernels.contact.island import C_IMPULSE, C_X, I_A, I_B
 from ..kernels.contact.pairs import MAX_PAIR_POINTS, pair_contacts
 from ..kernels.contact.shapes import body_gap, body_points, feature_points, min_gaps
+from .island_contacts import body_sides
 
 __all__ = ["TOUCHING", "overlapping_bodies", "lowest_gap", "lowest_gaps", "lowest_gaps_along", "nearest_static",
            "lowest_point", "resting_bodies", "touching_points", "island_points"]
@@ -165,12 +165,8 @@ def island_points(sim) -> dict[int, tuple[np.ndarray, np.ndarray]]:
     ints, floats = islands.contacts()
     if not len(ints):
         return {}
-    body = np.concatenate((ints[:, I_B], ints[:, I_A]))  # each contact once per moving side (b, then a)
-    sign = np.concatenate((np.ones(len(ints)), -np.ones(len(ints))))
-    points = np.concatenate((floats[:, C_X:C_X + 3], floats[:, C_X:C_X + 3]))
-    impulses = sign[:, None] * np.concatenate((floats[:, C_IMPULSE:C_IMPULSE + 3], floats[:, C_IMPULSE:C_IMPULSE + 3]))
-    order = np.argsort(np.where(body >= 0, body, len(sim.body_names)), kind="stable")
-    order = order[body[order] >= 0]
+    body, points, impulses = body_sides(ints, floats)
+    order = np.argsort(body, kind="stable")
     body, points, impulses = body[order], points[order], impulses[order]
     bodies, starts = np.unique(body, return_index=True)
     forces = np.add.reduceat(impulses, starts, axis=0) / islands.log.h

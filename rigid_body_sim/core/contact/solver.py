@@ -543,7 +543,7 @@ class ContactSolver:
         if self.statics is None:
             lowest = self._lowest[:flying.size]
             min_gaps(Y1, sim._prm, self.shapes, self.half_spaces, flying, lowest)
-        else:  # static shapes: their gaps too (every body's); bodies on their planes in Python
+        else:  # static shapes: their gaps too (the bodies outside the islands); bodies on their planes in Python
             min_gaps(Y1, sim._prm, self.shapes, self.half_spaces, self.bodies, self._lowest)
             two = np.concatenate((two, self._static_busy(Y1, resting, moving)))
             resting = resting[self.ground_of[resting] < len(self.half_spaces)]

@@ -226,14 +226,15 @@ def _gather(Y, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdi
         if not (island[a] == 1 or island[b] == 1):
             continue
         scale = max(size[a], size[b])
-        limit = TOUCH * scale + extra if deep_only else max(bound[k], PATCH_REACH * scale)
+        limit = TOUCH * scale + extra if deep_only else bound[k]
         mu = _pair_mu(shapes, a, b, default_mu)
         if shapes[a, KIND] == SHAPE_BOX and shapes[b, KIND] == SHAPE_BOX and pcount[k] > 0:
+            reach = limit if deep_only else max(limit, PATCH_REACH * scale)
             m, rx, ry, rz = box_patch(pos, quat, shapes, a, b, pnormal[k, 0], pnormal[k, 1], pnormal[k, 2],
-                                      PATCH_FLAT, max(limit - pdist[k], 0.0), poses, poly, res, seps)
+                                      PATCH_FLAT, max(reach - pdist[k], 0.0), poses, poly, res, seps)
             if m > 0:  # a face on a face: the clipped patch, each point at its own gap
                 for c in range(m):
-                    if seps[c] <= limit:
+                    if seps[c] <= reach:
                         _owners(cint, count, a, b, is_static)
                         for j in range(3):
                             cflt[count, C_X + j] = 0.5 * (res[c, j] + res[c, 3 + j])
@@ -242,7 +243,6 @@ def _gather(Y, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdi
                         cflt[count, C_MU] = mu
                         count += 1
                 continue
-        limit = TOUCH * scale + extra if deep_only else bound[k]
         for c in range(pcount[k]):
             if pseps[k, c] <= limit:
                 _owners(cint, count, a, b, is_static)
@@ -478,19 +478,21 @@ def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop, gx, gy, gz):
     changes a row's speed by more than PGS_TOL (m/s), at most PGS_SWEEPS. More than PILE_CONTACTS contacts (a
     pile) are taken from the highest against gravity (gx, gy, gz) down, then back up, in turn: a weight passes
     down a pile, and a stop up it, within one sweep; fewer, in their order."""
-    height = np.empty(stop)
     for c in range(stop):
-        q = order[c]
-        height[c] = gx * cflt[q, C_X] + gy * cflt[q, C_X + 1] + gz * cflt[q, C_X + 2]  # −height × |g|
         for k in range(3):
-            r = 3 * q + k
+            r = 3 * order[c] + k
             if rlam[r] != 0.0:
                 _apply(vel, rw, rbody, r, rlam[r])
     ranked = stop > PILE_CONTACTS
-    if ranked:
-        order[:stop] = order[:stop][np.argsort(height)]
+    if ranked:  # highest first: g · x ascending
+        down = np.empty(stop)
+        for c in range(stop):
+            q = order[c]
+            down[c] = gx * cflt[q, C_X] + gy * cflt[q, C_X + 1] + gz * cflt[q, C_X + 2]
+        order[:stop] = order[:stop][np.argsort(down)]
     for sweep in range(PGS_SWEEPS):
-        if _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, 0, stop, ranked and sweep % 2 == 1) <= PGS_TOL:
+        backward = ranked and sweep % 2 == 1
+        if _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, 0, stop, backward) <= PGS_TOL:
             break
     _pin = vel[0, 0], rj[0, 0], rw[0, 0], rbody[0, 0], rdiag[0], rbias[0], rlam[0], cflt[0, 0], order[0]
 
