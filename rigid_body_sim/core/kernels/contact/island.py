@@ -72,6 +72,10 @@ PROJECT_ROUNDS, TURN_ROUNDS, PROJECT_SWEEPS = 8, 2, 100
 PGS_SWEEPS, PGS_TOL = 200, 1e-13
 #: Gauss–Seidel over more contacts than this (a pile; the dense solve's DENSE_MAX / 3) sweeps them by height.
 PILE_CONTACTS = DENSE_MAX // 3
+#: A pile's velocity step: at most PILE_PGS_SWEEPS sweeps, each extrapolated (nonsmooth nonlinear conjugate
+#: gradient). A pile's projection: at most PILE_SWEEPS sweeps a round, from the lowest point up, and a pair whose
+#: normal is within acos(PILE_UPRIGHT) of gravity moves only its upper body (the lower held: shock propagation).
+PILE_PGS_SWEEPS, PILE_SWEEPS, PILE_UPRIGHT = 100, 20, 0.5
 #: Iterated Tikhonov steps of the sticking solve, and its regularisation (× the largest diagonal).
 TIKHONOV_STEPS, TIKHONOV_EPS = 6, 1e-9
 #: Columns of a contact's float row: point (3), normal a → b (3), gap, μ, and after the velocity step the
@@ -476,24 +480,52 @@ def _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, start, stop, bac
 def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop, gx, gy, gz):
     """Projected Gauss–Seidel on contacts order[:stop] from their λ in rlam (the warm start): sweeps until none
     changes a row's speed by more than PGS_TOL (m/s), at most PGS_SWEEPS. More than PILE_CONTACTS contacts (a
-    pile) are taken from the highest against gravity (gx, gy, gz) down, then back up, in turn: a weight passes
-    down a pile, and a stop up it, within one sweep; fewer, in their order."""
+    pile) are taken from the highest against gravity (gx, gy, gz) down, then back up, in turn (a weight passes
+    down a pile, and a stop up it, within one sweep), each sweep extrapolated, at most PILE_PGS_SWEEPS; fewer,
+    in their order."""
     for c in range(stop):
         for k in range(3):
             r = 3 * order[c] + k
             if rlam[r] != 0.0:
                 _apply(vel, rw, rbody, r, rlam[r])
     ranked = stop > PILE_CONTACTS
-    if ranked:  # highest first: g · x ascending
+    if not ranked:
+        for sweep in range(PGS_SWEEPS):
+            if _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, 0, stop, False) <= PGS_TOL:
+                break
+    else:  # highest first: g · x ascending
         down = np.empty(stop)
         for c in range(stop):
             q = order[c]
             down[c] = gx * cflt[q, C_X] + gy * cflt[q, C_X + 1] + gz * cflt[q, C_X + 2]
         order[:stop] = order[:stop][np.argsort(down)]
-    for sweep in range(PGS_SWEEPS):
-        backward = ranked and sweep % 2 == 1
-        if _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, 0, stop, backward) <= PGS_TOL:
-            break
+        # nonsmooth nonlinear conjugate gradient (Silcowitz, Niebe, Erleben 2010): each sweep's change of λ, Δ, is
+        # the descent direction; λ is then extrapolated by β p (β = |Δ|² / |Δ_prev|², p ← β p + Δ), restarted
+        # (p = Δ) when |Δ| grows; the next sweep projects onto the cones again
+        last = np.empty(3 * stop)
+        step = np.zeros(3 * stop)
+        shrink = 0.0
+        for sweep in range(PILE_PGS_SWEEPS):
+            for c in range(stop):
+                for k in range(3):
+                    last[3 * c + k] = rlam[3 * order[c] + k]
+            if _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, 0, stop, sweep % 2 == 1) <= PGS_TOL:
+                break
+            size2 = 0.0
+            for c in range(stop):
+                for k in range(3):
+                    d = rlam[3 * order[c] + k] - last[3 * c + k]
+                    size2 += d * d
+            beta = size2 / shrink if sweep > 0 and size2 <= shrink else 0.0
+            for c in range(stop):
+                for k in range(3):
+                    r = 3 * order[c] + k
+                    more = beta * step[3 * c + k]
+                    step[3 * c + k] = more + rlam[r] - last[3 * c + k]
+                    if more != 0.0:
+                        rlam[r] += more
+                        _apply(vel, rw, rbody, r, more)
+            shrink = size2
     _pin = vel[0, 0], rj[0, 0], rw[0, 0], rbody[0, 0], rdiag[0], rbias[0], rlam[0], cflt[0, 0], order[0]
 
 
@@ -654,11 +686,47 @@ def _link(nlist, lo, hi, pdist, bound, is_static, size, parent, flags):
 
 
 @njit(**JIT)
-def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdiag, rbias, rbody, rlam, vel):
+def _pile_rows(Y1, prm, nd, cint, cflt, rj, rw, rdiag, rbody, porder):
+    """The order of the nd normal rows' Gauss–Seidel in porder[:nd]: over a pile (more than PILE_CONTACTS, under
+    gravity) from the lowest point up, with each upright pair's lower body held (its M⁻¹Jᵀ side zeroed, the
+    diagonal the upper's alone), and True; else their order, and False."""
+    for c in range(nd):
+        porder[c] = c
+    pile = False
+    if nd > PILE_CONTACTS:
+        i = cint[0, 1] if cint[0, 1] >= 0 else cint[0, 0]
+        gx, gy, gz = prm[i, GRAVITY], prm[i, GRAVITY + 1], prm[i, GRAVITY + 2]
+        g = math.sqrt(gx * gx + gy * gy + gz * gz)
+        pile = g > 0.0
+    if pile:
+        down = np.empty(nd)
+        for c in range(nd):
+            down[c] = gx * cflt[c, C_X] + gy * cflt[c, C_X + 1] + gz * cflt[c, C_X + 2]
+        porder[:nd] = np.argsort(-down)
+        for c in range(nd):
+            a, b = rbody[c, 0], rbody[c, 1]
+            if a < 0 or b < 0 or abs(gx * cflt[c, C_N] + gy * cflt[c, C_N + 1] + gz * cflt[c, C_N + 2]) < PILE_UPRIGHT * g:
+                continue
+            below_a = gx * Y1[a, P] + gy * Y1[a, P + 1] + gz * Y1[a, P + 2]
+            below_b = gx * Y1[b, P] + gy * Y1[b, P + 1] + gz * Y1[b, P + 2]
+            low = 0 if below_a > below_b else 1
+            d = 0.0
+            for j in range(6):
+                rw[c, 6 * low + j] = 0.0
+                d += rj[c, 6 * (1 - low) + j] * rw[c, 6 * (1 - low) + j]
+            rdiag[c] = d
+    _pin = Y1[0, 0], prm[0, 0], cint[0, 0], cflt[0, 0], rj[0, 0], rw[0, 0], rdiag[0], rbody[0, 0], porder[0]
+    return pile
+
+
+@njit(**JIT)
+def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdiag, rbias, rbody, rlam, vel, porder):
     """After the projection: the island bodies' velocities in Y1 made not to approach at the nd touching points
     cint/cflt (normal rows, λ ≥ 0, e = 0): the projection moved them out, they must not be left moving in
     again. Gauss–Seidel in the kinetic metric first, then on the linear velocities alone for what approach is
-    left (that one converges in a pile, as the projection's translating rounds do). Only removes kinetic energy."""
+    left (that one converges in a pile, as the projection's translating rounds do); over a pile, the linear one
+    alone, as the projection's rounds (_pile_rows, PILE_SWEEPS). Removes kinetic energy (over a pile, the upper
+    body of an upright pair is brought to the lower's normal speed)."""
     n = members.shape[0]
     for m in range(n):
         i = members[m]
@@ -680,9 +748,13 @@ def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdia
         _rows(Y1, prm, nd, cint, cflt, iw, True, h, rj, rw, rdiag, rbias, rbody)
         for c in range(nd):
             rlam[c] = 0.0
-        for _s in range(PROJECT_SWEEPS):
+        pile = _pile_rows(Y1, prm, nd, cint, cflt, rj, rw, rdiag, rbody, porder)
+        for _s in range(PILE_SWEEPS if pile else PROJECT_SWEEPS):
+            if pile and metric == 0:
+                break
             change = 0.0
-            for c in range(nd):
+            for k in range(nd):
+                c = porder[k]
                 if rdiag[c] <= 0.0:
                     continue
                 new = max(rlam[c] - _row_speed(vel, rj, rbody, c) / rdiag[c], 0.0)
@@ -710,7 +782,7 @@ def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdia
         Y1[i, W + 1] = R[1] * vel[i, 3] + R[4] * vel[i, 4] + R[7] * vel[i, 5]
         Y1[i, W + 2] = R[2] * vel[i, 3] + R[5] * vel[i, 4] + R[8] * vel[i, 5]
     _pin = Y1[0, 0], prm[0, 0], members[0], island[0], cint[0, 0], cflt[0, 0], iw[0, 0], rj[0, 0], rw[0, 0]
-    _pin2 = rdiag[0], rbias[0], rbody[0, 0], rlam[0], vel[0, 0]
+    _pin2 = rdiag[0], rbias[0], rbody[0, 0], rlam[0], vel[0, 0], porder[0]
 
 
 @njit(**JIT)
@@ -734,7 +806,7 @@ def _attribute(nc, cint, cflt, nd, sint, sflt, members, head):
 @njit(**JIT)
 def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps,
              members, bound, size, is_static, default_mu, h, iw, dx, vel, cint, cflt, rj, rw, rdiag, rbias, rlam, rbody,
-             out):
+             porder, out):
     """The projection of the island bodies' poses Y1: points deeper than PROJECT_TOL × their pair's size closed by
     the least mass-metric correction (module docstring), then their velocities kept from approaching where it
     moved them (_stop_approach); returns the largest depth it took on (m)."""
@@ -774,9 +846,11 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
         for c in range(nd):  # every touching point is a row (λ ≥ 0): closing one gap must not open another
             rlam[c] = 0.0
             deepest = max(deepest, -cflt[c, C_GAP])
-        for _s in range(PROJECT_SWEEPS):
+        pile = _pile_rows(Y1, prm, nd, cint, cflt, rj, rw, rdiag, rbody, porder)
+        for _s in range(PILE_SWEEPS if pile else PROJECT_SWEEPS):
             change = 0.0
-            for c in range(nd):
+            for k in range(nd):
+                c = porder[k]
                 if rdiag[c] <= 0.0:
                     continue
                 g = cflt[c, C_GAP] + _row_speed(dx, rj, rbody, c)
@@ -801,7 +875,7 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
             _narrow(Y1, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound)
             nd = _gather(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount,
                          ppoints, pseps, members, bound, size, is_static, default_mu, True, 0.0, cint, cflt)
-        _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdiag, rbias, rbody, rlam, vel)
+        _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdiag, rbias, rbody, rlam, vel, porder)
         out[OUT_STOPPED] = nd
     _pin = Y1[0, 0], prm[0, 0], nlist[0, 0], members[0], cint[0, 0], cflt[0, 0], rj[0, 0], rbody[0, 0], out[0]
     return deepest
@@ -1005,7 +1079,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     deepest = _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount,
                        ppoints, pseps, members, bound, size, is_static, default_mu, h, iw, dx, vel, cint[half:],
                        cflt[half:], rj[3 * half:], rw[3 * half:], rdiag[3 * half:], rbias[3 * half:],
-                       rlam[3 * half:], rbody[3 * half:], out)
+                       rlam[3 * half:], rbody[3 * half:], order, out)
     out[OUT_DEPTH] = deepest
     if out[OUT_STOPPED] > 0:
         _attribute(nc, cint, cflt, int(out[OUT_STOPPED]), cint[half:], cflt[half:], members, cstart)
