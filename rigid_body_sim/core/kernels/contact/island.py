@@ -511,6 +511,8 @@ def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop, gx, gy, gz):
                     last[3 * c + k] = rlam[3 * order[c] + k]
             if _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, 0, stop, sweep % 2 == 1) <= PGS_TOL:
                 break
+            if sweep == PILE_PGS_SWEEPS - 1:  # the last λ is a sweep's: in its cones
+                break
             size2 = 0.0
             for c in range(stop):
                 for k in range(3):
