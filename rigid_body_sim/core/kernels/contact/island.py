@@ -722,13 +722,13 @@ def _pile_rows(Y1, prm, nd, cint, cflt, rj, rw, rdiag, rbody, porder):
 
 
 @njit(**JIT)
-def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdiag, rbias, rbody, rlam, vel, porder):
+def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdiag, rbias, rbody, rlam, vel):
     """After the projection: the island bodies' velocities in Y1 made not to approach at the nd touching points
     cint/cflt (normal rows, λ ≥ 0, e = 0): the projection moved them out, they must not be left moving in
     again. Gauss–Seidel in the kinetic metric first, then on the linear velocities alone for what approach is
-    left (that one converges in a pile, as the projection's translating rounds do); over a pile, the linear one
-    alone, as the projection's rounds (_pile_rows, PILE_SWEEPS). Removes kinetic energy (over a pile, the upper
-    body of an upright pair is brought to the lower's normal speed)."""
+    left (that one converges in a pile, as the projection's translating rounds do). Only removes kinetic energy
+    (not as the projection over a pile: holding a lower body there gave the upper its speed, energy and motion
+    that kept a pile from sleeping)."""
     n = members.shape[0]
     for m in range(n):
         i = members[m]
@@ -750,13 +750,9 @@ def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdia
         _rows(Y1, prm, nd, cint, cflt, iw, True, h, rj, rw, rdiag, rbias, rbody)
         for c in range(nd):
             rlam[c] = 0.0
-        pile = _pile_rows(Y1, prm, nd, cint, cflt, rj, rw, rdiag, rbody, porder)
-        for _s in range(PILE_SWEEPS if pile else PROJECT_SWEEPS):
-            if pile and metric == 0:
-                break
+        for _s in range(PROJECT_SWEEPS):
             change = 0.0
-            for k in range(nd):
-                c = porder[k]
+            for c in range(nd):
                 if rdiag[c] <= 0.0:
                     continue
                 new = max(rlam[c] - _row_speed(vel, rj, rbody, c) / rdiag[c], 0.0)
@@ -784,7 +780,7 @@ def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdia
         Y1[i, W + 1] = R[1] * vel[i, 3] + R[4] * vel[i, 4] + R[7] * vel[i, 5]
         Y1[i, W + 2] = R[2] * vel[i, 3] + R[5] * vel[i, 4] + R[8] * vel[i, 5]
     _pin = Y1[0, 0], prm[0, 0], members[0], island[0], cint[0, 0], cflt[0, 0], iw[0, 0], rj[0, 0], rw[0, 0]
-    _pin2 = rdiag[0], rbias[0], rbody[0, 0], rlam[0], vel[0, 0], porder[0]
+    _pin2 = rdiag[0], rbias[0], rbody[0, 0], rlam[0], vel[0, 0]
 
 
 @njit(**JIT)
@@ -877,7 +873,7 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
             _narrow(Y1, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound)
             nd = _gather(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount,
                          ppoints, pseps, members, bound, size, is_static, default_mu, True, 0.0, cint, cflt)
-        _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdiag, rbias, rbody, rlam, vel, porder)
+        _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdiag, rbias, rbody, rlam, vel)
         out[OUT_STOPPED] = nd
     _pin = Y1[0, 0], prm[0, 0], nlist[0, 0], members[0], cint[0, 0], cflt[0, 0], rj[0, 0], rbody[0, 0], out[0]
     return deepest
