@@ -23,19 +23,27 @@ SIGNALS = [signal.SIGINT, signal.SIGTERM]
 IDS = [s.name for s in SIGNALS]
 
 
-def signal_after_ready(script: str, *signums: signal.Signals, timeout: float = 30.0) -> tuple[int, str, str, float]:
-    """Run ``script`` in its own Python; once it prints "ready", send ``signums`` 0.1 s apart.
+def signal_after_ready(script: str, *signums: signal.Signals, timeout: float = 30.0,
+                       between: str | None = None) -> tuple[int, str, str, float]:
+    """Run ``script`` in its own Python; once it prints "ready", send ``signums`` 0.1 s apart, or, with
+    ``between``, each after the script printed that line (the first signal handled before the next is sent:
+    signals pending together are handled lowest number first, whatever order they were sent in).
     Returns (exit status, stdout after "ready", stderr, seconds from the first signal to the exit)."""
     process = subprocess.Popen([sys.executable, "-c", textwrap.dedent(script)], stdout=subprocess.PIPE,
                                stderr=subprocess.PIPE, text=True)
     try:
         assert process.stdout.readline().strip() == "ready", process.stderr.read()
         sent = time.monotonic()
-        for signum in signums:
+        seen = ""
+        for k, signum in enumerate(signums):
+            if k and between is not None:
+                line = process.stdout.readline()
+                assert line.strip() == between, line + process.stderr.read()
+                seen += line
             process.send_signal(signum)
             time.sleep(0.1)
         out, err = process.communicate(timeout=timeout)
-        return process.returncode, out, err, time.monotonic() - sent
+        return process.returncode, seen + out, err, time.monotonic() - sent
     finally:
         if process.poll() is None:
             process.kill()
@@ -75,7 +83,7 @@ def test_phase_2_only_sets_the_flag_and_calls_on_first_once(signum):
         print("stopped in order by", signals.signal_name, flush=True)
         signals.restore()
         print("restored", signal.getsignal(signal.SIGINT) is signal.default_int_handler, flush=True)
-    """, signum, signal.SIGINT)
+    """, signum, signal.SIGINT, between="first")
     assert returncode == 0 and err == "", err
     assert out.splitlines() == ["first", f"stopped in order by {signum.name}", "restored True"]
 
