@@ -296,9 +296,11 @@ def test_a_pile_of_27_cubes_falls_asleep():
 def test_a_pile_s_projection_lifts_sunk_columns_to_their_stacked_heights_in_one_step():
     """Four columns of ten 0.1 m cubes (160 contact points: a pile's projection), each cube set 1e-4 m into the
     one below (0.9 mm at the top), at rest: after one 1 ms step every cube stands at its stacked height
-    (k + ½) × the edge within 1e-12 m and no pair is deeper than PROJECT_TOL × its size. The mass metric's
-    Gauss–Seidel alone left 6e-6 m and a 1.6e-12 m overlap after its 8 rounds."""
-    from rigid_body_sim.core.kernels.contact.island import PROJECT_TOL
+    (k + ½) × the edge within 1e-12 m, no pair is deeper than PROJECT_TOL × its size, and every speed is
+    ≤ 1e-9 (the exact answer: rest). The mass metric's Gauss–Seidel alone left 6e-6 m and a 1.6e-12 m overlap
+    after its 8 rounds; the four towers, one island (within each other's reach), solved as one Gauss–Seidel
+    problem moved at 2.5e-4 m/s, where each tower, a component of the contacts, is the exact sticking case."""
+    from rigid_body_sim.core.kernels.contact.island import OUT_STICK, PROJECT_TOL
 
     edge, sunk, at = 0.1, 1e-4, 0.5 * 0.1 + 1e-3
     corners = [(sx * at, sy * at) for sx in (-1, 1) for sy in (-1, 1)]
@@ -311,6 +313,8 @@ def test_a_pile_s_projection_lifts_sunk_columns_to_their_stacked_heights_in_one_
     heights = sim.positions_world()[:, 2].reshape(4, 10)
     assert np.max(np.abs(heights - edge * (np.arange(10) + 0.5))) <= 1e-12
     assert deepest(sim) >= -PROJECT_TOL * edge
+    assert sim.contact.pairs.islands.out[OUT_STICK] == 4
+    assert speeds_of(sim, list(range(40))) <= 1e-9
 
 
 @pytest.mark.slow

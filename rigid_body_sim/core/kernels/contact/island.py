@@ -14,7 +14,8 @@ at its own gap, as far as the pair's reach over the step or PATCH_REACH × its s
 lets a row act only where the step would close it, and a box turned or tilted on another is held
 by its whole face, not rocked about the narrow phase's deepest corner.
 
-The sticking case is solved exactly first: every row as an equality (J M⁻¹ Jᵀ λ = −(J v* + g/h)), by
+The velocity problem is solved per component of the step's contacts (bodies joined by contacts; an island's
+bodies within reach but not touching are apart there). The sticking case is solved exactly first: every row as an equality (J M⁻¹ Jᵀ λ = −(J v* + g/h)), by
 a Cholesky factorisation of J M⁻¹ Jᵀ + εI refined by iterated Tikhonov steps (the minimum-norm λ of
 the consistent rank-deficient system: four coplanar corners of a face share its load evenly; v⁺ does
 not depend on which λ). It is kept when every λ_n ≥ 0 and every λ_t is in its cone (to round-off);
@@ -883,7 +884,7 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
 def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, members, cand, n_cand, is_static, stopped, spin_reach, size,
                 asleep, quiet, h, sleeping, default_mu, n_prev, island, parent, flags, nlist, pos, quat, pdist, pnormal, pcount,
                 ppoints, pseps, bound, cint, cflt, vel, iw, dx, rj, rw, rdiag, rbias, rlam, rbody, order, cstart,
-                A, L, vec, out):
+                A, L, vec, out, comp):
     """One step of every island (module docstring): results into Y1 for the bodies marked island[i] = 1 (solved)
     or 2 (asleep: their rows copied from Y0). Returns 0, or −(contacts needed) when cint is too small
     (then nothing was changed but ``asleep`` and the outputs; call again with room)."""
@@ -1011,29 +1012,36 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     out[OUT_CONTACTS] = nc
     _rows(Y0, prm, nc, cint, cflt, iw, False, h, rj, rw, rdiag, rbias, rbody)
     _warm_start(nc, cint, cflt, n_prev, cint[half:], cflt[half:], members, size, cstart, rj, rbody, rlam)
-    # contacts sorted by island (counting sort on the root of their moving body)
+    # contacts sorted by their component (counting sort on the root of their moving body): the bodies joined by
+    # this step's contacts. An island's bodies within reach but not touching are apart here: the velocity problem
+    # decouples over its components, and each (a tower beside a tower) may be the sticking case
     for m in range(n):
-        cstart[members[m]] = 0
+        i = members[m]
+        comp[i] = i
+        cstart[i] = 0
+    for c in range(nc):
+        if cint[c, 0] >= 0 and cint[c, 1] >= 0:
+            _union(comp, cint[c, 0], cint[c, 1])
     for c in range(nc):
         i = cint[c, 1] if cint[c, 1] >= 0 else cint[c, 0]
-        cstart[_find(parent, i)] += 1
+        cstart[_find(comp, i)] += 1
     total = 0
     for m in range(n):
         i = members[m]
-        if _find(parent, i) == i:
+        if _find(comp, i) == i:
             k = cstart[i]
             cstart[i] = total
             total += k
     for c in range(nc):
         i = cint[c, 1] if cint[c, 1] >= 0 else cint[c, 0]
-        r = _find(parent, i)
+        r = _find(comp, i)
         order[cstart[r]] = c
         cstart[r] += 1
     lo = 0
-    stop = 0  # the contacts of the islands not solved exactly, moved to the front of order (one PGS over all)
+    stop = 0  # the contacts of the components not solved exactly, moved to the front of order (one PGS over all)
     for m in range(n):
         i = members[m]
-        if _find(parent, i) != i or island[i] != 1:
+        if _find(comp, i) != i or island[i] != 1:
             continue
         hi = cstart[i]
         if hi == lo:
