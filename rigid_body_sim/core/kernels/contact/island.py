@@ -14,17 +14,17 @@ at its own gap, as far as the pair's reach over the step or PATCH_REACH × its s
 lets a row act only where the step would close it, and a box turned or tilted on another is held
 by its whole face, not rocked about the narrow phase's deepest corner.
 
-The velocity problem is solved per component of the step's contacts (bodies joined by contacts; an island's
-bodies within reach but not touching are apart there). The sticking case is solved exactly first: every row as an equality (J M⁻¹ Jᵀ λ = −(J v* + g/h)), by
-a Cholesky factorisation of J M⁻¹ Jᵀ + εI refined by iterated Tikhonov steps (the minimum-norm λ of
-the consistent rank-deficient system: four coplanar corners of a face share its load evenly; v⁺ does
+The velocity problem is solved per component of the step's contacts (bodies joined by contacts; an
+island's bodies within reach but not touching are apart there). The sticking case is solved exactly
+first: every row as an equality (J M⁻¹ Jᵀ λ = −(J v* + g/h)), by a Cholesky factorisation of
+J M⁻¹ Jᵀ + εI refined by iterated Tikhonov steps (the minimum-norm λ of the consistent rank-deficient system: four coplanar corners of a face share its load evenly; v⁺ does
 not depend on which λ). It is kept when every λ_n ≥ 0 and every λ_t is in its cone (to round-off);
 else projected Gauss–Seidel on the island's rows (over more than PILE_CONTACTS contacts, from the
 highest against gravity down, then back up, in turn: a weight passes down a pile and a stop up it
 within a sweep). Then the
 positions: every point found penetrating at the new poses (narrow phase again) is closed by a
-mass-metric least correction (Gauss–Seidel on the linearised gaps, λ ≥ 0), the narrow phase iterated
-PROJECT_ROUNDS times.
+mass-metric least correction (Gauss–Seidel on the linearised gaps, λ ≥ 0; over a pile, bottom-up with each
+upright pair's lower body held, _pile_rows), the narrow phase iterated PROJECT_ROUNDS times.
 
 Islands: union-find over the swept broad phase's candidate pairs of moving bodies (a sleeping
 body's only when the other is within the step's reach); a component is an island when one of its pairs touches at the step's start (signed distance ≤ TOUCH × the
@@ -708,7 +708,8 @@ def _pile_rows(Y1, prm, nd, cint, cflt, rj, rw, rdiag, rbody, porder):
         porder[:nd] = np.argsort(-down)
         for c in range(nd):
             a, b = rbody[c, 0], rbody[c, 1]
-            if a < 0 or b < 0 or abs(gx * cflt[c, C_N] + gy * cflt[c, C_N + 1] + gz * cflt[c, C_N + 2]) < PILE_UPRIGHT * g:
+            upright = abs(gx * cflt[c, C_N] + gy * cflt[c, C_N + 1] + gz * cflt[c, C_N + 2]) >= PILE_UPRIGHT * g
+            if a < 0 or b < 0 or not upright:
                 continue
             below_a = gx * Y1[a, P] + gy * Y1[a, P + 1] + gz * Y1[a, P + 2]
             below_b = gx * Y1[b, P] + gy * Y1[b, P + 1] + gz * Y1[b, P + 2]
@@ -807,8 +808,8 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
              members, bound, size, is_static, default_mu, h, iw, dx, vel, cint, cflt, rj, rw, rdiag, rbias, rlam, rbody,
              porder, out):
     """The projection of the island bodies' poses Y1: points deeper than PROJECT_TOL × their pair's size closed by
-    the least mass-metric correction (module docstring), then their velocities kept from approaching where it
-    moved them (_stop_approach); returns the largest depth it took on (m)."""
+    the least mass-metric correction (over a pile, bottom-up with lower bodies held: _pile_rows), then their
+    velocities kept from approaching where it moved them (_stop_approach); returns the largest depth it took on (m)."""
     n = members.shape[0]
     deepest = 0.0
     settled = False
