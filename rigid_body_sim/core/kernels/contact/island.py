@@ -17,9 +17,10 @@ by its whole face, not rocked about the narrow phase's deepest corner.
 The velocity problem is solved per component of the step's contacts (bodies joined by contacts; an
 island's bodies within reach but not touching are apart there). The sticking case is solved exactly
 first: every row as an equality (J M⁻¹ Jᵀ λ = −(J v* + g/h)), by a Cholesky factorisation of
-J M⁻¹ Jᵀ + εI refined by iterated Tikhonov steps (the minimum-norm λ of the consistent rank-deficient system: four coplanar corners of a face share its load evenly; v⁺ does
-not depend on which λ). It is kept when every λ_n ≥ 0 and every λ_t is in its cone (to round-off);
-else projected Gauss–Seidel on the island's rows (over more than PILE_CONTACTS contacts, from the
+J M⁻¹ Jᵀ + εI refined by iterated Tikhonov steps (the minimum-norm λ of the consistent rank-deficient
+system: four coplanar corners of a face share its load evenly; v⁺ does not depend on which λ). It is
+kept when every λ_n ≥ 0 and every λ_t is in its cone (to round-off); else projected Gauss–Seidel on
+the component's rows (over more than PILE_CONTACTS contacts, from the
 highest against gravity down, then back up, in turn: a weight passes down a pile and a stop up it
 within a sweep). Then the
 positions: every point found penetrating at the new poses (narrow phase again) is closed by a
