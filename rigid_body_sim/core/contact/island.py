@@ -54,6 +54,7 @@ class Islands:
         self._comp = np.zeros(n, dtype=np.int64)  # the velocity step's components (bodies joined by contacts)
         self._A, self._L = np.zeros((DENSE_MAX, DENSE_MAX)), np.zeros((DENSE_MAX, DENSE_MAX))
         self._vec = np.zeros((3, DENSE_MAX))
+        self._band = np.zeros((2, DENSE_MAX), dtype=np.int64)  # the sticking solve's profile, points on
         self.out = np.zeros(OUT_WIDTH)
         self._grow_pairs(16)
         self._grow_contacts(64)
@@ -165,7 +166,8 @@ class Islands:
             code = island_pass(*args_head, self._nlist, self._pos, self._quat, self._pdist, self._pnormal,
                                self._pcount, self._ppoints, self._pseps, self._bound, self._cint, self._cflt, self._vel,
                                self._iw, self._dx, self._rj, self._rw, self._rdiag, self._rbias, self._rlam,
-                               self._rbody, self._order, self._cstart, self._A, self._L, self._vec, self.out, self._comp)
+                               self._rbody, self._order, self._cstart, self._A, self._L, self._vec, self.out, self._comp,
+                               self._band)
             if code >= 0:
                 break
             self._grow_contacts(2 * -code)

@@ -78,8 +78,9 @@ PILE_CONTACTS = DENSE_MAX // 3
 #: gradient). A pile's projection: at most PILE_SWEEPS sweeps a round, from the lowest point up, and a pair whose
 #: normal is within acos(PILE_UPRIGHT) of gravity moves only its upper body (the lower held: shock propagation).
 PILE_PGS_SWEEPS, PILE_SWEEPS, PILE_UPRIGHT = 100, 20, 0.5
-#: Iterated Tikhonov steps of the sticking solve, and its regularisation (× the largest diagonal).
-TIKHONOV_STEPS, TIKHONOV_EPS = 6, 1e-9
+#: Iterated Tikhonov steps of the sticking solve (fewer once the residual is below TIKHONOV_TOL × the right-hand
+#: side's), and its regularisation (× the largest diagonal); most pivots of its points let go or taken back.
+TIKHONOV_STEPS, TIKHONOV_TOL, TIKHONOV_EPS, STICK_PIVOTS = 6, 1e-15, 1e-9, 3
 #: Columns of a contact's float row: point (3), normal a → b (3), gap, μ, and after the velocity step the
 #: impulse on b (3, world, N·s; a gets its opposite).
 C_X, C_N, C_GAP, C_MU, C_IMPULSE, C_FLOATS = 0, 3, 6, 7, 8, 11
@@ -290,9 +291,10 @@ def _gather(Y, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdi
 
 
 @njit(**JIT)
-def _rows(Y, prm, n_contacts, cint, cflt, iw, normal_only, h, rj, rw, rdiag, rbias, rbody):
+def _rows(Y, prm, n_contacts, cint, cflt, iw, normal_only, h, rj, rw, rdiag, rbias, rbody, island):
     """Each contact's rows (normal, t1, t2; or the normal alone): J (per side 6: linear, angular world), M⁻¹Jᵀ,
-    the diagonal of J M⁻¹ Jᵀ, the bias (the gap term g/h, g ≥ 0), the two bodies (−1: fixed)."""
+    the diagonal of J M⁻¹ Jᵀ, the bias (the gap term g/h, g ≥ 0), the two bodies (−1: fixed, or not moved by
+    this solve: island[i] != 1)."""
     per = 1 if normal_only else 3
     for c in range(n_contacts):
         nx, ny, nz = cflt[c, C_N], cflt[c, C_N + 1], cflt[c, C_N + 2]
@@ -318,6 +320,8 @@ def _rows(Y, prm, n_contacts, cint, cflt, iw, normal_only, h, rj, rw, rdiag, rbi
             diag = 0.0
             for side in range(2):
                 i = cint[c, side]
+                if i >= 0 and island[i] != 1:
+                    i = -1
                 rbody[r, side] = i
                 o = 6 * side
                 if i < 0:
@@ -341,6 +345,7 @@ def _rows(Y, prm, n_contacts, cint, cflt, iw, normal_only, h, rj, rw, rdiag, rbi
             rdiag[r] = diag
             rbias[r] = max(cflt[c, C_GAP], 0.0) / h if k == 0 else 0.0
     _pin = Y[0, 0], prm[0, 0], cint[0, 0], cflt[0, 0], iw[0, 0], rj[0, 0], rw[0, 0], rdiag[0], rbias[0], rbody[0, 0]
+    _pin2 = island[0]
 
 
 @njit(**JIT)
@@ -364,37 +369,99 @@ def _apply(vel, rw, rbody, r, dl):
 
 
 @njit(**JIT)
-def _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, start, stop, A, L, rhs, lam, res):
-    """The sticking case of one island's contacts order[start:stop] (3 rows each) solved as equalities;
-    True (and vel, rlam updated) when every λ_n ≥ 0 and every λ_t is in its cone, to round-off."""
-    m = 3 * (stop - start)
-    for x in range(m):
-        rx = 3 * order[start + x // 3] + x % 3
-        rhs[x] = -(_row_speed(vel, rj, rbody, rx) + rbias[rx])
-        for y in range(x + 1):
-            ry = 3 * order[start + y // 3] + y % 3
-            a = 0.0
-            for sx in range(2):
-                bx = rbody[rx, sx]
-                if bx < 0:
-                    continue
-                for sy in range(2):
-                    if rbody[ry, sy] == bx:
-                        for j in range(6):
-                            a += rj[rx, 6 * sx + j] * rw[ry, 6 * sy + j]
-            A[x, y] = a
-            A[y, x] = a
+def _profile_order(cflt, order, start, stop):
+    """Sort contacts order[start:stop] along their points' longest extent (a column's from its foot up), so that
+    their J M⁻¹ Jᵀ has a narrow profile (insertion sort: the order is mostly kept from step to step)."""
+    lo_x, lo_y, lo_z, hi_x, hi_y, hi_z = np.inf, np.inf, np.inf, -np.inf, -np.inf, -np.inf
+    for c in range(start, stop):
+        q = order[c]
+        lo_x, hi_x = min(lo_x, cflt[q, C_X]), max(hi_x, cflt[q, C_X])
+        lo_y, hi_y = min(lo_y, cflt[q, C_X + 1]), max(hi_y, cflt[q, C_X + 1])
+        lo_z, hi_z = min(lo_z, cflt[q, C_X + 2]), max(hi_z, cflt[q, C_X + 2])
+    axis = 0
+    if hi_y - lo_y > max(hi_x - lo_x, hi_z - lo_z):
+        axis = 1
+    elif hi_z - lo_z > hi_x - lo_x:
+        axis = 2
+    for x in range(start + 1, stop):
+        q = order[x]
+        key = cflt[q, C_X + axis]
+        y = x - 1
+        while y >= start and cflt[order[y], C_X + axis] > key:
+            order[y + 1] = order[y]
+            y -= 1
+        order[y + 1] = q
+    _pin = cflt[0, 0], order[0]
+
+
+@njit(**JIT)
+def _delassus(vel, rj, rw, rbody, rbias, order, start, stop, A, rhs, first):
+    """The lower triangle of A = J M⁻¹ Jᵀ of contacts order[start:stop] (3 rows each, in that order),
+    rhs = −(J v* + g/h), and each row's first structurally nonzero column first[x]: the first row of the first
+    contact sharing a body with it (rows sharing none are exact zeros and are neither written nor read)."""
+    nc = stop - start
+    for cx in range(nc):
+        qx = order[start + cx]
+        a0, a1 = rbody[3 * qx, 0], rbody[3 * qx, 1]
+        lead = cx
+        for cy in range(cx):
+            b0, b1 = rbody[3 * order[start + cy], 0], rbody[3 * order[start + cy], 1]
+            if (a0 >= 0 and (a0 == b0 or a0 == b1)) or (a1 >= 0 and (a1 == b0 or a1 == b1)):
+                lead = cy
+                break
+        for k in range(3):
+            x = 3 * cx + k
+            rx = 3 * qx + k
+            rhs[x] = -(_row_speed(vel, rj, rbody, rx) + rbias[rx])
+            first[x] = 3 * lead
+            for y in range(3 * lead, x + 1):
+                ry = 3 * order[start + y // 3] + y % 3
+                a = 0.0
+                for sx in range(2):
+                    bx = rbody[rx, sx]
+                    if bx < 0:
+                        continue
+                    for sy in range(2):
+                        if rbody[ry, sy] == bx:
+                            for j in range(6):
+                                a += rj[rx, 6 * sx + j] * rw[ry, 6 * sy + j]
+                A[x, y] = a
+    _pin = vel[0, 0], rj[0, 0], rw[0, 0], rbody[0, 0], rbias[0], order[0], A[0, 0], rhs[0], first[0]
+
+
+@njit(**INLINE)
+def _dot(L, x, y, lo, hi):
+    """Σ L[x, k] L[y, k] over k in [lo, hi), in four interleaved partial sums (independent chains the CPU overlaps)."""
+    s0 = s1 = s2 = s3 = 0.0
+    k = lo
+    while k + 4 <= hi:
+        s0 += L[x, k] * L[y, k]
+        s1 += L[x, k + 1] * L[y, k + 1]
+        s2 += L[x, k + 2] * L[y, k + 2]
+        s3 += L[x, k + 3] * L[y, k + 3]
+        k += 4
+    while k < hi:
+        s0 += L[x, k] * L[y, k]
+        k += 1
+    return (s0 + s1) + (s2 + s3)
+
+
+@njit(**JIT)
+def _equalities(m, A, rhs, first, on, L, lam, res):
+    """λ with (A + εI) λ = rhs on the rows with on[x] (the others' λ = 0), by a Cholesky factorisation within the
+    profile first[] (skyline: what lies before a row's first nonzero stays zero) refined by TIKHONOV_STEPS iterated
+    Tikhonov steps; False when A is zero or not positive definite there."""
     top = 0.0
     for x in range(m):
         top = max(top, A[x, x])
     eps = TIKHONOV_EPS * top
     ok = top > 0.0
-    # Cholesky of A + εI (lower, in L)
     for x in range(m):
-        for y in range(x + 1):
-            s = A[x, y] + (eps if x == y else 0.0)
-            for k in range(y):
-                s -= L[x, k] * L[y, k]
+        for y in range(first[x], x + 1):
+            if not on[x] or not on[y]:
+                L[x, y] = 1.0 if x == y else 0.0
+                continue
+            s = A[x, y] + (eps if x == y else 0.0) - _dot(L, x, y, max(first[x], first[y]), y)
             if x == y:
                 if s <= 0.0:
                     ok = False
@@ -402,45 +469,103 @@ def _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, start, stop, A, L, r
                 L[x, x] = math.sqrt(s)
             else:
                 L[x, y] = s / L[y, y]
+    scale = 0.0
     for x in range(m):
         lam[x] = 0.0
-        res[x] = rhs[x]
+        res[x] = rhs[x] if on[x] else 0.0
+        scale = max(scale, abs(res[x]))
+    last = np.inf
     for _ in range(TIKHONOV_STEPS):
         # solve (A + εI) δ = res: forward, backward (δ in res)
         for x in range(m):
             s = res[x]
-            for k in range(x):
+            for k in range(first[x], x):
                 s -= L[x, k] * res[k]
             res[x] = s / L[x, x]
         for x in range(m - 1, -1, -1):
-            s = res[x]
-            for k in range(x + 1, m):
-                s -= L[k, x] * res[k]
-            res[x] = s / L[x, x]
+            res[x] /= L[x, x]
+            for k in range(first[x], x):
+                res[k] -= L[x, k] * res[x]
         for x in range(m):
             lam[x] += res[x]
+        _residual(m, A, rhs, first, lam, res)
+        worst = 0.0
         for x in range(m):
-            s = rhs[x]
-            for y in range(m):
-                s -= A[x, y] * lam[y]
-            res[x] = s
-    biggest = 0.0
-    for x in range(0, m, 3):
-        biggest = max(biggest, abs(lam[x]))
-    tol = 1e-9 * biggest
-    for c in range(stop - start):
-        ln, l1, l2 = lam[3 * c], lam[3 * c + 1], lam[3 * c + 2]
-        mu = cflt[order[start + c], C_MU]
-        if ln < -tol or math.sqrt(l1 * l1 + l2 * l2) > mu * max(ln, 0.0) + tol:
-            ok = False
-    if ok:
+            if not on[x]:
+                res[x] = 0.0
+            worst = max(worst, abs(res[x]))
+        if worst <= TIKHONOV_TOL * scale or worst >= last:  # at round-off, or no longer shrinking
+            break
+        last = worst
+    _pin = A[0, 0], rhs[0], first[0], on[0], L[0, 0], lam[0], res[0]
+    return ok
+
+
+@njit(**JIT)
+def _residual(m, A, rhs, first, lam, res):
+    """res = rhs − A λ, A symmetric and zero before each row's first[x]: what each row's speed still lacks."""
+    for x in range(m):
+        res[x] = rhs[x] - A[x, x] * lam[x]
+    for x in range(m):
+        for y in range(first[x], x):
+            res[x] -= A[x, y] * lam[y]
+            res[y] -= A[x, y] * lam[x]
+    _pin = A[0, 0], rhs[0], first[0], lam[0], res[0]
+
+
+@njit(**JIT)
+def _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, start, stop, A, L, rhs, lam, res, band):
+    """The contacts order[start:stop] (3 rows each) solved exactly when none slides: the points that stay are
+    equalities (u⁺ = 0), the others have λ = 0 and part (u_n⁺ ≥ 0). From all staying, points whose λ_n < 0 are let
+    go and points let go that would close are taken back, at most STICK_PIVOTS times (block principal pivoting
+    on the normals: a column rocking on an edge). True (and vel, rlam updated) when every λ_n ≥ 0, every λ_t is
+    in its cone and every point let go parts, to round-off. Scratch: band[0] the profile, band[1] the points on."""
+    m = 3 * (stop - start)
+    first, on = band[0], band[1]
+    _profile_order(cflt, order, start, stop)
+    _delassus(vel, rj, rw, rbody, rbias, order, start, stop, A, rhs, first)
+    for x in range(0, m, 3):  # the points that held last step (warm start) or touch
+        r = 3 * order[start + x // 3]
+        on[x] = on[x + 1] = on[x + 2] = 1 if rlam[r] > 0.0 or rbias[r] == 0.0 else 0
+    kept = False
+    for _pivot in range(STICK_PIVOTS):
+        if not _equalities(m, A, rhs, first, on, L, lam, res):
+            break
+        biggest, fastest = 0.0, 0.0
+        for x in range(m):
+            if x % 3 == 0:
+                biggest = max(biggest, abs(lam[x]))
+            fastest = max(fastest, abs(rhs[x]))
+        tol, slack = 1e-9 * biggest, 1e-9 * fastest
+        _residual(m, A, rhs, first, lam, res)  # −res: each row's speed after
+        changed = False
+        for x in range(0, m, 3):
+            if on[x] and lam[x] < -tol:  # pulls: let go
+                on[x] = on[x + 1] = on[x + 2] = 0
+                changed = True
+            elif not on[x] and -res[x] < -slack:  # closes: take back
+                on[x] = on[x + 1] = on[x + 2] = 1
+                changed = True
+        if changed:
+            continue
+        kept = True
+        for x in range(m):  # the points on are met as equalities (a consistent system)
+            if on[x] and abs(res[x]) > slack:
+                kept = False
+        for c in range(stop - start):
+            ln, l1, l2 = lam[3 * c], lam[3 * c + 1], lam[3 * c + 2]
+            mu = cflt[order[start + c], C_MU]
+            if math.sqrt(l1 * l1 + l2 * l2) > mu * max(ln, 0.0) + tol:
+                kept = False
+        break
+    if kept:
         for x in range(m):
             rx = 3 * order[start + x // 3] + x % 3
             rlam[rx] = lam[x]
             _apply(vel, rw, rbody, rx, lam[x])
     _pin = vel[0, 0], rj[0, 0], rw[0, 0], rbody[0, 0], rbias[0], rlam[0], cflt[0, 0], order[0], A[0, 0], L[0, 0]
-    _pin2 = rhs[0], lam[0], res[0]
-    return ok
+    _pin2 = rhs[0], lam[0], res[0], band[0, 0]
+    return kept
 
 
 @njit(**JIT)
@@ -750,7 +875,7 @@ def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdia
                 else:
                     for j in range(9):
                         iw[i, j] = 0.0
-        _rows(Y1, prm, nd, cint, cflt, iw, True, h, rj, rw, rdiag, rbias, rbody)
+        _rows(Y1, prm, nd, cint, cflt, iw, True, h, rj, rw, rdiag, rbias, rbody, island)
         for c in range(nd):
             rlam[c] = 0.0
         for _s in range(PROJECT_SWEEPS):
@@ -807,15 +932,27 @@ def _attribute(nc, cint, cflt, nd, sint, sflt, members, head):
 @njit(**JIT)
 def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps,
              members, bound, size, is_static, default_mu, h, iw, dx, vel, cint, cflt, rj, rw, rdiag, rbias, rlam, rbody,
-             porder, out):
+             porder, out, comp, flags):
     """The projection of the island bodies' poses Y1: points deeper than PROJECT_TOL × their pair's size closed by
     the least mass-metric correction (over a pile, bottom-up with lower bodies held: _pile_rows), then their
-    velocities kept from approaching where it moved them (_stop_approach); returns the largest depth it took on (m)."""
+    velocities kept from approaching where it moved them (_stop_approach); returns the largest depth it took on (m).
+    Only the bodies of the velocity step's components (comp) with a deep point move; the others (solved exactly,
+    at their contacts' gaps to round-off) are held as fixed, and their pairs with each other not looked at again."""
     n = members.shape[0]
     deepest = 0.0
     settled = False
+    live = n_pairs
     for rnd in range(PROJECT_ROUNDS):
-        _narrow(Y1, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound)
+        if rnd == 1:  # the pairs with a moving body first: the later rounds' narrow phase (the others' data stale)
+            live = 0
+            for k in range(n_pairs):
+                a, b = nlist[k, 0], nlist[k, 1]
+                if island[a] == 1 or island[b] == 1:
+                    nlist[k, 0], nlist[live, 0] = nlist[live, 0], a
+                    nlist[k, 1], nlist[live, 1] = nlist[live, 1], b
+                    bound[k], bound[live] = bound[live], bound[k]
+                    live += 1
+        _narrow(Y1, prm, shapes, nlist, live, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound)
         nd = _gather(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps,
                      members, bound, size, is_static, default_mu, True, 0.0, cint, cflt)
         deep = 0
@@ -828,6 +965,17 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
         if deep == 0:
             settled = True  # nd: the touching points at the final poses
             break
+        if rnd == 0:  # the components with a deep point move; the others are held (island 3 until the end)
+            for c in range(nd):
+                i = cint[c, 1] if cint[c, 1] >= 0 else cint[c, 0]
+                if cflt[c, C_GAP] < -PROJECT_TOL * size[i]:
+                    for side in range(2):
+                        if cint[c, side] >= 0:
+                            flags[_find(comp, cint[c, side])] |= 256
+            for m in range(n):
+                i = members[m]
+                if island[i] == 1 and not flags[_find(comp, i)] & 256:
+                    island[i] = 3
         # the rows: every point within twice the depth above contact too, so that turning a body out of one
         # penetration does not drive its neighbouring corners into another
         nd = _gather(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount,
@@ -843,7 +991,7 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
                         iw[i, j] = 0.0
                 for j in range(6):
                     dx[i, j] = 0.0
-        _rows(Y1, prm, nd, cint, cflt, iw, True, h, rj, rw, rdiag, rbias, rbody)
+        _rows(Y1, prm, nd, cint, cflt, iw, True, h, rj, rw, rdiag, rbias, rbody, island)
         for c in range(nd):  # every touching point is a row (λ ≥ 0): closing one gap must not open another
             rlam[c] = 0.0
             deepest = max(deepest, -cflt[c, C_GAP])
@@ -873,12 +1021,17 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
             Y1[i, Q], Y1[i, Q + 1], Y1[i, Q + 2], Y1[i, Q + 3] = normalise(q[0], q[1], q[2], q[3])
     if deepest > 0.0:
         if not settled:  # the touching points at the final poses (settled: the last round's first gather)
-            _narrow(Y1, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound)
+            _narrow(Y1, prm, shapes, nlist, live, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound)
             nd = _gather(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount,
                          ppoints, pseps, members, bound, size, is_static, default_mu, True, 0.0, cint, cflt)
         _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdiag, rbias, rbody, rlam, vel)
         out[OUT_STOPPED] = nd
+    for m in range(n):
+        i = members[m]
+        if island[i] == 3:
+            island[i] = 1
     _pin = Y1[0, 0], prm[0, 0], nlist[0, 0], members[0], cint[0, 0], cflt[0, 0], rj[0, 0], rbody[0, 0], out[0]
+    _pin2 = comp[0], flags[0]
     return deepest
 
 
@@ -886,7 +1039,7 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
 def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, members, cand, n_cand, is_static, stopped, spin_reach, size,
                 asleep, quiet, h, sleeping, default_mu, n_prev, island, parent, flags, nlist, pos, quat, pdist, pnormal, pcount,
                 ppoints, pseps, bound, cint, cflt, vel, iw, dx, rj, rw, rdiag, rbias, rlam, rbody, order, cstart,
-                A, L, vec, out, comp):
+                A, L, vec, out, comp, band):
     """One step of every island (module docstring): results into Y1 for the bodies marked island[i] = 1 (solved)
     or 2 (asleep: their rows copied from Y0). Returns 0, or −(contacts needed) when cint is too small
     (then nothing was changed but ``asleep`` and the outputs; call again with room)."""
@@ -1012,7 +1165,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     nc = _gather(Y0, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps,
                  members, bound, size, is_static, default_mu, False, 0.0, cint, cflt)
     out[OUT_CONTACTS] = nc
-    _rows(Y0, prm, nc, cint, cflt, iw, False, h, rj, rw, rdiag, rbias, rbody)
+    _rows(Y0, prm, nc, cint, cflt, iw, False, h, rj, rw, rdiag, rbias, rbody, island)
     _warm_start(nc, cint, cflt, n_prev, cint[half:], cflt[half:], members, size, cstart, rj, rbody, rlam)
     # contacts sorted by their component (counting sort on the root of their moving body): the bodies joined by
     # this step's contacts. An island's bodies within reach but not touching are apart here: the velocity problem
@@ -1050,7 +1203,8 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             continue
         kept = False
         if 3 * (hi - lo) <= A.shape[0]:
-            kept = _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, lo, hi, A, L, vec[0], vec[1], vec[2])
+            kept = _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, lo, hi, A, L, vec[0], vec[1], vec[2],
+                             band)
         if kept:
             out[OUT_STICK] += 1
         else:
@@ -1087,23 +1241,23 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     deepest = _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount,
                        ppoints, pseps, members, bound, size, is_static, default_mu, h, iw, dx, vel, cint[half:],
                        cflt[half:], rj[3 * half:], rw[3 * half:], rdiag[3 * half:], rbias[3 * half:],
-                       rlam[3 * half:], rbody[3 * half:], order, out)
+                       rlam[3 * half:], rbody[3 * half:], order, out, comp, flags)
     out[OUT_DEPTH] = deepest
     if out[OUT_STOPPED] > 0:
         _attribute(nc, cint, cflt, int(out[OUT_STOPPED]), cint[half:], cflt[half:], members, cstart)
-    # sleeping: an island whose bodies were and stay slower than SLEEP_SPEED is locked at rest
+    # sleeping: a component of the step's contacts whose bodies were and stay slower than SLEEP_SPEED is locked
+    # at rest (its island's other bodies are beyond the step's reach: a sleeping body is woken by one within it)
     for m in range(n):
         i = members[m]
         if island[i] == 1:
             still = _speed(Y0, i, spin_reach) <= SLEEP_SPEED and _speed(Y1, i, spin_reach) <= SLEEP_SPEED
             quiet[i] = quiet[i] + 1 if still else 0
-            r = _find(parent, i)
             if not still:
-                flags[r] |= 16
+                flags[_find(comp, i)] |= 16
     if sleeping:
         for m in range(n):
             i = members[m]
-            if island[i] == 1 and not flags[_find(parent, i)] & 16:
+            if island[i] == 1 and not flags[_find(comp, i)] & 16:
                 asleep[i] = 1
                 out[OUT_SLEPT] += 1
                 for j in range(6):
