@@ -208,6 +208,42 @@ def test_a_sleeping_tower_wakes_when_hit():
     assert speeds(sim) == 0.0
 
 
+def test_a_tower_falls_asleep_beside_a_cube_still_sliding_in_its_island():
+    """A 3-cube tower at rest and a frictionless cube sliding past it 1 cm away at 1 cm/s are one island (their
+    swept boxes overlap) but no contact joins them: the tower, a component at rest, is locked in the first step
+    and stays so, to the bit, while the cube slides on at its speed (beyond the tower's reach, it wakes nothing)."""
+    bodies = tower(3)
+    bodies["slider"] = cube((EDGE + 0.01, -0.1, 0.5 * EDGE), mu=0.0, velocity=(0.0, 0.01, 0.0))
+    sim = simulator(bodies, sleeping=True)
+    islands = sim.contact.pairs.islands
+    sim.step()
+    assert (islands.island[:4] == 1).all()  # one island this step
+    assert islands.asleep[:3].all() and not islands.asleep[3]
+    rows = sim.state.rows()[:3, :13].copy()
+    sim.step(30)
+    assert np.array_equal(sim.state.rows()[:3, :13], rows)
+    assert islands.asleep[:3].all()
+    assert sim.state.v_WC_W[3] == pytest.approx([0.0, 0.01, 0.0], abs=1e-12)
+
+
+@pytest.mark.parametrize("mu", [0.0, 0.5])
+def test_a_cube_sliding_out_of_an_island_slides_on(mu):
+    """A cube sliding at 2 m/s on the ground, starting 1 cm beside a 3-cube tower (one island while their swept
+    boxes overlap), leaves the island and goes on sliding: its speed is 2 − μ g t throughout (a first-order
+    island step and the ground's held step are both exact for the constant friction force), never stopped
+    where it is handed back to the ground (frictionless, it keeps its 2 m/s)."""
+    bodies = tower(3)
+    bodies["slider"] = cube((EDGE + 0.01, -0.1, 0.5 * EDGE), mu=mu, velocity=(2.0, 0.0, 0.0))
+    sim = simulator(bodies)
+    solver = sim.contact
+    left = False
+    for k in range(1, 31):
+        sim.step()
+        left = left or not solver.in_island("slider")
+        assert sim.state.v_WC_W[3] == pytest.approx([2.0 - mu * G * 0.01 * k, 0.0, 0.0], abs=1e-9)
+    assert left
+
+
 def test_two_towers_a_millimetre_apart_are_solved_exactly():
     """Two 5-cube towers 1 mm apart (0.2 m cubes: their side faces' patch points, at a 1 mm gap, are rows of
     the one component holding both): the points apart are let go (λ = 0, and they do not close) and the rest

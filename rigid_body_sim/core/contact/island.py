@@ -43,6 +43,8 @@ class Islands:
         self.size = np.ascontiguousarray(shapes[:, DIMS:DIMS + 3].max(axis=1) * 2.0)
         self.island = np.zeros(n, dtype=np.int64)  # 1: stepped by the island pass this step, 2: asleep
         self.was_island = np.zeros(n, dtype=bool)
+        #: The bodies out of their island since the last step (in it the step before).
+        self.left = np.zeros(0, dtype=np.int64)
         self.asleep = np.zeros(n, dtype=np.int64)
         self.quiet = np.zeros(n, dtype=np.int64)
         self.saved = np.zeros((n, L.STATE_WIDTH))
@@ -101,6 +103,7 @@ class Islands:
         """Every body awake and out of the islands; the counts cleared."""
         self.island[:] = 0
         self.was_island[:] = False
+        self.left = np.zeros(0, dtype=np.int64)
         self.asleep[:] = 0
         self.quiet[:] = 0
         self.body_steps = 0
@@ -188,8 +191,6 @@ class Islands:
             solver.modes[now] = FLIGHT  # in the island: not held by the ground pass
             solver.ground_of[now] = -1
             solver.sliding[now] = False
-        left = np.flatnonzero(self.was_island & ~now)
+        self.left = np.flatnonzero(self.was_island & ~now)  # handed to their ground by ContactSolver.after_step
         self.was_island = now
-        for i in left:  # out of its island: persistent contact if it touches its ground and stays on it
-            solver.classify(sim, Y1, int(i))
         return now

@@ -276,10 +276,14 @@ class ContactSolver:
         gap, j = self._gap(sim, Y[i], i)
         if gap <= TOUCHING_GAP:
             count = self._contact_points(sim, Y[i], i, j)
-            speed, _, _, _ = self._normal_motion(sim, Y[i], i, j, count, np.zeros(L.WRENCH_WIDTH))
+            speed, _, vx, vy = self._normal_motion(sim, Y[i], i, j, count, np.zeros(L.WRENCH_WIDTH))
             if speed <= LIFT_OFF_SPEED:
                 self.modes[i] = PERSISTENT
                 self.ground_of[i] = j
+                # sliding if its points slip (as holding_wrench: frictionless, it slides along no direction)
+                slip, mu = math.hypot(vx, vy), self.friction_of(i, j)
+                self.sliding[i] = mu == 0.0 or slip > SLIP_TOLERANCE
+                self.slide_direction[i] = (vx / slip, vy / slip) if mu != 0.0 and slip > SLIP_TOLERANCE else (0.0, 0.0)
                 self.tracked[i] = self._staying(sim, Y[i], i, j, self._touching(sim, Y[i], i, j))
                 self.events.append(ContactEvent(sim.time, self.names[i], int(j), "rest", speed, speed))
                 two_grounds.start_if_touching(self, sim, Y[i], i, LIFT_OFF_SPEED, TOUCHING_GAP)
@@ -532,6 +536,8 @@ class ContactSolver:
         self._static_skipped.clear()
         # body–body events first (body_pairs.py): the bodies it stepped are done
         done = self.pairs.after_step(sim, wrenches, Y0, Y1, t0, h) if self.pairs is not None else None
+        if self.pairs is not None and len(self.pairs.islands.left):
+            done = self._out_of_islands(sim, wrenches, Y0, Y1, t0, h, done)
         moving = ~sim._stopped[self.bodies]
         if done is not None:
             moving &= ~done[self.bodies]
@@ -560,6 +566,27 @@ class ContactSolver:
                 Y1[i, :L.STATE_WIDTH] = self._persistent_end(sim, i, Y0[i], Y1[i], wrenches[i], t0, h)[:L.STATE_WIDTH]
             else:
                 Y1[i, :L.STATE_WIDTH] = self._with_events(sim, i, Y0[i], wrenches[i], t0, h)[:L.STATE_WIDTH]
+
+    def _out_of_islands(self, sim, wrenches: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, t0: float, h: float,
+                        done: np.ndarray | None) -> np.ndarray:
+        """The bodies out of their island this step: each touching its ground at the step's start (and not moving
+        away) is in persistent contact from there, and its step is taken again held on it (the free step it had
+        lacked the holding force: friction included); those a body–body event stepped are classified at the end.
+        Returns ``done`` with the bodies stepped here."""
+        done = np.zeros(len(sim._stopped), dtype=bool) if done is None else done.copy()  # (the islands' own mask)
+        for i in self.pairs.islands.left:
+            i = int(i)
+            if sim._stopped[i]:
+                continue
+            if done[i]:
+                self.classify(sim, Y1, i)
+                continue
+            self.classify(sim, Y0, i)
+            if self.modes[i] == PERSISTENT:
+                Y1[i, :L.STATE_WIDTH] = self._persistent_span(sim, i, Y0[i].copy(), wrenches[i], t0, h)[:L.STATE_WIDTH]
+                done[i] = True
+        self.pairs.islands.left = self.pairs.islands.left[:0]  # handed over once
+        return done
 
     def _refine_gains(self, sim, resting: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, t0: float,
                       h: float) -> np.ndarray:
