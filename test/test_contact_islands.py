@@ -226,6 +226,20 @@ def test_a_tower_falls_asleep_beside_a_cube_still_sliding_in_its_island():
     assert sim.state.v_WC_W[3] == pytest.approx([0.0, 0.01, 0.0], abs=1e-12)
 
 
+def test_a_wrench_wakes_only_the_tower_it_pushes():
+    """Two 3-cube towers 1 cm apart fall asleep apart (no contact joins them); 20 N up on one's top cube wakes
+    that tower alone: the other stays locked to the bit."""
+    sim = simulator({**tower(3), **tower(3, x=EDGE + 0.01)}, sleeping=True)
+    sim.step(5)
+    islands = sim.contact.pairs.islands
+    assert islands.asleep[:6].all()
+    rows = sim.state.rows()[3:6, :13].copy()
+    sim.apply_wrench("c0_0_2", force=(0.0, 0.0, 20.0))
+    sim.step(1)
+    assert not islands.asleep[:3].any() and islands.asleep[3:6].all()
+    assert np.array_equal(sim.state.rows()[3:6, :13], rows)
+
+
 @pytest.mark.parametrize("mu", [0.0, 0.5])
 def test_a_cube_sliding_out_of_an_island_slides_on(mu):
     """A cube sliding at 2 m/s on the ground, starting 1 cm beside a 3-cube tower (one island while their swept

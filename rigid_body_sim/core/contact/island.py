@@ -4,14 +4,15 @@ Each step, before the body–body event pass, the swept broad phase's candidate 
 union-find; a component with a pair touching at the step's start (or a sleeping body) is an
 island and is stepped by one compiled call (:func:`~rigid_body_sim.core.kernels.contact.island.island_pass`:
 Moreau–Jean / Stewart–Trinkle velocity step with normal non-penetration and Coulomb friction, the
-sticking case solved exactly, else projected Gauss–Seidel, then the projection of the positions
-onto the contact manifold). Its bodies are then left out of the event-driven passes for that
-step, and kept in flight mode (``ContactSolver.modes``): a body whose island dissolves starts
-again as after a reset (persistent contact if it touches its ground and does not move away).
+case where nothing slides solved exactly, else projected Gauss–Seidel, then the projection of the
+positions onto the contact manifold). Its bodies are then left out of the event-driven passes for
+that step, and kept in flight mode (``ContactSolver.modes``): a body out of its island
+(:attr:`Islands.left`) is handed to its ground by ``ContactSolver.after_step`` (persistent contact
+from the step's start if it touches its ground and does not move away, that step taken again held).
 Bodies in no island run exactly the event-driven code they ran before islands existed.
 
-Sleeping (``ContactSolver.sleeping``, default False): an island whose bodies stayed slower than
-SLEEP_SPEED is locked, its rows copied forward, until a wrench on one of its bodies, a changed
+Sleeping (``ContactSolver.sleeping``, default False): a component of an island (the bodies joined by
+the step's contacts) whose bodies stayed slower than SLEEP_SPEED is locked, its rows copied forward, until a wrench on one of its bodies, a changed
 state (an impulse, ``set_state``, ``set_body_state``) or another awake body within reach wakes it.
 Its contacts from the step it fell asleep in are kept and listed with every step's (:meth:`Islands.contacts`),
 each with the force it held its bodies with then: a locked island is still held.
@@ -57,6 +58,7 @@ class Islands:
         self._A, self._L = np.zeros((DENSE_MAX, DENSE_MAX)), np.zeros((DENSE_MAX, DENSE_MAX))
         self._vec = np.zeros((3, DENSE_MAX))
         self._band = np.zeros((2, DENSE_MAX), dtype=np.int64)  # the sticking solve's profile, points on
+        self._group = np.zeros(n, dtype=np.int64)  # a sleeping body's component when it fell asleep
         self.out = np.zeros(OUT_WIDTH)
         self._grow_pairs(16)
         self._grow_contacts(64)
@@ -170,7 +172,7 @@ class Islands:
                                self._pcount, self._ppoints, self._pseps, self._bound, self._cint, self._cflt, self._vel,
                                self._iw, self._dx, self._rj, self._rw, self._rdiag, self._rbias, self._rlam,
                                self._rbody, self._order, self._cstart, self._A, self._L, self._vec, self.out, self._comp,
-                               self._band)
+                               self._band, self._group)
             if code >= 0:
                 break
             self._grow_contacts(2 * -code)

@@ -15,24 +15,29 @@ lets a row act only where the step would close it, and a box turned or tilted on
 by its whole face, not rocked about the narrow phase's deepest corner.
 
 The velocity problem is solved per component of the step's contacts (bodies joined by contacts; an
-island's bodies within reach but not touching are apart there). The sticking case is solved exactly
-first: every row as an equality (J M⁻¹ Jᵀ λ = −(J v* + g/h)), by a Cholesky factorisation of
-J M⁻¹ Jᵀ + εI refined by iterated Tikhonov steps (the minimum-norm λ of the consistent rank-deficient
-system: four coplanar corners of a face share its load evenly; v⁺ does not depend on which λ). It is
-kept when every λ_n ≥ 0 and every λ_t is in its cone (to round-off); else projected Gauss–Seidel on
+island's bodies within reach but not touching are apart there). The case where nothing slides is
+solved exactly first (_sticking): the points that stay as equalities (J M⁻¹ Jᵀ λ = −(J v* + g/h) on
+their rows), the others at λ = 0, by a Cholesky factorisation of J M⁻¹ Jᵀ + εI within its profile
+(the contacts sorted along the component's longest extent: a column is banded) refined by iterated
+Tikhonov steps (the minimum-norm λ of the consistent rank-deficient system: four coplanar corners of
+a face share its load evenly; v⁺ does not depend on which λ); points that pull are let go and points
+let go that would close taken back, at most STICK_PIVOTS times. It is kept when the points on are
+met, every λ_n ≥ 0 and every λ_t is in its cone (to round-off); else projected Gauss–Seidel on
 the component's rows (over more than PILE_CONTACTS contacts, from the
 highest against gravity down, then back up, in turn: a weight passes down a pile and a stop up it
 within a sweep). Then the
 positions: every point found penetrating at the new poses (narrow phase again) is closed by a
 mass-metric least correction (Gauss–Seidel on the linearised gaps, λ ≥ 0; over a pile, bottom-up with each
-upright pair's lower body held, _pile_rows), the narrow phase iterated PROJECT_ROUNDS times.
+upright pair's lower body held, _pile_rows), the narrow phase iterated PROJECT_ROUNDS times; only the
+components with a deep point move, the others are held as fixed.
 
 Islands: union-find over the swept broad phase's candidate pairs of moving bodies (a sleeping
-body's only when the other is within the step's reach); a component is an island when one of its pairs touches at the step's start (signed distance ≤ TOUCH × the
-pair's size), or when it holds a sleeping body. Sleeping (when enabled): an island whose bodies
-all moved slower than SLEEP_SPEED at the step's start and after its solve is locked (velocities
-set to zero, its rows copied forward, no narrow phase between its bodies) until a wrench, a
-changed state or another body within reach wakes it (the driver and this pass).
+body's with an awake one only when that is within the step's reach, with a sleeping one only when
+they fell asleep together); a component is an island when one of its pairs touches at the step's start (signed distance ≤ TOUCH × the
+pair's size), or when it holds a sleeping body. Sleeping (when enabled): a component of the step's
+contacts whose bodies all moved slower than SLEEP_SPEED at the step's start and after its solve is
+locked (velocities set to zero, its rows copied forward, no narrow phase between its bodies) until a
+wrench, a changed state or another body within reach wakes it (the driver and this pass).
 
 Scratch is owned by the caller and preallocated; nothing here allocates per pair or per body
 (pair_contacts allocates its small workspace once per call).
@@ -429,23 +434,6 @@ def _delassus(vel, rj, rw, rbody, rbias, order, start, stop, A, rhs, first):
     _pin = vel[0, 0], rj[0, 0], rw[0, 0], rbody[0, 0], rbias[0], order[0], A[0, 0], rhs[0], first[0]
 
 
-@njit(**INLINE)
-def _dot(L, x, y, lo, hi):
-    """Σ L[x, k] L[y, k] over k in [lo, hi), in four interleaved partial sums (independent chains the CPU overlaps)."""
-    s0 = s1 = s2 = s3 = 0.0
-    k = lo
-    while k + 4 <= hi:
-        s0 += L[x, k] * L[y, k]
-        s1 += L[x, k + 1] * L[y, k + 1]
-        s2 += L[x, k + 2] * L[y, k + 2]
-        s3 += L[x, k + 3] * L[y, k + 3]
-        k += 4
-    while k < hi:
-        s0 += L[x, k] * L[y, k]
-        k += 1
-    return (s0 + s1) + (s2 + s3)
-
-
 @njit(**JIT)
 def _equalities(m, A, rhs, first, on, L, lam, res):
     """λ with (A + εI) λ = rhs on the rows with on[x] (the others' λ = 0), by a Cholesky factorisation within the
@@ -461,7 +449,9 @@ def _equalities(m, A, rhs, first, on, L, lam, res):
             if not on[x] or not on[y]:
                 L[x, y] = 1.0 if x == y else 0.0
                 continue
-            s = A[x, y] + (eps if x == y else 0.0) - _dot(L, x, y, max(first[x], first[y]), y)
+            s = A[x, y] + (eps if x == y else 0.0)
+            for k in range(max(first[x], first[y]), y):
+                s -= L[x, k] * L[y, k]
             if x == y:
                 if s <= 0.0:
                     ok = False
@@ -516,8 +506,8 @@ def _residual(m, A, rhs, first, lam, res):
 @njit(**JIT)
 def _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, start, stop, A, L, rhs, lam, res, band):
     """The contacts order[start:stop] (3 rows each) solved exactly when none slides: the points that stay are
-    equalities (u⁺ = 0), the others have λ = 0 and part (u_n⁺ ≥ 0). From all staying, points whose λ_n < 0 are let
-    go and points let go that would close are taken back, at most STICK_PIVOTS times (block principal pivoting
+    equalities (u⁺ = 0), the others have λ = 0 and part (u_n⁺ ≥ 0). From the points that held last step or
+    touch, points whose λ_n < 0 are let go and points let go that would close are taken back, at most STICK_PIVOTS times (block principal pivoting
     on the normals: a column rocking on an edge). True (and vel, rlam updated) when every λ_n ≥ 0, every λ_t is
     in its cone and every point let go parts, to round-off. Scratch: band[0] the profile, band[1] the points on."""
     m = 3 * (stop - start)
@@ -1039,7 +1029,7 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
 def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, members, cand, n_cand, is_static, stopped, spin_reach, size,
                 asleep, quiet, h, sleeping, default_mu, n_prev, island, parent, flags, nlist, pos, quat, pdist, pnormal, pcount,
                 ppoints, pseps, bound, cint, cflt, vel, iw, dx, rj, rw, rdiag, rbias, rlam, rbody, order, cstart,
-                A, L, vec, out, comp, band):
+                A, L, vec, out, comp, band, group):
     """One step of every island (module docstring): results into Y1 for the bodies marked island[i] = 1 (solved)
     or 2 (asleep: their rows copied from Y0). Returns 0, or −(contacts needed) when cint is too small
     (then nothing was changed but ``asleep`` and the outputs; call again with room)."""
@@ -1069,7 +1059,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         if stopped[a] or stopped[b]:
             continue
         if asleep[a] and (asleep[b] or is_static[b]):
-            if not is_static[b]:
+            if not is_static[b] and group[a] == group[b]:  # fell asleep together (apart, each wakes alone)
                 _union(parent, a, b)
             continue
         if is_static[a] and asleep[b]:
@@ -1160,6 +1150,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     out[OUT_BODIES] = bodies
     if bodies == 0:
         _pin = Y0[0, 0], Y1[0, 0], prm[0, 0], wr[0, 0], bare[0, 0], modes[0], saved[0, 0], cand[0, 0], A[0, 0], L[0, 0], vec[0, 0], order[0], cstart[0]
+        _pin2 = group[0]
         return 0
     # the velocity problem
     nc = _gather(Y0, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps,
@@ -1259,10 +1250,12 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             i = members[m]
             if island[i] == 1 and not flags[_find(comp, i)] & 16:
                 asleep[i] = 1
+                group[i] = _find(comp, i)
                 out[OUT_SLEPT] += 1
                 for j in range(6):
                     Y1[i, V + j] = 0.0
                 for j in range(STATE_WIDTH):
                     saved[i, j] = Y1[i, j]
     _pin = Y0[0, 0], Y1[0, 0], prm[0, 0], wr[0, 0], bare[0, 0], modes[0], saved[0, 0], cand[0, 0], A[0, 0], L[0, 0], vec[0, 0], order[0], cstart[0]
+    _pin2 = group[0]
     return 0
