@@ -76,9 +76,9 @@ def place(engine, p: np.ndarray, q: np.ndarray, offsets: np.ndarray) -> None:
     k = len(offsets) // len(p)
     p, q = np.tile(p, (k, 1)) + offsets, np.tile(q, (k, 1))
     if isinstance(engine, S.Ours):
-        Y = engine.sim.state.rows()
+        Y = engine.snapshot()
         Y[engine.moving, 0:3], Y[engine.moving, 3:7], Y[engine.moving, 7:13] = p, q, 0.0  # rows (p, q_WP, v, w)
-        engine.set_rows(Y)
+        engine.restore(Y)
     else:  # MuJoCo: a free joint's qpos is (x, y, z, qw, qx, qy, qz)
         qpos = engine.d.qpos.reshape(-1, 7)
         qpos[:, 0:3], qpos[:, 3:7] = p, q
