@@ -12,10 +12,11 @@ from the step's start if it touches its ground and does not move away, that step
 Bodies in no island run exactly the event-driven code they ran before islands existed.
 
 Sleeping (``ContactSolver.sleeping``, default False): a component of an island (the bodies joined by
-the step's contacts) whose bodies stayed slower than SLEEP_SPEED is locked, its rows copied forward, until a wrench on one of its bodies, a changed
-state (an impulse, ``set_state``, ``set_body_state``) or another awake body within reach wakes it.
-Its contacts from the step it fell asleep in are kept and listed with every step's (:meth:`Islands.contacts`),
-each with the force it held its bodies with then: a locked island is still held.
+the step's contacts) whose bodies stayed slower than SLEEP_SPEED is locked, its rows copied forward,
+until a wrench on one of its bodies, a changed state (an impulse, ``set_state``, ``set_body_state``)
+or another awake body within reach wakes it. Its contacts from the step it fell asleep in are kept
+and listed with every step's (:meth:`Islands.contacts`), each with the force it held its bodies with
+then: a locked island is still held.
 """
 
 from __future__ import annotations
@@ -47,7 +48,7 @@ class Islands:
         #: The bodies out of their island since the last step (in it the step before).
         self.left = np.zeros(0, dtype=np.int64)
         self.asleep = np.zeros(n, dtype=np.int64)
-        self.quiet = np.zeros(n, dtype=np.int64)
+        self._tried = np.zeros(n, dtype=np.int64)  # steps since a body's component was tried for the exact solve
         self.saved = np.zeros((n, L.STATE_WIDTH))
         self._parent = np.arange(n, dtype=np.int64)
         self._flags = np.zeros(n, dtype=np.int64)
@@ -107,7 +108,7 @@ class Islands:
         self.was_island[:] = False
         self.left = np.zeros(0, dtype=np.int64)
         self.asleep[:] = 0
-        self.quiet[:] = 0
+        self._tried[:] = 0
         self.body_steps = 0
         self.deepest = 0.0
         self.n_contacts = 0
@@ -163,7 +164,7 @@ class Islands:
             self._grow_pairs(2 * len(cand))
         args_head = (Y0, Y1, sim._prm, wrenches, solver._bare_rows, solver.modes, self.saved, solver.shapes,
                      solver.half_spaces, solver.half_space_friction, self.members, cand, len(cand),
-                     self.pairs.is_static, sim._stopped, self.pairs.spin_reach, self.size, self.asleep, self.quiet, h,
+                     self.pairs.is_static, sim._stopped, self.pairs.spin_reach, self.size, self.asleep, self._tried, h,
                      bool(solver.sleeping), DEFAULT_FRICTION, self.n_contacts, self.island, self._parent,
                      self._flags)
         was_asleep = self.asleep != 0

@@ -22,8 +22,9 @@ their rows), the others at λ = 0, by a Cholesky factorisation of J M⁻¹ Jᵀ 
 Tikhonov steps (the minimum-norm λ of the consistent rank-deficient system: four coplanar corners of
 a face share its load evenly; v⁺ does not depend on which λ); points that pull are let go and points
 let go that would close taken back, at most STICK_PIVOTS times. It is kept when the points on are
-met, every λ_n ≥ 0 and every λ_t is in its cone (to round-off); else projected Gauss–Seidel on
-the component's rows (over more than PILE_CONTACTS contacts, from the
+met, every λ_n ≥ 0 and every λ_t is in its cone (to round-off); a component with a point sliding at
+the last step's solution is tried only once in STICK_RETRY steps (landing, nearly none holds). Else
+projected Gauss–Seidel on the component's rows (over more than PILE_CONTACTS contacts, from the
 highest against gravity down, then back up, in turn: a weight passes down a pile and a stop up it
 within a sweep). Then the
 positions: every point found penetrating at the new poses (narrow phase again) is closed by a
@@ -86,6 +87,9 @@ PILE_PGS_SWEEPS, PILE_SWEEPS, PILE_UPRIGHT = 100, 20, 0.5
 #: Iterated Tikhonov steps of the sticking solve (fewer once the residual is below TIKHONOV_TOL × the right-hand
 #: side's), and its regularisation (× the largest diagonal); most pivots of its points let go or taken back.
 TIKHONOV_STEPS, TIKHONOV_TOL, TIKHONOV_EPS, STICK_PIVOTS = 6, 1e-15, 1e-9, 3
+#: A component with a point sliding at the last step's solution (its tangent λ at least SLIDING × μ λ_n: on its
+#: cone's edge) is tried for the sticking solve only once in STICK_RETRY steps.
+SLIDING, STICK_RETRY = 1.0 - 1e-6, 4
 #: Columns of a contact's float row: point (3), normal a → b (3), gap, μ, and after the velocity step the
 #: impulse on b (3, world, N·s; a gets its opposite).
 C_X, C_N, C_GAP, C_MU, C_IMPULSE, C_FLOATS = 0, 3, 6, 7, 8, 11
@@ -558,6 +562,33 @@ def _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, start, stop, A, L, r
     return kept
 
 
+@njit(**INLINE)
+def _sliding(rlam, cflt, order, start, stop):
+    """Whether a contact of order[start:stop] has its warm-start λ (the last step's solution) on its cone's edge."""
+    for k in range(start, stop):
+        r = 3 * order[k]
+        limit = SLIDING * cflt[order[k], C_MU] * rlam[r]
+        if limit > 0.0 and rlam[r + 1] * rlam[r + 1] + rlam[r + 2] * rlam[r + 2] >= limit * limit:
+            return True
+    return False
+
+
+@njit(**INLINE)
+def _waited(cint, order, start, stop, tried, since):
+    """The most steps any body of the contacts order[start:stop] waited since its component was tried for the
+    sticking solve, when ``since`` is negative; else every such body's count set to ``since``."""
+    most = 0
+    for k in range(start, stop):
+        for side in range(2):
+            b = cint[order[k], side]
+            if b >= 0:
+                if since < 0:
+                    most = max(most, tried[b])
+                else:
+                    tried[b] = since
+    return most
+
+
 @njit(**JIT)
 def _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, start, stop, backward):
     """One projected Gauss–Seidel sweep over contacts order[start:stop] (normal, then the two tangents in
@@ -952,16 +983,14 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
             if cflt[c, C_GAP] < -PROJECT_TOL * size[i]:
                 deep += 1
                 depth = max(depth, -cflt[c, C_GAP])
-        if deep == 0:
-            settled = True  # nd: the touching points at the final poses
-            break
-        if rnd == 0:  # the components with a deep point move; the others are held (island 3 until the end)
-            for c in range(nd):
-                i = cint[c, 1] if cint[c, 1] >= 0 else cint[c, 0]
-                if cflt[c, C_GAP] < -PROJECT_TOL * size[i]:
+                if rnd == 0:  # its components move
                     for side in range(2):
                         if cint[c, side] >= 0:
                             flags[_find(comp, cint[c, side])] |= 256
+        if deep == 0:
+            settled = True  # nd: the touching points at the final poses
+            break
+        if rnd == 0:  # the components without a deep point are held (island 3 until the end)
             for m in range(n):
                 i = members[m]
                 if island[i] == 1 and not flags[_find(comp, i)] & 256:
@@ -1027,12 +1056,13 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
 
 @njit(**JIT)
 def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, members, cand, n_cand, is_static, stopped, spin_reach, size,
-                asleep, quiet, h, sleeping, default_mu, n_prev, island, parent, flags, nlist, pos, quat, pdist, pnormal, pcount,
+                asleep, tried, h, sleeping, default_mu, n_prev, island, parent, flags, nlist, pos, quat, pdist, pnormal, pcount,
                 ppoints, pseps, bound, cint, cflt, vel, iw, dx, rj, rw, rdiag, rbias, rlam, rbody, order, cstart,
                 A, L, vec, out, comp, band, group):
     """One step of every island (module docstring): results into Y1 for the bodies marked island[i] = 1 (solved)
     or 2 (asleep: their rows copied from Y0). Returns 0, or −(contacts needed) when cint is too small
-    (then nothing was changed but ``asleep`` and the outputs; call again with room)."""
+    (then nothing was changed but ``asleep`` and the outputs; call again with room). ``tried`` (per body, kept
+    across calls): steps since its component was last tried for the sticking solve."""
     n = members.shape[0]
     for k in range(OUT_WIDTH):
         out[k] = 0.0
@@ -1045,7 +1075,6 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                 changed = changed or Y0[i, j] != saved[i, j]
             if changed:
                 asleep[i] = 0
-                quiet[i] = 0
                 woken += 1
     for m in range(n):
         i = members[m]
@@ -1079,7 +1108,6 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         if flags[r] & 2 and flags[r] & 4:  # something awake within reach of a sleeping island: it wakes
             if asleep[i]:
                 asleep[i] = 0
-                quiet[i] = 0
                 woken += 1
             island[i] = 1
         elif flags[r] & 2:
@@ -1194,8 +1222,12 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             continue
         kept = False
         if 3 * (hi - lo) <= A.shape[0]:
-            kept = _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, lo, hi, A, L, vec[0], vec[1], vec[2],
-                             band)
+            waited = _waited(cint, order, lo, hi, tried, -1)
+            if waited + 1 >= STICK_RETRY or not _sliding(rlam, cflt, order, lo, hi):
+                kept = _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, lo, hi, A, L, vec[0], vec[1],
+                                 vec[2], band)
+                waited = -1
+            _waited(cint, order, lo, hi, tried, waited + 1)
         if kept:
             out[OUT_STICK] += 1
         else:
@@ -1242,7 +1274,6 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         i = members[m]
         if island[i] == 1:
             still = _speed(Y0, i, spin_reach) <= SLEEP_SPEED and _speed(Y1, i, spin_reach) <= SLEEP_SPEED
-            quiet[i] = quiet[i] + 1 if still else 0
             if not still:
                 flags[_find(comp, i)] |= 16
     if sleeping:
