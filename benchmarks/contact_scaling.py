@@ -76,9 +76,9 @@ def place(engine, p: np.ndarray, q: np.ndarray, offsets: np.ndarray) -> None:
     k = len(offsets) // len(p)
     p, q = np.tile(p, (k, 1)) + offsets, np.tile(q, (k, 1))
     if isinstance(engine, S.Ours):
-        Y = engine.snapshot()
+        Y = engine.sim.state.rows()
         Y[engine.moving, 0:3], Y[engine.moving, 3:7], Y[engine.moving, 7:13] = p, q, 0.0  # rows (p, q_WP, v, w)
-        engine.restore(Y)
+        engine.set_rows(Y)
     else:  # MuJoCo: a free joint's qpos is (x, y, z, qw, qx, qy, qz)
         qpos = engine.d.qpos.reshape(-1, 7)
         qpos[:, 0:3], qpos[:, 3:7] = p, q
@@ -94,6 +94,19 @@ def engines(cubes: list[S.Cube]) -> list:
     return out
 
 
+def snapshot(engine):
+    """A state to time from: ours its state rows (a copy of a whole simulator of 10^5 bodies, its contact buffers
+    included, would not fit in memory; these piles run awake, so no sleep state is lost), a peer its own snapshot."""
+    return engine.sim.state.rows() if isinstance(engine, S.Ours) else engine.snapshot()
+
+
+def restore(engine, saved) -> None:
+    if isinstance(engine, S.Ours):
+        engine.set_rows(saved)
+    else:
+        engine.restore(saved)
+
+
 def cost_rows(quick: bool, log) -> tuple[list[dict], dict[str, str]]:
     log(f"  each engine's 1000-cube pile for {SETTLE_SECONDS:g} s")
     settled = settled_piles(SETTLE_SECONDS)
@@ -107,9 +120,9 @@ def cost_rows(quick: bool, log) -> tuple[list[dict], dict[str, str]]:
                 settings[f"{engine.name}, {engine.setting}"] = engine.settings_text()
             place(engine, *settled[engine.name], offsets)
             engine.step(WARM)
-            start = engine.snapshot()
+            start = snapshot(engine)
             cases.append(Case((engine.name, engine.setting, count), run=engine.step,
-                              setup=lambda e=engine, s=start: e.restore(s), max_units=WARM))
+                              setup=lambda e=engine, s=start: restore(e, s), max_units=WARM))
             owners.append(engine)
         log(f"  {count} cubes in {k} heaps: timing")
         stats = interleaved(cases, MIN_REPEATS, 0.5, log=log)
@@ -133,8 +146,8 @@ def pile_rows(quick: bool, log) -> tuple[list[dict], dict[str, str]]:
         readings.run(engine, seconds)
         log(f"  pile of {TEN_K} {engine.name}: finite {readings.finite}, penetration {readings.deepest:.3g} m, "
             f"energy rise {readings.rise:.3g} J")
-        end = engine.snapshot()
-        stats = interleaved([Case(0, run=engine.step, setup=lambda e=engine, s=end: e.restore(s), max_units=5)],
+        end = snapshot(engine)
+        stats = interleaved([Case(0, run=engine.step, setup=lambda e=engine, s=end: restore(e, s), max_units=5)],
                             MIN_REPEATS, 0.5, log=log)[0]
         row = readings.row(engine)
         row.update(part="pile", seconds=seconds, **stats.scaled(1e6).as_row("us_per_step"),
