@@ -393,6 +393,28 @@ def test_contacts_list_an_islands_pairs_with_the_weight_they_carry(tmp_path: Pat
     assert int(status["bodies in islands"]) == 3
 
 
+def test_sleeping_locks_a_resting_stack_and_turning_it_off_wakes_it(tmp_path: Path) -> None:
+    """With the ``sleeping`` parameter on, the two-box stack (at rest on the ground: an island) is locked from
+    its first tick: /diagnostics counts both boxes asleep. Set to false over ROS, both wake (none asleep) and
+    step again; the stack stands where it was placed to round-off throughout (its rest is exact)."""
+    scene = tmp_path / "stack.yaml"
+    scene.write_text(STACK)
+    with SimHarness(scene, {**PARAMETERS, "sleeping": True}) as h:
+        h.step(10)
+        asleep = int(contact_status(h)["bodies asleep"])
+        steps = h.node.session.simulator.contact.counts["island_body_steps"]
+        assert all(r.successful for r in h.set_parameters(sleeping=False))
+        h.step(10)
+        awake = int(contact_status(h)["bodies asleep"])
+        stepped = h.node.session.simulator.contact.counts["island_body_steps"] - steps
+        h.wait_for_latest_state()
+        poses = {b: h.latest_pose(b).pose.position for b in ("bottom", "middle")}
+    assert asleep == 2 and awake == 0
+    assert stepped == 2 * 10  # both boxes, every step since
+    for body, z in (("bottom", 0.1), ("middle", 0.3)):
+        np.testing.assert_allclose([poses[body].x, poses[body].y, poses[body].z], [0.0, 0.0, z], atol=1e-12)
+
+
 PUSHED = """\
 # a cube (1 kg, 0.2 m) 5 cm behind the centre of one resting on the ground, pushed along x by 6 N at
 # its centre of mass (μ = 0.5 everywhere: it slides on the lower cube, which sticks)

@@ -703,7 +703,8 @@ class Simulator:
     def with_scene(self, scene: Scene) -> "Simulator":
         """A simulator of ``scene`` that goes on from this one, for adding and removing bodies at run time.
 
-        The time, step count, integrator, dt, blow-up limit and reduction switch carry over;
+        The time, step count, integrator, dt, blow-up limit, reduction switch and contact sleeping
+        switch carry over (every body awake);
         every body in both scenes (by name) keeps its current pose and twist (in its own frame
         B and world axes, so a redefined body keeps where it is), its energy bound and whether
         it is stopped; bodies new to ``scene`` start at their initial state; bodies not in it
@@ -713,6 +714,8 @@ class Simulator:
         new = Simulator(scene, self.integrator, self.dt, reference_rtol=options["rtol"], reference_atol=options["atol"],
                         energy_growth_limit=self.energy_growth_limit, model_reduction=self._reduce,
                         threads=self._threads)
+        if new.contact is not None and self.contact is not None:
+            new.contact.sleeping = self.contact.sleeping
         state = new.state.copy()
         old_state = self.state
         for b, name in enumerate(scene.body_names):

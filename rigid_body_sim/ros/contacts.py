@@ -310,6 +310,7 @@ class ContactPublisher:
         energy = self.energy_change - self._at_open.get("energy_change", 0.0)
         resting = len(resting_bodies(sim))
         in_islands = int(np.count_nonzero(solver.pairs.islands.island)) if solver.pairs is not None else 0
+        asleep = int(np.count_nonzero(solver.pairs.islands.asleep)) if solver.pairs is not None else 0
         status = DiagnosticStatus(name=f"{node_name}: contact", hardware_id="none")
         status.level = DiagnosticStatus.OK
         status.message = (f"{resting} resting, {window['events']} events ({window['impacts']} impacts) "
@@ -317,6 +318,7 @@ class ContactPublisher:
         status.values = [
             _kv("contacts (resting bodies)", resting),
             _kv("bodies in islands", in_islands),
+            _kv("bodies asleep", asleep),
             _kv("contact points published (window)", window["contact_points"]),
             _kv("island contact points published (window)", window["island_contacts"]),
             _kv("events (window)", window["events"]),

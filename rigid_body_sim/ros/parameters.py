@@ -234,6 +234,11 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec("model_reduction", _T.BOOL, True,
                   "Give each body the cheapest exact model for what it is and what the scene declares "
                   "(docs/scenes.md); false steps every free body with the integrator."),
+    ParameterSpec("sleeping", _T.BOOL, False,
+                  "Lock the bodies resting on bodies (islands) that stayed slower than 1e-9 m/s, each group of them "
+                  "until a wrench, a state change or a moving body within reach wakes it (docs/contact.md, "
+                  "'Sleeping'): a pile at rest then costs little. False steps every island body; turning it off "
+                  "wakes every sleeping body. No effect in a scene without contact."),
     ParameterSpec("threads", _T.INTEGER, 0,
                   "Threads the physics step may use over the bodies: 0 = every core (NUMBA_NUM_THREADS, by default "
                   f"the CPU count). The step runs in parallel only from {PARALLEL_MIN_BODIES} moving bodies; the results "

@@ -139,8 +139,11 @@ def build_simulator(path: str, settings: Mapping[str, Any]) -> Simulator:
     """
     scene = load_scene(path)
     check_scene(scene, settings["world_frame"], settings["per_body_topics"])
-    return Simulator(scene, integrator=settings["integrator"], dt=physics_dt(settings),
-                     model_reduction=settings["model_reduction"], threads=settings.get("threads", 0))
+    sim = Simulator(scene, integrator=settings["integrator"], dt=physics_dt(settings),
+                    model_reduction=settings["model_reduction"], threads=settings.get("threads", 0))
+    if sim.contact is not None:
+        sim.contact.sleeping = settings.get("sleeping", False)
+    return sim
 
 
 def _ignore(*_args: Any) -> None:
@@ -606,6 +609,8 @@ class SimSession:
         for name in ("integrator", "model_reduction", "threads"):
             if old.get(name) != settings.get(name) and name in settings:
                 setattr(sim, name, settings[name])
+        if old.get("sleeping") != settings.get("sleeping") and sim.contact is not None:
+            sim.contact.sleeping = settings.get("sleeping", False)
         dt = physics_dt(settings)
         if dt != sim.dt:
             sim.dt = dt

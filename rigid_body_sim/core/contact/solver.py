@@ -238,14 +238,25 @@ class ContactSolver:
         self._control1 = np.zeros(L.CONTROL_WIDTH, dtype=np.int64)
         self._inputs1 = np.zeros(L.INPUT_WIDTH)
         self._never = np.zeros(1, dtype=np.int64)  # the step map's cancel flag (kernels.stepping.advance): never set
-        #: Islands at rest are locked (no step, no narrow phase inside them) until something touches or pushes
-        #: them (island.py). Off by default: a sleeping island's bodies keep their state exactly, but a locked
-        #: island does not see gravity change or a slow creep below island.SLEEP_SPEED.
-        self.sleeping = False
+        self._sleeping = False
         if len(self.bodies) >= 2 or (len(self.bodies) and statics.size):
             from .body_pairs import BodyPairs
 
             self.pairs = BodyPairs(self, sim, statics)
+
+    @property
+    def sleeping(self) -> bool:
+        """Islands at rest are locked (no step, no narrow phase inside them) until something touches or
+        pushes them (island.py). Off by default: a sleeping island's bodies keep their state exactly, but a
+        locked island does not see gravity change or a slow creep below island.SLEEP_SPEED. Set to False, every
+        sleeping body wakes (its next step is the island step from the state it was locked in)."""
+        return self._sleeping
+
+    @sleeping.setter
+    def sleeping(self, on: bool) -> None:
+        self._sleeping = bool(on)
+        if not on and self.pairs is not None:
+            self.pairs.islands.asleep[:] = 0
 
     # ----------------------------------------------------------------- modes
 
