@@ -415,6 +415,18 @@ def test_sleeping_locks_a_resting_stack_and_turning_it_off_wakes_it(tmp_path: Pa
         np.testing.assert_allclose([poses[body].x, poses[body].y, poses[body].z], [0.0, 0.0, z], atol=1e-12)
 
 
+def test_sleeping_goes_on_after_a_spawn(tmp_path: Path) -> None:
+    """``sleeping`` on, a crate spawned 5 cm above the two-box stack (the spawn makes a new simulator: the switch
+    carries over): it lands, comes to rest, and within 1 s all three bodies are asleep."""
+    scene = tmp_path / "stack.yaml"
+    scene.write_text(STACK)
+    with SimHarness(scene, {**PARAMETERS, "sleeping": True}) as h:
+        assert h.spawn(crate=CRATE).successful
+        h.watch_body("crate")
+        h.step(100)
+        assert int(contact_status(h)["bodies asleep"]) == 3
+
+
 PUSHED = """\
 # a cube (1 kg, 0.2 m) 5 cm behind the centre of one resting on the ground, pushed along x by 6 N at
 # its centre of mass (μ = 0.5 everywhere: it slides on the lower cube, which sticks)
