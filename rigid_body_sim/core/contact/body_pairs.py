@@ -201,6 +201,7 @@ class BodyPairs:
         swept_bounds(Y0, Y1, self.members, self.reach, h, self._lo, self._hi)
         found = grid_swept_pairs(self._lo, self._hi, self.movable, self._cells, self._heads, self._chain, self._pairs)
         islands = self.islands
+        islands.left = islands.left[:0]  # none out of their island this step unless the islands' step says so
         held = islands.was_island.any() or islands.asleep.any()  # islands from the last step to go on with
         if found == 0 and not held:
             islands.n_contacts = 0

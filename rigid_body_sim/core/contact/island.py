@@ -45,7 +45,7 @@ class Islands:
         self.size = np.ascontiguousarray(shapes[:, DIMS:DIMS + 3].max(axis=1) * 2.0)
         self.island = np.zeros(n, dtype=np.int64)  # 1: stepped by the island pass this step, 2: asleep
         self.was_island = np.zeros(n, dtype=bool)
-        #: The bodies out of their island since the last step (in it the step before).
+        #: The bodies out of their island this step (in it the step before); set by each step's body–body pass.
         self.left = np.zeros(0, dtype=np.int64)
         self.asleep = np.zeros(n, dtype=np.int64)
         self._tried = np.zeros(n, dtype=np.int64)  # steps since a body's component was tried for the exact solve

@@ -596,7 +596,6 @@ class ContactSolver:
             if self.modes[i] == PERSISTENT:
                 Y1[i, :L.STATE_WIDTH] = self._persistent_span(sim, i, Y0[i].copy(), wrenches[i], t0, h)[:L.STATE_WIDTH]
                 done[i] = True
-        self.pairs.islands.left = self.pairs.islands.left[:0]  # handed over once
         return done
 
     def _refine_gains(self, sim, resting: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, t0: float,
