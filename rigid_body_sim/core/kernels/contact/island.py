@@ -574,18 +574,15 @@ def _sliding(rlam, cflt, order, start, stop):
 
 
 @njit(**INLINE)
-def _waited(cint, order, start, stop, tried, since):
-    """The most steps any body of the contacts order[start:stop] waited since its component was tried for the
-    sticking solve, when ``since`` is negative; else every such body's count set to ``since``."""
+def _waited(cint, order, start, stop, tried):
+    """The most steps a body of the contacts order[start:stop] waited since its component was last tried for the
+    sticking solve."""
     most = 0
     for k in range(start, stop):
         for side in range(2):
             b = cint[order[k], side]
             if b >= 0:
-                if since < 0:
-                    most = max(most, tried[b])
-                else:
-                    tried[b] = since
+                most = max(most, tried[b])
     return most
 
 
@@ -1222,12 +1219,15 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             continue
         kept = False
         if 3 * (hi - lo) <= A.shape[0]:
-            waited = _waited(cint, order, lo, hi, tried, -1)
-            if waited + 1 >= STICK_RETRY or not _sliding(rlam, cflt, order, lo, hi):
+            since = _waited(cint, order, lo, hi, tried) + 1  # this step's count if not tried now
+            if since >= STICK_RETRY or not _sliding(rlam, cflt, order, lo, hi):
                 kept = _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, lo, hi, A, L, vec[0], vec[1],
                                  vec[2], band)
-                waited = -1
-            _waited(cint, order, lo, hi, tried, waited + 1)
+                since = 0
+            for c in range(lo, hi):
+                for side in range(2):
+                    if cint[order[c], side] >= 0:
+                        tried[cint[order[c], side]] = since
         if kept:
             out[OUT_STICK] += 1
         else:
