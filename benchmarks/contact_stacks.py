@@ -31,7 +31,9 @@ Peers, set up as their documentation recommends (settings printed with the table
   engine parameters; ``sleeping``: ``changeDynamics(activationState=ACTIVATION_STATE_ENABLE_SLEEPING)``
   on every cube (Bullet's deactivation). ``stepSimulation`` in a loop (it has no batched call).
 
-Ours: rk4 (the default) and semi_implicit_euler, through :class:`Simulator`, one thread.
+Ours: rk4 (the default) and semi_implicit_euler, through :class:`Simulator`, one thread; sleeping at the
+default sleep speed (rest to round-off), and rk4 also at MuJoCo's default sleep_tolerance (``PEER_SLEEP_SPEED``,
+1e-3 m/s: the contact solver's ``sleep_speed``).
 """
 
 from __future__ import annotations
@@ -66,6 +68,7 @@ PILE_EDGE, PILE_SPACING, PILE_TILT, PILE_SEED = 0.1, 0.15, 0.3, 2026
 PILE_SECONDS, LANDING = 3.0, 0.6
 WALL_THICKNESS, WALL_HEIGHT = 0.1, 1.0
 SAMPLE_EVERY = 10  # steps between readings
+PEER_SLEEP_SPEED = 1e-3  # m/s: MuJoCo's default sleep_tolerance, printed with its settings
 mujoco, pybullet = E.mujoco, E.pybullet
 
 
@@ -123,8 +126,11 @@ def pile(count: int) -> list[Cube]:
 class Ours:
     name = "rigid_body_sim"
 
-    def __init__(self, cubes: list[Cube], integrator: str, sleeping: bool):
+    def __init__(self, cubes: list[Cube], integrator: str, sleeping: bool, sleep_speed: float | None = None):
+        """``sleep_speed``: the contact solver's (m/s; None: its default, rest to round-off)."""
         self.cubes, self.setting = cubes, integrator + (", sleeping" if sleeping else "")
+        if sleep_speed is not None:
+            self.setting += f" below {sleep_speed:g} m/s"
         bodies = {}
         for k, c in enumerate(cubes):
             box = {"box": list(c.sizes)}
@@ -139,6 +145,8 @@ class Ours:
         self.sim = Simulator(self.scene, integrator=integrator, dt=DT, threads=1)
         if sleeping:
             self.sim.contact.sleeping = True
+        if sleep_speed is not None:
+            self.sim.contact.sleep_speed = sleep_speed
         self.moving = np.array([not c.static for c in cubes])
 
     def step(self, k: int) -> None:
@@ -290,6 +298,8 @@ def engines(cubes: list[Cube], sleeping_too: bool) -> list:
     """Every engine and setting on ``cubes`` (each with sleeping off, and on when ``sleeping_too``)."""
     sleeps = (False, True) if sleeping_too else (False,)
     out = [Ours(cubes, name, s) for name in OURS for s in sleeps]
+    if sleeping_too:  # and at MuJoCo's sleep threshold (its default sleep_tolerance)
+        out.append(Ours(cubes, OURS[0], True, PEER_SLEEP_SPEED))
     if mujoco is not None:
         out += [MuJoCo(cubes, cone, s) for cone in ("pyramidal", "elliptic") for s in sleeps]
     if pybullet is not None:

@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from rigid_body_sim.core import Simulator, load_scene
+from rigid_body_sim.core.kernels.contact.island import SLEEP_SPEED, SLEEP_STEPS
 
 G = 9.81
 EDGE = 0.2
@@ -224,6 +225,42 @@ def test_a_tower_falls_asleep_beside_a_cube_still_sliding_in_its_island():
     assert np.array_equal(sim.state.rows()[:3, :13], rows)
     assert islands.asleep[:3].all()
     assert sim.state.v_WC_W[3] == pytest.approx([0.0, 0.01, 0.0], abs=1e-12)
+
+
+def test_a_raised_sleep_speed_stops_a_creeping_cube_after_its_steps_below_it():
+    """A frictionless cube creeping at 0.5 mm/s on a cube resting on the ground. At the default sleep speed (rest
+    to round-off) the pair never sleeps and the cube creeps on at its speed; with sleep_speed 1e-3 m/s both fall
+    asleep after exactly SLEEP_STEPS steps below it (not one sooner), the creeping cube stopped where it was (its
+    kinetic energy dropped) and then locked to the bit."""
+    creep = 5e-4
+    for raised in (False, True):
+        sim = simulator({"low": cube((0.0, 0.0, 0.5 * EDGE)),
+                         "top": cube((0.0, 0.0, 1.5 * EDGE), mu=0.0, velocity=(creep, 0.0, 0.0))}, sleeping=True)
+        if raised:
+            sim.contact.sleep_speed = 1e-3
+        islands = sim.contact.pairs.islands
+        sim.step(SLEEP_STEPS - 1)
+        assert not islands.asleep[:2].any()
+        sim.step(1)
+        if not raised:
+            sim.step(100)
+            assert not islands.asleep[:2].any()
+            assert sim.state.v_WC_W[1] == pytest.approx([creep, 0.0, 0.0], abs=1e-12)
+            continue
+        assert islands.asleep[:2].all()
+        assert speeds(sim) == 0.0
+        assert sim.state.p_WC_W[1, 0] == pytest.approx(creep * SLEEP_STEPS * 0.01, rel=1e-9)
+        rows = sim.state.rows()[:, :13].copy()
+        sim.step(50)
+        assert np.array_equal(sim.state.rows()[:, :13], rows)
+
+
+@pytest.mark.parametrize("speed", [0.0, 1e-10, -1.0, float("nan"), float("inf")])
+def test_a_sleep_speed_below_rest_or_not_finite_is_refused(speed):
+    sim = simulator(tower(2))
+    with pytest.raises(ValueError, match=r"sleep_speed must be a finite speed of at least 1e-09 m/s, got"):
+        sim.contact.sleep_speed = speed
+    assert sim.contact.sleep_speed == SLEEP_SPEED
 
 
 def test_a_wrench_wakes_only_the_tower_it_pushes():

@@ -416,15 +416,17 @@ def test_sleeping_locks_a_resting_stack_and_turning_it_off_wakes_it(tmp_path: Pa
 
 
 def test_sleeping_goes_on_after_a_spawn(tmp_path: Path) -> None:
-    """``sleeping`` on, a crate spawned 5 cm above the two-box stack (the spawn makes a new simulator: the switch
-    carries over): it lands, comes to rest, and within 1 s all three bodies are asleep."""
+    """``sleeping`` on and ``sleep_speed`` raised to 1 mm/s, a crate spawned 5 cm above the two-box stack (the
+    spawn makes a new simulator: both carry over): it lands, comes to rest, and within 1 s all three bodies are
+    asleep."""
     scene = tmp_path / "stack.yaml"
     scene.write_text(STACK)
-    with SimHarness(scene, {**PARAMETERS, "sleeping": True}) as h:
+    with SimHarness(scene, {**PARAMETERS, "sleeping": True, "sleep_speed": 1e-3}) as h:
         assert h.spawn(crate=CRATE).successful
         h.watch_body("crate")
         h.step(100)
         assert int(contact_status(h)["bodies asleep"]) == 3
+        assert h.node.session.simulator.contact.sleep_speed == 1e-3
 
 
 PUSHED = """\

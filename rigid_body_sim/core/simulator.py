@@ -704,7 +704,7 @@ class Simulator:
         """A simulator of ``scene`` that goes on from this one, for adding and removing bodies at run time.
 
         The time, step count, integrator, dt, blow-up limit, reduction switch and contact sleeping
-        switch carry over (every body awake);
+        switch and sleep speed carry over (every body awake);
         every body in both scenes (by name) keeps its current pose and twist (in its own frame
         B and world axes, so a redefined body keeps where it is), its energy bound and whether
         it is stopped; bodies new to ``scene`` start at their initial state; bodies not in it
@@ -716,6 +716,7 @@ class Simulator:
                         threads=self._threads)
         if new.contact is not None and self.contact is not None:
             new.contact.sleeping = self.contact.sleeping
+            new.contact.sleep_speed = self.contact.sleep_speed
         state = new.state.copy()
         old_state = self.state
         for b, name in enumerate(scene.body_names):

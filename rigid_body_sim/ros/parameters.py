@@ -235,10 +235,16 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
                   "Give each body the cheapest exact model for what it is and what the scene declares "
                   "(docs/scenes.md); false steps every free body with the integrator."),
     ParameterSpec("sleeping", _T.BOOL, False,
-                  "Lock the bodies resting on bodies (islands) that stayed slower than 1e-9 m/s, each group of them "
+                  "Lock the bodies resting on bodies (islands) that stayed slower than sleep_speed, each group of them "
                   "until a wrench, a state change or a moving body within reach wakes it (docs/contact.md, "
                   "'Sleeping'): a pile at rest then costs little. False steps every island body; turning it off "
                   "wakes every sleeping body. No effect in a scene without contact."),
+    ParameterSpec("sleep_speed", _T.DOUBLE, 1e-9,
+                  "Speed (m/s, spin × bounding radius included) below which resting bodies fall asleep while "
+                  "sleeping is on. 1e-9 is rest to round-off: locked where they stand. Raised (MuJoCo's "
+                  "sleep_tolerance is 1e-3), a group must stay below it for 10 steps in a row and is then stopped "
+                  "where it is, creeping or not (its kinetic energy dropped): a pile sleeps sooner.",
+                  range=(1e-9, 1e3)),
     ParameterSpec("threads", _T.INTEGER, 0,
                   "Threads the physics step may use over the bodies: 0 = every core (NUMBA_NUM_THREADS, by default "
                   f"the CPU count). The step runs in parallel only from {PARALLEL_MIN_BODIES} moving bodies; the results "
@@ -547,7 +553,11 @@ def _yaml_value(value: Any) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, float):
-        return repr(value)
+        text = repr(value)
+        if "e" in text and "." not in text:  # YAML 1.1 (PyYAML, ROS's parser) reads 1e-09 as a string: 1.0e-09
+            mantissa, exponent = text.split("e")
+            text = f"{mantissa}.0e{exponent}"
+        return text
     return json.dumps(value) if isinstance(value, (str, list)) else str(value)
 
 

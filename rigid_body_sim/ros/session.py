@@ -143,6 +143,8 @@ def build_simulator(path: str, settings: Mapping[str, Any]) -> Simulator:
                     model_reduction=settings["model_reduction"], threads=settings.get("threads", 0))
     if sim.contact is not None:
         sim.contact.sleeping = settings.get("sleeping", False)
+        if "sleep_speed" in settings:
+            sim.contact.sleep_speed = settings["sleep_speed"]
     return sim
 
 
@@ -611,6 +613,9 @@ class SimSession:
                 setattr(sim, name, settings[name])
         if old.get("sleeping") != settings.get("sleeping") and sim.contact is not None:
             sim.contact.sleeping = settings.get("sleeping", False)
+        speed = settings.get("sleep_speed")
+        if old.get("sleep_speed") != speed and speed is not None and sim.contact is not None:
+            sim.contact.sleep_speed = speed
         dt = physics_dt(settings)
         if dt != sim.dt:
             sim.dt = dt

@@ -12,7 +12,8 @@ from the step's start if it touches its ground and does not move away, that step
 Bodies in no island run exactly the event-driven code they ran before islands existed.
 
 Sleeping (``ContactSolver.sleeping``, default False): a component of an island (the bodies joined by
-the step's contacts) whose bodies stayed slower than SLEEP_SPEED is locked, its rows copied forward,
+the step's contacts) whose bodies stayed slower than ``ContactSolver.sleep_speed`` (SLEEP_SPEED: at rest, unless
+raised; then for SLEEP_STEPS steps in a row) is locked, its rows copied forward,
 until a wrench on one of its bodies, a changed state (an impulse, ``set_state``, ``set_body_state``)
 or another awake body within reach wakes it. Its contacts from the step it fell asleep in are kept
 and listed with every step's (:meth:`Islands.contacts`), each with the force it held its bodies with
@@ -49,6 +50,7 @@ class Islands:
         self.left = np.zeros(0, dtype=np.int64)
         self.asleep = np.zeros(n, dtype=np.int64)
         self._tried = np.zeros(n, dtype=np.int64)  # steps since a body's component was tried for the exact solve
+        self._still = np.zeros(n, dtype=np.int64)  # steps in a row a body began and ended slower than the sleep speed
         self.saved = np.zeros((n, L.STATE_WIDTH))
         self._parent = np.arange(n, dtype=np.int64)
         self._flags = np.zeros(n, dtype=np.int64)
@@ -109,6 +111,7 @@ class Islands:
         self.left = np.zeros(0, dtype=np.int64)
         self.asleep[:] = 0
         self._tried[:] = 0
+        self._still[:] = 0
         self.body_steps = 0
         self.deepest = 0.0
         self.n_contacts = 0
@@ -164,9 +167,9 @@ class Islands:
             self._grow_pairs(2 * len(cand))
         args_head = (Y0, Y1, sim._prm, wrenches, solver._bare_rows, solver.modes, self.saved, solver.shapes,
                      solver.half_spaces, solver.half_space_friction, self.members, cand, len(cand),
-                     self.pairs.is_static, sim._stopped, self.pairs.spin_reach, self.size, self.asleep, self._tried, h,
-                     bool(solver.sleeping), DEFAULT_FRICTION, self.n_contacts, self.island, self._parent,
-                     self._flags)
+                     self.pairs.is_static, sim._stopped, self.pairs.spin_reach, self.size, self.asleep, self._tried,
+                     self._still, h, bool(solver.sleeping), float(solver.sleep_speed), DEFAULT_FRICTION, self.n_contacts,
+                     self.island, self._parent, self._flags)
         was_asleep = self.asleep != 0
         while True:
             code = island_pass(*args_head, self._nlist, self._pos, self._quat, self._pdist, self._pnormal,

@@ -79,6 +79,7 @@ from ..kernels.stepping import advance, step_reduced
 from ..kernels.contact.batch import CACHE_WIDTH, OK, TO_SOLVER, hold_all, settle_all
 from ..kernels.contact.impacts import _A, _LAM, IMPACT_WORK_SHAPE, impact
 from ..kernels.contact.layout import DIMS, FLIGHT, KIND, MAX_POINTS, NORMAL, PERSISTENT, SHAPE_BOX
+from ..kernels.contact.island import SLEEP_SPEED
 from ..kernels.contact.materials import material
 from ..kernels.contact.persistent import (
     LIFT_OFF,
@@ -230,6 +231,7 @@ class ContactSolver:
         self._d = np.empty(L.STATE_WIDTH)
         self._force = np.empty(6)
         self._lowest = np.empty(len(self.bodies))
+        self._flying_gaps = np.empty(len(self.bodies))
         # one-body buffers of the step map
         self._Y1 = np.zeros((2, 1, L.ROW_WIDTH))
         self._w1 = np.zeros((1, L.WRENCH_WIDTH))
@@ -239,6 +241,7 @@ class ContactSolver:
         self._inputs1 = np.zeros(L.INPUT_WIDTH)
         self._never = np.zeros(1, dtype=np.int64)  # the step map's cancel flag (kernels.stepping.advance): never set
         self._sleeping = False
+        self._sleep_speed = SLEEP_SPEED
         if len(self.bodies) >= 2 or (len(self.bodies) and statics.size):
             from .body_pairs import BodyPairs
 
@@ -257,6 +260,22 @@ class ContactSolver:
         self._sleeping = bool(on)
         if not on and self.pairs is not None:
             self.pairs.islands.asleep[:] = 0
+
+    @property
+    def sleep_speed(self) -> float:
+        """The speed (m/s, spin × bounding radius included) below which an island's bodies fall asleep while
+        :attr:`sleeping`. The default, island.SLEEP_SPEED = 1e-9 m/s, is rest to round-off (the exact sticking
+        solve's): a step that starts and ends that slow locks them where they are. Raised (as the peers' sleep
+        thresholds: MuJoCo's sleep_tolerance is 1e-3), bodies must stay below it for island.SLEEP_STEPS steps in a
+        row, and are then stopped where they are, creeping or not: their kinetic energy below it is dropped."""
+        return self._sleep_speed
+
+    @sleep_speed.setter
+    def sleep_speed(self, speed: float) -> None:
+        speed = float(speed)
+        if not (math.isfinite(speed) and speed >= SLEEP_SPEED):
+            raise ValueError(f"sleep_speed must be a finite speed of at least {SLEEP_SPEED:g} m/s, got {speed!r}")
+        self._sleep_speed = speed
 
     # ----------------------------------------------------------------- modes
 
@@ -561,10 +580,14 @@ class ContactSolver:
             lowest = self._lowest[:flying.size]
             min_gaps(Y1, sim._prm, self.shapes, self.half_spaces, flying, lowest)
         else:  # static shapes: their gaps too (the bodies outside the islands); bodies on their planes in Python
-            min_gaps(Y1, sim._prm, self.shapes, self.half_spaces, self.bodies, self._lowest)
+            in_flight = (modes == FLIGHT) & moving
+            self._lowest[:] = math.inf
+            gaps = self._flying_gaps[:flying.size]
+            min_gaps(Y1, sim._prm, self.shapes, self.half_spaces, flying, gaps)
+            self._lowest[in_flight] = gaps
             two = np.concatenate((two, self._static_busy(Y1, resting, moving)))
             resting = resting[self.ground_of[resting] < len(self.half_spaces)]
-            lowest = self._lowest[(modes == FLIGHT) & moving]
+            lowest = self._lowest[in_flight]
         settle_all(Y0, Y1, sim._prm, self.shapes, self.half_spaces, resting, self.ground_of, self.tracked,
                    self.pressed, self.sliding, self.slide_direction, self._band, self._status, self._locked)
         resting = self._refine_gains(sim, resting, Y0, Y1, t0, h)
@@ -896,8 +919,8 @@ class ContactSolver:
         return on_static
 
     def _static_busy(self, Y1: np.ndarray, resting: np.ndarray, moving: np.ndarray) -> np.ndarray:
-        """After the step: ``_lowest`` lowered, in place, to the signed distances to the static shapes of the
-        bodies ``moving`` (a mask over :attr:`bodies`: not stopped, not stepped by the islands, whose own rows
+        """After the step: ``_lowest`` (the half-spaces' lowest gaps of the bodies in flight, else inf) lowered, in
+        place, to the signed distances to the static shapes of the bodies ``moving`` (a mask over :attr:`bodies`: not stopped, not stepped by the islands, whose own rows
         hold the static shapes); returns the resting bodies the solver looks at in Python: those on a static
         shape's plane, and those on a half-space that reached a static shape (an impact against it, located on
         the step map)."""

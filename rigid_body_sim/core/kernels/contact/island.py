@@ -36,7 +36,8 @@ Islands: union-find over the swept broad phase's candidate pairs of moving bodie
 body's with an awake one only when that is within the step's reach, with a sleeping one only when
 they fell asleep together); a component is an island when one of its pairs touches at the step's start (signed distance ≤ TOUCH × the
 pair's size), or when it holds a sleeping body. Sleeping (when enabled): a component of the step's
-contacts whose bodies all moved slower than SLEEP_SPEED at the step's start and after its solve is
+contacts whose bodies all moved slower than the sleep speed (SLEEP_SPEED unless raised) at the starts and
+ends of their last steps (one step at SLEEP_SPEED, where that means at rest; SLEEP_STEPS above it) is
 locked (velocities set to zero, its rows copied forward, no narrow phase between its bodies) until a
 wrench, a changed state or another body within reach wakes it (the driver and this pass).
 
@@ -60,12 +61,15 @@ from .convex import POSE_WIDTH
 from .pairs import MAX_PAIR_POINTS, box_patch, boxes_apart, pair_contacts
 from .shapes import MAX_FEATURES, feature_gaps, feature_points
 
-__all__ = ["island_pass", "TOUCH", "SLEEP_SPEED", "DENSE_MAX", "PROJECT_TOL", "C_FLOATS", "C_INTS", "OUT_WIDTH"]
+__all__ = ["island_pass", "TOUCH", "SLEEP_SPEED", "SLEEP_STEPS", "DENSE_MAX", "PROJECT_TOL", "C_FLOATS", "C_INTS", "OUT_WIDTH"]
 
 #: A pair whose signed distance is at most this × its size (m per m) touches: its component is an island.
 TOUCH = 1e-6
 #: Bodies slower than this (m/s, and spin × bounding radius) at a step's start and after its solve are at rest.
 SLEEP_SPEED = 1e-9
+#: Steps a component's bodies must all stay slower than a sleep speed raised above SLEEP_SPEED before it sleeps
+#: (MuJoCo's mjMINAWAKE): a body slow only for an instant (a rocking column at its turning point) stays awake.
+SLEEP_STEPS = 10
 #: Two boxes whose pair normal is within acos(PATCH_FLAT) of a face normal touch by a patch: the other's face
 #: clipped against that one (pairs.box_patch), every point within the pair's reach or PATCH_REACH × its size.
 PATCH_FLAT, PATCH_REACH = math.cos(0.1), 1e-2
@@ -1052,14 +1056,15 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
 
 
 @njit(**JIT)
-def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, members, cand, n_cand, is_static, stopped, spin_reach, size,
-                asleep, tried, h, sleeping, default_mu, n_prev, island, parent, flags, nlist, pos, quat, pdist, pnormal, pcount,
-                ppoints, pseps, bound, cint, cflt, vel, iw, dx, rj, rw, rdiag, rbias, rlam, rbody, order, cstart,
-                A, L, vec, out, comp, band, group):
+def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, members, cand, n_cand, is_static, stopped,
+                spin_reach, size, asleep, tried, still, h, sleeping, sleep_speed, default_mu, n_prev, island, parent,
+                flags, nlist, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound, cint, cflt, vel, iw, dx, rj, rw,
+                rdiag, rbias, rlam, rbody, order, cstart, A, L, vec, out, comp, band, group):
     """One step of every island (module docstring): results into Y1 for the bodies marked island[i] = 1 (solved)
     or 2 (asleep: their rows copied from Y0). Returns 0, or −(contacts needed) when cint is too small
     (then nothing was changed but ``asleep`` and the outputs; call again with room). ``tried`` (per body, kept
-    across calls): steps since its component was last tried for the sticking solve."""
+    across calls): steps since its component was last tried for the sticking solve; ``still`` (per body, kept
+    across calls): the steps in a row it began and ended slower than ``sleep_speed`` (m/s) in an island."""
     n = members.shape[0]
     for k in range(OUT_WIDTH):
         out[k] = 0.0
@@ -1174,6 +1179,8 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             _inertia_world(Y0, prm, i, iw)
     out[OUT_BODIES] = bodies
     if bodies == 0:
+        for m in range(n):
+            still[members[m]] = 0
         _pin = Y0[0, 0], Y1[0, 0], prm[0, 0], wr[0, 0], bare[0, 0], modes[0], saved[0, 0], cand[0, 0], A[0, 0], L[0, 0], vec[0, 0], order[0], cstart[0]
         _pin2 = group[0]
         return 0
@@ -1268,14 +1275,21 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     out[OUT_DEPTH] = deepest
     if out[OUT_STOPPED] > 0:
         _attribute(nc, cint, cflt, int(out[OUT_STOPPED]), cint[half:], cflt[half:], members, cstart)
-    # sleeping: a component of the step's contacts whose bodies were and stay slower than SLEEP_SPEED is locked
-    # at rest (its island's other bodies are beyond the step's reach: a sleeping body is woken by one within it)
+    # sleeping: a component of the step's contacts whose bodies were and stay slower than the sleep speed (for
+    # SLEEP_STEPS steps in a row when it is raised above rest) is locked (its island's other bodies are beyond the
+    # step's reach: a sleeping body is woken by one within it)
+    need = 1 if sleep_speed <= SLEEP_SPEED else SLEEP_STEPS
     for m in range(n):
         i = members[m]
-        if island[i] == 1:
-            still = _speed(Y0, i, spin_reach) <= SLEEP_SPEED and _speed(Y1, i, spin_reach) <= SLEEP_SPEED
-            if not still:
-                flags[_find(comp, i)] |= 16
+        if island[i] != 1:
+            still[i] = 0
+            continue
+        if _speed(Y0, i, spin_reach) <= sleep_speed and _speed(Y1, i, spin_reach) <= sleep_speed:
+            still[i] += 1
+        else:
+            still[i] = 0
+        if still[i] < need:
+            flags[_find(comp, i)] |= 16
     if sleeping:
         for m in range(n):
             i = members[m]
