@@ -590,36 +590,72 @@ def _waited(cint, order, start, stop, tried):
     return most
 
 
+@njit(**INLINE)
+def _speeds3(vel, rj, rbody, r):
+    """The speeds of a contact's three rows r, r + 1, r + 2 (normal, t1, t2; the same two bodies), one pass over
+    its bodies' velocities."""
+    u0, u1, u2 = 0.0, 0.0, 0.0
+    for side in range(2):
+        i = rbody[r, side]
+        if i >= 0:
+            o = 6 * side
+            for j in range(6):
+                v = vel[i, j]
+                u0 += rj[r, o + j] * v
+                u1 += rj[r + 1, o + j] * v
+                u2 += rj[r + 2, o + j] * v
+    return u0, u1, u2
+
+
+@njit(**INLINE)
+def _apply3(vel, rw, rbody, r, d0, d1, d2):
+    """vel += M⁻¹Jᵀ (d0, d1, d2) over a contact's three rows r, r + 1, r + 2, one pass over its bodies."""
+    for side in range(2):
+        i = rbody[r, side]
+        if i >= 0:
+            o = 6 * side
+            for j in range(6):
+                vel[i, j] += rw[r, o + j] * d0 + rw[r + 1, o + j] * d1 + rw[r + 2, o + j] * d2
+
+
 @njit(**JIT)
 def _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, start, stop, backward):
     """One projected Gauss–Seidel sweep over contacts order[start:stop] (normal, then the two tangents in
     Coulomb's disk of the new normal λ), in that order or ``backward``; returns the largest change of a row's
-    speed (m/s)."""
+    speed (m/s). The tangents' speeds after the normal's change are J_t (v + M⁻¹J_nᵀ Δλ_n): the contact's
+    velocities are read once and written once."""
     change = 0.0
     for k in range(start, stop):
         q = order[start + stop - 1 - k] if backward else order[k]
         r = 3 * q
+        u0, u1, u2 = _speeds3(vel, rj, rbody, r)
+        dl = 0.0
         if rdiag[r] > 0.0:
-            u = _row_speed(vel, rj, rbody, r) + rbias[r]
-            new = max(rlam[r] - u / rdiag[r], 0.0)
+            new = max(rlam[r] - (u0 + rbias[r]) / rdiag[r], 0.0)
             dl = new - rlam[r]
             rlam[r] = new
-            _apply(vel, rw, rbody, r, dl)
+            if dl != 0.0:  # the tangents' speeds after it: + J_t M⁻¹ J_nᵀ Δλ_n
+                c1, c2 = 0.0, 0.0
+                for j in range(12):
+                    c1 += rj[r + 1, j] * rw[r, j]
+                    c2 += rj[r + 2, j] * rw[r, j]
+                u1 += c1 * dl
+                u2 += c2 * dl
             change = max(change, abs(dl) * rdiag[r])
         limit = cflt[q, C_MU] * rlam[r]
         l1, l2 = rlam[r + 1], rlam[r + 2]
         if rdiag[r + 1] > 0.0:
-            l1 = l1 - _row_speed(vel, rj, rbody, r + 1) / rdiag[r + 1]
+            l1 = l1 - u1 / rdiag[r + 1]
         if rdiag[r + 2] > 0.0:
-            l2 = l2 - _row_speed(vel, rj, rbody, r + 2) / rdiag[r + 2]
+            l2 = l2 - u2 / rdiag[r + 2]
         norm = math.sqrt(l1 * l1 + l2 * l2)
         if norm > limit:
             s = limit / norm if norm > 0.0 else 0.0
             l1, l2 = l1 * s, l2 * s
         d1, d2 = l1 - rlam[r + 1], l2 - rlam[r + 2]
         rlam[r + 1], rlam[r + 2] = l1, l2
-        _apply(vel, rw, rbody, r + 1, d1)
-        _apply(vel, rw, rbody, r + 2, d2)
+        if dl != 0.0 or d1 != 0.0 or d2 != 0.0:
+            _apply3(vel, rw, rbody, r, dl, d1, d2)
         change = max(change, max(abs(d1) * rdiag[r + 1], abs(d2) * rdiag[r + 2]))
     _pin = vel[0, 0], rj[0, 0], rw[0, 0], rbody[0, 0], rdiag[0], rbias[0], rlam[0], cflt[0, 0], order[0]
     return change
@@ -669,13 +705,15 @@ def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop, gx, gy, gz):
                     size2 += d * d
             beta = size2 / shrink if sweep > 0 and size2 <= shrink else 0.0
             for c in range(stop):
+                r = 3 * order[c]
+                m0, m1, m2 = beta * step[3 * c], beta * step[3 * c + 1], beta * step[3 * c + 2]
                 for k in range(3):
-                    r = 3 * order[c] + k
-                    more = beta * step[3 * c + k]
-                    step[3 * c + k] = more + rlam[r] - last[3 * c + k]
-                    if more != 0.0:
-                        rlam[r] += more
-                        _apply(vel, rw, rbody, r, more)
+                    step[3 * c + k] = beta * step[3 * c + k] + rlam[r + k] - last[3 * c + k]
+                if m0 != 0.0 or m1 != 0.0 or m2 != 0.0:
+                    rlam[r] += m0
+                    rlam[r + 1] += m1
+                    rlam[r + 2] += m2
+                    _apply3(vel, rw, rbody, r, m0, m1, m2)
             shrink = size2
     _pin = vel[0, 0], rj[0, 0], rw[0, 0], rbody[0, 0], rdiag[0], rbias[0], rlam[0], cflt[0, 0], order[0]
 
