@@ -122,6 +122,7 @@ class BodyPairs:
         self._cells, self._chain = np.empty((m, 3), dtype=np.int64), np.empty(m, dtype=np.int64)
         self._heads = np.empty(1 << max(4, int(2 * m - 1).bit_length()), dtype=np.int64)  # ≥ 2 M buckets
         self._pairs = np.empty((max(4 * m, 16), 2), dtype=np.int64)
+        self._last_swept = None  # (lo, hi, candidate pairs) of the last broad phase: reused while the boxes are equal
         self._q_PB = sim._prm[:, L.Q_PB:L.Q_PB + 4].copy()
         self._shapes = np.ascontiguousarray(shapes)
         # two-shape narrow-phase buffers
@@ -198,21 +199,14 @@ class BodyPairs:
     def after_step(self, sim, wrenches: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, t0: float,
                    h: float) -> np.ndarray | None:
         """Find and resolve the step's body–body events; the bodies done here as a bool mask (None: none)."""
-        swept_bounds(Y0, Y1, self.members, self.reach, h, self._lo, self._hi)
-        found = grid_swept_pairs(self._lo, self._hi, self.movable, self._cells, self._heads, self._chain, self._pairs)
+        pairs = self._candidates(Y0, Y1, h)
+        found = len(pairs)
         islands = self.islands
         islands.left = islands.left[:0]  # none out of their island this step unless the islands' step says so
         held = islands.was_island.any() or islands.asleep.any()  # islands from the last step to go on with
         if found == 0 and not held:
             islands.n_contacts = 0
             return None
-        if found > len(self._pairs):
-            self._pairs = np.empty((2 * found, 2), dtype=np.int64)
-            found = grid_swept_pairs(self._lo, self._hi, self.movable, self._cells, self._heads, self._chain,
-                                     self._pairs)
-        pairs = self.members[self._pairs[:found]]
-        # a moving body first (a static shape is never first)
-        pairs = np.ascontiguousarray(np.where(self.is_static[pairs[:, 0]][:, None], pairs[:, ::-1], pairs))
         in_island = None
         if found or held:  # islands first (island.py)
             in_island = islands.step(sim, wrenches, Y0, Y1, pairs, h)
@@ -235,6 +229,24 @@ class BodyPairs:
             self._group_step(sim, members, links, Y0, Y1, wrenches, t0, h)
             done[members] = True
         return done
+
+    def _candidates(self, Y0: np.ndarray, Y1: np.ndarray, h: float) -> np.ndarray:
+        """The broad phase's pairs (k, 2) of global body indices whose boxes swept over the step overlap, a moving
+        body first (a static shape never is). The same boxes as the last step's (a scene asleep or stopped) give
+        the same pairs: they are not searched again."""
+        swept_bounds(Y0, Y1, self.members, self.reach, h, self._lo, self._hi)
+        last = self._last_swept
+        if last is not None and np.array_equal(self._lo, last[0]) and np.array_equal(self._hi, last[1]):
+            return last[2]
+        found = grid_swept_pairs(self._lo, self._hi, self.movable, self._cells, self._heads, self._chain, self._pairs)
+        if found > len(self._pairs):
+            self._pairs = np.empty((2 * found, 2), dtype=np.int64)
+            found = grid_swept_pairs(self._lo, self._hi, self.movable, self._cells, self._heads, self._chain,
+                                     self._pairs)
+        pairs = self.members[self._pairs[:found]]
+        pairs = np.ascontiguousarray(np.where(self.is_static[pairs[:, 0]][:, None], pairs[:, ::-1], pairs))
+        self._last_swept = (self._lo.copy(), self._hi.copy(), pairs)
+        return pairs
 
     def _hits(self, sim, pairs: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, h: float) -> list[tuple[int, int]]:
         """The candidate pairs that meet inside the step (module docstring, 2); a static shape is never first.
