@@ -18,7 +18,7 @@
   rise of the energy K + U over its lowest earlier value (0 when the energy never rises, as
   for rigid contact with e = 0; a soft contact stores energy in its spring and returns it).
   Cost: body-steps/s timed from the state at ``LANDING`` s (the cubes landing) and at the end
-  (settled), sleeping off and on.
+  (settled), sleeping off and on; the sleeping settings also from ``PILE_LATER`` s (8 s: gone quiet).
 
 Peers, set up as their documentation recommends (settings printed with the tables):
 
@@ -66,6 +66,7 @@ TOWER_CUBES, TOWER_EDGE = 10, 0.2
 TOWER_SECONDS, TOWER_SECONDS_QUICK = 60.0, 5.0
 PILE_EDGE, PILE_SPACING, PILE_TILT, PILE_SEED = 0.1, 0.15, 0.3, 2026
 PILE_SECONDS, LANDING = 3.0, 0.6
+PILE_LATER = 8.0  # s: the sleeping settings are also timed from here (the pile gone quiet)
 WALL_THICKNESS, WALL_HEIGHT = 0.1, 1.0
 SAMPLE_EVERY = 10  # steps between readings
 PEER_SLEEP_SPEED = 1e-3  # m/s: MuJoCo's default sleep_tolerance, printed with its settings
@@ -411,7 +412,11 @@ def measure(count: int, quick: bool, log) -> tuple[list[dict], list[dict], dict[
         figures.append(readings.row(engine))
         log(f"  pile of {count} {engine.name} {engine.setting}: finite {readings.finite}, penetration "
             f"{readings.deepest:.3g} m, energy rise {readings.rise:.3g} J")
-        for phase, saved in (("pile, landing", landing), ("pile, settled", settled)):
+        phases = [("pile, landing", landing), ("pile, settled", settled)]
+        if "sleep" in engine.setting:  # on to PILE_LATER (no readings: the figures are the first PILE_SECONDS')
+            engine.step(round((PILE_LATER - PILE_SECONDS) / DT))
+            phases.append(("pile, later", engine.snapshot()))
+        for phase, saved in phases:
             timing.append(Case((phase, engine.name, engine.setting, count), run=engine.step,
                                setup=lambda e=engine, s=saved: e.restore(s), max_units=200))
         owners.append(engine)
@@ -452,15 +457,16 @@ def report(figures: list[dict], costs: list[dict], settings: dict[str, str], cou
                      f"{c['us_per_step']:.3g} ({c['us_per_step_min']:.3g}–{c['us_per_step_max']:.3g}) |")
     lines += ["", f"**Pile**: {count} cubes ({PILE_EDGE} m, 1 kg) dropped together into a bin, {PILE_SECONDS:g} s "
               f"(readings every {SAMPLE_EVERY * DT * 1e3:g} ms; cost timed from the state at {LANDING:g} s, landing, "
-              f"and at {PILE_SECONDS:g} s, settled):", "",
+              f"at {PILE_SECONDS:g} s, settled, and with sleeping at {PILE_LATER:g} s):", "",
               "| engine | setting | finite | deepest penetration (m) | largest energy rise (J) | body-steps/s landing | "
-              "body-steps/s settled |", "|---|---|---|---|---|---|---|"]
+              f"body-steps/s settled | body-steps/s at {PILE_LATER:g} s |", "|---|---|---|---|---|---|---|---|"]
+    rate = lambda c: (f"{c['body_steps_per_s']:.3g} ({c['body_steps_per_s_min']:.3g}–{c['body_steps_per_s_max']:.3g})"
+                      if c is not None else "—")
     for r in (r for r in figures if r["case"] == "pile"):
-        a, b = (cost[(phase, r["engine"], r["setting"])] for phase in ("pile, landing", "pile, settled"))
-        rate = lambda c: (f"{c['body_steps_per_s']:.3g} ({c['body_steps_per_s_min']:.3g}–"
-                          f"{c['body_steps_per_s_max']:.3g})")
+        a, b, c = (cost.get((phase, r["engine"], r["setting"])) for phase in ("pile, landing", "pile, settled",
+                                                                              "pile, later"))
         lines.append(f"| {r['engine']} | {r['setting']} | {'yes' if r['finite'] else 'no'} | {r['penetration']:.3g} | "
-                     f"{r['energy_rise']:.3g} | {rate(a)} | {rate(b)} |")
+                     f"{r['energy_rise']:.3g} | {rate(a)} | {rate(b)} | {rate(c)} |")
     lines += ["", "Settings:", ""] + [f"* **{k}**: {v}" for k, v in settings.items()]
     return "\n".join(lines) + "\n"
 
