@@ -247,7 +247,7 @@ class PyBullet:
     restores_sleep = False
 
     def __init__(self, cubes: list[Cube], sleeping: bool):
-        self.cubes, self.setting = cubes, "default" + (", sleeping" if sleeping else "")
+        self.cubes, self.setting, self.sleeping = cubes, "default" + (", sleeping" if sleeping else ""), sleeping
         p = pybullet
         self.c = c = p.connect(p.DIRECT)
         p.resetSimulation(physicsClientId=c)
@@ -272,7 +272,7 @@ class PyBullet:
         q = pybullet.getPhysicsEngineParameters(physicsClientId=self.c)
         keys = ("numSolverIterations", "useSplitImpulse", "enableConeFriction", "contactSlop", "erp", "contactERP",
                 "frictionERP")
-        sleep = (", ACTIVATION_STATE_ENABLE_SLEEPING on every cube" if "sleeping" in self.setting
+        sleep = (", ACTIVATION_STATE_ENABLE_SLEEPING on every cube" if self.sleeping
                  else ", ACTIVATION_STATE_DISABLE_SLEEPING on every cube")
         return (", ".join(f"{k} {q[k]:g}" for k in keys if k in q) + ", engine parameters at their defaults"
                 + sleep + ", damping 0, plane and walls friction 1 (Bullet multiplies the pair's coefficients)")
@@ -302,7 +302,7 @@ class PyBullet:
         """The saved state, every cube awake (the state does not carry sleep)."""
         p, c = pybullet, self.c
         p.restoreState(saved, physicsClientId=c)
-        if "sleeping" in self.setting:
+        if self.sleeping:
             for b in self.ids:
                 p.changeDynamics(b, -1, activationState=p.ACTIVATION_STATE_WAKE_UP, physicsClientId=c)
 
@@ -429,7 +429,7 @@ def measure(count: int, quick: bool, log) -> tuple[list[dict], list[dict], dict[
             f"{readings.deepest:.3g} m, energy rise {readings.rise:.3g} J")
         phases = [("pile, landing", landing), ("pile, settled", settled)]
         if "sleep" in engine.setting and engine.restores_sleep:  # on to PILE_LATER (no readings: the figures
-            asleep = engine.asleep() if engine.name == Ours.name else None  # are the first PILE_SECONDS')
+            asleep = engine.asleep() if isinstance(engine, Ours) else None  # are the first PILE_SECONDS')
             engine.step(round((PILE_LATER - PILE_SECONDS) / DT))
             phases.append(("pile, later", engine.snapshot()))
             if asleep is not None:

@@ -141,11 +141,16 @@ def build_simulator(path: str, settings: Mapping[str, Any]) -> Simulator:
     check_scene(scene, settings["world_frame"], settings["per_body_topics"])
     sim = Simulator(scene, integrator=settings["integrator"], dt=physics_dt(settings),
                     model_reduction=settings["model_reduction"], threads=settings.get("threads", 0))
+    _contact_settings(sim, settings)
+    return sim
+
+
+def _contact_settings(sim: Simulator, settings: Mapping[str, Any]) -> None:
+    """The ``sleeping`` and ``sleep_speed`` settings onto the simulator's contact solver (if it has one)."""
     if sim.contact is not None:
         sim.contact.sleeping = settings.get("sleeping", False)
         if "sleep_speed" in settings:
             sim.contact.sleep_speed = settings["sleep_speed"]
-    return sim
 
 
 def _ignore(*_args: Any) -> None:
@@ -611,11 +616,7 @@ class SimSession:
         for name in ("integrator", "model_reduction", "threads"):
             if old.get(name) != settings.get(name) and name in settings:
                 setattr(sim, name, settings[name])
-        if old.get("sleeping") != settings.get("sleeping") and sim.contact is not None:
-            sim.contact.sleeping = settings.get("sleeping", False)
-        speed = settings.get("sleep_speed")
-        if old.get("sleep_speed") != speed and speed is not None and sim.contact is not None:
-            sim.contact.sleep_speed = speed
+        _contact_settings(sim, settings)  # sleeping off wakes nothing that is not asleep
         dt = physics_dt(settings)
         if dt != sim.dt:
             sim.dt = dt

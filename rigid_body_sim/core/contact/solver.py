@@ -251,7 +251,7 @@ class ContactSolver:
     def sleeping(self) -> bool:
         """Islands at rest are locked (no step, no narrow phase inside them) until something touches or
         pushes them (island.py). Off by default: a sleeping island's bodies keep their state exactly, but a
-        locked island does not see gravity change or a slow creep below island.SLEEP_SPEED. Set to False, every
+        locked island does not see gravity change or a slow creep below :attr:`sleep_speed`. Set to False, every
         sleeping body wakes (its next step is the island step from the state it was locked in)."""
         return self._sleeping
 
@@ -572,19 +572,17 @@ class ContactSolver:
         if done is not None:
             moving &= ~done[self.bodies]
         modes = self.modes[self.bodies]
-        flying = self.bodies[(modes == FLIGHT) & moving]
+        in_flight = (modes == FLIGHT) & moving
+        flying = self.bodies[in_flight]
         resting = self.bodies[(modes == PERSISTENT) & moving]
         two = resting[self.other_ground[resting] >= 0]  # held on two half-spaces: two_grounds.py
         resting = resting[self.other_ground[resting] < 0]
-        if self.statics is None:
-            lowest = self._lowest[:flying.size]
-            min_gaps(Y1, sim._prm, self.shapes, self.half_spaces, flying, lowest)
-        else:  # static shapes: their gaps too (the bodies outside the islands); bodies on their planes in Python
-            in_flight = (modes == FLIGHT) & moving
+        lowest = self._flying_gaps[:flying.size]
+        min_gaps(Y1, sim._prm, self.shapes, self.half_spaces, flying, lowest)
+        # static shapes: their gaps too (the bodies outside the islands); bodies on their planes in Python
+        if self.statics is not None:
             self._lowest[:] = math.inf
-            gaps = self._flying_gaps[:flying.size]
-            min_gaps(Y1, sim._prm, self.shapes, self.half_spaces, flying, gaps)
-            self._lowest[in_flight] = gaps
+            self._lowest[in_flight] = lowest
             two = np.concatenate((two, self._static_busy(Y1, resting, moving)))
             resting = resting[self.ground_of[resting] < len(self.half_spaces)]
             lowest = self._lowest[in_flight]
