@@ -49,7 +49,7 @@ class Islands:
         #: The bodies out of their island this step (in it the step before); set by each step's body–body pass.
         self.left = np.zeros(0, dtype=np.int64)
         self.asleep = np.zeros(n, dtype=np.int64)
-        self._tried = np.zeros(n, dtype=np.int64)  # steps since a body's component was tried for the exact solve
+        self._wait = np.zeros(n, dtype=np.int64)  # steps before a body's component is tried for the exact solve
         self._still = np.zeros(n, dtype=np.int64)  # steps in a row a body began and ended slower than the sleep speed
         self.saved = np.zeros((n, L.STATE_WIDTH))
         self._parent = np.arange(n, dtype=np.int64)
@@ -110,7 +110,7 @@ class Islands:
         self.was_island[:] = False
         self.left = np.zeros(0, dtype=np.int64)
         self.asleep[:] = 0
-        self._tried[:] = 0
+        self._wait[:] = 0
         self._still[:] = 0
         self.body_steps = 0
         self.deepest = 0.0
@@ -167,7 +167,7 @@ class Islands:
             self._grow_pairs(2 * len(cand))
         args_head = (Y0, Y1, sim._prm, wrenches, solver._bare_rows, solver.modes, self.saved, solver.shapes,
                      solver.half_spaces, solver.half_space_friction, self.members, cand, len(cand),
-                     self.pairs.is_static, sim._stopped, self.pairs.spin_reach, self.size, self.asleep, self._tried,
+                     self.pairs.is_static, sim._stopped, self.pairs.spin_reach, self.size, self.asleep, self._wait,
                      self._still, h, bool(solver.sleeping), float(solver.sleep_speed), DEFAULT_FRICTION, self.n_contacts,
                      self.island, self._parent, self._flags)
         was_asleep = self.asleep != 0

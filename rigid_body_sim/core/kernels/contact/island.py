@@ -22,8 +22,8 @@ their rows), the others at λ = 0, by a Cholesky factorisation of J M⁻¹ Jᵀ 
 Tikhonov steps (the minimum-norm λ of the consistent rank-deficient system: four coplanar corners of
 a face share its load evenly; v⁺ does not depend on which λ); points that pull are let go and points
 let go that would close taken back, at most STICK_PIVOTS times. It is kept when the points on are
-met, every λ_n ≥ 0 and every λ_t is in its cone (to round-off); a component with a point sliding at
-the last step's solution is tried only once in STICK_RETRY steps (landing, nearly none holds). Else
+met, every λ_n ≥ 0 and every λ_t is in its cone (to round-off); a component whose attempt failed is
+tried again only after STICK_RETRY − 1 steps (landing, nearly none holds). Else
 projected Gauss–Seidel on the component's rows (over more than PILE_CONTACTS contacts, from the
 highest against gravity down, then back up, in turn: a weight passes down a pile and a stop up it
 within a sweep). Then the
@@ -91,9 +91,9 @@ PILE_PGS_SWEEPS, PILE_SWEEPS, PILE_UPRIGHT = 100, 20, 0.5
 #: Iterated Tikhonov steps of the sticking solve (fewer once the residual is below TIKHONOV_TOL × the right-hand
 #: side's), and its regularisation (× the largest diagonal); most pivots of its points let go or taken back.
 TIKHONOV_STEPS, TIKHONOV_TOL, TIKHONOV_EPS, STICK_PIVOTS = 6, 1e-15, 1e-9, 3
-#: A component with a point sliding at the last step's solution (its tangent λ at least SLIDING × μ λ_n: on its
-#: cone's edge) is tried for the sticking solve only once in STICK_RETRY steps.
-SLIDING, STICK_RETRY = 1.0 - 1e-6, 4
+#: A component whose sticking solve failed is tried again only after STICK_RETRY − 1 steps on Gauss–Seidel (while
+#: a pile lands, or a point slides, nearly none holds); one solved exactly is tried again at the next step.
+STICK_RETRY = 4
 #: Columns of a contact's float row: point (3), normal a → b (3), gap, μ, and after the velocity step the
 #: impulse on b (3, world, N·s; a gets its opposite).
 C_X, C_N, C_GAP, C_MU, C_IMPULSE, C_FLOATS = 0, 3, 6, 7, 8, 11
@@ -567,27 +567,16 @@ def _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, start, stop, A, L, r
 
 
 @njit(**INLINE)
-def _sliding(rlam, cflt, order, start, stop):
-    """Whether a contact of order[start:stop] has its warm-start λ (the last step's solution) on its cone's edge."""
-    for k in range(start, stop):
-        r = 3 * order[k]
-        limit = SLIDING * cflt[order[k], C_MU] * rlam[r]
-        if limit > 0.0 and rlam[r + 1] * rlam[r + 1] + rlam[r + 2] * rlam[r + 2] >= limit * limit:
-            return True
-    return False
-
-
-@njit(**INLINE)
-def _waited(cint, order, start, stop, tried):
-    """The most steps a body of the contacts order[start:stop] waited since its component was last tried for the
-    sticking solve."""
-    most = 0
+def _waiting(cint, order, start, stop, wait):
+    """The fewest steps a body of the contacts order[start:stop] still waits before its component is tried for
+    the sticking solve again (0: now)."""
+    least = wait[cint[order[start], I_B]] if cint[order[start], I_B] >= 0 else wait[cint[order[start], I_A]]
     for k in range(start, stop):
         for side in range(2):
             b = cint[order[k], side]
             if b >= 0:
-                most = max(most, tried[b])
-    return most
+                least = min(least, wait[b])
+    return least
 
 
 @njit(**INLINE)
@@ -619,11 +608,11 @@ def _apply3(vel, rw, rbody, r, d0, d1, d2):
 
 
 @njit(**JIT)
-def _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, start, stop, backward):
+def _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, cross, order, start, stop, backward):
     """One projected Gauss–Seidel sweep over contacts order[start:stop] (normal, then the two tangents in
     Coulomb's disk of the new normal λ), in that order or ``backward``; returns the largest change of a row's
-    speed (m/s). The tangents' speeds after the normal's change are J_t (v + M⁻¹J_nᵀ Δλ_n): the contact's
-    velocities are read once and written once."""
+    speed (m/s). The tangents' speeds after the normal's change are J_t (v + M⁻¹J_nᵀ Δλ_n), J_t M⁻¹J_nᵀ in
+    cross[q] (per step, _pgs): the contact's velocities are read once and written once."""
     change = 0.0
     for k in range(start, stop):
         q = order[start + stop - 1 - k] if backward else order[k]
@@ -634,13 +623,8 @@ def _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, start, stop, bac
             new = max(rlam[r] - (u0 + rbias[r]) / rdiag[r], 0.0)
             dl = new - rlam[r]
             rlam[r] = new
-            if dl != 0.0:  # the tangents' speeds after it: + J_t M⁻¹ J_nᵀ Δλ_n
-                c1, c2 = 0.0, 0.0
-                for j in range(12):
-                    c1 += rj[r + 1, j] * rw[r, j]
-                    c2 += rj[r + 2, j] * rw[r, j]
-                u1 += c1 * dl
-                u2 += c2 * dl
+            u1 += cross[q, 0] * dl  # the tangents' speeds after it: + J_t M⁻¹ J_nᵀ Δλ_n
+            u2 += cross[q, 1] * dl
             change = max(change, abs(dl) * rdiag[r])
         limit = cflt[q, C_MU] * rlam[r]
         l1, l2 = rlam[r + 1], rlam[r + 2]
@@ -658,6 +642,7 @@ def _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, start, stop, bac
             _apply3(vel, rw, rbody, r, dl, d1, d2)
         change = max(change, max(abs(d1) * rdiag[r + 1], abs(d2) * rdiag[r + 2]))
     _pin = vel[0, 0], rj[0, 0], rw[0, 0], rbody[0, 0], rdiag[0], rbias[0], rlam[0], cflt[0, 0], order[0]
+    _pin2 = cross[0, 0]
     return change
 
 
@@ -668,15 +653,22 @@ def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop, gx, gy, gz):
     pile) are taken from the highest against gravity (gx, gy, gz) down, then back up, in turn (a weight passes
     down a pile, and a stop up it, within one sweep), each sweep extrapolated, at most PILE_PGS_SWEEPS; fewer,
     in their order."""
+    cross = np.empty((rdiag.shape[0] // 3, 2))
     for c in range(stop):
+        q = order[c]
+        r = 3 * q
+        c1, c2 = 0.0, 0.0  # J_t M⁻¹ J_nᵀ: a normal's change in its tangents' speeds
+        for j in range(12):
+            c1 += rj[r + 1, j] * rw[r, j]
+            c2 += rj[r + 2, j] * rw[r, j]
+        cross[q, 0], cross[q, 1] = c1, c2
         for k in range(3):
-            r = 3 * order[c] + k
-            if rlam[r] != 0.0:
-                _apply(vel, rw, rbody, r, rlam[r])
+            if rlam[r + k] != 0.0:
+                _apply(vel, rw, rbody, r + k, rlam[r + k])
     ranked = stop > PILE_CONTACTS
     if not ranked:
         for sweep in range(PGS_SWEEPS):
-            if _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, 0, stop, False) <= PGS_TOL:
+            if _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, cross, order, 0, stop, False) <= PGS_TOL:
                 break
     else:  # highest first: g · x ascending
         down = np.empty(stop)
@@ -694,7 +686,7 @@ def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop, gx, gy, gz):
             for c in range(stop):
                 for k in range(3):
                     last[3 * c + k] = rlam[3 * order[c] + k]
-            if _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, 0, stop, sweep % 2 == 1) <= PGS_TOL:
+            if _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, cross, order, 0, stop, sweep % 2 == 1) <= PGS_TOL:
                 break
             if sweep == PILE_PGS_SWEEPS - 1:  # the last λ is a sweep's: in its cones
                 break
@@ -1003,7 +995,7 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
     settled = False
     live = n_pairs
     for rnd in range(PROJECT_ROUNDS):
-        if rnd == 1:  # the pairs with a moving body first: the later rounds' narrow phase (the others' data stale)
+        if rnd <= 1:  # the pairs with a moving body first: the rounds' narrow phase (the others' data stale)
             live = 0
             for k in range(n_pairs):
                 a, b = nlist[k, 0], nlist[k, 1]
@@ -1095,13 +1087,13 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
 
 @njit(**JIT)
 def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, members, cand, n_cand, is_static, stopped,
-                spin_reach, size, asleep, tried, still, h, sleeping, sleep_speed, default_mu, n_prev, island, parent,
+                spin_reach, size, asleep, wait, still, h, sleeping, sleep_speed, default_mu, n_prev, island, parent,
                 flags, nlist, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound, cint, cflt, vel, iw, dx, rj, rw,
                 rdiag, rbias, rlam, rbody, order, cstart, A, L, vec, out, comp, band, group):
     """One step of every island (module docstring): results into Y1 for the bodies marked island[i] = 1 (solved)
     or 2 (asleep: their rows copied from Y0). Returns 0, or −(contacts needed) when cint is too small
-    (then nothing was changed but ``asleep`` and the outputs; call again with room). ``tried`` (per body, kept
-    across calls): steps since its component was last tried for the sticking solve; ``still`` (per body, kept
+    (then nothing was changed but ``asleep`` and the outputs; call again with room). ``wait`` (per body, kept
+    across calls): steps before its component is tried for the sticking solve again (0: at once); ``still`` (per body, kept
     across calls): the steps in a row it began and ended slower than ``sleep_speed`` (m/s) in an island."""
     n = members.shape[0]
     for k in range(OUT_WIDTH):
@@ -1264,17 +1256,24 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             continue
         kept = False
         if 3 * (hi - lo) <= A.shape[0]:
-            since = _waited(cint, order, lo, hi, tried) + 1  # this step's count if not tried now
-            if since >= STICK_RETRY or not _sliding(rlam, cflt, order, lo, hi):
+            left = _waiting(cint, order, lo, hi, wait) - 1
+            if left < 0:
                 kept = _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, lo, hi, A, L, vec[0], vec[1],
                                  vec[2], band)
-                since = 0
+                left = 0 if kept else STICK_RETRY - 1
             for c in range(lo, hi):
                 for side in range(2):
                     if cint[order[c], side] >= 0:
-                        tried[cint[order[c], side]] = since
+                        wait[cint[order[c], side]] = left
         if kept:
             out[OUT_STICK] += 1
+            shallow = True  # and began with no point deeper than the projection's tolerance
+            for c in range(lo, hi):
+                q = order[c]
+                body = cint[q, I_B] if cint[q, I_B] >= 0 else cint[q, I_A]
+                shallow = shallow and cflt[q, C_GAP] >= -PROJECT_TOL * size[body]
+            if shallow:
+                flags[i] |= 512  # its root: the component was solved exactly, nothing to project at the start
         else:
             for c in range(lo, hi):
                 order[stop] = order[c]
@@ -1304,7 +1303,14 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         q = qmul(qw, qx, qy, qz, ew, ex, ey, ez)
         Y1[i, Q], Y1[i, Q + 1], Y1[i, Q + 2], Y1[i, Q + 3] = normalise(q[0], q[1], q[2], q[3])
     # the projection, on the second half of the contact and row scratch (the first keeps the velocity step's),
-    # looking at the pairs within their reach over the step as solved
+    # looking at the pairs within their reach over the step as solved. A body of a component solved exactly from
+    # no deep point that moved less than PROJECT_TOL × its size over the step is held from the start (island 3):
+    # its points' gaps were closed exactly (linear in the step, and it barely turned), none went deeper
+    for m in range(n):
+        i = members[m]
+        if island[i] == 1 and flags[_find(comp, i)] & 512:
+            if h * max(_speed(Y0, i, spin_reach), _speed(Y1, i, spin_reach)) <= PROJECT_TOL * size[i]:
+                island[i] = 3
     _bounds(Y0, Y1, nlist, 0, n_pairs, is_static, spin_reach, size, h, bound)
     deepest = _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount,
                        ppoints, pseps, members, bound, size, is_static, default_mu, h, iw, dx, vel, cint[half:],
