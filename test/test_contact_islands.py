@@ -255,6 +255,32 @@ def test_a_raised_sleep_speed_stops_a_creeping_cube_after_its_steps_below_it():
         assert np.array_equal(sim.state.rows()[:, :13], rows)
 
 
+@pytest.mark.parametrize("swing, sleeps", [(2e-3, True), (2e-2, False)])
+def test_a_raised_sleep_speed_sleeps_a_cube_jittering_in_place_not_one_swinging_farther(swing, sleeps):
+    """A frictionless 1 kg cube on a resting cube pushed along x by +F, −F, −F, +F, … (dt 0.01 s): its speed
+    swings between 0 and ±F h / m, and it moves by at most F h² / m from where it began. At sleep_speed 1e-3 m/s
+    a swing of 2e-3 m/s (moving 2e-5 m, within sleep_speed × SLEEP_STEPS steps = 1e-4 m) is at rest: both cubes
+    sleep after exactly SLEEP_STEPS steps, stopped; a swing of 2e-2 m/s (2e-4 m) never sleeps."""
+    h = 0.01
+    sim = simulator({"low": cube((0.0, 0.0, 0.5 * EDGE)), "top": cube((0.0, 0.0, 1.5 * EDGE), mu=0.0)},
+                    dt=h, sleeping=True)
+    sim.contact.sleep_speed = 1e-3
+    islands = sim.contact.pairs.islands
+    force = swing / h  # N on 1 kg: F h / m = swing
+    for k in range(3 * SLEEP_STEPS):
+        sim.apply_wrench("top", force=((1.0 if k % 4 in (0, 3) else -1.0) * force, 0.0, 0.0))
+        sim.step(1)
+        if sleeps and k == SLEEP_STEPS - 2:
+            assert not islands.asleep[:2].any()
+            assert abs(sim.state.v_WC_W[1, 0]) == pytest.approx(swing, rel=1e-9)  # above the sleep speed
+        if sleeps and k == SLEEP_STEPS - 1:
+            assert islands.asleep[:2].all()
+            assert speeds(sim) == 0.0
+            return
+        assert not islands.asleep[:2].any()
+        assert abs(sim.state.p_WC_W[1, 0]) <= swing * h * (1.0 + 1e-9)
+
+
 @pytest.mark.parametrize("speed", [0.0, 1e-10, -1.0, float("nan"), float("inf")])
 def test_a_sleep_speed_below_rest_or_not_finite_is_refused(speed):
     sim = simulator(tower(2))

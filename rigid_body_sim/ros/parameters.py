@@ -242,8 +242,9 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec("sleep_speed", _T.DOUBLE, 1e-9,
                   "Speed (m/s, spin × bounding radius included) below which resting bodies fall asleep while "
                   "sleeping is on. 1e-9 is rest to round-off: locked where they stand. Raised (MuJoCo's "
-                  "sleep_tolerance is 1e-3), a group must stay below it for 10 steps in a row and is then stopped "
-                  "where it is, creeping or not (its kinetic energy dropped): a pile sleeps sooner.",
+                  "sleep_tolerance is 1e-3), a group must stay for 10 steps within that speed × 10 steps of where "
+                  "it began them (its mean speed below it: jittering in place is rest) and is then stopped where "
+                  "it is, creeping or not (its kinetic energy dropped): a pile sleeps sooner.",
                   range=(1e-9, 1e3)),
     ParameterSpec("threads", _T.INTEGER, 0,
                   "Threads the physics step may use over the bodies: 0 = every core (NUMBA_NUM_THREADS, by default "

@@ -50,7 +50,8 @@ class Islands:
         self.left = np.zeros(0, dtype=np.int64)
         self.asleep = np.zeros(n, dtype=np.int64)
         self._wait = np.zeros(n, dtype=np.int64)  # steps before a body's component is tried for the exact solve
-        self._still = np.zeros(n, dtype=np.int64)  # steps in a row a body began and ended slower than the sleep speed
+        self._still = np.zeros(n, dtype=np.int64)  # steps in a row a body was at rest by the sleep rule
+        self._anchor = np.zeros((n, 7))  # where its run at rest began (position, quaternion)
         self.saved = np.zeros((n, L.STATE_WIDTH))
         self._parent = np.arange(n, dtype=np.int64)
         self._flags = np.zeros(n, dtype=np.int64)
@@ -168,7 +169,7 @@ class Islands:
         args_head = (Y0, Y1, sim._prm, wrenches, solver._bare_rows, solver.modes, self.saved, solver.shapes,
                      solver.half_spaces, solver.half_space_friction, self.members, cand, len(cand),
                      self.pairs.is_static, sim._stopped, self.pairs.spin_reach, self.size, self.asleep, self._wait,
-                     self._still, h, bool(solver.sleeping), float(solver.sleep_speed), DEFAULT_FRICTION, self.n_contacts,
+                     self._still, self._anchor, h, bool(solver.sleeping), float(solver.sleep_speed), DEFAULT_FRICTION, self.n_contacts,
                      self.island, self._parent, self._flags)
         was_asleep = self.asleep != 0
         while True:

@@ -266,8 +266,10 @@ class ContactSolver:
         """The speed (m/s, spin × bounding radius included) below which an island's bodies fall asleep while
         :attr:`sleeping`. The default, island.SLEEP_SPEED = 1e-9 m/s, is rest to round-off (the exact sticking
         solve's): a step that starts and ends that slow locks them where they are. Raised (as the peers' sleep
-        thresholds: MuJoCo's sleep_tolerance is 1e-3), bodies must stay below it for island.SLEEP_STEPS steps in a
-        row, and are then stopped where they are, creeping or not: their kinetic energy below it is dropped."""
+        thresholds: MuJoCo's sleep_tolerance is 1e-3), bodies must stay for island.SLEEP_STEPS steps within that
+        speed × SLEEP_STEPS steps of where they began them (their mean speed below it: a body jittering in place,
+        a Gauss–Seidel residue, is at rest), and are then stopped where they are, creeping or not: their kinetic
+        energy is dropped."""
         return self._sleep_speed
 
     @sleep_speed.setter

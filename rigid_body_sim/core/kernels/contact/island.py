@@ -36,8 +36,8 @@ Islands: union-find over the swept broad phase's candidate pairs of moving bodie
 body's with an awake one only when that is within the step's reach, with a sleeping one only when
 they fell asleep together); a component is an island when one of its pairs touches at the step's start (signed distance ≤ TOUCH × the
 pair's size), or when it holds a sleeping body. Sleeping (when enabled): a component of the step's
-contacts whose bodies all moved slower than the sleep speed (SLEEP_SPEED unless raised) at the starts and
-ends of their last steps (one step at SLEEP_SPEED, where that means at rest; SLEEP_STEPS above it) is
+contacts whose bodies all moved slower than SLEEP_SPEED at the start and end of the step (at rest), or, with
+the sleep speed raised, all stayed within it × SLEEP_STEPS steps of where they were SLEEP_STEPS steps ago, is
 locked (velocities set to zero, its rows copied forward, no narrow phase between its bodies) until a
 wrench, a changed state or another body within reach wakes it (the driver and this pass).
 
@@ -67,8 +67,10 @@ __all__ = ["island_pass", "TOUCH", "SLEEP_SPEED", "SLEEP_STEPS", "DENSE_MAX", "P
 TOUCH = 1e-6
 #: Bodies slower than this (m/s, and spin × bounding radius) at a step's start and after its solve are at rest.
 SLEEP_SPEED = 1e-9
-#: Steps a component's bodies must all stay slower than a sleep speed raised above SLEEP_SPEED before it sleeps
-#: (MuJoCo's mjMINAWAKE): a body slow only for an instant (a rocking column at its turning point) stays awake.
+#: Steps a component's bodies must all stay within a sleep speed raised above SLEEP_SPEED × SLEEP_STEPS steps of
+#: where they were when the run began (their mean speed over it below the sleep speed; MuJoCo's mjMINAWAKE)
+#: before it sleeps: a body slow only for an instant (a rocking column at its turning point) stays awake, and
+#: one jittering in place (a Gauss–Seidel residue over a pile) is at rest.
 SLEEP_STEPS = 10
 #: Two boxes whose pair normal is within acos(PATCH_FLAT) of a face normal touch by a patch: the other's face
 #: clipped against that one (pairs.box_patch), every point within the pair's reach or PATCH_REACH × its size.
@@ -140,6 +142,17 @@ def _speed(Y, i, spin_reach):
     v = math.sqrt(Y[i, V] ** 2 + Y[i, V + 1] ** 2 + Y[i, V + 2] ** 2)
     w = math.sqrt(Y[i, W] ** 2 + Y[i, W + 1] ** 2 + Y[i, W + 2] ** 2)
     return v + w * spin_reach[i]
+
+
+@njit(**JIT)
+def _moved(Y, anchor, i, spin_reach):
+    """How far body i at state rows Y is from its pose anchor[i] (position, quaternion): the distance its centre
+    moved plus the angle it turned × its bounding radius (m)."""
+    d = math.sqrt((Y[i, P] - anchor[i, 0]) ** 2 + (Y[i, P + 1] - anchor[i, 1]) ** 2 + (Y[i, P + 2] - anchor[i, 2]) ** 2)
+    # the turn from the anchor: conj(q_a) ⊗ q, its vector part's length sin(θ/2)
+    t = qmul(anchor[i, 3], -anchor[i, 4], -anchor[i, 5], -anchor[i, 6], Y[i, Q], Y[i, Q + 1], Y[i, Q + 2], Y[i, Q + 3])
+    s = min(math.sqrt(t[1] * t[1] + t[2] * t[2] + t[3] * t[3]), 1.0)
+    return d + 2.0 * math.asin(s) * spin_reach[i]
 
 
 @njit(**JIT)
@@ -1087,14 +1100,15 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
 
 @njit(**JIT)
 def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, members, cand, n_cand, is_static, stopped,
-                spin_reach, size, asleep, wait, still, h, sleeping, sleep_speed, default_mu, n_prev, island, parent,
+                spin_reach, size, asleep, wait, still, anchor, h, sleeping, sleep_speed, default_mu, n_prev, island, parent,
                 flags, nlist, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound, cint, cflt, vel, iw, dx, rj, rw,
                 rdiag, rbias, rlam, rbody, order, cstart, A, L, vec, out, comp, band, group):
     """One step of every island (module docstring): results into Y1 for the bodies marked island[i] = 1 (solved)
     or 2 (asleep: their rows copied from Y0). Returns 0, or −(contacts needed) when cint is too small
     (then nothing was changed but ``asleep`` and the outputs; call again with room). ``wait`` (per body, kept
     across calls): steps before its component is tried for the sticking solve again (0: at once); ``still`` (per body, kept
-    across calls): the steps in a row it began and ended slower than ``sleep_speed`` (m/s) in an island."""
+    across calls): the steps in a row it was at rest by the sleep rule (end of this function) in an island, from the
+    pose ``anchor`` (per body: position, quaternion) with a sleep speed raised above rest."""
     n = members.shape[0]
     for k in range(OUT_WIDTH):
         out[k] = 0.0
@@ -1319,16 +1333,26 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     out[OUT_DEPTH] = deepest
     if out[OUT_STOPPED] > 0:
         _attribute(nc, cint, cflt, int(out[OUT_STOPPED]), cint[half:], cflt[half:], members, cstart)
-    # sleeping: a component of the step's contacts whose bodies were and stay slower than the sleep speed (for
-    # SLEEP_STEPS steps in a row when it is raised above rest) is locked (its island's other bodies are beyond the
-    # step's reach: a sleeping body is woken by one within it)
+    # sleeping: a component of the step's contacts whose bodies were and stay slower than the sleep speed (at
+    # rest, SLEEP_SPEED: one step), or with a sleep speed raised above rest stayed within sleep_speed × SLEEP_STEPS
+    # steps of where they began SLEEP_STEPS steps ago (anchor: that pose), is locked (its island's other bodies are
+    # beyond the step's reach: a sleeping body is woken by one within it)
     need = 1 if sleep_speed <= SLEEP_SPEED else SLEEP_STEPS
     for m in range(n):
         i = members[m]
         if island[i] != 1:
             still[i] = 0
             continue
-        if _speed(Y0, i, spin_reach) <= sleep_speed and _speed(Y1, i, spin_reach) <= sleep_speed:
+        if need == 1:
+            at_rest = _speed(Y0, i, spin_reach) <= sleep_speed and _speed(Y1, i, spin_reach) <= sleep_speed
+        else:
+            if still[i] == 0:  # a run begins at this step's start
+                for j in range(3):
+                    anchor[i, j] = Y0[i, P + j]
+                for j in range(4):
+                    anchor[i, 3 + j] = Y0[i, Q + j]
+            at_rest = _moved(Y1, anchor, i, spin_reach) <= sleep_speed * SLEEP_STEPS * h
+        if at_rest:
             still[i] += 1
         else:
             still[i] = 0
