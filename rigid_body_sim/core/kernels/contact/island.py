@@ -621,11 +621,12 @@ def _apply3(vel, rw, rbody, r, d0, d1, d2):
 
 
 @njit(**JIT)
-def _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, cross, order, start, stop, backward):
+def _sweep(vel, rj, rw, rbody, rdiag, inv, rbias, rlam, cflt, cross, order, start, stop, backward):
     """One projected Gauss–Seidel sweep over contacts order[start:stop] (normal, then the two tangents in
     Coulomb's disk of the new normal λ), in that order or ``backward``; returns the largest change of a row's
     speed (m/s). The tangents' speeds after the normal's change are J_t (v + M⁻¹J_nᵀ Δλ_n), J_t M⁻¹J_nᵀ in
-    cross[q] (per step, _pgs): the contact's velocities are read once and written once."""
+    cross[q] (per step, _pgs), inv the rows' 1 / rdiag: the contact's velocities are read once and written
+    once."""
     change = 0.0
     for k in range(start, stop):
         q = order[start + stop - 1 - k] if backward else order[k]
@@ -633,7 +634,7 @@ def _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, cross, order, start, st
         u0, u1, u2 = _speeds3(vel, rj, rbody, r)
         dl = 0.0
         if rdiag[r] > 0.0:
-            new = max(rlam[r] - (u0 + rbias[r]) / rdiag[r], 0.0)
+            new = max(rlam[r] - (u0 + rbias[r]) * inv[r], 0.0)
             dl = new - rlam[r]
             rlam[r] = new
             u1 += cross[q, 0] * dl  # the tangents' speeds after it: + J_t M⁻¹ J_nᵀ Δλ_n
@@ -642,9 +643,9 @@ def _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, cross, order, start, st
         limit = cflt[q, C_MU] * rlam[r]
         l1, l2 = rlam[r + 1], rlam[r + 2]
         if rdiag[r + 1] > 0.0:
-            l1 = l1 - u1 / rdiag[r + 1]
+            l1 = l1 - u1 * inv[r + 1]
         if rdiag[r + 2] > 0.0:
-            l2 = l2 - u2 / rdiag[r + 2]
+            l2 = l2 - u2 * inv[r + 2]
         norm = math.sqrt(l1 * l1 + l2 * l2)
         if norm > limit:
             s = limit / norm if norm > 0.0 else 0.0
@@ -655,7 +656,7 @@ def _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, cross, order, start, st
             _apply3(vel, rw, rbody, r, dl, d1, d2)
         change = max(change, max(abs(d1) * rdiag[r + 1], abs(d2) * rdiag[r + 2]))
     _pin = vel[0, 0], rj[0, 0], rw[0, 0], rbody[0, 0], rdiag[0], rbias[0], rlam[0], cflt[0, 0], order[0]
-    _pin2 = cross[0, 0]
+    _pin2 = cross[0, 0], inv[0]
     return change
 
 
@@ -667,6 +668,7 @@ def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop, gx, gy, gz):
     down a pile, and a stop up it, within one sweep), each sweep extrapolated, at most PILE_PGS_SWEEPS; fewer,
     in their order."""
     cross = np.empty((rdiag.shape[0] // 3, 2))
+    inv = np.empty(rdiag.shape[0])
     for c in range(stop):
         q = order[c]
         r = 3 * q
@@ -676,12 +678,13 @@ def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop, gx, gy, gz):
             c2 += rj[r + 2, j] * rw[r, j]
         cross[q, 0], cross[q, 1] = c1, c2
         for k in range(3):
+            inv[r + k] = 1.0 / rdiag[r + k] if rdiag[r + k] > 0.0 else 0.0
             if rlam[r + k] != 0.0:
                 _apply(vel, rw, rbody, r + k, rlam[r + k])
     ranked = stop > PILE_CONTACTS
     if not ranked:
         for sweep in range(PGS_SWEEPS):
-            if _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, cross, order, 0, stop, False) <= PGS_TOL:
+            if _sweep(vel, rj, rw, rbody, rdiag, inv, rbias, rlam, cflt, cross, order, 0, stop, False) <= PGS_TOL:
                 break
     else:  # highest first: g · x ascending
         down = np.empty(stop)
@@ -699,7 +702,7 @@ def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop, gx, gy, gz):
             for c in range(stop):
                 for k in range(3):
                     last[3 * c + k] = rlam[3 * order[c] + k]
-            if _sweep(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, cross, order, 0, stop, sweep % 2 == 1) <= PGS_TOL:
+            if _sweep(vel, rj, rw, rbody, rdiag, inv, rbias, rlam, cflt, cross, order, 0, stop, sweep % 2 == 1) <= PGS_TOL:
                 break
             if sweep == PILE_PGS_SWEEPS - 1:  # the last λ is a sweep's: in its cones
                 break
@@ -923,6 +926,7 @@ def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdia
     (not as the projection over a pile: holding a lower body there gave the upper its speed, energy and motion
     that kept a pile from sleeping)."""
     n = members.shape[0]
+    inv = np.empty(nd)  # the rows' 1 / rdiag
     for m in range(n):
         i = members[m]
         if island[i] != 1:
@@ -943,12 +947,13 @@ def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdia
         _rows(Y1, prm, nd, cint, cflt, iw, True, h, rj, rw, rdiag, rbias, rbody, island)
         for c in range(nd):
             rlam[c] = 0.0
+            inv[c] = 1.0 / rdiag[c] if rdiag[c] > 0.0 else 0.0
         for _s in range(PROJECT_SWEEPS):
             change = 0.0
             for c in range(nd):
                 if rdiag[c] <= 0.0:
                     continue
-                new = max(rlam[c] - _row_speed(vel, rj, rbody, c) / rdiag[c], 0.0)
+                new = max(rlam[c] - _row_speed(vel, rj, rbody, c) * inv[c], 0.0)
                 dl = new - rlam[c]
                 rlam[c] = new
                 _apply(vel, rw, rbody, c, dl)
@@ -1059,6 +1064,9 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
             rlam[c] = 0.0
             deepest = max(deepest, -cflt[c, C_GAP])
         pile = _pile_rows(Y1, prm, nd, cint, cflt, rj, rw, rdiag, rbody, porder)
+        inv = np.empty(nd)  # the rows' 1 / rdiag
+        for c in range(nd):
+            inv[c] = 1.0 / rdiag[c] if rdiag[c] > 0.0 else 0.0
         for _s in range(PILE_SWEEPS if pile else PROJECT_SWEEPS):
             change = 0.0
             for k in range(nd):
@@ -1066,7 +1074,7 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
                 if rdiag[c] <= 0.0:
                     continue
                 g = cflt[c, C_GAP] + _row_speed(dx, rj, rbody, c)
-                new = max(rlam[c] - g / rdiag[c], 0.0)
+                new = max(rlam[c] - g * inv[c], 0.0)
                 dl = new - rlam[c]
                 rlam[c] = new
                 _apply(dx, rw, rbody, c, dl)
