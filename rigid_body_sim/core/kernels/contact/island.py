@@ -593,6 +593,13 @@ def _waiting(cint, order, start, stop, wait):
 
 
 @njit(**INLINE)
+def _inverse(d):
+    """1 / d for a row's diagonal d (Gauss–Seidel multiplies by it: a division is about a sixth of a sweep); 0 where
+    d is not positive (a row that moves nothing, skipped)."""
+    return 1.0 / d if d > 0.0 else 0.0
+
+
+@njit(**INLINE)
 def _speeds3(vel, rj, rbody, r):
     """The speeds of a contact's three rows r, r + 1, r + 2 (normal, t1, t2; the same two bodies), one pass over
     its bodies' velocities."""
@@ -678,7 +685,7 @@ def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop, gx, gy, gz):
             c2 += rj[r + 2, j] * rw[r, j]
         cross[q, 0], cross[q, 1] = c1, c2
         for k in range(3):
-            inv[r + k] = 1.0 / rdiag[r + k] if rdiag[r + k] > 0.0 else 0.0
+            inv[r + k] = _inverse(rdiag[r + k])
             if rlam[r + k] != 0.0:
                 _apply(vel, rw, rbody, r + k, rlam[r + k])
     ranked = stop > PILE_CONTACTS
@@ -947,7 +954,7 @@ def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdia
         _rows(Y1, prm, nd, cint, cflt, iw, True, h, rj, rw, rdiag, rbias, rbody, island)
         for c in range(nd):
             rlam[c] = 0.0
-            inv[c] = 1.0 / rdiag[c] if rdiag[c] > 0.0 else 0.0
+            inv[c] = _inverse(rdiag[c])
         for _s in range(PROJECT_SWEEPS):
             change = 0.0
             for c in range(nd):
@@ -1066,7 +1073,7 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
         pile = _pile_rows(Y1, prm, nd, cint, cflt, rj, rw, rdiag, rbody, porder)
         inv = np.empty(nd)  # the rows' 1 / rdiag
         for c in range(nd):
-            inv[c] = 1.0 / rdiag[c] if rdiag[c] > 0.0 else 0.0
+            inv[c] = _inverse(rdiag[c])
         for _s in range(PILE_SWEEPS if pile else PROJECT_SWEEPS):
             change = 0.0
             for k in range(nd):
@@ -1233,6 +1240,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     if bodies == 0:
         for m in range(n):
             still[members[m]] = 0
+            wait[members[m]] = 0
         _pin = Y0[0, 0], Y1[0, 0], prm[0, 0], wr[0, 0], bare[0, 0], modes[0], saved[0, 0], cand[0, 0], A[0, 0], L[0, 0], vec[0, 0], order[0], cstart[0]
         _pin2 = group[0]
         return 0
@@ -1348,8 +1356,9 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     need = 1 if sleep_speed <= SLEEP_SPEED else SLEEP_STEPS
     for m in range(n):
         i = members[m]
-        if island[i] != 1:
+        if island[i] != 1:  # out of the islands (or asleep): no run at rest, no wait for the exact solve
             still[i] = 0
+            wait[i] = 0
             continue
         if need == 1:
             at_rest = _speed(Y0, i, spin_reach) <= sleep_speed and _speed(Y1, i, spin_reach) <= sleep_speed
