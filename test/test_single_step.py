@@ -191,3 +191,29 @@ def test_step_one_reports_a_blow_up_cancel_and_a_rejected_control() -> None:
         warnings.simplefilter("error")
         sim.step(1)
     assert sim.rejected_controls == ()
+
+
+#: Two boxes dropped onto the ground, one on the other (stepped by the contact solver, not the single-step path).
+CONTACT_SCENE = {"gravity": [0.0, 0.0, -9.81], "ground": [{"normal": [0, 0, 1], "offset": 0.0}], "bodies": {
+    f"c{k}": {"mass": 1.0, "inertia": {"box": [0.2, 0.2, 0.2]}, "collision": {"box": [0.2, 0.2, 0.2]},
+              "pose": {"position": [0.01 * k, 0.0, 0.12 + 0.21 * k]}} for k in range(2)}}
+
+
+@pytest.mark.parametrize("copier", ["deepcopy", "pickle"])
+@pytest.mark.parametrize("spec", [SCENE, CONTACT_SCENE], ids=["free", "contact"])
+def test_a_copied_simulator_steps_and_reads_its_own_buffers(spec: dict, copier: str) -> None:
+    import copy
+    import pickle
+
+    sim = Simulator(load_scene(spec), dt=0.01)
+    sim.step(3)
+    start = sim.state.rows()
+    twin = copy.deepcopy(sim) if copier == "deepcopy" else pickle.loads(pickle.dumps(sim))
+    assert np.array_equal(twin.state.rows(), start)
+    for k in (1, 1, 5):  # step(1) on the single-step path where the scene has one, then step(k)
+        assert twin.step(k) == k
+    assert np.array_equal(sim.state.rows(), start)  # the original is not stepped through the copy
+    assert not np.array_equal(twin.state.rows(), start)  # the copy's state reads what it stepped
+    for k in (1, 1, 5):
+        sim.step(k)
+    assert np.array_equal(twin.state.rows(), sim.state.rows()) and twin.time == sim.time

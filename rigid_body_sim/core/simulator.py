@@ -305,6 +305,23 @@ class Simulator:
         self.threads = threads
         self.reset()
 
+    # ----------------------------------------------------------------- copies
+
+    def __getstate__(self) -> dict:
+        """For ``copy.deepcopy`` and ``pickle``: everything but what points into this object's own buffers (the
+        state views, the single-step block's addresses and its compiled entry), rebuilt by :meth:`__setstate__`."""
+        state = self.__dict__.copy()
+        for name in ("_views", "_single", "_block_address"):
+            del state[name]
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._views = (State.of_rows(self._Ys[0]), State.of_rows(self._Ys[1]))
+        self._block_address = int(self._block.ctypes.data)
+        self._point_block()
+        self._choose_single()
+
     # ----------------------------------------------------------------- configuration
 
     @property
