@@ -52,8 +52,21 @@ class Moment:
     many_endpoints: bool = False  # above FAST_EXIT_ENDPOINTS: a stop while ticking skips destroying them
 
 
-def after(seconds: float) -> Callable[[subprocess.Popen, Path], None]:
-    return lambda _process, _log: time.sleep(seconds)
+def after_handlers(timeout: float = 60.0) -> Callable[[subprocess.Popen, Path], None]:
+    """Wait until the process catches SIGINT and SIGTERM (its handlers in place: /proc/PID/status, SigCgt), the
+    first thing the entry point does, before its heavy imports: a signal sent earlier, while the interpreter
+    itself starts, meets no handler of ours and kills it (exit −15), on a machine slow to start Python."""
+    def reach(process: subprocess.Popen, _log: Path) -> None:
+        wanted = (1 << (signal.SIGINT - 1)) | (1 << (signal.SIGTERM - 1))
+        end = time.monotonic() + timeout
+        while time.monotonic() < end and process.poll() is None:
+            status = Path(f"/proc/{process.pid}/status").read_text()
+            caught = int(next(line for line in status.splitlines() if line.startswith("SigCgt:")).split()[1], 16)
+            if caught & wanted == wanted:
+                return
+            time.sleep(0.005)
+        raise AssertionError(f"the handlers were not in place within {timeout} s")
+    return reach
 
 
 def after_participant(seconds: float) -> Callable[[subprocess.Popen, Path], None]:
@@ -71,7 +84,7 @@ def after_line(text: str, seconds: float, timeout: float = 240.0) -> Callable[[s
 
 
 MOMENTS = {
-    "imports": Moment(0, True, after(0.3), start_up=True),
+    "imports": Moment(0, True, after_handlers(), start_up=True),
     # the participant is created first in the node's constructor, then the scene is loaded, then
     # the endpoints are created (600 bodies × 5 per-body topics here: about 2 s)
     "scene load": Moment(600, True, after_participant(0.0), start_up=True),
