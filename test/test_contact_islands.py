@@ -159,6 +159,50 @@ def test_a_sleeping_tower_is_locked_exactly():
     assert sim.contact.counts["island_body_steps"] == steps  # no island step taken while asleep
 
 
+def test_a_scene_wholly_asleep_is_carried_over_as_its_islands_would_step_it():
+    """Every moving body asleep and none pushed, stopped or set: the simulator carries the state over instead of
+    stepping (no island pass runs). The same tower beside a free ball without a shape (always moving: the
+    islands' pass runs every step) gives the same rows, contacts, logged pair impulses and impulses on each
+    body, to the bit, while asleep and after a wrench wakes the tower (both step it the same from then on)."""
+    free = {"far": {"mass": 1.0, "inertia": {"sphere": 0.1}, "pose": {"position": [50.0, 0.0, 100.0]}}}
+    alone, beside = asleep_tower(), simulator({**tower(3), **free}, sleeping=True)
+    beside.step(5)
+    passes = {}
+    for name, sim in (("alone", alone), ("beside", beside)):
+        islands = sim.contact.pairs.islands
+        islands.log.summing = sim.contact.track_torques = True
+        run = islands.step
+        passes[name] = 0
+
+        def counted(*args, run=run, name=name):
+            passes[name] += 1
+            return run(*args)
+
+        islands.step = counted
+
+    def same() -> None:
+        a, b = alone.contact.pairs.islands, beside.contact.pairs.islands
+        assert np.array_equal(alone.state.rows()[:3], beside.state.rows()[:3])
+        for x, y in zip(a.contacts(), b.contacts()):
+            assert len(x) and np.array_equal(x, y)
+        (ka, ia), (kb, ib) = a.log.take(), b.log.take()
+        named = [(k // log.width, np.where(k % log.width >= log.n_bodies, k % log.width - log.n_bodies - 100,
+                                           k % log.width)) for k, log in ((ka, a.log), (kb, b.log))]
+        assert len(ka) and np.array_equal(named[0], named[1]) and np.array_equal(ia, ib)  # (a half-space: −100 + k)
+        assert np.array_equal(a.impulses[:3], b.impulses[:3]) and a.impulses[:3, 2].sum() > 0.0
+
+    for _ in range(20):
+        alone.step(1)
+        beside.step(1)
+    same()
+    assert passes == {"alone": 0, "beside": 20} and alone.time == beside.time
+    for sim in (alone, beside):
+        sim.apply_wrench("c0_0_2", force=(3.0, 0.0, 5.0))
+        sim.step(10)
+    same()
+    assert not alone.contact.pairs.islands.asleep[:3].all() and passes["alone"] == 10
+
+
 def test_a_sleeping_tower_wakes_on_a_wrench():
     """20 N up on the top cube (1 kg): it wakes and lifts off; the island step is first order (Euler in
     velocity), exact for a constant force: v = h (F/m − g) after one step."""

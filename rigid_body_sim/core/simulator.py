@@ -858,6 +858,10 @@ class Simulator:
         wrenches = self._wrenches_of_this_step()
         if self.contact is not None:  # contact: the force holding bodies at rest is a wrench of this step
             self.contact.add_holding_wrenches(self, wrenches)
+            if self.contact.all_asleep(self, wrenches):  # no body moves (all asleep, none pushed): nothing to step
+                self._carry_state()
+                self.contact.after_asleep_step(self)
+                return wrenches
         if self._method.code is not None:
             self._advance_with(wrenches, 1, _NEVER)
             self._inputs[L.SPENT] = 0.0  # ``wrenches`` is this step's own array: nothing to drop before the next
@@ -881,6 +885,17 @@ class Simulator:
         if self.contact is not None:  # contact: events located inside the step; resting bodies projected
             self.contact.after_step(self, wrenches)
         return wrenches
+
+    def _carry_state(self) -> None:
+        """A step in which no body moves: the state carried into the other buffer, which becomes the current one
+        (as stepping.advance leaves a step done)."""
+        cur = self._control[L.CUR]
+        self._Ys[1 - cur] = self._Ys[cur]
+        self._control[L.CUR] = 1 - cur
+        self._control[L.DONE] = 1
+        self._control[L.OUTCOME] = L.OK
+        self._inputs[L.SPENT] = 0.0
+        self.step_count += 1
 
     def _wrenches_of_this_step(self) -> np.ndarray:
         """The applied plus the scripted wrenches active at the start of this step: a fresh array of rows."""

@@ -17,7 +17,9 @@ raised; then for SLEEP_STEPS steps in a row) is locked, its rows copied forward,
 until a wrench on one of its bodies, a changed state (an impulse, ``set_state``, ``set_body_state``)
 or another awake body within reach wakes it. Its contacts from the step it fell asleep in are kept
 and listed with every step's (:meth:`Islands.contacts`), each with the force it held its bodies with
-then: a locked island is still held.
+then: a locked island is still held. A scene wholly asleep (:meth:`Islands.all_asleep`: every moving body
+asleep, none pushed, stopped or set) is not stepped: the simulator carries its state over and
+:meth:`Islands.asleep_step` lists and logs the locked contacts, as the island pass would have.
 """
 
 from __future__ import annotations
@@ -26,7 +28,8 @@ import numpy as np
 
 from ..kernels import layout as L
 from ..kernels.contact.island import (C_FLOATS, C_IMPULSE, C_INTS, DENSE_MAX, I_A, I_B, OUT_BODIES, OUT_CONTACTS,
-                                      OUT_DEPTH, OUT_SLEPT, OUT_WIDTH, OUT_WOKEN, island_pass)
+                                      OUT_DEPTH, OUT_SLEPT, OUT_WIDTH, OUT_WOKEN, all_asleep,
+                                      island_pass)
 from ..kernels.contact.layout import DIMS, FLIGHT, PERSISTENT
 from ..kernels.contact.pairs import MAX_PAIR_POINTS
 from .island_contacts import IslandContactLog, body_sides
@@ -160,6 +163,29 @@ class Islands:
             self._rest_int = np.concatenate((self._rest_int, ints[new]))
             self._rest_flt = np.concatenate((self._rest_flt, forces))
 
+    def _record(self, Y0: np.ndarray, Y1: np.ndarray, h: float) -> None:
+        """The step's contacts (its own and the asleep islands') into the log and the impulses, for their readers."""
+        self._h = h
+        solver = self.solver
+        wanted = self.log.summing or solver.track_torques  # the asleep rows copied only for a reader
+        ints, floats = self.contacts() if wanted else (self._cint[:self.n_contacts], self._cflt[:self.n_contacts])
+        self.log.add(Y0, Y1, np.flatnonzero(self.island == 1), ints, floats, h)
+        if solver.track_torques and len(ints):
+            self._add_impulses(Y0, ints, floats)
+
+    def all_asleep(self, sim, wrenches: np.ndarray, Y0: np.ndarray) -> bool:
+        """Whether no body moves in the step from Y0: every moving body of the simulator asleep, none pushed by
+        ``wrenches``, stopped, or set (kernels/contact/island.all_asleep); then :meth:`asleep_step` is the step."""
+        return all_asleep(Y0, self.saved, wrenches, sim._stopped, self.asleep, sim._members)
+
+    def asleep_step(self, Y0: np.ndarray, Y1: np.ndarray, h: float) -> None:
+        """The islands' step when :meth:`all_asleep` (Y1 a copy of Y0): what :meth:`step` leaves then, its locked
+        islands' contacts listed and logged, at the cost of the log alone."""
+        self.left = self.left[:0]
+        self.n_contacts = 0
+        self.out[:] = 0.0
+        self._record(Y0, Y1, h)
+
     def step(self, sim, wrenches: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, cand: np.ndarray, h: float) -> np.ndarray:
         """The islands' step over the candidate pairs ``cand`` (k, 2) of global body indices; returns the mask of
         the bodies it stepped (or kept asleep)."""
@@ -184,12 +210,7 @@ class Islands:
         out = self.out
         self.n_contacts = int(out[OUT_CONTACTS])
         self._keep_resting(was_asleep, h)
-        self._h = h
-        wanted = self.log.summing or solver.track_torques  # the asleep rows copied only for a reader
-        ints, floats = self.contacts() if wanted else (self._cint[:self.n_contacts], self._cflt[:self.n_contacts])
-        self.log.add(Y0, Y1, np.flatnonzero(self.island == 1), ints, floats, h)
-        if solver.track_torques and len(ints):
-            self._add_impulses(Y0, ints, floats)
+        self._record(Y0, Y1, h)
         self.body_steps += int(out[OUT_BODIES])
         solver.counts["island_body_steps"] += int(out[OUT_BODIES])
         self.deepest = max(self.deepest, float(out[OUT_DEPTH]))

@@ -556,6 +556,19 @@ class ContactSolver:
                 return True
         return False
 
+    def all_asleep(self, sim, wrenches: np.ndarray) -> bool:
+        """Whether no body moves in the coming step (``wrenches`` its rows): every moving body asleep, none pushed,
+        stopped or set (Islands.all_asleep). Then the simulator carries the state over and calls
+        :meth:`after_asleep_step` instead of stepping."""
+        return self.pairs is not None and self.pairs.islands.all_asleep(sim, wrenches, sim._Ys[sim._control[L.CUR]])
+
+    def after_asleep_step(self, sim) -> None:
+        """After a step in which no body moved (:meth:`all_asleep`): the locked islands' contacts listed and logged
+        for it, as :meth:`after_step` would have."""
+        cur = sim._control[L.CUR]
+        self._static_skipped.clear()
+        self.pairs.islands.asleep_step(sim._Ys[1 - cur], sim._Ys[cur], sim.dt)
+
     def after_step(self, sim, wrenches: np.ndarray) -> None:
         """Events inside the step just taken (the simulator's buffers: start in 1 − CUR, end in CUR)."""
         cur = sim._control[L.CUR]

@@ -61,7 +61,7 @@ from .convex import POSE_WIDTH
 from .pairs import MAX_PAIR_POINTS, box_patch, boxes_apart, pair_contacts
 from .shapes import MAX_FEATURES, feature_gaps, feature_points
 
-__all__ = ["island_pass", "TOUCH", "SLEEP_SPEED", "SLEEP_STEPS", "DENSE_MAX", "PROJECT_TOL", "C_FLOATS", "C_INTS", "OUT_WIDTH"]
+__all__ = ["island_pass", "all_asleep", "TOUCH", "SLEEP_SPEED", "SLEEP_STEPS", "DENSE_MAX", "PROJECT_TOL", "C_FLOATS", "C_INTS", "OUT_WIDTH"]
 
 #: A pair whose signed distance is at most this × its size (m per m) touches: its component is an island.
 TOUCH = 1e-6
@@ -1113,6 +1113,28 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
     return deepest
 
 
+@njit(**INLINE)
+def _wakes(Y0, saved, wr, stopped, i):
+    """Whether sleeping body i wakes at the step's start: a wrench on it, stopped, or its state not the one it was
+    locked in (an impulse, a state set)."""
+    changed = wr[i, ACTIVE] != 0.0 or stopped[i]
+    for j in range(STATE_WIDTH):
+        changed = changed or Y0[i, j] != saved[i, j]
+    return changed
+
+
+@njit(**JIT)
+def all_asleep(Y0, saved, wr, stopped, asleep, moving):
+    """Whether no body moves in this step: every body of ``moving`` (the simulator's moving bodies, global indices)
+    asleep, none woken at the step's start (:func:`_wakes`). Then :func:`island_pass` would copy every row forward
+    and find nothing else to do: the driver carries the state over instead (a scene wholly asleep costs a check)."""
+    for m in range(moving.shape[0]):
+        i = moving[m]
+        if not asleep[i] or _wakes(Y0, saved, wr, stopped, i):
+            return False
+    return moving.shape[0] > 0
+
+
 @njit(**JIT)
 def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, members, cand, n_cand, is_static, stopped,
                 spin_reach, size, asleep, wait, still, anchor, h, sleeping, sleep_speed, default_mu, n_prev, island, parent,
@@ -1130,13 +1152,9 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     woken = 0
     for m in range(n):  # a sleeping body pushed (a wrench) or whose state was set wakes
         i = members[m]
-        if asleep[i]:
-            changed = wr[i, ACTIVE] != 0.0 or stopped[i]
-            for j in range(STATE_WIDTH):
-                changed = changed or Y0[i, j] != saved[i, j]
-            if changed:
-                asleep[i] = 0
-                woken += 1
+        if asleep[i] and _wakes(Y0, saved, wr, stopped, i):
+            asleep[i] = 0
+            woken += 1
     for m in range(n):
         i = members[m]
         parent[i] = i
@@ -1380,6 +1398,8 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             i = members[m]
             if island[i] == 1 and not flags[_find(comp, i)] & 16:
                 asleep[i] = 1
+                still[i] = 0  # woken, it begins a new run at rest and is tried for the exact solve at once
+                wait[i] = 0
                 group[i] = _find(comp, i)
                 out[OUT_SLEPT] += 1
                 for j in range(6):
