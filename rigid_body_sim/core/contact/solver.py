@@ -560,7 +560,8 @@ class ContactSolver:
         """Whether no body moves in the coming step (``wrenches`` its rows): every moving body asleep, none pushed,
         stopped or set (Islands.all_asleep). Then the simulator carries the state over and calls
         :meth:`after_asleep_step` instead of stepping."""
-        return self.pairs is not None and self.pairs.islands.all_asleep(sim, wrenches, sim._Ys[sim._control[L.CUR]])
+        return (self._sleeping and self.pairs is not None  # sleeping off: none asleep, no check
+                and self.pairs.islands.all_asleep(sim, wrenches, sim._Ys[sim._control[L.CUR]]))
 
     def after_asleep_step(self, sim) -> None:
         """After a step in which no body moved (:meth:`all_asleep`): the locked islands' contacts listed and logged
