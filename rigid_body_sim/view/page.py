@@ -29,6 +29,9 @@ REFRESH_HZ = 20.0
 SLOW_HZ = 4.0
 #: How often the node's parameters are read again, s.
 PARAMS_PERIOD_S = 2.0
+#: A control the user has just edited is not overwritten with the node's value for this long, s
+#: (a field being typed in keeps what is typed; the node's value shows once the user stops).
+EDIT_HOLD_S = 2.0
 #: Samples kept in each plot.
 PLOT_SAMPLES = 600
 INTEGRATORS = ("rk4", "euler", "exact_rotor_splitting", "implicit_gyroscopic", "reference", "semi_implicit_euler",
@@ -77,10 +80,11 @@ class LivePage:
             self.integrator = gui.add_dropdown("integrator", options=INTEGRATORS, initial_value=INTEGRATORS[0])
             self.rate_hz = gui.add_number("rate_hz", initial_value=100.0, min=0.001, max=100000.0, step=0.001)
             self.rtf = gui.add_number("real_time_factor", initial_value=1.0, min=1e-6, max=1e6, step=1e-6)
-            for handle, name, cast in ((self.integrator, "integrator", str), (self.rate_hz, "rate_hz", float),
-                                       (self.rtf, "real_time_factor", float)):
-                handle.on_update(lambda event, h=handle, n=name, c=cast:
-                                 ros.set_parameter(n, c(h.value)) if event.client is not None else None)
+            self._controls = {"integrator": (self.integrator, str), "rate_hz": (self.rate_hz, float),
+                              "real_time_factor": (self.rtf, float)}
+            self._edited_at = dict.fromkeys(self._controls, -EDIT_HOLD_S)  # monotonic s of the user's last edit
+            for name, (handle, cast) in self._controls.items():
+                handle.on_update(lambda event, h=handle, n=name, c=cast: self._edited(event, n, c(h.value)))
         with gui.add_folder("Click to strike"):
             gui.add_markdown("Click a point of a body: an impulse of the chosen size and direction is applied there "
                              "at the next step (on `impulse`, frame `B/world_aligned`).")
@@ -104,7 +108,6 @@ class LivePage:
         self._plotted_body = ""
         self.strike_dot: Any = None
         self._slow_due = self._params_due = 0.0
-        self._params_seen: dict = {}
         self._drawn_stamp: float | None = None
         self._draws: deque[float] = deque(maxlen=400)  # wall times at which new poses were drawn
 
@@ -336,12 +339,20 @@ class LivePage:
             self.rate_text.content = (f"{paused} · integrator `{params.get('integrator')}` · rate_hz "
                                       f"{params.get('rate_hz'):g} · real-time factor set {params.get('real_time_factor'):g}, "
                                       f"measured {'–' if rtf is None else f'{rtf:.3g}'} · page updates {draws:.1f}/s")
-        if params and params != self._params_seen:  # show the node's values in the controls
-            self._params_seen = params
-            if params.get("integrator") in INTEGRATORS:
-                self.integrator.value = params["integrator"]
-            self.rate_hz.value = float(params.get("rate_hz", self.rate_hz.value))
-            self.rtf.value = float(params.get("real_time_factor", self.rtf.value))
+        for name, (handle, cast) in self._controls.items():  # the node's values in the controls
+            value = params.get(name)
+            if value is None or (name == "integrator" and value not in INTEGRATORS):
+                continue
+            if cast(value) != handle.value and now - self._edited_at[name] >= EDIT_HOLD_S:
+                handle.value = cast(value)
+
+    def _edited(self, event: Any, name: str, value: Any) -> None:
+        """A control changed: by a user (sent to the node, and the control held for :data:`EDIT_HOLD_S`)
+        or by the page itself (nothing to do)."""
+        if event.client is None:
+            return
+        self._edited_at[name] = time.monotonic()
+        self.ros.set_parameter(name, value)
 
     def _show_imus(self) -> None:
         imus = self.ros.imu_topics()
