@@ -42,7 +42,6 @@ import shutil
 import socket
 import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -144,21 +143,22 @@ def twist_arrays(t: Twist) -> tuple[np.ndarray, np.ndarray]:
     return (np.array([t.linear.x, t.linear.y, t.linear.z]), np.array([t.angular.x, t.angular.y, t.angular.z]))
 
 
-def chromium() -> webdriver.Chrome:
+def chromium(profile: Path) -> webdriver.Chrome:
+    """Headless chromium with its profile in the folder ``profile``."""
     options = webdriver.ChromeOptions()
     options.binary_location = CHROMIUM
     for arg in ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
                 "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                f"--user-data-dir={tempfile.mkdtemp(prefix='rbs-view-chromium-')}", "--window-size=1200,800"):
+                f"--user-data-dir={profile}", "--window-size=1200,800"):
         options.add_argument(arg)
     return webdriver.Chrome(service=Service(CHROMEDRIVER), options=options)
 
 
 @pytest.fixture(scope="module")
-def browser():
+def browser(tmp_path_factory):
     """One headless chromium for the module's browser tests (starting one costs seconds)."""
     assert os.access(CHROMIUM, os.X_OK) and os.access(CHROMEDRIVER, os.X_OK), "make browser-deps installs them"
-    driver = chromium()
+    driver = chromium(tmp_path_factory.mktemp("chromium-profile"))
     yield driver
     driver.quit()
 
