@@ -85,7 +85,7 @@ $(STAMP): requirements.txt requirements-test.txt requirements-view.txt setup.py 
 	say "installing rigid_body_sim in editable mode"
 	$(PIP) install --no-deps -e .
 	$(PIP) check >/dev/null || { $(PIP) check; die "pip check found inconsistent dependencies"; }
-	say "compiling the numba kernels once (cached in rigid_body_sim/core/kernels/__pycache__; about a minute)"
+	say "compiling the numba kernels once (cached in rigid_body_sim/core/kernels/__pycache__; several minutes)"
 	$(VENV_PY) -c 'from rigid_body_sim.core.simulator import compile_kernels; compile_kernels()'
 	touch "$@"
 	say "ready: $(VENV) ($$($(VENV_PY) -V 2>&1))"
