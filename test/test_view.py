@@ -342,7 +342,7 @@ def test_view_in_chromium_draws_the_box_and_strikes_it(tmp_path, browser):
         driver.execute_script("arguments[0].scrollIntoView({block: 'center'})", integrator)
         integrator.click()
         driver.find_element(By.XPATH, "//*[@role='option' and normalize-space()='semi_implicit_euler']").click()
-        wait_text(driver, lambda t: "integrator semi_implicit_euler ·" in t, "the integrator from the node")
+        wait_text(driver, lambda t: "paused · integrator semi_implicit_euler\n" in t, "the integrator from the node")
         n = len(watcher.twists)
         click(driver, "Run")
         watcher.wait("ticks while running", lambda: len(watcher.twists) >= n + 5)

@@ -336,9 +336,12 @@ class LivePage:
         draws = sum(1 for t in self._draws if now - t <= 2.0) / 2.0
         if params:
             paused = "paused" if params.get("paused") else "running"
-            self.rate_text.content = (f"{paused} · integrator `{params.get('integrator')}` · rate_hz "
-                                      f"{params.get('rate_hz'):g} · real-time factor set {params.get('real_time_factor'):g}, "
-                                      f"measured {'–' if rtf is None else f'{rtf:.3g}'} · page updates {draws:.1f}/s")
+            # short lines, the changing figures last: the line count (and the buttons below) stays put
+            self.rate_text.content = (f"{paused} · integrator `{params.get('integrator')}`  \n"
+                                      f"rate_hz {params.get('rate_hz'):g} · real-time factor set "
+                                      f"{params.get('real_time_factor'):g}  \n"
+                                      f"measured real-time factor {'–' if rtf is None else f'{rtf:.3g}'}  \n"
+                                      f"page updates {draws:.1f}/s")
         for name, (handle, cast) in self._controls.items():  # the node's values in the controls
             value = params.get(name)
             if value is None or (name == "integrator" and value not in INTEGRATORS):
