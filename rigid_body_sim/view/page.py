@@ -83,6 +83,9 @@ class LivePage:
             self._controls = {"integrator": (self.integrator, str), "rate_hz": (self.rate_hz, float),
                               "real_time_factor": (self.rtf, float)}
             self._edited_at = dict.fromkeys(self._controls, -EDIT_HOLD_S)  # monotonic s of the user's last edit
+            # each control's value as the page last set it or last heard it from the user: a control that
+            # differs holds a user's edit whose callback has not run yet (it is not overwritten)
+            self._known = {name: handle.value for name, (handle, _cast) in self._controls.items()}
             for name, (handle, cast) in self._controls.items():
                 handle.on_update(lambda event, h=handle, n=name, c=cast: self._edited(event, n, c(h.value)))
         with gui.add_folder("Click to strike"):
@@ -346,7 +349,10 @@ class LivePage:
             value = params.get(name)
             if value is None or (name == "integrator" and value not in INTEGRATORS):
                 continue
-            if cast(value) != handle.value and now - self._edited_at[name] >= EDIT_HOLD_S:
+            if handle.value != self._known[name] or now - self._edited_at[name] < EDIT_HOLD_S:
+                continue  # being edited
+            if cast(value) != handle.value:
+                self._known[name] = cast(value)
                 handle.value = cast(value)
 
     def _edited(self, event: Any, name: str, value: Any) -> None:
@@ -354,6 +360,7 @@ class LivePage:
         or by the page itself (nothing to do)."""
         if event.client is None:
             return
+        self._known[name] = value
         self._edited_at[name] = time.monotonic()
         self.ros.set_parameter(name, value)
 
