@@ -211,8 +211,8 @@ def wait_text(driver, predicate, what: str, timeout: float = 60.0) -> str:
 
 
 def click(driver, label: str) -> None:
-    """Click the button named ``label``: the click is dispatched to that element (the page's lines
-    above it change length while it runs, so a click at a screen position can land on a neighbour)."""
+    """Click the button named ``label``: the click is dispatched to that element (the page above it
+    can move while it updates, so a click at a screen position can land on a neighbour)."""
     button = driver.find_element(By.XPATH, f"//button[normalize-space()='{label}']")
     driver.execute_script("arguments[0].scrollIntoView({block: 'center'}); arguments[0].click()", button)
 

@@ -351,9 +351,9 @@ class LivePage:
                 continue
             if handle.value != self._known[name] or now - self._edited_at[name] < EDIT_HOLD_S:
                 continue  # being edited
-            if cast(value) != handle.value:
-                self._known[name] = cast(value)
-                handle.value = cast(value)
+            value = cast(value)
+            if value != handle.value:
+                self._known[name] = handle.value = value
 
     def _edited(self, event: Any, name: str, value: Any) -> None:
         """A control changed: by a user (sent to the node, and the control held for :data:`EDIT_HOLD_S`)
