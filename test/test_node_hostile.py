@@ -27,6 +27,7 @@ import pytest
 import rclpy
 import yaml
 from diagnostic_msgs.msg import DiagnosticArray
+from rcl_interfaces.srv import SetParameters
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
@@ -340,17 +341,17 @@ def test_sigstop_sigcont_the_node_resumes_and_counts_the_missed_ticks(tmp_path):
 
 
 FAILING_TICK = textwrap.dedent("""
+    import os
     import sys
     from rigid_body_sim.ros.main import main
     from rigid_body_sim.ros.session import SimSession
 
     original = SimSession.advance
-    ticks = [0]
+    trigger = os.environ["FAIL_TICK_TRIGGER"]
 
     def failing(self):
-        ticks[0] += 1
-        if ticks[0] == 300:
-            raise ZeroDivisionError("float division by zero (injected into the 300th tick)")
+        if os.path.exists(trigger):
+            raise ZeroDivisionError("float division by zero (injected into the first tick after the trigger)")
         original(self)
 
     SimSession.advance = failing
@@ -365,14 +366,27 @@ def test_a_failing_tick_thread_is_loud_and_the_process_exits_1(tmp_path):
     and its traceback are logged, /diagnostics says ERROR at once, and the process exits 1."""
     script = tmp_path / "failing_node.py"
     script.write_text(FAILING_TICK)
+    trigger = tmp_path / "fail_now"
     log = tmp_path / "node.log"
     with open(log, "w") as out:
         process = subprocess.Popen([sys.executable, str(script), "--ros-args", "-p", "status_period:=0.0",
-                                    "-p", "diagnostics_period:=60.0"], stdout=out, stderr=subprocess.STDOUT,
-                                   env=os.environ.copy())
+                                    "-p", "diagnostics_period:=0.5"], stdout=out, stderr=subprocess.STDOUT,
+                                   env={**os.environ, "FAIL_TICK_TRIGGER": str(trigger)})
     wait_until_started(process, log)
     observer = Observer()
     try:
+        # The tick fails only once the observer has heard the node's /diagnostics (so it is
+        # matched with that publisher and cannot miss the ERROR for discovery's sake).
+        observer.spin_until(lambda: observer.diagnostics, "a first /diagnostics", process, log)
+        # Then no periodic report for a minute: the ERROR must be the report sent at once.
+        client = observer.node.create_client(SetParameters, "/rigid_body_sim/set_parameters")
+        assert client.wait_for_service(timeout_sec=30.0), "the node's parameter service never appeared"
+        request = SetParameters.Request(parameters=[Parameter("diagnostics_period", value=60.0).to_parameter_msg()])
+        future = client.call_async(request)
+        observer.executor.spin_until_future_complete(future, timeout_sec=30.0)
+        assert future.done() and future.result().results[0].successful, future.result()
+        heard_before = len(observer.diagnostics)
+        trigger.touch()
         deadline = time.monotonic() + 60.0
         while process.poll() is None and time.monotonic() < deadline:
             observer.executor.spin_once(timeout_sec=0.02)
@@ -384,7 +398,10 @@ def test_a_failing_tick_thread_is_loud_and_the_process_exits_1(tmp_path):
     assert process.returncode == 1, text
     assert "tick thread failed" in text and "ZeroDivisionError" in text and "Traceback" in text
     assert "exiting with status 1" in text
-    errors = [s for array in observer.diagnostics for s in array.status if s.name == SIM and level_name(s) == "ERROR"]
+    before = [s for array in observer.diagnostics[:heard_before] for s in array.status if s.name == SIM]
+    assert before and all(level_name(s) != "ERROR" for s in before), before
+    errors = [s for array in observer.diagnostics[heard_before:] for s in array.status
+              if s.name == SIM and level_name(s) == "ERROR"]
     assert errors and "tick thread failed" in errors[0].message
     # Nothing else failed: after the injected error, no second traceback.
     assert len(re.findall("Traceback", text)) == 1, text
