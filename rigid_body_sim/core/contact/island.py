@@ -107,6 +107,7 @@ class Islands:
         self._rj, self._rw = np.zeros((r, 12)), np.zeros((r, 12))
         self._rdiag, self._rbias, self._rlam = np.zeros(r), np.zeros(r), np.zeros(r)
         self._rbody = np.zeros((r, 2), dtype=np.int64)
+        self._cwork, self._rwork = np.zeros((2 * c, 3)), np.zeros((r, 3))  # the solves' and sorts' scratch
 
     def reset(self) -> None:
         """Every body awake and out of the islands; the counts cleared."""
@@ -203,7 +204,7 @@ class Islands:
                                self._pcount, self._ppoints, self._pseps, self._bound, self._cint, self._cflt, self._vel,
                                self._iw, self._dx, self._rj, self._rw, self._rdiag, self._rbias, self._rlam,
                                self._rbody, self._order, self._cstart, self._A, self._L, self._vec, self.out, self._comp,
-                               self._band, self._group)
+                               self._band, self._group, self._cwork, self._rwork)
             if code >= 0:
                 break
             self._grow_contacts(2 * -code)

@@ -394,10 +394,43 @@ def _apply(vel, rw, rbody, r, dl):
                 vel[i, j] += rw[r, 6 * side + j] * dl
 
 
+@njit(**INLINE)
+def _before(key, a, b):
+    """Whether index a sorts before b: by key, ties by index (a total order: the sort is deterministic)."""
+    return key[a] < key[b] or (key[a] == key[b] and a < b)
+
+
 @njit(**JIT)
-def _profile_order(cflt, order, start, stop):
+def _sift(key, idx, start, top, n):
+    """Move idx[start + top] down the max-heap idx[start:start + n] to its place."""
+    while True:
+        child = 2 * top + 1
+        if child >= n:
+            return
+        if child + 1 < n and _before(key, idx[start + child], idx[start + child + 1]):
+            child += 1
+        if not _before(key, idx[start + top], idx[start + child]):
+            return
+        idx[start + top], idx[start + child] = idx[start + child], idx[start + top]
+        top = child
+
+
+@njit(**JIT)
+def _sort_by(key, idx, start, stop):
+    """Sort idx[start:stop] in place by key[idx] ascending, ties by index (heap sort: no allocation, n log n)."""
+    n = stop - start
+    for top in range(n // 2 - 1, -1, -1):
+        _sift(key, idx, start, top, n)
+    for end in range(n - 1, 0, -1):
+        idx[start], idx[start + end] = idx[start + end], idx[start]
+        _sift(key, idx, start, 0, end)
+    _pin = key[0], idx[0]
+
+
+@njit(**JIT)
+def _profile_order(cflt, order, start, stop, key):
     """Sort contacts order[start:stop] along their points' longest extent (a column's from its foot up), so that
-    their J M⁻¹ Jᵀ has a narrow profile (insertion sort: the order is mostly kept from step to step)."""
+    their J M⁻¹ Jᵀ has a narrow profile; key (per contact) is scratch."""
     lo_x, lo_y, lo_z, hi_x, hi_y, hi_z = np.inf, np.inf, np.inf, -np.inf, -np.inf, -np.inf
     for c in range(start, stop):
         q = order[c]
@@ -409,15 +442,10 @@ def _profile_order(cflt, order, start, stop):
         axis = 1
     elif hi_z - lo_z > hi_x - lo_x:
         axis = 2
-    for x in range(start + 1, stop):
-        q = order[x]
-        key = cflt[q, C_X + axis]
-        y = x - 1
-        while y >= start and cflt[order[y], C_X + axis] > key:
-            order[y + 1] = order[y]
-            y -= 1
-        order[y + 1] = q
-    _pin = cflt[0, 0], order[0]
+    for c in range(start, stop):
+        key[order[c]] = cflt[order[c], C_X + axis]
+    _sort_by(key, order, start, stop)
+    _pin = cflt[0, 0], order[0], key[0]
 
 
 @njit(**JIT)
@@ -525,15 +553,16 @@ def _residual(m, A, rhs, first, lam, res):
 
 
 @njit(**JIT)
-def _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, start, stop, A, L, rhs, lam, res, band):
+def _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, start, stop, A, L, rhs, lam, res, band, key):
     """The contacts order[start:stop] (3 rows each) solved exactly when none slides: the points that stay are
     equalities (u⁺ = 0), the others have λ = 0 and part (u_n⁺ ≥ 0). From the points that held last step or
     touch, points whose λ_n < 0 are let go and points let go that would close are taken back, at most STICK_PIVOTS times (block principal pivoting
     on the normals: a column rocking on an edge). True (and vel, rlam updated) when every λ_n ≥ 0, every λ_t is
-    in its cone and every point let go parts, to round-off. Scratch: band[0] the profile, band[1] the points on."""
+    in its cone and every point let go parts, to round-off. Scratch: band[0] the profile, band[1] the points on,
+    key (per contact) the sort's."""
     m = 3 * (stop - start)
     first, on = band[0], band[1]
-    _profile_order(cflt, order, start, stop)
+    _profile_order(cflt, order, start, stop, key)
     _delassus(vel, rj, rw, rbody, rbias, order, start, stop, A, rhs, first)
     for x in range(0, m, 3):  # the points that held last step (warm start) or touch
         r = 3 * order[start + x // 3]
@@ -575,7 +604,7 @@ def _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, start, stop, A, L, r
             rlam[rx] = lam[x]
             _apply(vel, rw, rbody, rx, lam[x])
     _pin = vel[0, 0], rj[0, 0], rw[0, 0], rbody[0, 0], rbias[0], rlam[0], cflt[0, 0], order[0], A[0, 0], L[0, 0]
-    _pin2 = rhs[0], lam[0], res[0], band[0, 0]
+    _pin2 = rhs[0], lam[0], res[0], band[0, 0], key[0]
     return kept
 
 
@@ -668,14 +697,15 @@ def _sweep(vel, rj, rw, rbody, rdiag, inv, rbias, rlam, cflt, cross, order, star
 
 
 @njit(**JIT)
-def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop, gx, gy, gz):
+def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop, gx, gy, gz, cwork, rwork):
     """Projected Gauss–Seidel on contacts order[:stop] from their λ in rlam (the warm start): sweeps until none
     changes a row's speed by more than PGS_TOL (m/s), at most PGS_SWEEPS. More than PILE_CONTACTS contacts (a
     pile) are taken from the highest against gravity (gx, gy, gz) down, then back up, in turn (a weight passes
     down a pile, and a stop up it, within one sweep), each sweep extrapolated, at most PILE_PGS_SWEEPS; fewer,
-    in their order."""
-    cross = np.empty((rdiag.shape[0] // 3, 2))
-    inv = np.empty(rdiag.shape[0])
+    in their order. Scratch: cwork (per contact: the tangents' cross terms, the sort's key), rwork (per row: 1 /
+    the diagonal, the last sweep's λ, the extrapolation)."""
+    cross, key = cwork[:, 0:2], cwork[:, 2]
+    inv, last, step = rwork[:, 0], rwork[:, 1], rwork[:, 2]
     for c in range(stop):
         q = order[c]
         r = 3 * q
@@ -694,16 +724,15 @@ def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop, gx, gy, gz):
             if _sweep(vel, rj, rw, rbody, rdiag, inv, rbias, rlam, cflt, cross, order, 0, stop, False) <= PGS_TOL:
                 break
     else:  # highest first: g · x ascending
-        down = np.empty(stop)
         for c in range(stop):
             q = order[c]
-            down[c] = gx * cflt[q, C_X] + gy * cflt[q, C_X + 1] + gz * cflt[q, C_X + 2]
-        order[:stop] = order[:stop][np.argsort(down)]
+            key[q] = gx * cflt[q, C_X] + gy * cflt[q, C_X + 1] + gz * cflt[q, C_X + 2]
+        _sort_by(key, order, 0, stop)
         # nonsmooth nonlinear conjugate gradient (Silcowitz, Niebe, Erleben 2010): each sweep's change of λ, Δ, is
         # the descent direction; λ is then extrapolated by β p (β = |Δ|² / |Δ_prev|², p ← β p + Δ), restarted
         # (p = Δ) when |Δ| grows; the next sweep projects onto the cones again
-        last = np.empty(3 * stop)
-        step = np.zeros(3 * stop)
+        for x in range(3 * stop):
+            step[x] = 0.0
         shrink = 0.0
         for sweep in range(PILE_PGS_SWEEPS):
             for c in range(stop):
@@ -731,6 +760,7 @@ def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop, gx, gy, gz):
                     _apply3(vel, rw, rbody, r, m0, m1, m2)
             shrink = size2
     _pin = vel[0, 0], rj[0, 0], rw[0, 0], rbody[0, 0], rdiag[0], rbias[0], rlam[0], cflt[0, 0], order[0]
+    _pin2 = cwork[0, 0], rwork[0, 0]
 
 
 @njit(**INLINE)
@@ -890,10 +920,10 @@ def _link(nlist, lo, hi, pdist, bound, is_static, size, parent, flags):
 
 
 @njit(**JIT)
-def _pile_rows(Y1, prm, nd, cint, cflt, rj, rw, rdiag, rbody, porder):
+def _pile_rows(Y1, prm, nd, cint, cflt, rj, rw, rdiag, rbody, porder, key):
     """The order of the nd normal rows' Gauss–Seidel in porder[:nd]: over a pile (more than PILE_CONTACTS, under
     gravity) from the lowest point up, with each upright pair's lower body held (its M⁻¹Jᵀ side zeroed, the
-    diagonal the upper's alone), and True; else their order, and False."""
+    diagonal the upper's alone), and True; else their order, and False. key (per row) is the sort's scratch."""
     for c in range(nd):
         porder[c] = c
     pile = False
@@ -903,10 +933,9 @@ def _pile_rows(Y1, prm, nd, cint, cflt, rj, rw, rdiag, rbody, porder):
         g = math.sqrt(gx * gx + gy * gy + gz * gz)
         pile = g > 0.0
     if pile:
-        down = np.empty(nd)
         for c in range(nd):
-            down[c] = gx * cflt[c, C_X] + gy * cflt[c, C_X + 1] + gz * cflt[c, C_X + 2]
-        porder[:nd] = np.argsort(-down)
+            key[c] = -(gx * cflt[c, C_X] + gy * cflt[c, C_X + 1] + gz * cflt[c, C_X + 2])
+        _sort_by(key, porder, 0, nd)
         for c in range(nd):
             a, b = rbody[c, 0], rbody[c, 1]
             upright = abs(gx * cflt[c, C_N] + gy * cflt[c, C_N + 1] + gz * cflt[c, C_N + 2]) >= PILE_UPRIGHT * g
@@ -921,19 +950,19 @@ def _pile_rows(Y1, prm, nd, cint, cflt, rj, rw, rdiag, rbody, porder):
                 d += rj[c, 6 * (1 - low) + j] * rw[c, 6 * (1 - low) + j]
             rdiag[c] = d
     _pin = Y1[0, 0], prm[0, 0], cint[0, 0], cflt[0, 0], rj[0, 0], rw[0, 0], rdiag[0], rbody[0, 0], porder[0]
+    _pin2 = key[0]
     return pile
 
 
 @njit(**JIT)
-def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdiag, rbias, rbody, rlam, vel):
+def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdiag, rbias, rbody, rlam, vel, inv):
     """After the projection: the island bodies' velocities in Y1 made not to approach at the nd touching points
     cint/cflt (normal rows, λ ≥ 0, e = 0): the projection moved them out, they must not be left moving in
     again. Gauss–Seidel in the kinetic metric first, then on the linear velocities alone for what approach is
     left (that one converges in a pile, as the projection's translating rounds do). Only removes kinetic energy
     (not as the projection over a pile: holding a lower body there gave the upper its speed, energy and motion
-    that kept a pile from sleeping)."""
+    that kept a pile from sleeping). inv (per row) is scratch: the rows' 1 / rdiag."""
     n = members.shape[0]
-    inv = np.empty(nd)  # the rows' 1 / rdiag
     for m in range(n):
         i = members[m]
         if island[i] != 1:
@@ -985,7 +1014,7 @@ def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdia
         Y1[i, W + 1] = R[1] * vel[i, 3] + R[4] * vel[i, 4] + R[7] * vel[i, 5]
         Y1[i, W + 2] = R[2] * vel[i, 3] + R[5] * vel[i, 4] + R[8] * vel[i, 5]
     _pin = Y1[0, 0], prm[0, 0], members[0], island[0], cint[0, 0], cflt[0, 0], iw[0, 0], rj[0, 0], rw[0, 0]
-    _pin2 = rdiag[0], rbias[0], rbody[0, 0], rlam[0], vel[0, 0]
+    _pin2 = rdiag[0], rbias[0], rbody[0, 0], rlam[0], vel[0, 0], inv[0]
 
 
 @njit(**JIT)
@@ -1009,12 +1038,13 @@ def _attribute(nc, cint, cflt, nd, sint, sflt, members, head):
 @njit(**JIT)
 def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps,
              members, bound, size, is_static, default_mu, h, iw, dx, vel, cint, cflt, rj, rw, rdiag, rbias, rlam, rbody,
-             porder, out, comp, flags):
+             porder, out, comp, flags, rwork):
     """The projection of the island bodies' poses Y1: points deeper than PROJECT_TOL × their pair's size closed by
     the least mass-metric correction (over a pile, bottom-up with lower bodies held: _pile_rows), then their
     velocities kept from approaching where it moved them (_stop_approach); returns the largest depth it took on (m).
     Only the bodies of the velocity step's components (comp) with a deep point move; the others (solved exactly,
-    at their contacts' gaps to round-off) are held as fixed, and their pairs with each other not looked at again."""
+    at their contacts' gaps to round-off) are held as fixed, and their pairs with each other not looked at again.
+    rwork (per row, 2 columns) is scratch."""
     n = members.shape[0]
     deepest = 0.0
     settled = False
@@ -1070,8 +1100,8 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
         for c in range(nd):  # every touching point is a row (λ ≥ 0): closing one gap must not open another
             rlam[c] = 0.0
             deepest = max(deepest, -cflt[c, C_GAP])
-        pile = _pile_rows(Y1, prm, nd, cint, cflt, rj, rw, rdiag, rbody, porder)
-        inv = np.empty(nd)  # the rows' 1 / rdiag
+        pile = _pile_rows(Y1, prm, nd, cint, cflt, rj, rw, rdiag, rbody, porder, rwork[:, 1])
+        inv = rwork[:, 0]  # the rows' 1 / rdiag
         for c in range(nd):
             inv[c] = _inverse(rdiag[c])
         for _s in range(PILE_SWEEPS if pile else PROJECT_SWEEPS):
@@ -1102,14 +1132,15 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
             _narrow(Y1, prm, shapes, nlist, live, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound)
             nd = _gather(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount,
                          ppoints, pseps, members, bound, size, is_static, default_mu, True, 0.0, cint, cflt)
-        _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdiag, rbias, rbody, rlam, vel)
+        _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdiag, rbias, rbody, rlam, vel,
+                       rwork[:, 0])
         out[OUT_STOPPED] = nd
     for m in range(n):
         i = members[m]
         if island[i] == 3:
             island[i] = 1
     _pin = Y1[0, 0], prm[0, 0], nlist[0, 0], members[0], cint[0, 0], cflt[0, 0], rj[0, 0], rbody[0, 0], out[0]
-    _pin2 = comp[0], flags[0]
+    _pin2 = comp[0], flags[0], rwork[0, 0]
     return deepest
 
 
@@ -1139,13 +1170,14 @@ def all_asleep(Y0, saved, wr, stopped, asleep, moving):
 def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, members, cand, n_cand, is_static, stopped,
                 spin_reach, size, asleep, wait, still, anchor, h, sleeping, sleep_speed, default_mu, n_prev, island, parent,
                 flags, nlist, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound, cint, cflt, vel, iw, dx, rj, rw,
-                rdiag, rbias, rlam, rbody, order, cstart, A, L, vec, out, comp, band, group):
+                rdiag, rbias, rlam, rbody, order, cstart, A, L, vec, out, comp, band, group, cwork, rwork):
     """One step of every island (module docstring): results into Y1 for the bodies marked island[i] = 1 (solved)
     or 2 (asleep: their rows copied from Y0). Returns 0, or −(contacts needed) when cint is too small
     (then nothing was changed but ``asleep`` and the outputs; call again with room). ``wait`` (per body, kept
     across calls): steps before its component is tried for the sticking solve again (0: at once); ``still`` (per body, kept
     across calls): the steps in a row it was at rest by the sleep rule (end of this function) in an island, from the
-    pose ``anchor`` (per body: position, quaternion) with a sleep speed raised above rest."""
+    pose ``anchor`` (per body: position, quaternion) with a sleep speed raised above rest. ``cwork`` (per contact,
+    3 columns) and ``rwork`` (per row, 3 columns) are scratch."""
     n = members.shape[0]
     for k in range(OUT_WIDTH):
         out[k] = 0.0
@@ -1260,7 +1292,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             still[members[m]] = 0
             wait[members[m]] = 0
         _pin = Y0[0, 0], Y1[0, 0], prm[0, 0], wr[0, 0], bare[0, 0], modes[0], saved[0, 0], cand[0, 0], A[0, 0], L[0, 0], vec[0, 0], order[0], cstart[0]
-        _pin2 = group[0]
+        _pin2 = group[0], cwork[0, 0], rwork[0, 0]
         return 0
     # the velocity problem
     nc = _gather(Y0, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps,
@@ -1307,7 +1339,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             left = _waiting(cint, order, lo, hi, wait) - 1
             if left < 0:
                 kept = _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, lo, hi, A, L, vec[0], vec[1],
-                                 vec[2], band)
+                                 vec[2], band, cwork[:, 2])
                 left = 0 if kept else STICK_RETRY - 1
             for c in range(lo, hi):
                 for side in range(2):
@@ -1331,7 +1363,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     if stop > 0:
         body = cint[order[0], I_B] if cint[order[0], I_B] >= 0 else cint[order[0], I_A]
         g = prm[body, GRAVITY:GRAVITY + 3]  # the order's gravity: any order is Gauss–Seidel
-        _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop, g[0], g[1], g[2])
+        _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop, g[0], g[1], g[2], cwork, rwork)
     _impulses(nc, rj, rbody, rlam, cflt)
     # positions: p + h v, q ⊗ exp(h ω_P)
     for m in range(n):
@@ -1363,7 +1395,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     deepest = _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount,
                        ppoints, pseps, members, bound, size, is_static, default_mu, h, iw, dx, vel, cint[half:],
                        cflt[half:], rj[3 * half:], rw[3 * half:], rdiag[3 * half:], rbias[3 * half:],
-                       rlam[3 * half:], rbody[3 * half:], order, out, comp, flags)
+                       rlam[3 * half:], rbody[3 * half:], order, out, comp, flags, rwork[3 * half:])
     out[OUT_DEPTH] = deepest
     if out[OUT_STOPPED] > 0:
         _attribute(nc, cint, cflt, int(out[OUT_STOPPED]), cint[half:], cflt[half:], members, cstart)
@@ -1407,5 +1439,5 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                 for j in range(STATE_WIDTH):
                     saved[i, j] = Y1[i, j]
     _pin = Y0[0, 0], Y1[0, 0], prm[0, 0], wr[0, 0], bare[0, 0], modes[0], saved[0, 0], cand[0, 0], A[0, 0], L[0, 0], vec[0, 0], order[0], cstart[0]
-    _pin2 = group[0]
+    _pin2 = group[0], cwork[0, 0], rwork[0, 0]
     return 0
