@@ -15,9 +15,11 @@ samples or spins and stops in order. A :class:`Watchdog` bounds how long that st
 
 Python runs signal handlers in the main thread between bytecodes, so the latency of phase 1
 is that of the longest C call under way (an LLVM compile, one rclpy call). In phase 2 a
-thread also learns of each signal at once (through :func:`signal.set_wakeup_fd`) and calls
-``on_seen``: so a main thread inside a long compiled call that holds no GIL (a step of the
-simulator) can be told to return (``Simulator.cancel``) before its handler can run.
+thread learns of each signal at once (through :func:`signal.set_wakeup_fd`), sets the flag and
+calls ``on_seen``: so a main thread inside a long compiled call that holds no GIL (a step of the
+simulator) can be told to return (``Simulator.cancel``) before its handler can run. The handler
+itself takes no lock: a main thread inside ``stop.wait()`` holds the event's, and a handler run
+there that set the event would wait for it forever (CPython runs the handler in that thread).
 """
 
 from __future__ import annotations
@@ -63,6 +65,7 @@ class TwoPhaseSignals:
         self._prog = prog
         self._during = during
         self._on_first: Callable[[], None] | None = None
+        self._first_called = False
         self._orderly = False
         self._previous: dict[int, Any] = {}
         self._wakeup: tuple[int, int, int] | None = None  # (read fd, write fd, the wakeup fd before)
@@ -71,22 +74,24 @@ class TwoPhaseSignals:
 
     def switch_to_orderly(self, on_first: Callable[[], None] | None = None,
                           on_seen: Callable[[], None] | None = None) -> threading.Event:
-        """Enter phase 2: from now on a signal sets the returned event and calls ``on_first`` (once).
+        """Enter phase 2: from now on a signal sets the returned event and calls ``on_first`` (once,
+        from the handler, in the main thread).
 
-        ``on_seen`` (optional) is called from a thread of this class as soon as a signal arrives,
-        even while the main thread is in a long call that holds no GIL; it must take no lock the
-        main thread may hold. Only from the main thread (else ``on_seen`` is never called)."""
+        The event is set by a thread of this class (the signal watch) as soon as a signal arrives,
+        which then calls ``on_seen`` (optional), even while the main thread is in a long call that
+        holds no GIL; ``on_seen`` must take no lock the main thread may hold. Called from another
+        thread than the main one, there is no watch: the handler sets the event and ``on_seen`` is
+        never called."""
         self._on_first = on_first
         self._orderly = True
-        if on_seen is not None and self._wakeup is None and threading.current_thread() is threading.main_thread():
+        if self._wakeup is None and threading.current_thread() is threading.main_thread():
             read_fd, write_fd = os.pipe()
             os.set_blocking(write_fd, False)
             self._wakeup = (read_fd, write_fd, signal.set_wakeup_fd(write_fd, warn_on_full_buffer=False))
             threading.Thread(target=self._watch, args=(read_fd, on_seen), name="signal watch", daemon=True).start()
         return self.stop
 
-    @staticmethod
-    def _watch(read_fd: int, on_seen: Callable[[], None]) -> None:
+    def _watch(self, read_fd: int, on_seen: Callable[[], None] | None) -> None:
         stops = {int(signum) for signum in STOP_SIGNALS}
         while True:
             try:
@@ -95,8 +100,13 @@ class TwoPhaseSignals:
                 return
             if not data:
                 return
-            if stops.intersection(data):
-                on_seen()
+            seen = [signum for signum in data if signum in stops]
+            if seen:
+                if self.signum is None:
+                    self.signum = seen[0]
+                self.stop.set()
+                if on_seen is not None:
+                    on_seen()
 
     @property
     def signal_name(self) -> str:
@@ -106,10 +116,13 @@ class TwoPhaseSignals:
     def _handle(self, signum: int, _frame: Any) -> None:
         if not self._orderly:
             exit_now(0, f"{self._prog}: stopped by {signal.Signals(signum).name} {self._during}".rstrip())
-        if self.stop.is_set():
+        if self._first_called:
             return
-        self.signum = signum
-        self.stop.set()
+        self._first_called = True
+        if self.signum is None:
+            self.signum = signum
+        if self._wakeup is None:  # no watch (phase 2 entered from another thread): set here
+            self.stop.set()
         if self._on_first is not None:
             self._on_first()
 

@@ -27,10 +27,11 @@ def signal_after_ready(script: str, *signums: signal.Signals, timeout: float = 3
                        between: str | None = None) -> tuple[int, str, str, float]:
     """Run ``script`` in its own Python; once it prints "ready", send ``signums`` 0.1 s apart, or, with
     ``between``, each after the script printed that line (the first signal handled before the next is sent:
-    signals pending together are handled lowest number first, whatever order they were sent in).
-    Returns (exit status, stdout after "ready", stderr, seconds from the first signal to the exit)."""
-    process = subprocess.Popen([sys.executable, "-c", textwrap.dedent(script)], stdout=subprocess.PIPE,
-                               stderr=subprocess.PIPE, text=True)
+    signals pending together are handled lowest number first, whatever order they were sent in); then writes
+    "sent" to its stdin (a script that reads that line knows every signal was delivered: a handler runs before
+    the read returns). Returns (exit status, stdout after "ready", stderr, seconds from the first signal to the exit)."""
+    process = subprocess.Popen([sys.executable, "-c", textwrap.dedent(script)], stdin=subprocess.PIPE,
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         assert process.stdout.readline().strip() == "ready", process.stderr.read()
         sent = time.monotonic()
@@ -42,6 +43,11 @@ def signal_after_ready(script: str, *signums: signal.Signals, timeout: float = 3
                 seen += line
             process.send_signal(signum)
             time.sleep(0.1)
+        try:
+            process.stdin.write("sent\n")
+            process.stdin.flush()
+        except BrokenPipeError:  # it has exited already (phase 1)
+            pass
         out, err = process.communicate(timeout=timeout)
         return process.returncode, seen + out, err, time.monotonic() - sent
     finally:
@@ -72,6 +78,7 @@ def test_phase_1_exits_0_at_once_with_one_line(signum):
 def test_phase_2_only_sets_the_flag_and_calls_on_first_once(signum):
     returncode, out, err, _took = signal_after_ready("""
         import signal
+        import sys
         from rigid_body_sim.signals import TwoPhaseSignals
 
         signals = TwoPhaseSignals("prog")
@@ -79,14 +86,32 @@ def test_phase_2_only_sets_the_flag_and_calls_on_first_once(signum):
         print("ready", flush=True)
         while not stop.wait(0.05):  # short waits, as the program's loops: a handler that runs between one wait's
             pass                    # look at the flag and its sleep sets it unseen by that wait (not by the next)
-        import time
-        time.sleep(0.5)  # the second signal arrives meanwhile: nothing more happens
+        sys.stdin.readline()  # "sent": the second signal was sent before, and handled (nothing more happens)
         print("stopped in order by", signals.signal_name, flush=True)
         signals.restore()
         print("restored", signal.getsignal(signal.SIGINT) is signal.default_int_handler, flush=True)
     """, signum, signal.SIGINT, between="first")
     assert returncode == 0 and err == "", err
     assert out.splitlines() == ["first", f"stopped in order by {signum.name}", "restored True"]
+
+
+@pytest.mark.parametrize("signum", SIGNALS, ids=IDS)
+def test_phase_2_stops_a_main_thread_that_waits_on_the_flag(signum):
+    """The main thread inside ``stop.wait()`` holds the event's lock most of the time with a zero timeout (the
+    view's loop waits on it too): a handler that set the event there waited for that lock forever."""
+    returncode, out, err, took = signal_after_ready("""
+        from rigid_body_sim.signals import TwoPhaseSignals
+
+        signals = TwoPhaseSignals("prog")
+        stop = signals.switch_to_orderly(on_first=lambda: print("first", flush=True))
+        print("ready", flush=True)
+        while not stop.wait(0):
+            pass
+        print("stopped in order by", signals.signal_name, flush=True)
+    """, signum, timeout=15.0)
+    assert returncode == 0 and err == "", err
+    assert sorted(out.splitlines()) == sorted(["first", f"stopped in order by {signum.name}"]), out
+    assert took < 5.0
 
 
 @pytest.mark.parametrize("fails", [False, True], ids=["on_expire", "on_expire-fails"])
