@@ -63,7 +63,7 @@ class Islands:
         self._cstart = np.zeros(n, dtype=np.int64)
         self._comp = np.zeros(n, dtype=np.int64)  # the velocity step's components (bodies joined by contacts)
         self._A, self._L = np.zeros((DENSE_MAX, DENSE_MAX)), np.zeros((DENSE_MAX, DENSE_MAX))
-        self._vec = np.zeros((4, DENSE_MAX))
+        self._vec = np.zeros((3, DENSE_MAX))
         self._band = np.zeros((2, DENSE_MAX), dtype=np.int64)  # the sticking solve's profile, points on
         self._group = np.zeros(n, dtype=np.int64)  # a sleeping body's component when it fell asleep
         self.out = np.zeros(OUT_WIDTH)

@@ -15,20 +15,15 @@ lets a row act only where the step would close it, and a box turned or tilted on
 by its whole face, not rocked about the narrow phase's deepest corner.
 
 The velocity problem is solved per component of the step's contacts (bodies joined by contacts; an
-island's bodies within reach but not touching are apart there), exactly first (_sticking), each point
-sticking (its three rows equalities: J M⁻¹ Jᵀ λ = −(J v* + g/h)), sliding (its normal an equality,
-λ_t = −μ λ_n along its slip after the step) or parting (λ = 0). With no point sliding with friction, by a
-Cholesky factorisation of J M⁻¹ Jᵀ + εI within its profile (the contacts sorted along the component's
-longest extent: a column is banded) refined by iterated Tikhonov steps (the minimum-norm λ of the
-consistent rank-deficient system: four coplanar corners of a face share its load evenly; v⁺ does not
-depend on which λ); with one, by an LU factorisation of the same profile with each sliding point's
-tangents turned to its slip and across it, the friction's column folded into its normal's and the slip's
-turning linearised (a Newton step on the slip). Block pivoting over the states, at most STICK_PIVOTS
-solves (STICK_PIVOTS_LARGE over more than STICK_SMALL rows): sticking points outside their cones slide,
-points that pull part, parting points that would close stick, a slip that would turn back sticks, a slip
-that turned is solved again. It is kept when every
-state's conditions hold (to round-off); a component whose attempt failed is tried again only after
-STICK_RETRY − 1 steps (landing, nearly none holds). Else
+island's bodies within reach but not touching are apart there). The case where nothing slides is
+solved exactly first (_sticking): the points that stay as equalities (J M⁻¹ Jᵀ λ = −(J v* + g/h) on
+their rows), the others at λ = 0, by a Cholesky factorisation of J M⁻¹ Jᵀ + εI within its profile
+(the contacts sorted along the component's longest extent: a column is banded) refined by iterated
+Tikhonov steps (the minimum-norm λ of the consistent rank-deficient system: four coplanar corners of
+a face share its load evenly; v⁺ does not depend on which λ); points that pull are let go and points
+let go that would close taken back, at most STICK_PIVOTS times. It is kept when the points on are
+met, every λ_n ≥ 0 and every λ_t is in its cone (to round-off); a component whose attempt failed is
+tried again only after STICK_RETRY − 1 steps (landing, nearly none holds). Else
 projected Gauss–Seidel on the component's rows (over more than PILE_CONTACTS contacts, from the
 highest against gravity down, then back up, in turn: a weight passes down a pile and a stop up it
 within a sweep). Then the
@@ -95,15 +90,9 @@ PILE_CONTACTS = DENSE_MAX // 3
 #: gradient). A pile's projection: at most PILE_SWEEPS sweeps a round, from the lowest point up, and a pair whose
 #: normal is within acos(PILE_UPRIGHT) of gravity moves only its upper body (the lower held: shock propagation).
 PILE_PGS_SWEEPS, PILE_SWEEPS, PILE_UPRIGHT = 100, 20, 0.5
-#: Iterated Tikhonov steps of the exact solve (fewer once the residual is below TIKHONOV_TOL × the right-hand
-#: side's), and its regularisation (× the largest diagonal).
-TIKHONOV_STEPS, TIKHONOV_TOL, TIKHONOV_EPS = 6, 1e-15, 1e-9
-#: Most solves of the exact solve's pivoting for a component of at most STICK_SMALL rows (a few bodies: a slide
-#: starting takes four), and beyond (a pile's clumps: where three did not settle the states, six rarely did).
-STICK_PIVOTS, STICK_PIVOTS_LARGE, STICK_SMALL = 6, 3, 48
-#: A sliding point's unit slip (its direction) may differ by at most this (summed over the tangents) from the
-#: direction of its tangential speed after the step; else the exact solve is repeated along that direction.
-SLIP_TOL = 1e-9
+#: Iterated Tikhonov steps of the sticking solve (fewer once the residual is below TIKHONOV_TOL × the right-hand
+#: side's), and its regularisation (× the largest diagonal); most pivots of its points let go or taken back.
+TIKHONOV_STEPS, TIKHONOV_TOL, TIKHONOV_EPS, STICK_PIVOTS = 6, 1e-15, 1e-9, 3
 #: A component whose sticking solve failed is tried again only after STICK_RETRY − 1 steps on Gauss–Seidel (while
 #: a pile lands, or a point slides, nearly none holds); one solved exactly is tried again at the next step.
 STICK_RETRY = 4
@@ -495,10 +484,10 @@ def _delassus(vel, rj, rw, rbody, rbias, order, start, stop, A, rhs, first):
 
 
 @njit(**JIT)
-def _factor(m, A, first, on, L):
-    """L Lᵀ = A + εI on the rows with on[x] (an identity row elsewhere), a Cholesky factorisation within the profile
-    first[] (skyline: what lies before a row's first nonzero stays zero), ε = TIKHONOV_EPS × A's largest diagonal;
-    False when A is zero or not positive definite there."""
+def _equalities(m, A, rhs, first, on, L, lam, res):
+    """λ with (A + εI) λ = rhs on the rows with on[x] (the others' λ = 0), by a Cholesky factorisation within the
+    profile first[] (skyline: what lies before a row's first nonzero stays zero) refined by TIKHONOV_STEPS iterated
+    Tikhonov steps; False when A is zero or not positive definite there."""
     top = 0.0
     for x in range(m):
         top = max(top, A[x, x])
@@ -519,171 +508,36 @@ def _factor(m, A, first, on, L):
                 L[x, x] = math.sqrt(s)
             else:
                 L[x, y] = s / L[y, y]
-    _pin = A[0, 0], first[0], on[0], L[0, 0]
-    return ok
-
-
-@njit(**INLINE)
-def _sym(A, x, y):
-    """A[x, y] of the symmetric A stored as its lower triangle."""
-    return A[x, y] if y <= x else A[y, x]
-
-
-@njit(**INLINE)
-def _slides(on, cflt, order, start, x):
-    """Whether row x is a tangent of a point sliding with friction (its normal on, its first tangent off, μ > 0)."""
-    b = x - x % 3
-    return x % 3 != 0 and on[b] and not on[b + 1] and cflt[order[start + x // 3], C_MU] > 0.0
-
-
-@njit(**INLINE)
-def _turned(A, on, slip, cflt, order, start, x, y):
-    """Entry (x, y) of A with each sliding point's tangent rows and columns turned to its slip s (slip[b + 1],
-    slip[b + 2] of its first row b) and the perpendicular p = (−s2, s1)."""
-    x1, x2, cx1, cx2 = x, x, 1.0, 0.0
-    if _slides(on, cflt, order, start, x):
-        b = x - x % 3
-        x1, x2 = b + 1, b + 2
-        cx1, cx2 = (slip[b + 1], slip[b + 2]) if x % 3 == 1 else (-slip[b + 2], slip[b + 1])
-    y1, y2, cy1, cy2 = y, y, 1.0, 0.0
-    if _slides(on, cflt, order, start, y):
-        b = y - y % 3
-        y1, y2 = b + 1, b + 2
-        cy1, cy2 = (slip[b + 1], slip[b + 2]) if y % 3 == 1 else (-slip[b + 2], slip[b + 1])
-    a = cx1 * cy1 * _sym(A, x1, y1)
-    if cy2 != 0.0:
-        a += cx1 * cy2 * _sym(A, x1, y2)
-    if cx2 != 0.0:
-        a += cx2 * cy1 * _sym(A, x2, y1)
-        if cy2 != 0.0:
-            a += cx2 * cy2 * _sym(A, x2, y2)
-    return a
-
-
-@njit(**INLINE)
-def _column(A, on, slip, cflt, order, start, x, y):
-    """Entry (x, y) of the matrix B of the exact solve with sliding points, both rows on, y within x's profile: A
-    turned to the slips (_turned), less, where column y is a sliding point's normal, μ × its slip's column (the
-    friction λ_s = −μ λ_n that λ_n brings: B is not symmetric), plus on a slip's perpendicular row its compliance
-    slip[b] (λ_p = −u_p / slip[b]: the slip's turning, linearised)."""
-    a = _turned(A, on, slip, cflt, order, start, x, y)
-    if y % 3 == 0 and on[y] and not on[y + 1]:
-        mu = cflt[order[start + y // 3], C_MU]
-        if mu > 0.0:
-            a -= mu * _turned(A, on, slip, cflt, order, start, x, y + 1)
-    if x == y and x % 3 == 2 and _slides(on, cflt, order, start, x):
-        a += slip[x - 2]
-    return a
-
-
-@njit(**JIT)
-def _factor_lu(m, A, first, on, L, slip, cflt, order, start):
-    """LU = B + εI within the profile first[] (its lower part, unit diagonal, below L's diagonal; U on and above
-    it), B the matrix of the exact solve with sliding points (_column) on the rows with on[x], an identity row
-    elsewhere; no pivoting (B is A, positive semi-definite, less friction columns of μ × a tangent's: a pivot may
-    be negative; one smaller than ε is held at ±ε). False when a pivot is not finite; whether the solve is one
-    is judged by its residual and the states' conditions (_sticking)."""
-    top = 0.0
-    for x in range(m):
-        top = max(top, A[x, x])
-    eps = TIKHONOV_EPS * top
-    ok = top > 0.0
-    for x in range(m):
-        for y in range(first[x], x):
-            if not on[x] or not on[y]:
-                L[x, y] = 0.0
-                L[y, x] = 0.0
-                continue
-            lower = _column(A, on, slip, cflt, order, start, x, y)
-            upper = _column(A, on, slip, cflt, order, start, y, x)
-            for k in range(max(first[x], first[y]), y):
-                lower -= L[x, k] * L[k, y]
-                upper -= L[y, k] * L[k, x]
-            L[x, y] = lower / L[y, y]
-            L[y, x] = upper
-        if not on[x]:
-            L[x, x] = 1.0
-            continue
-        d = _column(A, on, slip, cflt, order, start, x, x) + eps
-        for k in range(first[x], x):
-            d -= L[x, k] * L[k, x]
-        if not math.isfinite(d):
-            ok = False
-            d = 1.0
-        elif abs(d) < eps:  # a direction B does not move (coplanar points' loads): held at ε, as in A + εI
-            d = eps if d >= 0.0 else -eps
-        L[x, x] = d
-    _pin = A[0, 0], first[0], on[0], L[0, 0], slip[0], cflt[0, 0], order[0]
-    return ok
-
-
-@njit(**INLINE)
-def _turn(on, slip, cflt, order, start, m, v, back):
-    """Each sliding point's tangent pair of v turned from world tangents (t1, t2) to (s, p) of its slip, or back."""
-    for x in range(1, m, 3):
-        if _slides(on, cflt, order, start, x):
-            s1, s2 = slip[x], slip[x + 1]
-            a, b = v[x], v[x + 1]
-            if back:
-                v[x], v[x + 1] = s1 * a - s2 * b, s2 * a + s1 * b
-            else:
-                v[x], v[x + 1] = s1 * a + s2 * b, -s2 * a + s1 * b
-
-
-@njit(**JIT)
-def _refine(m, A, rhs, first, on, L, lu, lam, res, slip, cflt, order, start):
-    """λ with the rows on met, from λ = 0, by iterated Tikhonov steps with L the factor of A + εI (_factor: the
-    minimum-norm λ of a consistent rank-deficient system) or, when lu, of B + εI (_factor_lu): a point sliding
-    with friction has λ_s = −μ λ_n along its slip s and u_p + slip[b] λ_p = 0 across it. Rows off: λ = 0. Stops
-    when the residual is below TIKHONOV_TOL × the right-hand side's or no longer shrinks, at most TIKHONOV_STEPS
-    iterates. λ and res = rhs − A λ (minus each row's speed after the step) end in world tangents."""
     scale = 0.0
     for x in range(m):
         lam[x] = 0.0
-        if on[x]:
-            scale = max(scale, abs(rhs[x]))
+        res[x] = rhs[x] if on[x] else 0.0
+        scale = max(scale, abs(res[x]))
     last = np.inf
-    for step in range(TIKHONOV_STEPS + 1):
-        if lu:  # (s, p) → world tangents, with λ_s = −μ λ_n
-            for x in range(0, m, 3):
-                if _slides(on, cflt, order, start, x + 1):
-                    lam[x + 1] = -cflt[order[start + x // 3], C_MU] * lam[x]
-            _turn(on, slip, cflt, order, start, m, lam, True)
-        _residual(m, A, rhs, first, lam, res)
-        if lu:
-            _turn(on, slip, cflt, order, start, m, lam, False)
-            _turn(on, slip, cflt, order, start, m, res, False)
-            for x in range(2, m, 3):
-                if _slides(on, cflt, order, start, x):
-                    res[x] -= slip[x - 2] * lam[x]
-        worst = 0.0
+    for _ in range(TIKHONOV_STEPS):
+        # solve (A + εI) δ = res: forward, backward (δ in res)
         for x in range(m):
-            if on[x]:
-                worst = max(worst, abs(res[x]))
-        done = worst <= TIKHONOV_TOL * scale or worst >= last or step == TIKHONOV_STEPS  # round-off, or not shrinking
-        if done:
-            if lu:
-                for x in range(2, m, 3):
-                    if _slides(on, cflt, order, start, x):
-                        res[x] += slip[x - 2] * lam[x]
-                _turn(on, slip, cflt, order, start, m, lam, True)
-                _turn(on, slip, cflt, order, start, m, res, True)
-            break
-        last = worst
-        # solve (A + εI) δ = res (or (B + εI)) on the rows on: forward, backward (δ in res)
-        for x in range(m):
-            s = res[x] if on[x] else 0.0
+            s = res[x]
             for k in range(first[x], x):
                 s -= L[x, k] * res[k]
-            res[x] = s if lu else s / L[x, x]
+            res[x] = s / L[x, x]
         for x in range(m - 1, -1, -1):
             res[x] /= L[x, x]
             for k in range(first[x], x):
-                res[k] -= (L[k, x] if lu else L[x, k]) * res[x]
+                res[k] -= L[x, k] * res[x]
         for x in range(m):
-            if on[x]:
-                lam[x] += res[x]
-    _pin = A[0, 0], rhs[0], first[0], on[0], L[0, 0], lam[0], res[0], slip[0], cflt[0, 0], order[0]
+            lam[x] += res[x]
+        _residual(m, A, rhs, first, lam, res)
+        worst = 0.0
+        for x in range(m):
+            if not on[x]:
+                res[x] = 0.0
+            worst = max(worst, abs(res[x]))
+        if worst <= TIKHONOV_TOL * scale or worst >= last:  # at round-off, or no longer shrinking
+            break
+        last = worst
+    _pin = A[0, 0], rhs[0], first[0], on[0], L[0, 0], lam[0], res[0]
+    return ok
 
 
 @njit(**JIT)
@@ -699,85 +553,49 @@ def _residual(m, A, rhs, first, lam, res):
 
 
 @njit(**JIT)
-def _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, start, stop, A, L, rhs, lam, res, slip, band, key):
-    """The contacts order[start:stop] (3 rows each) solved exactly, each point in one of three states: sticking
-    (its three rows equalities, u⁺ = 0, λ in its cone), sliding (its normal an equality, λ_t = −μ λ_n û_t along
-    its slip after the step; frictionless, λ_t = 0) or parting (λ = 0, u_n⁺ ≥ 0). From the warm start (points that held last
-    step or touch: sliding where last step's λ_t was on its cone or μ = 0, else sticking), block principal pivoting
-    and Newton steps on the slips, at most STICK_PIVOTS solves (STICK_PIVOTS_LARGE over more than STICK_SMALL
-    rows): sticking points whose λ_t leaves their cones slide against it (first: a point may pull for the friction
-    held), then a point that pulls (λ_n < 0) parts, one parting
-    that would close sticks, a sliding one whose slip would turn back sticks, and one whose friction is not along
-    its slip after the step is solved again about that slip (its turning linearised: _column); a sliding point
-    that does not slip is on its cone's edge (a box held by friction at unequally loaded corners). True (and
-    vel, rlam updated) when every state's conditions hold, to round-off. Scratch: band[0] the profile, band[1] the
-    rows on, slip (per row) each sliding point's unit slip (world tangents) and compliance, key (per contact) the
-    sort's."""
+def _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, start, stop, A, L, rhs, lam, res, band, key):
+    """The contacts order[start:stop] (3 rows each) solved exactly when none slides: the points that stay are
+    equalities (u⁺ = 0), the others have λ = 0 and part (u_n⁺ ≥ 0). From the points that held last step or
+    touch, points whose λ_n < 0 are let go and points let go that would close are taken back, at most STICK_PIVOTS times (block principal pivoting
+    on the normals: a column rocking on an edge). True (and vel, rlam updated) when every λ_n ≥ 0, every λ_t is
+    in its cone and every point let go parts, to round-off. Scratch: band[0] the profile, band[1] the points on,
+    key (per contact) the sort's."""
     m = 3 * (stop - start)
     first, on = band[0], band[1]
     _profile_order(cflt, order, start, stop, key)
     _delassus(vel, rj, rw, rbody, rbias, order, start, stop, A, rhs, first)
     for x in range(0, m, 3):  # the points that held last step (warm start) or touch
         r = 3 * order[start + x // 3]
-        mu = cflt[order[start + x // 3], C_MU]
         on[x] = on[x + 1] = on[x + 2] = 1 if rlam[r] > 0.0 or rbias[r] == 0.0 else 0
-        t = math.sqrt(rlam[r + 1] * rlam[r + 1] + rlam[r + 2] * rlam[r + 2])
-        if on[x] and (mu == 0.0 or (t > 0.0 and t >= (1.0 - 1e-9) * mu * rlam[r])):
-            _slide(on, slip, x, mu, -rlam[r + 1], -rlam[r + 2])
-            if t > 0.0:  # its compliance from its speed before the step's impulses
-                slip[x] = math.sqrt(rhs[x + 1] * rhs[x + 1] + rhs[x + 2] * rhs[x + 2]) / t
     kept = False
-    for _pivot in range(STICK_PIVOTS if m <= STICK_SMALL else STICK_PIVOTS_LARGE):
-        lu = False
-        for x in range(1, m, 3):
-            lu = lu or _slides(on, cflt, order, start, x)
-        if lu:
-            if not _factor_lu(m, A, first, on, L, slip, cflt, order, start):
-                break
-        elif not _factor(m, A, first, on, L):
+    for _pivot in range(STICK_PIVOTS):
+        if not _equalities(m, A, rhs, first, on, L, lam, res):
             break
-        _refine(m, A, rhs, first, on, L, lu, lam, res, slip, cflt, order, start)  # res: −(each row's speed after)
         biggest, fastest = 0.0, 0.0
         for x in range(m):
             if x % 3 == 0:
                 biggest = max(biggest, abs(lam[x]))
             fastest = max(fastest, abs(rhs[x]))
         tol, slack = 1e-9 * biggest, 1e-9 * fastest
+        _residual(m, A, rhs, first, lam, res)  # −res: each row's speed after
         changed = False
-        for x in range(0, m, 3):  # first the sticking points whose λ_t leaves their cones: they slide against it
-            if on[x] and on[x + 1]:
-                mu = cflt[order[start + x // 3], C_MU]
-                if math.sqrt(lam[x + 1] * lam[x + 1] + lam[x + 2] * lam[x + 2]) > mu * max(lam[x], 0.0) + tol:
-                    _slide(on, slip, x, mu, -lam[x + 1], -lam[x + 2])
-                    changed = True
-        if changed:  # (a point that pulled may have pulled for the friction held: its state is settled next)
-            continue
         for x in range(0, m, 3):
-            mu = cflt[order[start + x // 3], C_MU]
-            if on[x] and lam[x] < -tol:  # pulls: parts
+            if on[x] and lam[x] < -tol:  # pulls: let go
                 on[x] = on[x + 1] = on[x + 2] = 0
                 changed = True
-            elif not on[x] and -res[x] < -slack:  # closes: sticks (frictionless: slides)
+            elif not on[x] and -res[x] < -slack:  # closes: take back
                 on[x] = on[x + 1] = on[x + 2] = 1
-                if mu == 0.0:
-                    _slide(on, slip, x, mu, 0.0, 0.0)
                 changed = True
-            elif on[x] and not on[x + 1] and mu > 0.0:
-                u1, u2 = -res[x + 1], -res[x + 2]
-                speed = math.sqrt(u1 * u1 + u2 * u2)
-                f = mu * max(lam[x], 0.0)
-                if u1 * slip[x + 1] + u2 * slip[x + 2] < -slack:  # its slip would turn back: sticks
-                    on[x + 1] = on[x + 2] = 1
-                    changed = True
-                elif speed > slack and abs(lam[x + 1] + f * u1 / speed) + abs(lam[x + 2] + f * u2 / speed) > tol:
-                    # its friction is not along its slip: solved again about that slip
-                    slip[x], slip[x + 1], slip[x + 2] = speed / max(f, tol, 1e-300), u1 / speed, u2 / speed
-                    changed = True
         if changed:
             continue
         kept = True
-        for x in range(m):  # the rows on are met as equalities (a consistent system)
-            if on[x] and abs(res[x]) > slack and not _slides(on, cflt, order, start, x):
+        for x in range(m):  # the points on are met as equalities (a consistent system)
+            if on[x] and abs(res[x]) > slack:
+                kept = False
+        for c in range(stop - start):
+            ln, l1, l2 = lam[3 * c], lam[3 * c + 1], lam[3 * c + 2]
+            mu = cflt[order[start + c], C_MU]
+            if math.sqrt(l1 * l1 + l2 * l2) > mu * max(ln, 0.0) + tol:
                 kept = False
         break
     if kept:
@@ -786,18 +604,8 @@ def _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, start, stop, A, L, r
             rlam[rx] = lam[x]
             _apply(vel, rw, rbody, rx, lam[x])
     _pin = vel[0, 0], rj[0, 0], rw[0, 0], rbody[0, 0], rbias[0], rlam[0], cflt[0, 0], order[0], A[0, 0], L[0, 0]
-    _pin2 = rhs[0], lam[0], res[0], slip[0], band[0, 0], key[0]
+    _pin2 = rhs[0], lam[0], res[0], band[0, 0], key[0]
     return kept
-
-
-@njit(**INLINE)
-def _slide(on, slip, x, mu, s1, s2):
-    """The point at rows x, x + 1, x + 2 slides along (s1, s2) (world tangents; normalised, not zero) with friction
-    μ, its slip's compliance zero (its turning held, until the first solve gives its speed); frictionless: its
-    tangents off."""
-    on[x], on[x + 1], on[x + 2] = 1, 0, 1 if mu > 0.0 else 0
-    norm = math.sqrt(s1 * s1 + s2 * s2)
-    slip[x], slip[x + 1], slip[x + 2] = (0.0, s1 / norm, s2 / norm) if norm > 0.0 else (0.0, 1.0, 0.0)
 
 
 @njit(**INLINE)
@@ -1531,7 +1339,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             left = _waiting(cint, order, lo, hi, wait) - 1
             if left < 0:
                 kept = _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, lo, hi, A, L, vec[0], vec[1],
-                                 vec[2], vec[3], band, cwork[:, 2])
+                                 vec[2], band, cwork[:, 2])
                 left = 0 if kept else STICK_RETRY - 1
             for c in range(lo, hi):
                 for side in range(2):
