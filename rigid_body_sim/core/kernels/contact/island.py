@@ -24,9 +24,9 @@ a face share its load evenly; v⁺ does not depend on which λ); points that pul
 let go that would close taken back, at most STICK_PIVOTS times. It is kept when the points on are
 met, every λ_n ≥ 0 and every λ_t is in its cone (to round-off); a component whose attempt failed is
 tried again only after STICK_RETRY − 1 steps (landing, nearly none holds). Else
-projected Gauss–Seidel on the component's rows, from the highest against gravity down, then back
-up, in turn (a weight passes down a pile and a stop up it within a sweep), each sweep extrapolated
-(nonsmooth nonlinear conjugate gradient). Then the
+projected Gauss–Seidel on the component's rows (over more than PILE_CONTACTS contacts, from the
+highest against gravity down, then back up, in turn: a weight passes down a pile and a stop up it
+within a sweep). Then the
 positions: every point found penetrating at the new poses (narrow phase again) is closed by a
 mass-metric least correction (Gauss–Seidel on the linearised gaps, λ ≥ 0; over a pile, bottom-up with each
 upright pair's lower body held, _pile_rows), the narrow phase iterated PROJECT_ROUNDS times; only the
@@ -82,15 +82,14 @@ PROJECT_TOL = 1e-12
 #: Narrow-phase rounds of the position projection, the first TURN_ROUNDS in the mass metric (turning and
 #: translating), the others translating only; Gauss–Seidel sweeps per round.
 PROJECT_ROUNDS, TURN_ROUNDS, PROJECT_SWEEPS = 8, 2, 100
-#: Projected Gauss–Seidel sweeps of the velocity problem (by height, each extrapolated: nonsmooth nonlinear
-#: conjugate gradient): at most PGS_SWEEPS, or PGS_WORK / its contacts if more (a column of cubes needs hundreds to
-#: come to rest; a pile's hundreds of contacts keep PGS_SWEEPS); it stops earlier below PGS_TOL (m/s).
-PGS_SWEEPS, PGS_WORK, PGS_TOL = 100, 30000, 1e-13
-#: The projection over more contacts than this (a pile; the dense solve's DENSE_MAX / 3): at most PILE_SWEEPS
-#: sweeps a round, from the lowest point up, and a pair whose normal is within acos(PILE_UPRIGHT) of gravity moves
-#: only its upper body (the lower held: shock propagation).
+#: Most projected Gauss–Seidel sweeps of the velocity problem; it stops earlier below PGS_TOL (m/s).
+PGS_SWEEPS, PGS_TOL = 200, 1e-13
+#: Gauss–Seidel over more contacts than this (a pile; the dense solve's DENSE_MAX / 3) sweeps them by height.
 PILE_CONTACTS = DENSE_MAX // 3
-PILE_SWEEPS, PILE_UPRIGHT = 20, 0.5
+#: A pile's velocity step: at most PILE_PGS_SWEEPS sweeps, each extrapolated (nonsmooth nonlinear conjugate
+#: gradient). A pile's projection: at most PILE_SWEEPS sweeps a round, from the lowest point up, and a pair whose
+#: normal is within acos(PILE_UPRIGHT) of gravity moves only its upper body (the lower held: shock propagation).
+PILE_PGS_SWEEPS, PILE_SWEEPS, PILE_UPRIGHT = 100, 20, 0.5
 #: Iterated Tikhonov steps of the sticking solve (fewer once the residual is below TIKHONOV_TOL × the right-hand
 #: side's), and its regularisation (× the largest diagonal); most pivots of its points let go or taken back.
 TIKHONOV_STEPS, TIKHONOV_TOL, TIKHONOV_EPS, STICK_PIVOTS = 6, 1e-15, 1e-9, 3
@@ -707,10 +706,11 @@ def _sweep(vel, rj, rw, rbody, rdiag, inv, rbias, rlam, cflt, cross, order, star
 @njit(**JIT)
 def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop, gx, gy, gz, cwork, rwork):
     """Projected Gauss–Seidel on contacts order[:stop] from their λ in rlam (the warm start): sweeps until none
-    changes a row's speed by more than PGS_TOL (m/s), at most max(PGS_SWEEPS, PGS_WORK / stop), the contacts
-    taken from the highest against gravity (gx, gy, gz) down, then back up, in turn (a weight passes down a pile,
-    and a stop up it, within one sweep), each sweep extrapolated. Scratch: cwork (per contact: the tangents' cross terms, the
-    sort's key), rwork (per row: 1 / the diagonal, the last sweep's λ, the extrapolation)."""
+    changes a row's speed by more than PGS_TOL (m/s), at most PGS_SWEEPS. More than PILE_CONTACTS contacts (a
+    pile) are taken from the highest against gravity (gx, gy, gz) down, then back up, in turn (a weight passes
+    down a pile, and a stop up it, within one sweep), each sweep extrapolated, at most PILE_PGS_SWEEPS; fewer,
+    in their order. Scratch: cwork (per contact: the tangents' cross terms, the sort's key), rwork (per row: 1 /
+    the diagonal, the last sweep's λ, the extrapolation)."""
     cross, key = cwork[:, 0:2], cwork[:, 2]
     inv, last, step = rwork[:, 0], rwork[:, 1], rwork[:, 2]
     for c in range(stop):
@@ -725,42 +725,47 @@ def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop, gx, gy, gz, 
             inv[r + k] = _inverse(rdiag[r + k])
             if rlam[r + k] != 0.0:
                 _apply(vel, rw, rbody, r + k, rlam[r + k])
-    for c in range(stop):  # highest first: g · x ascending
-        q = order[c]
-        key[q] = gx * cflt[q, C_X] + gy * cflt[q, C_X + 1] + gz * cflt[q, C_X + 2]
-    _sort_by(key, order, 0, stop)
-    # nonsmooth nonlinear conjugate gradient (Silcowitz, Niebe, Erleben 2010): each sweep's change of λ, Δ, is
-    # the descent direction; λ is then extrapolated by β p (β = |Δ|² / |Δ_prev|², p ← β p + Δ), restarted
-    # (p = Δ) when |Δ| grows; the next sweep projects onto the cones again
-    for x in range(3 * stop):
-        step[x] = 0.0
-    shrink = 0.0
-    sweeps = max(PGS_SWEEPS, PGS_WORK // max(stop, 1))
-    for sweep in range(sweeps):
+    ranked = stop > PILE_CONTACTS
+    if not ranked:
+        for sweep in range(PGS_SWEEPS):
+            if _sweep(vel, rj, rw, rbody, rdiag, inv, rbias, rlam, cflt, cross, order, 0, stop, False) <= PGS_TOL:
+                break
+    else:  # highest first: g · x ascending
         for c in range(stop):
-            for k in range(3):
-                last[3 * c + k] = rlam[3 * order[c] + k]
-        if _sweep(vel, rj, rw, rbody, rdiag, inv, rbias, rlam, cflt, cross, order, 0, stop, sweep % 2 == 1) <= PGS_TOL:
-            break
-        if sweep == sweeps - 1:  # the last λ is a sweep's: in its cones
-            break
-        size2 = 0.0
-        for c in range(stop):
-            for k in range(3):
-                d = rlam[3 * order[c] + k] - last[3 * c + k]
-                size2 += d * d
-        beta = size2 / shrink if sweep > 0 and size2 <= shrink else 0.0
-        for c in range(stop):
-            r = 3 * order[c]
-            m0, m1, m2 = beta * step[3 * c], beta * step[3 * c + 1], beta * step[3 * c + 2]
-            for k in range(3):
-                step[3 * c + k] = beta * step[3 * c + k] + rlam[r + k] - last[3 * c + k]
-            if m0 != 0.0 or m1 != 0.0 or m2 != 0.0:
-                rlam[r] += m0
-                rlam[r + 1] += m1
-                rlam[r + 2] += m2
-                _apply3(vel, rw, rbody, r, m0, m1, m2)
-        shrink = size2
+            q = order[c]
+            key[q] = gx * cflt[q, C_X] + gy * cflt[q, C_X + 1] + gz * cflt[q, C_X + 2]
+        _sort_by(key, order, 0, stop)
+        # nonsmooth nonlinear conjugate gradient (Silcowitz, Niebe, Erleben 2010): each sweep's change of λ, Δ, is
+        # the descent direction; λ is then extrapolated by β p (β = |Δ|² / |Δ_prev|², p ← β p + Δ), restarted
+        # (p = Δ) when |Δ| grows; the next sweep projects onto the cones again
+        for x in range(3 * stop):
+            step[x] = 0.0
+        shrink = 0.0
+        for sweep in range(PILE_PGS_SWEEPS):
+            for c in range(stop):
+                for k in range(3):
+                    last[3 * c + k] = rlam[3 * order[c] + k]
+            if _sweep(vel, rj, rw, rbody, rdiag, inv, rbias, rlam, cflt, cross, order, 0, stop, sweep % 2 == 1) <= PGS_TOL:
+                break
+            if sweep == PILE_PGS_SWEEPS - 1:  # the last λ is a sweep's: in its cones
+                break
+            size2 = 0.0
+            for c in range(stop):
+                for k in range(3):
+                    d = rlam[3 * order[c] + k] - last[3 * c + k]
+                    size2 += d * d
+            beta = size2 / shrink if sweep > 0 and size2 <= shrink else 0.0
+            for c in range(stop):
+                r = 3 * order[c]
+                m0, m1, m2 = beta * step[3 * c], beta * step[3 * c + 1], beta * step[3 * c + 2]
+                for k in range(3):
+                    step[3 * c + k] = beta * step[3 * c + k] + rlam[r + k] - last[3 * c + k]
+                if m0 != 0.0 or m1 != 0.0 or m2 != 0.0:
+                    rlam[r] += m0
+                    rlam[r + 1] += m1
+                    rlam[r + 2] += m2
+                    _apply3(vel, rw, rbody, r, m0, m1, m2)
+            shrink = size2
     _pin = vel[0, 0], rj[0, 0], rw[0, 0], rbody[0, 0], rdiag[0], rbias[0], rlam[0], cflt[0, 0], order[0]
     _pin2 = cwork[0, 0], rwork[0, 0]
 
