@@ -200,6 +200,36 @@ def test_box_box_stacked_face_on_face():
     assert (dist, count) == (pytest.approx(2e-3, abs=1e-15), 4)
 
 
+@pytest.mark.parametrize("swap", [False, True])
+def test_box_corner_touching_a_box_face_within_round_off(swap):
+    """A tilted box's lowest corner over an upright box's top face, apart by δ from 0 to 1e-10 m (a pile's
+    resting contacts): the normal is the face's, +z (closed form), within 1e-9; the distance δ within 1e-14 m;
+    every point separates by at least the distance. A direction from the nearest points' difference over δ
+    is round-off there."""
+    rng = np.random.default_rng(11)
+    a = np.array([0.05, 0.05, 0.05])
+    for k in range(300):
+        b = rng.uniform(0.03, 0.08, size=3)
+        q = rng.normal(size=4)
+        q /= np.linalg.norm(q)
+        corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * b @ matrix(q).T
+        low = corners[np.argmin(corners[:, 2])]
+        delta = [0.0, 1e-16, 1e-14, 1e-12, 1e-10][k % 5] * rng.uniform(0.5, 1.0)
+        foot = rng.uniform(-0.8, 0.8, size=2) * a[:2]  # where the corner comes down, inside the face
+        cb = np.array([foot[0], foot[1], a[2] + delta]) - low
+        if np.min((corners + cb)[:, 2]) < a[2] + delta - 1e-15 or np.any(np.abs((corners + cb)[:, :2]) > 0.5):
+            continue  # not the lowest corner to round-off, or reaching past a neighbour
+        if swap:
+            dist, normal, count, points, seps = one(row("box", *b), row("box", *a), cb, [0.0, 0.0, 0.0], q, IDENTITY)
+            up = [0.0, 0.0, -1.0]
+        else:
+            dist, normal, count, points, seps = one(row("box", *a), row("box", *b), [0.0, 0.0, 0.0], cb, IDENTITY, q)
+            up = [0.0, 0.0, 1.0]
+        assert np.max(np.abs(normal - up)) <= 1e-9, (k, delta, normal)
+        assert abs(dist - delta) <= 1e-14, (k, delta, dist)
+        assert np.all(seps >= dist - 1e-14)
+
+
 # ----------------------------------------------------------------------------- definition and properties
 
 def random_pair_poses(rng, ka, kb, n):

@@ -18,7 +18,9 @@ Closed forms: sphere–sphere, sphere–capsule, capsule–capsule (closest poin
 sphere–box and sphere–cylinder (nearest point of a box, of a solid cylinder). Polytope cores
 (box–box, capsule–box as segment–box): GJK's exact distance when apart, the separating-axis
 test on the Minkowski difference's face normals (15 axes; 6 for segment–box) when they
-overlap, which is exact for polytopes. Pairs with a cylinder other than sphere–cylinder: GJK
+overlap or are apart by at most NEAR_TOUCH × their size, which is exact for polytopes (apart,
+for a face or an edge against the other; corner on corner or edge, the distance along the
+best axis, a lower bound). Pairs with a cylinder other than sphere–cylinder: GJK
 and EPA on support functions (convex.py) give the direction to ~1e-5 rad; Newton's method on
 the support functions, stratum by stratum (refine.py), takes it to round-off; point 0 is on
 both support sets along it (refine.feature_point), nearest GJK/EPA's witness points.
@@ -48,6 +50,10 @@ __all__ = ["make_workspace_jit", "MAX_PAIR_POINTS", "FACE_ALIGNMENT", "set_pose"
 MAX_PAIR_POINTS = 8
 #: A normal within this angle (rad) of a box face's normal makes that face a reference face for clipping.
 FACE_ALIGNMENT = 1e-6
+#: Polytopes apart by at most this × the pair's size take the separating-axis test's normal, as when they
+#: overlap: GJK's (its witnesses' difference over the distance) carries their round-off divided by the distance
+#: (a box's corner 3e-13 m from a face, at rest in a pile, got a normal 90° off the face's).
+NEAR_TOUCH = 1e-6
 
 _KIND, _DIM, _C, _R = 0, 1, 4, 7
 
@@ -353,7 +359,7 @@ def _core_radius(pose, ux, uy, uz):
 
 @njit(**JIT)
 def _sat(pa, pb, scale):
-    """Separating-axis test of two overlapping polytope cores (box or segment A, box B).
+    """Separating-axis test of two polytope cores (box or segment A, box B) overlapping or touching.
 
     The candidate axes are the face normals of A ⊖ B: the boxes' face normals and the cross
     products of their edge directions (a segment has one edge and no face). Returns
@@ -715,7 +721,7 @@ def pair_contact(pa, ma, pb, mb, scale, ws_s, ws_lam, ws_tmp, ws_poly, verts, fa
     else:
         d, nv, overlap = gjk(pa, pb, ws_s, ws_lam, ws_tmp, scale)
         polytopes = kb == CORE_BOX  # segment–box or box–box
-        if overlap and polytopes:
+        if polytopes and (overlap or d <= NEAR_TOUCH * scale):
             sd_core, nx, ny, nz, axis_id = _sat(pa, pb, scale)
             sd = sd_core - ma - mb
             _sat_witness(pa, ma, pb, sd_core, nx, ny, nz, axis_id, res, seps)
