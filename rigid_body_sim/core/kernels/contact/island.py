@@ -82,12 +82,13 @@ PROJECT_TOL = 1e-12
 #: Narrow-phase rounds of the position projection, the first TURN_ROUNDS in the mass metric (turning and
 #: translating), the others translating only; Gauss–Seidel sweeps per round.
 PROJECT_ROUNDS, TURN_ROUNDS, PROJECT_SWEEPS = 8, 2, 100
-#: Most projected Gauss–Seidel sweeps of the velocity problem; it stops earlier below PGS_TOL (m/s).
-PGS_SWEEPS, PGS_TOL = 200, 1e-13
+#: Most projected Gauss–Seidel sweeps of the velocity problem, or PGS_WORK / its contacts when that is more (a
+#: column of ten cubes, 56 contacts, comes to rest under 500, not 200); it stops earlier below PGS_TOL (m/s).
+PGS_SWEEPS, PGS_WORK, PGS_TOL = 200, 30000, 1e-13
 #: Gauss–Seidel over more contacts than this (a pile; the dense solve's DENSE_MAX / 3) sweeps them by height.
 PILE_CONTACTS = DENSE_MAX // 3
-#: A pile's velocity step: at most PILE_PGS_SWEEPS sweeps, each extrapolated (nonsmooth nonlinear conjugate
-#: gradient). A pile's projection: at most PILE_SWEEPS sweeps a round, from the lowest point up, and a pair whose
+#: A pile's velocity step: at most PILE_PGS_SWEEPS sweeps (or PGS_WORK / its contacts), each extrapolated
+#: (nonsmooth nonlinear conjugate gradient). A pile's projection: at most PILE_SWEEPS sweeps a round, from the lowest point up, and a pair whose
 #: normal is within acos(PILE_UPRIGHT) of gravity moves only its upper body (the lower held: shock propagation).
 PILE_PGS_SWEEPS, PILE_SWEEPS, PILE_UPRIGHT = 100, 20, 0.5
 #: Iterated Tikhonov steps of the sticking solve (fewer once the residual is below TIKHONOV_TOL × the right-hand
@@ -706,10 +707,10 @@ def _sweep(vel, rj, rw, rbody, rdiag, inv, rbias, rlam, cflt, cross, order, star
 @njit(**JIT)
 def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop, gx, gy, gz, cwork, rwork):
     """Projected Gauss–Seidel on contacts order[:stop] from their λ in rlam (the warm start): sweeps until none
-    changes a row's speed by more than PGS_TOL (m/s), at most PGS_SWEEPS. More than PILE_CONTACTS contacts (a
-    pile) are taken from the highest against gravity (gx, gy, gz) down, then back up, in turn (a weight passes
-    down a pile, and a stop up it, within one sweep), each sweep extrapolated, at most PILE_PGS_SWEEPS; fewer,
-    in their order. Scratch: cwork (per contact: the tangents' cross terms, the sort's key), rwork (per row: 1 /
+    changes a row's speed by more than PGS_TOL (m/s), at most PGS_SWEEPS or PGS_WORK / stop. More than
+    PILE_CONTACTS contacts (a pile) are taken from the highest against gravity (gx, gy, gz) down, then back up,
+    in turn (a weight passes down a pile, and a stop up it, within one sweep), each sweep extrapolated, at most
+    PILE_PGS_SWEEPS or PGS_WORK / stop; fewer, in their order. Scratch: cwork (per contact: the tangents' cross terms, the sort's key), rwork (per row: 1 /
     the diagonal, the last sweep's λ, the extrapolation)."""
     cross, key = cwork[:, 0:2], cwork[:, 2]
     inv, last, step = rwork[:, 0], rwork[:, 1], rwork[:, 2]
@@ -726,8 +727,9 @@ def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop, gx, gy, gz, 
             if rlam[r + k] != 0.0:
                 _apply(vel, rw, rbody, r + k, rlam[r + k])
     ranked = stop > PILE_CONTACTS
+    work = PGS_WORK // max(stop, 1)
     if not ranked:
-        for sweep in range(PGS_SWEEPS):
+        for sweep in range(max(PGS_SWEEPS, work)):
             if _sweep(vel, rj, rw, rbody, rdiag, inv, rbias, rlam, cflt, cross, order, 0, stop, False) <= PGS_TOL:
                 break
     else:  # highest first: g · x ascending
@@ -741,13 +743,14 @@ def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop, gx, gy, gz, 
         for x in range(3 * stop):
             step[x] = 0.0
         shrink = 0.0
-        for sweep in range(PILE_PGS_SWEEPS):
+        sweeps = max(PILE_PGS_SWEEPS, work)
+        for sweep in range(sweeps):
             for c in range(stop):
                 for k in range(3):
                     last[3 * c + k] = rlam[3 * order[c] + k]
             if _sweep(vel, rj, rw, rbody, rdiag, inv, rbias, rlam, cflt, cross, order, 0, stop, sweep % 2 == 1) <= PGS_TOL:
                 break
-            if sweep == PILE_PGS_SWEEPS - 1:  # the last λ is a sweep's: in its cones
+            if sweep == sweeps - 1:  # the last λ is a sweep's: in its cones
                 break
             size2 = 0.0
             for c in range(stop):
