@@ -16,7 +16,9 @@ by its whole face, not rocked about the narrow phase's deepest corner.
 
 The velocity problem is solved per component of the step's contacts (bodies joined by contacts; an
 island's bodies within reach but not touching are apart there). The case where nothing slides is
-solved exactly first (_sticking): the points that stay as equalities (J M⁻¹ Jᵀ λ = −(J v* + g/h) on
+solved exactly first: when the last step's λ (the warm start) already meets this step's sticking
+conditions below to their tolerances (a component at rest), it is kept without a factorisation (_held);
+else (_sticking) the points that stay as equalities (J M⁻¹ Jᵀ λ = −(J v* + g/h) on
 their rows), the others at λ = 0, by a Cholesky factorisation of J M⁻¹ Jᵀ + εI within its profile
 (the contacts sorted along the component's longest extent: a column is banded) refined by iterated
 Tikhonov steps (the minimum-norm λ of the consistent rank-deficient system: four coplanar corners of
@@ -91,6 +93,9 @@ PILE_CONTACTS = DENSE_MAX // 3
 #: (nonsmooth nonlinear conjugate gradient). A pile's projection: at most PILE_SWEEPS sweeps a round, from the lowest point up, and a pair whose
 #: normal is within acos(PILE_UPRIGHT) of gravity moves only its upper body (the lower held: shock propagation).
 PILE_PGS_SWEEPS, PILE_SWEEPS, PILE_UPRIGHT = 100, 20, 0.5
+#: A component's warm start is kept as its sticking solve (_held) when its points' speeds after are within this ×
+#: PROJECT_TOL × their body's size / h: over a step a body at rest moves a hundredth of the projection's tolerance.
+HELD_TOL = 1e-2
 #: Iterated Tikhonov steps of the sticking solve (fewer once the residual is below TIKHONOV_TOL × the right-hand
 #: side's), and its regularisation (× the largest diagonal); most pivots of its points let go or taken back.
 TIKHONOV_STEPS, TIKHONOV_TOL, TIKHONOV_EPS, STICK_PIVOTS = 6, 1e-15, 1e-9, 3
@@ -614,6 +619,75 @@ def _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, start, stop, A, L, r
     _pin = vel[0, 0], rj[0, 0], rw[0, 0], rbody[0, 0], rbias[0], rlam[0], cflt[0, 0], order[0], A[0, 0], L[0, 0]
     _pin2 = rhs[0], lam[0], res[0], band[0, 0], key[0]
     return kept
+
+
+@njit(**JIT)
+def _held(vel, rj, rw, rbody, rbias, rlam, cflt, cint, size, h, order, start, stop, saved):
+    """Whether the contacts order[start:stop] are solved exactly by their warm start (rlam: the last step's λ
+    carried over): every point with λ_n > 0 holds (its three rows' speeds after within the sticking solve's
+    tolerance, and within HELD_TOL × PROJECT_TOL × its body's size / h: over the step it moves a hundredth of the
+    projection's tolerance, so that a component at rest does not creep), every other parts (u_n⁺ ≥ 0 to that
+    tolerance), every point's gap after the step (linear) is above −PROJECT_TOL × its body's size / 2, every
+    λ_n ≥ 0 and every λ_t in its cone. Then the sticking solve's λ is that one, found without a factorisation
+    (a component at rest: the same λ step after step). True: vel has λ applied; False: vel as it was (its bodies'
+    rows kept in ``saved``, per body 6)."""
+    fastest, biggest = 0.0, 0.0
+    fits = True
+    for c in range(start, stop):
+        r = 3 * order[c]
+        for k in range(3):
+            fastest = max(fastest, abs(_row_speed(vel, rj, rbody, r + k) + rbias[r + k]))
+        ln, l1, l2 = rlam[r], rlam[r + 1], rlam[r + 2]
+        biggest = max(biggest, abs(ln))
+        if ln < 0.0 or (ln == 0.0 and (l1 != 0.0 or l2 != 0.0)):
+            fits = False
+    tol, slack = 1e-9 * biggest, 1e-9 * fastest
+    fits = fits and biggest > 0.0
+    if fits:
+        for c in range(start, stop):
+            q = order[c]
+            r = 3 * q
+            if math.sqrt(rlam[r + 1] ** 2 + rlam[r + 2] ** 2) > cflt[q, C_MU] * rlam[r] + tol:
+                fits = False
+    if fits:
+        for c in range(start, stop):
+            r = 3 * order[c]
+            for side in range(2):
+                i = rbody[r, side]
+                if i >= 0:
+                    for j in range(6):
+                        saved[i, j] = vel[i, j]
+        for c in range(start, stop):
+            r = 3 * order[c]
+            for k in range(3):
+                if rlam[r + k] != 0.0:
+                    _apply(vel, rw, rbody, r + k, rlam[r + k])
+        for c in range(start, stop):
+            q = order[c]
+            r = 3 * q
+            body = cint[q, I_B] if cint[q, I_B] >= 0 else cint[q, I_A]
+            reach = PROJECT_TOL * size[body]
+            close = min(slack, HELD_TOL * reach / h)
+            un = _row_speed(vel, rj, rbody, r)
+            if cflt[q, C_GAP] + h * un < -0.5 * reach:
+                fits = False
+            if rlam[r] > 0.0:
+                for k in range(3):
+                    if abs(_row_speed(vel, rj, rbody, r + k) + rbias[r + k]) > close:
+                        fits = False
+            elif un + rbias[r] < -close:
+                fits = False
+        if not fits:
+            for c in range(start, stop):
+                r = 3 * order[c]
+                for side in range(2):
+                    i = rbody[r, side]
+                    if i >= 0:
+                        for j in range(6):
+                            vel[i, j] = saved[i, j]
+    _pin = vel[0, 0], rj[0, 0], rw[0, 0], rbody[0, 0], rbias[0], rlam[0], cflt[0, 0], cint[0, 0], size[0], order[0]
+    _pin2 = saved[0, 0]
+    return fits
 
 
 @njit(**INLINE)
@@ -1348,8 +1422,11 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         if 3 * (hi - lo) <= A.shape[0]:
             left = _waiting(cint, order, lo, hi, wait) - 1
             if left < 0:
-                kept = _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, lo, hi, A, L, vec[0], vec[1],
-                                 vec[2], band, cwork[:, 2])
+                # dx (per body) is scratch until the projection
+                kept = _held(vel, rj, rw, rbody, rbias, rlam, cflt, cint, size, h, order, lo, hi, dx)
+                if not kept:
+                    kept = _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, lo, hi, A, L, vec[0], vec[1],
+                                     vec[2], band, cwork[:, 2])
                 left = 0 if kept else STICK_RETRY - 1
             for c in range(lo, hi):
                 for side in range(2):
