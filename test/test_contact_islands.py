@@ -408,6 +408,38 @@ def test_two_towers_a_millimetre_apart_are_solved_exactly():
     assert np.max(np.abs(sim.positions_world() - start)) <= 1e-9
 
 
+@pytest.mark.parametrize("dt", [1e-3, 1e-2])
+def test_a_resting_tower_is_held_by_its_warm_start_with_each_cube_s_weight(dt):
+    """A 10-cube tower at rest: every step is the sticking case, and on a quarter of the steps or more (each until
+    its residue grows past the tolerance) it is kept from the last step's λ (no factorisation); that λ is the
+    exact one: each cube's contact impulse over a step is its weight's, m g h up, with no moment about its centre
+    (momentum balance at rest), within 2e-9 of it (the sticking solve's tolerance, 1e-9 of the free speeds, and
+    what the steps held leave of the speeds, less); no speed above 1e-9 m/s."""
+    from rigid_body_sim.core.kernels.contact.island import C_IMPULSE, C_X, I_A, I_B, OUT_HELD, OUT_STICK
+
+    sim = simulator(tower(), dt=dt)
+    islands = sim.contact.pairs.islands
+    sim.step()
+    weight = 1.0 * G * dt  # N·s a step, each cube 1 kg
+    held = 0
+    for _ in range(200):
+        centres = sim.positions_world().copy()
+        sim.step()
+        assert islands.out[OUT_STICK] == 1
+        held += islands.out[OUT_HELD]
+        ints, floats = islands.contacts()
+        impulse, moment = np.zeros((10, 3)), np.zeros((10, 3))
+        for (a, b), x, j in zip(ints[:, [I_A, I_B]], floats[:, C_X:C_X + 3], floats[:, C_IMPULSE:C_IMPULSE + 3]):
+            for body, on_it in ((b, j), (a, -j)):  # the impulse on b, a takes its opposite
+                if body >= 0:
+                    impulse[body] += on_it
+                    moment[body] += np.cross(x - centres[body], on_it)
+        assert impulse == pytest.approx(np.tile([0.0, 0.0, weight], (10, 1)), abs=2e-9 * weight)
+        assert np.max(np.abs(moment)) <= 2e-9 * weight * EDGE
+    assert held >= 50
+    assert speeds(sim) <= 1e-9
+
+
 def speeds_of(sim: Simulator, bodies: list[int]) -> float:
     v = np.linalg.norm(sim.linear_velocities_world()[bodies], axis=1)
     w = np.linalg.norm(sim.angular_velocities_world()[bodies], axis=1) * 0.5 * EDGE

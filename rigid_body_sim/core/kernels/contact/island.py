@@ -112,9 +112,9 @@ I_A, I_B, I_STATIC, I_GROUND, I_NEXT, C_INTS = 0, 1, 2, 3, 4, 5
 WARM_REACH = 0.1
 #: Columns of the per-call outputs: island body-steps, contact points, sticking solves kept, PGS islands,
 #: projected points, largest depth projected (m), bodies woken, bodies put to sleep, points whose approach was
-#: stopped after the projection.
-OUT_BODIES, OUT_CONTACTS, OUT_STICK, OUT_PGS, OUT_PROJECTED, OUT_DEPTH, OUT_WOKEN, OUT_SLEPT, OUT_STOPPED = range(9)
-OUT_WIDTH = 9
+#: stopped after the projection, sticking solves kept from the warm start (_held, of OUT_STICK).
+OUT_BODIES, OUT_CONTACTS, OUT_STICK, OUT_PGS, OUT_PROJECTED, OUT_DEPTH, OUT_WOKEN, OUT_SLEPT, OUT_STOPPED, OUT_HELD = range(10)
+OUT_WIDTH = 10
 
 
 @njit(**JIT)
@@ -629,8 +629,9 @@ def _held(vel, rj, rw, rbody, rbias, rlam, cflt, cint, size, h, order, start, st
     projection's tolerance, so that a component at rest does not creep), every other parts (u_n⁺ ≥ 0 to that
     tolerance), every point's gap after the step (linear) is above −PROJECT_TOL × its body's size / 2, every
     λ_n ≥ 0 and every λ_t in its cone. Then the sticking solve's λ is that one, found without a factorisation
-    (a component at rest: the same λ step after step). True: vel has λ applied; False: vel as it was (its bodies'
-    rows kept in ``saved``, per body 6)."""
+    (a component at rest: the same λ step after step, until what it leaves of the speeds, the solve's round-off,
+    grows past that tolerance: a held λ does not follow the bodies' turn, so its residue grows step by step).
+    True: vel has λ applied; False: vel as it was (its bodies' rows kept in ``saved``, per body 6)."""
     fastest, biggest = 0.0, 0.0
     fits = True
     for c in range(start, stop):
@@ -1424,7 +1425,9 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             if left < 0:
                 # dx (per body) is scratch until the projection
                 kept = _held(vel, rj, rw, rbody, rbias, rlam, cflt, cint, size, h, order, lo, hi, dx)
-                if not kept:
+                if kept:
+                    out[OUT_HELD] += 1
+                else:
                     kept = _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, lo, hi, A, L, vec[0], vec[1],
                                      vec[2], band, cwork[:, 2])
                 left = 0 if kept else STICK_RETRY - 1
