@@ -621,6 +621,19 @@ def _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, start, stop, A, L, r
     return kept
 
 
+@njit(**INLINE)
+def _copy_rows(src, dst, rbody, order, start, stop):
+    """dst[i] = src[i] (6 columns) for every body of the contacts order[start:stop]."""
+    for c in range(start, stop):
+        r = 3 * order[c]
+        for side in range(2):
+            i = rbody[r, side]
+            if i >= 0:
+                for j in range(6):
+                    dst[i, j] = src[i, j]
+    _pin = src[0, 0], dst[0, 0], rbody[0, 0], order[0]
+
+
 @njit(**JIT)
 def _held(vel, rj, rw, rbody, rbias, rlam, cflt, cint, size, h, order, start, stop, saved):
     """Whether the contacts order[start:stop] are solved exactly by their warm start (rlam: the last step's λ
@@ -651,13 +664,7 @@ def _held(vel, rj, rw, rbody, rbias, rlam, cflt, cint, size, h, order, start, st
             if math.sqrt(rlam[r + 1] ** 2 + rlam[r + 2] ** 2) > cflt[q, C_MU] * rlam[r] + tol:
                 fits = False
     if fits:
-        for c in range(start, stop):
-            r = 3 * order[c]
-            for side in range(2):
-                i = rbody[r, side]
-                if i >= 0:
-                    for j in range(6):
-                        saved[i, j] = vel[i, j]
+        _copy_rows(vel, saved, rbody, order, start, stop)
         for c in range(start, stop):
             r = 3 * order[c]
             for k in range(3):
@@ -679,13 +686,7 @@ def _held(vel, rj, rw, rbody, rbias, rlam, cflt, cint, size, h, order, start, st
             elif un + rbias[r] < -close:
                 fits = False
         if not fits:
-            for c in range(start, stop):
-                r = 3 * order[c]
-                for side in range(2):
-                    i = rbody[r, side]
-                    if i >= 0:
-                        for j in range(6):
-                            vel[i, j] = saved[i, j]
+            _copy_rows(saved, vel, rbody, order, start, stop)
     _pin = vel[0, 0], rj[0, 0], rw[0, 0], rbody[0, 0], rbias[0], rlam[0], cflt[0, 0], cint[0, 0], size[0], order[0]
     _pin2 = saved[0, 0]
     return fits
