@@ -410,11 +410,12 @@ def test_two_towers_a_millimetre_apart_are_solved_exactly():
 
 @pytest.mark.parametrize("dt", [1e-3, 1e-2])
 def test_a_resting_tower_is_held_by_its_warm_start_with_each_cube_s_weight(dt):
-    """A 10-cube tower at rest: every step is the sticking case, and on a quarter of the steps or more (each until
-    its residue grows past the tolerance) it is kept from the last step's λ (no factorisation); that λ is the
-    exact one: each cube's contact impulse over a step is its weight's, m g h up, with no moment about its centre
-    (momentum balance at rest), within 2e-9 of it (the sticking solve's tolerance, 1e-9 of the free speeds, and
-    what the steps held leave of the speeds, less); no speed above 1e-9 m/s."""
+    """A 10-cube tower at rest: every step is the sticking case, and on most steps it is kept from the last step's λ
+    (no factorisation) until the tower's tilt, grown from round-off under a held λ, passes the tolerance: then it is
+    solved twice (the second from rest) and held again, not alternating between the two; that λ is the exact one:
+    each cube's contact impulse over a step is its weight's, m g h up, with no moment about its centre (momentum
+    balance at rest), within 2e-9 of it (the sticking solve's tolerance, 1e-9 of the free speeds, and what the steps
+    held leave of the speeds, less); no speed above 1e-9 m/s."""
     from rigid_body_sim.core.kernels.contact.island import C_IMPULSE, C_X, I_A, I_B, OUT_HELD, OUT_STICK
 
     sim = simulator(tower(), dt=dt)
@@ -436,7 +437,7 @@ def test_a_resting_tower_is_held_by_its_warm_start_with_each_cube_s_weight(dt):
                     moment[body] += np.cross(x - centres[body], on_it)
         assert impulse == pytest.approx(np.tile([0.0, 0.0, weight], (10, 1)), abs=2e-9 * weight)
         assert np.max(np.abs(moment)) <= 2e-9 * weight * EDGE
-    assert held >= 50
+    assert held >= (180 if dt == 1e-3 else 100)  # of 200 (measured 197 and 129)
     assert speeds(sim) <= 1e-9
 
 

@@ -8,7 +8,7 @@ core/contact/island.py). The step is **first order** (Moreau–Jean / Stewart–
 
 with, at each contact point (normal n, tangents t1, t2, gap g ≥ 0 at the step's start),
 u_n⁺ + g/h ≥ 0 ⊥ λ_n ≥ 0 (Stewart–Trinkle's gap term: a gap closes exactly within the step,
-never more) and Coulomb's cone |λ_t| ≤ μ λ_n, e = 0. The points of two boxes face on face (their
+never more; a gap within TOUCH_GAP × the pair's size is touching, g = 0) and Coulomb's cone |λ_t| ≤ μ λ_n, e = 0. The points of two boxes face on face (their
 normal within 0.1 rad of a face's) are the clipped patch of the two faces (pairs.box_patch), each
 at its own gap, as far as the pair's reach over the step or PATCH_REACH × its size: the gap term
 lets a row act only where the step would close it, and a box turned or tilted on another is held
@@ -16,8 +16,8 @@ by its whole face, not rocked about the narrow phase's deepest corner.
 
 The velocity problem is solved per component of the step's contacts (bodies joined by contacts; an
 island's bodies within reach but not touching are apart there). The case where nothing slides is
-solved exactly first: when the last step's λ (the warm start) already meets this step's sticking
-conditions below to their tolerances (a component at rest), it is kept without a factorisation (_held);
+solved exactly first: when the last step's λ (the warm start) was solved from rest and already meets this step's
+sticking conditions below to their tolerances (a component at rest), it is kept without a factorisation (_held);
 else (_sticking) the points that stay as equalities (J M⁻¹ Jᵀ λ = −(J v* + g/h) on
 their rows), the others at λ = 0, by a Cholesky factorisation of J M⁻¹ Jᵀ + εI within its profile
 (the contacts sorted along the component's longest extent: a column is banded) refined by iterated
@@ -81,6 +81,10 @@ PATCH_FLAT, PATCH_REACH = math.cos(0.1), 1e-2
 DENSE_MAX = 360
 #: Points deeper than this × the pair's size (m per m) after the step are projected out.
 PROJECT_TOL = 1e-12
+#: A point whose gap is at most this × the pair's size (half the projection's tolerance) touches: the velocity step
+#: does not close it (no gap term), so that the narrow phase's round-off in a resting gap (~1e-15 m) is not made a
+#: speed (~1e-12 m/s at dt = 1 ms) that the next step must stop.
+TOUCH_GAP = 0.5 * PROJECT_TOL
 #: Narrow-phase rounds of the position projection, the first TURN_ROUNDS in the mass metric (turning and
 #: translating), the others translating only; Gauss–Seidel sweeps per round.
 PROJECT_ROUNDS, TURN_ROUNDS, PROJECT_SWEEPS = 8, 2, 100
@@ -103,6 +107,11 @@ TIKHONOV_STEPS, TIKHONOV_TOL, TIKHONOV_EPS, STICK_PIVOTS = 6, 1e-15, 1e-9, 3
 #: A component whose sticking solve failed is tried again only after STICK_RETRY − 1 steps on Gauss–Seidel (while
 #: a pile lands, or a point slides, nearly none holds); one solved exactly is tried again at the next step.
 STICK_RETRY = 4
+#: A body's wait (steps before its component is tried for the sticking solve again) after an exact step: solved
+#: (WAIT_SOLVED: its λ also stopped what the bodies brought in, so it is solved once more, from that rest) or held or
+#: solved from a step solved exactly (WAIT_HELD: its λ is the resting one, kept by _held while it holds). Holding a
+#: λ that stopped a motion would stop it again, the other way: a component at rest would alternate.
+WAIT_SOLVED, WAIT_HELD = -1, -2
 #: Columns of a contact's float row: point (3), normal a → b (3), gap, μ, and after the velocity step the
 #: impulse on b (3, world, N·s; a gets its opposite).
 C_X, C_N, C_GAP, C_MU, C_IMPULSE, C_FLOATS = 0, 3, 6, 7, 8, 11
@@ -324,10 +333,10 @@ def _gather(Y, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdi
 
 
 @njit(**JIT)
-def _rows(Y, prm, n_contacts, cint, cflt, iw, normal_only, h, rj, rw, rdiag, rbias, rbody, island):
+def _rows(Y, prm, n_contacts, cint, cflt, iw, normal_only, h, size, rj, rw, rdiag, rbias, rbody, island):
     """Each contact's rows (normal, t1, t2; or the normal alone): J (per side 6: linear, angular world), M⁻¹Jᵀ,
-    the diagonal of J M⁻¹ Jᵀ, the bias (the gap term g/h, g ≥ 0), the two bodies (−1: fixed, or not moved by
-    this solve: island[i] != 1)."""
+    the diagonal of J M⁻¹ Jᵀ, the bias (the gap term g/h for a gap above TOUCH_GAP × the pair's size, else 0:
+    touching), the two bodies (−1: fixed, or not moved by this solve: island[i] != 1)."""
     per = 1 if normal_only else 3
     for c in range(n_contacts):
         nx, ny, nz = cflt[c, C_N], cflt[c, C_N + 1], cflt[c, C_N + 2]
@@ -376,9 +385,11 @@ def _rows(Y, prm, n_contacts, cint, cflt, iw, normal_only, h, rj, rw, rdiag, rbi
                 for j in range(6):
                     diag += rj[r, o + j] * rw[r, o + j]
             rdiag[r] = diag
-            rbias[r] = max(cflt[c, C_GAP], 0.0) / h if k == 0 else 0.0
+            body = cint[c, I_B] if cint[c, I_B] >= 0 else cint[c, I_A]
+            touching = cflt[c, C_GAP] <= TOUCH_GAP * size[body]
+            rbias[r] = 0.0 if k != 0 or touching else cflt[c, C_GAP] / h
     _pin = Y[0, 0], prm[0, 0], cint[0, 0], cflt[0, 0], iw[0, 0], rj[0, 0], rw[0, 0], rdiag[0], rbias[0], rbody[0, 0]
-    _pin2 = island[0]
+    _pin2 = island[0], size[0]
 
 
 @njit(**JIT)
@@ -695,15 +706,17 @@ def _held(vel, rj, rw, rbody, rbias, rlam, cflt, cint, size, h, order, start, st
 
 @njit(**INLINE)
 def _waiting(cint, order, start, stop, wait):
-    """The fewest steps a body of the contacts order[start:stop] still waits before its component is tried for
-    the sticking solve again (0: now)."""
+    """The fewest and the most steps a body of the contacts order[start:stop] still waits before its component is
+    tried for the sticking solve again (≤ 0: now; WAIT_SOLVED, WAIT_HELD below)."""
     least = wait[cint[order[start], I_B]] if cint[order[start], I_B] >= 0 else wait[cint[order[start], I_A]]
+    most = least
     for k in range(start, stop):
         for side in range(2):
             b = cint[order[k], side]
             if b >= 0:
                 least = min(least, wait[b])
-    return least
+                most = max(most, wait[b])
+    return least, most
 
 
 @njit(**INLINE)
@@ -1042,7 +1055,8 @@ def _pile_rows(Y1, prm, nd, cint, cflt, rj, rw, rdiag, rbody, porder, key):
 
 
 @njit(**JIT)
-def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdiag, rbias, rbody, rlam, vel, inv):
+def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, size, rj, rw, rdiag, rbias, rbody, rlam, vel,
+                   inv):
     """After the projection: the island bodies' velocities in Y1 made not to approach at the nd touching points
     cint/cflt (normal rows, λ ≥ 0, e = 0): the projection moved them out, they must not be left moving in
     again. Gauss–Seidel in the kinetic metric first, then on the linear velocities alone for what approach is
@@ -1067,7 +1081,7 @@ def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdia
                 else:
                     for j in range(9):
                         iw[i, j] = 0.0
-        _rows(Y1, prm, nd, cint, cflt, iw, True, h, rj, rw, rdiag, rbias, rbody, island)
+        _rows(Y1, prm, nd, cint, cflt, iw, True, h, size, rj, rw, rdiag, rbias, rbody, island)
         for c in range(nd):
             rlam[c] = 0.0
             inv[c] = _inverse(rdiag[c])
@@ -1101,7 +1115,7 @@ def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdia
         Y1[i, W + 1] = R[1] * vel[i, 3] + R[4] * vel[i, 4] + R[7] * vel[i, 5]
         Y1[i, W + 2] = R[2] * vel[i, 3] + R[5] * vel[i, 4] + R[8] * vel[i, 5]
     _pin = Y1[0, 0], prm[0, 0], members[0], island[0], cint[0, 0], cflt[0, 0], iw[0, 0], rj[0, 0], rw[0, 0]
-    _pin2 = rdiag[0], rbias[0], rbody[0, 0], rlam[0], vel[0, 0], inv[0]
+    _pin2 = rdiag[0], rbias[0], rbody[0, 0], rlam[0], vel[0, 0], inv[0], size[0]
 
 
 @njit(**JIT)
@@ -1183,7 +1197,7 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
                         iw[i, j] = 0.0
                 for j in range(6):
                     dx[i, j] = 0.0
-        _rows(Y1, prm, nd, cint, cflt, iw, True, h, rj, rw, rdiag, rbias, rbody, island)
+        _rows(Y1, prm, nd, cint, cflt, iw, True, h, size, rj, rw, rdiag, rbias, rbody, island)
         for c in range(nd):  # every touching point is a row (λ ≥ 0): closing one gap must not open another
             rlam[c] = 0.0
             deepest = max(deepest, -cflt[c, C_GAP])
@@ -1219,7 +1233,7 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
             _narrow(Y1, prm, shapes, nlist, live, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound)
             nd = _gather(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount,
                          ppoints, pseps, members, bound, size, is_static, default_mu, True, 0.0, cint, cflt)
-        _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, rj, rw, rdiag, rbias, rbody, rlam, vel,
+        _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, size, rj, rw, rdiag, rbias, rbody, rlam, vel,
                        rwork[:, 0])
         out[OUT_STOPPED] = nd
     for m in range(n):
@@ -1261,8 +1275,8 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     """One step of every island (module docstring): results into Y1 for the bodies marked island[i] = 1 (solved)
     or 2 (asleep: their rows copied from Y0). Returns 0, or −(contacts needed) when cint is too small
     (then nothing was changed but ``asleep`` and the outputs; call again with room). ``wait`` (per body, kept
-    across calls): steps before its component is tried for the sticking solve again (0: at once); ``still`` (per body, kept
-    across calls): the steps in a row it was at rest by the sleep rule (end of this function) in an island, from the
+    across calls): steps before its component is tried for the sticking solve again (≤ 0: at once; WAIT_SOLVED,
+    WAIT_HELD); ``still`` (per body, kept across calls): the steps in a row it was at rest by the sleep rule (end of this function) in an island, from the
     pose ``anchor`` (per body: position, quaternion) with a sleep speed raised above rest. ``cwork`` (per contact,
     3 columns) and ``rwork`` (per row, 3 columns) are scratch."""
     n = members.shape[0]
@@ -1385,7 +1399,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     nc = _gather(Y0, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps,
                  members, bound, size, is_static, default_mu, False, 0.0, cint, cflt)
     out[OUT_CONTACTS] = nc
-    _rows(Y0, prm, nc, cint, cflt, iw, False, h, rj, rw, rdiag, rbias, rbody, island)
+    _rows(Y0, prm, nc, cint, cflt, iw, False, h, size, rj, rw, rdiag, rbias, rbody, island)
     _warm_start(nc, cint, cflt, n_prev, cint[half:], cflt[half:], members, size, cstart, rj, rbody, rlam)
     # contacts sorted by their component (counting sort on the root of their moving body): the bodies joined by
     # this step's contacts. An island's bodies within reach but not touching are apart here: the velocity problem
@@ -1423,16 +1437,21 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             continue
         kept = False
         if 3 * (hi - lo) <= A.shape[0]:
-            left = _waiting(cint, order, lo, hi, wait) - 1
+            least, most = _waiting(cint, order, lo, hi, wait)
+            left = least - 1
             if left < 0:
-                # dx (per body) is scratch until the projection
-                kept = _held(vel, rj, rw, rbody, rbias, rlam, cflt, cint, size, h, order, lo, hi, dx)
+                if most == WAIT_HELD:  # dx (per body) is scratch until the projection
+                    kept = _held(vel, rj, rw, rbody, rbias, rlam, cflt, cint, size, h, order, lo, hi, dx)
                 if kept:
                     out[OUT_HELD] += 1
+                    left = WAIT_HELD
                 else:
                     kept = _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, lo, hi, A, L, vec[0], vec[1],
                                      vec[2], band, cwork[:, 2])
-                left = 0 if kept else STICK_RETRY - 1
+                    if not kept:
+                        left = STICK_RETRY - 1
+                    else:  # solved from a step solved exactly: its λ is the resting one, without a stop in it
+                        left = WAIT_HELD if least == most == WAIT_SOLVED else WAIT_SOLVED
             for c in range(lo, hi):
                 for side in range(2):
                     if cint[order[c], side] >= 0:
