@@ -1056,13 +1056,13 @@ def _pile_rows(Y1, prm, nd, cint, cflt, rj, rw, rdiag, rbody, porder, key):
 
 @njit(**JIT)
 def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, size, rj, rw, rdiag, rbias, rbody, rlam, vel,
-                   inv):
+                   inv, act):
     """After the projection: the island bodies' velocities in Y1 made not to approach at the nd touching points
     cint/cflt (normal rows, λ ≥ 0, e = 0): the projection moved them out, they must not be left moving in
     again. Gauss–Seidel in the kinetic metric first, then on the linear velocities alone for what approach is
     left (that one converges in a pile, as the projection's translating rounds do). Only removes kinetic energy
     (not as the projection over a pile: holding a lower body there gave the upper its speed, energy and motion
-    that kept a pile from sleeping). inv (per row) is scratch: the rows' 1 / rdiag."""
+    that kept a pile from sleeping). inv (per row) and act (per row: the rows that move a body) are scratch."""
     n = members.shape[0]
     for m in range(n):
         i = members[m]
@@ -1082,14 +1082,17 @@ def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, size, rj, rw
                     for j in range(9):
                         iw[i, j] = 0.0
         _rows(Y1, prm, nd, cint, cflt, iw, True, h, size, rj, rw, rdiag, rbias, rbody, island)
+        moving = 0
         for c in range(nd):
             rlam[c] = 0.0
             inv[c] = _inverse(rdiag[c])
+            if rdiag[c] > 0.0:  # the others (between bodies held) are not swept
+                act[moving] = c
+                moving += 1
         for _s in range(PROJECT_SWEEPS):
             change = 0.0
-            for c in range(nd):
-                if rdiag[c] <= 0.0:
-                    continue
+            for k in range(moving):
+                c = act[k]
                 new = max(rlam[c] - _row_speed(vel, rj, rbody, c) * inv[c], 0.0)
                 dl = new - rlam[c]
                 rlam[c] = new
@@ -1115,7 +1118,7 @@ def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, size, rj, rw
         Y1[i, W + 1] = R[1] * vel[i, 3] + R[4] * vel[i, 4] + R[7] * vel[i, 5]
         Y1[i, W + 2] = R[2] * vel[i, 3] + R[5] * vel[i, 4] + R[8] * vel[i, 5]
     _pin = Y1[0, 0], prm[0, 0], members[0], island[0], cint[0, 0], cflt[0, 0], iw[0, 0], rj[0, 0], rw[0, 0]
-    _pin2 = rdiag[0], rbias[0], rbody[0, 0], rlam[0], vel[0, 0], inv[0], size[0]
+    _pin2 = rdiag[0], rbias[0], rbody[0, 0], rlam[0], vel[0, 0], inv[0], size[0], act[0]
 
 
 @njit(**JIT)
@@ -1203,14 +1206,17 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
             deepest = max(deepest, -cflt[c, C_GAP])
         pile = _pile_rows(Y1, prm, nd, cint, cflt, rj, rw, rdiag, rbody, porder, rwork[:, 1])
         inv = rwork[:, 0]  # the rows' 1 / rdiag
-        for c in range(nd):
+        moving = 0
+        for k in range(nd):
+            c = porder[k]
             inv[c] = _inverse(rdiag[c])
+            if rdiag[c] > 0.0:  # in their order; the others (between bodies held) are not swept
+                porder[moving] = c
+                moving += 1
         for _s in range(PILE_SWEEPS if pile else PROJECT_SWEEPS):
             change = 0.0
-            for k in range(nd):
+            for k in range(moving):
                 c = porder[k]
-                if rdiag[c] <= 0.0:
-                    continue
                 g = cflt[c, C_GAP] + _row_speed(dx, rj, rbody, c)
                 new = max(rlam[c] - g * inv[c], 0.0)
                 dl = new - rlam[c]
@@ -1234,7 +1240,7 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
             nd = _gather(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount,
                          ppoints, pseps, members, bound, size, is_static, default_mu, True, 0.0, cint, cflt)
         _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, size, rj, rw, rdiag, rbias, rbody, rlam, vel,
-                       rwork[:, 0])
+                       rwork[:, 0], porder)
         out[OUT_STOPPED] = nd
     for m in range(n):
         i = members[m]
