@@ -370,7 +370,7 @@ def imu_body(sites: int, name_length: int = 2) -> dict:
 def test_a_spawn_of_20000_imu_sites_is_refused_naming_the_limit():
     """Before: one ~/spawn body with 20,000 IMU sites held the executor for 6.6-11.8 s (a publisher
     per IMU). Now it is refused at once, naming MAX_IMUS_PER_BODY, and the ticks go on."""
-    definition = yaml.safe_dump(imu_body(20_000))
+    definition = yaml.dump(imu_body(20_000), Dumper=yaml.CSafeDumper)  # safe_dump's text, in 1 s instead of 3 s
     with SimHarness(paused=False, parameters={"diagnostics_period": 0.0}) as harness:
         with harness.node.locked_simulator() as sim:
             before = sim.time

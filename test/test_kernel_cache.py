@@ -143,6 +143,24 @@ WAITER = (
 )
 
 
+def wait_until_blocked_on(handle, process: subprocess.Popen, timeout: float = 120.0) -> None:
+    """Wait until ``process`` waits for the flock held on ``handle``: the kernel lists a blocked
+    request (``->``) of that pid on that file's inode in /proc/locks. Fails if it ends first."""
+    import time
+
+    inode = os.fstat(handle.fileno()).st_ino
+    deadline = time.monotonic() + timeout
+    while True:
+        for line in Path("/proc/locks").read_text().splitlines():
+            fields = line.split()
+            if len(fields) > 5 and fields[1] == "->" and fields[5] == str(process.pid) \
+                    and fields[6].rsplit(":", 1)[-1] == str(inode):
+                return
+        assert process.poll() is None, "a process went past the cache while another held its lock"
+        assert time.monotonic() < deadline, f"the process never waited for the lock within {timeout} s"
+        time.sleep(0.02)
+
+
 def test_a_process_waits_while_another_compiles(tmp_path: Path) -> None:
     """Processes starting together on one cache take turns (cache_lock): while one holds the lock
     (compiling), another's first Simulator waits, and goes on the moment it is released."""
@@ -159,7 +177,7 @@ def test_a_process_waits_while_another_compiles(tmp_path: Path) -> None:
 
         fcntl.flock(handle, fcntl.LOCK_EX)  # another process compiling
         waiter = subprocess.Popen([sys.executable, "-c", WAITER], env=env, stdout=subprocess.PIPE, text=True)
-        time.sleep(3.0)
+        wait_until_blocked_on(handle, waiter)
         assert waiter.poll() is None, "a process went past the cache while another held its lock"
         released = time.monotonic()
         fcntl.flock(handle, fcntl.LOCK_UN)

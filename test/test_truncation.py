@@ -70,6 +70,22 @@ def chunk_samples(path: Path) -> list[tuple[int, dict[str, set[int]], dict[str, 
     return out
 
 
+def whole_chunks(path: Path) -> int:
+    """How many whole chunk records a recording being written holds so far (mcap's stream reader,
+    up to the first record not yet whole)."""
+    from mcap.records import Chunk
+    from mcap.stream_reader import StreamReader
+
+    count = 0
+    with open(path, "rb") as f:
+        try:
+            for record in StreamReader(f, emit_chunks=True).records:
+                count += isinstance(record, Chunk)
+        except Exception:  # noqa: BLE001 - the record being written: the count so far
+            pass
+    return count
+
+
 def expected_times(chunks: list[tuple[int, dict[str, set[int]], dict[str, set[int]]]], cut: int) -> list[int]:
     """The sample times read_recording must return for a cut at byte ``cut``: those at which every
     body seen with both a pose and a twist has both, in chunks that end at or before the cut."""
@@ -168,8 +184,8 @@ def test_cli_recording_cut_anywhere_reads_up_to_the_cut(tmp_path: Path, cuts: in
 @pytest.mark.timeout(300)
 @pytest.mark.parametrize("cuts", [pytest.param(40, id="40 cuts"), pytest.param(CUTS, id="200 cuts", marks=pytest.mark.slow)])
 def test_node_recording_cut_anywhere_reads_up_to_the_cut(tmp_path: Path, cuts: int) -> None:
-    """The node flushes a chunk every 0.5 s of wall time: 3 s of running gives several chunks
-    (cut at 40 random offsets in the default run, 200 in the slow one)."""
+    """The node flushes a chunk every 0.5 s of wall time: running until five chunks are on disk gives
+    several chunks (cut at 40 random offsets in the default run, 200 in the slow one)."""
     scene = tmp_path / "scene.yaml"
     scene.write_text(yaml.safe_dump(SCENE), encoding="utf-8")
     full = tmp_path / "node.mcap"
@@ -185,7 +201,12 @@ def test_node_recording_cut_anywhere_reads_up_to_the_cut(tmp_path: Path, cuts: i
             assert process.poll() is None, log_path.read_text()
             assert time.monotonic() < deadline, log_path.read_text()
             time.sleep(0.05)
-        time.sleep(3.0)
+        # Several chunks: until five whole chunks are on disk (one flushed every 0.5 s of wall time), not a fixed
+        # 3 s; the stop may write one more.
+        while whole_chunks(full) < 5:
+            assert process.poll() is None, log_path.read_text()
+            assert time.monotonic() < deadline + 60.0, log_path.read_text()
+            time.sleep(0.05)
         process.send_signal(signal.SIGINT)
         assert process.wait(timeout=30) == 0, log_path.read_text()
     finally:

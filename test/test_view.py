@@ -164,8 +164,12 @@ def browser(tmp_path_factory):
 
 
 def open_page(driver, port: int, server: subprocess.Popen, log: Path) -> None:
-    """Load the view's page (retrying while the view starts) and close the software-WebGL notice."""
+    """Load the view's page once the view says it serves it (retrying while the view starts) and close
+    the software-WebGL notice."""
     end = time.monotonic() + 60.0
+    while "Ctrl-C stops" not in log.read_text():  # its page is built: no load of a half-made page, no retry
+        assert server.poll() is None and time.monotonic() < end, log.read_text()
+        time.sleep(0.05)
     while True:
         try:
             driver.get(f"http://127.0.0.1:{port}")
