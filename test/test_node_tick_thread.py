@@ -69,15 +69,18 @@ def test_tick_thread_pause_step_rate_reset_and_stop():
         assert node.simulator.time == pytest.approx(3 * DT, abs=1e-12)
         assert stamp_ns(sim.latest_pose("box")) == round(3 * DT * 1e9)
 
+        unpaused, sim_unpaused = time.monotonic(), node.simulator.time
         assert sim.set_paused(False).success
         refused = sim.call_step()
         assert not refused.success and "running" in refused.message
         wall0, sim0 = time.monotonic(), node.simulator.time
         sim.spin_for(0.5)
         wall, advanced = time.monotonic() - wall0, node.simulator.time - sim0
-        # Deadline schedule: sim time follows wall time, never ahead of it (a heavily loaded machine
-        # may delay ticks: 0.15 s of 0.55 s was seen with a dozen other processes on 2 cores).
-        assert 0.2 * wall < advanced <= wall + 2 * DT
+        # Deadline schedule: sim time follows wall time from the unpause, never ahead of it (a heavily
+        # loaded machine may delay ticks: 0.15 s of 0.55 s was seen with a dozen other processes on 2
+        # cores; delayed ticks are caught up later, so over the window alone sim time may gain on wall).
+        assert 0.2 * wall < advanced
+        assert node.simulator.time - sim_unpaused <= time.monotonic() - unpaused + 2 * DT
 
         assert sim.set_parameters_atomically(rate_hz=200, real_time_factor=2.0).successful
         assert node.simulator.dt == pytest.approx(2.0 / 200)
