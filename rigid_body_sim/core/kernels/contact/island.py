@@ -7,12 +7,13 @@ core/contact/island.py). The step is **first order** (Moreau–Jean / Stewart–
     v⁺ = v + h M⁻¹ (f_ext + gyroscopic) + M⁻¹ Jᵀ λ,   p⁺ = p + h v⁺,   q⁺ = q ⊗ exp(h ω_P⁺)
 
 with, at each contact point (normal n, tangents t1, t2, gap g ≥ 0 at the step's start),
-u_n⁺ + g/h ≥ 0 ⊥ λ_n ≥ 0 (Stewart–Trinkle's gap term: a gap closes exactly within the step,
-never more; a gap within TOUCH_GAP × the pair's size is touching, g = 0) and Coulomb's cone |λ_t| ≤ μ λ_n, e = 0. The points of two boxes face on face (their
-normal within 0.1 rad of a face's) are the clipped patch of the two faces (pairs.box_patch), each
-at its own gap, as far as the pair's reach over the step or PATCH_REACH × its size: the gap term
-lets a row act only where the step would close it, and a box turned or tilted on another is held
-by its whole face, not rocked about the narrow phase's deepest corner.
+u_n⁺ + g/h ≥ 0 ⊥ λ_n ≥ 0 (Stewart–Trinkle's gap term: a gap closes exactly within the step, never
+more; a gap within TOUCH_GAP × the pair's size is touching, g = 0) and Coulomb's cone |λ_t| ≤ μ λ_n,
+e = 0. The points of two boxes face on face (their normal within 0.1 rad of a face's) are the
+clipped patch of the two faces (pairs.box_patch), each at its own gap, as far as the pair's reach
+over the step or PATCH_REACH × its size: the gap term lets a row act only where the step would close
+it, and a box turned or tilted on another is held by its whole face, not rocked about the narrow
+phase's deepest corner.
 
 The velocity problem is solved per component of the step's contacts (bodies joined by contacts; an
 island's bodies within reach but not touching are apart there). The case where nothing slides is
@@ -351,6 +352,8 @@ def _rows(Y, prm, n_contacts, cint, cflt, iw, normal_only, h, size, rj, rw, rdia
         s = 1.0 / math.sqrt(t1x * t1x + t1y * t1y + t1z * t1z)
         t1x, t1y, t1z = t1x * s, t1y * s, t1z * s
         t2x, t2y, t2z = ny * t1z - nz * t1y, nz * t1x - nx * t1z, nx * t1y - ny * t1x
+        body = cint[c, I_B] if cint[c, I_B] >= 0 else cint[c, I_A]
+        bias = cflt[c, C_GAP] / h if cflt[c, C_GAP] > TOUCH_GAP * size[body] else 0.0  # else touching
         for k in range(per):
             r = per * c + k
             if k == 0:
@@ -385,9 +388,7 @@ def _rows(Y, prm, n_contacts, cint, cflt, iw, normal_only, h, size, rj, rw, rdia
                 for j in range(6):
                     diag += rj[r, o + j] * rw[r, o + j]
             rdiag[r] = diag
-            body = cint[c, I_B] if cint[c, I_B] >= 0 else cint[c, I_A]
-            touching = cflt[c, C_GAP] <= TOUCH_GAP * size[body]
-            rbias[r] = 0.0 if k != 0 or touching else cflt[c, C_GAP] / h
+            rbias[r] = bias if k == 0 else 0.0
     _pin = Y[0, 0], prm[0, 0], cint[0, 0], cflt[0, 0], iw[0, 0], rj[0, 0], rw[0, 0], rdiag[0], rbias[0], rbody[0, 0]
     _pin2 = island[0], size[0]
 
@@ -1282,9 +1283,9 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     or 2 (asleep: their rows copied from Y0). Returns 0, or −(contacts needed) when cint is too small
     (then nothing was changed but ``asleep`` and the outputs; call again with room). ``wait`` (per body, kept
     across calls): steps before its component is tried for the sticking solve again (≤ 0: at once; WAIT_SOLVED,
-    WAIT_HELD); ``still`` (per body, kept across calls): the steps in a row it was at rest by the sleep rule (end of this function) in an island, from the
-    pose ``anchor`` (per body: position, quaternion) with a sleep speed raised above rest. ``cwork`` (per contact,
-    3 columns) and ``rwork`` (per row, 3 columns) are scratch."""
+    WAIT_HELD); ``still`` (per body, kept across calls): the steps in a row it was at rest by the sleep rule (end of
+    this function) in an island, from the pose ``anchor`` (per body: position, quaternion) with a sleep speed raised
+    above rest. ``cwork`` (per contact, 3 columns) and ``rwork`` (per row, 3 columns) are scratch."""
     n = members.shape[0]
     for k in range(OUT_WIDTH):
         out[k] = 0.0
