@@ -137,6 +137,10 @@ browser-deps:
 # The test files run in TEST_WORKERS processes (pytest-xdist; one file stays in one process, with its
 # module fixtures; each process claims its own ROS_DOMAIN_ID). TEST_WORKERS=0: one process.
 TEST_WORKERS ?= auto
+# Bytecode on for the tests even where the environment turns it off (PYTHONDONTWRITEBYTECODE): else every
+# worker rewrites the asserts of all test modules again (about 7 s of CPU each) and every node process
+# compiles the package from source. The .pyc files go to __pycache__/ (git-ignored; make clean removes them).
+test test-slow: export PYTHONDONTWRITEBYTECODE :=
 test: $(STAMP) $(FOXGLOVE_STAMP) browser-deps
 	timeout --foreground -s INT -k 60 $(TEST_TIMEOUT_S) $(VENV_PY) -m pytest -n $(TEST_WORKERS) --dist loadfile $(PYTEST_ARGS)
 

@@ -239,12 +239,22 @@ def tipping_run(integrator: str, omega: float, dt: float = 1e-3, until: float = 
 #: closed form (test_contact_bounce.py) and slide (test_contact_sliding.py).
 PYTHON_STEPPED = tuple(name for name, method in INTEGRATORS.items() if method.code is None)
 
+#: The tipping runs in the default run: one method of each accuracy class the tipping test tells apart
+#: (rk4: the closed-form tilt within 1e-6 rad; semi-implicit Euler: first order; splitting: second order).
+#: The other compiled methods tip in ``make test-slow`` (explicit Euler's pivot raises the energy at every
+#: step, so each step is refined down to MAX_REFINEMENT pieces: ~10 s of CPU).
+TIPPING_DEFAULT = ("rk4", "semi_implicit_euler", "splitting")
+
 
 def slow_if_python_stepped(names):
     return [pytest.param(name, marks=pytest.mark.slow) if name in PYTHON_STEPPED else name for name in names]
 
 
-@pytest.mark.parametrize("integrator", slow_if_python_stepped(INTEGRATORS))
+def slow_unless_tipping_default(names):
+    return [name if name in TIPPING_DEFAULT else pytest.param(name, marks=pytest.mark.slow) for name in names]
+
+
+@pytest.mark.parametrize("integrator", slow_unless_tipping_default(INTEGRATORS))
 def test_box_spun_one_percent_below_the_tipping_threshold_falls_back(integrator):
     """At 0.99 ω_c it pivots on the edge up to the closed-form tilt, short of β = atan(a/b), falls back and
     ends at rest on the same face. rk4 and reference reach the closed-form largest tilt within 1e-6 rad
@@ -261,7 +271,7 @@ def test_box_spun_one_percent_below_the_tipping_threshold_falls_back(integrator)
     assert np.linalg.norm(sim.state.v_WC_W[0]) <= 1e-12
 
 
-@pytest.mark.parametrize("integrator", slow_if_python_stepped(INTEGRATORS))
+@pytest.mark.parametrize("integrator", slow_unless_tipping_default(INTEGRATORS))
 def test_box_spun_one_percent_above_the_tipping_threshold_tips_over(integrator):
     sim, tilts = tipping_run(integrator, 1.01 * TIP_OMEGA)
     assert tilts.max() > TIP_BETA
