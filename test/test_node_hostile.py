@@ -13,6 +13,7 @@ also under floods, are in test_stops.py.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import re
 import signal
@@ -22,6 +23,7 @@ import textwrap
 import threading
 import time
 from pathlib import Path
+from typing import Iterator
 
 import pytest
 import rclpy
@@ -73,10 +75,24 @@ def test_one_request_naming_scene_twice_applies_the_last(tmp_path):
         harness.step()
 
 
+@contextlib.contextmanager
+def frequent_thread_switches(interval_s: float = 1e-5) -> Iterator[None]:
+    """Let the interpreter switch threads every ``interval_s`` inside the block (its own interval
+    is 5 ms), so that a race between threads shows in a few runs instead of a few hundred."""
+    previous = sys.getswitchinterval()
+    sys.setswitchinterval(interval_s)
+    try:
+        yield
+    finally:
+        sys.setswitchinterval(previous)
+
+
 def test_scene_changes_from_two_threads_at_once_stay_consistent(tmp_path):
     """Two threads (an in-process client, a multi-threaded executor) change ``scene`` at once,
     20 times each, while the executor serves the node: each change is applied whole, one at a
-    time, and the scene the node runs is always the one its parameter names."""
+    time, and the scene the node runs is always the one its parameter names. The endpoints each
+    change replaces are destroyed from those threads while the executor builds its wait sets
+    (threads switching every 10 µs): the executor never meets a destroyed one (InvalidHandle)."""
     scenes = [write_scene(tmp_path / f"s{k}.yaml", [f"body{k}", "shared"]) for k in range(4)]
     failures: list[BaseException] = []
     with SimHarness(scenes[0], paused=False, parameters={"scene_dirs": [str(tmp_path)]}) as harness:
@@ -92,9 +108,10 @@ def test_scene_changes_from_two_threads_at_once_stay_consistent(tmp_path):
                 failures.append(exc)
 
         threads = [threading.Thread(target=hammer, args=(offset,)) for offset in (0, 1)]
-        for thread in threads:
-            thread.start()
-        harness.spin_until(lambda: not any(t.is_alive() for t in threads), "both threads", timeout=120.0)
+        with frequent_thread_switches():
+            for thread in threads:
+                thread.start()
+            harness.spin_until(lambda: not any(t.is_alive() for t in threads), "both threads", timeout=120.0)
         assert not failures, failures
         path = node.get_parameter("scene").value
         with node.locked_simulator() as sim:
@@ -105,6 +122,22 @@ def test_scene_changes_from_two_threads_at_once_stay_consistent(tmp_path):
                             if name.endswith(("/pose", "/twist")))
         assert publishers == expected
         harness.spin_for(0.2)  # still ticking
+        assert node.tick_failure is None
+
+
+def test_contact_wrench_publishers_come_and_go_from_the_tick_thread_while_the_executor_spins():
+    """``publish_contact_wrench`` switched on and off 10 times while running at 1 kHz: the tick
+    thread creates and destroys the ``B/contact_wrench`` publishers while the executor builds its
+    wait sets (threads switching every 10 µs); neither the executor nor the ticks raise."""
+    scene = Path(__file__).resolve().parents[1] / "config" / "contact_resting_box_imu.yaml"
+    with SimHarness(scene, paused=False, parameters={"rate_hz": 1000.0, "publish_contact_wrench": False}) as harness:
+        node = harness.node
+        with frequent_thread_switches():
+            for k in range(10):
+                on = k % 2 == 0
+                assert all(r.successful for r in harness.set_parameters(publish_contact_wrench=on))
+                harness.spin_until(lambda: node.count_publishers("crate/contact_wrench") == int(on),
+                                   f"crate/contact_wrench {'made' if on else 'destroyed'} by the ticks")
         assert node.tick_failure is None
 
 

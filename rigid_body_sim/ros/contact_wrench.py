@@ -25,6 +25,7 @@ from rclpy.qos import QoSProfile
 
 from ..core import Simulator
 from .conversions import time_msg_from_seconds
+from .replaceable import create_replaceable_publisher
 
 __all__ = ["ContactWrenchPublishers", "contact_impulses"]
 
@@ -107,5 +108,5 @@ class ContactWrenchPublishers:
             self._node.destroy_publisher(self.publishers.pop(name))
         for name in names:
             if name not in self.publishers:
-                self.publishers[name] = self._node.create_publisher(WrenchStamped, f"{name}/contact_wrench",
-                                                                    self._qos)
+                self.publishers[name] = create_replaceable_publisher(
+                    self._node, WrenchStamped, f"{name}/contact_wrench", self._qos)

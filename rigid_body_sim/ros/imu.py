@@ -24,6 +24,7 @@ from sensor_msgs.msg import Imu
 from ..core import Scene, Simulator
 from ..core.imu import ImuBank, ImuSample
 from .conversions import time_msg_from_seconds
+from .replaceable import create_replaceable_publisher
 
 __all__ = ["ImuChange", "ImuPublishers", "fill_imu"]
 
@@ -78,7 +79,8 @@ class ImuPublishers:
         ``keep_state`` an unchanged IMU keeps its noise state and schedule (spawn, delete);
         without, every IMU starts afresh (a new scene)."""
         bank = ImuBank(scene.imus, self.bank if keep_state else None)
-        publishers = {site: self.publishers.get(site) or self._node.create_publisher(Imu, f"{site}/imu", self._qos)
+        publishers = {site: self.publishers.get(site)
+                      or create_replaceable_publisher(self._node, Imu, f"{site}/imu", self._qos)
                       for site in bank.sites}
         stale = [pub for site, pub in self.publishers.items() if site not in publishers]
         return ImuChange(bank, publishers, stale)

@@ -42,6 +42,7 @@ from rclpy.qos import QoSProfile
 
 from ..core import Scene, Simulator
 from .conversions import RejectedMessage, wrench_from_msg
+from .replaceable import create_replaceable_subscription
 
 __all__ = ["REJECTION_WARNING_PERIOD", "SHARED_QUEUE_DEPTH", "BodyInputs", "InputChange", "WrenchInputs",
            "shared_qos"]
@@ -143,10 +144,10 @@ class WrenchInputs:
                 bodies[body] = BodyInputs(old.wrench, old.impulse, frames) if old else BodyInputs(None, None, frames)
             else:
                 bodies[body] = BodyInputs(
-                    wrench=self._node.create_subscription(WrenchStamped, f"{body}/wrench",
-                                                          lambda msg, b=body: self.on_wrench(b, msg), self._qos),
-                    impulse=self._node.create_subscription(WrenchStamped, f"{body}/impulse",
-                                                           lambda msg, b=body: self.on_impulse(b, msg), self._qos),
+                    wrench=create_replaceable_subscription(self._node, WrenchStamped, f"{body}/wrench",
+                                                           lambda msg, b=body: self.on_wrench(b, msg), self._qos),
+                    impulse=create_replaceable_subscription(self._node, WrenchStamped, f"{body}/impulse",
+                                                            lambda msg, b=body: self.on_impulse(b, msg), self._qos),
                     frames=frames)
         stale = [s for name, old in self.bodies.items() if name not in bodies for s in (old.wrench, old.impulse)
                  if s is not None]

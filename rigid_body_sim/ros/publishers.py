@@ -41,6 +41,7 @@ from ..core import Simulator
 from .batch import VELOCITY_POINT_STEP, BatchCdr, pose_array, velocity_cloud
 from .cdr import PoseTwistClockCdr, check_against_middleware
 from .conversions import fill_odometry, fill_pose_stamped, fill_twist, time_msg_from_seconds
+from .replaceable import create_replaceable_publisher
 
 __all__ = ["BodyPublishers", "PublisherChange", "StatePublishers", "STATE_QOS", "OVERRIDABLE_TOPICS"]
 
@@ -162,8 +163,8 @@ class StatePublishers:
             old = self.bodies.get(name)
             if old is None:
                 bodies[name] = BodyPublishers(
-                    pose=self._node.create_publisher(PoseStamped, f"{name}/pose", self._qos),
-                    twist=self._node.create_publisher(self._twist_type, f"{name}/twist", self._qos),
+                    pose=create_replaceable_publisher(self._node, PoseStamped, f"{name}/pose", self._qos),
+                    twist=create_replaceable_publisher(self._node, self._twist_type, f"{name}/twist", self._qos),
                     twist_msg=self._twist_type(),
                     odom=self._odom_publisher(name) if publish_odometry else None)
             elif (old.odom is not None) == publish_odometry:
@@ -181,7 +182,7 @@ class StatePublishers:
         return PublisherChange(bodies, stale)
 
     def _odom_publisher(self, name: str) -> Any:
-        return self._node.create_publisher(Odometry, f"{name}/odom", self._qos)
+        return create_replaceable_publisher(self._node, Odometry, f"{name}/odom", self._qos)
 
     def commit(self, change: PublisherChange) -> None:
         """Swap in prepared publishers (hold the node's lock)."""

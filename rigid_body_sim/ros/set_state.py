@@ -43,6 +43,7 @@ from ..core.scene import ORIENTATION_TOLERANCE
 from .contacts import into_ground
 from .conversions import RejectedMessage
 from .inputs import shared_qos
+from .replaceable import create_replaceable_subscription
 
 __all__ = ["MAX_STATE_COMPONENT", "SetStateChange", "SetStateInputs", "state_from_odometry"]
 
@@ -127,8 +128,8 @@ class SetStateInputs:
                                                shared_qos(qos))
 
     def prepare(self, body_names: tuple[str, ...]) -> SetStateChange:
-        subs = {body: self.subscriptions.get(body) or self._node.create_subscription(
-            Odometry, f"{body}/set_state", lambda msg, b=body: self.on_set_state(b, msg), self._qos)
+        subs = {body: self.subscriptions.get(body) or create_replaceable_subscription(
+            self._node, Odometry, f"{body}/set_state", lambda msg, b=body: self.on_set_state(b, msg), self._qos)
             for body in body_names} if self.per_body else {}
         return SetStateChange(subs, [s for b, s in self.subscriptions.items() if b not in subs], frozenset(body_names))
 
