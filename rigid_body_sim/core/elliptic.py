@@ -23,7 +23,6 @@ the relative accuracy of cos β and Δ, which is what every formula below needs.
 from __future__ import annotations
 
 import numpy as np
-from scipy import special
 
 __all__ = [
     "complete_k",
@@ -51,6 +50,14 @@ _SPLIT = 134217729.0
 
 
 # ----------------------------------------------------------------------------- error-free arithmetic
+
+
+def _special():
+    """``scipy.special``, imported on first use: importing it takes about 0.2 s, and only the exact
+    rotor's bodies call these functions (a node or a script without them starts without it)."""
+    from scipy import special
+
+    return special
 
 
 def two_sum(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -101,7 +108,7 @@ def complete_k(m_c: np.ndarray) -> np.ndarray:
     ``scipy.special.ellipkm1``, which takes m_c itself and so is accurate to a few ulp as
     m_c → 0 (where K ≈ ln(4/√m_c)).
     """
-    return special.ellipkm1(m_c)
+    return _special().ellipkm1(m_c)
 
 
 def jacobi_reduced(r: np.ndarray, m_c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -204,7 +211,7 @@ def elliptic_f(sin_beta: np.ndarray, cos_beta: np.ndarray, delta: np.ndarray) ->
     given the three inputs to full relative precision, however close β is to π/2 and m to 1.
     """
     s, c, d = sin_beta, cos_beta, delta
-    return s * special.elliprf(c * c, d * d, 1.0)
+    return s * _special().elliprf(c * c, d * d, 1.0)
 
 
 def elliptic_f_angle(beta: np.ndarray, m_c: np.ndarray) -> np.ndarray:
@@ -224,9 +231,9 @@ def third_kind_minus_f(sin_beta: np.ndarray, cos_beta: np.ndarray, delta: np.nda
     no cancellation for n ≤ 0 (all arguments positive).
     """
     s, c, d = sin_beta, cos_beta, delta
-    return (n / 3.0) * s**3 * special.elliprj(c * c, d * d, 1.0, 1.0 - n * s * s)
+    return (n / 3.0) * s**3 * _special().elliprj(c * c, d * d, 1.0, 1.0 - n * s * s)
 
 
 def third_kind_minus_f_complete(n: np.ndarray, m_c: np.ndarray) -> np.ndarray:
     """Π(n | m) − K(m) = (n/3) R_J(0, m_c, 1, 1 − n), the value of :func:`third_kind_minus_f` at π/2."""
-    return (n / 3.0) * special.elliprj(0.0, m_c, 1.0, 1.0 - n)
+    return (n / 3.0) * _special().elliprj(0.0, m_c, 1.0, 1.0 - n)

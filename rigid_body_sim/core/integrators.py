@@ -10,7 +10,6 @@ and ``reference`` (scipy DOP853 on the compiled right-hand side).
 from __future__ import annotations
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from .free_rotor import exact_rotor
 from .kernels.contact.stage import held_derivatives
@@ -61,6 +60,8 @@ def step_reference(Y: np.ndarray, Ynew: np.ndarray, prm: np.ndarray, wrenches: n
     def rhs(_t: float, flat: np.ndarray) -> np.ndarray:
         held_derivatives(flat.reshape(n, STATE_WIDTH), sub_prm, sub_w, rates)
         return rates.ravel().copy()
+
+    from scipy.integrate import solve_ivp  # on first use: its import takes about 0.3 s of every start
 
     with np.errstate(all="ignore"):
         solution = solve_ivp(rhs, (0.0, dt), y0.ravel(), method="DOP853", rtol=rtol, atol=atol)
