@@ -135,8 +135,9 @@ browser-deps:
 
 # --foreground: Ctrl-C still reaches pytest; SIGINT first so pytest prints its summary.
 # The test files run in TEST_WORKERS processes (pytest-xdist; one file stays in one process, with its
-# module fixtures; each process claims its own ROS_DOMAIN_ID). TEST_WORKERS=0: one process.
-TEST_WORKERS ?= auto
+# module fixtures; each process claims its own ROS_DOMAIN_ID). TEST_WORKERS=0: one process. One more than
+# the CPUs: about a fifth of the suite's time waits (DDS discovery, signal and grace periods, page loads).
+TEST_WORKERS ?= $(shell echo $$(( $$(nproc) + 1 )))
 # Bytecode on for the tests even where the environment turns it off (PYTHONDONTWRITEBYTECODE): else every
 # worker rewrites the asserts of all test modules again (about 7 s of CPU each) and every node process
 # compiles the package from source. The .pyc files go to __pycache__/ (git-ignored; make clean removes them).

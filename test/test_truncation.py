@@ -3,7 +3,7 @@
 A recording is cut when its writer dies (SIGKILL, a crash), the disk fills up, or a copy stops
 half way: the file then ends at an arbitrary byte. Here a recording written by ``rigid-body-sim
 run --record`` and one written by the node process are each cut at 200 random byte offsets
-(40 in the default run; and at the edges: inside the magic, the header, right after it, the last
+(20 in the default run; and at the edges: inside the magic, the header, right after it, the last
 byte). Each cut file
 must either read, with a status starting ``cut short``, exactly the samples that lie in the
 chunks written whole before the cut (worked out from the complete file's chunk index, with
@@ -168,9 +168,9 @@ def check_plot_on_cuts(tmp_path: Path, full: Path, seed: int, n: int = 3) -> Non
 
 
 @pytest.mark.timeout(300)
-@pytest.mark.parametrize("cuts", [pytest.param(40, id="40 cuts"), pytest.param(CUTS, id="200 cuts", marks=pytest.mark.slow)])
+@pytest.mark.parametrize("cuts", [pytest.param(20, id="20 cuts"), pytest.param(CUTS, id="200 cuts", marks=pytest.mark.slow)])
 def test_cli_recording_cut_anywhere_reads_up_to_the_cut(tmp_path: Path, cuts: int) -> None:
-    """The CLI's recording cut at random offsets (40 in the default run, 200 in the slow one)."""
+    """The CLI's recording cut at random offsets (20 in the default run, 200 in the slow one)."""
     scene = tmp_path / "scene.yaml"
     scene.write_text(yaml.safe_dump(SCENE), encoding="utf-8")
     full = tmp_path / "run.mcap"
@@ -182,10 +182,10 @@ def test_cli_recording_cut_anywhere_reads_up_to_the_cut(tmp_path: Path, cuts: in
 
 @pytest.mark.ros
 @pytest.mark.timeout(300)
-@pytest.mark.parametrize("cuts", [pytest.param(40, id="40 cuts"), pytest.param(CUTS, id="200 cuts", marks=pytest.mark.slow)])
+@pytest.mark.parametrize("cuts", [pytest.param(20, id="20 cuts"), pytest.param(CUTS, id="200 cuts", marks=pytest.mark.slow)])
 def test_node_recording_cut_anywhere_reads_up_to_the_cut(tmp_path: Path, cuts: int) -> None:
     """The node flushes a chunk every 0.5 s of wall time: running until five chunks are on disk gives
-    several chunks (cut at 40 random offsets in the default run, 200 in the slow one)."""
+    several chunks (cut at 20 random offsets in the default run, 200 in the slow one)."""
     scene = tmp_path / "scene.yaml"
     scene.write_text(yaml.safe_dump(SCENE), encoding="utf-8")
     full = tmp_path / "node.mcap"
