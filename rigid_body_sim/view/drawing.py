@@ -185,8 +185,14 @@ class Bodies:
 
 
 def setup_scene(server: Any) -> None:
-    """The 3D scene both views share: z up, the camera on the default box, a 4 m grid at z = 0."""
+    """The 3D scene both views share: z up, the camera on the default box, a 4 m grid at z = 0, lit by
+    viser's default lights and a hemisphere light (sky above, grey ground) instead of viser's image-based
+    environment map: a browser without a GPU (software WebGL) prepares that map for 5-10 s at every page
+    load, and the two light the shapes alike."""
     server.scene.set_up_direction("+z")
+    server.scene.configure_environment_map(hdri=None)
+    server.scene.add_light_hemisphere("/sky", sky_color=(255, 255, 255), ground_color=(110, 110, 120),
+                                      intensity=2.0, position=(0.0, 0.0, 1.0))
     server.initial_camera.position = (1.9, -1.9, 2.0)
     server.initial_camera.look_at = (0.0, 0.0, 0.8)
     server.scene.add_grid("/ground", width=4.0, height=4.0, cell_size=0.5)
