@@ -250,11 +250,12 @@ def slow_if_python_stepped(names):
     return [pytest.param(name, marks=pytest.mark.slow) if name in PYTHON_STEPPED else name for name in names]
 
 
-def slow_unless_tipping_default(names):
-    return [name if name in TIPPING_DEFAULT else pytest.param(name, marks=pytest.mark.slow) for name in names]
+def slow_unless_in(default, names):
+    """``names`` as parameters, those not in ``default`` marked slow."""
+    return [name if name in default else pytest.param(name, marks=pytest.mark.slow) for name in names]
 
 
-@pytest.mark.parametrize("integrator", slow_unless_tipping_default(INTEGRATORS))
+@pytest.mark.parametrize("integrator", slow_unless_in(TIPPING_DEFAULT, INTEGRATORS))
 def test_box_spun_one_percent_below_the_tipping_threshold_falls_back(integrator):
     """At 0.99 ω_c it pivots on the edge up to the closed-form tilt, short of β = atan(a/b), falls back and
     ends at rest on the same face. rk4 and reference reach the closed-form largest tilt within 1e-6 rad
@@ -271,7 +272,7 @@ def test_box_spun_one_percent_below_the_tipping_threshold_falls_back(integrator)
     assert np.linalg.norm(sim.state.v_WC_W[0]) <= 1e-12
 
 
-@pytest.mark.parametrize("integrator", slow_unless_tipping_default(INTEGRATORS))
+@pytest.mark.parametrize("integrator", slow_unless_in(TIPPING_DEFAULT, INTEGRATORS))
 def test_box_spun_one_percent_above_the_tipping_threshold_tips_over(integrator):
     sim, tilts = tipping_run(integrator, 1.01 * TIP_OMEGA)
     assert tilts.max() > TIP_BETA
@@ -297,8 +298,7 @@ def pivot_energy_error(integrator: str, dt: float) -> float:
 PIVOT_ORDER_DEFAULT = ("semi_implicit_euler", "rk4")
 
 
-@pytest.mark.parametrize("integrator", [name if name in PIVOT_ORDER_DEFAULT else pytest.param(name, marks=pytest.mark.slow)
-                                        for name in FIXED_STEP_INTEGRATORS])
+@pytest.mark.parametrize("integrator", slow_unless_in(PIVOT_ORDER_DEFAULT, FIXED_STEP_INTEGRATORS))
 def test_pivoting_energy_error_converges_at_the_order_the_contact_force_allows(integrator):
     """Pivoting on an edge the energy is constant. A method whose stages evaluate dynamics.derivative finds
     the contact force at every stage and keeps its order (rk4: 4, fitted over dt = 4, 2, 1 ms, where the
