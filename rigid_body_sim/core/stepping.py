@@ -1,8 +1,8 @@
 """The host side of the compiled step driver (kernels/stepping.py): its parameter rows, and steps without checks.
 
 :func:`pack_parameters` fills the per-body constants the compiled step reads (layout.py names
-the columns); :func:`unchecked_steps` steps bodies with one integrator and no reduction or
-checks, for measuring integrators themselves.
+the columns); :class:`UncheckedStepper` (and :func:`unchecked_steps`) step bodies with one integrator and no
+reduction or checks, for measuring integrators themselves.
 """
 
 from __future__ import annotations
@@ -47,7 +47,7 @@ from .kernels.stepping import SCRATCH_ROWS, integrate, new_buffers
 from .model import State
 from .quaternion import quat_conjugate
 
-__all__ = ["pack_parameters", "unchecked_steps"]
+__all__ = ["UncheckedStepper", "pack_parameters", "unchecked_steps"]
 
 
 def pack_parameters(model) -> np.ndarray:
@@ -84,31 +84,54 @@ def pack_parameters(model) -> np.ndarray:
 
 
 
-def unchecked_steps(method_name: str, model, state, dt: float, steps: int = 1, wrenches: np.ndarray | None = None):
-    """``steps`` steps of every body of ``model`` with the integrator ``method_name``, no reduction, no checks.
+class UncheckedStepper:
+    """Steps every body of ``model`` with the integrator ``method_name``, no reduction, no checks.
 
     For measuring integrators themselves (tools/envelope.py, tests): every body is stepped
     by the integrator (model full, no projection), a non-finite or blown-up result is
     returned as it is, and ``wrenches`` (rows in frame terms, forces.add_wrench; default
-    none) hold for every step. Returns a new :class:`~rigid_body_sim.core.model.State`.
+    none) hold for every step. The parameter rows and buffers are made once, so a caller
+    sampling every step pays for the steps, not for setting them up.
     """
-    method = get_integrator(method_name)
-    n = model.count
-    prm = pack_parameters(model)
-    Ys, status, control, inputs = new_buffers(n)
-    Ys[0, :, :STATE_WIDTH] = state.rows()
-    inputs[DT], inputs[LIMIT] = dt, np.inf
-    members = np.arange(n, dtype=np.int64)
-    control[GROUPS + 2 * MODEL_FULL + 1] = n  # every body in the group of model full
-    rows = np.zeros((n, WRENCH_WIDTH)) if wrenches is None else np.array(wrenches, dtype=float)
-    with np.errstate(all="ignore"):
-        for _ in range(steps):
-            cur = control[CUR]
-            if method.code is None:
-                host = step_exact_rotor_splitting if method.name == "exact_rotor_splitting" else step_reference
-                host(Ys[cur], Ys[1 - cur], prm, rows, members, dt)
-            else:
-                integrate(method.code, Ys[cur], Ys[1 - cur], prm, rows, members, status, dt, np.inf,
-                           np.empty((SCRATCH_ROWS, ROW_WIDTH)))
-            control[CUR] = 1 - cur
-    return State.of_rows(Ys[control[CUR], :, :STATE_WIDTH].copy())
+
+    def __init__(self, method_name: str, model, dt: float, wrenches: np.ndarray | None = None):
+        self._method = get_integrator(method_name)
+        n = model.count
+        self._prm = pack_parameters(model)
+        self._Ys, self._status, self._control, inputs = new_buffers(n)
+        inputs[DT], inputs[LIMIT] = dt, np.inf
+        self._dt = dt
+        self._members = np.arange(n, dtype=np.int64)
+        self._control[GROUPS + 2 * MODEL_FULL + 1] = n  # every body in the group of model full
+        self._rows = np.zeros((n, WRENCH_WIDTH)) if wrenches is None else np.array(wrenches, dtype=float)
+        self._scratch = np.empty((SCRATCH_ROWS, ROW_WIDTH))
+
+    def run(self, state, steps: int = 1):
+        """``steps`` steps from ``state``; returns a new :class:`~rigid_body_sim.core.model.State`."""
+        return State.of_rows(self.samples(state, [steps])[-1])
+
+    def samples(self, state, counts) -> np.ndarray:
+        """From ``state``, ``counts[0]`` steps, then ``counts[1]`` more, ...: the (len(counts), N, 13) state rows
+        (p, q, v, w; layout.py) after each count, a new array."""
+        Ys, control, method, dt = self._Ys, self._control, self._method, self._dt
+        out = np.empty((len(counts), len(self._members), STATE_WIDTH))
+        Ys[control[CUR], :, :STATE_WIDTH] = state.rows()
+        with np.errstate(all="ignore"):
+            for k, steps in enumerate(counts):
+                for _ in range(steps):
+                    cur = control[CUR]
+                    if method.code is None:
+                        host = step_exact_rotor_splitting if method.name == "exact_rotor_splitting" else step_reference
+                        host(Ys[cur], Ys[1 - cur], self._prm, self._rows, self._members, dt)
+                    else:
+                        integrate(method.code, Ys[cur], Ys[1 - cur], self._prm, self._rows, self._members,
+                                  self._status, dt, np.inf, self._scratch)
+                    control[CUR] = 1 - cur
+                out[k] = Ys[control[CUR], :, :STATE_WIDTH]
+        return out
+
+
+def unchecked_steps(method_name: str, model, state, dt: float, steps: int = 1, wrenches: np.ndarray | None = None):
+    """``steps`` steps of every body of ``model`` with the integrator ``method_name``, no reduction, no checks
+    (:class:`UncheckedStepper`). Returns a new :class:`~rigid_body_sim.core.model.State`."""
+    return UncheckedStepper(method_name, model, dt, wrenches).run(state, steps)
