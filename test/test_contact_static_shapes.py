@@ -355,14 +355,15 @@ def test_each_body_meets_static_shapes_with_its_own_pair_material():
 
 
 def test_static_shape_materials_are_linear_in_the_bodies():
-    """20,000 balls, each with its own material, resting apart on a static box (a bin's floor), the last one on
-    a static ball: every array the static geometry holds is linear in the bodies (≤ 512 bytes a body; the
+    """2,000 balls, each with its own material, resting apart on a static box (a bin's floor), the last one on
+    a static ball: every array the static geometry holds is linear in the bodies (≤ 512 bytes a body, where
+    one n × n array of floats would hold 16 kB a body; the
     materials n × (G + 6 per static box) and n for the tangent rows, G = 0 here), and each body's materials
     are its pair material with the shape it touches (e = max, μ = √ of the product): the floor's face row,
     the static ball's tangent row (written at the start for the ball on it, and for every body by the
     island contacts' plane_rows)."""
     rng = np.random.default_rng(0)
-    nx, ny, pitch = 200, 100, 0.2
+    nx, ny, pitch = 50, 40, 0.2
     count = nx * ny
     e, mu = rng.uniform(0.0, 1.0, count), rng.uniform(0.0, 1.0, count)
     floor_e, floor_mu, post_e, post_mu = 0.3, 0.6, 0.7, 0.2
