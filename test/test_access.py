@@ -89,10 +89,9 @@ class Peer:
 
 @pytest.mark.timeout(900)  # a fresh installation compiles the kernels first (START_TIMEOUT_S)
 def test_a_peer_cannot_write_or_read_files_outside_the_configured_directories(tmp_path):
-    """Before: ``record_path:=`` a read-only (0400) decoy replaced it with MCAP, and ``scene:=`` a
-    file put its first line into the refusal and told whether a path exists. Now both are
-    refused before the file system is looked at: same words for an existing and a missing path,
-    no file content, the decoy untouched."""
+    """``record_path:=`` and ``scene:=`` outside the configured directories (a read-only decoy among them)
+    are refused before the file system is looked at: the same words for an existing and a missing path,
+    no file content in the refusal, the decoy untouched."""
     allowed = tmp_path / "allowed"
     allowed.mkdir()
     outside = tmp_path / "outside"
@@ -142,8 +141,7 @@ def test_a_peer_cannot_write_or_read_files_outside_the_configured_directories(tm
 
 
 def test_record_path_never_targets_the_scene_the_recording_or_an_existing_file(tmp_path):
-    """Before: record_path equal to the running scene's file overwrote the scene; equal to the
-    file being recorded, it truncated it under the old writer. Now both are refused, and an
+    """record_path equal to the running scene's file or to the file being recorded is refused; an
     existing file the node did not create is refused unless record_overwrite was set at start-up;
     a file the node created may be recorded to again."""
     scene = write_scene(tmp_path / "scene.yaml")
@@ -215,9 +213,8 @@ def test_default_directories_are_the_package_config_and_the_working_directory():
 
 @pytest.mark.timeout(900)  # a fresh installation compiles the kernels first (START_TIMEOUT_S)
 def test_security_variables_without_security_libraries_exit_2_in_one_line(tmp_path):
-    """Before: an SROS2-layout keystore with ROS_SECURITY_ENABLE=true and Enforce ended in a
-    traceback and exit 1 ("This Fast DDS version doesn't have the security libraries"); a
-    missing keystore under Enforce too. Now: one line saying why, exit 2."""
+    """ROS_SECURITY_ENABLE=true with Enforce, with an SROS2-layout keystore or a missing one, on a Fast DDS
+    without the security libraries: one line saying why, exit 2 (no traceback)."""
     keystore = tmp_path / "keystore"
     enclave = keystore / "enclaves"
     enclave.mkdir(parents=True)
@@ -245,9 +242,8 @@ def test_security_variables_without_security_libraries_exit_2_in_one_line(tmp_pa
 
 @pytest.mark.timeout(900)  # a fresh installation compiles the kernels first (START_TIMEOUT_S)
 def test_discovery_range_is_the_local_host_unless_the_environment_says_otherwise(tmp_path):
-    """Before: run directly (not through `make run`), the node was discoverable from the subnet.
-    Now ROS_AUTOMATIC_DISCOVERY_RANGE is LOCALHOST in the node's process unless set, and the
-    node says which range it uses."""
+    """Run directly (not through `make run`), the node's process has ROS_AUTOMATIC_DISCOVERY_RANGE
+    LOCALHOST unless the environment sets it, and the node says which range it uses."""
     program = ("import os, sys; from rigid_body_sim.ros.access import prepare_access; "
                "code = prepare_access([]); print(code, os.environ.get('ROS_AUTOMATIC_DISCOVERY_RANGE'))")
     env = {k: v for k, v in os.environ.items() if k != "ROS_AUTOMATIC_DISCOVERY_RANGE"}
@@ -317,9 +313,8 @@ def network_interface() -> str | None:
 
 @pytest.mark.timeout(900)  # a fresh installation compiles the kernels first (START_TIMEOUT_S)
 def test_a_peer_on_the_subnet_does_not_discover_the_node_run_directly(tmp_path):
-    """Before: run directly (not through `make run`, which exports the variable), the node was
-    discoverable from the subnet. A peer whose only transport is the subnet interface (a Fast
-    DDS profile allowing only it) does not discover the node started without
+    """Run directly (not through `make run`, which exports the variable): a peer whose only transport is
+    the subnet interface (a Fast DDS profile allowing only it) does not discover the node started without
     ROS_AUTOMATIC_DISCOVERY_RANGE; it does discover one started with SUBNET beside it (so it could)."""
     interface = network_interface()
     assert interface is not None, "this test needs a network interface besides loopback (the subnet a peer uses)"
@@ -368,8 +363,8 @@ def imu_body(sites: int, name_length: int = 2) -> dict:
 
 
 def test_a_spawn_of_20000_imu_sites_is_refused_naming_the_limit():
-    """Before: one ~/spawn body with 20,000 IMU sites held the executor for 6.6-11.8 s (a publisher
-    per IMU). Now it is refused at once, naming MAX_IMUS_PER_BODY, and the ticks go on."""
+    """A ~/spawn body with 20,000 IMU sites (a publisher each, if accepted) is refused at once, naming
+    MAX_IMUS_PER_BODY, and the ticks go on."""
     definition = yaml.dump(imu_body(20_000), Dumper=yaml.CSafeDumper)  # safe_dump's text, in 1 s instead of 3 s
     with SimHarness(paused=False, parameters={"diagnostics_period": 0.0}) as harness:
         with harness.node.locked_simulator() as sim:
@@ -386,7 +381,8 @@ def test_a_spawn_of_20000_imu_sites_is_refused_naming_the_limit():
 
 
 def test_sites_and_imus_per_scene_are_bounded():
-    """Before: `check` accepted 150,000 IMU sites. Now the scene is refused naming MAX_IMUS."""
+    """A scene with more IMUs than MAX_IMUS (or a body with more sites than MAX_SITES_PER_BODY) is
+    refused naming the limit."""
     bodies = {f"b{k}": imu_body(MAX_IMUS_PER_BODY) for k in range(MAX_IMUS // MAX_IMUS_PER_BODY + 1)}
     with pytest.raises(SceneError, match=f"at most {MAX_IMUS:,} IMUs in a scene \\(MAX_IMUS"):
         load_scene_text(yaml.safe_dump({"bodies": bodies}))
@@ -397,9 +393,8 @@ def test_sites_and_imus_per_scene_are_bounded():
 
 @pytest.mark.timeout(900)  # a fresh installation compiles the kernels first (START_TIMEOUT_S)
 def test_a_120_character_namespace_exits_2_with_the_reason(tmp_path):
-    """Before: a 120-character namespace was accepted, then a spawn of a 63-character body with a
-    63-character IMU site crashed the node (InvalidTopicNameException); the same scene at
-    start-up was a traceback and exit 1. Now the namespace is refused at start-up: exit 2."""
+    """A 120-character namespace (with which a 63-character body's 63-character IMU site would make an
+    invalid topic name) is refused at start-up: exit 2 with the reason, with or without that scene."""
     long_name = "b" * MAX_NAME_LENGTH
     site = "s" * MAX_NAME_LENGTH
     scene = write_scene(tmp_path / "long.yaml", {long_name: {**BOX, "sites": {site: {"position": [0, 0, 0],
@@ -416,8 +411,8 @@ def test_a_120_character_namespace_exits_2_with_the_reason(tmp_path):
 @pytest.mark.timeout(900)  # a fresh installation compiles the kernels first (START_TIMEOUT_S)
 def test_a_node_name_too_long_for_its_services_exits_2_in_one_line():
     """A namespace within its limit and a node name so long that ~/set_parameters_atomically
-    exceeds ROS's 247 characters: rclpy raised InvalidServiceNameException from the node's
-    constructor (traceback, exit 1). Now: one line naming the limit, exit 2."""
+    exceeds ROS's 247 characters (rclpy's InvalidServiceNameException from the node's constructor,
+    if let through): one line naming the limit, exit 2."""
     namespace = "/" + "n" * (MAX_NAMESPACE_LENGTH - 1)
     result = run_to_exit(["-r", f"__ns:={namespace}", "-r", f"__node:={'m' * 140}", "-p", "status_period:=0.0"])
     output = result.stdout + result.stderr
@@ -438,7 +433,7 @@ def test_the_longest_namespace_takes_the_longest_names():
 
 
 def test_diagnostics_period_has_a_floor():
-    """Before: diagnostics_period:=1e-9 flooded /diagnostics at 10 k messages a second."""
+    """diagnostics_period below its floor (1e-9 would flood /diagnostics) is refused."""
     with SimHarness(parameters={"diagnostics_period": 0.0}) as harness:
         result = harness.set_parameters_atomically(diagnostics_period=1e-9)
         assert not result.successful

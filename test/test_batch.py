@@ -178,7 +178,7 @@ def test_batches_match_simulator_and_body_names(tmp_path, scene_file):
 
 def test_qos_overrides_take_effect(tmp_path, scene_file):
     """qos_overrides./poses.publisher.* change the endpoint the graph reports; a volatile best-effort
-    publisher no longer latches, a bad value is refused at start-up with exit 2."""
+    publisher does not latch, a bad value is refused at start-up with exit 2."""
     process = run_node(tmp_path, scene_file, "-p", "qos_overrides./poses.publisher.reliability:=best_effort",
                        "-p", "qos_overrides./poses.publisher.durability:=volatile",
                        "-p", "qos_overrides./poses.publisher.depth:=5")

@@ -1,12 +1,12 @@
 """Hostile input to the scene loader and the ``rigid-body-sim`` command: never a hang, a memory
 blow-up or a traceback.
 
-Each case here once ended badly (each docstring says what happened); the test reproduces it and
-states what must happen instead: a clear error naming the key path and what was expected,
-in bounded time and memory. Time and memory are measured in a child process (its own peak
-RSS and CPU time from ``wait4``), never in this pytest process, and the bounds are generous
-enough for a loaded 2-core machine while far below what the unbounded behaviour costs (the
-alias bomb used to pass 4 GB within a minute).
+Each case is input that, unchecked, ends badly (each docstring says how); the test states what
+must happen: a clear error naming the key path and what was expected, in bounded time and
+memory. Time and memory are measured in a child process (its own peak RSS and CPU time from
+``wait4``), never in this pytest process, and the bounds are generous enough for a loaded
+2-core machine while far below what the unbounded behaviour costs (an alias bomb expanded
+passes 4 GB within a minute).
 
 The node-side halves (a refused scene change keeps the node ticking, signals under flood) are
 tested with the node.
@@ -478,7 +478,8 @@ def _many_bodies_yaml(n: int) -> str:
 
 
 def test_loading_many_bodies_is_linear_and_fast(tmp_path: Path) -> None:
-    """10⁴ bodies from a file: once ~12 s (PyYAML's pure-Python parser and per-body numpy calls)."""
+    """10⁴ bodies from a file load in time linear in the bodies (PyYAML's pure-Python parser and per-body
+    numpy calls would take ~12 s)."""
     small, large = write(tmp_path, _many_bodies_yaml(1000), "small.yaml"), write(tmp_path, _many_bodies_yaml(10_000), "large.yaml")
     warm_up = write(tmp_path, _many_bodies_yaml(10), "warm_up.yaml")  # first-call costs out of the timings
     times = {}
@@ -502,7 +503,8 @@ def _compact_bodies_yaml(n: int) -> str:
 
 @pytest.mark.slow
 def test_a_scene_at_the_body_limit_loads_in_seconds(tmp_path: Path) -> None:
-    """MAX_BODIES bodies in one file within MAX_SCENE_BYTES: once ~100 s (PyYAML's pure-Python parser)."""
+    """MAX_BODIES bodies in one file within MAX_SCENE_BYTES load in seconds (PyYAML's pure-Python parser
+    would take ~100 s)."""
     path = write(tmp_path, _compact_bodies_yaml(scene_module.MAX_BODIES), "limit.yaml")
     assert path.stat().st_size <= scene_module.MAX_SCENE_BYTES
     result = run_measured([sys.executable, "-c", f"from rigid_body_sim.core.scene import load_scene; "
@@ -511,7 +513,7 @@ def test_a_scene_at_the_body_limit_loads_in_seconds(tmp_path: Path) -> None:
           f"peak RSS {result.peak_rss_mb:.0f} MB")
     assert result.code == 0, result.stderr[-2000:]
     assert result.stdout.strip() == str(scene_module.MAX_BODIES)
-    assert result.cpu_s < 40  # about 7 s seen under load 4; the old loader took about 100 s
+    assert result.cpu_s < 40  # about 7 s seen under load 4; a pure-Python parser takes about 100 s
 
 
 # --------------------------------------------------------------------------- special files and races
@@ -888,9 +890,9 @@ def test_control_characters_in_a_path_are_escaped_in_messages(tmp_path: Path) ->
                                    {"linear": [1e150, 1e150, 0.0], "angular": [1e150, 1.0, 1.0]}],
                          ids=["v-1e50", "w-1e50", "v-w-1e150"])
 def test_huge_twists_step_or_stop_loudly_never_crash(integrator: str, twist: dict) -> None:
-    """A 1e50 m/s twist once raised ZeroDivisionError inside the compiled step (the
-    node's tick thread died). Now every integrator either steps it to a finite state or raises
-    NonFiniteStateError (a DivergenceError is one) and leaves the last finite state."""
+    """A 1e50 m/s twist (a division by zero inside the compiled step would kill the node's tick
+    thread): every integrator either steps it to a finite state or raises NonFiniteStateError
+    (a DivergenceError is one) and leaves the last finite state."""
     from rigid_body_sim.core.simulator import NonFiniteStateError
 
     scene = load_scene({"bodies": {"b": {"mass": 1.0, "inertia": {"box": [1.0, 0.6, 0.4]}, "twist": twist}}})

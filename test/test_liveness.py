@@ -290,8 +290,8 @@ def test_a_signal_during_a_long_tick_of_step_ticks_ends_it_at_a_substep(bodies, 
 def test_a_recording_taken_away_while_a_thread_writes_holds_what_it_counted(take, tmp_path):
     """The ordered stop takes the recorder away (``replace(None)``), the watchdog with
     ``finish_now``, while another thread may be writing (a tick, ~/step_ticks): the write under
-    way ends first, none follows, and the file holds the count logged. (Before, the watchdog
-    closed the file under a writer: the node said N messages, the file held N − 3.)"""
+    way ends first, none follows, and the file holds the count logged (a file closed under a writer
+    would hold fewer messages than the node says)."""
     import logging
     import threading
 

@@ -61,8 +61,8 @@ def clean_log(text: str) -> list[str]:
 
 
 def test_one_request_naming_scene_twice_applies_the_last(tmp_path):
-    """Before: the on-set callback kept one prepared scene, the post-set callback popped each
-    name of the request, and `KeyError` escaped from `_prepared_scenes.pop` into the executor."""
+    """One parameter request naming ``scene`` twice loads the last one; nothing escapes into the
+    executor (the scene prepared by the on-set callback is the one the post-set callback applies)."""
     a = write_scene(tmp_path / "a.yaml", ["p"])
     b = write_scene(tmp_path / "b.yaml", ["q"])
     with SimHarness(a, parameters={"scene_dirs": [str(tmp_path)]}) as harness:
@@ -197,10 +197,9 @@ def test_parameter_and_service_hammering_while_running_at_1khz(tmp_path):
 
 
 def test_sim_time_at_the_end_of_ros_time_stops_loudly_and_reset_recovers(tmp_path):
-    """Before: with real_time_factor 1e6 at 0.001 Hz (1e9 s a tick), the third tick's stamp no
-    longer fit builtin_interfaces/Time (int32 seconds) and the tick raised from the publisher.
-    Now the node refuses to advance past the end of ROS time, says so (~/step's reason, ERROR on
-    /diagnostics) and keeps serving; ~/reset starts again."""
+    """With real_time_factor 1e6 at 0.001 Hz (1e9 s a tick) the third tick's stamp would not fit
+    builtin_interfaces/Time (int32 seconds): the node refuses to advance past the end of ROS time,
+    says so (~/step's reason, ERROR on /diagnostics) and keeps serving; ~/reset starts again."""
     scene = write_scene(tmp_path / "s.yaml", ["ball"])
     params = {"real_time_factor": 1e6, "rate_hz": 0.001, "integrator": "splitting", "diagnostics_period": 0.0}
     with SimHarness(scene, parameters=params) as harness:
@@ -218,9 +217,8 @@ def test_sim_time_at_the_end_of_ros_time_stops_loudly_and_reset_recovers(tmp_pat
 
 
 def test_record_path_fifo_is_refused_at_once_and_ticks_go_on(tmp_path):
-    """Before: ``record_path:=`` a FIFO opened it for writing under the tick lock, which blocks
-    until a reader appears: the node froze (no ticks, no services). Now the change is refused
-    with a reason and the simulation never waits for it."""
+    """``record_path:=`` a FIFO (opening it for writing would block until a reader appears) is refused
+    with a reason, and the simulation never waits for it."""
     fifo = tmp_path / "record.mcap"  # named like a recording, inside record_dirs: the opener's own check refuses it
     os.mkfifo(fifo)
     with SimHarness(paused=False, parameters={"diagnostics_period": 0.0, "record_dirs": [str(tmp_path)]}) as harness:
@@ -236,9 +234,8 @@ def test_record_path_fifo_is_refused_at_once_and_ticks_go_on(tmp_path):
 
 
 def test_too_many_bodies_are_refused_and_ticks_go_on_while_loading(tmp_path):
-    """Before: a scene of thousands of bodies was accepted and its topics built while holding the
-    tick lock: no ticks, no services for minutes. Now more than MAX_BODIES bodies are refused
-    with the limit in the reason, and the ticks go on while the file is loaded and checked."""
+    """A scene of more than MAX_BODIES bodies is refused with the limit in the reason, and the ticks
+    go on while the file is loaded and checked."""
     big = write_scene(tmp_path / "big.yaml", [f"b{i}" for i in range(MAX_BODIES + 1)])
     with SimHarness(paused=False, parameters={"diagnostics_period": 0.0, "scene_dirs": [str(tmp_path)]}) as harness:
         with harness.node.locked_simulator() as sim:
@@ -254,9 +251,9 @@ def test_too_many_bodies_are_refused_and_ticks_go_on_while_loading(tmp_path):
 
 
 def test_an_alias_bomb_scene_change_is_refused_and_ticks_go_on(tmp_path):
-    """A ~600-byte scene whose anchors expand to 10⁹ nodes froze the node (0 ticks,
-    services dead, 4.5 GB in 30 s). Now the change is refused with the loader's reason, the
-    scene stays, and the tick thread keeps sim time going while the file is refused."""
+    """A ~600-byte scene whose anchors expand to 10⁹ nodes (loaded, it would take the node's memory and
+    time): the change is refused with the loader's reason, the scene stays, and the tick thread keeps
+    sim time going while the file is refused."""
     bomb = "[" + ", ".join(["&a0 [" + ", ".join(["1"] * 10) + "]"]
                            + [f"&a{i} [" + ", ".join([f"*a{i - 1}"] * 10) + "]" for i in range(1, 9)]) + "]"
     path = tmp_path / "bomb.yaml"
@@ -394,9 +391,8 @@ FAILING_TICK = textwrap.dedent("""
 
 @pytest.mark.timeout(900)  # a fresh installation compiles the kernels first (START_TIMEOUT_S)
 def test_a_failing_tick_thread_is_loud_and_the_process_exits_1(tmp_path):
-    """Before: an exception in the tick thread (a ZeroDivisionError from the compiled step) was
-    logged once as "tick thread failed" and the node went on without simulating. Now: the error
-    and its traceback are logged, /diagnostics says ERROR at once, and the process exits 1."""
+    """An exception in the tick thread (a ZeroDivisionError from the compiled step): the error and its
+    traceback are logged, /diagnostics says ERROR at once, and the process exits 1."""
     script = tmp_path / "failing_node.py"
     script.write_text(FAILING_TICK)
     trigger = tmp_path / "fail_now"
@@ -464,9 +460,7 @@ STUCK_TICK = textwrap.dedent("""
 @pytest.mark.timeout(900)  # a fresh installation compiles the kernels first (START_TIMEOUT_S)
 def test_a_stuck_tick_keeps_the_node_answering_and_sigterm_still_ends_it(tmp_path):
     """A tick that does not end (found with integrator reference and real_time_factor 1e6: one
-    step of 1e9 s takes weeks; or 1000 bodies × 100,000 substeps): before, every callback that
-    needed the simulator waited for it, so the node answered nothing, /diagnostics went silent,
-    and SIGINT/SIGTERM waited forever for the tick thread. Now messages are still taken,
+    step of 1e9 s takes weeks; or 1000 bodies × 100,000 substeps): messages are still taken,
     ~/reset is refused as busy within a second, /diagnostics reports the running tick, and a
     signal ends the process after STOP_GRACE_S with a complete recording (exit 1: forced)."""
     from mcap.reader import make_reader

@@ -47,12 +47,12 @@ then fail to run). Files are read as YAML 1.2 by :mod:`~rigid_body_sim.core.scen
 (:func:`rigid_body_sim.safe_open.read_regular_file`). A scene has at most :data:`MAX_BODIES`
 bodies and :data:`MAX_SCRIPTED_WRENCHES` scripted wrenches. Every number is finite; masses,
 the lengths of inertia shapes and principal moments are normal floats (≥ :data:`MIN_POSITIVE`,
-so that 1/m and 1/I exist: a subnormal mass used to fail at step 0), and what the dynamics
+so that 1/m and 1/I exist: a subnormal mass would fail at step 0), and what the dynamics
 form from a scene at t = 0 can be computed in float64 (:func:`_check_derived`): velocities,
 momenta, the gyroscopic term, weights, scripted forces and their accelerations are at most
 :data:`MAX_NORM` (their squares are finite), and each body's kinetic energy times
 ``energy_growth_limit`` (the blow-up check's bound) and its potential are finite (a 1e308
-moment with spin used to load with infinite energy).
+moment with spin would load with infinite energy).
 """
 
 from __future__ import annotations
