@@ -1,13 +1,12 @@
 """What a peer on the ROS domain can make the node do with files, and the limits at every door.
 
-Each test reproduces a finding of an outside attack (a hostile peer on the same domain) through
-the node's real interfaces, over DDS: a peer's ``set_parameters`` on the ``rigid_body_sim_node``
-process or on the harness's node, ``~/spawn``, and the process's start-up. Before the fix:
-``record_path`` overwrote a read-only decoy and the running scene, and truncated the file being
-recorded; ``scene`` put a file's first line into the refusal and told whether a path exists;
-ROS security variables without security libraries, or a long namespace, ended in a traceback
-and exit 1; a spawn of 20,000 IMU sites held the executor for seconds; ``diagnostics_period``
-took 1e-9 s.
+Each test is an outside attack (a hostile peer on the same domain) through the node's real
+interfaces, over DDS: a peer's ``set_parameters`` on the ``rigid_body_sim_node`` process or on the
+harness's node, ``~/spawn``, and the process's start-up. ``record_path`` must not overwrite a
+read-only decoy, the running scene or the file being recorded; ``scene`` must not put a file's
+content into the refusal nor tell whether a path exists; ROS security variables without security
+libraries, or a long namespace, end in one line and exit 2; a spawn of 20,000 IMU sites is refused
+at once; ``diagnostics_period`` has a floor.
 """
 
 from __future__ import annotations

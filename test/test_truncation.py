@@ -113,8 +113,8 @@ def cut_offsets(size: int, seed: int, cuts: int = CUTS) -> list[int]:
 def check_cuts(tmp_path: Path, full: Path, seed: int, cuts: int = CUTS) -> dict[str, int]:
     """Cut ``full`` at ``cuts`` random offsets (and the edges); every cut reads as required. Returns counts."""
     data = full.read_bytes()
-    whole, _scene = read_recording(full)
-    assert whole.meta["status"].startswith("complete")
+    whole, whole_scene = read_recording(full)
+    assert whole.meta["status"].startswith("complete") and whole_scene
     index = {round(t * 1e9): k for k, t in enumerate(whole.time)}
     chunks = chunk_samples(full)
     assert len(chunks) >= 3, "the recording should span several chunks"
@@ -129,8 +129,9 @@ def check_cuts(tmp_path: Path, full: Path, seed: int, cuts: int = CUTS) -> dict[
                 read_recording(cut_file)
             counts["refused"] += 1
             continue
-        run, _scene = read_recording(cut_file)
+        run, scene = read_recording(cut_file)
         assert run.meta["status"].startswith(f"{CUT_SHORT}: "), (cut, run.meta.get("status"))
+        assert scene == whole_scene, cut  # the scene is attached before the first sample
         times = [round(t * 1e9) for t in run.time]
         assert times == expected, cut
         rows = [index[t] for t in times]
