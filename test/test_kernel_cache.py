@@ -16,6 +16,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 REPO = Path(__file__).resolve().parents[1]
 PACKAGE = REPO / "rigid_body_sim"
 
@@ -111,7 +113,6 @@ def test_compile_kernels_covers_what_the_simulator_calls() -> None:
 def test_compile_kernels_covers_the_body_body_kernels_the_scene_loader_calls() -> None:
     """The loader's overlap check (a scene with a ground) and a spawn's add no signature to the pair kernels."""
     import numpy as np
-    import pytest
 
     from rigid_body_sim.core import SceneError, load_scene
     from rigid_body_sim.core.contact.compile_pairs import PAIR_ENTRY_POINTS, compile_pair_kernels
@@ -132,6 +133,46 @@ def test_compile_kernels_covers_the_body_body_kernels_the_scene_loader_calls() -
                        np.ones(4, dtype=bool), of=[3])
     after = {f.__name__: len(f.signatures) for f in PAIR_ENTRY_POINTS}
     assert after == before, "the overlap check compiled a signature compile_pair_kernels does not make"
+
+
+@pytest.mark.parametrize("copier", ["deepcopy", "pickle"])
+def test_a_copied_contact_simulator_steps_on_the_kernels_its_original_uses(copier: str) -> None:
+    """A copy of a simulator with contact (``copy.deepcopy``, ``pickle``: numpy's copies of arrays are
+    writable) passes its kernels the same array types as the original: no signature is added, so a copy
+    never compiles (the islands' pass alone takes minutes to compile)."""
+    import copy
+    import pickle
+
+    import numba
+    import numpy as np
+
+    from rigid_body_sim.core import Simulator, load_scene
+    from rigid_body_sim.core.kernels.contact import batch, island, shapes, stage
+
+    kernels = (island.island_pass, batch.hold_all, batch.settle_all, stage.stage_rows, shapes.min_gaps,
+               shapes.body_gap)
+    scene = load_scene({"gravity": [0.0, 0.0, -9.81], "ground": [{"normal": [0, 0, 1], "offset": 0.0}], "bodies": {
+        f"c{k}": {"mass": 1.0, "inertia": {"box": [0.2, 0.2, 0.2]}, "pose": {"position": [0.01 * k, 0.0, 0.1 + 0.2 * k]}}
+        for k in range(2)}})
+    sim = Simulator(scene, "rk4", 0.01)
+    sim.step(20)
+    assert sim.contact.in_island("c1")  # the islands' pass ran
+    before = {f.__name__: len(f.signatures) for f in kernels}
+    twin = copy.deepcopy(sim) if copier == "deepcopy" else pickle.loads(pickle.dumps(sim))
+
+    def array_types(solver) -> dict[str, str]:  # numba's type of every array the contact solver holds
+        found = {}
+        for owner, part in (("", solver), ("pairs.", solver.pairs), ("islands.", solver.pairs.islands)):
+            for name, value in vars(part).items():
+                if isinstance(value, np.ndarray):
+                    found[owner + name] = str(numba.typeof(value))
+        return found
+
+    assert array_types(twin.contact) == array_types(sim.contact)
+    twin.step(20)
+    twin.contact.reset(twin)
+    after = {f.__name__: len(f.signatures) for f in kernels}
+    assert after == before, "a copied simulator called a kernel with other array types than its original"
 
 
 #: Waits for the kernel cache (ensure_kernels) and says when it got past it.
@@ -189,7 +230,6 @@ def test_a_process_waits_while_another_compiles(tmp_path: Path) -> None:
 def test_compiling_refuses_sources_changed_under_the_process(monkeypatch) -> None:
     """A process whose kernel sources changed on disk after it imported them would cache its old
     machine code under the new sources' name: compile_kernels refuses, naming why."""
-    import pytest
 
     from rigid_body_sim.core import simulator
     from rigid_body_sim.core.kernels import jit

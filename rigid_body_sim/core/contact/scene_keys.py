@@ -97,6 +97,17 @@ class ContactSpec:
     friction: np.ndarray
     bodies: np.ndarray
 
+    def __post_init__(self) -> None:
+        for array in (self.grounds, self.shapes, self.restitution, self.friction, self.bodies):
+            array.flags.writeable = False
+
+    def __setstate__(self, state: dict) -> None:
+        """A copy (``copy.deepcopy``, ``pickle``) keeps its arrays read-only: numpy's copies of them are
+        writable, and the compiled kernels, specialised on read-only arrays, would compile again for them."""
+        for name, value in state.items():
+            object.__setattr__(self, name, value)
+        self.__post_init__()
+
 
 def without_contact_keys(body: Any) -> Any:
     """A body mapping without the keys read here (scene.py checks the rest against its own list).
@@ -217,9 +228,7 @@ def read_contact(check: Any, top: Mapping, model: Any, state: Any, *, apart: boo
         _check_apart(check, model, state, shapes)
     bodies = np.array([i for i in range(n) if shapes[i, KIND] != SHAPE_NONE and model.motions[i] == "free"],
                       dtype=np.int64)
-    for array in (grounds, shapes, restitution, friction, bodies):
-        array.flags.writeable = False
-    return ContactSpec(grounds, shapes, restitution, friction, bodies)
+    return ContactSpec(grounds, shapes, restitution, friction, bodies)  # read-only from here
 
 
 def _check_not_inside(check: Any, model: Any, state: Any, shapes: np.ndarray, grounds: np.ndarray) -> None:
