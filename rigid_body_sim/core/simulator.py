@@ -1159,6 +1159,9 @@ def _compile_all() -> None:
         Simulator(scene, integrator=integrator, dt=0.01).step(200)
         Simulator(table, integrator=integrator, dt=0.01).step(150)
     Simulator(stack, integrator="rk4", dt=0.01).step(5)
+    sleeper = Simulator(stack, integrator="rk4", dt=0.01)  # sleeping on: the check of a scene wholly asleep
+    sleeper.contact.sleeping = True
+    sleeper.step(30)
     from .kernels.contact.stage import held_derivatives
 
     one = Simulator(scene, integrator="rk4", dt=0.01)  # reference's right-hand side (core/integrators.py)
