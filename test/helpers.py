@@ -164,6 +164,21 @@ def with_spin_step(spec: dict[str, Any], spin_step: float, dt: float) -> dict[st
     return body
 
 
+def seeded_noise_readings(seed: int, site: str, accelerometer: dict, gyroscope: dict, dt: float,
+                          n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The first ``n`` (specific force, angular velocity) readings, (n, 3) each, of an IMU reading 0 whose
+    channels have these ``noise_density`` and ``bias`` and whose stream is seeded ``seed`` at ``site``
+    (core.imu.ImuNoise at interval ``dt``): what the node and the CLI must write for it."""
+    from rigid_body_sim.core.imu import ImuChannel, ImuNoise, ImuSpec
+
+    def channel(spec: dict) -> ImuChannel:
+        return ImuChannel(noise_density=spec["noise_density"], bias=tuple(spec["bias"]))
+
+    noise = ImuNoise(ImuSpec(seed=seed, accelerometer=channel(accelerometer), gyroscope=channel(gyroscope)), site)
+    readings = [noise.sample(np.zeros(3), np.zeros(3), dt) for _ in range(n)]
+    return np.array([r[0] for r in readings]), np.array([r[1] for r in readings])
+
+
 def assert_white_noise(samples: np.ndarray, bias: Any, sigma: float, standard_errors: float = 4.5) -> None:
     """Per axis, the samples (n, 3) have mean ``bias`` and standard deviation ``sigma``, each within
     ``standard_errors`` of its standard error: σ/√n for the mean, σ/√(2(n − 1)) for the standard

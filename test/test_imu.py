@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from helpers import assert_white_noise, scene_of
+from helpers import assert_white_noise, scene_of, seeded_noise_readings
 from rigid_body_sim.core import SceneError, Simulator, load_scene
 from rigid_body_sim.core.imu import ImuBank, ImuChannel, ImuNoise, ImuSpec
 
@@ -155,11 +155,9 @@ def test_offline_run_writes_imu_samples_whose_noise_matches_the_parameters(tmp_p
     assert len(noisy) == n
     f = np.array([[float(r[k]) for k in ("ax", "ay", "az")] for r in noisy])
     w = np.array([[float(r[k]) for k in ("gx", "gy", "gz")] for r in noisy])
-    noise = ImuNoise(ImuSpec(seed=1, accelerometer=ImuChannel(noise_density=accel["noise_density"], bias=tuple(accel["bias"])),
-                             gyroscope=ImuChannel(noise_density=gyro["noise_density"], bias=tuple(gyro["bias"]))), "b/s")
-    expected = [noise.sample(np.zeros(3), np.zeros(3), dt) for _ in range(n)]
-    np.testing.assert_allclose(f, [e[0] for e in expected], rtol=0, atol=1e-9)
-    np.testing.assert_allclose(w, [e[1] for e in expected], rtol=0, atol=1e-9)
+    expected_f, expected_w = seeded_noise_readings(1, "b/s", accel, gyro, dt, n)
+    np.testing.assert_allclose(f, expected_f, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(w, expected_w, rtol=0, atol=1e-9)
     if n >= 10_000:  # the statistics: test-slow
         for got, channel in ((f, accel), (w, gyro)):
             assert_white_noise(got, channel["bias"], channel["noise_density"] / np.sqrt(dt))

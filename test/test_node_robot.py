@@ -14,7 +14,7 @@ import yaml
 from rclpy.qos import QoSProfile
 from sensor_msgs.msg import Imu
 
-from helpers import assert_white_noise
+from helpers import assert_white_noise, seeded_noise_readings
 from rigid_body_sim.core.quaternion import quat_to_matrix, quat_wxyz_from_xyzw
 from rigid_body_sim.testing import SimHarness
 
@@ -190,15 +190,11 @@ def test_node_imu_samples_are_the_site_s_seeded_noise_stream(tmp_path) -> None:
     """The node's samples (recorded as published) of a noisy IMU at the COM of a body in free fall are the
     ideal reading 0 plus, sample after sample, the noise of that site's seeded stream at Δt = the tick
     (core.imu.ImuNoise, whose statistics test_imu.py measures); the covariances are σ_n²/Δt."""
-    from rigid_body_sim.core.imu import ImuChannel, ImuNoise, ImuSpec
-
     ticks = 50
     accel, gyro, f_S, w_S, msgs = _noisy_imu_at_the_com(tmp_path, ticks)
-    noise = ImuNoise(ImuSpec(seed=3, accelerometer=ImuChannel(noise_density=accel["noise_density"], bias=tuple(accel["bias"])),
-                             gyroscope=ImuChannel(noise_density=gyro["noise_density"], bias=tuple(gyro["bias"]))), "b/s")
-    expected = [noise.sample(np.zeros(3), np.zeros(3), TICK_S) for _ in range(ticks)]
-    np.testing.assert_allclose(f_S, [e[0] for e in expected], rtol=0, atol=1e-12)
-    np.testing.assert_allclose(w_S, [e[1] for e in expected], rtol=0, atol=1e-12)
+    expected_f, expected_w = seeded_noise_readings(3, "b/s", accel, gyro, TICK_S, ticks)
+    np.testing.assert_allclose(f_S, expected_f, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(w_S, expected_w, rtol=0, atol=1e-12)
     for cov, channel in ((msgs[0].linear_acceleration_covariance, accel), (msgs[0].angular_velocity_covariance, gyro)):
         sigma = channel["noise_density"] / np.sqrt(TICK_S)
         np.testing.assert_allclose(np.array(cov).reshape(3, 3), sigma**2 * np.eye(3), rtol=1e-12)
