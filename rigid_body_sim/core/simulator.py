@@ -1158,10 +1158,10 @@ def _compile_all() -> None:
     for integrator in ("rk4", "euler", "semi_implicit_euler"):  # with the contact found per stage, and held
         Simulator(scene, integrator=integrator, dt=0.01).step(200)
         Simulator(table, integrator=integrator, dt=0.01).step(150)
-    Simulator(stack, integrator="rk4", dt=0.01).step(5)
-    sleeper = Simulator(stack, integrator="rk4", dt=0.01)  # sleeping on: the check of a scene wholly asleep
-    sleeper.contact.sleeping = True
-    sleeper.step(30)
+    resting = Simulator(stack, integrator="rk4", dt=0.01)
+    resting.step(5)
+    resting.contact.sleeping = True  # then the check of a scene wholly asleep
+    resting.step(30)
     from .kernels.contact.stage import held_derivatives
 
     one = Simulator(scene, integrator="rk4", dt=0.01)  # reference's right-hand side (core/integrators.py)

@@ -114,18 +114,22 @@ class UncheckedStepper:
         """From ``state``, ``counts[0]`` steps, then ``counts[1]`` more, ...: the (len(counts), N, 13) state rows
         (p, q, v, w; layout.py) after each count, a new array."""
         Ys, control, method, dt = self._Ys, self._control, self._method, self._dt
-        out = np.empty((len(counts), len(self._members), STATE_WIDTH))
+        prm, rows, members = self._prm, self._rows, self._members
+        if method.code is None:  # the numpy-stepped methods
+            host = step_exact_rotor_splitting if method.name == "exact_rotor_splitting" else step_reference
+
+            def step(y0: np.ndarray, y1: np.ndarray) -> None:
+                host(y0, y1, prm, rows, members, dt)
+        else:
+            def step(y0: np.ndarray, y1: np.ndarray) -> None:
+                integrate(method.code, y0, y1, prm, rows, members, self._status, dt, np.inf, self._scratch)
+        out = np.empty((len(counts), len(members), STATE_WIDTH))
         Ys[control[CUR], :, :STATE_WIDTH] = state.rows()
         with np.errstate(all="ignore"):
             for k, steps in enumerate(counts):
                 for _ in range(steps):
                     cur = control[CUR]
-                    if method.code is None:
-                        host = step_exact_rotor_splitting if method.name == "exact_rotor_splitting" else step_reference
-                        host(Ys[cur], Ys[1 - cur], self._prm, self._rows, self._members, dt)
-                    else:
-                        integrate(method.code, Ys[cur], Ys[1 - cur], self._prm, self._rows, self._members,
-                                  self._status, dt, np.inf, self._scratch)
+                    step(Ys[cur], Ys[1 - cur])
                     control[CUR] = 1 - cur
                 out[k] = Ys[control[CUR], :, :STATE_WIDTH]
         return out

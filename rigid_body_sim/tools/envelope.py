@@ -172,7 +172,7 @@ def torque_free_run(integrator: str, inertia: np.ndarray, spin_step: np.ndarray,
     unit_error = 0.0
     stepper = UncheckedStepper(integrator, model, 1.0)
     # the sample points: every sample_every steps and the last step
-    ends = sorted(set(range(sample_every, steps, sample_every)) | ({steps} if steps > 0 else set()))
+    ends = [*range(sample_every, steps, sample_every), steps] if steps > 0 else []
     done = 0
     with np.errstate(all="ignore"):  # blow-ups are measured, not warned about
         for first in range(0, len(ends), SAMPLES_PER_BLOCK):
