@@ -18,6 +18,7 @@ import pytest
 import yaml
 from geometry_msgs.msg import PoseStamped
 
+from helpers import parameter_values
 from rigid_body_sim.core import Simulator, load_scene
 from rigid_body_sim.core.scene import MAX_SCENE_BYTES
 from rigid_body_sim.ros.parameters import BY_NAME
@@ -119,7 +120,7 @@ def snapshot(harness: SimHarness) -> dict:
         "state": b"".join(a.tobytes() for a in (state.p_WC_W, state.q_WP, state.v_WC_W, state.w_WP_P)),
         "held": {k: (f.tobytes(), t.tobytes()) for k, (f, t) in node.held_wrenches.items()},
         "pending": {k: (j.tobytes(), h.tobytes()) for k, (j, h) in node.pending_impulses.items()},
-        "parameters": {name: harness.get_parameter(name) for name in PARAMETER_NAMES},
+        "parameters": parameter_values(harness, PARAMETER_NAMES),
         "publishers": sorted(name for name, _types in node.get_publisher_names_and_types_by_node(node.get_name(), "/")),
         "subscriptions": sorted(name for name, _types in node.get_subscriber_names_and_types_by_node(node.get_name(), "/")),
     }
@@ -154,8 +155,9 @@ def test_bad_parameters_are_refused_whole_and_change_nothing(tmp_path):
         for k in range(len(cases)):
             drive(twin, k)
             twin.step(2)
-        assert snapshot(twin)["state"] == final["state"]
-        assert snapshot(twin)["time"] == final["time"]
+        twin_final = snapshot(twin)
+        assert twin_final["state"] == final["state"]
+        assert twin_final["time"] == final["time"]
     for label, reason in refusals:  # shown with -s: what an operator reads
         print(f"{label:32s} {reason[:150]}")
 

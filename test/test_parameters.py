@@ -13,6 +13,7 @@ import yaml
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.parameter import Parameter
 
+from helpers import parameter_values
 from rigid_body_sim.ros.publishers import OVERRIDABLE_TOPICS
 from rigid_body_sim.ros.parameters import BY_NAME, PARAMETERS, markdown_table, params_yaml, problem
 from rigid_body_sim.testing import SimHarness
@@ -87,14 +88,15 @@ def test_out_of_range_sets_are_refused_whole_with_a_reason():
     of another parameter: the request is refused with the parameter's name in the reason, and
     neither value changes."""
     with SimHarness() as harness:
-        before = {spec.name: harness.get_parameter(spec.name) for spec in PARAMETERS}
+        names = [spec.name for spec in PARAMETERS]
+        before = parameter_values(harness, names)
         dt = harness.node.simulator.dt
         for name, bad in ranged():
             other = ("paused", False) if name != "paused" else ("publish_clock", False)
             result = harness.set_parameters_atomically(**{name: bad, other[0]: other[1]})
             assert not result.successful, (name, bad)
             assert name in result.reason, (name, bad, result.reason)
-            after = {spec.name: harness.get_parameter(spec.name) for spec in PARAMETERS}
+            after = parameter_values(harness, names)
             assert after == before, (name, bad)
             assert harness.node.simulator.dt == dt
         harness.step()  # still runs
