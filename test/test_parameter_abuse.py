@@ -1,11 +1,12 @@
-"""Parameter abuse: every bad change is refused whole, with a reason, and the running
-simulation does not notice; a valid ``scene`` swaps the scene whole.
+"""Parameter abuse: a bad change is refused whole, with a reason, and the running simulation
+does not notice, wherever on its way it is refused (rclpy, the parameter table, the node's file
+rules, the scene loader); a valid ``scene`` swaps the scene whole.
 
-One harness takes every bad change in turn, each time with a wrench held and an impulse
-pending, ticking between attempts; a twin harness gets the same wrenches and ticks and no bad
-change. Refusals must leave the state, time, holds, pending impulses, topics and every
-parameter exactly as they were (compared before and after each attempt), and the two runs
-must end bitwise equal.
+One harness takes a bad change for each of those places in turn (``bad_changes``), each time
+with a wrench held and an impulse pending, ticking between attempts; a twin harness gets the
+same wrenches and ticks and no bad change. Refusals must leave the state, time, holds, pending
+impulses, topics and every parameter exactly as they were (compared before and after each
+attempt), and the two runs must end bitwise equal.
 """
 
 from __future__ import annotations
@@ -20,7 +21,6 @@ from geometry_msgs.msg import PoseStamped
 
 from helpers import parameter_values
 from rigid_body_sim.core import Simulator, load_scene
-from rigid_body_sim.core.scene import MAX_SCENE_BYTES
 from rigid_body_sim.ros.parameters import BY_NAME
 from rigid_body_sim.testing import SimHarness
 
@@ -52,58 +52,38 @@ def _write(path, data) -> str:
 
 
 def bad_changes(tmp_path) -> list[tuple[str, dict, str]]:
-    """(label, changes, a phrase the refusal must contain)."""
-    huge = tmp_path / "huge.yaml"
-    with open(huge, "wb") as handle:  # sparse: costs no disk
-        handle.truncate(MAX_SCENE_BYTES + 1)
+    """(label, changes, a phrase the refusal must contain): one bad change for each place on the way
+    from the parameter service to the running simulation where a change can be refused.
+
+    Every bad value of every parameter is not repeated here: each ranged parameter's refusal at either
+    end and NaN, through the service, is in test_parameters.py (``ranged``); the reasons of other bad
+    values (wrong types, choices, read-only parameters) in-process there too
+    (``test_change_problems_name_every_bad_value``); each way a scene file can be bad, in-process in
+    test_scene.py and test_hostile.py (the node wraps every loader error the same way).
+    """
     fifo = tmp_path / "fifo.yaml"  # named like a scene: the node's file rules let it through to the loader
     os.mkfifo(fifo)
-    directory = tmp_path / "directory.yaml"
-    directory.mkdir()
     scene_b = _write(tmp_path / "b.yaml", SCENE_B)
     return [
-        ("negative rate", {"rate_hz": -5.0}, "rate_hz"),
-        ("zero rate", {"rate_hz": 0.0}, "rate_hz"),
-        ("NaN rate", {"rate_hz": math.nan}, "rate_hz"),
-        ("infinite rate", {"rate_hz": math.inf}, "rate_hz"),
-        ("zero substeps", {"substeps": 0}, "substeps"),
-        ("negative substeps", {"substeps": -3}, "substeps"),
-        ("zero real-time factor", {"real_time_factor": 0.0}, "real_time_factor"),
-        ("negative real-time factor", {"real_time_factor": -1.0}, "real_time_factor"),
-        ("negative wrench timeout", {"wrench_timeout": -1.0}, "wrench_timeout"),
-        ("negative diagnostics period", {"diagnostics_period": -1.0}, "diagnostics_period"),
-        ("NaN diagnostics period", {"diagnostics_period": math.nan}, "diagnostics_period"),
-        ("negative status period", {"status_period": -0.5}, "status_period"),
-        ("unknown integrator", {"integrator": "leapfrog"}, "integrator must be one of"),
-        ("integrator in capitals", {"integrator": "RK4"}, "integrator must be one of"),
-        ("integrator with a space", {"integrator": "rk4 "}, "integrator must be one of"),
-        ("empty integrator", {"integrator": ""}, "integrator must be one of"),
-        ("missing scene", {"scene": str(tmp_path / "nowhere.yaml")}, "cannot read scene file (No such file"),
-        ("scene is a directory", {"scene": str(directory)}, "not a regular file"),
-        ("scene is /dev/zero", {"scene": "/dev/zero"}, "not inside the directories of scene_dirs"),
-        ("scene is a FIFO", {"scene": str(fifo)}, "not a regular file"),
-        ("empty scene path", {"scene": ""}, "scene must be the path"),
-        ("scene not YAML", {"scene": _write(tmp_path / "bad.yaml", "bodies: [unclosed\n")}, "not valid YAML"),
-        ("scene not UTF-8", {"scene": str(tmp_path / "latin1.yaml")}, "cannot read scene file"),
-        ("scene wrong schema", {"scene": _write(tmp_path / "schema.yaml", {"bodies": {"b": {"mass": 1.0}}})},
-         "bodies.b"),
-        ("scene unknown key", {"scene": _write(tmp_path / "key.yaml", {"bodys": {}})}, "bodys"),
-        ("scene negative mass", {"scene": _write(tmp_path / "mass.yaml",
-                                                  {"bodies": {"b": {"mass": -1.0, "inertia": {"sphere": 1.0}}}})}, "mass"),
-        ("scene empty file", {"scene": _write(tmp_path / "empty.yaml", "")}, "empty file"),
-        ("scene over 8 MiB", {"scene": str(huge)}, f"expected at most {MAX_SCENE_BYTES}"),
-        ("rate as text", {"rate_hz": "fast"}, "rate_hz must be a double, got a string ('fast')"),
-        ("substeps as float", {"substeps": 2.5}, "substeps must be an integer, got a double (2.5)"),
-        ("integrator as number", {"integrator": 3}, "integrator must be a string, got an integer (3)"),
-        ("paused as text", {"paused": "yes"}, "paused must be a bool, got a string ('yes')"),
-        ("scene as number", {"scene": 42}, "scene must be a string, got an integer (42)"),
-        ("clock as integer", {"publish_clock": 1}, "publish_clock must be a bool, got an integer (1)"),
-        ("rate as a list", {"rate_hz": [1.0, 2.0]}, "rate_hz must be a double, got a double array"),
-        ("read-only world frame", {"world_frame": "map"}, "world_frame is read-only: set at start-up only"),
-        ("read-only frame prefix", {"frame_prefix": "other/"}, "frame_prefix is read-only: set at start-up only"),
-        ("read-only per-body topics", {"per_body_topics": False}, "per_body_topics is read-only"),
-        ("node-owned body names", {"body_names": ["x"]}, "body_names is read-only: the node sets it"),
+        # rclpy, before the node's callback: a name the node never declared.
         ("undeclared parameter", {"no_such_parameter": 1.0}, "undeclared"),
+        # The parameter table (parameters.change_problems), in its order of checks: read-only, node-owned,
+        # type (a scalar, and an array, which only arrives as one through the service), finiteness,
+        # range (a double's and an integer's: rclpy would check either against its descriptor in its own
+        # words), choices, a check in code.
+        ("read-only world frame", {"world_frame": "map"}, "world_frame is read-only: set at start-up only"),
+        ("node-owned body names", {"body_names": ["x"]}, "body_names is read-only: the node sets it"),
+        ("rate as text", {"rate_hz": "fast"}, "rate_hz must be a double, got a string ('fast')"),
+        ("rate as a list", {"rate_hz": [1.0, 2.0]}, "rate_hz must be a double, got a double array"),
+        ("NaN rate", {"rate_hz": math.nan}, "rate_hz must be a finite double"),
+        ("negative rate", {"rate_hz": -5.0}, "rate_hz out of range"),
+        ("zero substeps", {"substeps": 0}, "substeps out of range"),
+        ("unknown integrator", {"integrator": "leapfrog"}, "integrator must be one of"),
+        ("empty scene path", {"scene": ""}, "scene must be the path"),
+        # The node's file rules (file_access.change_refusal): a scene outside scene_dirs.
+        ("scene is /dev/zero", {"scene": "/dev/zero"}, "not inside the directories of scene_dirs"),
+        # The loader, while the change is prepared (session.begin_change): a FIFO must not block it.
+        ("scene is a FIFO", {"scene": str(fifo)}, "not a regular file"),
         # All or nothing: a valid scene and substeps with one bad value change nothing.
         ("valid scene with a bad rate", {"scene": scene_b, "substeps": 4, "rate_hz": -1.0}, "rate_hz"),
         ("valid rate with a bad scene", {"rate_hz": 50.0, "integrator": "splitting", "scene": str(fifo)},
@@ -135,7 +115,6 @@ def drive(harness: SimHarness, k: int) -> None:
 def test_bad_parameters_are_refused_whole_and_change_nothing(tmp_path):
     scene_a = _write(tmp_path / "a.yaml", SCENE_A)
     cases = bad_changes(tmp_path)
-    (tmp_path / "latin1.yaml").write_bytes("bodies:\n  bö: 1\n".encode("latin-1"))
     refusals = []
     with SimHarness(scene_a, parameters={**START, "scene_dirs": [str(tmp_path)]}) as node:
         for k, (label, changes, phrase) in enumerate(cases):

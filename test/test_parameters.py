@@ -15,7 +15,8 @@ from rclpy.parameter import Parameter
 
 from helpers import parameter_values
 from rigid_body_sim.ros.publishers import OVERRIDABLE_TOPICS
-from rigid_body_sim.ros.parameters import BY_NAME, PARAMETERS, markdown_table, params_yaml, problem
+from rigid_body_sim.ros.parameters import (BY_NAME, PARAMETERS, change_problems, coerce, markdown_table, params_yaml,
+                                           problem)
 from rigid_body_sim.testing import SimHarness
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -140,6 +141,27 @@ def test_problem_names_what_was_wrong_and_what_was_expected():
     assert "one of" in problem("integrator", "RK4")
     assert "bool" in problem("paused", 1)
     assert "not a parameter" in problem("no_such", 1)
+
+
+def test_change_problems_name_every_bad_value():
+    """The reason the node refuses a run-time change with (its pre-set coercion, then
+    ``change_problems``) names the parameter and what was wrong: names are exact (no case folding or
+    stripping), a value of another type is refused with the type given, and every read-only
+    parameter is refused as such. test_parameter_abuse.py sends a bad change of each kind through
+    the parameter service and checks that the refusal changes nothing."""
+    cases = [
+        ({"integrator": "rk4 "}, "integrator must be one of"),
+        ({"integrator": ""}, "integrator must be one of"),
+        ({"integrator": 3}, "integrator must be a string, got an integer (3)"),
+        ({"scene": 42}, "scene must be a string, got an integer (42)"),
+        ({"paused": "yes"}, "paused must be a bool, got a string ('yes')"),
+        ({"publish_clock": 1}, "publish_clock must be a bool, got an integer (1)"),
+        ({"frame_prefix": "other/"}, "frame_prefix is read-only: set at start-up only"),
+        ({"per_body_topics": False}, "per_body_topics is read-only: set at start-up only"),
+    ]
+    for changes, phrase in cases:
+        reason = "; ".join(change_problems({name: coerce(BY_NAME[name], v) for name, v in changes.items()}))
+        assert phrase in reason, (changes, reason)
 
 
 def test_params_yaml_is_generated_from_the_table():

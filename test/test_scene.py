@@ -21,7 +21,7 @@ from helpers import EPS, random_rotation_matrix
 from rigid_body_sim.core import SceneError, load_scene
 from rigid_body_sim.core.mass_properties import box_inertia, cylinder_inertia, sphere_inertia
 from rigid_body_sim.core.quaternion import quat_conjugate, quat_multiply, quat_rotate, quat_to_matrix
-from rigid_body_sim.core.scene import ORIENTATION_TOLERANCE
+from rigid_body_sim.core.scene import MAX_SCENE_BYTES, ORIENTATION_TOLERANCE
 
 VALID_YAML = """\
 gravity: [0.0, 0.0, -9.81]
@@ -385,6 +385,14 @@ def test_not_utf8(tmp_path: Path) -> None:
 def test_empty_file(tmp_path: Path, text: str, got: str) -> None:
     path = _write(tmp_path, text)
     with pytest.raises(SceneError, match=re.escape(f"{path}: expected a mapping with key 'bodies' at the top, got {got}")):
+        load_scene(path)
+
+
+def test_file_over_the_size_limit(tmp_path: Path) -> None:
+    path = tmp_path / "huge.yaml"
+    with open(path, "wb") as handle:  # sparse: costs no disk
+        handle.truncate(MAX_SCENE_BYTES + 1)
+    with pytest.raises(SceneError, match=re.escape(f"{path}: scene file is ") + ".*" + re.escape(f"; expected at most {MAX_SCENE_BYTES}")):
         load_scene(path)
 
 
