@@ -4,7 +4,8 @@ What every stop must give (checked by :func:`helpers.stop_and_check`): exit stat
 traceback, no Fast DDS segment of the process left in /dev/shm, and no recording or a complete
 one that mcap's reader opens. Start-up stops (phase 1 of :mod:`rigid_body_sim.signals`) say so
 in one line and leave no recording; stops while ticking (phase 2) finish the recording. A
-SIGKILL loses at most the last second of a recording (the node flushes it every 0.5 s).
+SIGKILL loses at most the last second of a recording (the node flushes it every 0.5 s), and
+Foxglove's readers decode what is left.
 
 The table MOMENTS × SIGNALS is the map: the default run keeps one fast row for each moment,
 and ``make test-slow`` runs the rest and the soaks (20 stops at 1000 bodies, every moment of
@@ -26,9 +27,13 @@ from typing import Callable
 import numpy as np
 import pytest
 
+from rigid_body_sim.core import Simulator, load_scene
 from rigid_body_sim.offline.recording import read_recording
+from rigid_body_sim.ros.node import DEFAULT_INTEGRATOR
 from rigid_body_sim.testing import node_command, start_process
 
+from foxglove_support import (TICK_S, by_topic, check_everything_decodes, check_schema_text, foxglove_decode, stamp_ns,
+                              xyz, xyzw)
 from helpers import (kill_if_running, own_shared_memory, stop_and_check, wait_for_line, wait_for_participant,
                      write_tumbling_scene)
 
@@ -305,7 +310,11 @@ def test_sigkill_during_a_recording_loses_at_most_a_second(tmp_path):
     writer never finished it) and it holds every tick up to at most 1 s of sim time (= wall time
     here, real_time_factor 1) before the last /clock this process received before the kill.
     Two bodies write about 50 kB/s, so a 256 KiB chunk alone would keep ~5 s in memory (nothing
-    of these 2 s): what survives is the node's periodic flush (node_recording.FLUSH_PERIOD_S)."""
+    of these 2 s): what survives is the node's periodic flush (node_recording.FLUSH_PERIOD_S).
+
+    Foxglove's own readers (test/foxglove, as in test_foxglove_readers.py) read the same cut file
+    record by record: every message decodes, the batches are stamped on the ticks in order, and
+    the last one is the simulator's state after as many ticks, bit for bit."""
     import rclpy
     from mcap.exceptions import EndOfFile
     from mcap.reader import NonSeekingReader
@@ -358,3 +367,14 @@ def test_sigkill_during_a_recording_loses_at_most_a_second(tmp_path):
           f"(lost {lost_s:.3f} s), {len(times)} messages")
     assert lost_s <= 1.0
     assert len(data.bodies) == 2 and data.time[-1] * 1e9 >= last_clock_ns - 1e9
+    result = foxglove_decode(record)
+    check_everything_decodes(result, finished=False)
+    check_schema_text(record)
+    batches = by_topic(result, "/poses")
+    assert [t for t, _ in batches] == sorted(t for t, _ in batches)
+    for t, batch in batches:
+        assert stamp_ns(batch["header"]) == t and t % round(TICK_S * 1e9) == 0 and len(batch["poses"]) == 2
+    sim = Simulator(load_scene(scene), DEFAULT_INTEGRATOR, TICK_S)
+    sim.step(round(batches[-1][0] * 1e-9 / TICK_S))
+    assert [xyz(pose["position"]).tolist() for pose in batches[-1][1]["poses"]] == sim.positions_world().tolist()
+    assert [xyzw(pose["orientation"]).tolist() for pose in batches[-1][1]["poses"]] == sim.orientations_xyzw().tolist()
