@@ -2,9 +2,10 @@
 
 A recording is cut when its writer dies (SIGKILL, a crash), the disk fills up, or a copy stops
 half way: the file then ends at an arbitrary byte. Here a recording written by ``rigid-body-sim
-run --record`` and one written by the node process are each cut at 200 random byte offsets
-(20 in the default run; and at the edges: inside the magic, the header, right after it, the last
-byte). Each cut file
+run --record`` (chunks of 256 KiB before compression) and one written by the node process (a
+chunk flushed every 0.5 s) are each cut at the edges (inside the magic, the header, right after
+it, the last byte), on both sides of every chunk's end (the chunk whole, one byte short) and at
+200 random byte offsets (in the default run 5 for the CLI's, 20 for the node's). Each cut file
 must either read, with a status starting ``cut short``, exactly the samples that lie in the
 chunks written whole before the cut (worked out from the complete file's chunk index, with
 mcap's own reader) with the complete file's values, or, when no whole sample lies before the
@@ -105,23 +106,26 @@ def expected_times(chunks: list[tuple[int, dict[str, set[int]], dict[str, set[in
     return sorted(set.intersection(*(poses[b] & twists[b] for b in bodies)))
 
 
-def cut_offsets(size: int, seed: int, cuts: int = CUTS) -> list[int]:
+def cut_offsets(size: int, seed: int, cuts: int, chunk_ends: list[int]) -> list[int]:
+    """The edges of the file, both sides of each chunk's end, and ``cuts`` random offsets."""
     rng = np.random.default_rng(seed)
     edges = [0, 1, 5, 7, 8, 9, 30, 100, size - 1]
-    return edges + sorted(int(c) for c in rng.integers(0, size, cuts))
+    boundaries = [cut for end in chunk_ends for cut in (end - 1, end)]
+    return edges + boundaries + sorted(int(c) for c in rng.integers(0, size, cuts))
 
 
 def check_cuts(tmp_path: Path, full: Path, seed: int, cuts: int = CUTS) -> dict[str, int]:
-    """Cut ``full`` at ``cuts`` random offsets (and the edges); every cut reads as required. Returns counts."""
+    """Cut ``full`` at ``cuts`` random offsets (and the edges, and both sides of each chunk's end); every
+    cut reads as required. Returns counts (``chunks``: the chunks of the complete file)."""
     data = full.read_bytes()
     whole, whole_scene = read_recording(full)
     assert whole.meta["status"].startswith("complete") and whole_scene
     index = {round(t * 1e9): k for k, t in enumerate(whole.time)}
     chunks = chunk_samples(full)
     assert len(chunks) >= 3, "the recording should span several chunks"
-    counts = {"read": 0, "refused": 0, "cuts": 0}
+    counts = {"read": 0, "refused": 0, "cuts": 0, "chunks": len(chunks)}
     cut_file = tmp_path / "cut.mcap"
-    for cut in cut_offsets(len(data), seed, cuts):
+    for cut in cut_offsets(len(data), seed, cuts, [end for end, _poses, _twists in chunks]):
         cut_file.write_bytes(data[:cut])
         expected = expected_times(chunks, cut)
         counts["cuts"] += 1
@@ -170,16 +174,16 @@ def check_plot_on_cuts(tmp_path: Path, full: Path, seed: int, n: int = 3) -> Non
 
 
 @pytest.mark.timeout(300)
-@pytest.mark.parametrize("cuts", [pytest.param(20, id="20 cuts"), pytest.param(CUTS, id="200 cuts", marks=pytest.mark.slow)])
+@pytest.mark.parametrize("cuts", [pytest.param(5, id="5 cuts"), pytest.param(CUTS, id="200 cuts", marks=pytest.mark.slow)])
 def test_cli_recording_cut_anywhere_reads_up_to_the_cut(tmp_path: Path, cuts: int) -> None:
-    """The CLI's recording cut at random offsets (20 in the default run, 200 in the slow one);
-    ``rigid-body-sim plot`` on cut files."""
+    """The CLI's recording cut at the edges, both sides of each chunk's end and random
+    offsets (5 in the default run, 200 in the slow one); ``rigid-body-sim plot`` on cut files."""
     scene = tmp_path / "scene.yaml"
     scene.write_text(yaml.safe_dump(SCENE), encoding="utf-8")
     full = tmp_path / "run.mcap"
     assert main(["run", str(scene), "--duration", "8", "--dt", "0.01", "--record", str(full), "--quiet"]) == 0
     counts = check_cuts(tmp_path, full, seed=1, cuts=cuts)
-    assert counts["cuts"] == cuts + 9
+    assert counts["cuts"] == cuts + 9 + 2 * counts["chunks"]
     check_plot_on_cuts(tmp_path, full, seed=2, n=3 if cuts < CUTS else 6)
 
 
@@ -188,8 +192,8 @@ def test_cli_recording_cut_anywhere_reads_up_to_the_cut(tmp_path: Path, cuts: in
 @pytest.mark.parametrize("cuts", [pytest.param(20, id="20 cuts"), pytest.param(CUTS, id="200 cuts", marks=pytest.mark.slow)])
 def test_node_recording_cut_anywhere_reads_up_to_the_cut(tmp_path: Path, cuts: int) -> None:
     """The node flushes a chunk every 0.5 s of wall time: running until five chunks are on disk gives
-    several chunks (cut at 20 random offsets in the default run, 200 in the slow one). (``rigid-body-sim
-    plot`` of cut files: the CLI's test.)"""
+    several chunks, cut at the edges, both sides of each chunk's end and random offsets (20 in the
+    default run, 200 in the slow one). (``rigid-body-sim plot`` of cut files: the CLI's test.)"""
     scene = tmp_path / "scene.yaml"
     scene.write_text(yaml.safe_dump(SCENE), encoding="utf-8")
     full = tmp_path / "node.mcap"
@@ -218,7 +222,7 @@ def test_node_recording_cut_anywhere_reads_up_to_the_cut(tmp_path: Path, cuts: i
             process.kill()
             process.wait()
     counts = check_cuts(tmp_path, full, seed=3, cuts=cuts)
-    assert counts["cuts"] == cuts + 9
+    assert counts["cuts"] == cuts + 9 + 2 * counts["chunks"]
 
 
 _FULL_DISK = """\
