@@ -31,7 +31,7 @@ from __future__ import annotations
 import struct
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Sequence
 
 import rclpy
 from geometry_msgs.msg import PoseArray, PoseStamped, Twist, WrenchStamped
@@ -320,9 +320,15 @@ class SimHarness:
 
     def get_parameter(self, name: str) -> Any:
         """A node parameter's current value, read through its parameter service."""
-        future = self._parameters.get_parameters([name])
+        return self.get_parameters([name])[name]
+
+    def get_parameters(self, names: Iterable[str]) -> dict[str, Any]:
+        """The current values of the node parameters ``names`` (name -> value), read in one request to its
+        parameter service."""
+        names = list(names)
+        future = self._parameters.get_parameters(names)
         self.spin_until(future.done, "the parameter service")
-        return parameter_value_to_python(future.result().values[0])
+        return dict(zip(names, (parameter_value_to_python(v) for v in future.result().values), strict=True))
 
     # ------------------------------------------------------------------ outputs
 

@@ -3,8 +3,7 @@
 Everything random here takes a seeded ``numpy.random.Generator`` from the caller, so every
 test is reproducible. Quaternions are (w, x, y, z) unless a name says ``_xyzw``.
 
-At the end, helpers of the node tests: a harness's parameters read in one request, and node
-processes started, signalled and checked.
+At the end, helpers of the stop tests: node processes started, signalled and checked.
 """
 
 from __future__ import annotations
@@ -195,17 +194,6 @@ def write_tumbling_scene(path: Path, count: int, seed: int = 0) -> Path:
     bodies = random_tumbling_bodies(np.random.default_rng(seed), count, spin_rate=2.0)
     path.write_text(yaml.safe_dump({"bodies": bodies}))
     return path
-
-
-def parameter_values(harness: Any, names: Any) -> dict[str, Any]:
-    """The current values of the parameters ``names`` of a :class:`~rigid_body_sim.testing.SimHarness`'s
-    node, as a client reads them: one ``get_parameters`` request through its parameter service."""
-    from rclpy.parameter import parameter_value_to_python
-
-    names = list(names)
-    future = harness._parameters.get_parameters(names)
-    harness.spin_until(future.done, "the parameter service")
-    return dict(zip(names, (parameter_value_to_python(v) for v in future.result().values), strict=True))
 
 
 def wait_for_line(log_path: Path, text: str, process: subprocess.Popen, timeout: float) -> float:

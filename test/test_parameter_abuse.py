@@ -19,7 +19,6 @@ import pytest
 import yaml
 from geometry_msgs.msg import PoseStamped
 
-from helpers import parameter_values
 from rigid_body_sim.core import Simulator, load_scene
 from rigid_body_sim.ros.parameters import BY_NAME
 from rigid_body_sim.testing import SimHarness
@@ -100,7 +99,7 @@ def snapshot(harness: SimHarness) -> dict:
         "state": b"".join(a.tobytes() for a in (state.p_WC_W, state.q_WP, state.v_WC_W, state.w_WP_P)),
         "held": {k: (f.tobytes(), t.tobytes()) for k, (f, t) in node.held_wrenches.items()},
         "pending": {k: (j.tobytes(), h.tobytes()) for k, (j, h) in node.pending_impulses.items()},
-        "parameters": parameter_values(harness, PARAMETER_NAMES),
+        "parameters": harness.get_parameters(PARAMETER_NAMES),
         "publishers": sorted(name for name, _types in node.get_publisher_names_and_types_by_node(node.get_name(), "/")),
         "subscriptions": sorted(name for name, _types in node.get_subscriber_names_and_types_by_node(node.get_name(), "/")),
     }

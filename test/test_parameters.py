@@ -13,7 +13,6 @@ import yaml
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.parameter import Parameter
 
-from helpers import parameter_values
 from rigid_body_sim.ros.publishers import OVERRIDABLE_TOPICS
 from rigid_body_sim.ros.parameters import (BY_NAME, PARAMETERS, change_problems, coerce, markdown_table, params_yaml,
                                            problem)
@@ -90,14 +89,14 @@ def test_out_of_range_sets_are_refused_whole_with_a_reason():
     neither value changes."""
     with SimHarness() as harness:
         names = [spec.name for spec in PARAMETERS]
-        before = parameter_values(harness, names)
+        before = harness.get_parameters(names)
         dt = harness.node.simulator.dt
         for name, bad in ranged():
             other = ("paused", False) if name != "paused" else ("publish_clock", False)
             result = harness.set_parameters_atomically(**{name: bad, other[0]: other[1]})
             assert not result.successful, (name, bad)
             assert name in result.reason, (name, bad, result.reason)
-            after = parameter_values(harness, names)
+            after = harness.get_parameters(names)
             assert after == before, (name, bad)
             assert harness.node.simulator.dt == dt
         harness.step()  # still runs
