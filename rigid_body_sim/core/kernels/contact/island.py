@@ -109,9 +109,9 @@ TIKHONOV_STEPS, TIKHONOV_TOL, TIKHONOV_EPS, STICK_PIVOTS = 6, 1e-15, 1e-9, 3
 #: A component whose sticking solve failed is tried again only after STICK_RETRY − 1 steps on Gauss–Seidel (while
 #: a pile lands, or a point slides, nearly none holds); one solved exactly is tried again at the next step.
 STICK_RETRY = 4
-#: A component on Gauss–Seidel last step with a point's warm start within this (relative) of its cone's edge, sliding
-#: faster than μ |g| h there, slid (_slid): it is not tried for the sticking solve (as if tried and failed; such an
-#: attempt nearly never holds).
+#: A component on Gauss–Seidel last step with a point's warm start within this (relative) of its cone's edge, not at
+#: rest there, slid (_slid): it is not tried for the sticking solve (as if tried and failed; such an attempt nearly
+#: never holds).
 SLID_TOL = 1e-9
 #: A body's wait (steps before its component is tried for the sticking solve again) after an exact step: solved
 #: (WAIT_SOLVED: its λ also stopped what the bodies brought in, so it is solved once more, from that rest) or held or
@@ -725,10 +725,10 @@ def _point_velocity(Y, i, x, y, z):
 
 
 @njit(**INLINE)
-def _slid(Y0, prm, cint, cflt, rlam, order, start, stop, h):
+def _slid(Y0, cint, cflt, rlam, order, start, stop):
     """Whether a point of the contacts order[start:stop] slides: its warm start (the last step's λ) on its
     cone's edge, |λ_t| ≥ μ λ_n (1 − SLID_TOL) with μ λ_n > 0, and its bodies' tangential speed there at the
-    step's start (Y0) above μ |g| h, what friction under the body's weight takes off in a step."""
+    step's start (Y0) above SLEEP_SPEED (at rest, a share of the load on a cone's edge is not a slide)."""
     slid = False
     for c in range(start, stop):
         q = order[c]
@@ -743,11 +743,9 @@ def _slid(Y0, prm, cint, cflt, rlam, order, start, stop, h):
             ux, uy, uz = bx - ax, by - ay, bz - az
             un = ux * cflt[q, C_N] + uy * cflt[q, C_N + 1] + uz * cflt[q, C_N + 2]
             ux, uy, uz = ux - un * cflt[q, C_N], uy - un * cflt[q, C_N + 1], uz - un * cflt[q, C_N + 2]
-            i = b if b >= 0 else a
-            g = math.sqrt(prm[i, GRAVITY] ** 2 + prm[i, GRAVITY + 1] ** 2 + prm[i, GRAVITY + 2] ** 2)
-            if math.sqrt(ux * ux + uy * uy + uz * uz) > cflt[q, C_MU] * g * h:
+            if math.sqrt(ux * ux + uy * uy + uz * uz) > SLEEP_SPEED:
                 slid = True
-    _pin = Y0[0, 0], prm[0, 0], cint[0, 0], cflt[0, 0], rlam[0], order[0]
+    _pin = Y0[0, 0], cint[0, 0], cflt[0, 0], rlam[0], order[0]
     return slid
 
 
@@ -1522,7 +1520,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                 if kept:
                     out[OUT_HELD] += 1
                     left = WAIT_HELD
-                elif most >= 0 and _slid(Y0, prm, cint, cflt, rlam, order, lo, hi, h):  # as failed
+                elif most >= 0 and _slid(Y0, cint, cflt, rlam, order, lo, hi):  # as a failed attempt
                     left = STICK_RETRY - 1
                 else:
                     kept = _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, lo, hi, A, L, vec[0], vec[1],
