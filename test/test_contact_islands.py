@@ -519,33 +519,6 @@ def test_the_islands_sort_orders_by_key_then_by_index(keys, data):
     assert idx.tolist() == expected.tolist()
 
 
-@pytest.mark.parametrize("mu, tangent, speed, slid", [
-    (0.5, 1.0, 1e-3, True),    # its impulse on the cone's edge, sliding: not tried for the sticking solve
-    (0.5, 1.0, 1e-12, False),  # on the edge at rest (a share of the load): tried
-    (0.5, 0.9, 1e-3, False),   # inside the cone: tried
-    (0.0, 0.0, 1e-3, False),   # frictionless: no cone to be on the edge of
-])
-def test_a_component_slides_when_a_point_on_its_cone_s_edge_moves_along_it(mu, tangent, speed, slid):
-    """One point between a body and the ground, λ_n = 2 N·s, |λ_t| = tangent × μ λ_n; the body moves at ``speed``
-    along the ground (with a spin about the normal, which moves no point on its axis)."""
-    from rigid_body_sim.core.kernels.contact.island import C_FLOATS, C_INTS, C_MU, C_N, C_X, I_A, I_B, _slid
-    from rigid_body_sim.core.kernels.layout import P, Q, STATE_WIDTH, V, W
-
-    Y0 = np.zeros((1, STATE_WIDTH))
-    Y0[0, P:P + 3] = (0.3, -0.2, 0.05)
-    Y0[0, Q:Q + 4] = (np.cos(0.2), 0.0, 0.0, np.sin(0.2))
-    Y0[0, V:V + 3] = (0.6 * speed, 0.8 * speed, 0.0)
-    Y0[0, W:W + 3] = (0.0, 0.0, 5.0)
-    cint = np.zeros((1, C_INTS), dtype=np.int64)
-    cint[0, I_A], cint[0, I_B] = -1, 0
-    cflt = np.zeros((1, C_FLOATS))
-    cflt[0, C_X:C_X + 3] = (0.3, -0.2, 0.0)
-    cflt[0, C_N:C_N + 3] = (0.0, 0.0, 1.0)
-    cflt[0, C_MU] = mu
-    rlam = np.array([2.0, 0.6 * tangent * mu * 2.0, 0.8 * tangent * mu * 2.0])
-    assert _slid(Y0, cint, cflt, rlam, np.zeros(1, dtype=np.int64), 0, 1) == slid
-
-
 #: The documented bounds of a settling pile of 0.1 m cubes at dt = 1 ms (docs/contact.md, islands): the deepest
 #: overlap of two cubes (m; a cube's first landing on another, taken by the event-driven impact before the two
 #: form an island; measured 4e-14 with 27 cubes over 1.5 s, 1.6e-4 with 1000) and the energy's largest rise
