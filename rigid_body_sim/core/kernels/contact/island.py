@@ -27,9 +27,9 @@ a face share its load evenly; v⁺ does not depend on which λ); points that pul
 let go that would close taken back, at most STICK_PIVOTS times. It is kept when the points on are
 met, every λ_n ≥ 0 and every λ_t is in its cone (to round-off); a component whose attempt failed is
 tried again only after STICK_RETRY − 1 steps (landing, nearly none holds). Else
-projected Gauss–Seidel on the component's rows (over more than PILE_CONTACTS contacts, from the
-highest against gravity down, then back up, in turn: a weight passes down a pile and a stop up it
-within a sweep). Then the
+projected Gauss–Seidel on the component's rows (over more than PILE_CONTACTS contacts, a pile, each
+component on its own, from the highest against gravity down, then back up, in turn: a weight passes
+down a pile and a stop up it within a sweep). Then the
 positions: every point found penetrating at the new poses (narrow phase again) is closed by a
 mass-metric least correction (Gauss–Seidel on the linearised gaps, λ ≥ 0; over a pile, bottom-up with each
 upright pair's lower body held, _pile_rows), the narrow phase iterated PROJECT_ROUNDS times; only the
@@ -796,13 +796,61 @@ def _sweep(vel, rj, rw, rbody, rdiag, inv, rbias, rlam, cflt, cross, order, star
 
 
 @njit(**JIT)
-def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop, gx, gy, gz, cwork, rwork):
-    """Projected Gauss–Seidel on contacts order[:stop] from their λ in rlam (the warm start): sweeps until none
-    changes a row's speed by more than PGS_TOL (m/s), at most PGS_SWEEPS or PGS_WORK / stop. More than
-    PILE_CONTACTS contacts (a pile) are taken from the highest against gravity (gx, gy, gz) down, then back up,
-    in turn (a weight passes down a pile, and a stop up it, within one sweep), each sweep extrapolated, at most
-    PILE_PGS_SWEEPS or PGS_WORK / stop; fewer, in their order. Scratch: cwork (per contact: the tangents' cross terms, the sort's key), rwork (per row: 1 /
-    the diagonal, the last sweep's λ, the extrapolation)."""
+def _pile_sweeps(vel, rj, rw, rbody, rdiag, inv, rbias, rlam, cflt, cross, order, start, stop, sweeps, last, step):
+    """At most ``sweeps`` projected Gauss–Seidel sweeps over one component's contacts order[start:stop] (sorted from
+    the highest against gravity down), down then back up in turn, each extrapolated: nonsmooth nonlinear conjugate
+    gradient (Silcowitz, Niebe, Erleben 2010). Each sweep's change of λ, Δ, is the descent direction; λ is then
+    extrapolated by β p (β = |Δ|² / |Δ_prev|², p ← β p + Δ), restarted (p = Δ) when |Δ| grows; the next
+    sweep projects onto the cones again. Stops when no row's speed changes by more than PGS_TOL (m/s). last and step
+    (per row of order[start:stop], at 3 × its place) are scratch."""
+    for x in range(3 * start, 3 * stop):
+        step[x] = 0.0
+    shrink = 0.0
+    for sweep in range(sweeps):
+        for c in range(start, stop):
+            for k in range(3):
+                last[3 * c + k] = rlam[3 * order[c] + k]
+        backward = sweep % 2 == 1
+        if _sweep(vel, rj, rw, rbody, rdiag, inv, rbias, rlam, cflt, cross, order, start, stop, backward) <= PGS_TOL:
+            break
+        if sweep == sweeps - 1:  # the last λ is a sweep's: in its cones
+            break
+        size2 = 0.0
+        for c in range(start, stop):
+            for k in range(3):
+                d = rlam[3 * order[c] + k] - last[3 * c + k]
+                size2 += d * d
+        beta = size2 / shrink if sweep > 0 and size2 <= shrink else 0.0
+        for c in range(start, stop):
+            r = 3 * order[c]
+            m0, m1, m2 = beta * step[3 * c], beta * step[3 * c + 1], beta * step[3 * c + 2]
+            for k in range(3):
+                step[3 * c + k] = beta * step[3 * c + k] + rlam[r + k] - last[3 * c + k]
+            if m0 != 0.0 or m1 != 0.0 or m2 != 0.0:
+                rlam[r] += m0
+                rlam[r + 1] += m1
+                rlam[r + 2] += m2
+                _apply3(vel, rw, rbody, r, m0, m1, m2)
+        shrink = size2
+    _pin = vel[0, 0], rj[0, 0], rw[0, 0], rbody[0, 0], rdiag[0], rbias[0], rlam[0], cflt[0, 0], order[0]
+    _pin2 = cross[0, 0], inv[0], last[0], step[0]
+
+
+@njit(**INLINE)
+def _root(cint, comp, q):
+    """The velocity step's component (its root in comp) of contact q: that of its moving body."""
+    return _find(comp, cint[q, I_B] if cint[q, I_B] >= 0 else cint[q, I_A])
+
+
+@njit(**JIT)
+def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, cint, comp, order, stop, gx, gy, gz, cwork, rwork):
+    """Projected Gauss–Seidel on contacts order[:stop] (each component's contiguous; comp: the components'
+    union-find, cint the contacts' bodies) from their λ in rlam (the warm start): sweeps until none changes a row's
+    speed by more than PGS_TOL (m/s), at most PGS_SWEEPS or PGS_WORK / stop. More than PILE_CONTACTS contacts (a
+    pile): each component on its own (_pile_sweeps), from the highest against gravity (gx, gy, gz) down, then back
+    up, in turn (a weight passes down a pile, and a stop up it, within one sweep), at most PILE_PGS_SWEEPS or
+    PGS_WORK / stop; fewer, in their order. Scratch: cwork (per contact: the tangents' cross terms, the sort's key),
+    rwork (per row: 1 / the diagonal, the last sweep's λ, the extrapolation)."""
     cross, key = cwork[:, 0:2], cwork[:, 2]
     inv, last, step = rwork[:, 0], rwork[:, 1], rwork[:, 2]
     for c in range(stop):
@@ -817,51 +865,27 @@ def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop, gx, gy, gz, 
             inv[r + k] = _inverse(rdiag[r + k])
             if rlam[r + k] != 0.0:
                 _apply(vel, rw, rbody, r + k, rlam[r + k])
-    ranked = stop > PILE_CONTACTS
     work = PGS_WORK // max(stop, 1)
-    if not ranked:
+    if stop <= PILE_CONTACTS:
         for sweep in range(max(PGS_SWEEPS, work)):
             if _sweep(vel, rj, rw, rbody, rdiag, inv, rbias, rlam, cflt, cross, order, 0, stop, False) <= PGS_TOL:
                 break
-    else:  # highest first: g · x ascending
+    else:  # a pile: component by component (what one sweep reads stays in cache), highest first: g · x ascending
         for c in range(stop):
             q = order[c]
             key[q] = gx * cflt[q, C_X] + gy * cflt[q, C_X + 1] + gz * cflt[q, C_X + 2]
-        _sort_by(key, order, 0, stop)
-        # nonsmooth nonlinear conjugate gradient (Silcowitz, Niebe, Erleben 2010): each sweep's change of λ, Δ, is
-        # the descent direction; λ is then extrapolated by β p (β = |Δ|² / |Δ_prev|², p ← β p + Δ), restarted
-        # (p = Δ) when |Δ| grows; the next sweep projects onto the cones again
-        for x in range(3 * stop):
-            step[x] = 0.0
-        shrink = 0.0
-        sweeps = max(PILE_PGS_SWEEPS, work)
-        for sweep in range(sweeps):
-            for c in range(stop):
-                for k in range(3):
-                    last[3 * c + k] = rlam[3 * order[c] + k]
-            if _sweep(vel, rj, rw, rbody, rdiag, inv, rbias, rlam, cflt, cross, order, 0, stop, sweep % 2 == 1) <= PGS_TOL:
-                break
-            if sweep == sweeps - 1:  # the last λ is a sweep's: in its cones
-                break
-            size2 = 0.0
-            for c in range(stop):
-                for k in range(3):
-                    d = rlam[3 * order[c] + k] - last[3 * c + k]
-                    size2 += d * d
-            beta = size2 / shrink if sweep > 0 and size2 <= shrink else 0.0
-            for c in range(stop):
-                r = 3 * order[c]
-                m0, m1, m2 = beta * step[3 * c], beta * step[3 * c + 1], beta * step[3 * c + 2]
-                for k in range(3):
-                    step[3 * c + k] = beta * step[3 * c + k] + rlam[r + k] - last[3 * c + k]
-                if m0 != 0.0 or m1 != 0.0 or m2 != 0.0:
-                    rlam[r] += m0
-                    rlam[r + 1] += m1
-                    rlam[r + 2] += m2
-                    _apply3(vel, rw, rbody, r, m0, m1, m2)
-            shrink = size2
+        lo = 0
+        while lo < stop:
+            root = _root(cint, comp, order[lo])
+            hi = lo + 1
+            while hi < stop and _root(cint, comp, order[hi]) == root:
+                hi += 1
+            _sort_by(key, order, lo, hi)
+            _pile_sweeps(vel, rj, rw, rbody, rdiag, inv, rbias, rlam, cflt, cross, order, lo, hi,
+                         max(PILE_PGS_SWEEPS, work), last, step)
+            lo = hi
     _pin = vel[0, 0], rj[0, 0], rw[0, 0], rbody[0, 0], rdiag[0], rbias[0], rlam[0], cflt[0, 0], order[0]
-    _pin2 = cwork[0, 0], rwork[0, 0]
+    _pin2 = cwork[0, 0], rwork[0, 0], cint[0, 0], comp[0]
 
 
 @njit(**INLINE)
@@ -1481,7 +1505,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     if stop > 0:
         body = cint[order[0], I_B] if cint[order[0], I_B] >= 0 else cint[order[0], I_A]
         g = prm[body, GRAVITY:GRAVITY + 3]  # the order's gravity: any order is Gauss–Seidel
-        _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, order, stop, g[0], g[1], g[2], cwork, rwork)
+        _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, cint, comp, order, stop, g[0], g[1], g[2], cwork, rwork)
     _impulses(nc, rj, rbody, rlam, cflt)
     # positions: p + h v, q ⊗ exp(h ω_P)
     for m in range(n):
