@@ -134,11 +134,12 @@ def test_one_consumer_joins_every_tick_of_three_shard_nodes(tmp_path) -> None:
             node.set_parameters([Parameter("paused", value=False)])
         tick_ns = 10_000_000
         deadline = time.monotonic() + 15.0
-        while len([s for s in joined if s <= ticks * tick_ns]) < ticks + 1 and time.monotonic() < deadline:
+        # list(joined): a snapshot taken in one call, while the executor's threads may be adding to it
+        while len([s for s in list(joined) if s <= ticks * tick_ns]) < ticks + 1 and time.monotonic() < deadline:
             executor.spin_once(timeout_sec=0.05)
         for node in nodes:
             node.set_parameters([Parameter("paused", value=True)])
-        stamps = sorted(s for s in joined if s <= ticks * tick_ns)
+        stamps = sorted(s for s in list(joined) if s <= ticks * tick_ns)
         assert stamps == [k * tick_ns for k in range(ticks + 1)], f"joined {stamps}; given up {joiner.incomplete}"
         expected = _whole_scene_poses(scene_path, ticks, 0.01)
         for k in range(1, ticks + 1):
