@@ -577,7 +577,6 @@ def test_a_pile_of_1000_cubes_settles():
     assert sim.contact.counts["island_body_steps"] > 1000 * 1000
 
 
-
 @pytest.mark.slow
 def test_a_pile_of_1000_cubes_falls_mostly_asleep_within_3_s():
     """With sleeping on at the default sleep speed (rest to round-off), at least 600 of the 1000 cubes are asleep at
