@@ -13,13 +13,16 @@ output file is opened): a signal only sets :attr:`TwoPhaseSignals.stop`, a
 :class:`threading.Event`, and calls ``on_first`` once; the program sees the flag between two
 samples or spins and stops in order. A :class:`Watchdog` bounds how long that stop may take.
 
-Python runs signal handlers in the main thread between bytecodes, so the latency of phase 1
-is that of the longest C call under way (an LLVM compile, one rclpy call). In phase 2 a
-thread learns of each signal at once (through :func:`signal.set_wakeup_fd`), sets the flag and
-calls ``on_seen``: so a main thread inside a long compiled call that holds no GIL (a step of the
-simulator) can be told to return (``Simulator.cancel``) before its handler can run. The handler
-itself takes no lock: a main thread inside ``stop.wait()`` holds the event's, and a handler run
-there that set the event would wait for it forever (CPython runs the handler in that thread).
+Python runs signal handlers in the main thread between bytecodes, and a signal sent to the
+process may be delivered to any of its threads (OpenBLAS's, Fast DDS's): the main thread's
+sleep or wait is then not interrupted, and its handler runs only when that call returns. So a
+thread of this class (the signal watch) learns of each signal at once, through
+:func:`signal.set_wakeup_fd`: in phase 1 it exits, in phase 2 it sets the flag and calls
+``on_seen`` (a main thread inside a long compiled call that holds no GIL, a step of the
+simulator, can so be told to return, ``Simulator.cancel``, before its handler can run). The
+handler itself takes no lock: a main thread inside ``stop.wait()`` holds the event's, and a
+handler run there that set the event would wait for it forever (CPython runs the handler in
+that thread).
 """
 
 from __future__ import annotations
@@ -48,8 +51,9 @@ PORT_PREFIX = "fastdds_port"
 class TwoPhaseSignals:
     """SIGINT/SIGTERM: exit 0 at once (phase 1) until :meth:`switch_to_orderly`, then only set :attr:`stop`.
 
-    Installs its handlers when created (only in the main thread: elsewhere Python cannot, and
-    the process's handlers stay as they are); :meth:`restore` puts the previous ones back.
+    Installs its handlers and starts the signal watch when created (only in the main thread:
+    elsewhere Python cannot, and the process's handlers stay as they are); :meth:`restore` puts
+    the previous ones back and ends the watch.
 
     Parameters
     ----------
@@ -65,48 +69,60 @@ class TwoPhaseSignals:
         self._prog = prog
         self._during = during
         self._on_first: Callable[[], None] | None = None
+        self._on_seen: Callable[[], None] | None = None
         self._first_called = False
         self._orderly = False
+        self._exiting = threading.Lock()  # phase 1: the handler and the watch may both see one signal
         self._previous: dict[int, Any] = {}
-        self._wakeup: tuple[int, int, int] | None = None  # (read fd, write fd, the wakeup fd before)
+        self._wakeup: tuple[int, int] | None = None  # (write fd, the wakeup fd before)
         if threading.current_thread() is threading.main_thread():
             self._previous = {signum: signal.signal(signum, self._handle) for signum in STOP_SIGNALS}
+            read_fd, write_fd = os.pipe()
+            os.set_blocking(write_fd, False)
+            self._wakeup = (write_fd, signal.set_wakeup_fd(write_fd, warn_on_full_buffer=False))
+            threading.Thread(target=self._watch, args=(read_fd,), name="signal watch", daemon=True).start()
 
     def switch_to_orderly(self, on_first: Callable[[], None] | None = None,
                           on_seen: Callable[[], None] | None = None) -> threading.Event:
         """Enter phase 2: from now on a signal sets the returned event and calls ``on_first`` (once,
         from the handler, in the main thread).
 
-        The event is set by a thread of this class (the signal watch) as soon as a signal arrives,
-        which then calls ``on_seen`` (optional), even while the main thread is in a long call that
-        holds no GIL; ``on_seen`` must take no lock the main thread may hold. Called from another
-        thread than the main one, there is no watch: the handler sets the event and ``on_seen`` is
-        never called."""
+        The event is set by the signal watch as soon as a signal arrives, which then calls
+        ``on_seen`` (optional), even while the main thread is in a long call that holds no GIL;
+        ``on_seen`` must take no lock the main thread may hold. Created in another thread than the
+        main one, this object installs nothing: the event is never set by a signal."""
         self._on_first = on_first
+        self._on_seen = on_seen
         self._orderly = True
-        if self._wakeup is None and threading.current_thread() is threading.main_thread():
-            read_fd, write_fd = os.pipe()
-            os.set_blocking(write_fd, False)
-            self._wakeup = (read_fd, write_fd, signal.set_wakeup_fd(write_fd, warn_on_full_buffer=False))
-            threading.Thread(target=self._watch, args=(read_fd, on_seen), name="signal watch", daemon=True).start()
         return self.stop
 
-    def _watch(self, read_fd: int, on_seen: Callable[[], None] | None) -> None:
+    def _watch(self, read_fd: int) -> None:
         stops = {int(signum) for signum in STOP_SIGNALS}
-        while True:
-            try:
-                data = os.read(read_fd, 64)
-            except OSError:
-                return
-            if not data:
-                return
-            seen = [signum for signum in data if signum in stops]
-            if seen:
+        try:
+            while data := os.read(read_fd, 64):  # b"" once restore closed the write end
+                seen = [signum for signum in data if signum in stops]
+                if not seen:
+                    continue
+                if not self._orderly:
+                    self._exit_phase_1(seen[0])
+                    return
                 if self.signum is None:
                     self.signum = seen[0]
                 self.stop.set()
-                if on_seen is not None:
-                    on_seen()
+                if self._on_seen is not None:
+                    self._on_seen()
+        except OSError:
+            pass
+        finally:
+            os.close(read_fd)
+
+    def _exit_phase_1(self, signum: int) -> None:
+        """Exit 0 with the one line; the handler or the watch, whichever comes second, waits for
+        the first to end the process (it does not run on in the meantime)."""
+        if self._exiting.acquire(blocking=False):
+            exit_now(0, f"{self._prog}: stopped by {signal.Signals(signum).name} {self._during}".rstrip())
+        if threading.current_thread() is threading.main_thread():
+            threading.Event().wait()
 
     @property
     def signal_name(self) -> str:
@@ -115,14 +131,12 @@ class TwoPhaseSignals:
 
     def _handle(self, signum: int, _frame: Any) -> None:
         if not self._orderly:
-            exit_now(0, f"{self._prog}: stopped by {signal.Signals(signum).name} {self._during}".rstrip())
+            self._exit_phase_1(signum)
         if self._first_called:
             return
         self._first_called = True
         if self.signum is None:
             self.signum = signum
-        if self._wakeup is None:  # no watch (phase 2 entered from another thread): set here
-            self.stop.set()
         if self._on_first is not None:
             self._on_first()
 
@@ -132,7 +146,7 @@ class TwoPhaseSignals:
             signal.signal(signum, previous)
         self._previous = {}
         if self._wakeup is not None:
-            read_fd, write_fd, before = self._wakeup
+            write_fd, before = self._wakeup
             signal.set_wakeup_fd(before)
             os.close(write_fd)  # the watch thread reads the end of the pipe and ends
             self._wakeup = None
