@@ -128,7 +128,7 @@ OUT_BODIES, OUT_CONTACTS, OUT_STICK, OUT_PGS, OUT_PROJECTED, OUT_DEPTH, OUT_WOKE
 OUT_WIDTH = 10
 
 
-@njit(**JIT)
+@njit(**INLINE)
 def _find(parent, i):
     while parent[i] != i:
         parent[i] = parent[parent[i]]
@@ -146,7 +146,7 @@ def _union(parent, a, b):
             parent[ra] = rb
 
 
-@njit(**JIT)
+@njit(**INLINE)
 def _pose(Y, prm, i, pos, quat):
     pos[i, 0], pos[i, 1], pos[i, 2] = Y[i, P], Y[i, P + 1], Y[i, P + 2]
     qw, qx, qy, qz = qmul(Y[i, Q], Y[i, Q + 1], Y[i, Q + 2], Y[i, Q + 3],
@@ -154,7 +154,7 @@ def _pose(Y, prm, i, pos, quat):
     quat[i, 0], quat[i, 1], quat[i, 2], quat[i, 3] = qw, qx, qy, qz
 
 
-@njit(**JIT)
+@njit(**INLINE)
 def _speed(Y, i, spin_reach):
     v = math.sqrt(Y[i, V] ** 2 + Y[i, V + 1] ** 2 + Y[i, V + 2] ** 2)
     w = math.sqrt(Y[i, W] ** 2 + Y[i, W + 1] ** 2 + Y[i, W + 2] ** 2)
@@ -180,30 +180,35 @@ def _reach_bound(Y0, Y1, i, spin_reach):
     return max(s0, s1) + dv
 
 
-@njit(**JIT)
+@njit(**INLINE)
 def _pair_mu(shapes, a, b, default_mu):
-    if shapes[a, HAS_MATERIAL] == 0.0 and shapes[b, HAS_MATERIAL] == 0.0:
-        return default_mu
-    ma = shapes[a, FRICTION] if shapes[a, HAS_MATERIAL] != 0.0 else shapes[b, FRICTION]
-    mb = shapes[b, FRICTION] if shapes[b, HAS_MATERIAL] != 0.0 else shapes[a, FRICTION]
-    return math.sqrt(ma * mb)
+    mu = default_mu
+    if shapes[a, HAS_MATERIAL] != 0.0 or shapes[b, HAS_MATERIAL] != 0.0:
+        ma = shapes[a, FRICTION] if shapes[a, HAS_MATERIAL] != 0.0 else shapes[b, FRICTION]
+        mb = shapes[b, FRICTION] if shapes[b, HAS_MATERIAL] != 0.0 else shapes[a, FRICTION]
+        mu = math.sqrt(ma * mb)
+    _pin = shapes[0, 0]
+    return mu
 
 
-@njit(**JIT)
+@njit(**INLINE)
 def _inside(pos, quat, shapes, i, x, y, z, slack):
     """Whether the world point (x, y, z) is inside box i grown by ``slack`` (m)."""
     lx, ly, lz = rotate_back(quat[i, 0], quat[i, 1], quat[i, 2], quat[i, 3], x - pos[i, 0], y - pos[i, 1], z - pos[i, 2])
-    return (abs(lx) <= shapes[i, DIMS] + slack and abs(ly) <= shapes[i, DIMS + 1] + slack
-            and abs(lz) <= shapes[i, DIMS + 2] + slack)
+    inside = (abs(lx) <= shapes[i, DIMS] + slack and abs(ly) <= shapes[i, DIMS + 1] + slack
+              and abs(lz) <= shapes[i, DIMS + 2] + slack)
+    _pin = shapes[0, 0]
+    return inside
 
 
-@njit(**JIT)
+@njit(**INLINE)
 def _owners(cint, c, a, b, is_static):
     """Contact c's int row for the pair (a, b): its moving bodies (−1: static) and the static body, if any."""
     cint[c, I_A] = -1 if is_static[a] else a
     cint[c, I_B] = -1 if is_static[b] else b
     cint[c, I_STATIC] = a if is_static[a] else (b if is_static[b] else -1)
     cint[c, I_GROUND] = -1
+    _pin = is_static[0]
 
 
 @njit(**JIT)
@@ -393,7 +398,7 @@ def _rows(Y, prm, n_contacts, cint, cflt, iw, normal_only, h, size, rj, rw, rdia
     _pin2 = island[0], size[0]
 
 
-@njit(**JIT)
+@njit(**INLINE)
 def _row_speed(vel, rj, rbody, r):
     u = 0.0
     for side in range(2):
@@ -401,16 +406,18 @@ def _row_speed(vel, rj, rbody, r):
         if i >= 0:
             for j in range(6):
                 u += rj[r, 6 * side + j] * vel[i, j]
+    _pin = vel[0, 0], rj[0, 0]
     return u
 
 
-@njit(**JIT)
+@njit(**INLINE)
 def _apply(vel, rw, rbody, r, dl):
     for side in range(2):
         i = rbody[r, side]
         if i >= 0:
             for j in range(6):
                 vel[i, j] += rw[r, 6 * side + j] * dl
+    _pin = vel[0, 0], rw[0, 0]
 
 
 @njit(**INLINE)
@@ -1010,7 +1017,7 @@ def _bounds(Y0, Y1, nlist, lo, hi, is_static, spin_reach, size, h, bound):
     _pin = Y0[0, 0], Y1[0, 0], nlist[0, 0], is_static[0], spin_reach[0], size[0], bound[0]
 
 
-@njit(**JIT)
+@njit(**INLINE)
 def _inertia_world(Y, prm, i, iw):
     qw, qx, qy, qz = normalise(Y[i, Q], Y[i, Q + 1], Y[i, Q + 2], Y[i, Q + 3])
     R = matrix(qw, qx, qy, qz)
@@ -1121,7 +1128,8 @@ def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, size, rj, rw
                 new = max(rlam[c] - _row_speed(vel, rj, rbody, c) * inv[c], 0.0)
                 dl = new - rlam[c]
                 rlam[c] = new
-                _apply(vel, rw, rbody, c, dl)
+                if dl != 0.0:
+                    _apply(vel, rw, rbody, c, dl)
                 change = max(change, abs(dl) * rdiag[c])
             if change <= PGS_TOL:
                 break
@@ -1246,7 +1254,8 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
                 new = max(rlam[c] - g * inv[c], 0.0)
                 dl = new - rlam[c]
                 rlam[c] = new
-                _apply(dx, rw, rbody, c, dl)
+                if dl != 0.0:
+                    _apply(dx, rw, rbody, c, dl)
                 change = max(change, abs(dl) * rdiag[c])
             if change <= 1e-16:
                 break

@@ -479,7 +479,7 @@ def _face_of(pose, ux, uy, uz):
     return axis, sgn, best
 
 
-@njit(**JIT)
+@njit(**INLINE)
 def _clip(poly, src, n, px, py, pz, ox, oy, oz, limit):
     """Sutherland–Hodgman: keep the part of polygon poly[src, :n] with (p − o)·plane ≤ limit; returns its size."""
     dst = 1 - src
@@ -497,6 +497,7 @@ def _clip(poly, src, n, px, py, pz, ox, oy, oz, limit):
             t = da / (da - db)
             poly[dst, m, 0], poly[dst, m, 1], poly[dst, m, 2] = ax + t * (bx - ax), ay + t * (by - ay), az + t * (bz - az)
             m += 1
+    _pin = poly[0, 0, 0]
     return m
 
 
@@ -785,7 +786,7 @@ def pair_contact(pa, ma, pb, mb, scale, ws_s, ws_lam, ws_tmp, ws_poly, verts, fa
 _CORE_OF = (0, 0, 2, 3, 1)  # layout.SHAPE_* → CORE_* (SHAPE_NONE unused)
 
 
-@njit(**JIT)
+@njit(**INLINE)
 def boxes_apart(quat, pos, shapes, a, b):
     """A lower bound (m) on the distance of boxes a and b: their largest separation along the six face normals
     (negative when none separates them)."""
