@@ -77,15 +77,16 @@ def test_phase_1_exits_0_at_once_with_one_line(signum):
 @pytest.mark.parametrize("signum", SIGNALS, ids=IDS)
 def test_phase_1_exits_at_once_when_another_thread_receives_the_signal(signum):
     """A signal sent to the process may be delivered to any thread (OpenBLAS's, Fast DDS's); the main
-    thread's sleep then goes on, and its handler would run only when the sleep ends."""
-    process = subprocess.Popen([sys.executable, "-c", textwrap.dedent(f"""
+    thread's sleep then goes on, and its handler would run only when the sleep ends. Here a second
+    thread of the child sends it to itself alone once it reads "sent"."""
+    returncode, out, err, took = signal_after_ready(f"""
         import signal, sys, threading, time
         from rigid_body_sim.signals import TwoPhaseSignals
 
         signals = TwoPhaseSignals("prog")
         def other():
             sys.stdin.readline()
-            signal.pthread_kill(threading.get_ident(), signal.{signum.name})  # to this thread only
+            signal.pthread_kill(threading.get_ident(), signal.{signum.name})
             time.sleep(20)
         threading.Thread(target=other, daemon=True).start()
         try:
@@ -93,17 +94,8 @@ def test_phase_1_exits_at_once_when_another_thread_receives_the_signal(signum):
             time.sleep(20)
         finally:
             print("finally ran", flush=True)
-    """)], stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
-        assert process.stdout.readline().strip() == "ready", process.stderr.read()
-        sent = time.monotonic()
-        out, err = process.communicate("go\n", timeout=30)
-        took = time.monotonic() - sent
-    finally:
-        if process.poll() is None:
-            process.kill()
-            process.wait()
-    assert process.returncode == 0 and out == "", out + err
+    """)
+    assert returncode == 0 and out == "", out + err
     assert err == f"prog: stopped by {signum.name} during start-up\n"
     assert took < 5.0
 
