@@ -56,45 +56,29 @@ def signal_after_ready(script: str, *signums: signal.Signals, timeout: float = 3
             process.wait()
 
 
+@pytest.mark.parametrize("to_thread", [False, True], ids=["to-process", "to-other-thread"])
 @pytest.mark.parametrize("signum", SIGNALS, ids=IDS)
-def test_phase_1_exits_0_at_once_with_one_line(signum):
-    returncode, out, err, took = signal_after_ready("""
-        import time
-        from rigid_body_sim.signals import TwoPhaseSignals
-
-        signals = TwoPhaseSignals("prog")
-        try:
-            print("ready", flush=True)
-            time.sleep(20)
-        finally:
-            print("finally ran", flush=True)
-    """, signum)
-    assert returncode == 0 and out == "", out + err
-    assert err == f"prog: stopped by {signum.name} during start-up\n"
-    assert took < 5.0
-
-
-@pytest.mark.parametrize("signum", SIGNALS, ids=IDS)
-def test_phase_1_exits_at_once_when_another_thread_receives_the_signal(signum):
-    """A signal sent to the process may be delivered to any thread (OpenBLAS's, Fast DDS's); the main
-    thread's sleep then goes on, and its handler would run only when the sleep ends. Here a second
-    thread of the child sends it to itself alone once it reads "sent"."""
-    returncode, out, err, took = signal_after_ready(f"""
-        import signal, sys, threading, time
-        from rigid_body_sim.signals import TwoPhaseSignals
-
-        signals = TwoPhaseSignals("prog")
+def test_phase_1_exits_0_at_once_with_one_line(signum, to_thread):
+    """Sent to the process, or by a second thread of the child to itself alone once it reads "sent": a signal
+    may be delivered to any thread (OpenBLAS's, Fast DDS's), and then the main thread's sleep goes on and its
+    handler would run only when the sleep ends."""
+    other = f"""
         def other():
             sys.stdin.readline()
             signal.pthread_kill(threading.get_ident(), signal.{signum.name})
             time.sleep(20)
-        threading.Thread(target=other, daemon=True).start()
+        threading.Thread(target=other, daemon=True).start()""" if to_thread else ""
+    returncode, out, err, took = signal_after_ready(f"""
+        import signal, sys, threading, time
+        from rigid_body_sim.signals import TwoPhaseSignals
+
+        signals = TwoPhaseSignals("prog"){other}
         try:
             print("ready", flush=True)
             time.sleep(20)
         finally:
             print("finally ran", flush=True)
-    """)
+    """, *(() if to_thread else (signum,)))
     assert returncode == 0 and out == "", out + err
     assert err == f"prog: stopped by {signum.name} during start-up\n"
     assert took < 5.0
