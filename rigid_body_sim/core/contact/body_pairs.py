@@ -45,11 +45,12 @@ After each step, before the ground pass:
    apart along the normal by the depth, shared by inverse mass (a held member does not move).
 
 Resting contact between bodies is the islands' (island.py): before the pass, components of the
-candidate pairs with a pair touching at the step's start are stepped together by a first-order
-velocity step and left out of this pass. A body meeting another outside an island is kept up by
-the impacts of item 5 at each step's start until the two form an island at the next step (it may
-sink into the other by up to about a h²/2 within that step: counted in :attr:`BodyPairs.separations`
-when moved back out).
+candidate pairs with a pair touching at the step's start (and not striking there: approaching
+faster than twice the change the step's forces make to that speed, an impact of item 5) are
+stepped together by a first-order velocity step and left out of this pass. A body meeting another
+outside an island is kept up by the impacts of item 5 at each step's start until the two form an
+island at the next step (it may sink into the other by up to about a h²/2 within that step: counted
+in :attr:`BodyPairs.separations` when moved back out).
 """
 
 from __future__ import annotations
@@ -60,6 +61,7 @@ import numpy as np
 
 from ..kernels import layout as L
 from ..kernels.contact.impacts import IMPACT_WORK_SHAPE, impact, kinetic_energy_row
+from ..kernels.contact.island import APPROACH_SPEED  # a relative normal velocity below −this (m/s) approaches
 from ..kernels.contact.layout import DIMS, KIND, MAX_POINTS, NORMAL, PERSISTENT, FLIGHT, SHAPE_SPHERE
 from ..kernels.contact.pair_impacts import PAIR_JACOBIAN_SHAPE, pair_impact
 from ..kernels.contact.pairs import MAX_PAIR_POINTS, apart_bounds, pair_contacts
@@ -86,8 +88,6 @@ MAX_GROUP_EVENTS = 10_000
 MAX_ROUNDS = 10
 #: A pair whose signed distance is below this × its size (m per m) touches.
 TOUCHING = 1e-12
-#: A relative normal velocity below −this (m/s) approaches.
-APPROACH_SPEED = 1e-12
 #: A resting body whose contact points move away from its ground faster than this (m/s) lifts off.
 LIFT_OFF_SPEED = 1e-9
 

@@ -66,8 +66,12 @@ from .shapes import MAX_FEATURES, feature_gaps, feature_points
 
 __all__ = ["island_pass", "all_asleep", "TOUCH", "SLEEP_SPEED", "SLEEP_STEPS", "DENSE_MAX", "PROJECT_TOL", "C_FLOATS", "C_INTS", "OUT_WIDTH"]
 
-#: A pair whose signed distance is at most this × its size (m per m) touches: its component is an island.
+#: A pair whose signed distance is at most this × its size (m per m) touches: its component is an island, unless
+#: the pair strikes there (approaching faster than IMPACT_MARGIN × the change the step's forces make to that speed,
+#: and than APPROACH_SPEED, m/s): then it is the impact law's (core/contact/body_pairs.py), restitution and all.
+#: APPROACH_SPEED is also the impact law's: a relative normal velocity below −this approaches.
 TOUCH = 1e-6
+IMPACT_MARGIN, APPROACH_SPEED = 2.0, 1e-12
 #: Bodies slower than this (m/s, and spin × bounding radius) at a step's start and after its solve are at rest.
 SLEEP_SPEED = 1e-9
 #: Steps a component's bodies must all stay within a sleep speed raised above SLEEP_SPEED × SLEEP_STEPS steps of
@@ -1029,18 +1033,49 @@ def _inertia_world(Y, prm, i, iw):
             iw[i, 3 * a + b] = s
 
 
+@njit(**INLINE)
+def _normal_speed(Y, a, b, nx, ny, nz, x, y, z):
+    """The normal velocity (m/s, < 0 approaching) of body b over body a at world point (x, y, z), normal (n) from a
+    to b, at state rows Y."""
+    u = 0.0
+    for i, sign in ((a, -1.0), (b, 1.0)):
+        wx, wy, wz = rotate(Y[i, Q], Y[i, Q + 1], Y[i, Q + 2], Y[i, Q + 3], Y[i, W], Y[i, W + 1], Y[i, W + 2])
+        rx, ry, rz = x - Y[i, P], y - Y[i, P + 1], z - Y[i, P + 2]
+        u += sign * ((Y[i, V] + wy * rz - wz * ry) * nx + (Y[i, V + 1] + wz * rx - wx * rz) * ny
+                     + (Y[i, V + 2] + wx * ry - wy * rx) * nz)
+    return u
+
+
+@njit(**INLINE)
+def _striking(Y0, Y1, pnormal, pcount, ppoints, k, a, b):
+    """Whether touching pair k (a, b) strikes at the step's start: at one of its points it approaches faster than
+    IMPACT_MARGIN × what the step's forces change that speed by (Y1: the free step's end), and faster than
+    APPROACH_SPEED (an impact, the impact law's; else resting contact, the island's)."""
+    nx, ny, nz = pnormal[k, 0], pnormal[k, 1], pnormal[k, 2]
+    for c in range(pcount[k]):
+        x = 0.5 * (ppoints[k, c, 0] + ppoints[k, c, 3])
+        y = 0.5 * (ppoints[k, c, 1] + ppoints[k, c, 4])
+        z = 0.5 * (ppoints[k, c, 2] + ppoints[k, c, 5])
+        u0 = _normal_speed(Y0, a, b, nx, ny, nz, x, y, z)
+        du = abs(_normal_speed(Y1, a, b, nx, ny, nz, x, y, z) - u0)
+        if -u0 > max(IMPACT_MARGIN * du, APPROACH_SPEED):
+            return True
+    return False
+
+
 @njit(**JIT)
-def _link(nlist, lo, hi, pdist, bound, is_static, size, parent, flags):
-    """Pairs nlist[lo:hi] after their narrow phase (bound: their reach, _bounds): moving pairs joined (flags bit 8
-    on a touching pair's first body)."""
+def _link(Y0, Y1, nlist, lo, hi, pdist, pnormal, pcount, ppoints, bound, is_static, size, parent, flags):
+    """Pairs nlist[lo:hi] after their narrow phase at Y0 (bound: their reach, _bounds; Y1: the free step's end):
+    moving pairs joined (flags bit 8 on a touching pair's first body)."""
     for k in range(lo, hi):
         a, b = nlist[k, 0], nlist[k, 1]
         touch = TOUCH * max(size[a], size[b])
         if is_static[a] or is_static[b]:
             continue
-        if pdist[k] <= touch or (flags[a] & 64 and flags[b] & 64 and pdist[k] <= bound[k]):
-            # touching; or both stepped in an island last step and still within reach: the island holds
-            # them while they settle (a Gauss–Seidel residue may part them by more than TOUCH)
+        settling = flags[a] & 64 and flags[b] & 64 and pdist[k] <= bound[k]
+        if settling or (pdist[k] <= touch and not _striking(Y0, Y1, pnormal, pcount, ppoints, k, a, b)):
+            # touching and not striking; or both stepped in an island last step and still within reach: the island
+            # holds them while they settle (a Gauss–Seidel residue may part them by more than TOUCH)
             _union(parent, a, b)
             flags[a] |= 8
         elif pdist[k] <= bound[k] or not (flags[a] & 32 or flags[b] & 32):
@@ -1048,7 +1083,8 @@ def _link(nlist, lo, hi, pdist, bound, is_static, size, parent, flags):
             # and projection can move its bodies beyond the free step's reach; a sleeping island is woken
             # only by a body within that reach
             _union(parent, a, b)
-    _pin = nlist[0, 0], pdist[0], bound[0], is_static[0], size[0], parent[0]
+    _pin = Y0[0, 0], Y1[0, 0], nlist[0, 0], pdist[0], pnormal[0, 0], pcount[0], ppoints[0, 0, 0], bound[0]
+    _pin2 = is_static[0], size[0], parent[0]
 
 
 @njit(**JIT)
@@ -1349,7 +1385,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         n_pairs += 1
     _bounds(Y0, Y1, nlist, 0, n_pairs, is_static, spin_reach, size, h, bound)
     _narrow(Y0, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound)
-    _link(nlist, 0, n_pairs, pdist, bound, is_static, size, parent, flags)
+    _link(Y0, Y1, nlist, 0, n_pairs, pdist, pnormal, pcount, ppoints, bound, is_static, size, parent, flags)
     for m in range(n):
         i = members[m]
         r = _find(parent, i)
@@ -1378,7 +1414,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         _bounds(Y0, Y1, nlist, n0, n_pairs, is_static, spin_reach, size, h, bound)
         _narrow(Y0, prm, shapes, nlist[n0:], n_pairs - n0, pos, quat, pdist[n0:], pnormal[n0:], pcount[n0:],
                 ppoints[n0:], pseps[n0:], bound[n0:])
-        _link(nlist, n0, n_pairs, pdist, bound, is_static, size, parent, flags)
+        _link(Y0, Y1, nlist, n0, n_pairs, pdist, pnormal, pcount, ppoints, bound, is_static, size, parent, flags)
     out[OUT_WOKEN] = woken
     # room for the contacts (pairs' points and each island body's features against each half-space)
     need = 0
