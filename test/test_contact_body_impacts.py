@@ -13,6 +13,8 @@
   spins, materials and offsets (within the smallest half-size: they must meet) flying at each
   other (hypothesis): an impact event, the kinetic energy after the step holding it ≤ before
   (1 + 1e-12); every impact event's too.
+* The same two spheres under gravity, meeting at a step boundary: after it each flies on its own
+  integrator's step (the closed-form parabolas within 1e-9 m), not the islands' first-order one.
 * A box flying face on at a box (four contact points) and at a sphere: the impact time and the
   1-D textbook velocities, within 1e-9.
 * A ball dropped onto a box resting on the ground, e = 0: it stops on it (the ground takes the
@@ -91,6 +93,29 @@ def test_two_spheres_meet_the_closed_form(name):
     np.testing.assert_allclose(ev_b[0].normal_world, n, atol=1e-9)
     # and the bodies now separate along the straight lines after the impact
     assert np.linalg.norm(s.p_WC_W[1] - s.p_WC_W[0]) > RA + RB
+
+
+def test_two_spheres_meeting_at_a_step_boundary_part_on_their_own_steps():
+    """Under gravity, the two spheres fly level at each other (0.35 m closed at 3.5 m/s, e = 0.7, frictionless):
+    they meet at t = 0.1 s, a step boundary at dt = 1 ms, and touch at the next step's start while parting.
+    Each then flies on its own integrator's step, not the islands' (first order: ½ g h² ≈ 5e-6 m off in one
+    step): at t = 0.11 s both centres are on the closed form (the 1-D impact velocities, the fall ½ g t², exact
+    for rk4) within 1e-9 m."""
+    e, g, va, vb = 0.7, 9.81, 1.5, -2.0
+    pa, pb = np.array([0.0, 0.0, 1.0]), np.array([0.6, 0.0, 1.0])
+    scene = load_scene({"gravity": [0.0, 0.0, -g], "ground": [],
+                        "bodies": {"a": _ball(RA, MA, pa, (va, 0, 0), e=e, mu=0.0),
+                                   "b": _ball(RB, MB, pb, (vb, 0, 0), e=e, mu=0.0)}})
+    sim = Simulator(scene, "rk4", 1e-3)
+    sim.step(110)
+    t_hit, t = 0.35 / (va - vb), 0.11
+    va_after = ((MA - e * MB) * va + (1 + e) * MB * vb) / (MA + MB)
+    vb_after = ((MB - e * MA) * vb + (1 + e) * MA * va) / (MA + MB)
+    fall = -0.5 * g * t * t
+    expect = [(pa[0] + va * t_hit + va_after * (t - t_hit), 0.0, 1.0 + fall),
+              (pb[0] + vb * t_hit + vb_after * (t - t_hit), 0.0, 1.0 + fall)]
+    assert len(sim.contact.events_of("a", "impact")) == 1
+    np.testing.assert_allclose(sim.positions_world(), expect, rtol=0.0, atol=1e-9)
 
 
 @pytest.mark.parametrize("kind_b", ["box", "sphere"])

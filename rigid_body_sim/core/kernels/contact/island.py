@@ -67,9 +67,10 @@ from .shapes import MAX_FEATURES, feature_gaps, feature_points
 __all__ = ["island_pass", "all_asleep", "TOUCH", "SLEEP_SPEED", "SLEEP_STEPS", "DENSE_MAX", "PROJECT_TOL", "C_FLOATS", "C_INTS", "OUT_WIDTH"]
 
 #: A pair whose signed distance is at most this × its size (m per m) touches: its component is an island, unless
-#: the pair strikes there (approaching faster than IMPACT_MARGIN × the change the step's forces make to that speed,
-#: and than APPROACH_SPEED, m/s): then it is the impact law's (core/contact/body_pairs.py), restitution and all.
-#: APPROACH_SPEED is also the impact law's: a relative normal velocity below −this approaches.
+#: the pair is not resting there (its normal speed beyond IMPACT_MARGIN × the change the step's forces make to it, and
+#: beyond APPROACH_SPEED, m/s): striking, it is an impact, the impact law's (core/contact/body_pairs.py, restitution
+#: and all); parting, its bodies fly on. APPROACH_SPEED is also the impact law's: a normal velocity below −this
+#: approaches.
 TOUCH = 1e-6
 IMPACT_MARGIN, APPROACH_SPEED = 2.0, 1e-12
 #: Bodies slower than this (m/s, and spin × bounding radius) at a step's start and after its solve are at rest.
@@ -1047,20 +1048,21 @@ def _normal_speed(Y, a, b, nx, ny, nz, x, y, z):
 
 
 @njit(**INLINE)
-def _striking(Y0, Y1, pnormal, pcount, ppoints, k, a, b):
-    """Whether touching pair k (a, b) strikes at the step's start: at one of its points it approaches faster than
-    IMPACT_MARGIN × what the step's forces change that speed by (Y1: the free step's end), and faster than
-    APPROACH_SPEED (an impact, the impact law's; else resting contact, the island's)."""
+def _not_resting(Y0, Y1, pnormal, pcount, ppoints, k, a, b):
+    """Whether touching pair k (a, b) is not in resting contact at the step's start: its least normal speed over
+    its points (< 0 approaching) is beyond IMPACT_MARGIN × the largest change the step's forces make to one (Y1: the
+    free step's end) and beyond APPROACH_SPEED, either way: striking (an impact, the impact law's) or parting (each
+    body flies on, its own step)."""
     nx, ny, nz = pnormal[k, 0], pnormal[k, 1], pnormal[k, 2]
+    least, change = math.inf, 0.0
     for c in range(pcount[k]):
         x = 0.5 * (ppoints[k, c, 0] + ppoints[k, c, 3])
         y = 0.5 * (ppoints[k, c, 1] + ppoints[k, c, 4])
         z = 0.5 * (ppoints[k, c, 2] + ppoints[k, c, 5])
         u0 = _normal_speed(Y0, a, b, nx, ny, nz, x, y, z)
-        du = abs(_normal_speed(Y1, a, b, nx, ny, nz, x, y, z) - u0)
-        if -u0 > max(IMPACT_MARGIN * du, APPROACH_SPEED):
-            return True
-    return False
+        least = min(least, u0)
+        change = max(change, abs(_normal_speed(Y1, a, b, nx, ny, nz, x, y, z) - u0))
+    return pcount[k] > 0 and abs(least) > max(IMPACT_MARGIN * change, APPROACH_SPEED)
 
 
 @njit(**JIT)
@@ -1073,8 +1075,8 @@ def _link(Y0, Y1, nlist, lo, hi, pdist, pnormal, pcount, ppoints, bound, is_stat
         if is_static[a] or is_static[b]:
             continue
         settling = flags[a] & 64 and flags[b] & 64 and pdist[k] <= bound[k]
-        if settling or (pdist[k] <= touch and not _striking(Y0, Y1, pnormal, pcount, ppoints, k, a, b)):
-            # touching and not striking; or both stepped in an island last step and still within reach: the island
+        if settling or (pdist[k] <= touch and not _not_resting(Y0, Y1, pnormal, pcount, ppoints, k, a, b)):
+            # touching and resting; or both stepped in an island last step and still within reach: the island
             # holds them while they settle (a Gauss–Seidel residue may part them by more than TOUCH)
             _union(parent, a, b)
             flags[a] |= 8
