@@ -12,7 +12,8 @@
 * Energy never rises: random pairs of shapes (sphere, box, capsule, cylinder), orientations,
   spins, materials and offsets (within the smallest half-size: they must meet) flying at each
   other (hypothesis): an impact event, the kinetic energy after the step holding it ≤ before
-  (1 + 1e-12); every impact event's too.
+  (1 + 1e-12); every impact event's too. The same pairs set touching at a step's start (within the
+  islands' band, or overlapping a little) while closing: an impact event, not the islands' step.
 * The same two spheres under gravity, meeting at a step boundary: after it each flies on its own
   integrator's step (the closed-form parabolas within 1e-9 m), not the islands' first-order one.
 * A box flying face on at a box (four contact points) and at a sphere: the impact time and the
@@ -219,6 +220,47 @@ def test_energy_never_rises_at_a_body_body_impact(kinds, dims, quats, spins, off
     assert _energy(sim) <= before * (1.0 + 1e-12)
     for event in sim.contact.events:
         assert event.energy_after <= event.energy_before * (1.0 + 1e-12)
+
+
+@settings(max_examples=25, deadline=None)
+@given(kinds=st.tuples(st.sampled_from(sorted(_KINDS)), st.sampled_from(sorted(_KINDS))),
+       dims=st.tuples(st.floats(0.05, 0.15), st.floats(0.05, 0.15), st.floats(0.05, 0.15)),
+       quats=st.lists(_unit, min_size=8, max_size=8).filter(lambda q: min(np.linalg.norm(q[:4]), np.linalg.norm(q[4:])) > 0.1),
+       masses=st.tuples(st.floats(0.2, 5.0), st.floats(0.2, 5.0)),
+       e=st.floats(0.0, 1.0), mu=st.floats(0.0, 1.5), gap=st.floats(-0.5, 0.9))
+def test_a_pair_touching_at_a_step_start_while_it_strikes_is_an_impact(kinds, dims, quats, masses, e, mu, gap):
+    """Random pairs of shapes (as above, no spin) set at a step's start at a signed distance of gap × the islands'
+    TOUCH × the pair's size (the band the islands take as touching; overlapping when gap < 0), closing at 4 m/s:
+    they strike. The step holds an impact event for both bodies, the kinetic energy does not rise, and the islands
+    take no step."""
+    from rigid_body_sim.core.kernels.contact.island import TOUCH
+    from rigid_body_sim.core.kernels import layout as L
+
+    bodies = {}
+    for k, (name, vx) in enumerate((("a", 2.0), ("b", -2.0))):
+        shape, inertia = _shape(kinds[k], dims)
+        q = np.asarray(quats[4 * k:4 * k + 4]) / np.linalg.norm(quats[4 * k:4 * k + 4])
+        bodies[name] = {"mass": masses[k], "inertia": inertia, "collision": shape,
+                        "material": {"restitution": e, "friction": mu},
+                        "pose": {"position": [0.8 * k, 0.0, 1.0], "orientation": [float(q[1]), float(q[2]), float(q[3]), float(q[0])]},
+                        "twist": {"linear": [vx, 0.0, 0.0]}}
+    sim = Simulator(load_scene({"gravity": [0.0, 0.0, 0.0], "ground": [], "bodies": bodies}), "implicit_gyroscopic", 2e-3)
+    pairs = sim.contact.pairs
+    target = gap * TOUCH * max(pairs.size[0], pairs.size[1])
+    ya, yb = sim.state.rows()[0].copy(), sim.state.rows()[1].copy()
+    lo, hi = 0.0, 0.8  # b's x: overlapping, apart
+    for _ in range(200):  # bisection on the signed distance (continuous in x) to round-off
+        yb[L.P] = 0.5 * (lo + hi)
+        if pairs.contact(ya, 0, yb, 1) < target:
+            lo = yb[L.P]
+        else:
+            hi = yb[L.P]
+    sim.set_body_state("b", position_world=(hi, 0.0, 1.0))
+    before = _energy(sim)
+    sim.step()
+    assert sim.contact.events_of("a", "impact") and sim.contact.events_of("b", "impact")
+    assert sim.contact.counts["island_body_steps"] == 0
+    assert _energy(sim) <= before * (1.0 + 1e-12)
 
 
 def test_a_ball_dropped_onto_a_resting_box_stops_on_it():
