@@ -186,19 +186,19 @@ def _energy(sim):
 
 
 _unit = st.floats(-1.0, 1.0)
+#: Random pairs of shapes, orientations, masses and materials (the properties below draw from these).
+_PAIRS = dict(
+    kinds=st.tuples(st.sampled_from(sorted(_KINDS)), st.sampled_from(sorted(_KINDS))),
+    dims=st.tuples(st.floats(0.05, 0.15), st.floats(0.05, 0.15), st.floats(0.05, 0.15)),
+    quats=st.lists(_unit, min_size=8, max_size=8).filter(lambda q: min(np.linalg.norm(q[:4]), np.linalg.norm(q[4:])) > 0.1),
+    masses=st.tuples(st.floats(0.2, 5.0), st.floats(0.2, 5.0)),
+    e=st.floats(0.0, 1.0), mu=st.floats(0.0, 1.5))
 
 
-@settings(max_examples=25, deadline=None)
-@example(kinds=("box", "box"), dims=(0.125, 0.05078125, 0.0625), quats=[0.0, 1.0, 0.5, 0.0, 0.0, 0.0, 0.0, 1.0],
-         spins=[0.0, 0.0, 0.0, 0.0, -1.0, 1.5], offset=(0.0, 0.0), masses=(1.0, 1.0), e=1.0, mu=0.0)
-@given(kinds=st.tuples(st.sampled_from(sorted(_KINDS)), st.sampled_from(sorted(_KINDS))),
-       dims=st.tuples(st.floats(0.05, 0.15), st.floats(0.05, 0.15), st.floats(0.05, 0.15)),
-       quats=st.lists(_unit, min_size=8, max_size=8).filter(lambda q: min(np.linalg.norm(q[:4]), np.linalg.norm(q[4:])) > 0.1),
-       spins=st.lists(st.floats(-3.0, 3.0), min_size=6, max_size=6),
-       offset=st.tuples(st.floats(-0.02, 0.02), st.floats(-0.02, 0.02)),
-       masses=st.tuples(st.floats(0.2, 5.0), st.floats(0.2, 5.0)),
-       e=st.floats(0.0, 1.0), mu=st.floats(0.0, 1.5))
-def test_energy_never_rises_at_a_body_body_impact(kinds, dims, quats, spins, offset, masses, e, mu):
+def _flying_pair(kinds, dims, quats, masses, e, mu, spins=(0.0,) * 6, offset=(0.0, 0.0)) -> Simulator:
+    """a at x = 0 and b at x = 0.8 m (offset in y, z), flying at each other at 2 m/s each, no gravity.
+    implicit_gyroscopic keeps a free body's energy exactly at any |ω|h, so a step's change is the
+    contact's alone (rk4's own truncation error on the spin an impact leaves reaches 1e-11 of E)."""
     bodies = {}
     for k, (name, x, vx) in enumerate((("a", 0.0, 2.0), ("b", 0.8, -2.0))):
         shape, inertia = _shape(kinds[k], dims)
@@ -207,10 +207,17 @@ def test_energy_never_rises_at_a_body_body_impact(kinds, dims, quats, spins, off
                         "material": {"restitution": e, "friction": mu},
                         "pose": {"position": [x, offset[0] * k, 1.0 + offset[1] * k],
                                  "orientation": [float(q[1]), float(q[2]), float(q[3]), float(q[0])]},
-                        "twist": {"linear": [vx, 0.0, 0.0], "angular": spins[3 * k:3 * k + 3]}}
-    # implicit_gyroscopic keeps a free body's energy exactly at any |ω|h, so the step's change is the
-    # contact's alone (rk4's own truncation error on the spin an impact leaves reaches 1e-11 of E)
-    sim = Simulator(load_scene({"gravity": [0.0, 0.0, 0.0], "ground": [], "bodies": bodies}), "implicit_gyroscopic", 2e-3)
+                        "twist": {"linear": [vx, 0.0, 0.0], "angular": list(spins[3 * k:3 * k + 3])}}
+    return Simulator(load_scene({"gravity": [0.0, 0.0, 0.0], "ground": [], "bodies": bodies}), "implicit_gyroscopic", 2e-3)
+
+
+@settings(max_examples=25, deadline=None)
+@example(kinds=("box", "box"), dims=(0.125, 0.05078125, 0.0625), quats=[0.0, 1.0, 0.5, 0.0, 0.0, 0.0, 0.0, 1.0],
+         spins=[0.0, 0.0, 0.0, 0.0, -1.0, 1.5], offset=(0.0, 0.0), masses=(1.0, 1.0), e=1.0, mu=0.0)
+@given(**_PAIRS, spins=st.lists(st.floats(-3.0, 3.0), min_size=6, max_size=6),
+       offset=st.tuples(st.floats(-0.02, 0.02), st.floats(-0.02, 0.02)))
+def test_energy_never_rises_at_a_body_body_impact(kinds, dims, quats, spins, offset, masses, e, mu):
+    sim = _flying_pair(kinds, dims, quats, masses, e, mu, spins, offset)
     before = _energy(sim)
     for _ in range(150):
         sim.step()
@@ -223,11 +230,7 @@ def test_energy_never_rises_at_a_body_body_impact(kinds, dims, quats, spins, off
 
 
 @settings(max_examples=25, deadline=None)
-@given(kinds=st.tuples(st.sampled_from(sorted(_KINDS)), st.sampled_from(sorted(_KINDS))),
-       dims=st.tuples(st.floats(0.05, 0.15), st.floats(0.05, 0.15), st.floats(0.05, 0.15)),
-       quats=st.lists(_unit, min_size=8, max_size=8).filter(lambda q: min(np.linalg.norm(q[:4]), np.linalg.norm(q[4:])) > 0.1),
-       masses=st.tuples(st.floats(0.2, 5.0), st.floats(0.2, 5.0)),
-       e=st.floats(0.0, 1.0), mu=st.floats(0.0, 1.5), gap=st.floats(-0.5, 0.9))
+@given(**_PAIRS, gap=st.floats(-0.5, 0.9))
 def test_a_pair_touching_at_a_step_start_while_it_strikes_is_an_impact(kinds, dims, quats, masses, e, mu, gap):
     """Random pairs of shapes (as above, no spin) set at a step's start at a signed distance of gap × the islands'
     TOUCH × the pair's size (the band the islands take as touching; overlapping when gap < 0), closing at 4 m/s:
@@ -236,15 +239,7 @@ def test_a_pair_touching_at_a_step_start_while_it_strikes_is_an_impact(kinds, di
     from rigid_body_sim.core.kernels.contact.island import TOUCH
     from rigid_body_sim.core.kernels import layout as L
 
-    bodies = {}
-    for k, (name, vx) in enumerate((("a", 2.0), ("b", -2.0))):
-        shape, inertia = _shape(kinds[k], dims)
-        q = np.asarray(quats[4 * k:4 * k + 4]) / np.linalg.norm(quats[4 * k:4 * k + 4])
-        bodies[name] = {"mass": masses[k], "inertia": inertia, "collision": shape,
-                        "material": {"restitution": e, "friction": mu},
-                        "pose": {"position": [0.8 * k, 0.0, 1.0], "orientation": [float(q[1]), float(q[2]), float(q[3]), float(q[0])]},
-                        "twist": {"linear": [vx, 0.0, 0.0]}}
-    sim = Simulator(load_scene({"gravity": [0.0, 0.0, 0.0], "ground": [], "bodies": bodies}), "implicit_gyroscopic", 2e-3)
+    sim = _flying_pair(kinds, dims, quats, masses, e, mu)
     pairs = sim.contact.pairs
     target = gap * TOUCH * max(pairs.size[0], pairs.size[1])
     ya, yb = sim.state.rows()[0].copy(), sim.state.rows()[1].copy()

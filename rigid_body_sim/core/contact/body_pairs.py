@@ -63,7 +63,7 @@ from ..kernels import layout as L
 from ..kernels.contact.impacts import IMPACT_WORK_SHAPE, impact, kinetic_energy_row
 from ..kernels.contact.island import APPROACH_SPEED  # a relative normal velocity below −this (m/s) approaches
 from ..kernels.contact.layout import DIMS, KIND, MAX_POINTS, NORMAL, PERSISTENT, FLIGHT, SHAPE_SPHERE
-from ..kernels.contact.pair_impacts import PAIR_JACOBIAN_SHAPE, pair_impact
+from ..kernels.contact.pair_impacts import PAIR_JACOBIAN_SHAPE, normal_speed, pair_impact
 from ..kernels.contact.pairs import MAX_PAIR_POINTS, apart_bounds, pair_contacts
 from ..kernels.contact.persistent import normal_speeds
 from ..kernels.contact.swept import grid_swept_pairs, swept_bounds
@@ -186,13 +186,7 @@ class BodyPairs:
     @staticmethod
     def _relative_normal_speed(ya, yb, n, points) -> float:
         """The least normal velocity of b over a at the contact points (k, 3) (m/s, < 0 approaching)."""
-        lowest = math.inf
-        w_a = quat_rotate(ya[L.Q:L.Q + 4], ya[L.W:L.W + 3])
-        w_b = quat_rotate(yb[L.Q:L.Q + 4], yb[L.W:L.W + 3])
-        for x in points:
-            u = (yb[L.V:L.V + 3] + np.cross(w_b, x - yb[L.P:L.P + 3])) - (ya[L.V:L.V + 3] + np.cross(w_a, x - ya[L.P:L.P + 3]))
-            lowest = min(lowest, float(u @ n))
-        return lowest
+        return min((normal_speed(ya, yb, n[0], n[1], n[2], x[0], x[1], x[2]) for x in points), default=math.inf)
 
     # ----------------------------------------------------------------- after the step
 

@@ -17,7 +17,7 @@ import numpy as np
 from ..kernels.contact.broadphase import grid_pairs, shape_aabbs, sweep_pairs
 from ..kernels.contact.impacts import IMPACT_WORK_SHAPE
 from ..kernels.contact.layout import DIMS, KIND, SHAPE_BOX, SHAPE_CAPSULE, SHAPE_CYLINDER, SHAPE_SPHERE, SHAPE_WIDTH
-from ..kernels.contact.pair_impacts import PAIR_JACOBIAN_SHAPE, pair_impact
+from ..kernels.contact.pair_impacts import PAIR_JACOBIAN_SHAPE, normal_speed, pair_impact
 from ..kernels.contact.pairs import MAX_PAIR_POINTS, apart_bounds, pair_contacts
 from ..kernels.contact.swept import grid_swept_pairs, swept_bounds
 from ..kernels.layout import INERTIA, INV_INERTIA, INV_MASS, MASS, PRM_WIDTH, P, Q, STATE_WIDTH, V
@@ -25,8 +25,8 @@ from ..kernels.layout import INERTIA, INV_INERTIA, INV_MASS, MASS, PRM_WIDTH, P,
 __all__ = ["PAIR_ENTRY_POINTS", "compile_pair_kernels"]
 
 #: The body–body contact kernels called from Python.
-PAIR_ENTRY_POINTS = (shape_aabbs, grid_pairs, sweep_pairs, pair_contacts, apart_bounds, pair_impact, swept_bounds,
-                     grid_swept_pairs)
+PAIR_ENTRY_POINTS = (shape_aabbs, grid_pairs, sweep_pairs, pair_contacts, apart_bounds, pair_impact, normal_speed,
+                     swept_bounds, grid_swept_pairs)
 
 
 def compile_pair_kernels() -> None:
@@ -67,3 +67,4 @@ def compile_pair_kernels() -> None:
     points = np.array([[0.1, 0.0, 0.0]])  # world, m
     pair_impact(y, y.copy(), prm, y_b, y_b.copy(), prm.copy(), 1, points, 1.0, 0.0, 0.0, 0.5, 0.5,
                 np.zeros(PAIR_JACOBIAN_SHAPE), np.zeros(IMPACT_WORK_SHAPE))
+    normal_speed(y, y_b, 1.0, 0.0, 0.0, 0.1, 0.0, 0.0)

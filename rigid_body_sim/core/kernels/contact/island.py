@@ -61,17 +61,18 @@ from ..layout import ACTIVE, BOUND, GRAVITY, INV_INERTIA, INV_MASS, INERTIA, P, 
 from ..rotation import exp_map, matrix, normalise, qmul, rotate, rotate_back
 from .layout import DIMS, FRICTION, HAS_MATERIAL, KIND, NORMAL, SHAPE_BOX
 from .convex import POSE_WIDTH
+from .pair_impacts import normal_speed
 from .pairs import MAX_PAIR_POINTS, box_patch, boxes_apart, pair_contacts
 from .shapes import MAX_FEATURES, feature_gaps, feature_points
 
 __all__ = ["island_pass", "all_asleep", "TOUCH", "SLEEP_SPEED", "SLEEP_STEPS", "DENSE_MAX", "PROJECT_TOL", "C_FLOATS", "C_INTS", "OUT_WIDTH"]
 
-#: A pair whose signed distance is at most this × its size (m per m) touches: its component is an island, unless
-#: the pair is not resting there (its normal speed beyond IMPACT_MARGIN × the change the step's forces make to it, and
-#: beyond APPROACH_SPEED, m/s): striking, it is an impact, the impact law's (core/contact/body_pairs.py, restitution
-#: and all); parting, its bodies fly on. APPROACH_SPEED is also the impact law's: a normal velocity below −this
-#: approaches.
+#: A pair whose signed distance is at most this × its size (m per m) touches: its component is an island if it rests.
 TOUCH = 1e-6
+#: A touching pair rests unless its least normal speed is beyond IMPACT_MARGIN × the change the step's forces make to
+#: a point's and beyond APPROACH_SPEED (m/s), either way: striking, it is an impact, the impact law's
+#: (core/contact/body_pairs.py, restitution and all); parting, its bodies fly on. APPROACH_SPEED is also the impact
+#: law's: a normal velocity below −this approaches.
 IMPACT_MARGIN, APPROACH_SPEED = 2.0, 1e-12
 #: Bodies slower than this (m/s, and spin × bounding radius) at a step's start and after its solve are at rest.
 SLEEP_SPEED = 1e-9
@@ -1035,19 +1036,6 @@ def _inertia_world(Y, prm, i, iw):
 
 
 @njit(**INLINE)
-def _normal_speed(Y, a, b, nx, ny, nz, x, y, z):
-    """The normal velocity (m/s, < 0 approaching) of body b over body a at world point (x, y, z), normal (n) from a
-    to b, at state rows Y."""
-    u = 0.0
-    for i, sign in ((a, -1.0), (b, 1.0)):
-        wx, wy, wz = rotate(Y[i, Q], Y[i, Q + 1], Y[i, Q + 2], Y[i, Q + 3], Y[i, W], Y[i, W + 1], Y[i, W + 2])
-        rx, ry, rz = x - Y[i, P], y - Y[i, P + 1], z - Y[i, P + 2]
-        u += sign * ((Y[i, V] + wy * rz - wz * ry) * nx + (Y[i, V + 1] + wz * rx - wx * rz) * ny
-                     + (Y[i, V + 2] + wx * ry - wy * rx) * nz)
-    return u
-
-
-@njit(**INLINE)
 def _not_resting(Y0, Y1, pnormal, pcount, ppoints, k, a, b):
     """Whether touching pair k (a, b) is not in resting contact at the step's start: its least normal speed over
     its points (< 0 approaching) is beyond IMPACT_MARGIN × the largest change the step's forces make to one (Y1: the
@@ -1059,9 +1047,9 @@ def _not_resting(Y0, Y1, pnormal, pcount, ppoints, k, a, b):
         x = 0.5 * (ppoints[k, c, 0] + ppoints[k, c, 3])
         y = 0.5 * (ppoints[k, c, 1] + ppoints[k, c, 4])
         z = 0.5 * (ppoints[k, c, 2] + ppoints[k, c, 5])
-        u0 = _normal_speed(Y0, a, b, nx, ny, nz, x, y, z)
+        u0 = normal_speed(Y0[a], Y0[b], nx, ny, nz, x, y, z)
         least = min(least, u0)
-        change = max(change, abs(_normal_speed(Y1, a, b, nx, ny, nz, x, y, z) - u0))
+        change = max(change, abs(normal_speed(Y1[a], Y1[b], nx, ny, nz, x, y, z) - u0))
     return pcount[k] > 0 and abs(least) > max(IMPACT_MARGIN * change, APPROACH_SPEED)
 
 

@@ -18,16 +18,29 @@ from __future__ import annotations
 
 from numba import njit
 
-from ..jit import JIT
+from ..jit import INLINE, JIT
 from ..layout import INV_INERTIA, INV_MASS, P, Q, V, W
-from ..rotation import rotate_back
+from ..rotation import rotate, rotate_back
 from .impacts import _A, _B, _LAM, _SAVED, kinetic_energy_row, pgs, restitution, tangents
 from .layout import MAX_POINTS
 
-__all__ = ["PAIR_JACOBIAN_SHAPE", "pair_rows", "pair_impact"]
+__all__ = ["PAIR_JACOBIAN_SHAPE", "normal_speed", "pair_rows", "pair_impact"]
 
 #: Shape of the Jacobian scratch: per row, a's linear (3) and angular (3, principal axes), then b's.
 PAIR_JACOBIAN_SHAPE = (3 * MAX_POINTS, 12)
+
+
+@njit(**INLINE)
+def normal_speed(ya, yb, nx, ny, nz, x, y, z):
+    """The normal velocity (m/s, < 0 approaching) of body b over body a at world point (x, y, z), normal n from a
+    to b, at state rows ya, yb."""
+    u = 0.0
+    for row, sign in ((ya, -1.0), (yb, 1.0)):
+        wx, wy, wz = rotate(row[Q], row[Q + 1], row[Q + 2], row[Q + 3], row[W], row[W + 1], row[W + 2])
+        rx, ry, rz = x - row[P], y - row[P + 1], z - row[P + 2]
+        u += sign * ((row[V] + wy * rz - wz * ry) * nx + (row[V + 1] + wz * rx - wx * rz) * ny
+                     + (row[V + 2] + wx * ry - wy * rx) * nz)
+    return u
 
 
 @njit(**JIT)
