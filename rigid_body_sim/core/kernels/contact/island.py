@@ -666,8 +666,9 @@ def _held(vel, rj, rw, rbody, rbias, rlam, cflt, cint, size, h, order, start, st
     carried over): every point with λ_n > 0 holds (its three rows' speeds after within the sticking solve's
     tolerance, and within HELD_TOL × PROJECT_TOL × its body's size / h: over the step it moves a hundredth of the
     projection's tolerance, so that a component at rest does not creep), every other parts (u_n⁺ ≥ 0 to that
-    tolerance), every point's gap after the step (linear) is above −PROJECT_TOL × its body's size / 2, every
-    λ_n ≥ 0 and every λ_t in its cone. Then the sticking solve's λ is that one, found without a factorisation
+    tolerance), every point's gap after the step (linear) at least −PROJECT_TOL × its body's size (as deep as the
+    projection leaves a point: a component resting there is held as at its faces), every λ_n ≥ 0 and every λ_t in
+    its cone. Then the sticking solve's λ is that one, found without a factorisation
     (a component at rest: the same λ step after step, until what it leaves of the speeds, the solve's round-off,
     grows past that tolerance: a held λ does not follow the bodies' turn, so its residue grows step by step).
     True: vel has λ applied; False: vel as it was (its bodies' rows kept in ``saved``, per body 6)."""
@@ -703,7 +704,7 @@ def _held(vel, rj, rw, rbody, rbias, rlam, cflt, cint, size, h, order, start, st
             reach = PROJECT_TOL * size[body]
             close = min(slack, HELD_TOL * reach / h)
             un = _row_speed(vel, rj, rbody, r)
-            if cflt[q, C_GAP] + h * un < -0.5 * reach:
+            if cflt[q, C_GAP] + h * un < -reach:
                 fits = False
             if rlam[r] > 0.0:
                 for k in range(3):
@@ -1524,11 +1525,12 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                         wait[cint[order[c], side]] = left
         if kept:
             out[OUT_STICK] += 1
-            shallow = True  # and began with no point deeper than the projection's tolerance
+            shallow = True  # and began with no point deeper than half the projection's tolerance (a deeper one,
+            # left there by the projection, is looked at by it again: a held step may take it toward the tolerance)
             for c in range(lo, hi):
                 q = order[c]
                 body = cint[q, I_B] if cint[q, I_B] >= 0 else cint[q, I_A]
-                shallow = shallow and cflt[q, C_GAP] >= -PROJECT_TOL * size[body]
+                shallow = shallow and cflt[q, C_GAP] >= -0.5 * PROJECT_TOL * size[body]
             if shallow:
                 flags[i] |= 512  # its root: the component was solved exactly, nothing to project at the start
         else:
@@ -1561,8 +1563,8 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         Y1[i, Q], Y1[i, Q + 1], Y1[i, Q + 2], Y1[i, Q + 3] = normalise(q[0], q[1], q[2], q[3])
     # the projection, on the second half of the contact and row scratch (the first keeps the velocity step's),
     # looking at the pairs within their reach over the step as solved. A body of a component solved exactly from
-    # no deep point that moved less than PROJECT_TOL × its size over the step is held from the start (island 3):
-    # its points' gaps were closed exactly (linear in the step, and it barely turned), none went deeper
+    # no point deeper than half the tolerance that moved less than PROJECT_TOL × its size over the step is held
+    # from the start (island 3): its points' gaps were closed exactly (linear in the step, and it barely turned)
     for m in range(n):
         i = members[m]
         if island[i] == 1 and flags[_find(comp, i)] & 512:
