@@ -64,8 +64,8 @@ class Drop:
     (resting, sliding, rolling: the contact forces and the projection), ``event_rise`` over steps
     with an event (impacts, landings, lift-offs, stops; such a step also holds flight pieces) and
     ``flight_rise`` over contact-free steps (the integrator's own error on the tumbling phone).
-    ``impacts``: their number; ``impact_gain``: the largest kinetic energy after minus before
-    over them, J (≤ 0: no impact gained).
+    ``impacts``: their number; ``impact_gain``: the largest kinetic energy after over before, minus 1,
+    over them (≤ 0: no impact gained).
     """
 
     height: float
@@ -137,7 +137,8 @@ def drop(data: dict[str, Any], height: float, spin: float, nudge_x: float, nudge
     up_z = float(R[2, 2])
     return Drop(height, spin, nudge_x, nudge_z, at_rest, sim.time, up_z < 0.0, up_z, gap, float(p[2]),
                 start, energy(), rises["rest"], rises["event"], rises["flight"], len(impacts),
-                max((e.energy_after - e.energy_before for e in impacts), default=-math.inf))
+                max((e.energy_after / e.energy_before - 1.0 for e in impacts if e.energy_before > 0.0),
+                    default=-math.inf))
 
 
 def run(drops: int, seed: int = 0, data: dict[str, Any] | None = None, spin: tuple[float, float] = SPIN,
@@ -224,6 +225,8 @@ def page(results: list[Drop], seed: int, seconds: float, spin_bins: int = 16) ->
     event = max(d.event_rise / d.energy_start for d in results)
     flight = max(d.flight_rise / d.energy_start for d in results)
     impact = max(d.impact_gain for d in results)
+    gained = ("negative: no impact gained" if impact <= 0.0 else "round-off: no impact gained more than 1e-12 of it"
+              if impact <= 1e-12 else "an impact gained energy")
 
     half = sum(d.face_down for d in results if d.spin < math.pi)
     half_n = sum(1 for d in results if d.spin < math.pi)
@@ -279,8 +282,7 @@ stopped at {MAX_TIME:g} s of sim time (counted as not screen-down above). The fi
 |---|---|---|---|---|---|---|
 {others}
 
-Largest change of the kinetic energy across an impact: {impact:.1e} J (negative: no impact
-gained). Largest rise of E = KE + m g z over one step, relative to the drop's energy: contact-free
+Largest change of the kinetic energy across an impact, relative to it: {impact:.1e} ({gained}). Largest rise of E = KE + m g z over one step, relative to the drop's energy: contact-free
 steps {flight:.1e} (rk4's own error on the tumbling phone), steps with an event {event:.1e},
 steps in persistent contact {rest:.1e}. **{gaining} of {n} drops gained energy (more than 1e-12
 of theirs) in some step of persistent contact** (rk4 finds the contact force at every stage, each

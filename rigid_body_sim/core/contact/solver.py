@@ -359,7 +359,12 @@ class ContactSolver:
 
     def _staying(self, sim, y: np.ndarray, i: int, j: int, mask: int) -> int:
         """The features of ``mask`` whose contact points do not move away from ground j (a box spun about a
-        bottom edge touches with four corners, but two of them rise: only the edge is in contact)."""
+        bottom edge touches with four corners, but two of them rise: only the edge is in contact), or all of
+        ``mask`` when every one does."""
+        return self._not_rising(sim, y, i, j, mask) or mask
+
+    def _not_rising(self, sim, y: np.ndarray, i: int, j: int, mask: int) -> int:
+        """The features of ``mask`` whose contact points do not move away from ground j (none: 0)."""
         n = self.grounds[j, NORMAL:NORMAL + 3]
         kept = 0
         for k in range(MAX_FEATURES):
@@ -369,7 +374,7 @@ class ContactSolver:
                 _, highest = normal_speeds(y, sim._prm[i], count, self._points, n[0], n[1], n[2], self._work)
                 if count and highest <= LIFT_OFF_SPEED:
                     kept |= 1 << k
-        return kept or mask
+        return kept
 
     def _tracked_points(self, sim, y: np.ndarray, i: int, mask: int | None = None) -> int:
         """Contact points (self._points, self._gaps) of body i's tracked features (or of ``mask``)."""
@@ -386,12 +391,14 @@ class ContactSolver:
         return min(free) if free else math.inf
 
     def _settle(self, sim, y: np.ndarray, i: int, sticking: bool) -> None:
-        """Project body i onto its tracked features, adding every feature the projection leaves touching (≤ band)."""
+        """Project body i onto its tracked features, adding every feature the projection leaves touching (≤ band)
+        that does not move away (a box landed on an edge turns about it: its other edge, within the band, rises)."""
         j = int(self.ground_of[i])
         for _ in range(4):
             self._project(sim, y, i, sticking)
             count = feature_gaps(y, sim._prm[i], self.shapes[i], self.grounds[j], self._features)
             more = sum(1 << k for k in range(count) if self._features[k] <= self._band[i]) & ~int(self.tracked[i])
+            more = self._not_rising(sim, y, i, j, more) if more else 0
             if not more:
                 break
             self.tracked[i] = int(self.tracked[i]) | more
@@ -817,7 +824,7 @@ class ContactSolver:
         """Body i goes into persistent contact with ground j at y (projected in place); 'rest' dated t + remaining."""
         self.modes[i] = PERSISTENT
         self.ground_of[i] = j
-        self.tracked[i] = self._touching(sim, y, i, j)
+        self.tracked[i] = self._staying(sim, y, i, j, self._touching(sim, y, i, j))
         self._settle(sim, y, i, False)
         self.events.append(ContactEvent(t + remaining, self.names[i], j, "rest", speed, 0.0))
 
@@ -994,8 +1001,11 @@ class ContactSolver:
         _, accel, _, _ = self._normal_motion(sim, y, i, j, count, w, mask)
         self.events.append(ContactEvent(t, self.names[i], j, "impact", before, highest, impulse, e0, e1, *jump))
         toward = -accel
-        if highest <= LIFT_OFF_SPEED or (toward > 0.0 and highest * highest <= 2.0 * toward * ZENO_APEX):
-            self.tracked[i] = mask
+        # the features it turns about (the others rise); none struck (a feature that rose off the ground and came
+        # back within the step, located at its start): every one, as for a bounce below ZENO_APEX
+        staying = self._not_rising(sim, y, i, j, mask) if before < -LIFT_OFF_SPEED else mask
+        if staying or (toward > 0.0 and highest * highest <= 2.0 * toward * ZENO_APEX):
+            self.tracked[i] = staying or mask
             self._settle(sim, y, i, False)
             return self._persistent_span(sim, i, y, w, t, h) if h > 0.0 else y
         self.modes[i] = FLIGHT
