@@ -65,8 +65,9 @@ class Body:
     """One body on the ground z = 0 (world z up), or ``grid`` × the same cube for a throughput scene.
 
     ``shape`` ``sphere`` (size: radius) or ``box`` (size: edge lengths); ``position`` of the
-    centre of mass; ``velocity``, ``angular_velocity`` world axes; ``gravity`` world axes (a
-    tilted gravity makes an incline of the flat ground).
+    centre of mass; ``orientation`` the body's axes in the world's, a unit quaternion (x, y, z, w);
+    ``velocity``, ``angular_velocity`` world axes; ``gravity`` world axes (a tilted gravity makes
+    an incline of the flat ground).
     """
 
     shape: str
@@ -78,6 +79,7 @@ class Body:
     velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
     angular_velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
     gravity: tuple[float, float, float] = (0.0, 0.0, -9.81)
+    orientation: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0)
     grid: int = 1
     spacing: float = 0.5
     inertia: np.ndarray = field(init=False)
@@ -139,7 +141,7 @@ class Ours(Engine):
         for i, p in enumerate(body.positions()):
             bodies[f"b{i}"] = {"mass": body.mass, "inertia": shape, "collision": shape,
                                "material": {"restitution": body.restitution, "friction": body.friction},
-                               "pose": {"position": p.tolist()},
+                               "pose": {"position": p.tolist(), "orientation": list(body.orientation)},
                                "twist": {"linear": list(body.velocity), "angular": list(body.angular_velocity)}}
         self.scene_data = {"gravity": list(body.gravity),
                            "ground": [{"normal": [0, 0, 1], "offset": 0.0,
@@ -200,7 +202,9 @@ class MuJoCo(MuJoCoData, Engine):
             geom = f'type="sphere" size="{body.size[0]}"'
         else:
             geom = 'type="box" size="{} {} {}"'.format(*(0.5 * s for s in body.size))
-        bodies = "".join(f'<body pos="{p[0]:.17g} {p[1]:.17g} {p[2]:.17g}"><freejoint/>'
+        qx, qy, qz, qw = body.orientation
+        bodies = "".join(f'<body pos="{p[0]:.17g} {p[1]:.17g} {p[2]:.17g}" quat="{qw:.17g} {qx:.17g} {qy:.17g} {qz:.17g}">'
+                         f'<freejoint/>'
                          f'<geom {geom} mass="{body.mass}" friction="{mu} 0.005 0.0001"{solref}/></body>'
                          for p in body.positions())
         g = " ".join(f"{x:.17g}" for x in body.gravity)
@@ -240,7 +244,12 @@ class MuJoCo(MuJoCoData, Engine):
 
     def set_velocity(self, v, w) -> None:
         qvel = self.d.qvel.reshape(-1, 6)
-        R = self.d.xmat[1].reshape(3, 3) if self.d.time > 0 else np.eye(3)
+        if self.d.time > 0:
+            R = self.d.xmat[1].reshape(3, 3)
+        else:  # before the first mj_forward: the initial orientation (w, x, y, z)
+            R = np.empty(9)
+            mujoco.mju_quat2Mat(R, np.array(self.d.qpos[3:7]))
+            R = R.reshape(3, 3)
         qvel[:, 0:3] = v
         qvel[:, 3:6] = R.T @ np.asarray(w, float)
 
@@ -282,8 +291,8 @@ class PyBullet(PyBulletClient, Engine):
             shape = p.createCollisionShape(p.GEOM_BOX, halfExtents=[0.5 * s for s in body.size], physicsClientId=c)
         self.ids = []
         for pos in body.positions():
-            b = p.createMultiBody(body.mass, shape, basePosition=pos.tolist(), useMaximalCoordinates=tuned,
-                                  physicsClientId=c)
+            b = p.createMultiBody(body.mass, shape, basePosition=pos.tolist(), baseOrientation=list(body.orientation),
+                                  useMaximalCoordinates=tuned, physicsClientId=c)
             extra = {"contactProcessingThreshold": 0.0} if tuned else {}
             p.changeDynamics(b, -1, lateralFriction=body.friction, restitution=body.restitution, linearDamping=0.0,
                              angularDamping=0.0, rollingFriction=0.0, spinningFriction=0.0, physicsClientId=c, **extra)
@@ -309,11 +318,11 @@ class PyBullet(PyBulletClient, Engine):
 
     def sample(self):
         p = pybullet
-        pos, _ = p.getBasePositionAndOrientation(self.ids[0], physicsClientId=self.c)
+        pos, orn = p.getBasePositionAndOrientation(self.ids[0], physicsClientId=self.c)
         v, w = p.getBaseVelocity(self.ids[0], physicsClientId=self.c)
         v, w = np.array(v), np.array(w)
-        # a sphere's and a cube's inertia are isotropic: ½ I |w|² in any axes
-        kinetic = 0.5 * self.body.mass * float(v @ v) + 0.5 * float(self.body.inertia[0] * (w @ w))
+        w_body = np.array(p.getMatrixFromQuaternion(orn)).reshape(3, 3).T @ w  # the shape's axes are the body's
+        kinetic = 0.5 * self.body.mass * float(v @ v) + 0.5 * float(self.body.inertia @ (w_body * w_body))
         return np.array(pos), w, v, kinetic
 
     def set_velocity(self, v, w) -> None:

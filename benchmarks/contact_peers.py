@@ -26,7 +26,12 @@ Cases (g = 9.81 m/s², exact answers from rigid_body_sim/exact/contact.py), each
 * **incline**: the cube on a 20° slope (gravity tilted by 20° about y on the flat ground —
   the same physics in every engine): μ = 0.5 must not move (the mean speed over t = 1 … 3 s is
   the creep), μ = 0.3 slides with a = g (sin θ − μ cos θ) (measured as the velocity change over
-  t = 0.5 … 1.5 s).
+  t = 0.5 … 1.5 s);
+* **rock**: a 0.2 × 0.2 × 1 m box, 1 kg, μ = 0.9, e = 0, released at rest tilted 0.02 rad onto a
+  bottom edge: it rocks on its edges (Housner's block). Landings 1 and 5 (ours: the located
+  impacts; peers: the instants the centre passes over the footprint's middle, interpolated) and
+  the rocking energy kept at them (KE + m g (z − z_rest), z_rest the engine's own standing rest
+  height, the median over the middle half of the rock after the landing over the one before).
 
 Between bodies (part ``bodies``, benchmarks/contact_bodies.py, whose docstring has the
 conventions): two spheres head-on (equal and unequal masses, e = 0.5, frictionless) and oblique
@@ -80,6 +85,8 @@ CUBE = (0.2, 0.2, 0.2)
 V0 = 2.0
 MU_SLIDE, MU_ROLL = 0.5, 0.3
 THETA = math.radians(20.0)
+ROCK, ROCK_TILT, MU_ROCK = (0.2, 0.2, 1.0), 0.02, 0.9  # the rocking box (m), its release tilt (rad), its μ
+ROCK_LANDINGS = 5
 CUBES = 1000
 FREE_BODIES = 10_000
 
@@ -103,6 +110,15 @@ def roll_body(launched: bool) -> E.Body:
 def incline_body(mu: float) -> E.Body:
     return E.Body("box", CUBE, 1.0, (0.0, 0.0, 0.1), friction=mu,
                   gravity=(G * math.sin(THETA), 0.0, -G * math.cos(THETA)))
+
+
+def rock_body() -> E.Body:
+    """The box upright centred on x = 0, turned by ROCK_TILT about y onto its bottom edge x = +w/2 (at rest)."""
+    w, _, h = ROCK
+    c, s = math.cos(ROCK_TILT), math.sin(ROCK_TILT)
+    edge_x = 0.5 * w  # the centre from that edge, upright (−w/2, h/2), turned about y
+    return E.Body("box", ROCK, 1.0, (edge_x - 0.5 * w * c + 0.5 * h * s, 0.0, 0.5 * w * s + 0.5 * h * c),
+                  friction=MU_ROCK, orientation=(0.0, math.sin(0.5 * ROCK_TILT), 0.0, math.cos(0.5 * ROCK_TILT)))
 
 
 def engines(body: E.Body, dt: float, case: str, rest: E.Body | None = None) -> list[E.Engine]:
@@ -307,6 +323,46 @@ def case_incline(engine, mu: float) -> list[dict]:
                  relative=True)]
 
 
+def _standing_height(engine: E.Engine, seconds: float = 1.0) -> float:
+    """The height of the rocking box's centre standing upright at rest in ``engine``'s kind and setting."""
+    w, _, h = ROCK
+    body = E.Body("box", ROCK, 1.0, (0.0, 0.0, 0.5 * h), friction=MU_ROCK)
+    dt = engine.sim.dt if isinstance(engine, E.Ours) else _dt(engine)
+    extra = (engine.dampratio,) if isinstance(engine, E.MuJoCo) else ()
+    standing = type(engine)(body, dt, engine.setting, *extra)
+    standing.step(int(round(seconds / dt)))
+    z = float(standing.sample()[0][2])
+    standing.close()
+    return z
+
+
+def case_rock(engine) -> list[dict]:
+    r = run(engine, 1.2)
+    w, _, h = ROCK
+    t, x = r["t"], r["p"][:, 0]
+    flips = np.flatnonzero(np.sign(x[1:]) != np.sign(x[:-1]))  # upright between samples k and k + 1
+    upright = [float(t[k] + (t[k + 1] - t[k]) * x[k] / (x[k] - x[k + 1])) for k in flips]
+    if isinstance(engine, E.Ours):
+        landings = [e.time for e in engine.sim.contact.events_of("b0", "impact")]
+    else:
+        landings = upright
+    # the rocking energy above the engine's own rest standing (a soft contact rests sunk in): KE + m g (z − z_rest),
+    # the median over the middle half of each rock between uprights
+    energy = r["ke"] + 1.0 * G * (r["p"][:, 2] - _standing_height(engine))
+    ends = [0.0] + upright
+    rocks = [float(np.median(energy[(t >= a + 0.25 * (b - a)) & (t <= b - 0.25 * (b - a))]))
+             for a, b in zip(ends[:-1], ends[1:])]
+    kept = exact.rocking_spin_kept(w, h) ** 2
+    times = exact.rocking_landings(ROCK_LANDINGS, w, h, ROCK_TILT, G)
+    rows = []
+    for k in (1, ROCK_LANDINGS):
+        at = landings[k - 1] if len(landings) >= k else math.nan
+        share = rocks[k] / rocks[k - 1] if len(rocks) > k and rocks[k - 1] > 0.0 else math.nan
+        rows.append(_row("rock", f"landing {k}", at, times[k - 1], "s"))
+        rows.append(_row("rock", f"energy kept at landing {k}", share, kept, "", relative=True))
+    return rows
+
+
 def _row(case: str, quantity: str, value: float, exact_value: float, unit: str, relative: bool = False) -> dict:
     error = value - exact_value
     if relative and exact_value != 0.0:
@@ -332,7 +388,8 @@ def measure_cases(quick: bool, log) -> tuple[list[dict], list[dict], dict[str, s
              ("slide", slide_body(True), slide_body(False), case_slide, 1.0),
              ("roll", roll_body(True), roll_body(False), case_roll, 0.5),
              ("incline mu 0.5", incline_body(0.5), None, lambda e: case_incline(e, 0.5), 3.0),
-             ("incline mu 0.3", incline_body(0.3), None, lambda e: case_incline(e, 0.3), 1.5)]
+             ("incline mu 0.3", incline_body(0.3), None, lambda e: case_incline(e, 0.3), 1.5),
+             ("rock", rock_body(), None, case_rock, 1.2)]
     for dt in DTS:
         for case, body, rest, measure, seconds in plans:
             for engine in engines(body, dt, case.split()[0], rest):

@@ -7,6 +7,8 @@
   (a free sphere keeps its speed over 1 s, the damping PyBullet applies by default would take
   7.5 % of it); MuJoCo's calibrated solref gives the first apex of the closed form; and the
   sampled-impact reading finds a peer's first impact within one step of the closed form.
+* The rocking box: the bench's reading of ours meets Housner's closed form (1e-9); (bench) MuJoCo and
+  PyBullet start it tilted and land it near the closed form's first landing.
 * Between bodies (benchmarks/contact_bodies.py): the bench's reading of ours meets the closed
   forms (two spheres head-on and oblique within 1e-9, both tunnelling scenes held at dt = 10 ms)
   and its tables print; a peer's impact time read from samples is the end of the step holding
@@ -76,6 +78,34 @@ def test_mujoco_calibrated_solref_gives_the_first_apex_and_impacts_are_read_with
     assert C._apexes(r, flights, 1)[0] == pytest.approx(exact.bounce_apex(1, C.H0, C.E_BOUNCE), rel=1e-6)
     assert abs(impacts[0] - exact.bounce_impact_time(1, C.H0, C.E_BOUNCE, C.G)) <= dt
 
+
+
+def test_the_rocking_box_reads_ours_at_housners_closed_form():
+    """Ours (rk4, dt = 1 ms) read by the rocking case: landings 1 and 5 within 1e-9 s and the energy kept at them
+    within 1e-9 of (1 − (3/2) sin²α)²: the reading itself adds no error (located impacts; the rocks' energy
+    constant between landings)."""
+    from benchmarks import contact_engines as E
+    from benchmarks import contact_peers as C
+
+    rows = C.case_rock(E.Ours(C.rock_body(), 1e-3, "rk4"))
+    assert [r["quantity"] for r in rows] == ["landing 1", "energy kept at landing 1", "landing 5",
+                                            "energy kept at landing 5"]
+    for r in rows:
+        assert abs(r["error"]) <= 1e-9, r
+
+
+@pytest.mark.bench
+def test_peers_start_the_rocking_box_tilted_and_read_its_first_landing():
+    """The box's orientation reaches MuJoCo and PyBullet: each starts tilted as ours and lands on its other edge
+    within 2 ms of the closed form's first landing (their own contact apart), with some of its rocking energy kept."""
+    from benchmarks import contact_engines as E
+    from benchmarks import contact_peers as C
+
+    for engine in (E.MuJoCo(C.rock_body(), 1e-3, "pyramidal"), E.PyBullet(C.rock_body(), 1e-3, "default")):
+        rows = {r["quantity"]: r for r in C.case_rock(engine)}
+        assert abs(rows["landing 1"]["error"]) <= 2e-3, (engine.name, rows)
+        assert 0.0 < rows["energy kept at landing 1"]["value"] < 1.0, (engine.name, rows)
+        engine.close()
 
 def _our_rows(case, items, dt, spins):
     from benchmarks import contact_bodies as B

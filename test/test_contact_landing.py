@@ -20,6 +20,7 @@ from hypothesis import strategies as st
 from helpers import FIXED_STEP_INTEGRATORS, ORDER, loglog_slope
 from rigid_body_sim.core import INTEGRATORS, Simulator, load_scene
 from rigid_body_sim.core.kernels.contact.shapes import MAX_FEATURES, feature_gaps
+from rigid_body_sim.exact import contact as exact_contact
 
 G = 9.81
 MASS, THICK = 0.2, 0.008
@@ -320,19 +321,6 @@ def test_pivoting_keeps_the_energy_to_1e_9_with_rk4_and_reference(integrator):
 
 
 
-def rocking_fall_time(k: float, alpha: float, tilt: float) -> float:
-    """Time (s) for a box released at rest tilted by ``tilt`` onto a bottom edge to stand upright, turning about
-    that edge: ½ I θ̇² = m g r (cos(α − tilt) − cos(α − θ)), k = m g r / I, by quadrature (θ = tilt − v²: smooth)."""
-    from scipy.integrate import quad
-
-    def dt_dv(v: float) -> float:
-        if v == 0.0:
-            return 2.0 / math.sqrt(2.0 * k * math.sin(alpha - tilt))
-        return 2.0 * v / math.sqrt(4.0 * k * math.sin(alpha - tilt + 0.5 * v * v) * math.sin(0.5 * v * v))
-
-    return quad(dt_dv, 0.0, math.sqrt(tilt), epsabs=1e-14, epsrel=1e-12, limit=200)[0]
-
-
 def test_a_slender_box_rocks_on_its_edges_as_housners_block():
     """A 0.2 × 0.2 × 1 m box (1 kg, μ = 0.9, e = 0) released at rest tilted 0.02 rad onto a bottom edge turns about
     it, lands on its other edge and turns about that one, and so on: the impact at each landing is inelastic and
@@ -355,17 +343,11 @@ def test_a_slender_box_rocks_on_its_edges_as_housners_block():
     for _ in range(2500):  # the tenth landing at 1.888 s
         sim.step()
     assert len(sim.contact.events_of("box", "impact")) >= 10
-    alpha = math.atan(width / height)
-    kept = 1.0 - 1.5 * math.sin(alpha) ** 2
-    k = G * 0.5 * math.hypot(width, height) / ((width**2 + height**2) / 3.0)  # m g r / I about an edge
-    spin = math.sqrt(2.0 * k * (math.cos(alpha - tilt) - math.cos(alpha)))
-    at, apex = rocking_fall_time(k, alpha, tilt), tilt
-    for event in sim.contact.events_of("box", "impact")[:10]:
+    kept = exact_contact.rocking_spin_kept(width, height)
+    landings = sim.contact.events_of("box", "impact")[:10]
+    for event, at in zip(landings, exact_contact.rocking_landings(10, width, height, tilt, G), strict=True):
         assert event.energy_after / event.energy_before == pytest.approx(kept**2, rel=1e-12)
         assert event.time == pytest.approx(at, abs=1e-10)
-        spin *= kept
-        apex = alpha - math.acos(math.cos(alpha) + spin * spin / (2.0 * k))
-        at += 2.0 * rocking_fall_time(k, alpha, apex)
 
 # ----------------------------------------------------------------------------- the phone drops of docs/phone_drop.md
 

@@ -1,4 +1,5 @@
-"""Closed forms of rigid contact with a flat ground: the bouncing ball, the sliding box, slide to roll, the incline.
+"""Closed forms of rigid contact with a flat ground: the bouncing ball, the sliding box, slide to roll, the incline,
+the rocking block.
 
 Each is the textbook answer of the rigid model (Newton restitution e, Coulomb friction μ with
 one coefficient, point contact, uniform gravity g > 0 along −n). Times in s, lengths in m,
@@ -20,6 +21,8 @@ __all__ = [
     "rolling_start",
     "slip_speed_time",
     "incline_acceleration",
+    "rocking_spin_kept",
+    "rocking_landings",
 ]
 
 
@@ -104,3 +107,48 @@ def incline_acceleration(theta: float, mu: float, g: float) -> float:
     if not 0.0 <= theta < 0.5 * math.pi or not mu >= 0.0:
         raise ValueError(f"theta, mu: expected 0 ≤ θ < π/2 and μ ≥ 0, got {theta!r}, {mu!r}")
     return max(0.0, g * (math.sin(theta) - mu * math.cos(theta)))
+
+
+def rocking_spin_kept(width: float, height: float) -> float:
+    """Share of its spin a rigid block keeps when it lands on its other bottom edge (inelastic, without slip,
+    the edge it turned about lifting; the angular momentum about the new edge is kept): 1 − (3/2) sin²α,
+    α = atan(width / height) (Housner 1963). Below 0 (a block more than √2 times as wide as tall) it stops."""
+    alpha = math.atan(_positive("width", width) / _positive("height", height))
+    return 1.0 - 1.5 * math.sin(alpha) ** 2
+
+
+def _rocking_fall(k: float, alpha: float, tilt: float) -> float:
+    """Time from rest tilted by ``tilt`` onto an edge to upright, turning about it: ½ I θ̇² = m g r (cos(α − tilt) −
+    cos(α − θ)), k = m g r / I; θ = tilt − v² makes the integrand smooth."""
+    from scipy.integrate import quad
+
+    def dt_dv(v: float) -> float:
+        if v == 0.0:
+            return 2.0 / math.sqrt(2.0 * k * math.sin(alpha - tilt))
+        return 2.0 * v / math.sqrt(4.0 * k * math.sin(alpha - tilt + 0.5 * v * v) * math.sin(0.5 * v * v))
+
+    return quad(dt_dv, 0.0, math.sqrt(tilt), epsabs=1e-14, epsrel=1e-12, limit=200)[0]
+
+
+def rocking_landings(count: int, width: float, height: float, tilt: float, g: float) -> list[float]:
+    """Times of the first ``count`` landings of a rigid box (its cross-section width × height about the rocking
+    axis, uniform) released at rest tilted by ``tilt`` (rad, 0 < tilt < α) onto a bottom edge, rocking on a flat
+    ground without slip: it turns about its edge (I = m (w² + h²)/3, its centre r = ½ √(w² + h²) from it) to
+    upright, lands on the other edge keeping :func:`rocking_spin_kept` of its spin, rises to the tilt where that
+    spin's energy is spent, falls back, and so on. Each fall by quadrature."""
+    width, height, g = _positive("width", width), _positive("height", height), _positive("g", g)
+    alpha = math.atan(width / height)
+    if not 0.0 < tilt < alpha:
+        raise ValueError(f"tilt: expected 0 < tilt < atan(width / height) = {alpha!r}, got {tilt!r}")
+    kept = rocking_spin_kept(width, height)
+    if kept <= 0.0:
+        raise ValueError(f"width, height: expected a block that rocks (width < √2 height), got {width!r}, {height!r}")
+    k = g * 0.5 * math.hypot(width, height) / ((width * width + height * height) / 3.0)  # m g r / I
+    spin = math.sqrt(2.0 * k * (math.cos(alpha - tilt) - math.cos(alpha)))
+    at, times = _rocking_fall(k, alpha, tilt), []
+    for _ in range(int(count)):
+        times.append(at)
+        spin *= kept
+        apex = alpha - math.acos(math.cos(alpha) + spin * spin / (2.0 * k))  # where the spin left is spent
+        at += 2.0 * _rocking_fall(k, alpha, apex)
+    return times
