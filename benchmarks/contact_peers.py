@@ -565,7 +565,7 @@ def accuracy_table(figures: list[dict]) -> str:
     for case, q in quantities:
         rows = [r for r in figures if r["case"] == case and r["quantity"] == q]
         ex = rows[0]["exact"]
-        exact_text = f"{ex:.6g} {rows[0]['unit']}" if ex != 0.0 else "0"
+        exact_text = f"{ex:.6g} {rows[0]['unit']}".rstrip() if ex != 0.0 else "0"
         cells = []
         for k in keys:
             mine = [r for r in rows if (r["engine"], r["setting"]) == k]
