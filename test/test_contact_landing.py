@@ -321,24 +321,31 @@ def test_pivoting_keeps_the_energy_to_1e_9_with_rk4_and_reference(integrator):
 
 
 
-def test_a_slender_box_rocks_on_its_edges_as_housners_block():
+@pytest.mark.parametrize("support", ["ground", "static box"])
+def test_a_slender_box_rocks_on_its_edges_as_housners_block(support):
     """A 0.2 × 0.2 × 1 m box (1 kg, μ = 0.9, e = 0) released at rest tilted 0.02 rad onto a bottom edge turns about
     it, lands on its other edge and turns about that one, and so on: the impact at each landing is inelastic and
     without slip at the new edge, the old edge lifting, so the angular momentum about the new edge is kept and the
     spin keeps 1 − (3/2) sin²α of itself, α = atan(0.2 / 1) (Housner 1963). Ten landings: each one's kinetic
     energy ratio is (1 − (3/2) sin²α)² within 1e-12 (seen 3e-15), and each is at the closed form's time (the fall
-    from each apex by quadrature, the apex from the energy left) within 1e-10 s (rk4, dt = 1 ms; seen 4e-12)."""
+    from each apex by quadrature, the apex from the energy left) within 1e-10 s (rk4, dt = 1 ms; seen 4e-12). On
+    the ground and on a static box's top face (a table: its face an exact plane, the contact force found at every
+    stage as on the ground)."""
     width, height, tilt = 0.2, 1.0, 0.02
     turn = np.array([math.sin(0.5 * tilt), math.cos(0.5 * tilt)])  # about y: (y, w) of the quaternion
     corner = np.array([-0.5 * width, 0.5 * height])  # the centre of mass from the edge it leans on (x, z), upright
     c, s = math.cos(tilt), math.sin(tilt)
-    centre = np.array([0.5 * width + c * corner[0] + s * corner[1], -s * corner[0] + c * corner[1]])
+    top = 0.0 if support == "ground" else 0.3  # the table's top face
+    centre = np.array([0.5 * width + c * corner[0] + s * corner[1], top - s * corner[0] + c * corner[1]])
+    material = {"restitution": 0.0, "friction": 0.9}
     data = {"gravity": [0.0, 0.0, -G],
-            "ground": [{"normal": [0, 0, 1], "material": {"restitution": 0.0, "friction": 0.9}}],
-            "bodies": {"box": {"mass": 1.0, "inertia": {"box": [width, width, height]},
-                               "material": {"restitution": 0.0, "friction": 0.9},
+            "ground": [{"normal": [0, 0, 1], "material": material}] if support == "ground" else [],
+            "bodies": {"box": {"mass": 1.0, "inertia": {"box": [width, width, height]}, "material": material,
                                "pose": {"position": [centre[0], 0.0, centre[1]],
                                         "orientation": [0.0, turn[0], 0.0, turn[1]]}}}}
+    if support == "static box":
+        data["bodies"]["table"] = {"mass": 10.0, "inertia": {"box": [2.0, 2.0, 2.0 * top]}, "motion": "static",
+                                   "material": material, "pose": {"position": [0.0, 0.0, 0.0]}}
     sim = Simulator(load_scene(data), integrator="rk4", dt=1e-3)
     for _ in range(2500):  # the tenth landing at 1.888 s
         sim.step()

@@ -511,9 +511,9 @@ class ContactSolver:
         """Add the holding force of body i at y into the wrench row w; False (and flight) if it lifts off.
 
         With ``stages`` and an integrator that evaluates dynamics.derivative at every stage, a body
-        on one half-space stepped by it gets instead its contact in the row, found at every stage
-        (kernels/contact/stage.py; the row with the force found here kept in ``_held_rows``).
-        """
+        on one half-space or a static box's face (an exact plane) stepped by it gets instead its contact in the
+        row, found at every stage (kernels/contact/stage.py; the row with the force found here kept in
+        ``_held_rows``)."""
         if self.other_ground[i] >= 0 and not self.other_projected[i]:
             return two_grounds.hold(self, sim, y, i, w, t, LIFT_OFF_SPEED, TOUCHING_GAP, SLIP_TOLERANCE)
         j = int(self.ground_of[i])
@@ -537,7 +537,8 @@ class ContactSolver:
         self.pressed[i] = int(sum(1 << int(self._owners[c]) for c in range(count) if lam[c] > 0.0))
         self._bare_rows[i] = w
         add_contact_wrench(w, y, sim._prm[i], count, self._points, self._anchors, self._work)
-        if (stages and sim._method.derivative_stages and j < len(self.half_spaces) and self.other_ground[i] < 0
+        on_plane = j < len(self.half_spaces) or not self.statics.is_tangent(j)  # a half-space or a static box's face
+        if (stages and sim._method.derivative_stages and on_plane and self.other_ground[i] < 0
                 and stepped_by_integrator(sim._prm[i])):
             self._held_rows[i] = w
             hold_in_row(w, self._bare_rows[i], y, sim._prm[i], self.shapes[i], self.grounds[j], int(self.tracked[i]),

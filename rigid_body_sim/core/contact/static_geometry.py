@@ -25,7 +25,8 @@ the narrow phase's, and the contact points are the body's lowest features agains
 (exact for a sphere, and for any shape landing on a face within it).
 
 Persistent contact on a face row is the ground's, exact (held and projected on the face's
-plane) while the contact points stay within the face. On a tangent row (a curved static
+plane, the force found at every stage by the methods that do so on the ground) while the contact
+points stay within the face. On a tangent row (a curved static
 support, an edge, a corner, or a face the body has slid over the rim of) the row is refreshed
 from the narrow phase before each step and the body is held on that plane: first order in time,
 not checked against a closed form, and counted (``ContactSolver.counts["static_tangent"]``, per
