@@ -225,7 +225,7 @@ def page(results: list[Drop], seed: int, seconds: float, spin_bins: int = 16) ->
     event = max(d.event_rise / d.energy_start for d in results)
     flight = max(d.flight_rise / d.energy_start for d in results)
     impact = max(d.impact_gain for d in results)
-    gained = ("negative: no impact gained" if impact <= 0.0 else "round-off: no impact gained more than 1e-12 of it"
+    gained = ("≤ 0: no impact gained" if impact <= 0.0 else "round-off: no impact gained more than 1e-12 of it"
               if impact <= 1e-12 else "an impact gained energy")
 
     half = sum(d.face_down for d in results if d.spin < math.pi)
