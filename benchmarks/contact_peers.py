@@ -326,7 +326,7 @@ def case_incline(engine, mu: float) -> list[dict]:
 def _standing_height(engine: E.Engine, seconds: float = 1.0) -> float:
     """The height of the rocking box's centre standing upright at rest in ``engine``'s kind and setting."""
     w, _, h = ROCK
-    body = E.Body("box", ROCK, 1.0, (0.0, 0.0, 0.5 * h), friction=MU_ROCK)
+    body = E.Body("box", ROCK, engine.body.mass, (0.0, 0.0, 0.5 * h), friction=MU_ROCK)
     dt = engine.sim.dt if isinstance(engine, E.Ours) else _dt(engine)
     extra = (engine.dampratio,) if isinstance(engine, E.MuJoCo) else ()
     standing = type(engine)(body, dt, engine.setting, *extra)
@@ -348,7 +348,7 @@ def case_rock(engine) -> list[dict]:
         landings = upright
     # the rocking energy above the engine's own rest standing (a soft contact rests sunk in): KE + m g (z − z_rest),
     # the median over the middle half of each rock between uprights
-    energy = r["ke"] + 1.0 * G * (r["p"][:, 2] - _standing_height(engine))
+    energy = r["ke"] + engine.body.mass * G * (r["p"][:, 2] - _standing_height(engine))
     ends = [0.0] + upright
     rocks = [float(np.median(energy[(t >= a + 0.25 * (b - a)) & (t <= b - 0.25 * (b - a))]))
              for a, b in zip(ends[:-1], ends[1:])]

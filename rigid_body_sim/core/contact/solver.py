@@ -992,24 +992,24 @@ class ContactSolver:
         mask = int(self.tracked[i]) | self._touching(sim, y, i, j)
         count = self._tracked_points(sim, y, i, mask)
         before, _, _, _ = self._normal_motion(sim, y, i, j, count, w, mask)
-        if before >= -LIFT_OFF_SPEED:  # nothing strikes (a feature that rose off the ground and came back within
-            # the step, located at its start): no impact; held on every touching feature, as below ZENO_APEX
-            self.tracked[i] = mask
-            self._settle(sim, y, i, False)
-            return self._persistent_span(sim, i, y, w, t, h) if h > 0.0 else y
-        e, mu = self.restitution_of(i, j), self.friction_of(i, j)
-        after_row = y.copy()
-        impulse, e0, e1, alpha = impact(y, after_row, sim._prm[i], count, self._points, n[0], n[1], n[2], e, mu,
-                                        self._work)
-        jump = self._jump(sim, i, y, after_row, count, e, alpha)
-        y = after_row
-        _, highest = normal_speeds(y, sim._prm[i], count, self._points, n[0], n[1], n[2], self._work)
-        _, accel, _, _ = self._normal_motion(sim, y, i, j, count, w, mask)
-        self.events.append(ContactEvent(t, self.names[i], j, "impact", before, highest, impulse, e0, e1, *jump))
-        toward = -accel
-        staying = self._not_rising(sim, y, i, j, mask)  # the features it turns about (the others rise)
-        if staying or (toward > 0.0 and highest * highest <= 2.0 * toward * ZENO_APEX):
-            self.tracked[i] = staying or mask
+        staying = mask  # nothing strikes (a feature that rose off the ground and came back within the step, located
+        # at its start): no impact, held on every touching feature as below ZENO_APEX
+        if before < -LIFT_OFF_SPEED:
+            e, mu = self.restitution_of(i, j), self.friction_of(i, j)
+            after_row = y.copy()
+            impulse, e0, e1, alpha = impact(y, after_row, sim._prm[i], count, self._points, n[0], n[1], n[2], e, mu,
+                                            self._work)
+            jump = self._jump(sim, i, y, after_row, count, e, alpha)
+            y = after_row
+            _, highest = normal_speeds(y, sim._prm[i], count, self._points, n[0], n[1], n[2], self._work)
+            _, accel, _, _ = self._normal_motion(sim, y, i, j, count, w, mask)
+            self.events.append(ContactEvent(t, self.names[i], j, "impact", before, highest, impulse, e0, e1, *jump))
+            toward = -accel
+            staying = self._not_rising(sim, y, i, j, mask)  # the features it turns about (the others rise)
+            if not staying and toward > 0.0 and highest * highest <= 2.0 * toward * ZENO_APEX:
+                staying = mask
+        if staying:
+            self.tracked[i] = staying
             self._settle(sim, y, i, False)
             return self._persistent_span(sim, i, y, w, t, h) if h > 0.0 else y
         self.modes[i] = FLIGHT
