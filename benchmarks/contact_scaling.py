@@ -8,8 +8,9 @@ dt = 1 ms, one thread), ours with rk4 (the default) and MuJoCo with its default 
 * **cost**: each engine drops contact_stacks' 1000-cube lattice on the open ground (no bin) for
   ``SETTLE_SECONDS``; the heap's poses (at rest: velocities zero) are copied into k heaps
   ``HEAP_PITCH`` apart, k = 1, 10, 100 (1e3, 1e4, 1e5 cubes; 1 and 10 with ``--quick``). Each
-  engine steps its copies ``WARM`` steps, then is timed from that state: µs per step and
-  body-steps/s, medians of ≥ 5 with min–max. Linear cost is a flat body-steps/s down the column.
+  engine steps its copies ``WARM`` steps, then is timed: MuJoCo from that state (``mj_copyData``), ours
+  on from where it is (:func:`snapshot`): µs per step and body-steps/s, medians of ≥ 5 with min–max.
+  Linear cost is a flat body-steps/s down the column.
   MuJoCo's arena: ``MUJOCO_MB_PER_CUBE`` MB per cube; it holds fewer than 65,534 bodies (not 1e5).
 * **pile**: ``TEN_K`` cubes dropped together into one bin (contact_stacks' lattice, 22 cubes a side)
   for ``TEN_K_SECONDS`` (0.3 s with ``--quick``): finite, deepest penetration and largest energy rise
@@ -95,15 +96,17 @@ def engines(cubes: list[S.Cube]) -> list:
 
 
 def snapshot(engine):
-    """A state to time from: ours its state rows (a copy of a whole simulator of 10^5 bodies, its contact buffers
-    included, would not fit in memory; these piles run awake, so no sleep state is lost), a peer its own snapshot."""
-    return engine.sim.state.rows() if isinstance(engine, S.Ours) else engine.snapshot()
+    """A state to time from: a peer's own snapshot; None for ours, which is timed on from where it is (a copy of a
+    whole simulator of 10^5 bodies, its contact buffers included, would not fit in memory, and setting only its
+    state rows back resets its contact solver: the warm start and the components held at rest, so every sample
+    would time a cold step, not the step of a pile that has been running)."""
+    return None if isinstance(engine, S.Ours) else engine.snapshot()
 
 
 def restore(engine, saved) -> None:
-    if isinstance(engine, S.Ours):
-        engine.set_rows(saved)
-    else:
+    """Back to :func:`snapshot`'s state (a peer); ours steps on (these heaps and piles run awake, at rest or
+    settling: consecutive steps cost alike)."""
+    if saved is not None:
         engine.restore(saved)
 
 
