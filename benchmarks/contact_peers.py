@@ -325,8 +325,7 @@ def case_incline(engine, mu: float) -> list[dict]:
 
 def _standing_height(engine: E.Engine, seconds: float = 1.0) -> float:
     """The height of the rocking box's centre standing upright at rest in ``engine``'s kind and setting."""
-    w, _, h = ROCK
-    body = E.Body("box", ROCK, engine.body.mass, (0.0, 0.0, 0.5 * h), friction=MU_ROCK)
+    body = E.Body("box", ROCK, engine.body.mass, (0.0, 0.0, 0.5 * ROCK[2]), friction=MU_ROCK)
     dt = engine.sim.dt if isinstance(engine, E.Ours) else _dt(engine)
     extra = (engine.dampratio,) if isinstance(engine, E.MuJoCo) else ()
     standing = type(engine)(body, dt, engine.setting, *extra)

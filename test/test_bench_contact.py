@@ -79,7 +79,6 @@ def test_mujoco_calibrated_solref_gives_the_first_apex_and_impacts_are_read_with
     assert abs(impacts[0] - exact.bounce_impact_time(1, C.H0, C.E_BOUNCE, C.G)) <= dt
 
 
-
 def test_the_rocking_box_reads_ours_at_housners_closed_form():
     """Ours (rk4, dt = 1 ms) read by the rocking case: landings 1 and 5 within 1e-9 s and the energy kept at them
     within 1e-9 of (1 − (3/2) sin²α)²: the reading itself adds no error (located impacts; the rocks' energy
@@ -106,6 +105,7 @@ def test_peers_start_the_rocking_box_tilted_and_read_its_first_landing():
         assert abs(rows["landing 1"]["error"]) <= 2e-3, (engine.name, rows)
         assert 0.0 < rows["energy kept at landing 1"]["value"] < 1.0, (engine.name, rows)
         engine.close()
+
 
 def _our_rows(case, items, dt, spins):
     from benchmarks import contact_bodies as B

@@ -356,6 +356,7 @@ def test_a_slender_box_rocks_on_its_edges_as_housners_block(support):
         assert event.energy_after / event.energy_before == pytest.approx(kept**2, rel=1e-12)
         assert event.time == pytest.approx(at, abs=1e-10)
 
+
 # ----------------------------------------------------------------------------- the phone drops of docs/phone_drop.md
 
 def test_phone_drops_end_at_rest_flat_on_a_face_and_no_impact_gains_energy():
