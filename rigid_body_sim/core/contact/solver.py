@@ -60,7 +60,10 @@ Zeno guard: after an impact whose rebound would rise less than :data:`ZENO_APEX`
 speed u⁺ with u⁺²/(2a) < ZENO_APEX, a the free normal acceleration of the contact point toward
 the ground), the remaining bounces form a geometric series u⁺, e u⁺, e² u⁺, ... whose flights
 sum to 2u⁺/(a(1 − e)): the body is put into persistent contact at once and its ``rest`` event
-is dated at that accumulation time (the positions it skips are below ZENO_APEX).
+is dated at that accumulation time (the positions it skips are below ZENO_APEX). Rocking (a landing
+after which the body turns on the new features, the others rising) ends the same way once the
+rising features would come down again before the end of the next step (_comes_down_in): every
+touching feature is held from that landing.
 
 Events are recorded in :attr:`ContactSolver.events` (:class:`ContactEvent`).
 """
@@ -1011,10 +1014,33 @@ class ContactSolver:
         if staying:
             self.tracked[i] = staying
             self._settle(sim, y, i, False)
+            rising = mask & ~int(self.tracked[i])
+            if rising and self._comes_down_in(sim, i, y, w, rising) <= h + sim.dt:  # rocking below the step
+                self.tracked[i] = mask
+                self._settle(sim, y, i, False)
             return self._persistent_span(sim, i, y, w, t, h) if h > 0.0 else y
         self.modes[i] = FLIGHT
         self.sliding[i] = False
         return self._with_events(sim, i, y, w, t, h) if h > 0.0 else y
+
+    def _comes_down_in(self, sim, i: int, y: np.ndarray, w: np.ndarray, rising: int) -> float:
+        """The time (s) until the ``rising`` features of body i, at y turning on its tracked ones under the wrench
+        row w (without contact), come back to the ground: 2u/a, u their normal speed and a their normal acceleration
+        toward the ground under the holding force found at y (inf if they do not come back)."""
+        j = int(self.ground_of[i])
+        n = self.grounds[j, NORMAL:NORMAL + 3]
+        count = self._tracked_points(sim, y, i)
+        self._normal_motion(sim, y, i, j, count, w, int(self.tracked[i]))
+        held = w.copy()
+        mode, _, _, _ = holding_wrench(y, sim._prm[i], held, count, self._points, n[0], n[1], n[2],
+                                       self.friction_of(i, j), SLIP_TOLERANCE, self._bias, self._rdot, self._work,
+                                       self._d, self._force)
+        if mode == LIFT_OFF:
+            return math.inf
+        add_contact_wrench(held, y, sim._prm[i], count, self._points, self._anchors, self._work)
+        count = self._tracked_points(sim, y, i, rising)
+        speed, accel, _, _ = self._normal_motion(sim, y, i, j, count, held, rising)
+        return 2.0 * speed / -accel if speed > 0.0 and accel < 0.0 else math.inf
 
 
 def _torques_about_com(Y: np.ndarray, added: np.ndarray) -> np.ndarray:
