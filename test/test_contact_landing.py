@@ -20,6 +20,7 @@ from hypothesis import strategies as st
 from helpers import FIXED_STEP_INTEGRATORS, ORDER, loglog_slope
 from rigid_body_sim.core import INTEGRATORS, Simulator, load_scene
 from rigid_body_sim.core.kernels.contact.shapes import MAX_FEATURES, feature_gaps
+from rigid_body_sim.core.quaternion import quat_rotate, quat_wxyz_from_xyzw
 from rigid_body_sim.exact import contact as exact_contact
 
 G = 9.81
@@ -119,7 +120,6 @@ def test_rods_land_on_their_side_without_gaining_energy(collision, inertia, e):
     assert contact.is_resting("rod")
     assert sim.state.p_WC_W[0, 2] == pytest.approx(0.05, abs=1e-12)  # lying: the centre one radius up
     axis = sim.orientations_xyzw()[0]
-    from rigid_body_sim.core.quaternion import quat_rotate, quat_wxyz_from_xyzw
     assert quat_rotate(quat_wxyz_from_xyzw(axis), np.array([0.0, 0.0, 1.0]))[2] == pytest.approx(0.0, abs=1e-9)
 
 
@@ -130,7 +130,6 @@ def test_gap_accelerations_match_finite_differences_of_the_gap_functions():
     from rigid_body_sim.core.kernels.contact.shapes import feature_points
     from rigid_body_sim.core.kernels.dynamics import derivative
     from rigid_body_sim.core.kernels.layout import ROW_WIDTH, WRENCH_WIDTH
-    from rigid_body_sim.core.quaternion import quat_rotate
     from rigid_body_sim.core.stepping import pack_parameters, unchecked_steps
 
     s, c = math.sin(0.4), math.cos(0.4)
@@ -226,7 +225,6 @@ def tipping_run(integrator: str, omega: float, dt: float = 1e-3, until: float = 
                                "twist": {"linear": [omega * TIP_B / 2.0, 0.0, omega * TIP_A / 2.0],
                                          "angular": [0.0, omega, 0.0]}}}}
     sim = Simulator(load_scene(data), integrator=integrator, dt=dt)
-    from rigid_body_sim.core.quaternion import quat_rotate, quat_wxyz_from_xyzw
     tilts = []
     for _ in range(int(round(until / dt))):
         sim.step()
@@ -321,17 +319,10 @@ def test_pivoting_keeps_the_energy_to_1e_9_with_rk4_and_reference(integrator):
 
 
 
-@pytest.mark.parametrize("support", ["ground", "static box"])
-def test_a_slender_box_rocks_on_its_edges_as_housners_block(support):
-    """A 0.2 × 0.2 × 1 m box (1 kg, μ = 0.9, e = 0) released at rest tilted 0.02 rad onto a bottom edge turns about
-    it, lands on its other edge and turns about that one, and so on: the impact at each landing is inelastic and
-    without slip at the new edge, the old edge lifting, so the angular momentum about the new edge is kept and the
-    spin keeps 1 − (3/2) sin²α of itself, α = atan(0.2 / 1) (Housner 1963). Ten landings: each one's kinetic
-    energy ratio is (1 − (3/2) sin²α)² within 1e-12 (seen 3e-15), and each is at the closed form's time (the fall
-    from each apex by quadrature, the apex from the energy left) within 1e-10 s (rk4, dt = 1 ms; seen 4e-12). On
-    the ground and on a static box's top face (a table: its face an exact plane, the contact force found at every
-    stage as on the ground)."""
-    width, height, tilt = 0.2, 1.0, 0.02
+def released_on_an_edge(width: float, height: float, tilt: float, integrator: str = "rk4",
+                        support: str = "ground") -> Simulator:
+    """A box (width along x, ``width`` deep, height along z; 1 kg, μ = 0.9, e = 0) at rest, tilted by ``tilt``
+    (rad, about y) onto its bottom edge on the ground or on a static box's top face (``support``), dt = 1 ms."""
     turn = np.array([math.sin(0.5 * tilt), math.cos(0.5 * tilt)])  # about y: (y, w) of the quaternion
     corner = np.array([-0.5 * width, 0.5 * height])  # the centre of mass from the edge it leans on (x, z), upright
     c, s = math.cos(tilt), math.sin(tilt)
@@ -346,7 +337,21 @@ def test_a_slender_box_rocks_on_its_edges_as_housners_block(support):
     if support == "static box":
         data["bodies"]["table"] = {"mass": 10.0, "inertia": {"box": [2.0, 2.0, 2.0 * top]}, "motion": "static",
                                    "material": material, "pose": {"position": [0.0, 0.0, 0.0]}}
-    sim = Simulator(load_scene(data), integrator="rk4", dt=1e-3)
+    return Simulator(load_scene(data), integrator=integrator, dt=1e-3)
+
+
+@pytest.mark.parametrize("support", ["ground", "static box"])
+def test_a_slender_box_rocks_on_its_edges_as_housners_block(support):
+    """A 0.2 × 0.2 × 1 m box (1 kg, μ = 0.9, e = 0) released at rest tilted 0.02 rad onto a bottom edge turns about
+    it, lands on its other edge and turns about that one, and so on: the impact at each landing is inelastic and
+    without slip at the new edge, the old edge lifting, so the angular momentum about the new edge is kept and the
+    spin keeps 1 − (3/2) sin²α of itself, α = atan(0.2 / 1) (Housner 1963). Ten landings: each one's kinetic
+    energy ratio is (1 − (3/2) sin²α)² within 1e-12 (seen 3e-15), and each is at the closed form's time (the fall
+    from each apex by quadrature, the apex from the energy left) within 1e-10 s (rk4, dt = 1 ms; seen 4e-12). On
+    the ground and on a static box's top face (a table: its face an exact plane, the contact force found at every
+    stage as on the ground)."""
+    width, height, tilt = 0.2, 1.0, 0.02
+    sim = released_on_an_edge(width, height, tilt, support=support)
     for _ in range(2500):  # the tenth landing at 1.888 s
         sim.step()
     assert len(sim.contact.events_of("box", "impact")) >= 10
@@ -355,6 +360,35 @@ def test_a_slender_box_rocks_on_its_edges_as_housners_block(support):
     for event, at in zip(landings, exact_contact.rocking_landings(10, width, height, tilt, G), strict=True):
         assert event.energy_after / event.energy_before == pytest.approx(kept**2, rel=1e-12)
         assert event.time == pytest.approx(at, abs=1e-10)
+
+
+@pytest.mark.parametrize("integrator", ["rk4", "euler"])
+def test_a_rocking_box_comes_to_rest_when_its_next_landing_is_under_two_steps_away(integrator):
+    """A 0.1 × 0.2 m box released tilted 0.05 rad onto an edge rocks as Housner's block (spin kept per landing
+    r = 0.7): its landings come ever faster and accumulate at a finite time T∞ (the closed form's landings
+    summed). The rocking ends at the first landing after which the rising edge would come down within the next
+    step: the flights it skips are shorter than 2 dt each and shrink by r, so that landing is within
+    2 dt / (1 − r) of T∞, and the box then rests flat. rk4 lands at the closed form's times (1e-9 s; seen 1e-11)
+    and last lands 3.7 ms before T∞; explicit Euler, whose pivoting gains energy (first order: its landings
+    late by 2.5e-5, 9.4e-5, 2.2e-4 s), would rock on by about 1e-5 rad (the rule off: 414 landings in 1 s, still
+    moving at 1.4 mm/s); its last landing is seen 8.4 ms after T∞ (asked: within 2e-2 s)."""
+    width, height, tilt, dt = TIP_A, TIP_B, 0.05, 1e-3
+    sim = released_on_an_edge(width, height, tilt, integrator)
+    for _ in range(500):
+        sim.step()
+    exact = exact_contact.rocking_landings(40, width, height, tilt, G)  # the 40th within 1e-6 s of T∞
+    kept = exact_contact.rocking_spin_kept(width, height)
+    landings = [event.time for event in sim.contact.events_of("box", "impact")]
+    if integrator == "rk4":
+        np.testing.assert_allclose(landings, exact[:len(landings)], rtol=0.0, atol=1e-9)
+        assert exact[-1] - 2.0 * dt / (1.0 - kept) <= landings[-1] <= exact[-1]
+    else:
+        np.testing.assert_allclose(landings[:3], exact[:3], rtol=0.0, atol=1e-3)
+        assert abs(landings[-1] - exact[-1]) <= 2e-2
+    assert sim.contact.is_resting("box")
+    z_axis = quat_rotate(quat_wxyz_from_xyzw(sim.orientations_xyzw()[0]), np.array([0.0, 0.0, 1.0]))
+    assert abs(math.atan2(z_axis[0], z_axis[2])) <= 1e-9
+    assert np.linalg.norm(sim.state.v_WC_W[0]) <= 1e-12
 
 
 # ----------------------------------------------------------------------------- the phone drops of docs/phone_drop.md
