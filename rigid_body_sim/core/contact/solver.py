@@ -521,12 +521,9 @@ class ContactSolver:
             return two_grounds.hold(self, sim, y, i, w, t, LIFT_OFF_SPEED, TOUCHING_GAP, SLIP_TOLERANCE)
         j = int(self.ground_of[i])
         count = self._tracked_points(sim, y, i)
-        n = self.grounds[j, NORMAL:NORMAL + 3]
         lowest = float(self._gaps[:count].min()) if count else math.inf  # set_body_state may have lifted it
-        speed, _, _, _ = self._normal_motion(sim, y, i, j, count, w, int(self.tracked[i]))
         mu = self.friction_of(i, j)
-        mode, _, sx, sy = holding_wrench(y, sim._prm[i], w, count, self._points, n[0], n[1], n[2], mu,
-                                         SLIP_TOLERANCE, self._bias, self._rdot, self._work, self._d, self._force)
+        speed, mode, sx, sy = self._holding_force(sim, y, i, count, w, mu)
         if count and self._painleve(count, mu, sx, sy):
             self.counts["painleve"] += 1
         if count == 0 or mode == LIFT_OFF or speed > LIFT_OFF_SPEED or lowest > TOUCHING_GAP:
@@ -548,6 +545,16 @@ class ContactSolver:
                         mu, mode, sx, sy, SLIP_TOLERANCE)
             self._staged[i] = 1
         return True
+
+    def _holding_force(self, sim, y: np.ndarray, i: int, count: int, w: np.ndarray, mu: float):
+        """(lowest normal speed, mode, ŝ1, ŝ2) of body i at y held on the ``count`` points of its tracked features
+        (self._points) under the wrench row w (without contact); the force in self._work, for add_contact_wrench."""
+        j = int(self.ground_of[i])
+        n = self.grounds[j, NORMAL:NORMAL + 3]
+        speed, _, _, _ = self._normal_motion(sim, y, i, j, count, w, int(self.tracked[i]))
+        mode, _, sx, sy = holding_wrench(y, sim._prm[i], w, count, self._points, n[0], n[1], n[2], mu,
+                                         SLIP_TOLERANCE, self._bias, self._rdot, self._work, self._d, self._force)
+        return speed, mode, sx, sy
 
     def _painleve(self, count: int, mu: float, sx: float, sy: float) -> bool:
         """Whether the sliding contact rows in self._work (holding_wrench's) are in a Painlevé configuration.
@@ -1028,15 +1035,11 @@ class ContactSolver:
         row w (without contact), come back to the ground: 2u/a, u their normal speed and a their normal acceleration
         toward the ground under the holding force found at y (inf if they do not come back)."""
         j = int(self.ground_of[i])
-        n = self.grounds[j, NORMAL:NORMAL + 3]
         count = self._tracked_points(sim, y, i)
-        self._normal_motion(sim, y, i, j, count, w, int(self.tracked[i]))
-        held = w.copy()
-        mode, _, _, _ = holding_wrench(y, sim._prm[i], held, count, self._points, n[0], n[1], n[2],
-                                       self.friction_of(i, j), SLIP_TOLERANCE, self._bias, self._rdot, self._work,
-                                       self._d, self._force)
+        _, mode, _, _ = self._holding_force(sim, y, i, count, w, self.friction_of(i, j))
         if mode == LIFT_OFF:
             return math.inf
+        held = w.copy()
         add_contact_wrench(held, y, sim._prm[i], count, self._points, self._anchors, self._work)
         count = self._tracked_points(sim, y, i, rising)
         speed, accel, _, _ = self._normal_motion(sim, y, i, j, count, held, rising)
