@@ -39,6 +39,7 @@ from __future__ import annotations
 import io
 import os
 import shutil
+import signal
 import socket
 import subprocess
 import sys
@@ -75,6 +76,27 @@ NAMESPACE, PREFIX = "/view_test", "sim1/"
 def view_command(*args: str) -> list[str]:
     script = Path(sys.executable).parent / "rigid-body-sim"
     return [str(script) if script.exists() else shutil.which("rigid-body-sim") or "rigid-body-sim", "view", *args]
+
+
+def stack_dump_env(tmp_path: Path) -> dict[str, str]:
+    """The environment for a view whose threads' stacks can be asked for: SIGUSR1 prints them to its
+    stderr (faulthandler, registered by a sitecustomize on PYTHONPATH; the command itself unchanged)."""
+    hook = tmp_path / "stack_dump"
+    hook.mkdir()
+    (hook / "sitecustomize.py").write_text(
+        "import faulthandler, signal\nfaulthandler.register(signal.SIGUSR1, all_threads=True)\n")
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(hook), env.get("PYTHONPATH", "")) if p)
+    return env
+
+
+def with_stacks(view: subprocess.Popen, log: Path, failure: AssertionError) -> AssertionError:
+    """``failure`` with the view's log, ending with the stacks of its threads (a view started with
+    :func:`stack_dump_env`): where it was when the page stopped following it."""
+    if view.poll() is None:
+        view.send_signal(signal.SIGUSR1)
+        time.sleep(1.0)
+    return AssertionError(f"{failure}\n\nthe view's log, the stacks of its threads last:\n{log.read_text()}")
 
 
 def free_port() -> int:
@@ -451,7 +473,8 @@ def test_replay_in_chromium_shows_the_recorded_pose_at_the_slider_time(tmp_path,
 
     port = free_port()
     with open(tmp_path / "view.log", "w") as log:
-        view = subprocess.Popen(view_command(str(record), "--port", str(port)), stdout=log, stderr=subprocess.STDOUT)
+        view = subprocess.Popen(view_command(str(record), "--port", str(port)), stdout=log, stderr=subprocess.STDOUT,
+                                env=stack_dump_env(tmp_path))
     driver = browser
     try:
         open_page(driver, port, view, tmp_path / "view.log")
@@ -485,13 +508,16 @@ def test_replay_in_chromium_shows_the_recorded_pose_at_the_slider_time(tmp_path,
 
         # Play from the end starts again at 0 and moves on; Pause holds a recorded sample.
         click(driver, "Play")
-        wait_text(driver, lambda t: "playing" in t, "playing")
-        end = time.monotonic() + 30.0
-        while not ((pose := shown_pose(driver)) and 0.3 < pose[0] < 40.0):
-            assert time.monotonic() < end, f"playback never moved on; the page shows {pose}"
-            time.sleep(0.1)
-        click(driver, "Pause")
-        paused = wait_text(driver, lambda t: "paused at t = " in t, "paused")
+        try:
+            wait_text(driver, lambda t: "playing" in t, "playing")
+            end = time.monotonic() + 30.0
+            while not ((pose := shown_pose(driver)) and 0.3 < pose[0] < 40.0):
+                assert time.monotonic() < end, f"playback never moved on; the page shows {pose}"
+                time.sleep(0.1)
+            click(driver, "Pause")
+            paused = wait_text(driver, lambda t: "paused at t = " in t, "paused")
+        except AssertionError as failure:
+            raise with_stacks(view, tmp_path / "view.log", failure) from failure
         at = float(paused.split("paused at t = ", 1)[1].split(" s", 1)[0])
         pose = wait_pose_at(driver, at)
         check(pose, pose[0])
