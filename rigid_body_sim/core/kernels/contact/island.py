@@ -57,7 +57,7 @@ from numba import njit
 
 from ..forces import body_wrench
 from ..jit import INLINE, JIT
-from ..layout import ACTIVE, BOUND, GRAVITY, INV_INERTIA, INV_MASS, INERTIA, P, Q, Q_PB, STATE_WIDTH, V, W
+from ..layout import ACTIVE, BOUND, GRAVITY, INV_INERTIA, INV_MASS, INERTIA, MASS, P, Q, Q_PB, STATE_WIDTH, V, W
 from ..rotation import exp_map, matrix, normalise, qmul, rotate, rotate_back
 from .layout import DIMS, FRICTION, HAS_MATERIAL, KIND, NORMAL, SHAPE_BOX
 from .convex import POSE_WIDTH
@@ -88,6 +88,8 @@ PATCH_FLAT, PATCH_REACH = math.cos(0.1), 1e-2
 DENSE_MAX = 360
 #: Points deeper than this × the pair's size (m per m) after the step are projected out.
 PROJECT_TOL = 1e-12
+#: A component's rise of K + U over a step within this × the sum of its bodies' |K + U| is round-off (_no_gain).
+RISE_ROUNDOFF = 1e-13
 #: A point whose gap is at most this × the pair's size (half the projection's tolerance) touches: the velocity step
 #: does not close it (no gap term), so that the narrow phase's round-off in a resting gap (~1e-15 m) is not made a
 #: speed (~1e-12 m/s at dt = 1 ms) that the next step must stop.
@@ -1334,6 +1336,59 @@ def all_asleep(Y0, saved, wr, stopped, asleep, moving):
     return moving.shape[0] > 0
 
 
+
+@njit(**JIT)
+def _energy(Y, prm, i):
+    """Body i's kinetic energy and its K + U under its gravity at state rows Y (J): ½ m v² + ½ Σ Iⱼ ωⱼ² − m g · p."""
+    k = 0.0
+    u = 0.0
+    for a in range(3):
+        k += prm[i, MASS] * Y[i, V + a] ** 2 + prm[i, INERTIA + a] * Y[i, W + a] ** 2
+        u -= prm[i, MASS] * prm[i, GRAVITY + a] * Y[i, P + a]
+    return 0.5 * k, 0.5 * k + u
+
+
+@njit(**JIT)
+def _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, sums):
+    """Keep each component of the step's contacts (comp) that nothing but gravity pushes (no applied wrench on
+    its bodies; its fixed sides never move) from ending the step with more K + U than it began it with: what the
+    step added (a Gauss–Seidel step short of convergence, the projection's lift) is taken out of its kinetic
+    energy, every body's v and ω scaled by √(1 − ΔE/K), which keeps every contact between its bodies or with a
+    fixed side separating that was. A rise within the round-off of the sums (RISE_ROUNDOFF × Σ |E|) is left
+    alone: the exact solve's steps are not touched. sums (per body, ≥ 4 columns) is scratch: per root the rise,
+    K at the end, Σ |E| and whether a body is pushed."""
+    n = members.shape[0]
+    for m in range(n):
+        i = members[m]
+        if island[i] == 1:
+            r = _find(comp, i)
+            for j in range(4):
+                sums[r, j] = 0.0
+    for m in range(n):
+        i = members[m]
+        if island[i] != 1:
+            continue
+        r = _find(comp, i)
+        row = bare[i] if modes[i] != 0 else wr[i]
+        if row[ACTIVE] != 0.0:
+            sums[r, 3] = 1.0
+        _, e0 = _energy(Y0, prm, i)
+        k1, e1 = _energy(Y1, prm, i)
+        sums[r, 0] += e1 - e0
+        sums[r, 1] += k1
+        sums[r, 2] += abs(e0) + abs(e1)
+    for m in range(n):
+        i = members[m]
+        if island[i] != 1:
+            continue
+        r = _find(comp, i)
+        if sums[r, 3] == 0.0 and sums[r, 0] > RISE_ROUNDOFF * sums[r, 2] and sums[r, 1] > 0.0:
+            scale = math.sqrt(max(0.0, 1.0 - sums[r, 0] / sums[r, 1]))
+            for a in range(3):
+                Y1[i, V + a] *= scale
+                Y1[i, W + a] *= scale
+
+
 @njit(**JIT)
 def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, members, cand, n_cand, is_static, stopped,
                 spin_reach, size, asleep, wait, still, anchor, h, sleeping, sleep_speed, default_mu, n_prev, island, parent,
@@ -1576,6 +1631,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                        cflt[half:], rj[3 * half:], rw[3 * half:], rdiag[3 * half:], rbias[3 * half:],
                        rlam[3 * half:], rbody[3 * half:], order, out, comp, flags, rwork[3 * half:])
     out[OUT_DEPTH] = deepest
+    _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, dx)
     if out[OUT_STOPPED] > 0:
         _attribute(nc, cint, cflt, int(out[OUT_STOPPED]), cint[half:], cflt[half:], members, cstart)
     # sleeping: a component of the step's contacts whose bodies were and stay slower than the sleep speed (at
