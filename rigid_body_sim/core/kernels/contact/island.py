@@ -131,9 +131,11 @@ I_A, I_B, I_STATIC, I_GROUND, I_NEXT, C_INTS = 0, 1, 2, 3, 4, 5
 WARM_REACH = 0.1
 #: Columns of the per-call outputs: island body-steps, contact points, sticking solves kept, PGS islands,
 #: projected points, largest depth projected (m), bodies woken, bodies put to sleep, points whose approach was
-#: stopped after the projection, sticking solves kept from the warm start (_held, of OUT_STICK).
-OUT_BODIES, OUT_CONTACTS, OUT_STICK, OUT_PGS, OUT_PROJECTED, OUT_DEPTH, OUT_WOKEN, OUT_SLEPT, OUT_STOPPED, OUT_HELD = range(10)
-OUT_WIDTH = 10
+#: stopped after the projection, sticking solves kept from the warm start (_held, of OUT_STICK), components whose
+#: gain of K + U was taken out of their kinetic energy, components set back at rest where they began (_no_gain).
+(OUT_BODIES, OUT_CONTACTS, OUT_STICK, OUT_PGS, OUT_PROJECTED, OUT_DEPTH, OUT_WOKEN, OUT_SLEPT, OUT_STOPPED, OUT_HELD,
+ OUT_TRIMMED, OUT_RESTORED) = range(12)
+OUT_WIDTH = 12
 
 
 @njit(**INLINE)
@@ -1349,21 +1351,30 @@ def _energy(Y, prm, i):
 
 
 @njit(**JIT)
-def _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, sums):
+def _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt, size, sums, out):
     """Keep each component of the step's contacts (comp) that nothing but gravity pushes (no applied wrench on
-    its bodies; its fixed sides never move) from ending the step with more K + U than it began it with: what the
+    its bodies; its fixed sides never move) from ending the step with more K + U than it began it with. What the
     step added (a Gauss–Seidel step short of convergence, the projection's lift) is taken out of its kinetic
-    energy, every body's v and ω scaled by √(1 − ΔE/K), which keeps every contact between its bodies or with a
-    fixed side separating that was. A rise within the round-off of the sums (RISE_ROUNDOFF × Σ |E|) is left
-    alone: the exact solve's steps are not touched. sums (per body, ≥ 4 columns) is scratch: per root the rise,
-    K at the end, Σ |E| and whether a body is pushed."""
+    energy, every body's v and ω scaled by √(1 − ΔE/K), which keeps separating every contact between its bodies
+    or with a fixed side that was (OUT_TRIMMED). Where it added more than the component's kinetic energy, its
+    bodies are set back where they began the step, at rest (K + U then U₀ ≤ K₀ + U₀; OUT_RESTORED): it was nearly
+    at rest, and it had no contact with another component over the step. A component with a point of the step's
+    start (nc rows of cint, cflt) deeper than the projection's tolerance (overlapping as it was set) is left alone:
+    the projection's lift out of that overlap is its to keep. A rise within RISE_ROUNDOFF × Σ |E| is
+    round-off and left alone: the exact solve's steps are not touched. sums (per body, ≥ 5 columns) is scratch: per
+    root the rise, K at the end, Σ |E|, whether a body is pushed (then, 1: trimmed, 2: restored), and whether a
+    point began deeper than the tolerance."""
     n = members.shape[0]
     for m in range(n):
         i = members[m]
         if island[i] == 1:
             r = _find(comp, i)
-            for j in range(4):
+            for j in range(5):
                 sums[r, j] = 0.0
+    for c in range(nc):
+        i = cint[c, I_B] if cint[c, I_B] >= 0 else cint[c, I_A]
+        if cflt[c, C_GAP] < -PROJECT_TOL * size[i]:
+            sums[_find(comp, i), 4] = 1.0
     for m in range(n):
         i = members[m]
         if island[i] != 1:
@@ -1371,7 +1382,7 @@ def _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, sums):
         r = _find(comp, i)
         row = bare[i] if modes[i] != 0 else wr[i]
         if row[ACTIVE] != 0.0:
-            sums[r, 3] = 1.0
+            sums[r, 3] = -1.0
         _, e0 = _energy(Y0, prm, i)
         k1, e1 = _energy(Y1, prm, i)
         sums[r, 0] += e1 - e0
@@ -1382,11 +1393,25 @@ def _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, sums):
         if island[i] != 1:
             continue
         r = _find(comp, i)
-        if sums[r, 3] == 0.0 and sums[r, 0] > RISE_ROUNDOFF * sums[r, 2] and sums[r, 1] > 0.0:
-            scale = math.sqrt(max(0.0, 1.0 - sums[r, 0] / sums[r, 1]))
+        if sums[r, 3] == 0.0 and sums[r, 4] == 0.0 and sums[r, 0] > RISE_ROUNDOFF * sums[r, 2]:
+            if sums[r, 0] < sums[r, 1]:
+                sums[r, 3] = 1.0
+                out[OUT_TRIMMED] += 1
+            else:
+                sums[r, 3] = 2.0
+                out[OUT_RESTORED] += 1
+        if sums[r, 3] == 1.0:
+            scale = math.sqrt(1.0 - sums[r, 0] / sums[r, 1])
             for a in range(3):
                 Y1[i, V + a] *= scale
                 Y1[i, W + a] *= scale
+        elif sums[r, 3] == 2.0:
+            for j in range(STATE_WIDTH):
+                Y1[i, j] = Y0[i, j]
+            Y1[i, BOUND] = Y0[i, BOUND]
+            for j in range(3):
+                Y1[i, V + j] = 0.0
+                Y1[i, W + j] = 0.0
 
 
 @njit(**JIT)
@@ -1631,7 +1656,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                        cflt[half:], rj[3 * half:], rw[3 * half:], rdiag[3 * half:], rbias[3 * half:],
                        rlam[3 * half:], rbody[3 * half:], order, out, comp, flags, rwork[3 * half:])
     out[OUT_DEPTH] = deepest
-    _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, dx)
+    _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt, size, dx, out)
     if out[OUT_STOPPED] > 0:
         _attribute(nc, cint, cflt, int(out[OUT_STOPPED]), cint[half:], cflt[half:], members, cstart)
     # sleeping: a component of the step's contacts whose bodies were and stay slower than the sleep speed (at
