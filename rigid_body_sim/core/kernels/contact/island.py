@@ -61,6 +61,7 @@ from ..layout import ACTIVE, BOUND, GRAVITY, INV_INERTIA, INV_MASS, INERTIA, MAS
 from ..rotation import exp_map, matrix, normalise, qmul, rotate, rotate_back
 from .layout import DIMS, FRICTION, HAS_MATERIAL, KIND, NORMAL, SHAPE_BOX
 from .convex import POSE_WIDTH
+from .impacts import kinetic_energy_row
 from .pair_impacts import normal_speed
 from .pairs import MAX_PAIR_POINTS, box_patch, boxes_apart, pair_contacts
 from .shapes import MAX_FEATURES, feature_gaps, feature_points
@@ -1338,16 +1339,12 @@ def all_asleep(Y0, saved, wr, stopped, asleep, moving):
     return moving.shape[0] > 0
 
 
-
 @njit(**JIT)
 def _energy(Y, prm, i):
     """Body i's kinetic energy and its K + U under its gravity at state rows Y (J): ½ m v² + ½ Σ Iⱼ ωⱼ² − m g · p."""
-    k = 0.0
-    u = 0.0
-    for a in range(3):
-        k += prm[i, MASS] * Y[i, V + a] ** 2 + prm[i, INERTIA + a] * Y[i, W + a] ** 2
-        u -= prm[i, MASS] * prm[i, GRAVITY + a] * Y[i, P + a]
-    return 0.5 * k, 0.5 * k + u
+    k = kinetic_energy_row(Y[i], prm[i])
+    return k, k - prm[i, MASS] * (prm[i, GRAVITY] * Y[i, P] + prm[i, GRAVITY + 1] * Y[i, P + 1]
+                                  + prm[i, GRAVITY + 2] * Y[i, P + 2])
 
 
 @njit(**JIT)
@@ -1361,20 +1358,20 @@ def _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt
     at rest, and it had no contact with another component over the step. A component with a point of the step's
     start (nc rows of cint, cflt) deeper than the projection's tolerance (overlapping as it was set) is left alone:
     the projection's lift out of that overlap is its to keep. A rise within RISE_ROUNDOFF × Σ |E| is
-    round-off and left alone: the exact solve's steps are not touched. sums (per body, ≥ 5 columns) is scratch: per
-    root the rise, K at the end, Σ |E|, whether a body is pushed (then, 1: trimmed, 2: restored), and whether a
-    point began deeper than the tolerance."""
+    round-off and left alone: the exact solve's steps are not touched. sums (per body, ≥ 4 columns) is scratch: per
+    root the rise, K at the end, Σ |E|, and what is done (−1: left alone, pushed or overlapping; 1: trimmed;
+    2: restored)."""
     n = members.shape[0]
     for m in range(n):
         i = members[m]
         if island[i] == 1:
             r = _find(comp, i)
-            for j in range(5):
+            for j in range(4):
                 sums[r, j] = 0.0
     for c in range(nc):
         i = cint[c, I_B] if cint[c, I_B] >= 0 else cint[c, I_A]
         if cflt[c, C_GAP] < -PROJECT_TOL * size[i]:
-            sums[_find(comp, i), 4] = 1.0
+            sums[_find(comp, i), 3] = -1.0
     for m in range(n):
         i = members[m]
         if island[i] != 1:
@@ -1393,7 +1390,7 @@ def _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt
         if island[i] != 1:
             continue
         r = _find(comp, i)
-        if sums[r, 3] == 0.0 and sums[r, 4] == 0.0 and sums[r, 0] > RISE_ROUNDOFF * sums[r, 2]:
+        if sums[r, 3] == 0.0 and sums[r, 0] > RISE_ROUNDOFF * sums[r, 2]:
             if sums[r, 0] < sums[r, 1]:
                 sums[r, 3] = 1.0
                 out[OUT_TRIMMED] += 1
