@@ -90,7 +90,7 @@ DENSE_MAX = 360
 #: Points deeper than this × the pair's size (m per m) after the step are projected out.
 PROJECT_TOL = 1e-12
 #: A component's rise of K + U over a step within this × the sum of its bodies' |K + U| is round-off (_no_gain).
-RISE_ROUNDOFF = 1e-13
+RISE_ROUNDOFF = 1e-15
 #: A point whose gap is at most this × the pair's size (half the projection's tolerance) touches: the velocity step
 #: does not close it (no gap term), so that the narrow phase's round-off in a resting gap (~1e-15 m) is not made a
 #: speed (~1e-12 m/s at dt = 1 ms) that the next step must stop.
@@ -99,15 +99,15 @@ TOUCH_GAP = 0.5 * PROJECT_TOL
 #: translating), the others translating only; Gauss–Seidel sweeps per round.
 PROJECT_ROUNDS, TURN_ROUNDS, PROJECT_SWEEPS = 8, 2, 100
 #: Most projected Gauss–Seidel sweeps of the velocity problem, or PGS_WORK / its contacts when that is more (the
-#: last columns of a pile rocking on an edge, two of ten cubes, 116 contacts, come to rest under 860, not 260);
-#: it stops earlier below PGS_TOL (m/s).
-PGS_SWEEPS, PGS_WORK, PGS_TOL = 200, 100000, 1e-13
+#: last few columns of a pile still moving get more); it stops earlier below PGS_TOL (m/s). What a step short of
+#: convergence adds to K + U is taken out by _no_gain.
+PGS_SWEEPS, PGS_WORK, PGS_TOL = 200, 20000, 1e-13
 #: Gauss–Seidel over more contacts than this (a pile; the dense solve's DENSE_MAX / 3) sweeps them by height.
 PILE_CONTACTS = DENSE_MAX // 3
 #: A pile's velocity step: at most PILE_PGS_SWEEPS sweeps (or PGS_WORK / its contacts), each extrapolated
 #: (nonsmooth nonlinear conjugate gradient). A pile's projection: at most PILE_SWEEPS sweeps a round, from the lowest point up, and a pair whose
 #: normal is within acos(PILE_UPRIGHT) of gravity moves only its upper body (the lower held: shock propagation).
-PILE_PGS_SWEEPS, PILE_SWEEPS, PILE_UPRIGHT = 100, 20, 0.5
+PILE_PGS_SWEEPS, PILE_SWEEPS, PILE_UPRIGHT = 20, 20, 0.5
 #: A component's warm start is kept as its sticking solve (_held) when its points' speeds after are within this ×
 #: PROJECT_TOL × their body's size / h: over a step a body at rest moves a hundredth of the projection's tolerance.
 HELD_TOL = 1e-2
@@ -1124,9 +1124,10 @@ def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, size, rj, rw
     """After the projection: the island bodies' velocities in Y1 made not to approach at the nd touching points
     cint/cflt (normal rows, λ ≥ 0, e = 0): the projection moved them out, they must not be left moving in
     again. Gauss–Seidel in the kinetic metric first, then on the linear velocities alone for what approach is
-    left (that one converges in a pile, as the projection's translating rounds do). Only removes kinetic energy
-    (not as the projection over a pile: holding a lower body there gave the upper its speed, energy and motion
-    that kept a pile from sleeping). inv (per row) and act (per row: the rows that move a body) are scratch."""
+    left (that one converges in a pile, as the projection's translating rounds do); over a pile (more than
+    PILE_CONTACTS points) at most PILE_SWEEPS sweeps each, what approach is left being the next step's to stop.
+    Only removes kinetic energy (not as the projection over a pile: holding a lower body there gave the upper its
+    speed, energy and motion that kept a pile from sleeping). inv (per row) and act (per row: the rows that move a body) are scratch."""
     n = members.shape[0]
     for m in range(n):
         i = members[m]
@@ -1153,7 +1154,7 @@ def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, size, rj, rw
             if rdiag[c] > 0.0:  # the others (between bodies held) are not swept
                 act[moving] = c
                 moving += 1
-        for _s in range(PROJECT_SWEEPS):
+        for _s in range(PILE_SWEEPS if nd > PILE_CONTACTS else PROJECT_SWEEPS):
             change = 0.0
             for k in range(moving):
                 c = act[k]
@@ -1348,14 +1349,15 @@ def _energy(Y, prm, i):
 
 
 @njit(**JIT)
-def _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt, size, sums, out):
+def _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt, size, sums, flags, out):
     """Keep each component of the step's contacts (comp) that nothing but gravity pushes (no applied wrench on
     its bodies; its fixed sides never move) from ending the step with more K + U than it began it with. What the
     step added (a Gauss–Seidel step short of convergence, the projection's lift) is taken out of its kinetic
     energy, every body's v and ω scaled by √(1 − ΔE/K), which keeps separating every contact between its bodies
     or with a fixed side that was (OUT_TRIMMED). Where it added more than the component's kinetic energy, its
     bodies are set back where they began the step, at rest (K + U then U₀ ≤ K₀ + U₀; OUT_RESTORED): it was nearly
-    at rest, and it had no contact with another component over the step. A component with a point of the step's
+    at rest, and it had no contact with another component over the step. That rest is imposed, not found: its root
+    is flagged (128) and the sleep rule does not count the step as at rest. A component with a point of the step's
     start (nc rows of cint, cflt) deeper than the projection's tolerance (overlapping as it was set) is left alone:
     the projection's lift out of that overlap is its to keep. A rise within RISE_ROUNDOFF × Σ |E| is
     round-off and left alone: the exact solve's steps are not touched. sums (per body, ≥ 4 columns) is scratch: per
@@ -1396,6 +1398,7 @@ def _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt
                 out[OUT_TRIMMED] += 1
             else:
                 sums[r, 3] = 2.0
+                flags[r] |= 128
                 out[OUT_RESTORED] += 1
         if sums[r, 3] == 1.0:
             scale = math.sqrt(1.0 - sums[r, 0] / sums[r, 1])
@@ -1653,7 +1656,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                        cflt[half:], rj[3 * half:], rw[3 * half:], rdiag[3 * half:], rbias[3 * half:],
                        rlam[3 * half:], rbody[3 * half:], order, out, comp, flags, rwork[3 * half:])
     out[OUT_DEPTH] = deepest
-    _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt, size, dx, out)
+    _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt, size, dx, flags, out)
     if out[OUT_STOPPED] > 0:
         _attribute(nc, cint, cflt, int(out[OUT_STOPPED]), cint[half:], cflt[half:], members, cstart)
     # sleeping: a component of the step's contacts whose bodies were and stay slower than the sleep speed (at
@@ -1676,7 +1679,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                 for j in range(4):
                     anchor[i, 3 + j] = Y0[i, Q + j]
             at_rest = _moved(Y1, anchor, i, spin_reach) <= sleep_speed * SLEEP_STEPS * h
-        if at_rest:
+        if at_rest and not flags[_find(comp, i)] & 128:  # not on a rest _no_gain imposed
             still[i] += 1
         else:
             still[i] = 0
