@@ -1127,7 +1127,8 @@ def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, size, rj, rw
     left (that one converges in a pile, as the projection's translating rounds do); over a pile (more than
     PILE_CONTACTS points) at most PILE_SWEEPS sweeps each, what approach is left being the next step's to stop.
     Only removes kinetic energy (not as the projection over a pile: holding a lower body there gave the upper its
-    speed, energy and motion that kept a pile from sleeping). inv (per row) and act (per row: the rows that move a body) are scratch."""
+    speed, energy and motion that kept a pile from sleeping). inv (per row) and act (per row: the rows that move a
+    body) are scratch."""
     n = members.shape[0]
     for m in range(n):
         i = members[m]
