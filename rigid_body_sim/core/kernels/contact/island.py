@@ -25,8 +25,9 @@ their rows), the others at λ = 0, by a Cholesky factorisation of J M⁻¹ Jᵀ 
 Tikhonov steps (the minimum-norm λ of the consistent rank-deficient system: four coplanar corners of
 a face share its load evenly; v⁺ does not depend on which λ); points that pull are let go and points
 let go that would close taken back, at most STICK_PIVOTS times. It is kept when the points on are
-met, every λ_n ≥ 0 and every λ_t is in its cone (to round-off); a component whose attempt failed is
-tried again only after STICK_RETRY − 1 steps (landing, nearly none holds). Else
+met (to EQUALITY_TOL of the right-hand side), every λ_n ≥ 0 and every λ_t is in its cone (to
+round-off); a component whose attempt failed is tried again only after STICK_RETRY − 1 steps
+(landing, nearly none holds). Else
 projected Gauss–Seidel on the component's rows (over more than PILE_CONTACTS contacts, a pile, each
 component on its own, from the highest against gravity down, then back up, in turn: a weight passes
 down a pile and a stop up it within a sweep). Then the
@@ -114,6 +115,10 @@ HELD_TOL = 1e-2
 #: Iterated Tikhonov steps of the sticking solve (fewer once the residual is below TIKHONOV_TOL × the right-hand
 #: side's), and its regularisation (× the largest diagonal); most pivots of its points let go or taken back.
 TIKHONOV_STEPS, TIKHONOV_TOL, TIKHONOV_EPS, STICK_PIVOTS = 6, 1e-15, 1e-9, 3
+#: The sticking solve is kept only when the points on are met as equalities within EQUALITY_TOL × its largest
+#: right-hand side: a pile's redundant points (a face's four corners) agree only to the narrow phase's round-off,
+#: which leaves a residue of about 1.5e-9 of it that no further refinement removes (a 52-point component at rest).
+EQUALITY_TOL = 1e-8
 #: A component whose sticking solve failed is tried again only after STICK_RETRY − 1 steps on Gauss–Seidel (while
 #: a pile lands, or a point slides, nearly none holds); one solved exactly is tried again at the next step.
 STICK_RETRY = 4
@@ -597,8 +602,9 @@ def _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, start, stop, A, L, r
     """The contacts order[start:stop] (3 rows each) solved exactly when none slides: the points that stay are
     equalities (u⁺ = 0), the others have λ = 0 and part (u_n⁺ ≥ 0). From the points that held last step or
     touch, points whose λ_n < 0 are let go and points let go that would close are taken back, at most STICK_PIVOTS times (block principal pivoting
-    on the normals: a column rocking on an edge). True (and vel, rlam updated) when every λ_n ≥ 0, every λ_t is
-    in its cone and every point let go parts, to round-off. Scratch: band[0] the profile, band[1] the points on,
+    on the normals: a column rocking on an edge). True (and vel, rlam updated) when the points on are met to
+    EQUALITY_TOL × the largest right-hand side and every λ_n ≥ 0, every λ_t is in its cone and every point let go
+    parts, to round-off. Scratch: band[0] the profile, band[1] the points on,
     key (per contact) the sort's."""
     m = 3 * (stop - start)
     first, on = band[0], band[1]
@@ -634,7 +640,7 @@ def _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, start, stop, A, L, r
             continue
         kept = True
         for x in range(m):  # the points on are met as equalities (a consistent system)
-            if on[x] and abs(res[x]) > slack:
+            if on[x] and abs(res[x]) > EQUALITY_TOL * fastest:
                 kept = False
         for c in range(stop - start):
             ln, l1, l2 = lam[3 * c], lam[3 * c + 1], lam[3 * c + 2]
