@@ -24,7 +24,8 @@ their rows), the others at λ = 0, by a Cholesky factorisation of J M⁻¹ Jᵀ 
 (the contacts sorted along the component's longest extent: a column is banded) refined by iterated
 Tikhonov steps (the minimum-norm λ of the consistent rank-deficient system: four coplanar corners of
 a face share its load evenly; v⁺ does not depend on which λ); points that pull are let go and points
-let go that would close taken back, at most STICK_PIVOTS times. It is kept when the points on are
+let go that would close taken back, at most STICK_PIVOTS times (the attempt ends when its first solve
+changes more than STICK_CHANGES points: not at rest). It is kept when the points on are
 met (to EQUALITY_TOL of the right-hand side), every λ_n ≥ 0 and every λ_t is in its cone (to
 round-off); a component whose attempt failed is tried again only after STICK_RETRY − 1 steps
 (landing, nearly none holds). Else
@@ -115,6 +116,10 @@ HELD_TOL = 1e-2
 #: Iterated Tikhonov steps of the sticking solve (fewer once the residual is below TIKHONOV_TOL × the right-hand
 #: side's), and its regularisation (× the largest diagonal); most pivots of its points let go or taken back.
 TIKHONOV_STEPS, TIKHONOV_TOL, TIKHONOV_EPS, STICK_PIVOTS = 6, 1e-15, 1e-9, 3
+#: A sticking attempt ends when its first solve (from the points that held last step or touch) has more than
+#: STICK_CHANGES points to let go or take back: the component lands or slides, and its pivots would not settle (a
+#: column rocking on an edge changes the corners of one face at most).
+STICK_CHANGES = 4
 #: The sticking solve is kept only when the points on are met as equalities within EQUALITY_TOL × its largest
 #: right-hand side: a pile's redundant points (a face's four corners) agree only to the narrow phase's round-off,
 #: which leaves a residue of about 1.5e-9 of it that no further refinement removes (a 52-point component at rest).
@@ -601,11 +606,12 @@ def _residual(m, A, rhs, first, lam, res):
 def _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, start, stop, A, L, rhs, lam, res, band, key):
     """The contacts order[start:stop] (3 rows each) solved exactly when none slides: the points that stay are
     equalities (u⁺ = 0), the others have λ = 0 and part (u_n⁺ ≥ 0). From the points that held last step or
-    touch, points whose λ_n < 0 are let go and points let go that would close are taken back, at most STICK_PIVOTS times (block principal pivoting
-    on the normals: a column rocking on an edge). True (and vel, rlam updated) when the points on are met to
-    EQUALITY_TOL × the largest right-hand side and every λ_n ≥ 0, every λ_t is in its cone and every point let go
-    parts, to round-off. Scratch: band[0] the profile, band[1] the points on,
-    key (per contact) the sort's."""
+    touch, points whose λ_n < 0 are let go and points let go that would close are taken back, at most
+    STICK_PIVOTS times (block principal pivoting on the normals: a column rocking on an edge); the attempt ends
+    when the first solve changes more than STICK_CHANGES points. True (and vel, rlam updated) when the points on
+    are met to EQUALITY_TOL × the largest right-hand side and every λ_n ≥ 0, every λ_t is in its cone and every
+    point let go parts, to round-off. Scratch: band[0] the profile, band[1] the points on, key (per contact) the
+    sort's."""
     m = 3 * (stop - start)
     first, on = band[0], band[1]
     _profile_order(cflt, order, start, stop, key)
@@ -625,17 +631,19 @@ def _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, start, stop, A, L, r
             fastest = max(fastest, abs(rhs[x]))
         tol, slack = 1e-9 * biggest, 1e-9 * fastest
         _residual(m, A, rhs, first, lam, res)  # −res: each row's speed after
-        changed = False
+        changed = 0
         x0 = m
         for x in range(0, m, 3):
             if on[x] and lam[x] < -tol:  # pulls: let go
                 on[x] = on[x + 1] = on[x + 2] = 0
-                changed = True
+                changed += 1
             elif not on[x] and -res[x] < -slack:  # closes: take back
                 on[x] = on[x + 1] = on[x + 2] = 1
-                changed = True
+                changed += 1
             if changed and x0 == m:
                 x0 = x
+        if changed > STICK_CHANGES and _pivot == 0:  # lands or slides: the pivots would not settle
+            break
         if changed:
             continue
         kept = True
@@ -1686,20 +1694,24 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                 for j in range(4):
                     anchor[i, 3 + j] = Y0[i, Q + j]
             at_rest = _moved(Y1, anchor, i, spin_reach) <= sleep_speed * SLEEP_STEPS * h
-        if at_rest and not flags[_find(comp, i)] & 128:  # not on a rest _no_gain imposed
+        r = _find(comp, i)
+        if at_rest and not flags[r] & 128:  # not on a rest _no_gain imposed
             still[i] += 1
         else:
             still[i] = 0
         if still[i] < need:
-            flags[_find(comp, i)] |= 16
+            flags[r] |= 16
     if sleeping:
         for m in range(n):
             i = members[m]
-            if island[i] == 1 and not flags[_find(comp, i)] & 16:
+            if island[i] != 1:
+                continue
+            r = _find(comp, i)
+            if not flags[r] & 16:
                 asleep[i] = 1
                 still[i] = 0  # woken, it begins a new run at rest and is tried for the exact solve at once
                 wait[i] = 0
-                group[i] = _find(comp, i)
+                group[i] = r
                 out[OUT_SLEPT] += 1
                 for j in range(6):
                     Y1[i, V + j] = 0.0
