@@ -79,7 +79,8 @@ from ..quaternion import quat_rotate, quat_to_matrix
 from . import static_geometry, two_grounds
 from .events import ContactEvent
 from ..kernels.stepping import advance, step_reduced
-from ..kernels.contact.batch import CACHE_WIDTH, OK, TO_SOLVER, hold_all, settle_all
+from ..kernels.contact.batch import (CACHE_WIDTH, OK, TO_SOLVER, busy_bodies, gravity_gains, hold_all, record_holds,
+                                     settle_all, split_bodies)
 from ..kernels.contact.impacts import _A, _LAM, IMPACT_WORK_SHAPE, impact
 from ..kernels.contact.layout import DIMS, FLIGHT, KIND, MAX_POINTS, NORMAL, PERSISTENT, SHAPE_BOX
 from ..kernels.contact.island import SLEEP_SPEED
@@ -235,6 +236,12 @@ class ContactSolver:
         self._force = np.empty(6)
         self._lowest = np.empty(len(self.bodies))
         self._flying_gaps = np.empty(len(self.bodies))
+        m = len(self.bodies)  # batch.split_bodies' and busy_bodies' lists, before the step (hold) and after it (step)
+        self._hold_lists = np.empty((3, m), dtype=np.int64)
+        self._step_lists = np.empty((3, m), dtype=np.int64)
+        self._busy = np.empty(m, dtype=np.int64)
+        self._not_done = np.zeros(n, dtype=np.bool_)
+        self._rose, self._rose_energy = np.empty(m, dtype=np.int64), np.empty(m)  # batch.gravity_gains
         # one-body buffers of the step map
         self._Y1 = np.zeros((2, 1, L.ROW_WIDTH))
         self._w1 = np.zeros((1, L.WRENCH_WIDTH))
@@ -478,14 +485,16 @@ class ContactSolver:
     def add_holding_wrenches(self, sim, wrenches: np.ndarray) -> None:
         """Add to ``wrenches`` (the step's rows, in place) the force holding each body in persistent contact."""
         Y = sim._Ys[sim._control[L.CUR]]
-        resting = self.bodies[(self.modes[self.bodies] == PERSISTENT) & ~sim._stopped[self.bodies]]
+        lists = self._hold_lists
+        _, n_one, n_two = split_bodies(self.bodies, self.modes, sim._stopped, self._not_done, self.other_ground,
+                                       lists[0], lists[1], lists[2])
         self.holding_forces[:] = 0.0
         self._locked[:] = 0
         self._staged[:] = 0
-        if not resting.size:
+        if not n_one + n_two:
             return
-        two = resting[self.other_ground[resting] >= 0]  # held on two half-spaces: two_grounds.py
-        one = resting[self.other_ground[resting] < 0]
+        one, two = lists[1, :n_one], lists[2, :n_two]  # two: held on two half-spaces (two_grounds.py)
+        held_one, held_two = one, two
         if self.statics is not None:  # held on a static shape's plane: in Python (static_geometry.py)
             on_static = one[self.ground_of[one] >= len(self.half_spaces)]
             one = one[self.ground_of[one] < len(self.half_spaces)]
@@ -498,11 +507,13 @@ class ContactSolver:
             self._hold(sim, Y[i], i, wrenches[i], sim.time, stages=False)
         for i in two:
             self._hold(sim, Y[i], i, wrenches[i], sim.time)
-        held = resting[self.modes[resting] == PERSISTENT]
-        added = wrenches[held] - self._bare_rows[held]  # the contact forces go in as world-axes forces (add_wrench)
-        self.holding_forces[held] = added[:, L.F_WORLD:L.F_WORLD + 3] + added[:, L.F_COM_W:L.F_COM_W + 3]
-        self.holding_impulses[held] += self.holding_forces[held] * sim.dt
+        for bodies in (held_one, held_two):  # the contact forces go in as world-axes forces (add_wrench)
+            record_holds(bodies, self.modes, wrenches, self._bare_rows, self.holding_forces, self.holding_impulses,
+                         sim.dt)
         if self.track_torques:
+            resting = np.concatenate((held_one, held_two))
+            held = resting[self.modes[resting] == PERSISTENT]
+            added = wrenches[held] - self._bare_rows[held]
             self.holding_angular_impulses[held] += _torques_about_com(Y[held], added) * sim.dt
         if sim._method.derivative_stages:  # the force found at every stage instead (stage.py)
             one = one[self.modes[one] == PERSISTENT]
@@ -594,27 +605,26 @@ class ContactSolver:
         Y0, Y1 = sim._Ys[1 - cur], sim._Ys[cur]
         h = sim.dt
         t0 = sim.time - h
-        staged = np.flatnonzero(self._staged)
-        if staged.size and sim._method.held is not None:  # their steps with the contact found at every stage
-            sim._method.held(Y0, Y1, sim._prm, wrenches, staged, h)
+        if sim._method.held is not None and (staged := np.flatnonzero(self._staged)).size:
+            sim._method.held(Y0, Y1, sim._prm, wrenches, staged, h)  # their steps with the contact found at every stage
         self._static_skipped.clear()
         # body–body events first (body_pairs.py): the bodies it stepped are done
         done = self.pairs.after_step(sim, wrenches, Y0, Y1, t0, h) if self.pairs is not None else None
         if self.pairs is not None and len(self.pairs.islands.left):
             done = self._out_of_islands(sim, wrenches, Y0, Y1, t0, h, done)
-        moving = ~sim._stopped[self.bodies]
-        if done is not None:
-            moving &= ~done[self.bodies]
-        modes = self.modes[self.bodies]
-        in_flight = (modes == FLIGHT) & moving
-        flying = self.bodies[in_flight]
-        resting = self.bodies[(modes == PERSISTENT) & moving]
-        two = resting[self.other_ground[resting] >= 0]  # held on two half-spaces: two_grounds.py
-        resting = resting[self.other_ground[resting] < 0]
+        lists = self._step_lists
+        n_flying, n_one, n_two = split_bodies(self.bodies, self.modes, sim._stopped,
+                                              self._not_done if done is None else done, self.other_ground,
+                                              lists[0], lists[1], lists[2])
+        flying, resting, two = lists[0, :n_flying], lists[1, :n_one], lists[2, :n_two]  # two: two_grounds.py
         lowest = self._flying_gaps[:flying.size]
         min_gaps(Y1, sim._prm, self.shapes, self.half_spaces, flying, lowest)
         # static shapes: their gaps too (the bodies outside the islands); bodies on their planes in Python
         if self.statics is not None:
+            moving = ~sim._stopped[self.bodies]
+            if done is not None:
+                moving &= ~done[self.bodies]
+            in_flight = (self.modes[self.bodies] == FLIGHT) & moving
             self._lowest[:] = math.inf
             self._lowest[in_flight] = lowest
             two = np.concatenate((two, self._static_busy(Y1, resting, moving)))
@@ -624,8 +634,7 @@ class ContactSolver:
                    self.pressed, self.sliding, self.slide_direction, self._band, self._status, self._locked)
         resting = self._refine_gains(sim, resting, Y0, Y1, t0, h)
         # only the bodies with an event in the step are looked at in Python
-        busy = np.concatenate((resting[self._status[resting] == TO_SOLVER], two, flying[lowest < 0.0]))
-        for i in busy:
+        for i in self._busy[:busy_bodies(resting, self._status, two, flying, lowest, self._busy)].tolist():
             if sim._stopped[i]:
                 continue
             if self.modes[i] == PERSISTENT:
@@ -664,25 +673,12 @@ class ContactSolver:
         counted in :attr:`energy_gains`. Returns ``resting`` (the bodies handled here are marked
         done in the status).
         """
-        ok = resting[self._status[resting] == OK]
-        if not ok.size:
-            return resting
-        plain = self._bare_rows[ok, L.ACTIVE] == 0.0  # gravity alone: the energy must not rise
-        ok = ok[plain]
-        if not ok.size:
+        # gravity alone (an empty bare row): the energy must not rise
+        rose = gravity_gains(Y0, Y1, sim._prm, resting, self._status, self._bare_rows, self._rose, self._rose_energy)
+        if not rose:
             return resting
         prm = sim._prm
-        g = prm[ok, L.GRAVITY:L.GRAVITY + 3]
-
-        def energy(Y):
-            rows = Y[ok]
-            kinetic = 0.5 * (prm[ok, L.MASS] * np.sum(rows[:, L.V:L.V + 3] ** 2, axis=1)
-                             + np.sum(prm[ok, L.INERTIA:L.INERTIA + 3] * rows[:, L.W:L.W + 3] ** 2, axis=1))
-            return kinetic - prm[ok, L.MASS] * np.sum(g * rows[:, L.P:L.P + 3], axis=1)
-
-        before, after = energy(Y0), energy(Y1)
-        rose = after > before + 1e-12 * np.abs(before) + 1e-300
-        for i, e0 in zip(ok[rose], before[rose]):
+        for i, e0 in zip(self._rose[:rose].tolist(), self._rose_energy[:rose].tolist()):
             saved = (int(self.modes[i]), int(self.tracked[i]), bool(self.sliding[i]), self.slide_direction[i].copy(),
                      int(self.pressed[i]), int(self.ground_of[i]), len(self.events))
             bare = self._bare_rows[i].copy()

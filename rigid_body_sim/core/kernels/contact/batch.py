@@ -23,10 +23,11 @@ import numpy as np
 from numba import njit
 
 from ..dynamics import derivative
-from ..layout import AXIS_S, CACHE_RATE, PRM_WIDTH, Q, STATE_WIDTH, TOP_KEY, V, W, WRENCH_WIDTH
+from ..layout import (ACTIVE, AXIS_S, CACHE_RATE, F_COM_W, F_WORLD, GRAVITY, INERTIA, MASS, P, PRM_WIDTH, Q, STATE_WIDTH,
+                      TOP_KEY, V, W, WRENCH_WIDTH)
 from ..rotation import rotate
 from .impacts import _LAM, IMPACT_WORK_SHAPE, build_rows
-from .layout import MAX_POINTS, NORMAL
+from .layout import FLIGHT, MAX_POINTS, NORMAL, PERSISTENT
 from .materials import material
 from .persistent import (
     LIFT_OFF,
@@ -40,7 +41,8 @@ from .persistent import (
 )
 from .shapes import MAX_FEATURES, body_points, feature_gaps, feature_points
 
-__all__ = ["OK", "TO_SOLVER", "LOCKED", "LOCK_ACCELERATION", "CACHE_WIDTH", "hold_all", "settle_all"]
+__all__ = ["OK", "TO_SOLVER", "LOCKED", "LOCK_ACCELERATION", "CACHE_WIDTH", "hold_all", "settle_all", "split_bodies",
+           "record_holds", "gravity_gains", "busy_bodies"]
 
 _OPTS = {"cache": True, "nogil": True, "error_model": "numpy"}
 
@@ -230,3 +232,89 @@ def settle_all(Y0, Y, prm, shapes, grounds, bodies, ground_of, tracked, pressed,
                 status[i] = TO_SOLVER
         if status[i] == OK:
             project(y, p, shapes[i], ground, tracked[i], not sliding[i], points, gaps, owners, work)
+
+
+# ----------------------------------------------------------------- the bookkeeping around the passes
+# (one compiled call each instead of a handful of numpy operations per step: the solver's Python layer)
+
+
+@njit(**_OPTS)
+def split_bodies(bodies, modes, stopped, done, other_ground, flying, one, two):
+    """Sort the ``bodies`` neither stopped nor done (``done``: a mask over all bodies) by mode, keeping their order:
+    in flight into ``flying``, in persistent contact on one ground or static plane into ``one``, on two half-spaces
+    (other_ground ≥ 0, two_grounds.py) into ``two``. Returns (n_flying, n_one, n_two)."""
+    n_flying = n_one = n_two = 0
+    for m in range(bodies.shape[0]):
+        i = bodies[m]
+        if stopped[i] or done[i]:
+            continue
+        if modes[i] == FLIGHT:
+            flying[n_flying] = i
+            n_flying += 1
+        elif modes[i] == PERSISTENT:
+            if other_ground[i] >= 0:
+                two[n_two] = i
+                n_two += 1
+            else:
+                one[n_one] = i
+                n_one += 1
+    return n_flying, n_one, n_two
+
+
+@njit(**_OPTS)
+def record_holds(bodies, modes, wrenches, bare, holding_forces, holding_impulses, dt):
+    """For each of ``bodies`` still in persistent contact: its contact force, world axes (its wrench row's forces
+    less the ``bare`` row's), into ``holding_forces``, and that times ``dt`` added to ``holding_impulses``."""
+    for m in range(bodies.shape[0]):
+        i = bodies[m]
+        if modes[i] != PERSISTENT:
+            continue
+        for k in range(3):
+            f = (wrenches[i, F_WORLD + k] - bare[i, F_WORLD + k]) + (wrenches[i, F_COM_W + k] - bare[i, F_COM_W + k])
+            holding_forces[i, k] = f
+            holding_impulses[i, k] += f * dt
+
+
+@njit(**_OPTS)
+def _energy(y, p):
+    kinetic = 0.5 * (p[MASS] * (y[V] ** 2 + y[V + 1] ** 2 + y[V + 2] ** 2)
+                     + (p[INERTIA] * y[W] ** 2 + p[INERTIA + 1] * y[W + 1] ** 2 + p[INERTIA + 2] * y[W + 2] ** 2))
+    return kinetic - p[MASS] * (p[GRAVITY] * y[P] + p[GRAVITY + 1] * y[P + 1] + p[GRAVITY + 2] * y[P + 2])
+
+
+@njit(**_OPTS)
+def gravity_gains(Y0, Y1, prm, bodies, status, bare, rose, before):
+    """Of the ``bodies`` with status OK under gravity alone (their ``bare`` rows empty), those whose energy
+    (kinetic less m g·p) rose over the step (Y0 → Y1) by more than 1e-12 of itself: into ``rose``, their energy at
+    the start into ``before``, in ``bodies``' order. Returns their count."""
+    n = 0
+    for m in range(bodies.shape[0]):
+        i = bodies[m]
+        if status[i] != OK or bare[i, ACTIVE] != 0.0:
+            continue
+        e0 = _energy(Y0[i], prm[i])
+        if _energy(Y1[i], prm[i]) > e0 + 1e-12 * abs(e0) + 1e-300:
+            rose[n] = i
+            before[n] = e0
+            n += 1
+    return n
+
+
+@njit(**_OPTS)
+def busy_bodies(resting, status, two, flying, lowest, out):
+    """Into ``out``, the bodies whose step needs the solver in Python: the ``resting`` ones flagged TO_SOLVER, then
+    ``two``, then the ``flying`` ones whose lowest gap (``lowest[k]``, of ``flying[k]``) is below 0. Returns their
+    count."""
+    n = 0
+    for m in range(resting.shape[0]):
+        if status[resting[m]] == TO_SOLVER:
+            out[n] = resting[m]
+            n += 1
+    for m in range(two.shape[0]):
+        out[n] = two[m]
+        n += 1
+    for m in range(flying.shape[0]):
+        if lowest[m] < 0.0:
+            out[n] = flying[m]
+            n += 1
+    return n
