@@ -95,7 +95,7 @@ DROPPED = {
 }
 
 
-@pytest.mark.parametrize("dt", [1e-3, 1e-2])
+@pytest.mark.parametrize("dt", [pytest.param(1e-3, marks=pytest.mark.slow), 1e-2])  # the same at 1e-3: test-slow
 @pytest.mark.parametrize("what", sorted(DROPPED))
 def test_a_body_dropped_onto_a_two_box_stack_comes_to_rest_on_it(what, dt):
     """A box (turned, off-centre) or a ball (off-centre) dropped 0.3 m onto two stacked cubes, e = 0.
