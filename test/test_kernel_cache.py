@@ -149,8 +149,8 @@ def test_a_copied_contact_simulator_steps_on_the_kernels_its_original_uses(copie
     from rigid_body_sim.core import Simulator, load_scene
     from rigid_body_sim.core.kernels.contact import batch, island, shapes, stage
 
-    kernels = (island.island_pass, batch.hold_all, batch.settle_all, stage.stage_rows, shapes.min_gaps,
-               shapes.body_gap)
+    kernels = (island.island_pass, batch.hold_all, batch.settle_all, batch.split_bodies, batch.record_holds,
+               batch.gravity_gains, batch.busy_bodies, stage.stage_rows, shapes.min_gaps, shapes.body_gap)
     scene = load_scene({"gravity": [0.0, 0.0, -9.81], "ground": [{"normal": [0, 0, 1], "offset": 0.0}], "bodies": {
         f"c{k}": {"mass": 1.0, "inertia": {"box": [0.2, 0.2, 0.2]}, "pose": {"position": [0.01 * k, 0.0, 0.1 + 0.2 * k]}}
         for k in range(2)}})
