@@ -184,7 +184,7 @@ def test_cli_recording_cut_anywhere_reads_up_to_the_cut(tmp_path: Path, cuts: in
     assert main(["run", str(scene), "--duration", "8", "--dt", "0.01", "--record", str(full), "--quiet"]) == 0
     counts = check_cuts(tmp_path, full, seed=1, cuts=cuts)
     assert counts["cuts"] == cuts + 9 + 2 * counts["chunks"]
-    check_plot_on_cuts(tmp_path, full, seed=2, n=3 if cuts < CUTS else 6)
+    check_plot_on_cuts(tmp_path, full, seed=2, n=1 if cuts < CUTS else 6)  # a plot costs ~1 CPU-s
 
 
 @pytest.mark.ros
