@@ -37,7 +37,7 @@ from ..kernels.contact.impacts import _A, _ANG, _B, _LAM, _LIN, _row_velocity, p
 from ..kernels.contact.layout import MAX_POINTS, NORMAL, PERSISTENT
 from ..kernels.contact.persistent import START_SLIDE_ACCELERATION, accelerations, add_contact_wrench, normal_bias, project
 from ..kernels.contact.shapes import MAX_FEATURES, feature_gaps, feature_points
-from ..quaternion import quat_rotate
+from ..quaternion import cross3, quat_rotate
 from .events import ContactEvent
 
 __all__ = ["touching_other", "hold", "end_of_step", "project_second", "crease", "start_if_touching"]
@@ -51,7 +51,7 @@ def crease(solver, i: int) -> np.ndarray:
     """The unit direction n_A × n_B of the crease between body i's two half-spaces (world axes)."""
     n_a = solver.grounds[int(solver.ground_of[i]), NORMAL:NORMAL + 3]
     n_b = solver.grounds[int(solver.other_ground[i]), NORMAL:NORMAL + 3]
-    t = np.cross(n_a, n_b)
+    t = cross3(n_a, n_b)
     return t / np.linalg.norm(t)
 
 
@@ -82,7 +82,7 @@ def touching_other(solver, sim, y: np.ndarray, i: int, speed_limit: float, gap_l
 def _point_velocities(sim, y: np.ndarray, i: int, points: np.ndarray) -> np.ndarray:
     """(k, 3) world velocities of body points ``points`` (world positions) of body i at state row y."""
     w_W = quat_rotate(y[L.Q:L.Q + 4], y[L.W:L.W + 3])
-    return y[L.V:L.V + 3] + np.cross(w_W, points - y[L.P:L.P + 3])
+    return y[L.V:L.V + 3] + cross3(w_W, points - y[L.P:L.P + 3])
 
 
 def _points(solver, sim, y: np.ndarray, i: int):
@@ -123,10 +123,10 @@ def _build_rows(y: np.ndarray, prm: np.ndarray, points: np.ndarray, normals: np.
         n = normals[c]
         directions[3 * c] = n
         directions[3 * c + 1] = t1
-        directions[3 * c + 2] = np.cross(n, t1)
+        directions[3 * c + 2] = cross3(n, t1)
     r = np.repeat(points[:count] - y[L.P:L.P + 3], 3, axis=0)
     q = y[L.Q:L.Q + 4]
-    angular_P = quat_rotate(q * np.array([1.0, -1.0, -1.0, -1.0]), np.cross(r, directions))
+    angular_P = quat_rotate(q * np.array([1.0, -1.0, -1.0, -1.0]), cross3(r, directions))
     work[:rows, _LIN:_LIN + 3] = directions
     work[:rows, _ANG:_ANG + 3] = angular_P
     inverse = np.concatenate(([prm[L.INV_MASS]] * 3, prm[L.INV_INERTIA:L.INV_INERTIA + 3]))
