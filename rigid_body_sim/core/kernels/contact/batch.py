@@ -23,10 +23,9 @@ import numpy as np
 from numba import njit
 
 from ..dynamics import derivative
-from ..layout import (ACTIVE, AXIS_S, CACHE_RATE, F_COM_W, F_WORLD, GRAVITY, INERTIA, MASS, P, PRM_WIDTH, Q, STATE_WIDTH,
-                      TOP_KEY, V, W, WRENCH_WIDTH)
+from ..layout import ACTIVE, AXIS_S, CACHE_RATE, F_COM_W, F_WORLD, PRM_WIDTH, Q, STATE_WIDTH, TOP_KEY, V, W, WRENCH_WIDTH
 from ..rotation import rotate
-from .impacts import _LAM, IMPACT_WORK_SHAPE, build_rows
+from .impacts import _LAM, IMPACT_WORK_SHAPE, build_rows, kinetic_energy_row, potential_energy_row
 from .layout import FLIGHT, MAX_POINTS, NORMAL, PERSISTENT
 from .materials import material
 from .persistent import (
@@ -276,13 +275,6 @@ def record_holds(bodies, modes, wrenches, bare, holding_forces, holding_impulses
 
 
 @njit(**_OPTS)
-def _energy(y, p):
-    kinetic = 0.5 * (p[MASS] * (y[V] ** 2 + y[V + 1] ** 2 + y[V + 2] ** 2)
-                     + (p[INERTIA] * y[W] ** 2 + p[INERTIA + 1] * y[W + 1] ** 2 + p[INERTIA + 2] * y[W + 2] ** 2))
-    return kinetic - p[MASS] * (p[GRAVITY] * y[P] + p[GRAVITY + 1] * y[P + 1] + p[GRAVITY + 2] * y[P + 2])
-
-
-@njit(**_OPTS)
 def gravity_gains(Y0, Y1, prm, bodies, status, bare, rose, before):
     """Of the ``bodies`` with status OK under gravity alone (their ``bare`` rows empty), those whose energy
     (kinetic less m g·p) rose over the step (Y0 → Y1) by more than 1e-12 of itself: into ``rose``, their energy at
@@ -292,8 +284,9 @@ def gravity_gains(Y0, Y1, prm, bodies, status, bare, rose, before):
         i = bodies[m]
         if status[i] != OK or bare[i, ACTIVE] != 0.0:
             continue
-        e0 = _energy(Y0[i], prm[i])
-        if _energy(Y1[i], prm[i]) > e0 + 1e-12 * abs(e0) + 1e-300:
+        e0 = kinetic_energy_row(Y0[i], prm[i]) + potential_energy_row(Y0[i], prm[i])
+        e1 = kinetic_energy_row(Y1[i], prm[i]) + potential_energy_row(Y1[i], prm[i])
+        if e1 > e0 + 1e-12 * abs(e0) + 1e-300:
             rose[n] = i
             before[n] = e0
             n += 1

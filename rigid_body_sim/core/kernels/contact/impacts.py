@@ -33,12 +33,12 @@ import math
 import numpy as np
 from numba import njit
 
-from ..layout import INERTIA, INV_INERTIA, INV_MASS, MASS, P, Q, V, W
+from ..layout import GRAVITY, INERTIA, INV_INERTIA, INV_MASS, MASS, P, Q, V, W
 from ..rotation import rotate_back
 from .layout import MAX_POINTS
 
 __all__ = ["IMPACT_WORK_SHAPE", "restitution", "PGS_MAX_SWEEPS", "PGS_TOLERANCE", "tangents", "build_rows", "pgs", "pgs_each",
-           "kinetic_energy_row", "apply_impulses", "impact", "summed_wrench"]
+           "kinetic_energy_row", "potential_energy_row", "apply_impulses", "impact", "summed_wrench"]
 
 _OPTS = {"cache": True, "nogil": True, "error_model": "numpy"}
 
@@ -204,6 +204,12 @@ def kinetic_energy_row(y, p):
     return 0.5 * (p[MASS] * (y[V] * y[V] + y[V + 1] * y[V + 1] + y[V + 2] * y[V + 2])
                   + p[INERTIA] * y[W] * y[W] + p[INERTIA + 1] * y[W + 1] * y[W + 1]
                   + p[INERTIA + 2] * y[W + 2] * y[W + 2])
+
+
+@njit(**_OPTS)
+def potential_energy_row(y, p):
+    """−m g · p of one state row under its gravity (J): its potential energy, zero at the world origin."""
+    return -(p[MASS] * (p[GRAVITY] * y[P] + p[GRAVITY + 1] * y[P + 1] + p[GRAVITY + 2] * y[P + 2]))
 
 
 @njit(**_OPTS)

@@ -63,7 +63,7 @@ from ..layout import ACTIVE, BOUND, GRAVITY, INV_INERTIA, INV_MASS, INERTIA, MAS
 from ..rotation import exp_map, matrix, normalise, qmul, rotate, rotate_back
 from .layout import DIMS, FRICTION, HAS_MATERIAL, KIND, NORMAL, SHAPE_BOX
 from .convex import POSE_WIDTH
-from .impacts import kinetic_energy_row
+from .impacts import kinetic_energy_row, potential_energy_row
 from .pair_impacts import normal_speed
 from .pairs import MAX_PAIR_POINTS, box_patch, boxes_apart, pair_contacts
 from .shapes import MAX_FEATURES, feature_gaps, feature_points
@@ -1359,8 +1359,7 @@ def all_asleep(Y0, saved, wr, stopped, asleep, moving):
 def _energy(Y, prm, i):
     """Body i's kinetic energy and its K + U under its gravity at state rows Y (J): ½ m v² + ½ Σ Iⱼ ωⱼ² − m g · p."""
     k = kinetic_energy_row(Y[i], prm[i])
-    return k, k - prm[i, MASS] * (prm[i, GRAVITY] * Y[i, P] + prm[i, GRAVITY + 1] * Y[i, P + 1]
-                                  + prm[i, GRAVITY + 2] * Y[i, P + 2])
+    return k, k + potential_energy_row(Y[i], prm[i])
 
 
 @njit(**JIT)
