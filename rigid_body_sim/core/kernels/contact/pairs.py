@@ -401,6 +401,18 @@ def _sat(pa, pb, scale):
     return best, bx, by, bz, best_id
 
 
+@njit(**INLINE)
+def _face_separation(pa, pb):
+    """The largest separation (m) of two box cores along their six face normals: a lower bound on their
+    distance, _sat's without the edge axes."""
+    ox, oy, oz = pb[_C] - pa[_C], pb[_C + 1] - pa[_C + 1], pb[_C + 2] - pa[_C + 2]
+    best = -math.inf
+    for k in range(6):
+        ux, uy, uz = _axis(pa, k) if k < 3 else _axis(pb, k - 3)
+        best = max(best, abs(ux * ox + uy * oy + uz * oz) - _box_radius(pa, ux, uy, uz) - _box_radius(pb, ux, uy, uz))
+    return best
+
+
 @njit(**JIT)
 def _support_edge(pose, i, ux, uy, uz):
     """The edge along local axis i of the box core furthest along u: (start, direction) in world (m)."""
@@ -720,12 +732,24 @@ def pair_contact(pa, ma, pb, mb, scale, ws_s, ws_lam, ws_tmp, ws_poly, verts, fa
     elif ka == CORE_SEGMENT and kb == CORE_SEGMENT:
         sd, nx, ny, nz, count = _segment_segment(pa, ma, pb, mb, band, res, seps)
     else:
-        d, nv, overlap = gjk(pa, pb, ws_s, ws_lam, ws_tmp, scale)
         polytopes = kb == CORE_BOX  # segment–box or box–box
-        if polytopes and (overlap or d <= NEAR_TOUCH * scale):
+        # two boxes not apart along a face normal: the separating-axis test first. Overlapping (no axis separates
+        # them) or with its two witness points within NEAR_TOUCH × the size (their distance is at most that), they
+        # take its result without GJK, which would find them overlapping or that near
+        sat_done, sd_core, axis_id = False, 0.0, -1
+        if ka == CORE_BOX and polytopes and _face_separation(pa, pb) <= NEAR_TOUCH * scale:
             sd_core, nx, ny, nz, axis_id = _sat(pa, pb, scale)
-            sd = sd_core - ma - mb
             _sat_witness(pa, ma, pb, sd_core, nx, ny, nz, axis_id, res, seps)
+            wx, wy, wz = res[0, 3] - res[0, 0], res[0, 4] - res[0, 1], res[0, 5] - res[0, 2]
+            sat_done = sd_core <= 0.0 or wx * wx + wy * wy + wz * wz <= (NEAR_TOUCH * scale) ** 2
+        d, nv, overlap = 0.0, 0, True
+        if not sat_done:
+            d, nv, overlap = gjk(pa, pb, ws_s, ws_lam, ws_tmp, scale)
+        if polytopes and (overlap or d <= NEAR_TOUCH * scale):
+            if not sat_done:
+                sd_core, nx, ny, nz, axis_id = _sat(pa, pb, scale)
+                _sat_witness(pa, ma, pb, sd_core, nx, ny, nz, axis_id, res, seps)
+            sd = sd_core - ma - mb
         elif overlap:
             epa(pa, pb, ws_s, nv, verts, faces, face_nd, edges, scale, out)
             sd_core, nx, ny, nz = _exact_normal(pa, pb, out[1], out[2], out[3])
