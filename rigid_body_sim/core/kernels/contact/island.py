@@ -1001,14 +1001,34 @@ def _impulses(nc, rj, rbody, rlam, cflt):
     _pin = rj[0, 0], rbody[0, 0], rlam[0], cflt[0, 0]
 
 
+@njit(**INLINE)
+def _still_apart(Y, shapes, path, lower, bound, a, b):
+    """Whether boxes a and b, apart by at least ``lower`` (m) when their bodies had moved path[·, 0] (m) and turned
+    path[·, 1] (rad) less than now (path: each body's since, summed), are still apart by more than ``bound`` (m):
+    a face-normal separation changes by at most the two translations plus the two turns × (the centres' distance
+    along the way + each box's half-extents summed)."""
+    ta, tb = path[a, 0], path[b, 0]
+    turn = path[a, 1] + path[b, 1]
+    extents = 0.0
+    for j in range(3):
+        extents += shapes[a, DIMS + j] + shapes[b, DIMS + j]
+    ox, oy, oz = Y[b, P] - Y[a, P], Y[b, P + 1] - Y[a, P + 1], Y[b, P + 2] - Y[a, P + 2]
+    centres = math.sqrt(ox * ox + oy * oy + oz * oz) + ta + tb
+    return lower - (ta + tb + turn * (centres + extents)) - 1e-12 * extents > bound
+
+
 @njit(**JIT)
-def _narrow(Y, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound):
+def _narrow(Y, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound, path, again):
     """The narrow phase of pairs nlist[:n_pairs] at state rows Y, but for two boxes farther apart than their
     bound[k] (m; by a face-normal separation, ~40 ns against ~1 µs): those get that lower bound as pdist and no
-    points. Reorders nlist[:n_pairs] and bound[:n_pairs] (the pairs looked at first)."""
+    points. Reorders nlist[:n_pairs] and bound[:n_pairs] (the pairs looked at first). ``again`` (a later round of
+    the projection: pdist and pcount at each place the pair's from an earlier round): a pair found apart then is
+    not looked at while _still_apart holds (path: per body, what it moved and turned since)."""
     near = 0
     for k in range(n_pairs):
         a, b = nlist[k, 0], nlist[k, 1]
+        if again and pcount[k] == 0 and _still_apart(Y, shapes, path, pdist[k], bound[k], a, b):
+            continue  # as apart as when looked at (the same decision; pdist keeps that lower bound)
         _pose(Y, prm, a, pos, quat)
         _pose(Y, prm, b, pos, quat)
         apart = -1.0
@@ -1026,7 +1046,7 @@ def _narrow(Y, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, p
         near += 1
     if near > 0:
         pair_contacts(pos, quat, shapes, nlist[:near], pdist, pnormal, pcount, ppoints, pseps)
-    _pin = Y[0, 0], prm[0, 0], nlist[0, 0], pos[0, 0], quat[0, 0], pdist[0], pcount[0], bound[0]
+    _pin = Y[0, 0], prm[0, 0], nlist[0, 0], pos[0, 0], quat[0, 0], pdist[0], pcount[0], bound[0], path[0, 0]
 
 
 @njit(**JIT)
@@ -1234,6 +1254,9 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
     deepest = 0.0
     settled = False
     live = n_pairs
+    path = vel  # per body: what it moved (m) and turned (rad) since the first round, summed
+    for m in range(n):
+        path[members[m], 0] = path[members[m], 1] = 0.0
     for rnd in range(PROJECT_ROUNDS):
         if rnd <= 1:  # the pairs with a moving body first: the rounds' narrow phase (the others' data stale)
             live = 0
@@ -1243,8 +1266,10 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
                     nlist[k, 0], nlist[live, 0] = nlist[live, 0], a
                     nlist[k, 1], nlist[live, 1] = nlist[live, 1], b
                     bound[k], bound[live] = bound[live], bound[k]
+                    pdist[k], pdist[live] = pdist[live], pdist[k]
+                    pcount[k], pcount[live] = pcount[live], pcount[k]
                     live += 1
-        _narrow(Y1, prm, shapes, nlist, live, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound)
+        _narrow(Y1, prm, shapes, nlist, live, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound, path, rnd > 0)
         nd = _gather(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps,
                      members, bound, size, is_static, default_mu, True, 0.0, cint, cflt)
         deep = 0
@@ -1313,12 +1338,14 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
                 continue
             for a in range(3):
                 Y1[i, P + a] += dx[i, a]
+            path[i, 0] += math.sqrt(dx[i, 0] ** 2 + dx[i, 1] ** 2 + dx[i, 2] ** 2)
+            path[i, 1] += math.sqrt(dx[i, 3] ** 2 + dx[i, 4] ** 2 + dx[i, 5] ** 2)
             ew, ex, ey, ez = exp_map(dx[i, 3], dx[i, 4], dx[i, 5])  # a world-axes turn: exp(δθ) ⊗ q
             q = qmul(ew, ex, ey, ez, Y1[i, Q], Y1[i, Q + 1], Y1[i, Q + 2], Y1[i, Q + 3])
             Y1[i, Q], Y1[i, Q + 1], Y1[i, Q + 2], Y1[i, Q + 3] = normalise(q[0], q[1], q[2], q[3])
     if deepest > 0.0:
         if not settled:  # the touching points at the final poses (settled: the last round's first gather)
-            _narrow(Y1, prm, shapes, nlist, live, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound)
+            _narrow(Y1, prm, shapes, nlist, live, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound, path, True)
             nd = _gather(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount,
                          ppoints, pseps, members, bound, size, is_static, default_mu, True, 0.0, cint, cflt)
         _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, size, rj, rw, rdiag, rbias, rbody, rlam, vel,
@@ -1469,7 +1496,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         nlist[n_pairs, 0], nlist[n_pairs, 1] = a, b
         n_pairs += 1
     _bounds(Y0, Y1, nlist, 0, n_pairs, is_static, spin_reach, size, h, bound)
-    _narrow(Y0, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound)
+    _narrow(Y0, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound, dx, False)
     _link(Y0, Y1, nlist, 0, n_pairs, pdist, pnormal, pcount, ppoints, bound, is_static, size, parent, flags)
     for m in range(n):
         i = members[m]
@@ -1498,7 +1525,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                 n_pairs += 1
         _bounds(Y0, Y1, nlist, n0, n_pairs, is_static, spin_reach, size, h, bound)
         _narrow(Y0, prm, shapes, nlist[n0:], n_pairs - n0, pos, quat, pdist[n0:], pnormal[n0:], pcount[n0:],
-                ppoints[n0:], pseps[n0:], bound[n0:])
+                ppoints[n0:], pseps[n0:], bound[n0:], dx, False)
         _link(Y0, Y1, nlist, n0, n_pairs, pdist, pnormal, pcount, ppoints, bound, is_static, size, parent, flags)
     out[OUT_WOKEN] = woken
     # room for the contacts (pairs' points and each island body's features against each half-space)
