@@ -682,9 +682,10 @@ def _copy_rows(src, dst, rbody, order, start, stop):
 @njit(**JIT)
 def _held(vel, rj, rw, rbody, rbias, rlam, cflt, cint, size, h, order, start, stop, saved):
     """Whether the contacts order[start:stop] are solved exactly by their warm start (rlam: the last step's λ
-    carried over): every point with λ_n > 0 holds (its three rows' speeds after within the sticking solve's
-    tolerance, and within HELD_TOL × PROJECT_TOL × its body's size / h: over the step it moves a hundredth of the
-    projection's tolerance, so that a component at rest does not creep), every other parts (u_n⁺ ≥ 0 to that
+    carried over): every point with λ_n > 0 holds (its three rows' speeds after within 1e-9 × the largest row
+    speed before, a tenth of the sticking solve's EQUALITY_TOL, and within HELD_TOL × PROJECT_TOL × its body's
+    size / h: over the step it moves a hundredth of the projection's tolerance, so that a component at rest does
+    not creep), every other parts (u_n⁺ ≥ 0 to that
     tolerance), every point's gap after the step (linear) at least −PROJECT_TOL × its body's size (as deep as the
     projection leaves a point: a component resting there is held as at its faces), every λ_n ≥ 0 and every λ_t in
     its cone. Then the sticking solve's λ is that one, found without a factorisation
