@@ -685,11 +685,10 @@ def _held(vel, rj, rw, rbody, rbias, rlam, cflt, cint, size, h, order, start, st
     carried over): every point with λ_n > 0 holds (its three rows' speeds after within 1e-9 × the largest row
     speed before, a tenth of the sticking solve's EQUALITY_TOL, and within HELD_TOL × PROJECT_TOL × its body's
     size / h: over the step it moves a hundredth of the projection's tolerance, so that a component at rest does
-    not creep), every other parts (u_n⁺ ≥ 0 to that
-    tolerance), every point's gap after the step (linear) at least −PROJECT_TOL × its body's size (as deep as the
-    projection leaves a point: a component resting there is held as at its faces), every λ_n ≥ 0 and every λ_t in
-    its cone. Then the sticking solve's λ is that one, found without a factorisation
-    (a component at rest: the same λ step after step, until what it leaves of the speeds, the solve's round-off,
+    not creep), every other parts (u_n⁺ ≥ 0 to that tolerance), every point's gap after the step (linear) at least
+    −PROJECT_TOL × its body's size (as deep as the projection leaves a point: a component resting there is held as
+    at its faces), every λ_n ≥ 0 and every λ_t in its cone. Then the sticking solve's λ is that one, found without a
+    factorisation (a component at rest: the same λ step after step, until what it leaves of the speeds, the solve's round-off,
     grows past that tolerance: a held λ does not follow the bodies' turn, so its residue grows step by step).
     True: vel has λ applied; False: vel as it was (its bodies' rows kept in ``saved``, per body 6)."""
     fastest, biggest = 0.0, 0.0
@@ -1255,7 +1254,8 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
     deepest = 0.0
     settled = False
     live = n_pairs
-    path = vel  # per body: what it moved (m) and turned (rad) since the first round, summed
+    path = vel  # per body: what it moved (m) and turned (rad) since the first round, summed (a static body's row is
+    # never written: zero, as it does not move)
     for m in range(n):
         path[members[m], 0] = path[members[m], 1] = 0.0
     for rnd in range(PROJECT_ROUNDS):

@@ -401,18 +401,6 @@ def _sat(pa, pb, scale):
     return best, bx, by, bz, best_id
 
 
-@njit(**INLINE)
-def _face_separation(pa, pb):
-    """The largest separation (m) of two box cores along their six face normals: a lower bound on their
-    distance, _sat's without the edge axes."""
-    ox, oy, oz = pb[_C] - pa[_C], pb[_C + 1] - pa[_C + 1], pb[_C + 2] - pa[_C + 2]
-    best = -math.inf
-    for k in range(6):
-        ux, uy, uz = _axis(pa, k) if k < 3 else _axis(pb, k - 3)
-        best = max(best, abs(ux * ox + uy * oy + uz * oz) - _box_radius(pa, ux, uy, uz) - _box_radius(pb, ux, uy, uz))
-    return best
-
-
 @njit(**JIT)
 def _support_edge(pose, i, ux, uy, uz):
     """The edge along local axis i of the box core furthest along u: (start, direction) in world (m)."""
@@ -737,7 +725,9 @@ def pair_contact(pa, ma, pb, mb, scale, ws_s, ws_lam, ws_tmp, ws_poly, verts, fa
         # them) or with its two witness points within NEAR_TOUCH × the size (their distance is at most that), they
         # take its result without GJK, which would find them overlapping or that near
         sat_done, sd_core, axis_id = False, 0.0, -1
-        if ka == CORE_BOX and polytopes and _face_separation(pa, pb) <= NEAR_TOUCH * scale:
+        if ka == CORE_BOX and polytopes and _face_gap(pa[_R:_R + 9], pb[_R:_R + 9], pa[_DIM:_DIM + 3], pb[_DIM:_DIM + 3],
+                                                      pb[_C] - pa[_C], pb[_C + 1] - pa[_C + 1],
+                                                      pb[_C + 2] - pa[_C + 2]) <= NEAR_TOUCH * scale:
             sd_core, nx, ny, nz, axis_id = _sat(pa, pb, scale)
             _sat_witness(pa, ma, pb, sd_core, nx, ny, nz, axis_id, res, seps)
             wx, wy, wz = res[0, 3] - res[0, 0], res[0, 4] - res[0, 1], res[0, 5] - res[0, 2]
@@ -811,12 +801,10 @@ _CORE_OF = (0, 0, 2, 3, 1)  # layout.SHAPE_* → CORE_* (SHAPE_NONE unused)
 
 
 @njit(**INLINE)
-def boxes_apart(quat, pos, shapes, a, b):
-    """A lower bound (m) on the distance of boxes a and b: their largest separation along the six face normals
-    (negative when none separates them)."""
-    Ra = matrix(quat[a, 0], quat[a, 1], quat[a, 2], quat[a, 3])
-    Rb = matrix(quat[b, 0], quat[b, 1], quat[b, 2], quat[b, 3])
-    ox, oy, oz = pos[b, 0] - pos[a, 0], pos[b, 1] - pos[a, 1], pos[b, 2] - pos[a, 2]
+def _face_gap(Ra, Rb, da, db, ox, oy, oz):
+    """Two boxes' largest separation (m) along their six face normals (negative when none separates them): a lower
+    bound on their distance. Ra, Rb: their rotations, row-major (9); da, db: their half extents (3); o: b's centre
+    minus a's (world, m)."""
     best = -math.inf
     for side in range(2):
         for k in range(3):
@@ -826,10 +814,20 @@ def boxes_apart(quat, pos, shapes, a, b):
                 ux, uy, uz = Rb[k], Rb[3 + k], Rb[6 + k]
             reach = 0.0
             for j in range(3):
-                reach += shapes[a, DIMS + j] * abs(Ra[j] * ux + Ra[3 + j] * uy + Ra[6 + j] * uz)
-                reach += shapes[b, DIMS + j] * abs(Rb[j] * ux + Rb[3 + j] * uy + Rb[6 + j] * uz)
+                reach += da[j] * abs(Ra[j] * ux + Ra[3 + j] * uy + Ra[6 + j] * uz)
+                reach += db[j] * abs(Rb[j] * ux + Rb[3 + j] * uy + Rb[6 + j] * uz)
             best = max(best, abs(ux * ox + uy * oy + uz * oz) - reach)
     return best
+
+
+@njit(**INLINE)
+def boxes_apart(quat, pos, shapes, a, b):
+    """A lower bound (m) on the distance of boxes a and b: their largest separation along the six face normals
+    (negative when none separates them)."""
+    Ra = matrix(quat[a, 0], quat[a, 1], quat[a, 2], quat[a, 3])
+    Rb = matrix(quat[b, 0], quat[b, 1], quat[b, 2], quat[b, 3])
+    return _face_gap(Ra, Rb, shapes[a, DIMS:DIMS + 3], shapes[b, DIMS:DIMS + 3], pos[b, 0] - pos[a, 0],
+                     pos[b, 1] - pos[a, 1], pos[b, 2] - pos[a, 2])
 
 
 @njit(**JIT)
