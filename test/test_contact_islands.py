@@ -414,8 +414,9 @@ def test_a_cube_sliding_to_a_stop_on_a_cube_rests_exactly_within_the_retry():
     """A cube sliding at 1 m/s on a cube resting on the ground (μ = 0.5) slows at μ g (1 − μ g t at every step
     within 1e-9: a first-order island step is exact for the constant friction force, the lower cube held by the
     ground's friction), stops at 1 / (μ g), and from STICK_RETRY steps after that is the sticking case solved
-    exactly (while it slid, the exact solve was tried only once in STICK_RETRY steps): every speed ≤ 1e-9."""
-    from rigid_body_sim.core.kernels.contact.island import OUT_PGS, OUT_STICK, STICK_RETRY
+    exactly (while it slid, it slipped at the end of each step, and its component went untried for STICK_SKIPS
+    steps in a row): every speed ≤ 1e-9."""
+    from rigid_body_sim.core.kernels.contact.island import OUT_PGS, OUT_STICK, STICK_RETRY, STICK_SKIPS
 
     bodies = {"below": cube((0.0, 0.0, 0.5 * EDGE)),
               "above": cube((-0.05, 0.0, 1.5 * EDGE), velocity=(1.0, 0.0, 0.0))}
@@ -423,14 +424,22 @@ def test_a_cube_sliding_to_a_stop_on_a_cube_rests_exactly_within_the_retry():
     islands = sim.contact.pairs.islands
     h = sim.dt
     stop = int(np.ceil(1.0 / (0.5 * G * h)))  # the step in which it stops
+    assert stop > STICK_RETRY + STICK_SKIPS  # the slide lasts a whole run of skips
+    skipped = []
     for k in range(1, stop + STICK_RETRY + 30):
         sim.step()
         v = sim.state.v_WC_W
         assert v[1] == pytest.approx([max(1.0 - 0.5 * G * h * k, 0.0), 0.0, 0.0], abs=1e-9)
         assert np.linalg.norm(v[0]) <= 1e-9
+        skips, slipped = islands._skips[1]  # the upper cube's (body 1)
+        if k < stop:
+            assert slipped == 1
+            skipped.append(skips)
         if k > stop + STICK_RETRY:
+            assert slipped == 0
             assert islands.out[OUT_STICK] == 1 and islands.out[OUT_PGS] == 0
             assert speeds(sim) <= 1e-9
+    assert max(skipped) == STICK_SKIPS, skipped
 
 
 def test_two_towers_a_millimetre_apart_are_solved_exactly():

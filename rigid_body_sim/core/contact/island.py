@@ -53,6 +53,7 @@ class Islands:
         self.left = np.zeros(0, dtype=np.int64)
         self.asleep = np.zeros(n, dtype=np.int64)
         self._wait = np.zeros(n, dtype=np.int64)  # steps before a body's component is tried for the exact solve
+        self._skips = np.zeros((n, 2), dtype=np.int64)  # steps in a row its component, due, was not tried; slipped
         self._still = np.zeros(n, dtype=np.int64)  # steps in a row a body was at rest by the sleep rule
         self._anchor = np.zeros((n, 7))  # where its run at rest began (position, quaternion)
         self.saved = np.zeros((n, L.STATE_WIDTH))
@@ -116,6 +117,7 @@ class Islands:
         self.left = np.zeros(0, dtype=np.int64)
         self.asleep[:] = 0
         self._wait[:] = 0
+        self._skips[:] = 0
         self._still[:] = 0
         self.body_steps = 0
         self.deepest = 0.0
@@ -196,8 +198,8 @@ class Islands:
         args_head = (Y0, Y1, sim._prm, wrenches, solver._bare_rows, solver.modes, self.saved, solver.shapes,
                      solver.half_spaces, solver.half_space_friction, self.members, cand, len(cand),
                      self.pairs.is_static, sim._stopped, self.pairs.spin_reach, self.size, self.asleep, self._wait,
-                     self._still, self._anchor, h, bool(solver.sleeping), float(solver.sleep_speed), DEFAULT_FRICTION,
-                     self.n_contacts, self.island, self._parent, self._flags)
+                     self._skips, self._still, self._anchor, h, bool(solver.sleeping), float(solver.sleep_speed),
+                     DEFAULT_FRICTION, self.n_contacts, self.island, self._parent, self._flags)
         was_asleep = self.asleep != 0
         while True:
             code = island_pass(*args_head, self._nlist, self._pos, self._quat, self._pdist, self._pnormal,

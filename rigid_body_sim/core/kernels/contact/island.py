@@ -28,7 +28,8 @@ let go that would close taken back, at most STICK_PIVOTS times (the attempt ends
 changes more than STICK_CHANGES points: not at rest). It is kept when the points on are
 met (to EQUALITY_TOL of the right-hand side), every λ_n ≥ 0 and every λ_t is in its cone (to
 round-off); a component whose attempt failed is tried again only after STICK_RETRY − 1 steps
-(landing, nearly none holds). Else
+(landing, nearly none holds), and one due with a body that slipped at the end of the last step is looked at
+again at the next step instead (at most STICK_SKIPS steps in a row). Else
 projected Gauss–Seidel on the component's rows (over more than PILE_CONTACTS contacts, a pile, each
 component on its own, from the highest against gravity down, then back up, in turn: a weight passes
 down a pile and a stop up it within a sweep). Then the
@@ -127,6 +128,11 @@ EQUALITY_TOL = 1e-8
 #: A component whose sticking solve failed is tried again only after STICK_RETRY − 1 steps on Gauss–Seidel (while
 #: a pile lands, or a point slides, nearly none holds); one solved exactly is tried again at the next step.
 STICK_RETRY = 4
+#: A component due for the sticking solve with a body that slipped at the end of the last step (a point of its
+#: Gauss–Seidel step slipping faster than SLIP × its body's size / h) is looked at again at the next step instead,
+#: at most STICK_SKIPS steps in a row: one still slipping nearly never holds (a pile landing), one that came to
+#: rest in its last step is tried at once.
+STICK_SKIPS, SLIP = 12, 1e-6
 #: A body's wait (steps before its component is tried for the sticking solve again) after an exact step: solved
 #: (WAIT_SOLVED: its λ also stopped what the bodies brought in, so it is solved once more, from that rest) or held or
 #: solved from a step solved exactly (WAIT_HELD: its λ is the resting one, kept by _held while it holds). Holding a
@@ -751,6 +757,18 @@ def _waiting(cint, order, start, stop, wait):
                 least = min(least, wait[b])
                 most = max(most, wait[b])
     return least, most
+
+
+@njit(**INLINE)
+def _most(cint, order, start, stop, per_body):
+    """The largest per_body[b] over the bodies b of the contacts order[start:stop]."""
+    most = per_body[cint[order[start], I_B]] if cint[order[start], I_B] >= 0 else per_body[cint[order[start], I_A]]
+    for k in range(start, stop):
+        for side in range(2):
+            b = cint[order[k], side]
+            if b >= 0:
+                most = max(most, per_body[b])
+    return most
 
 
 @njit(**INLINE)
@@ -1458,16 +1476,17 @@ def _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt
 
 @njit(**JIT)
 def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, members, cand, n_cand, is_static, stopped,
-                spin_reach, size, asleep, wait, still, anchor, h, sleeping, sleep_speed, default_mu, n_prev, island, parent,
+                spin_reach, size, asleep, wait, skips, still, anchor, h, sleeping, sleep_speed, default_mu, n_prev, island, parent,
                 flags, nlist, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound, cint, cflt, vel, iw, dx, rj, rw,
                 rdiag, rbias, rlam, rbody, order, cstart, A, L, vec, out, comp, band, group, cwork, rwork):
     """One step of every island (module docstring): results into Y1 for the bodies marked island[i] = 1 (solved)
     or 2 (asleep: their rows copied from Y0). Returns 0, or −(contacts needed) when cint is too small
     (then nothing was changed but ``asleep`` and the outputs; call again with room). ``wait`` (per body, kept
     across calls): steps before its component is tried for the sticking solve again (≤ 0: at once; WAIT_SOLVED,
-    WAIT_HELD); ``still`` (per body, kept across calls): the steps in a row it was at rest by the sleep rule (end of
-    this function) in an island, from the pose ``anchor`` (per body: position, quaternion) with a sleep speed raised
-    above rest. ``cwork`` (per contact, 3 columns) and ``rwork`` (per row, 3 columns) are scratch."""
+    WAIT_HELD); ``skips`` (per body, 2 columns, kept across calls): the steps in a row its component, due, was not
+    tried (STICK_SKIPS), and 1 if a point of it slipped at the end of the step (SLIP); ``still`` (per body, kept
+    across calls): the steps in a row it was at rest by the sleep rule (end of this function) in an island, from
+    the pose ``anchor`` (per body: position, quaternion) with a sleep speed raised above rest. ``cwork`` (per contact, 3 columns) and ``rwork`` (per row, 3 columns) are scratch."""
     n = members.shape[0]
     for k in range(OUT_WIDTH):
         out[k] = 0.0
@@ -1581,6 +1600,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         for m in range(n):
             still[members[m]] = 0
             wait[members[m]] = 0
+            skips[members[m], 0] = skips[members[m], 1] = 0
         _pin = Y0[0, 0], Y1[0, 0], prm[0, 0], wr[0, 0], bare[0, 0], modes[0], saved[0, 0], cand[0, 0], A[0, 0], L[0, 0], vec[0, 0], order[0], cstart[0]
         _pin2 = group[0], cwork[0, 0], rwork[0, 0]
         return 0
@@ -1628,13 +1648,19 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         if 3 * (hi - lo) <= A.shape[0]:
             least, most = _waiting(cint, order, lo, hi, wait)
             left = least - 1
+            skipped = _most(cint, order, lo, hi, skips[:, 0])
             if left < 0:
                 if most == WAIT_HELD:  # dx (per body) is scratch until the projection
                     kept = _held(vel, rj, rw, rbody, rbias, rlam, cflt, cint, size, h, order, lo, hi, dx)
                 if kept:
                     out[OUT_HELD] += 1
                     left = WAIT_HELD
+                    skipped = 0
+                elif skipped < STICK_SKIPS and _most(cint, order, lo, hi, skips[:, 1]) > 0:
+                    left = 0  # due again at the next step
+                    skipped += 1
                 else:
+                    skipped = 0
                     kept = _sticking(vel, rj, rw, rbody, rbias, rlam, cflt, order, lo, hi, A, L, vec[0], vec[1],
                                      vec[2], band, cwork[:, 2])
                     if not kept:
@@ -1645,6 +1671,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                 for side in range(2):
                     if cint[order[c], side] >= 0:
                         wait[cint[order[c], side]] = left
+                        skips[cint[order[c], side], 0] = skipped
         if kept:
             out[OUT_STICK] += 1
             shallow = True  # and began with no point deeper than half the projection's tolerance (a deeper one,
@@ -1665,6 +1692,17 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         body = cint[order[0], I_B] if cint[order[0], I_B] >= 0 else cint[order[0], I_A]
         g = prm[body, GRAVITY:GRAVITY + 3]  # the order's gravity: any order is Gauss–Seidel
         _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, cint, comp, order, stop, g[0], g[1], g[2], cwork, rwork)
+    for m in range(n):  # which bodies slipped: for the next step's attempts (those solved exactly did not)
+        skips[members[m], 1] = 0
+    for c in range(stop):
+        q = order[c]
+        r = 3 * q
+        u1, u2 = _row_speed(vel, rj, rbody, r + 1), _row_speed(vel, rj, rbody, r + 2)
+        body = cint[q, I_B] if cint[q, I_B] >= 0 else cint[q, I_A]
+        if u1 * u1 + u2 * u2 > (SLIP * size[body] / h) ** 2:
+            for side in range(2):
+                if cint[q, side] >= 0:
+                    skips[cint[q, side], 1] = 1
     _impulses(nc, rj, rbody, rlam, cflt)
     # positions: p + h v, q ⊗ exp(h ω_P)
     for m in range(n):
@@ -1711,6 +1749,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         if island[i] != 1:  # out of the islands (or asleep): no run at rest, no wait for the exact solve
             still[i] = 0
             wait[i] = 0
+            skips[i, 0] = skips[i, 1] = 0
             continue
         if need == 1:
             at_rest = _speed(Y0, i, spin_reach) <= sleep_speed and _speed(Y1, i, spin_reach) <= sleep_speed
@@ -1738,6 +1777,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                 asleep[i] = 1
                 still[i] = 0  # woken, it begins a new run at rest and is tried for the exact solve at once
                 wait[i] = 0
+                skips[i, 0] = skips[i, 1] = 0
                 group[i] = r
                 out[OUT_SLEPT] += 1
                 for j in range(6):
