@@ -111,6 +111,20 @@ def pytest_unconfigure(config: pytest.Config) -> None:
     _DOMAIN_LOCK.close()
 
 
+#: The files that take longest in the default run (each waits seconds on processes, a browser or signals), run
+#: first: ``make test`` hands each file whole to the next free xdist worker (``--dist loadfile``), and a long file
+#: handed out last would keep the run going while the other workers sit idle.
+LONG_FILES = ("test_view.py", "test_stops.py", "test_liveness.py", "test_node_hostile.py", "test_truncation.py",
+              "test_hostile.py", "test_access.py", "test_contact_landing.py")
+
+
+def pytest_collection_modifyitems(session: pytest.Session, config: pytest.Config, items: list[pytest.Item]) -> None:
+    """The files of LONG_FILES first, in that order; the other files, and the tests within each file, keep their
+    order."""
+    rank = {name: k for k, name in enumerate(LONG_FILES)}
+    items.sort(key=lambda item: rank.get(item.path.name, len(LONG_FILES)))
+
+
 @pytest.fixture(scope="session")
 def ros_domain_id() -> int:
     """The ROS domain id private to this pytest session (also in ``os.environ``)."""
