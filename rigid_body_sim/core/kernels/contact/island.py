@@ -745,30 +745,18 @@ def _held(vel, rj, rw, rbody, rbias, rlam, cflt, cint, size, h, order, start, st
 
 
 @njit(**INLINE)
-def _waiting(cint, order, start, stop, wait):
-    """The fewest and the most steps a body of the contacts order[start:stop] still waits before its component is
-    tried for the sticking solve again (≤ 0: now; WAIT_SOLVED, WAIT_HELD below)."""
-    least = wait[cint[order[start], I_B]] if cint[order[start], I_B] >= 0 else wait[cint[order[start], I_A]]
+def _span(cint, order, start, stop, per_body):
+    """The least and the largest per_body[b] over the bodies b of the contacts order[start:stop] (a component's
+    wait, its run of skips, whether a body of it slipped)."""
+    least = per_body[cint[order[start], I_B]] if cint[order[start], I_B] >= 0 else per_body[cint[order[start], I_A]]
     most = least
     for k in range(start, stop):
         for side in range(2):
             b = cint[order[k], side]
             if b >= 0:
-                least = min(least, wait[b])
-                most = max(most, wait[b])
-    return least, most
-
-
-@njit(**INLINE)
-def _most(cint, order, start, stop, per_body):
-    """The largest per_body[b] over the bodies b of the contacts order[start:stop]."""
-    most = per_body[cint[order[start], I_B]] if cint[order[start], I_B] >= 0 else per_body[cint[order[start], I_A]]
-    for k in range(start, stop):
-        for side in range(2):
-            b = cint[order[k], side]
-            if b >= 0:
+                least = min(least, per_body[b])
                 most = max(most, per_body[b])
-    return most
+    return least, most
 
 
 @njit(**INLINE)
@@ -1476,8 +1464,8 @@ def _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt
 
 @njit(**JIT)
 def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, members, cand, n_cand, is_static, stopped,
-                spin_reach, size, asleep, wait, skips, still, anchor, h, sleeping, sleep_speed, default_mu, n_prev, island, parent,
-                flags, nlist, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound, cint, cflt, vel, iw, dx, rj, rw,
+                spin_reach, size, asleep, wait, skips, still, anchor, h, sleeping, sleep_speed, default_mu, n_prev, island,
+                parent, flags, nlist, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound, cint, cflt, vel, iw, dx, rj, rw,
                 rdiag, rbias, rlam, rbody, order, cstart, A, L, vec, out, comp, band, group, cwork, rwork):
     """One step of every island (module docstring): results into Y1 for the bodies marked island[i] = 1 (solved)
     or 2 (asleep: their rows copied from Y0). Returns 0, or −(contacts needed) when cint is too small
@@ -1486,7 +1474,8 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     WAIT_HELD); ``skips`` (per body, 2 columns, kept across calls): the steps in a row its component, due, was not
     tried (STICK_SKIPS), and 1 if a point of it slipped at the end of the step (SLIP); ``still`` (per body, kept
     across calls): the steps in a row it was at rest by the sleep rule (end of this function) in an island, from
-    the pose ``anchor`` (per body: position, quaternion) with a sleep speed raised above rest. ``cwork`` (per contact, 3 columns) and ``rwork`` (per row, 3 columns) are scratch."""
+    the pose ``anchor`` (per body: position, quaternion) with a sleep speed raised above rest. ``cwork`` (per
+    contact, 3 columns) and ``rwork`` (per row, 3 columns) are scratch."""
     n = members.shape[0]
     for k in range(OUT_WIDTH):
         out[k] = 0.0
@@ -1646,9 +1635,10 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             continue
         kept = False
         if 3 * (hi - lo) <= A.shape[0]:
-            least, most = _waiting(cint, order, lo, hi, wait)
+            # the steps its bodies still wait before an attempt (≤ 0: now; WAIT_SOLVED, WAIT_HELD)
+            least, most = _span(cint, order, lo, hi, wait)
             left = least - 1
-            skipped = _most(cint, order, lo, hi, skips[:, 0])
+            skipped = _span(cint, order, lo, hi, skips[:, 0])[1]
             if left < 0:
                 if most == WAIT_HELD:  # dx (per body) is scratch until the projection
                     kept = _held(vel, rj, rw, rbody, rbias, rlam, cflt, cint, size, h, order, lo, hi, dx)
@@ -1656,7 +1646,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                     out[OUT_HELD] += 1
                     left = WAIT_HELD
                     skipped = 0
-                elif skipped < STICK_SKIPS and _most(cint, order, lo, hi, skips[:, 1]) > 0:
+                elif skipped < STICK_SKIPS and _span(cint, order, lo, hi, skips[:, 1])[1] > 0:
                     left = 0  # due again at the next step
                     skipped += 1
                 else:
