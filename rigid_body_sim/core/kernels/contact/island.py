@@ -48,7 +48,7 @@ locked (velocities set to zero, its rows copied forward, no narrow phase between
 wrench, a changed state or another body within reach wakes it (the driver and this pass).
 
 Scratch is owned by the caller and preallocated; nothing here allocates per pair or per body
-(pair_contacts allocates its small workspace once per call).
+(pair_contacts, _gather and _sort_by allocate small fixed workspaces once per call).
 """
 
 from __future__ import annotations
@@ -111,6 +111,8 @@ PILE_CONTACTS = DENSE_MAX // 3
 #: (nonsmooth nonlinear conjugate gradient). A pile's projection: at most PILE_SWEEPS sweeps a round, from the lowest point up, and a pair whose
 #: normal is within acos(PILE_UPRIGHT) of gravity moves only its upper body (the lower held: shock propagation).
 PILE_PGS_SWEEPS, PILE_SWEEPS, PILE_UPRIGHT = 20, 20, 0.5
+#: Ranges of the islands' sort (_sort_by) at most this long are insertion sorted.
+SORT_SMALL = 16
 #: A component's warm start is kept as its sticking solve (_held) when its points' speeds after are within this ×
 #: PROJECT_TOL × their body's size / h: over a step a body at rest moves a hundredth of the projection's tolerance.
 HELD_TOL = 1e-2
@@ -469,14 +471,69 @@ def _sift(key, idx, start, top, n):
 
 
 @njit(**JIT)
-def _sort_by(key, idx, start, stop):
-    """Sort idx[start:stop] in place by key[idx] ascending, ties by index (heap sort: no allocation, n log n)."""
-    n = stop - start
+def _heap_sort(key, idx, lo, hi):
+    """Heap sort of idx[lo:hi] by _before (n log n at worst, no allocation)."""
+    n = hi - lo
     for top in range(n // 2 - 1, -1, -1):
-        _sift(key, idx, start, top, n)
+        _sift(key, idx, lo, top, n)
     for end in range(n - 1, 0, -1):
-        idx[start], idx[start + end] = idx[start + end], idx[start]
-        _sift(key, idx, start, 0, end)
+        idx[lo], idx[lo + end] = idx[lo + end], idx[lo]
+        _sift(key, idx, lo, 0, end)
+    _pin = key[0], idx[0]
+
+
+@njit(**JIT)
+def _sort_by(key, idx, start, stop):
+    """Sort idx[start:stop] in place by key[idx] ascending, ties by index: a total order, so one result whatever
+    the method. Introsort: quicksort (median of three, Hoare's partition) while a range is longer than SORT_SMALL,
+    insertion sort below; a range still split after 2 log2 n levels heap sorted (n log n at worst). The larger part
+    waits on a stack of 64 ranges (it holds at most log2 n), the smaller is sorted first."""
+    stack = np.empty((64, 3), dtype=np.int64)
+    stack[0, 0], stack[0, 1], stack[0, 2] = start, stop, 2 * int(math.log2(max(stop - start, 1)) + 1)
+    top = 1
+    while top > 0:
+        top -= 1
+        lo, hi, depth = stack[top, 0], stack[top, 1], stack[top, 2]
+        while hi - lo > SORT_SMALL:
+            if depth == 0:
+                _heap_sort(key, idx, lo, hi)
+                lo = hi
+                break
+            depth -= 1
+            mid = (lo + hi - 1) // 2
+            if _before(key, idx[mid], idx[lo]):
+                idx[mid], idx[lo] = idx[lo], idx[mid]
+            if _before(key, idx[hi - 1], idx[mid]):
+                idx[mid], idx[hi - 1] = idx[hi - 1], idx[mid]
+                if _before(key, idx[mid], idx[lo]):
+                    idx[mid], idx[lo] = idx[lo], idx[mid]
+            pivot = idx[mid]
+            i, j = lo - 1, hi
+            while True:
+                i += 1
+                while _before(key, idx[i], pivot):
+                    i += 1
+                j -= 1
+                while _before(key, pivot, idx[j]):
+                    j -= 1
+                if i >= j:
+                    break
+                idx[i], idx[j] = idx[j], idx[i]
+            # idx[lo:j + 1] before or at the pivot, idx[j + 1:hi] at or after it; both non-empty
+            if j + 1 - lo < hi - j - 1:
+                stack[top, 0], stack[top, 1], stack[top, 2] = j + 1, hi, depth
+                hi = j + 1
+            else:
+                stack[top, 0], stack[top, 1], stack[top, 2] = lo, j + 1, depth
+                lo = j + 1
+            top += 1
+        for a in range(lo + 1, hi):  # insertion sort of what is left of the range
+            v = idx[a]
+            b = a - 1
+            while b >= lo and _before(key, v, idx[b]):
+                idx[b + 1] = idx[b]
+                b -= 1
+            idx[b + 1] = v
     _pin = key[0], idx[0]
 
 
