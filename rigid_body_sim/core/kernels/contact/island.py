@@ -100,7 +100,7 @@ RISE_ROUNDOFF = 1e-15
 TOUCH_GAP = 0.5 * PROJECT_TOL
 #: Narrow-phase rounds of the position projection, the first TURN_ROUNDS in the mass metric (turning and
 #: translating), the others translating only; Gauss–Seidel sweeps per round.
-PROJECT_ROUNDS, TURN_ROUNDS, PROJECT_SWEEPS = 8, 2, 100
+PROJECT_ROUNDS, TURN_ROUNDS, PROJECT_SWEEPS = 8, 1, 100
 #: Most projected Gauss–Seidel sweeps of the velocity problem, or PGS_WORK / its contacts when that is more (the
 #: last few columns of a pile still moving get more); it stops earlier below PGS_TOL (m/s). What a step short of
 #: convergence adds to K + U is taken out by _no_gain.
