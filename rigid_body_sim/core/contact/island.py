@@ -54,7 +54,7 @@ class Islands:
         self.asleep = np.zeros(n, dtype=np.int64)
         self._wait = np.zeros(n, dtype=np.int64)  # steps before a body's component is tried for the exact solve
         self._skips = np.zeros((n, 2), dtype=np.int64)  # steps in a row its component, due, was not tried; slipped
-        self._still = np.zeros(n, dtype=np.int64)  # steps in a row a body was at rest by the sleep rule
+        self._still = np.zeros(n, dtype=np.int64)  # steps in a row at rest by the sleep rule (< 0: set back at rest)
         self._anchor = np.zeros((n, 7))  # where its run at rest began (position, quaternion)
         self.saved = np.zeros((n, L.STATE_WIDTH))
         self._parent = np.arange(n, dtype=np.int64)

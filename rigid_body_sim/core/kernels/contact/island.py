@@ -135,6 +135,12 @@ STICK_RETRY = 4
 #: at most STICK_SKIPS steps in a row: one still slipping nearly never holds (a pile landing), one that came to
 #: rest in its last step is tried at once.
 STICK_SKIPS, SLIP = 12, 1e-6
+#: A component set back where it began by the energy step (_no_gain) this many steps in a row sleeps (its bodies have
+#: not moved since; at least two of its sticking attempts failed meanwhile, each STICK_RETRY + STICK_SKIPS steps
+#: apart at most): a rest imposed once is not counted as one (a body that should move would be locked), but a
+#: component whose every step is set back (a resting pile whose exact solve leaves a friction cone and whose
+#: Gauss–Seidel step and projection add energy) would otherwise be stepped, unmoving, for ever.
+FROZEN_STEPS = 2 * (STICK_RETRY + STICK_SKIPS)
 #: A body's wait (steps before its component is tried for the sticking solve again) after an exact step: solved
 #: (WAIT_SOLVED: its λ also stopped what the bodies brought in, so it is solved once more, from that rest) or held or
 #: solved from a step solved exactly (WAIT_HELD: its λ is the resting one, kept by _held while it holds). Holding a
@@ -1462,7 +1468,8 @@ def _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt
     or with a fixed side that was (OUT_TRIMMED). Where it added more than the component's kinetic energy, its
     bodies are set back where they began the step, at rest (K + U then U₀ ≤ K₀ + U₀; OUT_RESTORED): it was nearly
     at rest, and it had no contact with another component over the step. That rest is imposed, not found: its root
-    is flagged (128) and the sleep rule does not count the step as at rest. A component with a point of the step's
+    is flagged (128) and the sleep rule does not count the step as at rest (but FROZEN_STEPS such steps in a row
+    are, apart). A component with a point of the step's
     start (nc rows of cint, cflt) deeper than the projection's tolerance (overlapping as it was set) is left alone:
     the projection's lift out of that overlap is its to keep. A rise within RISE_ROUNDOFF × Σ |E| is
     round-off and left alone: the exact solve's steps are not touched. sums (per body, ≥ 4 columns) is scratch: per
@@ -1530,8 +1537,8 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     across calls): steps before its component is tried for the sticking solve again (≤ 0: at once; WAIT_SOLVED,
     WAIT_HELD); ``skips`` (per body, 2 columns, kept across calls): the steps in a row its component, due, was not
     tried (STICK_SKIPS), and 1 if a point of it slipped at the end of the step (SLIP); ``still`` (per body, kept
-    across calls): the steps in a row it was at rest by the sleep rule (end of this function) in an island, from
-    the pose ``anchor`` (per body: position, quaternion) with a sleep speed raised above rest. ``cwork`` (per
+    across calls): the steps in a row it was at rest by the sleep rule (end of this function) in an island, or,
+    negative, set back where it began by _no_gain (FROZEN_STEPS), from the pose ``anchor`` (per body: position, quaternion) with a sleep speed raised above rest. ``cwork`` (per
     contact, 3 columns) and ``rwork`` (per row, 3 columns) are scratch."""
     n = members.shape[0]
     for k in range(OUT_WIDTH):
@@ -1801,18 +1808,20 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         if need == 1:
             at_rest = _speed(Y0, i, spin_reach) <= sleep_speed and _speed(Y1, i, spin_reach) <= sleep_speed
         else:
-            if still[i] == 0:  # a run begins at this step's start
+            if still[i] <= 0:  # a run begins at this step's start
                 for j in range(3):
                     anchor[i, j] = Y0[i, P + j]
                 for j in range(4):
                     anchor[i, 3 + j] = Y0[i, Q + j]
             at_rest = _moved(Y1, anchor, i, spin_reach) <= sleep_speed * SLEEP_STEPS * h
         r = _find(comp, i)
-        if at_rest and not flags[r] & 128:  # not on a rest _no_gain imposed
-            still[i] += 1
+        if flags[r] & 128:  # set back where it began by _no_gain: a rest imposed, not found; counted apart (< 0)
+            still[i] = min(still[i], 0) - 1
+        elif at_rest:
+            still[i] = max(still[i], 0) + 1
         else:
             still[i] = 0
-        if still[i] < need:
+        if still[i] < need and -still[i] < FROZEN_STEPS:
             flags[r] |= 16
     if sleeping:
         for m in range(n):
