@@ -1468,9 +1468,8 @@ def _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt
     or with a fixed side that was (OUT_TRIMMED). Where it added more than the component's kinetic energy, its
     bodies are set back where they began the step, at rest (K + U then U₀ ≤ K₀ + U₀; OUT_RESTORED): it was nearly
     at rest, and it had no contact with another component over the step. That rest is imposed, not found: its root
-    is flagged (128) and the sleep rule does not count the step as at rest (but FROZEN_STEPS such steps in a row
-    are, apart). A component with a point of the step's
-    start (nc rows of cint, cflt) deeper than the projection's tolerance (overlapping as it was set) is left alone:
+    is flagged (128) and the sleep rule does not count the step as at rest (FROZEN_STEPS such steps in a row it
+    counts apart). A component with a point of the step's start (nc rows of cint, cflt) deeper than the projection's tolerance (overlapping as it was set) is left alone:
     the projection's lift out of that overlap is its to keep. A rise within RISE_ROUNDOFF × Σ |E| is
     round-off and left alone: the exact solve's steps are not touched. sums (per body, ≥ 4 columns) is scratch: per
     root the rise, K at the end, Σ |E|, and what is done (−1: left alone, pushed or overlapping; 1: trimmed;
@@ -1537,9 +1536,10 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     across calls): steps before its component is tried for the sticking solve again (≤ 0: at once; WAIT_SOLVED,
     WAIT_HELD); ``skips`` (per body, 2 columns, kept across calls): the steps in a row its component, due, was not
     tried (STICK_SKIPS), and 1 if a point of it slipped at the end of the step (SLIP); ``still`` (per body, kept
-    across calls): the steps in a row it was at rest by the sleep rule (end of this function) in an island, or,
-    negative, set back where it began by _no_gain (FROZEN_STEPS), from the pose ``anchor`` (per body: position, quaternion) with a sleep speed raised above rest. ``cwork`` (per
-    contact, 3 columns) and ``rwork`` (per row, 3 columns) are scratch."""
+    across calls): the steps in a row it was at rest by the sleep rule (end of this function) in an island, from
+    the pose ``anchor`` (per body: position, quaternion) with a sleep speed raised above rest; negative, the steps
+    in a row _no_gain set it back where it began (FROZEN_STEPS). ``cwork`` (per contact, 3 columns) and ``rwork``
+    (per row, 3 columns) are scratch."""
     n = members.shape[0]
     for k in range(OUT_WIDTH):
         out[k] = 0.0
