@@ -415,6 +415,38 @@ def test_sleeping_locks_a_resting_stack_and_turning_it_off_wakes_it(tmp_path: Pa
         np.testing.assert_allclose([poses[body].x, poses[body].y, poses[body].z], [0.0, 0.0, z], atol=1e-12)
 
 
+def test_a_crate_asleep_alone_on_the_ground_is_listed_resting_with_its_weight(tmp_path: Path) -> None:
+    """With ``sleeping`` on, a 2 kg crate resting alone on the ground 2 m from the two-box stack falls asleep with
+    it: /diagnostics counts three bodies asleep, two in islands and one resting; ``contacts`` still lists the
+    crate resting on the ground (ground 0, no other body) with its weight along the normal over each tick, and
+    its pose stays where it was placed."""
+    scene = tmp_path / "stack.yaml"
+    scene.write_text(STACK + """\
+  crate: {mass: 2.0, inertia: {box: [0.2, 0.2, 0.2]}, material: {restitution: 0.0, friction: 0.5},
+          pose: {position: [2.0, 0.0, 0.1]}}
+""")
+    with SimHarness(scene, {**PARAMETERS, "sleeping": True}) as h:
+        h.watch_body("crate")
+        clouds = collect(h, "/contacts", PointCloud2)
+        h.step(20)
+        h.spin_until(lambda: len(clouds) >= 20, "20 contacts")
+        status = contact_status(h)
+        assert h.node.session.simulator.contact.pairs.islands.asleep.all()
+        h.wait_for_latest_state()
+        pose = h.latest_pose("crate").pose.position
+    assert int(status["bodies asleep"]) == 3 and int(status["bodies in islands"]) == 2
+    assert int(status["contacts (resting bodies)"]) == 1
+    crate, none = 2, 0xFFFFFFFF
+    for cloud in clouds[-5:]:
+        rows = [p for p in cloud_points(cloud) if int(p["body"]) == crate]
+        assert len(rows) == 1
+        p = rows[0]
+        assert int(p["ground"]) == 0 and int(p["other"]) == none and p["state"] == 1
+        assert p["normal_force"] == pytest.approx(2.0 * G, rel=1e-9)
+        assert abs(p["friction_force"]) <= 1e-9 * 2.0 * G
+    np.testing.assert_allclose([pose.x, pose.y, pose.z], [2.0, 0.0, 0.1], atol=1e-12)
+
+
 def test_sleeping_goes_on_after_a_spawn(tmp_path: Path) -> None:
     """``sleeping`` on and ``sleep_speed`` raised to 1 mm/s, a crate spawned 5 cm above the two-box stack (the
     spawn makes a new simulator: both carry over): it lands, comes to rest, and within 1 s all three bodies are

@@ -309,7 +309,7 @@ class ContactPublisher:
         window = {key: value - self._at_open.get(key, 0) for key, value in self.totals.items()}
         energy = self.energy_change - self._at_open.get("energy_change", 0.0)
         resting = len(resting_bodies(sim))
-        in_islands = int(np.count_nonzero(solver.pairs.islands.island)) if solver.pairs is not None else 0
+        in_islands = int(np.count_nonzero(solver.pairs.islands.in_islands())) if solver.pairs is not None else 0
         asleep = int(np.count_nonzero(solver.pairs.islands.asleep)) if solver.pairs is not None else 0
         status = DiagnosticStatus(name=f"{node_name}: contact", hardware_id="none")
         status.level = DiagnosticStatus.OK

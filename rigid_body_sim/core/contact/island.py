@@ -19,7 +19,10 @@ or another awake body within reach wakes it. Its contacts from the step it fell 
 and listed with every step's (:meth:`Islands.contacts`), each with the force it held its bodies with
 then: a locked island is still held. A scene wholly asleep (:meth:`Islands.all_asleep`: every moving body
 asleep, none pushed, stopped or set) is not stepped: the simulator carries its state over and
-:meth:`Islands.asleep_step` lists and logs the locked contacts, as the island pass would have.
+:meth:`Islands.asleep_step` lists and logs the locked contacts, as the island pass would have. A body woken is
+solved from that rest: the locked contacts are the warm start of its next step (:meth:`Islands._warm_rows`), and
+its component's first Gauss–Seidel solve gets WOKEN_SWEEPS. A body resting alone on a half-space (the ground
+pass's) sleeps by the same rule (:meth:`Islands.rest_alone`): it keeps its mode, ground and holding force.
 """
 
 from __future__ import annotations
@@ -29,7 +32,7 @@ import numpy as np
 from ..kernels import layout as L
 from ..kernels.contact.island import (C_FLOATS, C_IMPULSE, C_INTS, DENSE_MAX, I_A, I_B, OUT_BODIES, OUT_CONTACTS,
                                       OUT_DEPTH, OUT_SLEPT, OUT_WIDTH, OUT_WOKEN, all_asleep,
-                                      island_pass)
+                                      island_pass, rest_alone)
 from ..kernels.contact.layout import DIMS, FLIGHT, PERSISTENT
 from ..kernels.contact.pairs import MAX_PAIR_POINTS
 from .island_contacts import IslandContactLog, body_sides
@@ -52,10 +55,14 @@ class Islands:
         #: The bodies out of their island this step (in it the step before); set by each step's body–body pass.
         self.left = np.zeros(0, dtype=np.int64)
         self.asleep = np.zeros(n, dtype=np.int64)
+        self._roused = np.zeros(n, dtype=np.int64)  # woken, until its first island step (island_pass)
         self._wait = np.zeros(n, dtype=np.int64)  # steps before a body's component is tried for the exact solve
         self._skips = np.zeros((n, 2), dtype=np.int64)  # steps in a row its component, due, was not tried; slipped
         self._still = np.zeros(n, dtype=np.int64)  # steps in a row at rest by the sleep rule (< 0: set back at rest)
         self._anchor = np.zeros((n, 7))  # where its run at rest began (position, quaternion)
+        self._alone_still = np.zeros(n, dtype=np.int64)  # the same, resting alone on its ground (rest_alone)
+        self._alone_anchor = np.zeros((n, 7))
+        self._alone = np.zeros(n, dtype=bool)
         self.saved = np.zeros((n, L.STATE_WIDTH))
         self._parent = np.arange(n, dtype=np.int64)
         self._flags = np.zeros(n, dtype=np.int64)
@@ -116,15 +123,27 @@ class Islands:
         self.was_island[:] = False
         self.left = np.zeros(0, dtype=np.int64)
         self.asleep[:] = 0
+        self._roused[:] = 0
         self._wait[:] = 0
         self._skips[:] = 0
         self._still[:] = 0
+        self._alone_still[:] = 0
         self.body_steps = 0
         self.deepest = 0.0
         self.n_contacts = 0
         self.log.clear()
         self._rest_int, self._rest_flt = self._rest_int[:0], self._rest_flt[:0]
         self.impulses[:] = 0.0
+
+    def wake_all(self) -> None:
+        """Every sleeping body awake (sleeping turned off): each is solved from the rest it was locked in."""
+        self._roused[self.asleep != 0] = 1
+        self.asleep[:] = 0
+
+    def in_islands(self) -> np.ndarray:
+        """Per body, whether the last step stepped it in an island or kept it asleep in one (a body asleep alone on
+        its ground, still in persistent contact, is not)."""
+        return (self.island != 0) & (self.solver.modes != PERSISTENT)
 
     def contacts(self) -> tuple[np.ndarray, np.ndarray]:
         """The last step's island contacts (views, valid until the next step): ints (n, C_INTS) — bodies a and b
@@ -181,6 +200,21 @@ class Islands:
         ``wrenches``, stopped, or set (kernels/contact/island.all_asleep); then :meth:`asleep_step` is the step."""
         return all_asleep(Y0, self.saved, wrenches, sim._stopped, self.asleep, sim._members)
 
+    def rest_alone(self, alone: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, h: float) -> np.ndarray:
+        """Sleeping for ``alone`` (int64, global indices), the bodies the ground pass held alone on their ground over
+        the step Y0 → Y1 (ContactSolver, after its step): each at rest by an island's rule as long as an island's
+        bodies must be falls asleep, its velocities zeroed in Y1 (kernels/contact/island.rest_alone). Returns those
+        that fell asleep."""
+        self._alone[:] = False
+        self._alone[alone] = True
+        self._alone_still[~self._alone] = 0
+        solver = self.solver
+        rest_alone(Y0, Y1, alone, self.pairs.spin_reach, self._alone_still, self._alone_anchor, self.asleep,
+                   self.saved, self._group, float(solver.sleep_speed), h)
+        fell = alone[self.asleep[alone] != 0]
+        self.was_island[fell] = True  # woken, out of its island of one: its step is taken again held (left)
+        return fell
+
     def asleep_step(self, Y0: np.ndarray, Y1: np.ndarray, h: float) -> None:
         """The islands' step when :meth:`all_asleep` (Y1 a copy of Y0): what :meth:`step` leaves then, its locked
         islands' contacts listed and logged, at the cost of the log alone."""
@@ -188,6 +222,19 @@ class Islands:
         self.n_contacts = 0
         self.out[:] = 0.0
         self._record(Y0, Y1, h)
+
+    def _warm_rows(self, h: float) -> int:
+        """The rows the island pass takes its warm start from (the first half of the contact scratch): the last
+        step's contacts, then those of the islands asleep, each its force × h (the λ that held it): a body that
+        wakes is solved from the rest it was locked in. Returns their count."""
+        n, k = self.n_contacts, len(self._rest_int)
+        if k:
+            if n + k > len(self._cint) // 2:
+                self._grow_contacts(2 * (n + k))
+            self._cint[n:n + k] = self._rest_int
+            self._cflt[n:n + k] = self._rest_flt
+            self._cflt[n:n + k, C_IMPULSE:C_IMPULSE + 3] *= h
+        return n + k
 
     def step(self, sim, wrenches: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, cand: np.ndarray, h: float) -> np.ndarray:
         """The islands' step over the candidate pairs ``cand`` (k, 2) of global body indices; returns the mask of
@@ -197,9 +244,9 @@ class Islands:
             self._grow_pairs(2 * len(cand))
         args_head = (Y0, Y1, sim._prm, wrenches, solver._bare_rows, solver.modes, self.saved, solver.shapes,
                      solver.half_spaces, solver.half_space_friction, self.members, cand, len(cand),
-                     self.pairs.is_static, sim._stopped, self.pairs.spin_reach, self.size, self.asleep, self._wait,
+                     self.pairs.is_static, sim._stopped, self.pairs.spin_reach, self.size, self.asleep, self._roused, self._wait,
                      self._skips, self._still, self._anchor, h, bool(solver.sleeping), float(solver.sleep_speed),
-                     DEFAULT_FRICTION, self.n_contacts, self.island, self._parent, self._flags)
+                     DEFAULT_FRICTION, self._warm_rows(h), self.island, self._parent, self._flags)
         was_asleep = self.asleep != 0
         while True:
             code = island_pass(*args_head, self._nlist, self._pos, self._quat, self._pdist, self._pnormal,
@@ -218,10 +265,11 @@ class Islands:
         solver.counts["island_body_steps"] += int(out[OUT_BODIES])
         self.deepest = max(self.deepest, float(out[OUT_DEPTH]))
         now = self.island != 0
-        if now.any():
-            solver.modes[now] = FLIGHT  # in the island: not held by the ground pass
-            solver.ground_of[now] = -1
-            solver.sliding[now] = False
+        stepped = self.island == 1
+        if stepped.any():  # in the island: not held by the ground pass (asleep, a body keeps its mode)
+            solver.modes[stepped] = FLIGHT
+            solver.ground_of[stepped] = -1
+            solver.sliding[stepped] = False
         self.left = np.flatnonzero(self.was_island & ~now)  # handed to their ground by ContactSolver.after_step
         self.was_island = now
         return now

@@ -241,6 +241,10 @@ class ContactSolver:
         self._step_lists = np.empty((3, m), dtype=np.int64)
         self._busy = np.empty(m, dtype=np.int64)
         self._not_done = np.zeros(n, dtype=np.bool_)
+        self._no_bodies = np.zeros(0, dtype=np.int64)
+        #: Per body asleep on its ground alone (:meth:`_rest_alone`): the holding force (N) and its torque about the
+        #: centre of mass (N·m), world axes, of the step it fell asleep in, which hold it while it sleeps.
+        self._rest_force, self._rest_torque = np.zeros((n, 3)), np.zeros((n, 3))
         self._rose, self._rose_energy = np.empty(m, dtype=np.int64), np.empty(m)  # batch.gravity_gains
         # one-body buffers of the step map
         self._Y1 = np.zeros((2, 1, L.ROW_WIDTH))
@@ -259,8 +263,8 @@ class ContactSolver:
 
     @property
     def sleeping(self) -> bool:
-        """Islands at rest are locked (no step, no narrow phase inside them) until something touches or
-        pushes them (island.py). Off by default: a sleeping island's bodies keep their state exactly, but a
+        """Islands at rest, and bodies at rest alone on a half-space, are locked (no step, no narrow phase inside
+        them) until something touches or pushes them (island.py). Off by default: a sleeping island's bodies keep their state exactly, but a
         locked island does not see gravity change or a slow creep below :attr:`sleep_speed`. Set to False, every
         sleeping body wakes (its next step is the island step from the state it was locked in)."""
         return self._sleeping
@@ -269,7 +273,7 @@ class ContactSolver:
     def sleeping(self, on: bool) -> None:
         self._sleeping = bool(on)
         if not on and self.pairs is not None:
-            self.pairs.islands.asleep[:] = 0
+            self.pairs.islands.wake_all()
 
     @property
     def sleep_speed(self) -> float:
@@ -335,8 +339,9 @@ class ContactSolver:
         return bool(self.modes[self.names.index(body)] == PERSISTENT)
 
     def in_island(self, body: str) -> bool:
-        """True while ``body`` is stepped with the bodies it rests on or carries (island.py; asleep included)."""
-        return self.pairs is not None and bool(self.pairs.islands.island[self.names.index(body)])
+        """True while ``body`` is stepped with the bodies it rests on or carries (island.py; asleep included, but not
+        asleep alone on its ground: that one is resting)."""
+        return self.pairs is not None and bool(self.pairs.islands.in_islands()[self.names.index(body)])
 
     def static_body_of(self, ground: int) -> str | None:
         """The static body whose shape plane row ``ground`` (a ContactEvent's) belongs to; None for a
@@ -486,9 +491,15 @@ class ContactSolver:
         """Add to ``wrenches`` (the step's rows, in place) the force holding each body in persistent contact."""
         Y = sim._Ys[sim._control[L.CUR]]
         lists = self._hold_lists
-        _, n_one, n_two = split_bodies(self.bodies, self.modes, sim._stopped, self._not_done, self.other_ground,
+        sleepers, asleep = self._asleep_on_ground()
+        _, n_one, n_two = split_bodies(self.bodies, self.modes, sim._stopped, asleep, self.other_ground,
                                        lists[0], lists[1], lists[2])
         self.holding_forces[:] = 0.0
+        if sleepers.size:  # asleep on their ground: held by the force they fell asleep with, not looked at
+            self.holding_forces[sleepers] = self._rest_force[sleepers]
+            self.holding_impulses[sleepers] += self._rest_force[sleepers] * sim.dt
+            if self.track_torques:
+                self.holding_angular_impulses[sleepers] += self._rest_torque[sleepers] * sim.dt
         self._locked[:] = 0
         self._staged[:] = 0
         if not n_one + n_two:
@@ -520,6 +531,28 @@ class ContactSolver:
             stage_rows(wrenches, self._bare_rows, self._held_rows, Y, sim._prm, self.shapes, self.grounds, one,
                        self.ground_of, self.tracked, self.friction, self.tangent_friction, self.first_tangent,
                        self.sliding, self.slide_direction, SLIP_TOLERANCE, self._locked, self._staged)
+
+    def _asleep_on_ground(self) -> tuple[np.ndarray, np.ndarray]:
+        """(the bodies asleep on their ground alone (:meth:`_rest_alone`), a mask over all bodies of them)."""
+        if not self._sleeping or self.pairs is None:
+            return self._no_bodies, self._not_done
+        asleep = (self.pairs.islands.asleep != 0) & (self.modes == PERSISTENT)
+        sleepers = np.flatnonzero(asleep)
+        return (sleepers, asleep) if sleepers.size else (self._no_bodies, self._not_done)
+
+    def _rest_alone(self, sim, wrenches: np.ndarray, Y0: np.ndarray, Y1: np.ndarray) -> None:
+        """After the step: sleeping for the bodies held on one half-space alone (in persistent contact, not sliding,
+        pushed by no wrench, in no island; not on a static shape), by the islands' rule (Islands.rest_alone). One
+        that falls asleep keeps its mode and ground; the force and torque of its last hold hold it while it sleeps
+        (:attr:`holding_forces`, the impulses)."""
+        b = self.bodies
+        alone = b[(self.modes[b] == PERSISTENT) & (self.ground_of[b] < len(self.half_spaces))
+                  & (self.other_ground[b] < 0) & ~self.sliding[b] & ~sim._stopped[b]
+                  & (self.pairs.islands.island[b] == 0) & (self._bare_rows[b, L.ACTIVE] == 0.0)]
+        fell = self.pairs.islands.rest_alone(alone, Y0, Y1, sim.dt)
+        if fell.size:
+            self._rest_force[fell] = self.holding_forces[fell]
+            self._rest_torque[fell] = _torques_about_com(Y0[fell], wrenches[fell] - self._bare_rows[fell])
 
     def _hold(self, sim, y: np.ndarray, i: int, w: np.ndarray, t: float, stages: bool = True) -> bool:
         """Add the holding force of body i at y into the wrench row w; False (and flight) if it lifts off.
@@ -641,6 +674,8 @@ class ContactSolver:
                 Y1[i, :L.STATE_WIDTH] = self._persistent_end(sim, i, Y0[i], Y1[i], wrenches[i], t0, h)[:L.STATE_WIDTH]
             else:
                 Y1[i, :L.STATE_WIDTH] = self._with_events(sim, i, Y0[i], wrenches[i], t0, h)[:L.STATE_WIDTH]
+        if self._sleeping and self.pairs is not None:
+            self._rest_alone(sim, wrenches, Y0, Y1)
 
     def _out_of_islands(self, sim, wrenches: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, t0: float, h: float,
                         done: np.ndarray | None) -> np.ndarray:

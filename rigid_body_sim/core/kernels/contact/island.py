@@ -69,7 +69,7 @@ from .pair_impacts import normal_speed
 from .pairs import MAX_PAIR_POINTS, box_patch, boxes_apart, pair_contacts
 from .shapes import MAX_FEATURES, feature_gaps, feature_points
 
-__all__ = ["island_pass", "all_asleep", "TOUCH", "SLEEP_SPEED", "SLEEP_STEPS", "DENSE_MAX", "PROJECT_TOL", "C_FLOATS", "C_INTS", "OUT_WIDTH"]
+__all__ = ["island_pass", "all_asleep", "rest_alone", "TOUCH", "SLEEP_SPEED", "SLEEP_STEPS", "DENSE_MAX", "PROJECT_TOL", "C_FLOATS", "C_INTS", "OUT_WIDTH"]
 
 #: A pair whose signed distance is at most this × its size (m per m) touches: its component is an island if it rests.
 TOUCH = 1e-6
@@ -111,6 +111,10 @@ PILE_CONTACTS = DENSE_MAX // 3
 #: (nonsmooth nonlinear conjugate gradient). A pile's projection: at most PILE_SWEEPS sweeps a round, from the lowest point up, and a pair whose
 #: normal is within acos(PILE_UPRIGHT) of gravity moves only its upper body (the lower held: shock propagation).
 PILE_PGS_SWEEPS, PILE_SWEEPS, PILE_UPRIGHT = 20, 20, 0.5
+#: The first velocity step of a pile's component just woken: at most this many sweeps. Solved from the rest it was
+#: locked in (its λ the warm start), PILE_PGS_SWEEPS short of convergence can let a column that rests slide (a
+#: tenth of a millimetre in the 1000-cube pile); the converged solve holds it.
+WOKEN_SWEEPS = PGS_SWEEPS
 #: Ranges of the islands' sort (_sort_by) at most this long are insertion sorted.
 SORT_SMALL = 16
 #: A component's warm start is kept as its sticking solve (_held) when its points' speeds after are within this ×
@@ -205,6 +209,22 @@ def _moved(Y, anchor, i, spin_reach):
     t = qmul(anchor[i, 3], -anchor[i, 4], -anchor[i, 5], -anchor[i, 6], Y[i, Q], Y[i, Q + 1], Y[i, Q + 2], Y[i, Q + 3])
     s = min(math.sqrt(t[1] * t[1] + t[2] * t[2] + t[3] * t[3]), 1.0)
     return d + 2.0 * math.asin(s) * spin_reach[i]
+
+
+@njit(**INLINE)
+def _at_rest(Y0, Y1, i, still, anchor, need, sleep_speed, h, spin_reach):
+    """Whether body i was at rest over the step from Y0 to Y1 by the sleep rule: with ``need`` = 1 (the sleep speed
+    at SLEEP_SPEED, rest to round-off) slower than ``sleep_speed`` at its start and end; else (raised) within
+    sleep_speed × SLEEP_STEPS steps of the pose ``anchor[i]`` (position, quaternion), which a run at rest
+    (``still[i]`` ≤ 0: none yet) begins at this step's start."""
+    if need == 1:
+        return _speed(Y0, i, spin_reach) <= sleep_speed and _speed(Y1, i, spin_reach) <= sleep_speed
+    if still[i] <= 0:
+        for j in range(3):
+            anchor[i, j] = Y0[i, P + j]
+        for j in range(4):
+            anchor[i, 3 + j] = Y0[i, Q + j]
+    return _moved(Y1, anchor, i, spin_reach) <= sleep_speed * SLEEP_STEPS * h
 
 
 @njit(**JIT)
@@ -945,13 +965,13 @@ def _root(cint, comp, q):
 
 
 @njit(**JIT)
-def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, cint, comp, order, stop, gx, gy, gz, cwork, rwork):
+def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, cint, comp, flags, order, stop, gx, gy, gz, cwork, rwork):
     """Projected Gauss–Seidel on contacts order[:stop] (each component's contiguous; comp: the components'
     union-find, cint the contacts' bodies) from their λ in rlam (the warm start): sweeps until none changes a row's
     speed by more than PGS_TOL (m/s), at most PGS_SWEEPS or PGS_WORK / stop. More than PILE_CONTACTS contacts (a
     pile): each component on its own (_pile_sweeps), from the highest against gravity (gx, gy, gz) down, then back
     up, in turn (a weight passes down a pile, and a stop up it, within one sweep), at most PILE_PGS_SWEEPS or
-    PGS_WORK / stop; fewer, in their order. Scratch: cwork (per contact: the tangents' cross terms, the sort's key),
+    PGS_WORK / stop (PGS_SWEEPS for a component whose root has flag 2048: just woken); fewer, in their order. Scratch: cwork (per contact: the tangents' cross terms, the sort's key),
     rwork (per row: 1 / the diagonal, the last sweep's λ, the extrapolation)."""
     cross, key = cwork[:, 0:2], cwork[:, 2]
     inv, last, step = rwork[:, 0], rwork[:, 1], rwork[:, 2]
@@ -983,11 +1003,11 @@ def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, cint, comp, order, stop, 
             while hi < stop and _root(cint, comp, order[hi]) == root:
                 hi += 1
             _sort_by(key, order, lo, hi)
-            _pile_sweeps(vel, rj, rw, rbody, rdiag, inv, rbias, rlam, cflt, cross, order, lo, hi,
-                         max(PILE_PGS_SWEEPS, work), last, step)
+            sweeps = WOKEN_SWEEPS if flags[root] & 2048 else max(PILE_PGS_SWEEPS, work)
+            _pile_sweeps(vel, rj, rw, rbody, rdiag, inv, rbias, rlam, cflt, cross, order, lo, hi, sweeps, last, step)
             lo = hi
     _pin = vel[0, 0], rj[0, 0], rw[0, 0], rbody[0, 0], rdiag[0], rbias[0], rlam[0], cflt[0, 0], order[0]
-    _pin2 = cwork[0, 0], rwork[0, 0], cint[0, 0], comp[0]
+    _pin2 = cwork[0, 0], rwork[0, 0], cint[0, 0], comp[0], flags[0]
 
 
 @njit(**INLINE)
@@ -1453,6 +1473,33 @@ def all_asleep(Y0, saved, wr, stopped, asleep, moving):
 
 
 @njit(**JIT)
+def rest_alone(Y0, Y1, alone, spin_reach, still, anchor, asleep, saved, group, sleep_speed, h):
+    """Sleeping for bodies resting alone on their ground (held by the ground pass, in no island): each body of
+    ``alone`` (global indices) at rest over the step Y0 → Y1 by the islands' rule (:func:`_at_rest`) as many steps
+    in a row as an island's bodies (``still``, per body, kept across calls: the caller sets it to 0 for a body not
+    alone) falls asleep as a one-body island's would: its velocities set to zero in Y1, its row saved, its own
+    group. Returns how many fell asleep."""
+    need = 1 if sleep_speed <= SLEEP_SPEED else SLEEP_STEPS
+    fell = 0
+    for m in range(alone.shape[0]):
+        i = alone[m]
+        if _at_rest(Y0, Y1, i, still, anchor, need, sleep_speed, h, spin_reach):
+            still[i] = max(still[i], 0) + 1
+        else:
+            still[i] = 0
+        if still[i] >= need:
+            asleep[i] = 1
+            still[i] = 0
+            group[i] = i
+            fell += 1
+            for j in range(6):
+                Y1[i, V + j] = 0.0
+            for j in range(STATE_WIDTH):
+                saved[i, j] = Y1[i, j]
+    return fell
+
+
+@njit(**JIT)
 def _energy(Y, prm, i):
     """Body i's kinetic energy and its K + U under its gravity at state rows Y (J): ½ m v² + ½ Σ Iⱼ ωⱼ² − m g · p."""
     k = kinetic_energy_row(Y[i], prm[i])
@@ -1527,7 +1574,8 @@ def _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt
 
 @njit(**JIT)
 def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, members, cand, n_cand, is_static, stopped,
-                spin_reach, size, asleep, wait, skips, still, anchor, h, sleeping, sleep_speed, default_mu, n_prev, island,
+                spin_reach, size, asleep, roused, wait, skips, still, anchor, h, sleeping, sleep_speed, default_mu, n_prev,
+                island,
                 parent, flags, nlist, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound, cint, cflt, vel, iw, dx, rj, rw,
                 rdiag, rbias, rlam, rbody, order, cstart, A, L, vec, out, comp, band, group, cwork, rwork):
     """One step of every island (module docstring): results into Y1 for the bodies marked island[i] = 1 (solved)
@@ -1538,7 +1586,9 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     tried (STICK_SKIPS), and 1 if a point of it slipped at the end of the step (SLIP); ``still`` (per body, kept
     across calls): the steps in a row it was at rest by the sleep rule (end of this function) in an island, from
     the pose ``anchor`` (per body: position, quaternion) with a sleep speed raised above rest; negative, the steps
-    in a row _no_gain set it back where it began (FROZEN_STEPS). ``cwork`` (per contact, 3 columns) and ``rwork``
+    in a row _no_gain set it back where it began (FROZEN_STEPS). ``roused`` (per body, kept across calls): 1 from
+    when it wakes (here, or all at once when sleeping is turned off) to its first step in an island, whose
+    Gauss–Seidel solve gets PGS_SWEEPS sweeps (WOKEN_SWEEPS). ``cwork`` (per contact, 3 columns) and ``rwork``
     (per row, 3 columns) are scratch."""
     n = members.shape[0]
     for k in range(OUT_WIDTH):
@@ -1548,6 +1598,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         i = members[m]
         if asleep[i] and _wakes(Y0, saved, wr, stopped, i):
             asleep[i] = 0
+            roused[i] = 1
             woken += 1
     for m in range(n):
         i = members[m]
@@ -1581,6 +1632,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         if flags[r] & 2 and flags[r] & 4:  # something awake within reach of a sleeping island: it wakes
             if asleep[i]:
                 asleep[i] = 0
+                roused[i] = 1
                 woken += 1
             island[i] = 1
         elif flags[r] & 2:
@@ -1655,7 +1707,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             wait[members[m]] = 0
             skips[members[m], 0] = skips[members[m], 1] = 0
         _pin = Y0[0, 0], Y1[0, 0], prm[0, 0], wr[0, 0], bare[0, 0], modes[0], saved[0, 0], cand[0, 0], A[0, 0], L[0, 0], vec[0, 0], order[0], cstart[0]
-        _pin2 = group[0], cwork[0, 0], rwork[0, 0]
+        _pin2 = group[0], cwork[0, 0], rwork[0, 0], roused[0]
         return 0
     # the velocity problem
     nc = _gather(Y0, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps,
@@ -1742,10 +1794,16 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                 stop += 1
             out[OUT_PGS] += 1
         lo = hi
+    for m in range(n):  # the components of bodies just woken: their first solve converged (WOKEN_SWEEPS)
+        i = members[m]
+        if island[i] == 1 and roused[i]:
+            flags[_find(comp, i)] |= 2048
+            roused[i] = 0
     if stop > 0:
         body = cint[order[0], I_B] if cint[order[0], I_B] >= 0 else cint[order[0], I_A]
         g = prm[body, GRAVITY:GRAVITY + 3]  # the order's gravity: any order is Gauss–Seidel
-        _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, cint, comp, order, stop, g[0], g[1], g[2], cwork, rwork)
+        _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, cint, comp, flags, order, stop, g[0], g[1], g[2], cwork,
+             rwork)
     for m in range(n):  # which bodies slipped: for the next step's attempts (those solved exactly did not)
         skips[members[m], 1] = 0
     for c in range(stop):
@@ -1804,16 +1862,9 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             still[i] = 0
             wait[i] = 0
             skips[i, 0] = skips[i, 1] = 0
+            roused[i] = 0
             continue
-        if need == 1:
-            at_rest = _speed(Y0, i, spin_reach) <= sleep_speed and _speed(Y1, i, spin_reach) <= sleep_speed
-        else:
-            if still[i] <= 0:  # a run begins at this step's start
-                for j in range(3):
-                    anchor[i, j] = Y0[i, P + j]
-                for j in range(4):
-                    anchor[i, 3 + j] = Y0[i, Q + j]
-            at_rest = _moved(Y1, anchor, i, spin_reach) <= sleep_speed * SLEEP_STEPS * h
+        at_rest = _at_rest(Y0, Y1, i, still, anchor, need, sleep_speed, h, spin_reach)
         r = _find(comp, i)
         if flags[r] & 128:  # set back where it began by _no_gain: a rest imposed, not found; counted apart (< 0)
             still[i] = min(still[i], 0) - 1
@@ -1841,5 +1892,5 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                 for j in range(STATE_WIDTH):
                     saved[i, j] = Y1[i, j]
     _pin = Y0[0, 0], Y1[0, 0], prm[0, 0], wr[0, 0], bare[0, 0], modes[0], saved[0, 0], cand[0, 0], A[0, 0], L[0, 0], vec[0, 0], order[0], cstart[0]
-    _pin2 = group[0], cwork[0, 0], rwork[0, 0]
+    _pin2 = group[0], cwork[0, 0], rwork[0, 0], roused[0]
     return 0
