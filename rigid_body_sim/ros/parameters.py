@@ -235,7 +235,8 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
                   "Give each body the cheapest exact model for what it is and what the scene declares "
                   "(docs/scenes.md); false steps every free body with the integrator."),
     ParameterSpec("sleeping", _T.BOOL, False,
-                  "Lock the bodies resting on bodies (islands) that stayed slower than sleep_speed, each group of them "
+                  "Lock the bodies resting on bodies (islands) or alone on the ground that stayed slower than "
+                  "sleep_speed, each group of them "
                   "until a wrench, a state change or a moving body within reach wakes it (docs/contact.md, "
                   "'Sleeping'): a pile at rest then costs little. False steps every island body; turning it off "
                   "wakes every sleeping body. No effect in a scene without contact."),
