@@ -61,8 +61,6 @@ class Islands:
         self._still = np.zeros(n, dtype=np.int64)  # steps in a row at rest by the sleep rule (< 0: set back at rest)
         self._anchor = np.zeros((n, 7))  # where its run at rest began (position, quaternion)
         self._alone_still = np.zeros(n, dtype=np.int64)  # the same, resting alone on its ground (rest_alone)
-        self._alone_anchor = np.zeros((n, 7))
-        self._alone = np.zeros(n, dtype=bool)
         self.saved = np.zeros((n, L.STATE_WIDTH))
         self._parent = np.arange(n, dtype=np.int64)
         self._flags = np.zeros(n, dtype=np.int64)
@@ -205,12 +203,12 @@ class Islands:
         the step Y0 → Y1 (ContactSolver, after its step): each at rest by an island's rule as long as an island's
         bodies must be falls asleep, its velocities zeroed in Y1 (kernels/contact/island.rest_alone). Returns those
         that fell asleep."""
-        self._alone[:] = False
-        self._alone[alone] = True
-        self._alone_still[~self._alone] = 0
-        solver = self.solver
-        rest_alone(Y0, Y1, alone, self.pairs.spin_reach, self._alone_still, self._alone_anchor, self.asleep,
-                   self.saved, self._group, float(solver.sleep_speed), h)
+        kept = self._alone_still[alone]  # a run at rest alone ends when the body is not alone
+        self._alone_still[:] = 0
+        self._alone_still[alone] = kept
+        # the anchor is the islands': a run in either begins by setting it (a body is in one or the other)
+        rest_alone(Y0, Y1, alone, self.pairs.spin_reach, self._alone_still, self._anchor, self.asleep, self.saved,
+                   self._group, float(self.solver.sleep_speed), h)
         fell = alone[self.asleep[alone] != 0]
         self.was_island[fell] = True  # woken, out of its island of one: its step is taken again held (left)
         return fell
@@ -244,8 +242,8 @@ class Islands:
             self._grow_pairs(2 * len(cand))
         args_head = (Y0, Y1, sim._prm, wrenches, solver._bare_rows, solver.modes, self.saved, solver.shapes,
                      solver.half_spaces, solver.half_space_friction, self.members, cand, len(cand),
-                     self.pairs.is_static, sim._stopped, self.pairs.spin_reach, self.size, self.asleep, self._roused, self._wait,
-                     self._skips, self._still, self._anchor, h, bool(solver.sleeping), float(solver.sleep_speed),
+                     self.pairs.is_static, sim._stopped, self.pairs.spin_reach, self.size, self.asleep, self._roused,
+                     self._wait, self._skips, self._still, self._anchor, h, bool(solver.sleeping), float(solver.sleep_speed),
                      DEFAULT_FRICTION, self._warm_rows(h), self.island, self._parent, self._flags)
         was_asleep = self.asleep != 0
         while True:

@@ -264,9 +264,10 @@ class ContactSolver:
     @property
     def sleeping(self) -> bool:
         """Islands at rest, and bodies at rest alone on a half-space, are locked (no step, no narrow phase inside
-        them) until something touches or pushes them (island.py). Off by default: a sleeping island's bodies keep their state exactly, but a
-        locked island does not see gravity change or a slow creep below :attr:`sleep_speed`. Set to False, every
-        sleeping body wakes (its next step is the island step from the state it was locked in)."""
+        them) until something touches or pushes them (island.py). Off by default: a sleeping island's bodies keep
+        their state exactly, but a locked island does not see gravity change or a slow creep below
+        :attr:`sleep_speed`. Set to False, every sleeping body wakes (its next step is the island step from the
+        state it was locked in)."""
         return self._sleeping
 
     @sleeping.setter

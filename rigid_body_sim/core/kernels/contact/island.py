@@ -971,8 +971,8 @@ def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, cint, comp, flags, order,
     speed by more than PGS_TOL (m/s), at most PGS_SWEEPS or PGS_WORK / stop. More than PILE_CONTACTS contacts (a
     pile): each component on its own (_pile_sweeps), from the highest against gravity (gx, gy, gz) down, then back
     up, in turn (a weight passes down a pile, and a stop up it, within one sweep), at most PILE_PGS_SWEEPS or
-    PGS_WORK / stop (PGS_SWEEPS for a component whose root has flag 2048: just woken); fewer, in their order. Scratch: cwork (per contact: the tangents' cross terms, the sort's key),
-    rwork (per row: 1 / the diagonal, the last sweep's λ, the extrapolation)."""
+    PGS_WORK / stop (WOKEN_SWEEPS for a component whose root has flag 2048: just woken); fewer, in their order.
+    Scratch: cwork (per contact: the tangents' cross terms, the sort's key), rwork (per row: 1 / the diagonal, the last sweep's λ, the extrapolation)."""
     cross, key = cwork[:, 0:2], cwork[:, 2]
     inv, last, step = rwork[:, 0], rwork[:, 1], rwork[:, 2]
     for c in range(stop):
