@@ -20,7 +20,7 @@ and listed with every step's (:meth:`Islands.contacts`), each with the force it 
 then: a locked island is still held. A scene wholly asleep (:meth:`Islands.all_asleep`: every moving body
 asleep, none pushed, stopped or set) is not stepped: the simulator carries its state over and
 :meth:`Islands.asleep_step` lists and logs the locked contacts, as the island pass would have. A body woken is
-solved from that rest: the locked contacts are the warm start of its next step (:meth:`Islands._warm_rows`), and
+solved from that rest: the locked contacts are the warm start of its next step (the island pass's), and
 its component's first Gauss–Seidel solve gets WOKEN_SWEEPS. A body resting alone on a half-space (the ground
 pass's) sleeps by the same rule (:meth:`Islands.rest_alone`): it keeps its mode, ground and holding force.
 """
@@ -221,19 +221,6 @@ class Islands:
         self.out[:] = 0.0
         self._record(Y0, Y1, h)
 
-    def _warm_rows(self, h: float) -> int:
-        """The rows the island pass takes its warm start from (the first half of the contact scratch): the last
-        step's contacts, then those of the islands asleep, each its force × h (the λ that held it): a body that
-        wakes is solved from the rest it was locked in. Returns their count."""
-        n, k = self.n_contacts, len(self._rest_int)
-        if k:
-            if n + k > len(self._cint) // 2:
-                self._grow_contacts(2 * (n + k))
-            self._cint[n:n + k] = self._rest_int
-            self._cflt[n:n + k] = self._rest_flt
-            self._cflt[n:n + k, C_IMPULSE:C_IMPULSE + 3] *= h
-        return n + k
-
     def step(self, sim, wrenches: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, cand: np.ndarray, h: float) -> np.ndarray:
         """The islands' step over the candidate pairs ``cand`` (k, 2) of global body indices; returns the mask of
         the bodies it stepped (or kept asleep)."""
@@ -244,7 +231,7 @@ class Islands:
                      solver.half_spaces, solver.half_space_friction, self.members, cand, len(cand),
                      self.pairs.is_static, sim._stopped, self.pairs.spin_reach, self.size, self.asleep, self._roused,
                      self._wait, self._skips, self._still, self._anchor, h, bool(solver.sleeping), float(solver.sleep_speed),
-                     DEFAULT_FRICTION, self._warm_rows(h), self.island, self._parent, self._flags)
+                     DEFAULT_FRICTION, self.n_contacts, self._rest_int, self._rest_flt, self.island, self._parent, self._flags)
         was_asleep = self.asleep != 0
         while True:
             code = island_pass(*args_head, self._nlist, self._pos, self._quat, self._pdist, self._pnormal,

@@ -1575,7 +1575,7 @@ def _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt
 @njit(**JIT)
 def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, members, cand, n_cand, is_static, stopped,
                 spin_reach, size, asleep, roused, wait, skips, still, anchor, h, sleeping, sleep_speed, default_mu, n_prev,
-                island,
+                rest_int, rest_flt, island,
                 parent, flags, nlist, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound, cint, cflt, vel, iw, dx, rj, rw,
                 rdiag, rbias, rlam, rbody, order, cstart, A, L, vec, out, comp, band, group, cwork, rwork):
     """One step of every island (module docstring): results into Y1 for the bodies marked island[i] = 1 (solved)
@@ -1588,7 +1588,9 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     the pose ``anchor`` (per body: position, quaternion) with a sleep speed raised above rest; negative, the steps
     in a row _no_gain set it back where it began (FROZEN_STEPS). ``roused`` (per body, kept across calls): 1 from
     when it wakes (here, or all at once when sleeping is turned off) to its first step in an island, whose
-    Gauss–Seidel solve gets PGS_SWEEPS sweeps (WOKEN_SWEEPS). ``cwork`` (per contact, 3 columns) and ``rwork``
+    Gauss–Seidel solve gets PGS_SWEEPS sweeps (WOKEN_SWEEPS). The warm start: the last step's n_prev contacts (the
+    first half of cint/cflt) and, while a body is roused, the contacts of the islands asleep (rest_int, rest_flt:
+    each a force, N; × h, the λ that held it), so that one woken is solved from the rest it was locked in. ``cwork`` (per contact, 3 columns) and ``rwork``
     (per row, 3 columns) are scratch."""
     n = members.shape[0]
     for k in range(OUT_WIDTH):
@@ -1662,14 +1664,26 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         if island[members[m]] == 1:
             need += MAX_FEATURES * 4 * grounds.shape[0]
         bound[n_pairs + m] = 0.0
+    n_warm = n_prev  # and the asleep islands' contacts while a body woken has not had its first island step
+    for m in range(n):
+        if roused[members[m]]:
+            n_warm = n_prev + rest_int.shape[0]
+            break
     half = cint.shape[0] // 2
-    if need > half:  # the first half: the velocity step's contacts; the second: the projection's
-        return -need
+    if max(need, n_warm) > half:  # the first half: the velocity step's contacts; the second: the projection's
+        return -max(need, n_warm)
     for c in range(n_prev):  # the last step's contacts (the first half) kept in the second for the warm start
         for j in range(C_INTS):
             cint[half + c, j] = cint[c, j]
         for j in range(C_FLOATS):
             cflt[half + c, j] = cflt[c, j]
+    for c in range(n_warm - n_prev):
+        for j in range(C_INTS):
+            cint[half + n_prev + c, j] = rest_int[c, j]
+        for j in range(C_FLOATS):
+            cflt[half + n_prev + c, j] = rest_flt[c, j]
+        for j in range(3):
+            cflt[half + n_prev + c, C_IMPULSE + j] *= h
     bodies = 0
     for m in range(n):
         i = members[m]
@@ -1707,14 +1721,14 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             wait[members[m]] = 0
             skips[members[m], 0] = skips[members[m], 1] = 0
         _pin = Y0[0, 0], Y1[0, 0], prm[0, 0], wr[0, 0], bare[0, 0], modes[0], saved[0, 0], cand[0, 0], A[0, 0], L[0, 0], vec[0, 0], order[0], cstart[0]
-        _pin2 = group[0], cwork[0, 0], rwork[0, 0], roused[0]
+        _pin2 = group[0], cwork[0, 0], rwork[0, 0], roused[0], rest_int[:1], rest_flt[:1]
         return 0
     # the velocity problem
     nc = _gather(Y0, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps,
                  members, bound, size, is_static, default_mu, False, 0.0, cint, cflt)
     out[OUT_CONTACTS] = nc
     _rows(Y0, prm, nc, cint, cflt, iw, False, h, size, rj, rw, rdiag, rbias, rbody, island)
-    _warm_start(nc, cint, cflt, n_prev, cint[half:], cflt[half:], members, size, cstart, rj, rbody, rlam)
+    _warm_start(nc, cint, cflt, n_warm, cint[half:], cflt[half:], members, size, cstart, rj, rbody, rlam)
     # contacts sorted by their component (counting sort on the root of their moving body): the bodies joined by
     # this step's contacts. An island's bodies within reach but not touching are apart here: the velocity problem
     # decouples over its components, and each (a tower beside a tower) may be the sticking case
@@ -1892,5 +1906,5 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                 for j in range(STATE_WIDTH):
                     saved[i, j] = Y1[i, j]
     _pin = Y0[0, 0], Y1[0, 0], prm[0, 0], wr[0, 0], bare[0, 0], modes[0], saved[0, 0], cand[0, 0], A[0, 0], L[0, 0], vec[0, 0], order[0], cstart[0]
-    _pin2 = group[0], cwork[0, 0], rwork[0, 0], roused[0]
+    _pin2 = group[0], cwork[0, 0], rwork[0, 0], roused[0], rest_int[:1], rest_flt[:1]
     return 0
