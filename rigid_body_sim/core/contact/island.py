@@ -65,6 +65,7 @@ class Islands:
         self._parent = np.arange(n, dtype=np.int64)
         self._flags = np.zeros(n, dtype=np.int64)
         self._pos, self._quat = np.zeros((n, 3)), np.zeros((n, 4))
+        self._rot = np.zeros((n, 10))  # the narrow phase's: each shape's rotation, and whether taken
         self._vel, self._iw, self._dx = np.zeros((n, 6)), np.zeros((n, 9)), np.zeros((n, 6))
         self._cstart = np.zeros(n, dtype=np.int64)
         self._comp = np.zeros(n, dtype=np.int64)  # the velocity step's components (bodies joined by contacts)
@@ -234,7 +235,7 @@ class Islands:
                      DEFAULT_FRICTION, self.n_contacts, self._rest_int, self._rest_flt, self.island, self._parent, self._flags)
         was_asleep = self.asleep != 0
         while True:
-            code = island_pass(*args_head, self._nlist, self._pos, self._quat, self._pdist, self._pnormal,
+            code = island_pass(*args_head, self._nlist, self._pos, self._quat, self._rot, self._pdist, self._pnormal,
                                self._pcount, self._ppoints, self._pseps, self._bound, self._cint, self._cflt, self._vel,
                                self._iw, self._dx, self._rj, self._rw, self._rdiag, self._rbias, self._rlam,
                                self._rbody, self._order, self._cstart, self._A, self._L, self._vec, self.out, self._comp,

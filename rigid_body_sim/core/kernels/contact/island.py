@@ -66,7 +66,7 @@ from .layout import DIMS, FRICTION, HAS_MATERIAL, KIND, NORMAL, SHAPE_BOX
 from .convex import POSE_WIDTH
 from .impacts import kinetic_energy_row, potential_energy_row
 from .pair_impacts import normal_speed
-from .pairs import MAX_PAIR_POINTS, box_patch, boxes_apart, pair_contacts
+from .pairs import MAX_PAIR_POINTS, box_patch, boxes_apart_turned, pair_contacts
 from .shapes import MAX_FEATURES, feature_gaps, feature_points
 
 __all__ = ["island_pass", "all_asleep", "rest_alone", "TOUCH", "SLEEP_SPEED", "SLEEP_STEPS", "DENSE_MAX", "PROJECT_TOL", "C_FLOATS", "C_INTS", "OUT_WIDTH"]
@@ -191,6 +191,23 @@ def _pose(Y, prm, i, pos, quat):
     qw, qx, qy, qz = qmul(Y[i, Q], Y[i, Q + 1], Y[i, Q + 2], Y[i, Q + 3],
                           prm[i, Q_PB], prm[i, Q_PB + 1], prm[i, Q_PB + 2], prm[i, Q_PB + 3])
     quat[i, 0], quat[i, 1], quat[i, 2], quat[i, 3] = qw, qx, qy, qz
+
+
+@njit(**JIT)
+def _poses(Y, prm, nlist, n_pairs, pos, quat, rot):
+    """The shape poses at Y of the bodies of pairs nlist[:n_pairs] into pos, quat (_pose) and their rotation
+    matrices into rot[:, :9] (row-major), each body once (rot[i, 9]: 1 once done)."""
+    for k in range(n_pairs):
+        rot[nlist[k, 0], 9] = rot[nlist[k, 1], 9] = 0.0
+    for k in range(n_pairs):
+        for side in range(2):
+            i = nlist[k, side]
+            if rot[i, 9] == 0.0:
+                _pose(Y, prm, i, pos, quat)
+                R = matrix(quat[i, 0], quat[i, 1], quat[i, 2], quat[i, 3])
+                rot[i, 0], rot[i, 1], rot[i, 2], rot[i, 3], rot[i, 4], rot[i, 5], rot[i, 6], rot[i, 7], rot[i, 8] = R
+                rot[i, 9] = 1.0
+    _pin = Y[0, 0], prm[0, 0], nlist[0, 0], pos[0, 0], quat[0, 0], rot[0, 0]
 
 
 @njit(**INLINE)
@@ -1107,22 +1124,23 @@ def _still_apart(Y, shapes, path, lower, bound, a, b):
 
 
 @njit(**JIT)
-def _narrow(Y, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound, path, again):
+def _narrow(Y, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound, path, again,
+            rot):
     """The narrow phase of pairs nlist[:n_pairs] at state rows Y, but for two boxes farther apart than their
     bound[k] (m; by a face-normal separation, ~40 ns against ~1 µs): those get that lower bound as pdist and no
     points. Reorders nlist[:n_pairs] and bound[:n_pairs] (the pairs looked at first). ``again`` (a later round of
     the projection: pdist and pcount at each place the pair's from an earlier round): a pair found apart then is
-    not looked at while _still_apart holds (path: per body, what it moved and turned since)."""
+    not looked at while _still_apart holds (path: per body, what it moved and turned since). rot (per body, 10
+    columns) is scratch: each body's pose is taken once (_poses), before the pairs are looked at."""
+    _poses(Y, prm, nlist, n_pairs, pos, quat, rot)
     near = 0
     for k in range(n_pairs):
         a, b = nlist[k, 0], nlist[k, 1]
         if again and pcount[k] == 0 and _still_apart(Y, shapes, path, pdist[k], bound[k], a, b):
             continue  # as apart as when looked at (the same decision; pdist keeps that lower bound)
-        _pose(Y, prm, a, pos, quat)
-        _pose(Y, prm, b, pos, quat)
         apart = -1.0
-        if shapes[a, KIND] == SHAPE_BOX and shapes[b, KIND] == SHAPE_BOX:
-            apart = boxes_apart(quat, pos, shapes, a, b)
+        if shapes[a, KIND] == SHAPE_BOX and shapes[b, KIND] == SHAPE_BOX:  # its bound decides: found sooner
+            apart = boxes_apart_turned(rot, pos, shapes, a, b, bound[k])
         if apart > bound[k]:
             pdist[k] = apart
             pcount[k] = 0
@@ -1135,7 +1153,7 @@ def _narrow(Y, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, p
         near += 1
     if near > 0:
         pair_contacts(pos, quat, shapes, nlist[:near], pdist, pnormal, pcount, ppoints, pseps)
-    _pin = Y[0, 0], prm[0, 0], nlist[0, 0], pos[0, 0], quat[0, 0], pdist[0], pcount[0], bound[0], path[0, 0]
+    _pin = Y[0, 0], prm[0, 0], nlist[0, 0], pos[0, 0], quat[0, 0], pdist[0], pcount[0], bound[0], path[0, 0], rot[0, 0]
 
 
 @njit(**JIT)
@@ -1330,15 +1348,15 @@ def _attribute(nc, cint, cflt, nd, sint, sflt, members, head):
 
 
 @njit(**JIT)
-def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps,
-             members, bound, size, is_static, default_mu, h, iw, dx, vel, cint, cflt, rj, rw, rdiag, rbias, rlam, rbody,
-             porder, out, comp, flags, rwork):
+def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, rot, pdist, pnormal, pcount, ppoints,
+             pseps, members, bound, size, is_static, default_mu, h, iw, dx, vel, cint, cflt, rj, rw, rdiag, rbias, rlam,
+             rbody, porder, out, comp, flags, rwork):
     """The projection of the island bodies' poses Y1: points deeper than PROJECT_TOL × their pair's size closed by
     the least mass-metric correction (over a pile, bottom-up with lower bodies held: _pile_rows), then their
     velocities kept from approaching where it moved them (_stop_approach); returns the largest depth it took on (m).
     Only the bodies of the velocity step's components (comp) with a deep point move; the others (solved exactly,
     at their contacts' gaps to round-off) are held as fixed, and their pairs with each other not looked at again.
-    rwork (per row, 2 columns) is scratch."""
+    rwork (per row, 2 columns) and rot (per body, _narrow's) are scratch."""
     n = members.shape[0]
     deepest = 0.0
     settled = False
@@ -1359,7 +1377,8 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
                     pdist[k], pdist[live] = pdist[live], pdist[k]
                     pcount[k], pcount[live] = pcount[live], pcount[k]
                     live += 1
-        _narrow(Y1, prm, shapes, nlist, live, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound, path, rnd > 0)
+        _narrow(Y1, prm, shapes, nlist, live, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound, path, rnd > 0,
+                rot)
         nd = _gather(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps,
                      members, bound, size, is_static, default_mu, True, 0.0, cint, cflt)
         deep = 0
@@ -1435,7 +1454,8 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, p
             Y1[i, Q], Y1[i, Q + 1], Y1[i, Q + 2], Y1[i, Q + 3] = normalise(q[0], q[1], q[2], q[3])
     if deepest > 0.0:
         if not settled:  # the touching points at the final poses (settled: the last round's first gather)
-            _narrow(Y1, prm, shapes, nlist, live, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound, path, True)
+            _narrow(Y1, prm, shapes, nlist, live, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound, path, True,
+                    rot)
             nd = _gather(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount,
                          ppoints, pseps, members, bound, size, is_static, default_mu, True, 0.0, cint, cflt)
         _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, size, rj, rw, rdiag, rbias, rbody, rlam, vel,
@@ -1576,8 +1596,8 @@ def _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt
 def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, members, cand, n_cand, is_static, stopped,
                 spin_reach, size, asleep, roused, wait, skips, still, anchor, h, sleeping, sleep_speed, default_mu, n_prev,
                 rest_int, rest_flt, island,
-                parent, flags, nlist, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound, cint, cflt, vel, iw, dx, rj, rw,
-                rdiag, rbias, rlam, rbody, order, cstart, A, L, vec, out, comp, band, group, cwork, rwork):
+                parent, flags, nlist, pos, quat, rot, pdist, pnormal, pcount, ppoints, pseps, bound, cint, cflt, vel, iw,
+                dx, rj, rw, rdiag, rbias, rlam, rbody, order, cstart, A, L, vec, out, comp, band, group, cwork, rwork):
     """One step of every island (module docstring): results into Y1 for the bodies marked island[i] = 1 (solved)
     or 2 (asleep: their rows copied from Y0). Returns 0, or −(contacts needed) when cint is too small
     (then nothing was changed but ``asleep`` and the outputs; call again with room). ``wait`` (per body, kept
@@ -1622,7 +1642,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         nlist[n_pairs, 0], nlist[n_pairs, 1] = a, b
         n_pairs += 1
     _bounds(Y0, Y1, nlist, 0, n_pairs, is_static, spin_reach, size, h, bound)
-    _narrow(Y0, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound, dx, False)
+    _narrow(Y0, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound, dx, False, rot)
     _link(Y0, Y1, nlist, 0, n_pairs, pdist, pnormal, pcount, ppoints, bound, is_static, size, parent, flags)
     for m in range(n):
         i = members[m]
@@ -1652,7 +1672,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                 n_pairs += 1
         _bounds(Y0, Y1, nlist, n0, n_pairs, is_static, spin_reach, size, h, bound)
         _narrow(Y0, prm, shapes, nlist[n0:], n_pairs - n0, pos, quat, pdist[n0:], pnormal[n0:], pcount[n0:],
-                ppoints[n0:], pseps[n0:], bound[n0:], dx, False)
+                ppoints[n0:], pseps[n0:], bound[n0:], dx, False, rot)
         _link(Y0, Y1, nlist, n0, n_pairs, pdist, pnormal, pcount, ppoints, bound, is_static, size, parent, flags)
     out[OUT_WOKEN] = woken
     # room for the contacts (pairs' points and each island body's features against each half-space)
@@ -1857,7 +1877,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             if h * max(_speed(Y0, i, spin_reach), _speed(Y1, i, spin_reach)) <= PROJECT_TOL * size[i]:
                 island[i] = 3
     _bounds(Y0, Y1, nlist, 0, n_pairs, is_static, spin_reach, size, h, bound)
-    deepest = _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount,
+    deepest = _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, rot, pdist, pnormal, pcount,
                        ppoints, pseps, members, bound, size, is_static, default_mu, h, iw, dx, vel, cint[half:],
                        cflt[half:], rj[3 * half:], rw[3 * half:], rdiag[3 * half:], rbias[3 * half:],
                        rlam[3 * half:], rbody[3 * half:], order, out, comp, flags, rwork[3 * half:])

@@ -44,7 +44,7 @@ from .refine import feature_point, refine_normal
 from .shapes import FEATURE_BAND
 
 __all__ = ["make_workspace_jit", "MAX_PAIR_POINTS", "FACE_ALIGNMENT", "set_pose", "surface_point", "pair_contact", "pair_contacts",
-           "boxes_apart", "apart_bounds", "box_patch"]
+           "boxes_apart", "boxes_apart_turned", "apart_bounds", "box_patch"]
 
 #: Most contact points one pair reports (a box face clipped against another: a polygon of up to 8 corners).
 MAX_PAIR_POINTS = 8
@@ -727,7 +727,7 @@ def pair_contact(pa, ma, pb, mb, scale, ws_s, ws_lam, ws_tmp, ws_poly, verts, fa
         sat_done, sd_core, axis_id = False, 0.0, -1
         if ka == CORE_BOX and polytopes and _face_gap(pa[_R:_R + 9], pb[_R:_R + 9], pa[_DIM:_DIM + 3], pb[_DIM:_DIM + 3],
                                                       pb[_C] - pa[_C], pb[_C + 1] - pa[_C + 1],
-                                                      pb[_C + 2] - pa[_C + 2]) <= NEAR_TOUCH * scale:
+                                                      pb[_C + 2] - pa[_C + 2], NEAR_TOUCH * scale) <= NEAR_TOUCH * scale:
             sd_core, nx, ny, nz, axis_id = _sat(pa, pb, scale)
             _sat_witness(pa, ma, pb, sd_core, nx, ny, nz, axis_id, res, seps)
             wx, wy, wz = res[0, 3] - res[0, 0], res[0, 4] - res[0, 1], res[0, 5] - res[0, 2]
@@ -801,10 +801,11 @@ _CORE_OF = (0, 0, 2, 3, 1)  # layout.SHAPE_* → CORE_* (SHAPE_NONE unused)
 
 
 @njit(**INLINE)
-def _face_gap(Ra, Rb, da, db, ox, oy, oz):
+def _face_gap(Ra, Rb, da, db, ox, oy, oz, beyond):
     """Two boxes' largest separation (m) along their six face normals (negative when none separates them): a lower
-    bound on their distance. Ra, Rb: their rotations, row-major (9); da, db: their half extents (3); o: b's centre
-    minus a's (world, m)."""
+    bound on their distance; or the first separation found larger than ``beyond`` (m; math.inf: none is), itself a
+    lower bound larger than it. Ra, Rb: their rotations, row-major (9); da, db: their half extents (3); o: b's
+    centre minus a's (world, m)."""
     best = -math.inf
     for side in range(2):
         for k in range(3):
@@ -817,17 +818,28 @@ def _face_gap(Ra, Rb, da, db, ox, oy, oz):
                 reach += da[j] * abs(Ra[j] * ux + Ra[3 + j] * uy + Ra[6 + j] * uz)
                 reach += db[j] * abs(Rb[j] * ux + Rb[3 + j] * uy + Rb[6 + j] * uz)
             best = max(best, abs(ux * ox + uy * oy + uz * oz) - reach)
+            if best > beyond:
+                return best
     return best
 
 
 @njit(**INLINE)
-def boxes_apart(quat, pos, shapes, a, b):
+def boxes_apart(quat, pos, shapes, a, b, beyond=math.inf):
     """A lower bound (m) on the distance of boxes a and b: their largest separation along the six face normals
-    (negative when none separates them)."""
+    (negative when none separates them); with ``beyond`` (m), the first found larger than it (whether the largest
+    is: the same answer, found sooner)."""
     Ra = matrix(quat[a, 0], quat[a, 1], quat[a, 2], quat[a, 3])
     Rb = matrix(quat[b, 0], quat[b, 1], quat[b, 2], quat[b, 3])
     return _face_gap(Ra, Rb, shapes[a, DIMS:DIMS + 3], shapes[b, DIMS:DIMS + 3], pos[b, 0] - pos[a, 0],
-                     pos[b, 1] - pos[a, 1], pos[b, 2] - pos[a, 2])
+                     pos[b, 1] - pos[a, 1], pos[b, 2] - pos[a, 2], beyond)
+
+
+@njit(**INLINE)
+def boxes_apart_turned(rot, pos, shapes, a, b, beyond):
+    """:func:`boxes_apart` with the shapes' rotations given: rot (N, ≥ 9) rows, each the matrix of its quat,
+    row-major."""
+    return _face_gap(rot[a], rot[b], shapes[a, DIMS:DIMS + 3], shapes[b, DIMS:DIMS + 3], pos[b, 0] - pos[a, 0],
+                     pos[b, 1] - pos[a, 1], pos[b, 2] - pos[a, 2], beyond)
 
 
 @njit(**JIT)
