@@ -205,12 +205,15 @@ class BodyPairs:
         in_island = None
         if found or held:  # islands first (island.py)
             in_island = islands.step(sim, wrenches, Y0, Y1, pairs, h)
-            if in_island.any():
+            if in_island[self.solver.bodies].all():  # every pair has a moving body first: none is left
+                pairs = pairs[:0]
+            elif in_island.any():
                 pairs = pairs[~(in_island[pairs[:, 0]] | in_island[pairs[:, 1]])]
             else:
                 in_island = None
         stopped = sim._stopped
-        pairs = pairs[~(stopped[pairs[:, 0]] | stopped[pairs[:, 1]])]
+        if len(pairs) and stopped.any():
+            pairs = pairs[~(stopped[pairs[:, 0]] | stopped[pairs[:, 1]])]
         if not len(pairs):
             return in_island
         self._step_wrenches = wrenches
@@ -227,8 +230,9 @@ class BodyPairs:
 
     def _candidates(self, Y0: np.ndarray, Y1: np.ndarray, h: float) -> np.ndarray:
         """The broad phase's pairs (k, 2) of global body indices whose boxes swept over the step overlap, a moving
-        body first (a static shape never is). The same boxes as the last step's (a scene asleep or stopped) give
-        the same pairs: they are not searched again."""
+        body first (a static shape never is: each row is its two members in order, the moving bodies listed
+        first). The same boxes as the last step's (a scene asleep or stopped) give the same pairs: they are not
+        searched again."""
         swept_bounds(Y0, Y1, self.members, self.reach, h, self._lo, self._hi)
         last, lo, hi = self._last_swept, self._lo.tobytes(), self._hi.tobytes()
         if last is not None and lo == last[0] and hi == last[1]:
@@ -239,7 +243,6 @@ class BodyPairs:
             found = grid_swept_pairs(self._lo, self._hi, self.movable, self._cells, self._heads, self._chain,
                                      self._pairs)
         pairs = self.members[self._pairs[:found]]
-        pairs = np.ascontiguousarray(np.where(self.is_static[pairs[:, 0]][:, None], pairs[:, ::-1], pairs))
         self._last_swept = (lo, hi, pairs)
         return pairs
 
