@@ -62,7 +62,7 @@ from ..forces import body_wrench
 from ..jit import INLINE, JIT
 from ..layout import ACTIVE, BOUND, GRAVITY, INV_INERTIA, INV_MASS, INERTIA, MASS, P, Q, Q_PB, STATE_WIDTH, V, W
 from ..rotation import exp_map, matrix, normalise, qmul, rotate, rotate_back
-from .layout import DIMS, FRICTION, HAS_MATERIAL, KIND, NORMAL, SHAPE_BOX
+from .layout import DIMS, FRICTION, HAS_MATERIAL, KIND, NORMAL, OFFSET, SHAPE_BOX
 from .convex import POSE_WIDTH
 from .impacts import kinetic_energy_row, potential_energy_row
 from .pair_impacts import normal_speed
@@ -390,9 +390,13 @@ def _gather(Y, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdi
         i = members[m]
         if island[i] != 1:
             continue
+        reach = (shapes[i, DIMS] + shapes[i, DIMS + 1] + shapes[i, DIMS + 2]) * (1.0 + 1e-12)  # ≥ any feature's
         for j in range(grounds.shape[0]):
-            nf = feature_gaps(Y[i], prm[i], shapes[i], grounds[j], gaps)
             limit = TOUCH * size[i] + extra if deep_only else bound[n_pairs + m]
+            base = grounds[j, NORMAL] * Y[i, P] + grounds[j, NORMAL + 1] * Y[i, P + 1] + grounds[j, NORMAL + 2] * Y[i, P + 2]
+            if base - grounds[j, OFFSET] - reach > limit:  # every feature farther than limit (its centre's distance
+                continue  # less its reach: the same answer as feature_gaps', without its features)
+            nf = feature_gaps(Y[i], prm[i], shapes[i], grounds[j], gaps)
             for f in range(nf):
                 if gaps[f] <= limit:
                     npts = feature_points(Y[i], prm[i], shapes[i], grounds[j], 1 << f, points, pg, owners)
@@ -1157,17 +1161,20 @@ def _narrow(Y, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, p
 
 
 @njit(**JIT)
-def _bounds(Y0, Y1, nlist, lo, hi, is_static, spin_reach, size, h, bound):
-    """Each pair's reach over the step from Y0 to Y1 (m): how close it must be to meet within the step."""
+def _bounds(Y0, Y1, nlist, lo, hi, is_static, spin_reach, size, h, bound, members, speed):
+    """Each pair's reach over the step from Y0 to Y1 (m): how close it must be to meet within the step. speed (per
+    body) is scratch: each member's _reach_bound, taken once."""
+    for m in range(members.shape[0]):
+        speed[members[m]] = _reach_bound(Y0, Y1, members[m], spin_reach)
     for k in range(lo, hi):
         a, b = nlist[k, 0], nlist[k, 1]
         reach = 0.0
         if not is_static[a]:
-            reach += _reach_bound(Y0, Y1, a, spin_reach)
+            reach += speed[a]
         if not is_static[b]:
-            reach += _reach_bound(Y0, Y1, b, spin_reach)
+            reach += speed[b]
         bound[k] = reach * h + TOUCH * max(size[a], size[b])
-    _pin = Y0[0, 0], Y1[0, 0], nlist[0, 0], is_static[0], spin_reach[0], size[0], bound[0]
+    _pin = Y0[0, 0], Y1[0, 0], nlist[0, 0], is_static[0], spin_reach[0], size[0], bound[0], members[0], speed[0]
 
 
 @njit(**INLINE)
@@ -1641,7 +1648,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             continue
         nlist[n_pairs, 0], nlist[n_pairs, 1] = a, b
         n_pairs += 1
-    _bounds(Y0, Y1, nlist, 0, n_pairs, is_static, spin_reach, size, h, bound)
+    _bounds(Y0, Y1, nlist, 0, n_pairs, is_static, spin_reach, size, h, bound, members, dx[:, 0])
     _narrow(Y0, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound, dx, False, rot)
     _link(Y0, Y1, nlist, 0, n_pairs, pdist, pnormal, pcount, ppoints, bound, is_static, size, parent, flags)
     for m in range(n):
@@ -1670,7 +1677,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             if flags[a] & 32 and (is_static[b] or flags[b] & 32):  # skipped above (asleep with asleep)
                 nlist[n_pairs, 0], nlist[n_pairs, 1] = a, b
                 n_pairs += 1
-        _bounds(Y0, Y1, nlist, n0, n_pairs, is_static, spin_reach, size, h, bound)
+        _bounds(Y0, Y1, nlist, n0, n_pairs, is_static, spin_reach, size, h, bound, members, dx[:, 0])
         _narrow(Y0, prm, shapes, nlist[n0:], n_pairs - n0, pos, quat, pdist[n0:], pnormal[n0:], pcount[n0:],
                 ppoints[n0:], pseps[n0:], bound[n0:], dx, False, rot)
         _link(Y0, Y1, nlist, n0, n_pairs, pdist, pnormal, pcount, ppoints, bound, is_static, size, parent, flags)
@@ -1876,7 +1883,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         if island[i] == 1 and flags[_find(comp, i)] & 512:
             if h * max(_speed(Y0, i, spin_reach), _speed(Y1, i, spin_reach)) <= PROJECT_TOL * size[i]:
                 island[i] = 3
-    _bounds(Y0, Y1, nlist, 0, n_pairs, is_static, spin_reach, size, h, bound)
+    _bounds(Y0, Y1, nlist, 0, n_pairs, is_static, spin_reach, size, h, bound, members, dx[:, 0])
     deepest = _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, rot, pdist, pnormal, pcount,
                        ppoints, pseps, members, bound, size, is_static, default_mu, h, iw, dx, vel, cint[half:],
                        cflt[half:], rj[3 * half:], rw[3 * half:], rdiag[3 * half:], rbias[3 * half:],
