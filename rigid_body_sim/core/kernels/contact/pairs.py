@@ -824,20 +824,20 @@ def _face_gap(Ra, Rb, da, db, ox, oy, oz, beyond):
 
 
 @njit(**INLINE)
-def boxes_apart(quat, pos, shapes, a, b, beyond=math.inf):
+def boxes_apart(quat, pos, shapes, a, b):
     """A lower bound (m) on the distance of boxes a and b: their largest separation along the six face normals
-    (negative when none separates them); with ``beyond`` (m), the first found larger than it (whether the largest
-    is: the same answer, found sooner)."""
+    (negative when none separates them)."""
     Ra = matrix(quat[a, 0], quat[a, 1], quat[a, 2], quat[a, 3])
     Rb = matrix(quat[b, 0], quat[b, 1], quat[b, 2], quat[b, 3])
     return _face_gap(Ra, Rb, shapes[a, DIMS:DIMS + 3], shapes[b, DIMS:DIMS + 3], pos[b, 0] - pos[a, 0],
-                     pos[b, 1] - pos[a, 1], pos[b, 2] - pos[a, 2], beyond)
+                     pos[b, 1] - pos[a, 1], pos[b, 2] - pos[a, 2], math.inf)
 
 
 @njit(**INLINE)
 def boxes_apart_turned(rot, pos, shapes, a, b, beyond):
-    """:func:`boxes_apart` with the shapes' rotations given: rot (N, ≥ 9) rows, each the matrix of its quat,
-    row-major."""
+    """:func:`boxes_apart` with the shapes' rotations given (rot (N, ≥ 9) rows, each the matrix of its quat,
+    row-major), or the first face-normal separation found larger than ``beyond`` (m): whether the largest is, the
+    same answer, found sooner."""
     return _face_gap(rot[a], rot[b], shapes[a, DIMS:DIMS + 3], shapes[b, DIMS:DIMS + 3], pos[b, 0] - pos[a, 0],
                      pos[b, 1] - pos[a, 1], pos[b, 2] - pos[a, 2], beyond)
 
