@@ -67,6 +67,7 @@ class Islands:
         self._pos, self._quat = np.zeros((n, 3)), np.zeros((n, 4))
         self._rot = np.zeros((n, 10))  # the narrow phase's: each shape's rotation, and whether taken
         self._vel, self._iw, self._dx = np.zeros((n, 6)), np.zeros((n, 9)), np.zeros((n, 6))
+        self._bwork, self._blist = np.zeros((n, 13)), np.zeros(n, dtype=np.int64)  # the pile solve's extrapolation
         self._cstart = np.zeros(n, dtype=np.int64)
         self._comp = np.zeros(n, dtype=np.int64)  # the velocity step's components (bodies joined by contacts)
         self._A, self._L = np.zeros((DENSE_MAX, DENSE_MAX)), np.zeros((DENSE_MAX, DENSE_MAX))
@@ -239,7 +240,7 @@ class Islands:
                                self._pcount, self._ppoints, self._pseps, self._bound, self._cint, self._cflt, self._vel,
                                self._iw, self._dx, self._rj, self._rw, self._rdiag, self._rbias, self._rlam,
                                self._rbody, self._order, self._cstart, self._A, self._L, self._vec, self.out, self._comp,
-                               self._band, self._group, self._cwork, self._rwork)
+                               self._band, self._group, self._cwork, self._rwork, self._bwork, self._blist)
             if code >= 0:
                 break
             self._grow_contacts(2 * -code)

@@ -939,20 +939,39 @@ def _sweep(vel, rj, rw, rbody, rdiag, inv, rbias, rlam, cflt, cross, order, star
 
 
 @njit(**JIT)
-def _pile_sweeps(vel, rj, rw, rbody, rdiag, inv, rbias, rlam, cflt, cross, order, start, stop, sweeps, last, step):
+def _pile_sweeps(vel, rj, rw, rbody, rdiag, inv, rbias, rlam, cflt, cross, order, start, stop, sweeps, last, step,
+                 bwork, blist):
     """At most ``sweeps`` projected Gauss–Seidel sweeps over one component's contacts order[start:stop] (sorted from
     the highest against gravity down), down then back up in turn, each extrapolated: nonsmooth nonlinear conjugate
     gradient (Silcowitz, Niebe, Erleben 2010). Each sweep's change of λ, Δ, is the descent direction; λ is then
     extrapolated by β p (β = |Δ|² / |Δ_prev|², p ← β p + Δ), restarted (p = Δ) when |Δ| grows; the next
-    sweep projects onto the cones again. Stops when no row's speed changes by more than PGS_TOL (m/s). last and step
-    (per row of order[start:stop], at 3 × its place) are scratch."""
+    sweep projects onto the cones again. Stops when no row's speed changes by more than PGS_TOL (m/s). The
+    extrapolation moves the velocities per body, not per contact (they are linear in λ: M⁻¹Jᵀ p kept per body).
+    Scratch: last and step (per row of order[start:stop], at 3 × its place), bwork (per body: M⁻¹Jᵀ p, the
+    velocities at the sweep's start, and whether listed, zero between calls) and blist (the component's bodies)."""
     for x in range(3 * start, 3 * stop):
         step[x] = 0.0
+    nb = 0  # the component's bodies; bwork[i, :6]: M⁻¹Jᵀ p, [6:12]: vel at the sweep's start, [12]: listed
+    for c in range(start, stop):
+        r = 3 * order[c]
+        for side in range(2):
+            i = rbody[r, side]
+            if i >= 0 and bwork[i, 12] == 0.0:
+                bwork[i, 12] = 1.0
+                blist[nb] = i
+                nb += 1
+    for b in range(nb):
+        for j in range(6):
+            bwork[blist[b], j] = 0.0
     shrink = 0.0
     for sweep in range(sweeps):
         for c in range(start, stop):
             for k in range(3):
                 last[3 * c + k] = rlam[3 * order[c] + k]
+        for b in range(nb):
+            i = blist[b]
+            for j in range(6):
+                bwork[i, 6 + j] = vel[i, j]
         backward = sweep % 2 == 1
         if _sweep(vel, rj, rw, rbody, rdiag, inv, rbias, rlam, cflt, cross, order, start, stop, backward) <= PGS_TOL:
             break
@@ -969,14 +988,20 @@ def _pile_sweeps(vel, rj, rw, rbody, rdiag, inv, rbias, rlam, cflt, cross, order
             m0, m1, m2 = beta * step[3 * c], beta * step[3 * c + 1], beta * step[3 * c + 2]
             for k in range(3):
                 step[3 * c + k] = beta * step[3 * c + k] + rlam[r + k] - last[3 * c + k]
-            if m0 != 0.0 or m1 != 0.0 or m2 != 0.0:
-                rlam[r] += m0
-                rlam[r + 1] += m1
-                rlam[r + 2] += m2
-                _apply3(vel, rw, rbody, r, m0, m1, m2)
+            rlam[r] += m0
+            rlam[r + 1] += m1
+            rlam[r + 2] += m2
+        for b in range(nb):  # vel += M⁻¹Jᵀ β p; M⁻¹Jᵀ p ← β M⁻¹Jᵀ p + the sweep's change of vel (linear in λ)
+            i = blist[b]
+            for j in range(6):
+                m = beta * bwork[i, j]
+                bwork[i, j] = m + (vel[i, j] - bwork[i, 6 + j])
+                vel[i, j] += m
         shrink = size2
+    for b in range(nb):
+        bwork[blist[b], 12] = 0.0
     _pin = vel[0, 0], rj[0, 0], rw[0, 0], rbody[0, 0], rdiag[0], rbias[0], rlam[0], cflt[0, 0], order[0]
-    _pin2 = cross[0, 0], inv[0], last[0], step[0]
+    _pin2 = cross[0, 0], inv[0], last[0], step[0], bwork[0, 0], blist[0]
 
 
 @njit(**INLINE)
@@ -986,7 +1011,8 @@ def _root(cint, comp, q):
 
 
 @njit(**JIT)
-def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, cint, comp, flags, order, stop, gx, gy, gz, cwork, rwork):
+def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, cint, comp, flags, order, stop, gx, gy, gz, cwork, rwork, bwork,
+         blist):
     """Projected Gauss–Seidel on contacts order[:stop] (each component's contiguous; comp: the components'
     union-find, cint the contacts' bodies) from their λ in rlam (the warm start): sweeps until none changes a row's
     speed by more than PGS_TOL (m/s), at most PGS_SWEEPS or PGS_WORK / stop. More than PILE_CONTACTS contacts (a
@@ -994,7 +1020,7 @@ def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, cint, comp, flags, order,
     up, in turn (a weight passes down a pile, and a stop up it, within one sweep), at most PILE_PGS_SWEEPS or
     PGS_WORK / stop (WOKEN_SWEEPS for a component whose root has flag 2048: just woken); fewer, in their order.
     Scratch: cwork (per contact: the tangents' cross terms, the sort's key), rwork (per row: 1 / the diagonal, the
-    last sweep's λ, the extrapolation)."""
+    last sweep's λ, the extrapolation), bwork and blist (per body: _pile_sweeps')."""
     cross, key = cwork[:, 0:2], cwork[:, 2]
     inv, last, step = rwork[:, 0], rwork[:, 1], rwork[:, 2]
     for c in range(stop):
@@ -1026,10 +1052,11 @@ def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, cint, comp, flags, order,
                 hi += 1
             _sort_by(key, order, lo, hi)
             sweeps = WOKEN_SWEEPS if flags[root] & 2048 else max(PILE_PGS_SWEEPS, work)
-            _pile_sweeps(vel, rj, rw, rbody, rdiag, inv, rbias, rlam, cflt, cross, order, lo, hi, sweeps, last, step)
+            _pile_sweeps(vel, rj, rw, rbody, rdiag, inv, rbias, rlam, cflt, cross, order, lo, hi, sweeps, last, step,
+                         bwork, blist)
             lo = hi
     _pin = vel[0, 0], rj[0, 0], rw[0, 0], rbody[0, 0], rdiag[0], rbias[0], rlam[0], cflt[0, 0], order[0]
-    _pin2 = cwork[0, 0], rwork[0, 0], cint[0, 0], comp[0], flags[0]
+    _pin2 = cwork[0, 0], rwork[0, 0], cint[0, 0], comp[0], flags[0], bwork[0, 0], blist[0]
 
 
 @njit(**INLINE)
@@ -1605,7 +1632,8 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                 spin_reach, size, asleep, roused, wait, skips, still, anchor, h, sleeping, sleep_speed, default_mu, n_prev,
                 rest_int, rest_flt, island,
                 parent, flags, nlist, pos, quat, rot, pdist, pnormal, pcount, ppoints, pseps, bound, cint, cflt, vel, iw,
-                dx, rj, rw, rdiag, rbias, rlam, rbody, order, cstart, A, L, vec, out, comp, band, group, cwork, rwork):
+                dx, rj, rw, rdiag, rbias, rlam, rbody, order, cstart, A, L, vec, out, comp, band, group, cwork, rwork,
+                bwork, blist):
     """One step of every island (module docstring): results into Y1 for the bodies marked island[i] = 1 (solved)
     or 2 (asleep: their rows copied from Y0). Returns 0, or −(contacts needed) when cint is too small
     (then nothing was changed but ``asleep`` and the outputs; call again with room). ``wait`` (per body, kept
@@ -1619,7 +1647,8 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     Gauss–Seidel solve gets PGS_SWEEPS sweeps (WOKEN_SWEEPS). The warm start: the last step's n_prev contacts (the
     first half of cint/cflt) and, while a body is roused, the contacts of the islands asleep (rest_int, rest_flt:
     each a force, N; × h, the λ that held it), so that one woken is solved from the rest it was locked in.
-    ``cwork`` (per contact, 3 columns) and ``rwork`` (per row, 3 columns) are scratch."""
+    ``cwork`` (per contact, 3 columns), ``rwork`` (per row, 3 columns), ``bwork`` (per body, 13 columns, the last
+    zero between calls) and ``blist`` (per body) are scratch."""
     n = members.shape[0]
     for k in range(OUT_WIDTH):
         out[k] = 0.0
@@ -1749,7 +1778,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             wait[members[m]] = 0
             skips[members[m], 0] = skips[members[m], 1] = 0
         _pin = Y0[0, 0], Y1[0, 0], prm[0, 0], wr[0, 0], bare[0, 0], modes[0], saved[0, 0], cand[0, 0], A[0, 0], L[0, 0], vec[0, 0], order[0], cstart[0]
-        _pin2 = group[0], cwork[0, 0], rwork[0, 0], roused[0], rest_int[:1], rest_flt[:1]
+        _pin2 = group[0], cwork[0, 0], rwork[0, 0], roused[0], rest_int[:1], rest_flt[:1], bwork[0, 0], blist[0]
         return 0
     # the velocity problem
     nc = _gather(Y0, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps,
@@ -1845,7 +1874,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         body = cint[order[0], I_B] if cint[order[0], I_B] >= 0 else cint[order[0], I_A]
         g = prm[body, GRAVITY:GRAVITY + 3]  # the order's gravity: any order is Gauss–Seidel
         _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, cint, comp, flags, order, stop, g[0], g[1], g[2], cwork,
-             rwork)
+             rwork, bwork, blist)
     for m in range(n):  # which bodies slipped: for the next step's attempts (those solved exactly did not)
         skips[members[m], 1] = 0
     for c in range(stop):
@@ -1934,5 +1963,5 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                 for j in range(STATE_WIDTH):
                     saved[i, j] = Y1[i, j]
     _pin = Y0[0, 0], Y1[0, 0], prm[0, 0], wr[0, 0], bare[0, 0], modes[0], saved[0, 0], cand[0, 0], A[0, 0], L[0, 0], vec[0, 0], order[0], cstart[0]
-    _pin2 = group[0], cwork[0, 0], rwork[0, 0], roused[0], rest_int[:1], rest_flt[:1]
+    _pin2 = group[0], cwork[0, 0], rwork[0, 0], roused[0], rest_int[:1], rest_flt[:1], bwork[0, 0], blist[0]
     return 0
