@@ -53,7 +53,7 @@ from ..kernels.contact.layout import (
     SHAPE_NONE,
     SHAPE_SPHERE,
 )
-from ..kernels.contact.pairs import FACE_ALIGNMENT, MAX_PAIR_POINTS, pair_contacts
+from ..kernels.contact.pairs import FACE_ALIGNMENT, MAX_PAIR_POINTS, apart_bounds, pair_contacts
 from ..kernels.contact.shapes import body_points
 from ..quaternion import quat_conjugate, quat_multiply, quat_to_matrix
 from .materials import pair_material
@@ -234,8 +234,9 @@ class StaticGeometry:
     def lower_gaps(self, Y: np.ndarray, shapes: np.ndarray, bodies: np.ndarray, out: np.ndarray) -> None:
         """out[m] ← min(out[m], signed distance of body bodies[m] to the static shapes), in place.
 
-        Pairs whose bounding spheres are apart are not passed to the narrow phase: their distance is
-        positive, and out[m] stays as it was (callers ask only whether it went below zero).
+        Pairs whose bounding spheres are apart, or two boxes with a positive lower bound on their distance
+        (apart_bounds), are not passed to the narrow phase: their distance is positive, and out[m] stays as it
+        was (callers ask only whether it went below zero).
         """
         k = len(self.statics)
         centres = Y[bodies, L.P:L.P + 3]
@@ -248,6 +249,12 @@ class StaticGeometry:
         quat = np.concatenate((self.quat, quat_multiply(Y[bodies[near_m], L.Q:L.Q + 4], self._q_PB[bodies[near_m]])))
         rows = np.concatenate((self.shapes, shapes[bodies[near_m]]))
         pairs = np.stack((near_s, k + np.arange(near_m.size)), axis=1).astype(np.int64)
+        lower = np.empty(len(pairs))
+        apart_bounds(pos, quat, rows, pairs, lower)
+        touching = lower <= 0.0
+        if not touching.any():
+            return
+        pairs, near_m = np.ascontiguousarray(pairs[touching]), near_m[touching]
         m = len(pairs)
         dist, normal, count = np.empty(m), np.empty((m, 3)), np.empty(m, dtype=np.int64)
         pair_contacts(pos, quat, rows, pairs, dist, normal, count, np.empty((m, MAX_PAIR_POINTS, 6)),
