@@ -9,14 +9,16 @@ After each step, before the ground pass:
    step; overlapping boxes, found with a hashed uniform grid, are the candidate pairs. A step
    without a candidate costs these two compiled loops and nothing else (no Python per body or
    per pair).
-2. **Narrow phase** on the candidates (one compiled call at the step's end, one at its start;
-   kernels/contact/pairs.py). A pair of moving bodies meets in the step if its signed distance
-   is negative at the end, or it overlaps at the start while approaching; a pair apart at both
-   ends (d₀, d₁ ≥ 0) that could have met in between (d₀ + d₁ ≤ B h, B the bound on |d′| below)
-   is followed along the step by **conservative advancement** (below), so that an event which
-   starts and ends inside one step is still found. A body against a static shape is looked at
-   here only in that last case (a passage through it inside the step); a negative distance at
-   the step's end is the ground pass's (static_geometry.py).
+2. **Narrow phase** on the candidates (one compiled call, kernels/contact/swept.py's screen_pairs:
+   pairs provably apart over the whole step are left out, the others' signed distances taken at the
+   step's end and at its start, batched; kernels/contact/pairs.py). A pair of moving bodies meets in
+   the step if its signed distance is negative at the end, or it overlaps at the start while
+   approaching; a pair apart at both ends (d₀, d₁ ≥ 0) that could have met in between
+   (d₀ + d₁ ≤ B h, B the bound on |d′| below) is followed along the step by **conservative
+   advancement** (below), so that an event which starts and ends inside one step is still found.
+   A body against a static shape is looked at here only in that last case (a passage through it
+   inside the step); a negative distance at the step's end is the ground pass's
+   (static_geometry.py).
 3. **Groups**: bodies linked by such pairs are stepped together, event after event, from the
    step's start. Each event time is the first root of s ↦ F(s), F the least of the group's pair
    signed distances d(Φ_a(y_a0, s h), Φ_b(y_b0, s h)) and of its flying members' gaps to the
@@ -64,9 +66,9 @@ from ..kernels.contact.impacts import IMPACT_WORK_SHAPE, impact, kinetic_energy_
 from ..kernels.contact.island import APPROACH_SPEED  # a relative normal velocity below −this (m/s) approaches
 from ..kernels.contact.layout import DIMS, KIND, MAX_POINTS, NORMAL, PERSISTENT, FLIGHT, SHAPE_SPHERE
 from ..kernels.contact.pair_impacts import PAIR_JACOBIAN_SHAPE, normal_speed, pair_impact
-from ..kernels.contact.pairs import MAX_PAIR_POINTS, apart_bounds, pair_contacts
+from ..kernels.contact.pairs import MAX_PAIR_POINTS, pair_contacts
 from ..kernels.contact.persistent import normal_speeds
-from ..kernels.contact.swept import grid_swept_pairs, swept_bounds
+from ..kernels.contact.swept import grid_swept_pairs, screen_pairs, swept_bounds
 from ..quaternion import quat_multiply, quat_rotate
 from .events import ContactEvent
 from .island import Islands
@@ -116,6 +118,7 @@ class BodyPairs:
         self.spin_reach = np.array([0.0 if shapes[i, KIND] == SHAPE_SPHERE else bounding_radius(shapes[i])
                                     for i in range(len(shapes))])
         self.size = shapes[:, DIMS:DIMS + 3].max(axis=1)
+        self._radius = np.array([bounding_radius(shapes[i]) for i in range(len(shapes))])  # per body, m
         self.is_static = np.zeros(len(shapes), dtype=bool)
         self.is_static[statics] = True
         self._lo, self._hi = np.empty((m, 3)), np.empty((m, 3))
@@ -126,6 +129,9 @@ class BodyPairs:
         # bitwise equal (a bytes comparison: a fraction of np.array_equal's cost on a few bodies' boxes)
         self._q_PB = sim._prm[:, L.Q_PB:L.Q_PB + 4].copy()
         self._shapes = np.ascontiguousarray(shapes)
+        # the candidates' screen (screen_pairs): each body's poses at the step's ends, per pair what it found
+        self._spos, self._squat, self._lower = np.zeros((2, len(shapes), 3)), np.zeros((2, len(shapes), 4)), np.empty(1)
+        self._grow_screen(64)
         # two-shape narrow-phase buffers
         self._pos2, self._quat2 = np.zeros((2, 3)), np.zeros((2, 4))
         self._shape2 = np.zeros((2, shapes.shape[1]))
@@ -155,27 +161,6 @@ class BodyPairs:
         pair_contacts(self._pos2, self._quat2, self._shape2, self._pair2, self._dist1, self._normal1, self._count1,
                       self._points1, self._seps1)
         return float(self._dist1[0])
-
-    def _poses(self, Y: np.ndarray, bodies: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(shape centres (m, 3), q_WS (m, 4)) of ``bodies`` (m,) at state rows Y: the batched kernels' poses."""
-        pos = np.ascontiguousarray(Y[bodies, L.P:L.P + 3])
-        return pos, np.ascontiguousarray(quat_multiply(Y[bodies, L.Q:L.Q + 4], self._q_PB[bodies]))
-
-    @staticmethod
-    def _batch(poses: tuple, shapes: np.ndarray, local: np.ndarray) -> np.ndarray:
-        """(k,) signed distances of the pairs ``local`` (k, 2) of shapes (rows ``shapes``) at ``poses``."""
-        k = len(local)
-        dist = np.empty(k)
-        pair_contacts(*poses, shapes, local, dist, np.empty((k, 3)), np.zeros(k, dtype=np.int64),
-                      np.empty((k, MAX_PAIR_POINTS, 6)), np.empty((k, MAX_PAIR_POINTS)))
-        return dist
-
-    @staticmethod
-    def _apart(poses: tuple, shapes: np.ndarray, local: np.ndarray) -> np.ndarray:
-        """(k,) lower bounds on the distances of the pairs ``local`` (−1: none; two boxes only), as :meth:`_batch`."""
-        out = np.empty(len(local))
-        apart_bounds(*poses, shapes, local, out)
-        return out
 
     def _geometry(self) -> tuple[np.ndarray, np.ndarray, float]:
         """(normal from a to b (3,), contact points (k, 3) mid-way between the surfaces, signed distance) of the
@@ -249,24 +234,23 @@ class BodyPairs:
     def _hits(self, sim, pairs: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, h: float) -> list[tuple[int, int]]:
         """The candidate pairs that meet inside the step (module docstring, 2); a static shape is never first.
 
-        Vectorised over the candidates; Python per pair only for those that overlap at an end of the
-        step or that may have passed through each other: apart at both ends with d₀ + d₁ ≤ B h (B the
-        bound on |d′| of :meth:`_pair_bounds`; if |d′| ≤ B, d stays ≥ (d₀ + d₁ − B h)/2 > 0 otherwise).
+        One compiled call over the candidates (kernels/contact/swept.py, screen_pairs: each pair's bound B on
+        |d′| and, unless it is provably apart over the step, d₀ and d₁); Python per pair only for those
+        that overlap at an end of the step or that may have passed through each other: apart at both ends with
+        d₀ + d₁ ≤ B h (if |d′| ≤ B, d stays ≥ (d₀ + d₁ − B h)/2 > 0 otherwise).
         """
         solver = self.solver
         static_a = self.is_static[pairs[:, 0]]
-        pairs = np.where(static_a[:, None], pairs[:, ::-1], pairs)  # a moving body first
-        reach = self._pair_bounds(pairs, Y0, Y1) * h
-        bodies = np.unique(pairs)
-        local = np.ascontiguousarray(np.searchsorted(bodies, pairs))  # the pairs as rows of the arrays below
-        shapes = np.ascontiguousarray(self._shapes[bodies])
-        at0, at1 = self._poses(Y0, bodies), self._poses(Y1, bodies)
-        lo0, lo1 = self._apart(at0, shapes, local), self._apart(at1, shapes, local)
-        near = ~((lo0 > 0.0) & (lo1 > 0.0) & (lo0 + lo1 > reach))  # the others cannot be either kind below
-        if not near.any():
+        pairs = np.ascontiguousarray(np.where(static_a[:, None], pairs[:, ::-1], pairs))  # a moving body first
+        k = len(pairs)
+        if k > len(self._reach):
+            self._grow_screen(2 * k)
+        reach, d0, d1 = self._reach[:k], self._d0[:k], self._d1[:k]
+        near = screen_pairs(Y0, Y1, self._q_PB, self._shapes, self._radius, self.spin_reach, pairs, h, self._spos,
+                            self._squat, self._near, self._which, self._lower, self._sdist, self._snormal, self._scount,
+                            self._spoints, self._sseps, self._reach, self._d0, self._d1)
+        if near == 0:
             return []
-        pairs, reach, local = pairs[near], reach[near], np.ascontiguousarray(local[near])
-        d1, d0 = self._batch(at1, shapes, local), self._batch(at0, shapes, local)
         static = self.is_static[pairs[:, 1]]
         resting = solver.modes[pairs[:, 0]] == PERSISTENT
         ends = ~static & ((d1 < 0.0) | (d0 < 0.0))
@@ -284,18 +268,12 @@ class BodyPairs:
                 hits.append((a, b))
         return hits
 
-    def _pair_bounds(self, pairs: np.ndarray, Y0: np.ndarray, Y1: np.ndarray) -> np.ndarray:
-        """(k,) bounds (m/s) on |d′| of the pairs over the step (:meth:`_pair_bound`, vectorised)."""
-        a, b = pairs[:, 0], pairs[:, 1]
-        V = slice(L.V, L.V + 3)
-        rel0, rel1 = Y0[b, V] - Y0[a, V], Y1[b, V] - Y1[a, V]
-        bound = np.maximum(np.linalg.norm(rel0, axis=1), np.linalg.norm(rel1, axis=1))
-        bound += np.linalg.norm(rel1 - rel0, axis=1)
-        W = slice(L.W, L.W + 3)
-        for i in (a, b):
-            spin = np.maximum(np.linalg.norm(Y0[i, W], axis=1), np.linalg.norm(Y1[i, W], axis=1))
-            bound += (spin + np.linalg.norm(Y1[i, W] - Y0[i, W], axis=1)) * self.spin_reach[i]
-        return bound
+    def _grow_screen(self, k: int) -> None:
+        """Room for k candidate pairs in screen_pairs' arrays."""
+        self._reach, self._d0, self._d1 = np.empty(k), np.empty(k), np.empty(k)
+        self._near, self._which = np.empty((k, 2), dtype=np.int64), np.empty(k, dtype=np.int64)
+        self._sdist, self._snormal, self._scount = np.empty(k), np.empty((k, 3)), np.zeros(k, dtype=np.int64)
+        self._spoints, self._sseps = np.empty((k, MAX_PAIR_POINTS, 6)), np.empty((k, MAX_PAIR_POINTS))
 
     def _approaching(self, sim, ya, a, yb, b) -> bool:
         self.contact(ya, a, yb, b)

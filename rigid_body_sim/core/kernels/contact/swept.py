@@ -11,8 +11,10 @@ side, so two overlapping boxes sit in the same or neighbouring cells) and writes
 overlapping pair: about linear in the number of shapes while the moving ones have comparable
 sizes (one huge box, a very fast body's sweep, makes every cell huge). The fixed boxes (static
 shapes, any size) are tested against every movable box: S × N tests for S of them.
-No allocation: the caller owns every array, so a step without any candidate pair
-costs two compiled loops over the shapes and nothing else.
+:func:`screen_pairs` then gives each candidate its bound on how fast its distance changes and,
+unless two boxes are provably apart over the whole step, its signed distances at the step's two
+ends (two batched narrow-phase calls). No allocation: the caller owns every array, so a step
+without any candidate pair costs two compiled loops over the shapes and nothing else.
 """
 
 from __future__ import annotations
@@ -22,9 +24,11 @@ import math
 from numba import njit
 
 from ..jit import INLINE, JIT
-from ..layout import P, V
+from ..layout import P, Q, V, W
+from ..rotation import qmul
+from .pairs import apart_bounds, pair_contacts
 
-__all__ = ["swept_bounds", "grid_swept_pairs"]
+__all__ = ["swept_bounds", "grid_swept_pairs", "screen_pairs"]
 
 
 @njit(**JIT)
@@ -107,3 +111,77 @@ def grid_swept_pairs(lo, hi, movable, cells, heads, chain, pairs):
                 j = chain[j]
     _pin = lo[0, 0], hi[0, 0], movable[0], cells[0, 0], heads[0], chain[0], pairs[0, 0]
     return count
+
+
+@njit(**INLINE)
+def _norm3(x, y, z):
+    return math.sqrt(x * x + y * y + z * z)
+
+
+@njit(**JIT)
+def screen_pairs(Y0, Y1, q_PB, shapes, radius, spin_reach, pairs, h, pos, quat, near, which, lower, dist, normal, count,
+                 points, seps, reach, d0, d1):
+    """For each candidate pair (a, b), row k of ``pairs`` (K, 2; body indices): reach[k] ← h × a bound (m/s) on
+    how fast its signed distance changes over the step, and d0[k], d1[k] ← its signed distances (m) at the step's
+    start and end, or +inf for both where the pair cannot have met in the step: lower bounds on its distance at
+    both ends positive and summing to more than reach[k], first its centres' distance less both bounding radii
+    (``radius``, per body, m, about the centre of mass), then for two boxes apart_bounds'.
+
+    The bound: the larger relative speed |v_b − v_a| of the step's two ends plus its change, and for each body the
+    larger spin |ω| plus its change times its spin_reach (per body, m: the radius its spin sweeps). Y0, Y1: state
+    rows at the step's start and end; q_PB (per body, w x y z): each shape's orientation in its body's principal
+    axes (the shape q_WS = q ⊗ q_PB, its centre the centre of mass); shapes (per body: shape rows).
+
+    Scratch owned by the caller: pos (2, N, 3) and quat (2, N, 4) (a pair's bodies' poses at each end, in their
+    rows), near (K, 2) and which (K,) int64 (the pairs looked at, and their rows k), lower (1,), and dist (K,),
+    normal (K, 3), count (K,) int64, points (K, MAX_PAIR_POINTS, 6), seps (K, MAX_PAIR_POINTS) (pair_contacts').
+    Returns how many pairs were looked at.
+    """
+    m = 0
+    for k in range(pairs.shape[0]):
+        a, b = pairs[k, 0], pairs[k, 1]
+        r0x, r0y, r0z = Y0[b, V] - Y0[a, V], Y0[b, V + 1] - Y0[a, V + 1], Y0[b, V + 2] - Y0[a, V + 2]
+        r1x, r1y, r1z = Y1[b, V] - Y1[a, V], Y1[b, V + 1] - Y1[a, V + 1], Y1[b, V + 2] - Y1[a, V + 2]
+        bound = max(_norm3(r0x, r0y, r0z), _norm3(r1x, r1y, r1z))
+        bound += _norm3(r1x - r0x, r1y - r0y, r1z - r0z)
+        for side in range(2):
+            i = pairs[k, side]
+            spin = max(_norm3(Y0[i, W], Y0[i, W + 1], Y0[i, W + 2]), _norm3(Y1[i, W], Y1[i, W + 1], Y1[i, W + 2]))
+            bound += (spin + _norm3(Y1[i, W] - Y0[i, W], Y1[i, W + 1] - Y0[i, W + 1], Y1[i, W + 2] - Y0[i, W + 2])) \
+                * spin_reach[i]
+        reach[k] = bound * h
+        both = radius[a] + radius[b]
+        apart0 = _norm3(Y0[b, P] - Y0[a, P], Y0[b, P + 1] - Y0[a, P + 1], Y0[b, P + 2] - Y0[a, P + 2]) - both
+        apart1 = _norm3(Y1[b, P] - Y1[a, P], Y1[b, P + 1] - Y1[a, P + 1], Y1[b, P + 2] - Y1[a, P + 2]) - both
+        if apart0 > 0.0 and apart1 > 0.0 and apart0 + apart1 > reach[k]:
+            d0[k] = d1[k] = math.inf
+            continue
+        for side in range(2):
+            i = pairs[k, side]
+            for end in range(2):
+                Y = Y0 if end == 0 else Y1
+                for j in range(3):
+                    pos[end, i, j] = Y[i, P + j]
+                qw, qx, qy, qz = qmul(Y[i, Q], Y[i, Q + 1], Y[i, Q + 2], Y[i, Q + 3],
+                                      q_PB[i, 0], q_PB[i, 1], q_PB[i, 2], q_PB[i, 3])
+                quat[end, i, 0], quat[end, i, 1], quat[end, i, 2], quat[end, i, 3] = qw, qx, qy, qz
+        near[m, 0], near[m, 1] = a, b
+        apart_bounds(pos[0], quat[0], shapes, near[m:m + 1], lower)
+        at0 = lower[0]
+        apart_bounds(pos[1], quat[1], shapes, near[m:m + 1], lower)
+        if at0 > 0.0 and lower[0] > 0.0 and at0 + lower[0] > reach[k]:
+            d0[k] = d1[k] = math.inf
+        else:
+            which[m] = k
+            m += 1
+    if m > 0:
+        pair_contacts(pos[1], quat[1], shapes, near[:m], dist, normal, count, points, seps)
+        for j in range(m):
+            d1[which[j]] = dist[j]
+        pair_contacts(pos[0], quat[0], shapes, near[:m], dist, normal, count, points, seps)
+        for j in range(m):
+            d0[which[j]] = dist[j]
+    _pin = Y0[0, 0], Y1[0, 0], q_PB[0, 0], shapes[0, 0], radius[0], spin_reach[0], pairs[0, 0], pos[0, 0, 0]
+    _pin2 = quat[0, 0, 0], near[0, 0], which[0], lower[0], dist[0], normal[0, 0], count[0], points[0, 0, 0]
+    _pin3 = seps[0, 0], reach[0], d0[0], d1[0]
+    return m
