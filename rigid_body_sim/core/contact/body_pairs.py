@@ -68,7 +68,7 @@ from ..kernels.contact.layout import DIMS, KIND, MAX_POINTS, NORMAL, PERSISTENT,
 from ..kernels.contact.pair_impacts import PAIR_JACOBIAN_SHAPE, normal_speed, pair_impact
 from ..kernels.contact.pairs import MAX_PAIR_POINTS, pair_contacts
 from ..kernels.contact.persistent import normal_speeds
-from ..kernels.contact.swept import grid_swept_pairs, screen_pairs, swept_bounds
+from ..kernels.contact.swept import grid_swept_pairs, screen_pairs, spheres_may_meet, swept_bounds
 from ..quaternion import quat_multiply, quat_rotate
 from .events import ContactEvent
 from .island import Islands
@@ -227,6 +227,7 @@ class BodyPairs:
             self._pairs = np.empty((2 * found, 2), dtype=np.int64)
             found = grid_swept_pairs(self._lo, self._hi, self.movable, self._cells, self._heads, self._chain,
                                      self._pairs)
+        found = spheres_may_meet(Y0, Y1, self.members, self.reach, h, self._pairs, found)
         pairs = self.members[self._pairs[:found]]
         self._last_swept = (lo, hi, pairs)
         return pairs

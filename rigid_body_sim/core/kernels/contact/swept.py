@@ -11,10 +11,12 @@ side, so two overlapping boxes sit in the same or neighbouring cells) and writes
 overlapping pair: about linear in the number of shapes while the moving ones have comparable
 sizes (one huge box, a very fast body's sweep, makes every cell huge). The fixed boxes (static
 shapes, any size) are tested against every movable box: S × N tests for S of them.
-:func:`screen_pairs` then gives each candidate its bound on how fast its distance changes and,
-unless two boxes are provably apart over the whole step, its signed distances at the step's two
-ends (two batched narrow-phase calls). No allocation: the caller owns every array, so a step
-without any candidate pair costs two compiled loops over the shapes and nothing else.
+:func:`spheres_may_meet` keeps of these the pairs whose bounding spheres can meet over the step
+(boxes overlap where spheres do not: every diagonal neighbour of a lattice). :func:`screen_pairs`
+then gives each candidate its bound on how fast its distance changes and, unless it is provably
+apart over the whole step, its signed distances at the step's two ends (two batched narrow-phase
+calls). No allocation: the caller owns every array, so a step without any candidate pair costs
+two compiled loops over the shapes and nothing else.
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ from ..layout import P, Q, V, W
 from ..rotation import qmul
 from .pairs import apart_bounds, pair_contacts
 
-__all__ = ["swept_bounds", "grid_swept_pairs", "screen_pairs"]
+__all__ = ["swept_bounds", "grid_swept_pairs", "spheres_may_meet", "screen_pairs"]
 
 
 @njit(**JIT)
@@ -111,6 +113,39 @@ def grid_swept_pairs(lo, hi, movable, cells, heads, chain, pairs):
                 j = chain[j]
     _pin = lo[0, 0], hi[0, 0], movable[0], cells[0, 0], heads[0], chain[0], pairs[0, 0]
     return count
+
+
+@njit(**JIT)
+def spheres_may_meet(Y0, Y1, members, reach, h, pairs, found):
+    """Of the overlapping boxes' pairs (rows of members) pairs[:found], those whose bounding spheres can meet over
+    the step kept at the front, in their order; returns how many. A pair is dropped when its centres' relative
+    path, taken as the chord from its start to its end offset to its start, stays further from zero than both
+    spheres' radii (``reach``) plus both growths (|v₁ − v₀| h / 4 each, as swept_bounds') and 1e-6 of the radii:
+    each centre stays within its growth of its own chord (swept_bounds), so their difference within both of the
+    chords' difference. Y0, Y1, members, reach, h as for swept_bounds."""
+    kept = 0
+    for k in range(found):
+        m, n = pairs[k, 0], pairs[k, 1]
+        a, b = members[m], members[n]
+        grow = 0.0
+        for i in (a, b):
+            dvx, dvy, dvz = Y1[i, V] - Y0[i, V], Y1[i, V + 1] - Y0[i, V + 1], Y1[i, V + 2] - Y0[i, V + 2]
+            grow += 0.25 * h * math.sqrt(dvx * dvx + dvy * dvy + dvz * dvz)
+        r0x, r0y, r0z = Y0[b, P] - Y0[a, P], Y0[b, P + 1] - Y0[a, P + 1], Y0[b, P + 2] - Y0[a, P + 2]
+        dx = Y1[b, P] - Y1[a, P] - r0x
+        dy = Y1[b, P + 1] - Y1[a, P + 1] - r0y
+        dz = Y1[b, P + 2] - Y1[a, P + 2] - r0z
+        d2 = dx * dx + dy * dy + dz * dz
+        t = 0.0
+        if d2 > 0.0:
+            t = min(max(-(r0x * dx + r0y * dy + r0z * dz) / d2, 0.0), 1.0)
+        cx, cy, cz = r0x + t * dx, r0y + t * dy, r0z + t * dz
+        radii = reach[m] + reach[n]
+        if math.sqrt(cx * cx + cy * cy + cz * cz) <= radii * (1.0 + 1e-6) + grow:
+            pairs[kept, 0], pairs[kept, 1] = m, n
+            kept += 1
+    _pin = Y0[0, 0], Y1[0, 0], members[0], reach[0], pairs[0, 0]
+    return kept
 
 
 @njit(**INLINE)
