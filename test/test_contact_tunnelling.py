@@ -129,3 +129,33 @@ def test_swept_bounds_hold_the_path_of_a_constant_acceleration():
         t = np.linspace(0.0, h, 101)[:, None]
         path = p0 + v0 * t + 0.5 * a * t * t
         assert np.all(path >= lo[0] - 1e-15) and np.all(path <= hi[0] + 1e-15)
+
+
+def test_swept_spheres_keep_every_pair_that_meets():
+    """spheres_may_meet (kernels/contact/swept.py) drops a pair only when its bounding spheres stay apart all along
+    the step: over random bodies under constant accelerations (closed-form paths, sampled at 1001 instants), every
+    pair whose spheres touch at some instant is kept, and pairs that stay apart are dropped (the cull is not empty)."""
+    from rigid_body_sim.core.kernels.contact.swept import spheres_may_meet
+    from rigid_body_sim.core.kernels.layout import P, ROW_WIDTH, V
+
+    rng = np.random.default_rng(2)
+    h, n = 0.01, 60
+    p0, v0, a = rng.uniform(-0.5, 0.5, (n, 3)), rng.normal(0, 5, (n, 3)), rng.normal(0, 50, (n, 3))
+    radius = rng.uniform(0.02, 0.15, n)
+    Y0, Y1 = np.zeros((n, ROW_WIDTH)), np.zeros((n, ROW_WIDTH))
+    Y0[:, P:P + 3], Y0[:, V:V + 3] = p0, v0
+    Y1[:, P:P + 3], Y1[:, V:V + 3] = p0 + v0 * h + 0.5 * a * h * h, v0 + a * h
+    pairs = np.array([(i, j) for i in range(n) for j in range(i + 1, n)], dtype=np.int64)
+    kept = spheres_may_meet(Y0, Y1, np.arange(n, dtype=np.int64), radius, h, pairs, len(pairs))
+    kept_set = {tuple(q) for q in pairs[:kept].tolist()}
+    t = np.linspace(0.0, h, 1001)[:, None, None]
+    path = p0 + v0 * t + 0.5 * a * t * t  # (instants, bodies, 3)
+    meeting = dropped = 0
+    for i in range(n):
+        for j in range(i + 1, n):
+            gap = np.min(np.linalg.norm(path[:, j] - path[:, i], axis=1)) - radius[i] - radius[j]
+            if gap <= 0.0:
+                meeting += 1
+                assert (i, j) in kept_set, f"pair {i}, {j} meets (gap {gap:.3g} m) but was dropped"
+            dropped += (i, j) not in kept_set
+    assert meeting > 20 and dropped > 100
