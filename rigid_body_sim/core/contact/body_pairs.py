@@ -6,9 +6,9 @@ After each step, before the ground pass:
 
 1. **Swept broad phase** (compiled, no allocation; kernels/contact/swept.py): every moving body
    with a shape and every static shape gets the world box its bounding sphere stays in over the
-   step; overlapping boxes, found with a hashed uniform grid, are the candidate pairs. A step
-   without a candidate costs these two compiled loops and nothing else (no Python per body or
-   per pair).
+   step; overlapping boxes, found with a hashed uniform grid, whose bounding spheres can meet over
+   the step, are the candidate pairs. A step without a candidate costs these compiled loops and
+   nothing else (no Python per body or per pair).
 2. **Narrow phase** on the candidates (one compiled call, kernels/contact/swept.py's screen_pairs:
    pairs provably apart over the whole step are left out, the others' signed distances taken at the
    step's end and at its start, batched; kernels/contact/pairs.py). A pair of moving bodies meets in
@@ -113,12 +113,11 @@ class BodyPairs:
         m = len(self.members)
         self.movable = np.zeros(m, dtype=np.bool_)
         self.movable[:len(solver.bodies)] = True
-        self.reach = np.array([bounding_radius(shapes[i]) for i in self.members])
-        #: Per body: the radius its spin sweeps (0 for a sphere, whose distance its spin does not change).
-        self.spin_reach = np.array([0.0 if shapes[i, KIND] == SHAPE_SPHERE else bounding_radius(shapes[i])
-                                    for i in range(len(shapes))])
-        self.size = shapes[:, DIMS:DIMS + 3].max(axis=1)
         self._radius = np.array([bounding_radius(shapes[i]) for i in range(len(shapes))])  # per body, m
+        self.reach = self._radius[self.members]
+        #: Per body: the radius its spin sweeps (0 for a sphere, whose distance its spin does not change).
+        self.spin_reach = np.where(shapes[:, KIND] == SHAPE_SPHERE, 0.0, self._radius)
+        self.size = shapes[:, DIMS:DIMS + 3].max(axis=1)
         self.is_static = np.zeros(len(shapes), dtype=bool)
         self.is_static[statics] = True
         self._lo, self._hi = np.empty((m, 3)), np.empty((m, 3))
