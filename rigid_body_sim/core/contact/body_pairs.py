@@ -10,7 +10,7 @@ After each step, before the ground pass:
    the step, are the candidate pairs. A step without a candidate costs these compiled loops and
    nothing else (no Python per body or per pair).
 2. **Narrow phase** on the candidates (one compiled call, kernels/contact/swept.py's screen_pairs:
-   pairs provably apart over the whole step are left out, the others' signed distances taken at the
+   two boxes provably apart over the whole step are left out, the others' signed distances taken at the
    step's end and at its start, batched; kernels/contact/pairs.py). A pair of moving bodies meets in
    the step if its signed distance is negative at the end, or it overlaps at the start while
    approaching; a pair apart at both ends (d₀, d₁ ≥ 0) that could have met in between
@@ -113,10 +113,10 @@ class BodyPairs:
         m = len(self.members)
         self.movable = np.zeros(m, dtype=np.bool_)
         self.movable[:len(solver.bodies)] = True
-        self._radius = np.array([bounding_radius(shapes[i]) for i in range(len(shapes))])  # per body, m
-        self.reach = self._radius[self.members]
+        radius = np.array([bounding_radius(shapes[i]) for i in range(len(shapes))])  # per body, m
+        self.reach = radius[self.members]
         #: Per body: the radius its spin sweeps (0 for a sphere, whose distance its spin does not change).
-        self.spin_reach = np.where(shapes[:, KIND] == SHAPE_SPHERE, 0.0, self._radius)
+        self.spin_reach = np.where(shapes[:, KIND] == SHAPE_SPHERE, 0.0, radius)
         self.size = shapes[:, DIMS:DIMS + 3].max(axis=1)
         self.is_static = np.zeros(len(shapes), dtype=bool)
         self.is_static[statics] = True
@@ -235,7 +235,7 @@ class BodyPairs:
         """The candidate pairs that meet inside the step (module docstring, 2); a static shape is never first.
 
         One compiled call over the candidates (kernels/contact/swept.py, screen_pairs: each pair's bound B on
-        |d′| and, unless it is provably apart over the step, d₀ and d₁); Python per pair only for those
+        |d′| and, unless two boxes are provably apart over the step, d₀ and d₁); Python per pair only for those
         that overlap at an end of the step or that may have passed through each other: apart at both ends with
         d₀ + d₁ ≤ B h (if |d′| ≤ B, d stays ≥ (d₀ + d₁ − B h)/2 > 0 otherwise).
         """
@@ -246,8 +246,8 @@ class BodyPairs:
         if k > len(self._reach):
             self._grow_screen(2 * k)
         reach, d0, d1 = self._reach[:k], self._d0[:k], self._d1[:k]
-        near = screen_pairs(Y0, Y1, self._q_PB, self._shapes, self._radius, self.spin_reach, pairs, h, self._spos,
-                            self._squat, self._near, self._which, self._lower, self._sdist, self._snormal, self._scount,
+        near = screen_pairs(Y0, Y1, self._q_PB, self._shapes, self.spin_reach, pairs, h, self._spos, self._squat,
+                            self._near, self._which, self._lower, self._sdist, self._snormal, self._scount,
                             self._spoints, self._sseps, self._reach, self._d0, self._d1)
         if near == 0:
             return []

@@ -61,7 +61,7 @@ def compile_pair_kernels() -> None:
     spheres_may_meet(Ys[0], Ys[1], members, np.full(n, 0.1), 1e-3, swept, found)
     Ys[:, :, Q] = 1.0
     k = len(pairs)
-    screen_pairs(Ys[0], Ys[1], quat.copy(), shapes, np.full(n, 0.2), np.full(n, 0.1), pairs, 1e-3, np.zeros((2, n, 3)),
+    screen_pairs(Ys[0], Ys[1], quat.copy(), shapes, np.full(n, 0.1), pairs, 1e-3, np.zeros((2, n, 3)),
                  np.zeros((2, n, 4)), np.empty((k, 2), dtype=np.int64), np.empty(k, dtype=np.int64), np.empty(1),
                  np.empty(k), np.empty((k, 3)), np.zeros(k, dtype=np.int64), np.empty((k, MAX_PAIR_POINTS, 6)),
                  np.empty((k, MAX_PAIR_POINTS)), np.empty(k), np.empty(k), np.empty(k))

@@ -154,13 +154,13 @@ def _norm3(x, y, z):
 
 
 @njit(**JIT)
-def screen_pairs(Y0, Y1, q_PB, shapes, radius, spin_reach, pairs, h, pos, quat, near, which, lower, dist, normal, count,
-                 points, seps, reach, d0, d1):
+def screen_pairs(Y0, Y1, q_PB, shapes, spin_reach, pairs, h, pos, quat, near, which, lower, dist, normal, count, points,
+                 seps, reach, d0, d1):
     """For each candidate pair (a, b), row k of ``pairs`` (K, 2; body indices): reach[k] ← h × a bound (m/s) on
     how fast its signed distance changes over the step, and d0[k], d1[k] ← its signed distances (m) at the step's
-    start and end, or +inf for both where the pair cannot have met in the step: lower bounds on its distance at
-    both ends positive and summing to more than reach[k], first its centres' distance less both bounding radii
-    (``radius``, per body, m, about the centre of mass), then for two boxes apart_bounds'.
+    start and end, or +inf for both where the pair cannot have met in the step: two boxes whose lower bounds on
+    their distance (apart_bounds) at both ends are positive and sum to more than reach[k] (pairs whose bounding
+    spheres cannot meet were dropped before, by spheres_may_meet).
 
     The bound: the larger relative speed |v_b − v_a| of the step's two ends plus its change, and for each body the
     larger spin |ω| plus its change times its spin_reach (per body, m: the radius its spin sweeps). Y0, Y1: state
@@ -185,12 +185,6 @@ def screen_pairs(Y0, Y1, q_PB, shapes, radius, spin_reach, pairs, h, pos, quat, 
             bound += (spin + _norm3(Y1[i, W] - Y0[i, W], Y1[i, W + 1] - Y0[i, W + 1], Y1[i, W + 2] - Y0[i, W + 2])) \
                 * spin_reach[i]
         reach[k] = bound * h
-        both = radius[a] + radius[b]
-        apart0 = _norm3(Y0[b, P] - Y0[a, P], Y0[b, P + 1] - Y0[a, P + 1], Y0[b, P + 2] - Y0[a, P + 2]) - both
-        apart1 = _norm3(Y1[b, P] - Y1[a, P], Y1[b, P + 1] - Y1[a, P + 1], Y1[b, P + 2] - Y1[a, P + 2]) - both
-        if apart0 > 0.0 and apart1 > 0.0 and apart0 + apart1 > reach[k]:
-            d0[k] = d1[k] = math.inf
-            continue
         for side in range(2):
             i = pairs[k, side]
             for end in range(2):
@@ -216,7 +210,7 @@ def screen_pairs(Y0, Y1, q_PB, shapes, radius, spin_reach, pairs, h, pos, quat, 
         pair_contacts(pos[0], quat[0], shapes, near[:m], dist, normal, count, points, seps)
         for j in range(m):
             d0[which[j]] = dist[j]
-    _pin = Y0[0, 0], Y1[0, 0], q_PB[0, 0], shapes[0, 0], radius[0], spin_reach[0], pairs[0, 0], pos[0, 0, 0]
+    _pin = Y0[0, 0], Y1[0, 0], q_PB[0, 0], shapes[0, 0], spin_reach[0], pairs[0, 0], pos[0, 0, 0]
     _pin2 = quat[0, 0, 0], near[0, 0], which[0], lower[0], dist[0], normal[0, 0], count[0], points[0, 0, 0]
     _pin3 = seps[0, 0], reach[0], d0[0], d1[0]
     return m
