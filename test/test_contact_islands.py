@@ -146,6 +146,35 @@ def test_a_cube_turned_and_tilted_lands_flat_on_a_cube_and_rests(yaw_deg, tilt):
 
 
 
+def can(position, radius=0.0625, length=0.125, orientation=(0.0, 0.0, 0.0, 1.0)):
+    """A can: a 0.4 kg cylinder (μ = 0.5, e = 0), its axis along body z."""
+    shape = {"cylinder": [radius, length]}
+    return {"mass": 0.4, "inertia": shape, "collision": shape, "material": {"restitution": 0.0, "friction": 0.5},
+            "pose": {"position": list(position), "orientation": list(orientation)}}
+
+
+@pytest.mark.parametrize("below, offset, tilt", [("cylinder", 0.0, 0.0), ("cylinder", 0.03125, 0.0),
+                                                 ("cylinder", 0.03125, 0.02), ("box", 0.03125, 0.0),
+                                                 ("box", 0.03125, 0.02)])
+def test_a_can_dropped_onto_a_can_or_a_cube_lands_on_its_end_and_rests(below, offset, tilt):
+    """A can (radius 0.0625 m, length 0.125 m) dropped 5 mm, upright or tilted, onto a can or a 0.125 m cube
+    resting on the ground, its axis 0 or 31 mm off the lower's (its centre over the lower's top face; rk4 at
+    dt = 10 ms): it lands on its end, rim or edge first, and by 1 s rests flat — at its stacked height 0.1875 m,
+    its axis the world's z, every speed within 1e-9 — and so to 2 s."""
+    from scipy.spatial.transform import Rotation
+
+    turn = Rotation.from_euler("y", tilt)
+    lowest = 0.0625 * np.sin(tilt) + 0.0625 * np.cos(tilt)  # its lowest rim point below its centre
+    lower = can((0.0, 0.0, 0.0625)) if below == "cylinder" else cube((0.0, 0.0, 0.0625), mass=0.4, edge=0.125)
+    sim = simulator({"a": lower, "b": can((offset, 0.0, 0.125 + lowest + 5e-3), orientation=tuple(turn.as_quat()))})
+    for _ in range(2):
+        sim.step(100)
+        axis = Rotation.from_quat(sim.orientations_xyzw()[1]).apply([0.0, 0.0, 1.0])
+        assert sim.positions_world()[:, 2] == pytest.approx([0.0625, 0.1875], abs=1e-9)
+        assert np.linalg.norm(axis - [0.0, 0.0, 1.0]) <= 1e-9
+        assert speeds(sim) <= 1e-9
+
+
 @pytest.mark.parametrize("dt, within", [(1e-4, 2e-3), (1e-5, 2e-4)])
 def test_a_slender_block_rocking_on_a_box_keeps_housners_share_of_its_spin_at_each_landing(dt, within):
     """A block 0.2 × 0.2 × 1 m (1 kg, μ = 0.9, e = 0) tilted 0.02 rad onto one bottom edge, on a heavy box resting

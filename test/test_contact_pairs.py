@@ -31,7 +31,7 @@ import pytest
 from rigid_body_sim.core.kernels.contact.broadphase import grid_pairs, shape_aabbs, sweep_pairs
 from rigid_body_sim.core.kernels.contact.layout import DIMS, KIND, SHAPE_BOX, SHAPE_WIDTH
 from rigid_body_sim.core.kernels.contact.convex import POSE_WIDTH
-from rigid_body_sim.core.kernels.contact.pairs import MAX_PAIR_POINTS, apart_bounds, box_patch, pair_contacts
+from rigid_body_sim.core.kernels.contact.pairs import MAX_PAIR_POINTS, apart_bounds, face_patch, pair_contacts
 
 KINDS = {"sphere": 1, "box": 2, "cylinder": 3, "capsule": 4}
 IDENTITY = (1.0, 0.0, 0.0, 0.0)
@@ -362,20 +362,20 @@ def test_a_pair_kept_apart_without_a_look_is_still_apart_by_more_than_its_bound(
 
 
 def _patch(half_a, half_b, pos_b, quat_b, normal, flat=np.cos(0.1), band=1.0):
-    """box_patch of box a (half extents half_a, at the origin, unturned) and box b; its points sorted."""
+    """face_patch of box a (half extents half_a, at the origin, unturned) and box b; its points sorted."""
     shapes = np.zeros((2, SHAPE_WIDTH))
     shapes[:, KIND] = SHAPE_BOX
     shapes[0, DIMS:DIMS + 3], shapes[1, DIMS:DIMS + 3] = half_a, half_b
     pos, quat = np.array([[0.0, 0.0, 0.0], pos_b]), np.array([[1.0, 0.0, 0.0, 0.0], quat_b])
     res, seps = np.empty((MAX_PAIR_POINTS, 6)), np.empty(MAX_PAIR_POINTS)
-    count, *ref = box_patch(pos, quat, shapes, 0, 1, *normal, flat, band, np.zeros((2, POSE_WIDTH)),
+    count, *ref = face_patch(pos, quat, shapes, 0, 1, *normal, flat, band, np.zeros((2, POSE_WIDTH)),
                             np.empty((2, 16, 3)), res, seps)
     order = np.lexsort(np.round(res[:count, 3:5], 9).T)
     return count, np.array(ref), res[:count][order], seps[:count][order]
 
 
 def test_a_box_face_on_a_box_face_touches_by_the_clipped_patch():
-    """box_patch (the islands' rows of two boxes face on face, kernels/contact/island.py), against closed forms:
+    """face_patch (the islands' rows of two boxes face on face, kernels/contact/island.py), against closed forms:
     a cube tilted 0.02 rad on a larger box touches by its four bottom corners, each at its own height above the
     top face (numpy rotation, 1e-15 m), its foot straight below; a cube turned 45° about z on an equal cube, a
     gap 1e-3 m above it, by the regular octagon of the two squares' crossing (1e-15 m); a pair normal 0.3 rad
@@ -475,6 +475,92 @@ def test_cylinder_on_a_box_face_standing_and_lying():
     assert count == 2
     assert sorted(points[:, 1]) == pytest.approx([-0.1, 0.3], abs=1e-12)  # clipped at the face's edge y = 0.3
     assert seps == pytest.approx([-1e-3] * 2, abs=1e-12)
+
+
+ALONG_X = (np.cos(np.pi / 4), 0.0, np.sin(np.pi / 4), 0.0)  # the body's z axis along world x
+
+
+def on_both(ka, da, ca, qa, kb, db, cb, qb, points):
+    """Every point pair lies on its shape's surface (surface_distance), within 1e-12 m."""
+    for p in points:
+        assert surface_distance(ka, da, np.asarray(ca), matrix(qa), p[:3]) <= 1e-12
+        assert surface_distance(kb, db, np.asarray(cb), matrix(qb), p[3:]) <= 1e-12
+
+
+@pytest.mark.parametrize("ra,rb,offset", [(0.1, 0.1, (0.0, 0.0)), (0.1, 0.1, (0.06, 0.02)), (0.1, 0.04, (0.03, 0.0)),
+                                          (0.04, 0.1, (0.03, -0.01)), (0.1, 0.06, (0.09, 0.0))])
+def test_two_cylinders_end_on_end_touch_where_their_disks_overlap(ra, rb, offset):
+    """B (radius rb) sunk 1 mm on A's top end, its axis offset: the points are each rim's four points (local ±x,
+    ±y) inside the other disk and the two points where the rims cross (closed form); every one is within both
+    disks, 1 mm deep, on both surfaces, and their hull holds B's centre when it lies over both disks."""
+    h = 0.15
+    ca, cb = np.zeros(3), np.array([offset[0], offset[1], 2 * h - 1e-3])
+    da, db = np.array([ra, h, 0.0]), np.array([rb, h, 0.0])
+    dist, normal, count, points, seps = one(row("cylinder", ra, h), row("cylinder", rb, h), ca, cb)
+    assert dist == pytest.approx(-1e-3, abs=1e-12)
+    assert normal == pytest.approx([0.0, 0.0, 1.0], abs=1e-12)
+    assert seps == pytest.approx([-1e-3] * count, abs=1e-12)
+    on_both("cylinder", da, ca, IDENTITY, "cylinder", db, cb, IDENTITY, points)
+    expect = []
+    for centre, r, other, r_other in ((ca[:2], ra, cb[:2], rb), (cb[:2], rb, ca[:2], ra)):
+        for u in ((1, 0), (0, 1), (-1, 0), (0, -1)):
+            p = centre + r * np.array(u)
+            if np.linalg.norm(p - other) <= r_other + 1e-12:
+                expect.append(p)
+    d = np.linalg.norm(cb[:2])
+    if abs(ra - rb) < d < ra + rb:
+        e = cb[:2] / d
+        along = (d * d + ra * ra - rb * rb) / (2 * d)
+        across = np.sqrt(ra * ra - along * along)
+        expect += [along * e + s * across * np.array([-e[1], e[0]]) for s in (-1, 1)]
+    distinct = {tuple(np.round(p, 9)) for p in expect}
+    assert count == len(distinct)
+    assert {tuple(np.round(p[:2], 9)) for p in points} == distinct
+    if np.linalg.norm(cb[:2]) < ra:  # B's centre over A's disk: inside the points' hull
+        from scipy.spatial import Delaunay
+        assert Delaunay(points[:, :2]).find_simplex(cb[:2]) >= 0
+
+
+@pytest.mark.parametrize("ka", ["capsule", "cylinder"])
+def test_a_side_lying_on_an_end_face_touches_along_the_chord_over_the_disk(ka):
+    """A capsule or a cylinder (radius 0.03, half length 0.2, along x, 0.02 off the disk's centre in y) lying 1 mm
+    deep on a cylinder's top end (radius 0.1): two points, at the chord's ends x = ±√(0.1² − 0.02²); a cylinder
+    standing on a lying one's side: the chord of its end along the side's line."""
+    R, h, r, half = 0.1, 0.15, 0.03, 0.2
+    ca, cb = np.zeros(3), np.array([0.01, 0.02, h + r - 1e-3])
+    db = np.array([r, half, 0.0])
+    dist, normal, count, points, seps = one(row("cylinder", R, h), row(ka, r, half), ca, cb, IDENTITY, ALONG_X)
+    assert dist == pytest.approx(-1e-3, abs=1e-12)
+    assert count == 2
+    assert seps == pytest.approx([-1e-3] * 2, abs=1e-12)
+    chord = np.sqrt(R * R - 0.02 ** 2)
+    assert sorted(points[:, 0]) == pytest.approx([-chord, chord], abs=1e-12)
+    assert points[:, 1] == pytest.approx([0.02, 0.02], abs=1e-12)
+    on_both("cylinder", np.array([R, h, 0.0]), ca, IDENTITY, ka, db, cb, ALONG_X, points)
+    # a cylinder (radius 0.05) standing on the side of one lying along x: its end's chord along the top line
+    ca, cb = np.zeros(3), np.array([0.01, 0.03, R + h - 1e-3])
+    dist, normal, count, points, seps = one(row("cylinder", R, half), row("cylinder", 0.05, h), ca, cb, ALONG_X)
+    assert count == 2
+    assert seps == pytest.approx([-1e-3] * 2, abs=1e-12)
+    chord = np.sqrt(0.05 ** 2 - 0.03 ** 2)
+    assert sorted(points[:, 0]) == pytest.approx([0.01 - chord, 0.01 + chord], abs=1e-12)
+    on_both("cylinder", np.array([R, half, 0.0]), ca, ALONG_X, "cylinder", np.array([0.05, h, 0.0]), cb, IDENTITY,
+            points)
+
+
+@pytest.mark.parametrize("ka", ["capsule", "cylinder"])
+def test_two_sides_lying_along_parallel_axes_touch_along_their_overlap(ka):
+    """A capsule or a cylinder (radius 0.03, half length 0.2) lying 1 mm deep along the top of a cylinder lying
+    (radius 0.1, half length 0.15) parallel to it, 0.1 along: two points, at the overlap's ends x = −0.1, 0.15."""
+    R, h, r, half = 0.1, 0.15, 0.03, 0.2
+    ca, cb = np.zeros(3), np.array([0.1, 0.0, R + r - 1e-3])
+    dist, normal, count, points, seps = one(row(ka, r, half), row("cylinder", R, h), cb, ca, ALONG_X, ALONG_X)
+    assert dist == pytest.approx(-1e-3, abs=1e-12)
+    assert normal == pytest.approx([0.0, 0.0, -1.0], abs=1e-12)
+    assert count == 2
+    assert seps == pytest.approx([-1e-3] * 2, abs=1e-12)
+    assert sorted(points[:, 0]) == pytest.approx([-0.1, 0.15], abs=1e-12)
+    on_both(ka, np.array([r, half, 0.0]), cb, ALONG_X, "cylinder", np.array([R, h, 0.0]), ca, ALONG_X, points)
 
 
 @pytest.mark.parametrize("ka,kb", [("sphere", "cylinder"), ("box", "cylinder"), ("cylinder", "cylinder"),

@@ -9,11 +9,11 @@ core/contact/island.py). The step is **first order** (Moreau–Jean / Stewart–
 with, at each contact point (normal n, tangents t1, t2, gap g ≥ 0 at the step's start),
 u_n⁺ + g/h ≥ 0 ⊥ λ_n ≥ 0 (Stewart–Trinkle's gap term: a gap closes exactly within the step, never
 more; a gap within TOUCH_GAP × the pair's size is touching, g = 0) and Coulomb's cone |λ_t| ≤ μ λ_n,
-e = 0. The points of two boxes face on face (their normal within 0.1 rad of a face's) are the
-clipped patch of the two faces (pairs.box_patch), each at its own gap, as far as the pair's reach
-over the step or PATCH_REACH × its size: the gap term lets a row act only where the step would close
-it, and a box turned or tilted on another is held by its whole face, not rocked about the narrow
-phase's deepest corner.
+e = 0. The points of two boxes or cylinders face on face (their normal within 0.1 rad of a box face's
+or a cylinder end's) are the clipped patch of the two faces (pairs.face_patch), each at its own gap, as
+far as the pair's reach over the step or PATCH_REACH × its size: the gap term lets a row act only where
+the step would close it, and a box or a can turned or tilted on another is held by its whole face, not
+rocked about the narrow phase's deepest corner or rim point.
 
 The velocity problem is solved per component of the step's contacts (bodies joined by contacts; an
 island's bodies within reach but not touching are apart there). The case where nothing slides is
@@ -62,11 +62,11 @@ from ..forces import body_wrench
 from ..jit import INLINE, JIT
 from ..layout import ACTIVE, BOUND, GRAVITY, INV_INERTIA, INV_MASS, INERTIA, MASS, P, Q, Q_PB, STATE_WIDTH, V, W
 from ..rotation import exp_map, matrix, normalise, qmul, rotate, rotate_back
-from .layout import DIMS, FRICTION, HAS_MATERIAL, KIND, NORMAL, OFFSET, SHAPE_BOX
+from .layout import DIMS, FRICTION, HAS_MATERIAL, KIND, NORMAL, OFFSET, SHAPE_BOX, SHAPE_CYLINDER
 from .convex import POSE_WIDTH
 from .impacts import kinetic_energy_row, potential_energy_row
 from .pair_impacts import normal_speed
-from .pairs import MAX_PAIR_POINTS, box_patch, boxes_apart_turned, pair_contacts
+from .pairs import MAX_PAIR_POINTS, boxes_apart_turned, face_patch, pair_contacts
 from .shapes import MAX_FEATURES, feature_gaps, feature_points
 
 __all__ = ["island_pass", "all_asleep", "rest_alone", "TOUCH", "SLEEP_SPEED", "SLEEP_STEPS", "DENSE_MAX", "PROJECT_TOL", "C_FLOATS", "C_INTS", "OUT_WIDTH"]
@@ -85,8 +85,9 @@ SLEEP_SPEED = 1e-9
 #: before it sleeps: a body slow only for an instant (a rocking column at its turning point) stays awake, and
 #: one jittering in place (a Gauss–Seidel residue over a pile) is at rest.
 SLEEP_STEPS = 10
-#: Two boxes whose pair normal is within acos(PATCH_FLAT) of a face normal touch by a patch: the other's face
-#: clipped against that one (pairs.box_patch), every point within the pair's reach or PATCH_REACH × its size.
+#: Two boxes or cylinders whose pair normal is within acos(PATCH_FLAT) of a box face's or a cylinder end's normal
+#: touch by a patch: the other's face, rim or side clipped against that one (pairs.face_patch), every point within
+#: the pair's reach or PATCH_REACH × its size.
 PATCH_FLAT, PATCH_REACH = math.cos(0.1), 1e-2
 #: Most rows (3 per contact point) of an island solved densely for the sticking case.
 DENSE_MAX = 360
@@ -265,12 +266,40 @@ def _pair_mu(shapes, a, b, default_mu):
 
 @njit(**INLINE)
 def _inside(pos, quat, shapes, i, x, y, z, slack):
-    """Whether the world point (x, y, z) is inside box i grown by ``slack`` (m)."""
+    """Whether the world point (x, y, z) is inside box or cylinder i grown by ``slack`` (m)."""
     lx, ly, lz = rotate_back(quat[i, 0], quat[i, 1], quat[i, 2], quat[i, 3], x - pos[i, 0], y - pos[i, 1], z - pos[i, 2])
-    inside = (abs(lx) <= shapes[i, DIMS] + slack and abs(ly) <= shapes[i, DIMS + 1] + slack
-              and abs(lz) <= shapes[i, DIMS + 2] + slack)
+    if shapes[i, KIND] == SHAPE_CYLINDER:
+        r = shapes[i, DIMS] + slack
+        inside = lx * lx + ly * ly <= r * r and abs(lz) <= shapes[i, DIMS + 1] + slack
+    else:
+        inside = (abs(lx) <= shapes[i, DIMS] + slack and abs(ly) <= shapes[i, DIMS + 1] + slack
+                  and abs(lz) <= shapes[i, DIMS + 2] + slack)
     _pin = shapes[0, 0]
     return inside
+
+
+@njit(**INLINE)
+def _corner(pos, quat, shapes, i, corner):
+    """Corner ``corner`` (0–7) of box i, or of cylinder i the rim point along its local ±x or ±y (corner & 3) of
+    its end at ±z (corner & 4), as the narrow phase's rims standing flat (pairs._disk_disk): world, m."""
+    if shapes[i, KIND] == SHAPE_CYLINDER:
+        j = corner & 3
+        r = shapes[i, DIMS]
+        lx = r if j == 0 else (-r if j == 2 else 0.0)
+        ly = r if j == 1 else (-r if j == 3 else 0.0)
+        lz = shapes[i, DIMS + 1] if corner & 4 else -shapes[i, DIMS + 1]
+    else:
+        lx = shapes[i, DIMS] if corner & 1 else -shapes[i, DIMS]
+        ly = shapes[i, DIMS + 1] if corner & 2 else -shapes[i, DIMS + 1]
+        lz = shapes[i, DIMS + 2] if corner & 4 else -shapes[i, DIMS + 2]
+    ox, oy, oz = rotate(quat[i, 0], quat[i, 1], quat[i, 2], quat[i, 3], lx, ly, lz)
+    return pos[i, 0] + ox, pos[i, 1] + oy, pos[i, 2] + oz
+
+
+@njit(**INLINE)
+def _has_corners(shapes, i):
+    """Box or cylinder: the shapes _corners looks at."""
+    return shapes[i, KIND] == SHAPE_BOX or shapes[i, KIND] == SHAPE_CYLINDER
 
 
 @njit(**INLINE)
@@ -284,12 +313,11 @@ def _owners(cint, c, a, b, is_static):
 
 
 @njit(**JIT)
-def _box_corners(pos, quat, shapes, k, a, b, pnormal, pcount, ppoints, limit, scale, is_static, mu, cint, cflt,
-                 count):
-    """Box–box pair k not face on face (no patch): besides the narrow phase's points (the deepest feature), each
-    corner of one box whose separation along the pair's normal from the other's supporting plane is within
-    ``limit`` and whose foot on that plane lies on the other box: a tilted box's other corners, which a spin
-    brings in."""
+def _corners(pos, quat, shapes, k, a, b, pnormal, pcount, ppoints, limit, scale, is_static, mu, cint, cflt, count):
+    """Pair k of boxes and cylinders not face on face (no patch): besides the narrow phase's points (the deepest
+    feature), each corner of one (a box's, a cylinder's rim points: _corner) whose separation along the pair's
+    normal from the other's supporting plane is within ``limit`` and whose foot on that plane lies on the other:
+    a tilted box's other corners, a tilted cylinder's other side of its rim, which a spin brings in."""
     nx, ny, nz = pnormal[k, 0], pnormal[k, 1], pnormal[k, 2]
     plane_a = nx * ppoints[k, 0, 0] + ny * ppoints[k, 0, 1] + nz * ppoints[k, 0, 2]  # a's support along n
     plane_b = nx * ppoints[k, 0, 3] + ny * ppoints[k, 0, 4] + nz * ppoints[k, 0, 5]  # b's support along −n
@@ -298,12 +326,7 @@ def _box_corners(pos, quat, shapes, k, a, b, pnormal, pcount, ppoints, limit, sc
         i = b if side == 0 else a
         other = a if side == 0 else b
         for corner in range(8):
-            sx = 1.0 if corner & 1 else -1.0
-            sy = 1.0 if corner & 2 else -1.0
-            sz = 1.0 if corner & 4 else -1.0
-            ox, oy, oz = rotate(quat[i, 0], quat[i, 1], quat[i, 2], quat[i, 3], sx * shapes[i, DIMS],
-                                sy * shapes[i, DIMS + 1], sz * shapes[i, DIMS + 2])
-            x, y, z = pos[i, 0] + ox, pos[i, 1] + oy, pos[i, 2] + oz
+            x, y, z = _corner(pos, quat, shapes, i, corner)
             along = nx * x + ny * y + nz * z
             sep = along - plane_a if side == 0 else plane_b - along
             if sep > limit:
@@ -355,9 +378,9 @@ def _gather(Y, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdi
         scale = max(size[a], size[b])
         limit = TOUCH * scale + extra if deep_only else bound[k]
         mu = _pair_mu(shapes, a, b, default_mu)
-        if shapes[a, KIND] == SHAPE_BOX and shapes[b, KIND] == SHAPE_BOX and pcount[k] > 0:
+        if _has_corners(shapes, a) and _has_corners(shapes, b) and pcount[k] > 0:
             reach = limit if deep_only else max(limit, PATCH_REACH * scale)
-            m, rx, ry, rz = box_patch(pos, quat, shapes, a, b, pnormal[k, 0], pnormal[k, 1], pnormal[k, 2],
+            m, rx, ry, rz = face_patch(pos, quat, shapes, a, b, pnormal[k, 0], pnormal[k, 1], pnormal[k, 2],
                                       PATCH_FLAT, max(reach - pdist[k], 0.0), poses, poly, res, seps)
             if m > 0:  # a face on a face: the clipped patch, each point at its own gap
                 for c in range(m):
@@ -379,9 +402,9 @@ def _gather(Y, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdi
                 cflt[count, C_GAP] = pseps[k, c]
                 cflt[count, C_MU] = mu
                 count += 1
-        if shapes[a, KIND] == SHAPE_BOX and shapes[b, KIND] == SHAPE_BOX and pcount[k] > 0:
-            count = _box_corners(pos, quat, shapes, k, a, b, pnormal, pcount, ppoints, limit, scale, is_static,
-                                 mu, cint, cflt, count)
+        if _has_corners(shapes, a) and _has_corners(shapes, b) and pcount[k] > 0:
+            count = _corners(pos, quat, shapes, k, a, b, pnormal, pcount, ppoints, limit, scale, is_static, mu, cint,
+                             cflt, count)
     gaps = np.empty(MAX_FEATURES)
     points = np.empty((4, 3))
     pg = np.empty(4)
@@ -1716,7 +1739,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     need = 0
     for k in range(n_pairs):
         if island[nlist[k, 0]] == 1 or island[nlist[k, 1]] == 1:
-            need += pcount[k] + 16  # a box–box pair's corners besides (_box_corners)
+            need += pcount[k] + 16  # a pair's corners besides (_corners)
     for m in range(n):
         if island[members[m]] == 1:
             need += MAX_FEATURES * 4 * grounds.shape[0]

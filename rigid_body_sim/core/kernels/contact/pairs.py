@@ -11,7 +11,10 @@ writes
   on B's (world, m), with ``seps[m, k]`` = (p_B − p_A)·n; point 0 is the deepest
   (seps[m, 0] = dist[m]). More than one point where a feature touches flat: two box faces
   (the incident face clipped to the reference face: up to 8 points), a capsule lying on a box
-  face or parallel to another capsule (2). Every point whose separation is within
+  face or parallel to another capsule (2), a cylinder standing or lying on a box face (its rim's 4
+  points or its side's line, clipped), two cylinder ends (each rim's points within the other disk
+  and where the rims cross), a cylinder's or capsule's side on a cylinder's end (the chord over
+  the disk, 2) or along a parallel cylinder (their overlap, 2). Every point whose separation is within
   ``FEATURE_BAND`` × the pair's size of the deepest, or that penetrates, is reported.
 
 Closed forms: sphere–sphere, sphere–capsule, capsule–capsule (closest points of segments),
@@ -44,7 +47,7 @@ from .refine import feature_point, refine_normal
 from .shapes import FEATURE_BAND
 
 __all__ = ["make_workspace_jit", "MAX_PAIR_POINTS", "FACE_ALIGNMENT", "set_pose", "surface_point", "pair_contact", "pair_contacts",
-           "boxes_apart", "boxes_apart_turned", "apart_bounds", "box_patch"]
+           "boxes_apart", "boxes_apart_turned", "apart_bounds", "face_patch"]
 
 #: Most contact points one pair reports (a box face clipped against another: a polygon of up to 8 corners).
 MAX_PAIR_POINTS = 8
@@ -502,12 +505,12 @@ def _clip(poly, src, n, px, py, pz, ox, oy, oz, limit):
 
 
 @njit(**JIT)
-def _face_manifold(ref, inc, ref_is_a, ma, mb, nx, ny, nz, sd, band, poly, res, seps):
+def _face_manifold(ref, inc, ref_is_a, ma, mb, nx, ny, nz, sd, band, tilt, poly, res, seps):
     """Clip the incident core's feature (box face or segment) against the reference box face nearest n.
 
     ``ref`` is a box core; ``inc`` a box, a segment (with margin; a segment is always A here) or
     a cylinder standing on an end (four rim points, as against the ground) or lying on its side
-    (the side's line), else nothing is clipped. Writes the points whose separation is within ``band`` of the
+    (the side's line), each within ``tilt`` (rad, small) of the face, else nothing is clipped. Writes the points whose separation is within ``band`` of the
     deepest or below zero; returns their count (0 if clipping left nothing).
     """
     sgn_n = 1.0 if ref_is_a else -1.0  # the reference face's outward normal is ±n
@@ -537,7 +540,7 @@ def _face_manifold(ref, inc, ref_is_a, ma, mb, nx, ny, nz, sd, band, poly, res, 
         ux, uy, uz = _axis(inc, 2)
         c_axis = ux * rx + uy * ry + uz * rz
         r, h = inc[_DIM], inc[_DIM + 1]
-        if abs(c_axis) >= 1.0 - 0.5 * FACE_ALIGNMENT * FACE_ALIGNMENT:
+        if abs(c_axis) >= 1.0 - 0.5 * tilt * tilt:
             # standing on an end face: four rim points of the end facing the reference face
             s_end = -1.0 if c_axis > 0.0 else 1.0
             e1x, e1y, e1z = _axis(inc, 0)
@@ -549,7 +552,7 @@ def _face_manifold(ref, inc, ref_is_a, ma, mb, nx, ny, nz, sd, band, poly, res, 
                 poly[0, k, 1] = inc[_C + 1] + s_end * h * uy + r * (c1 * e1y + c2 * e2y)
                 poly[0, k, 2] = inc[_C + 2] + s_end * h * uz + r * (c1 * e1z + c2 * e2z)
             n = 4
-        elif abs(c_axis) <= FACE_ALIGNMENT:
+        elif abs(c_axis) <= tilt:
             # lying on its side: the line of the side nearest the reference face
             px, py, pz = rx - c_axis * ux, ry - c_axis * uy, rz - c_axis * uz
             norm = math.sqrt(px * px + py * py + pz * pz)
@@ -698,6 +701,219 @@ def _put_feature_points(pa, ma, pb, mb, nx, ny, nz, wax, way, waz, wbx, wby, wbz
 
 
 @njit(**INLINE)
+def _flat_end(pose, fx, fy, fz, tilt):
+    """The end face of a cylinder core whose outward normal is within ``tilt`` (rad, small) of f: (True, its centre (world,
+    m), its outward normal, its radius (m)), else (False, ...)."""
+    if int(pose[_KIND]) != CORE_CYLINDER:
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    ux, uy, uz = _axis(pose, 2)
+    c = ux * fx + uy * fy + uz * fz
+    if abs(c) < 1.0 - 0.5 * tilt * tilt:
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    s = 1.0 if c > 0.0 else -1.0
+    h = pose[_DIM + 1]
+    return (True, pose[_C] + s * h * ux, pose[_C + 1] + s * h * uy, pose[_C + 2] + s * h * uz, s * ux, s * uy, s * uz,
+            pose[_DIM])
+
+
+@njit(**INLINE)
+def _lying_line(pose, margin, fx, fy, fz, tilt):
+    """The line of a cylinder's side or a capsule's surface (margin: its radius) nearest direction f, when the axis is
+    within ``tilt`` (rad, small) of across f: (True, its ends p0, p1 (world, m)), else (False, ...). Both ends lie on the
+    surface: the core's axis offset by the radius along f's part across the axis."""
+    kind = int(pose[_KIND])
+    if kind != CORE_CYLINDER and kind != CORE_SEGMENT:
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    ux, uy, uz = _axis(pose, 2)
+    c = ux * fx + uy * fy + uz * fz
+    if abs(c) > tilt:
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    wx, wy, wz = fx - c * ux, fy - c * uy, fz - c * uz
+    w = math.sqrt(wx * wx + wy * wy + wz * wz)
+    r, h = (pose[_DIM], pose[_DIM + 1]) if kind == CORE_CYLINDER else (margin, pose[_DIM])
+    if h <= 0.0:
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    ox, oy, oz = pose[_C] + r * wx / w, pose[_C + 1] + r * wy / w, pose[_C + 2] + r * wz / w
+    return True, ox - h * ux, oy - h * uy, oz - h * uz, ox + h * ux, oy + h * uy, oz + h * uz
+
+
+@njit(**INLINE)
+def _onto_disk(ex, ey, ez, mx, my, mz, radius, px, py, pz):
+    """The point of the disk (centre e, unit normal m, radius) nearest p: p projected onto its plane, drawn in to
+    the rim if beyond it."""
+    d = (px - ex) * mx + (py - ey) * my + (pz - ez) * mz
+    qx, qy, qz = px - d * mx - ex, py - d * my - ey, pz - d * mz - ez
+    q = math.sqrt(qx * qx + qy * qy + qz * qz)
+    s = radius / q if q > radius else 1.0
+    return ex + s * qx, ey + s * qy, ez + s * qz
+
+
+@njit(**INLINE)
+def _add(poly, k, ax, ay, az, bx, by, bz, tol):
+    """Append the point pair (a on A, b on B) to poly[0, k], poly[1, k] unless a is within tol of one there already
+    (two rims' points that coincide); returns the new count."""
+    for q in range(k):
+        if abs(poly[0, q, 0] - ax) <= tol and abs(poly[0, q, 1] - ay) <= tol and abs(poly[0, q, 2] - az) <= tol:
+            return k
+    poly[0, k, 0], poly[0, k, 1], poly[0, k, 2] = ax, ay, az
+    poly[1, k, 0], poly[1, k, 1], poly[1, k, 2] = bx, by, bz
+    return k + 1
+
+
+@njit(**JIT)
+def _disk_disk(pa, pb, ea, eb, tol, poly):
+    """Two end faces touching flat (ea, eb: _flat_end of A along n, of B along −n): the four rim points of each
+    (along its core's local x and y axes) that lie within the other disk, and the two points where the rims
+    cross, each paired with the nearest point of the other face, into poly (_add); returns their count (≤ 10)."""
+    k = 0
+    for side in range(2):
+        src, e, other = (pa, ea, eb) if side == 0 else (pb, eb, ea)
+        e1x, e1y, e1z = _axis(src, 0)
+        e2x, e2y, e2z = _axis(src, 1)
+        r = e[7]
+        for j in range(4):
+            c1 = 1.0 if j == 0 else (-1.0 if j == 2 else 0.0)
+            c2 = 1.0 if j == 1 else (-1.0 if j == 3 else 0.0)
+            px = e[1] + r * (c1 * e1x + c2 * e2x)
+            py = e[2] + r * (c1 * e1y + c2 * e2y)
+            pz = e[3] + r * (c1 * e1z + c2 * e2z)
+            d = (px - other[1]) * other[4] + (py - other[2]) * other[5] + (pz - other[3]) * other[6]
+            qx, qy, qz = px - d * other[4] - other[1], py - d * other[5] - other[2], pz - d * other[6] - other[3]
+            if qx * qx + qy * qy + qz * qz > (other[7] + tol) ** 2:
+                continue
+            fx, fy, fz = _onto_disk(other[1], other[2], other[3], other[4], other[5], other[6], other[7], px, py, pz)
+            if side == 0:
+                k = _add(poly, k, px, py, pz, fx, fy, fz, tol)
+            else:
+                k = _add(poly, k, fx, fy, fz, px, py, pz, tol)
+    # where the rims cross, in A's plane: B's centre projected onto it, at d from A's
+    mx, my, mz = ea[4], ea[5], ea[6]
+    t = (eb[1] - ea[1]) * mx + (eb[2] - ea[2]) * my + (eb[3] - ea[3]) * mz
+    ox, oy, oz = eb[1] - t * mx - ea[1], eb[2] - t * my - ea[2], eb[3] - t * mz - ea[3]
+    d = math.sqrt(ox * ox + oy * oy + oz * oz)
+    ra, rb = ea[7], eb[7]
+    if abs(ra - rb) + tol < d < ra + rb:
+        ox, oy, oz = ox / d, oy / d, oz / d
+        vx, vy, vz = my * oz - mz * oy, mz * ox - mx * oz, mx * oy - my * ox
+        along = (d * d + ra * ra - rb * rb) / (2.0 * d)
+        across = math.sqrt(max(ra * ra - along * along, 0.0))
+        for sgn in (-1.0, 1.0):
+            px = ea[1] + along * ox + sgn * across * vx
+            py = ea[2] + along * oy + sgn * across * vy
+            pz = ea[3] + along * oz + sgn * across * vz
+            fx, fy, fz = _onto_disk(eb[1], eb[2], eb[3], eb[4], eb[5], eb[6], rb, px, py, pz)
+            k = _add(poly, k, px, py, pz, fx, fy, fz, tol)
+    return k
+
+
+@njit(**JIT)
+def _line_disk(line, e, line_is_a, tol, poly):
+    """A lying side (line: _lying_line) on an end face (e: _flat_end): the ends of the part of the line over the
+    disk, each paired with the nearest point of the face, into poly (A's point first); returns 2, or 0 if that
+    part has no length."""
+    mx, my, mz = e[4], e[5], e[6]
+    p0x, p0y, p0z = line[1], line[2], line[3]
+    dx, dy, dz = line[4] - p0x, line[5] - p0y, line[6] - p0z
+    a0 = (p0x - e[1]) * mx + (p0y - e[2]) * my + (p0z - e[3]) * mz
+    ad = dx * mx + dy * my + dz * mz
+    ox, oy, oz = p0x - a0 * mx - e[1], p0y - a0 * my - e[2], p0z - a0 * mz - e[3]  # in the disk's plane
+    vx, vy, vz = dx - ad * mx, dy - ad * my, dz - ad * mz
+    qa = vx * vx + vy * vy + vz * vz
+    qb = ox * vx + oy * vy + oz * vz
+    qc = ox * ox + oy * oy + oz * oz - e[7] * e[7]
+    disc = qb * qb - qa * qc
+    if qa <= 0.0 or disc <= 0.0:
+        return 0
+    root = math.sqrt(disc)
+    t0, t1 = max((-qb - root) / qa, 0.0), min((-qb + root) / qa, 1.0)
+    if (t1 - t0) * math.sqrt(dx * dx + dy * dy + dz * dz) <= tol:
+        return 0
+    k = 0
+    for t in (t0, t1):
+        px, py, pz = p0x + t * dx, p0y + t * dy, p0z + t * dz
+        fx, fy, fz = _onto_disk(e[1], e[2], e[3], mx, my, mz, e[7], px, py, pz)
+        if line_is_a:
+            k = _add(poly, k, px, py, pz, fx, fy, fz, tol)
+        else:
+            k = _add(poly, k, fx, fy, fz, px, py, pz, tol)
+    return k
+
+
+@njit(**JIT)
+def _line_line(la, lb, tol, poly):
+    """Two lying sides along parallel axes (la, lb: _lying_line of A and B): the ends of the part of A's line
+    beside B's, each paired with the nearest point of B's line, into poly; returns 2, or 0 if that part has no
+    length."""
+    p0x, p0y, p0z = la[1], la[2], la[3]
+    dx, dy, dz = la[4] - p0x, la[5] - p0y, la[6] - p0z
+    length = math.sqrt(dx * dx + dy * dy + dz * dz)
+    ux, uy, uz = dx / length, dy / length, dz / length
+    q0x, q0y, q0z = lb[1], lb[2], lb[3]
+    ex, ey, ez = lb[4] - q0x, lb[5] - q0y, lb[6] - q0z
+    s0 = (q0x - p0x) * ux + (q0y - p0y) * uy + (q0z - p0z) * uz
+    s1 = s0 + ex * ux + ey * uy + ez * uz
+    lo, hi = max(0.0, min(s0, s1)), min(length, max(s0, s1))
+    if hi - lo <= tol:
+        return 0
+    ee = ex * ex + ey * ey + ez * ez
+    k = 0
+    for end in (lo, hi):
+        px, py, pz = p0x + end * ux, p0y + end * uy, p0z + end * uz
+        t = min(1.0, max(0.0, ((px - q0x) * ex + (py - q0y) * ey + (pz - q0z) * ez) / ee))
+        k = _add(poly, k, px, py, pz, q0x + t * ex, q0y + t * ey, q0z + t * ez, tol)
+    return k
+
+
+@njit(**JIT)
+def _round_manifold(pa, ma, pb, mb, nx, ny, nz, band, tilt, poly, res, seps):
+    """A capsule or a cylinder (A) against a cylinder (B) touching along a flat feature, each within ``tilt`` (rad,
+    small) of across n: two end faces (_disk_disk), a lying side on an end face (_line_disk), two lying sides along
+    parallel axes (_line_line), to FEATURE_BAND × the pair's size. Writes the points whose separation along n is
+    within ``band`` of the deepest or below zero, deepest first, into res and seps; returns their count, 0 (res
+    untouched) where the pair touches at one point."""
+    ea = _flat_end(pa, nx, ny, nz, tilt)
+    eb = _flat_end(pb, -nx, -ny, -nz, tilt)
+    la = _lying_line(pa, ma, nx, ny, nz, tilt)
+    lb = _lying_line(pb, mb, -nx, -ny, -nz, tilt)
+    tol = FEATURE_BAND * max(max(max(pa[_DIM], pa[_DIM + 1]), ma), max(max(pb[_DIM], pb[_DIM + 1]), mb))
+    n = 0
+    if ea[0] and eb[0]:
+        n = _disk_disk(pa, pb, ea, eb, tol, poly)
+    elif la[0] and eb[0]:
+        n = _line_disk(la, eb, True, tol, poly)
+    elif ea[0] and lb[0]:
+        n = _line_disk(lb, ea, False, tol, poly)
+    elif la[0] and lb[0]:
+        ux, uy, uz = _axis(pa, 2)
+        vx, vy, vz = _axis(pb, 2)
+        cx, cy, cz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+        if cx * cx + cy * cy + cz * cz <= tilt * tilt:
+            n = _line_line(la, lb, tol, poly)
+    if n < 2:
+        return 0
+    lowest = math.inf
+    for q in range(n):
+        lowest = min(lowest, (poly[1, q, 0] - poly[0, q, 0]) * nx + (poly[1, q, 1] - poly[0, q, 1]) * ny
+                     + (poly[1, q, 2] - poly[0, q, 2]) * nz)
+    keep = max(lowest + band, 0.0)
+    count = 0
+    for q in range(n):
+        sep = ((poly[1, q, 0] - poly[0, q, 0]) * nx + (poly[1, q, 1] - poly[0, q, 1]) * ny
+               + (poly[1, q, 2] - poly[0, q, 2]) * nz)
+        if sep <= keep and count < MAX_PAIR_POINTS:
+            _put(res, seps, count, poly[0, q, 0], poly[0, q, 1], poly[0, q, 2], poly[1, q, 0], poly[1, q, 1],
+                 poly[1, q, 2], nx, ny, nz)
+            count += 1
+    for q in range(1, count):  # deepest first
+        if seps[q] < seps[0]:
+            for c in range(6):
+                res[0, c], res[q, c] = res[q, c], res[0, c]
+            seps[0], seps[q] = seps[q], seps[0]
+    _pin = pa[0], pb[0], poly[0, 0, 0], res[0, 0], seps[0]
+    return count
+
+
+@njit(**INLINE)
 def pair_contact(pa, ma, pb, mb, scale, ws_s, ws_lam, ws_tmp, ws_poly, verts, faces, face_nd, edges, out, res, seps):
     """Signed distance, normal (A to B) and contact points of two posed cores with margins (set_pose).
 
@@ -779,19 +995,22 @@ def pair_contact(pa, ma, pb, mb, scale, ws_s, ws_lam, ws_tmp, ws_poly, verts, fa
             if ka == CORE_SEGMENT:
                 ux, uy, uz = _axis(pa, 2)
                 if cb >= flat and abs(ux * nx + uy * ny + uz * nz) <= FACE_ALIGNMENT and pa[_DIM] > 0.0:
-                    m = _face_manifold(pb, pa, False, ma, mb, nx, ny, nz, sd, band, ws_poly, res, seps)
+                    m = _face_manifold(pb, pa, False, ma, mb, nx, ny, nz, sd, band, FACE_ALIGNMENT, ws_poly, res, seps)
                     count = max(m, 1)
             elif max(ca, cb) >= flat:
                 if ca >= cb:
-                    m = _face_manifold(pa, pb, True, ma, mb, nx, ny, nz, sd, band, ws_poly, res, seps)
+                    m = _face_manifold(pa, pb, True, ma, mb, nx, ny, nz, sd, band, FACE_ALIGNMENT, ws_poly, res, seps)
                 else:
-                    m = _face_manifold(pb, pa, False, ma, mb, nx, ny, nz, sd, band, ws_poly, res, seps)
+                    m = _face_manifold(pb, pa, False, ma, mb, nx, ny, nz, sd, band, FACE_ALIGNMENT, ws_poly, res, seps)
                 count = max(m, 1)
         elif ka == CORE_BOX:  # a cylinder on a box face, standing or lying: its rim or side clipped
             _, _, ca = _face_of(pa, nx, ny, nz)
             if ca >= 1.0 - 0.5 * FACE_ALIGNMENT * FACE_ALIGNMENT:
-                m = _face_manifold(pa, pb, True, ma, mb, nx, ny, nz, sd, band, ws_poly, res, seps)
+                m = _face_manifold(pa, pb, True, ma, mb, nx, ny, nz, sd, band, FACE_ALIGNMENT, ws_poly, res, seps)
                 count = max(m, 1)
+        else:  # a capsule or a cylinder against a cylinder: flat ends and lying sides
+            m = _round_manifold(pa, ma, pb, mb, nx, ny, nz, band, FACE_ALIGNMENT, ws_poly, res, seps)
+            count = max(m, 1)
     _pin = pa[0], pb[0], ws_s[0, 0, 0], ws_lam[0], ws_tmp[0], ws_poly[0, 0, 0], verts[0, 0, 0], faces[0, 0]
     _pin2 = face_nd[0, 0], edges[0, 0], out[0], res[0, 0], seps[0]
     return sd, nx, ny, nz, count
@@ -843,31 +1062,49 @@ def boxes_apart_turned(rot, pos, shapes, a, b, beyond):
 
 
 @njit(**JIT)
-def box_patch(pos, quat, shapes, a, b, nx, ny, nz, flat, band, poses, poly, res, seps):
-    """Boxes a and b (rows of pos (N, 3), quat (N, 4) w x y z, shapes) whose pair normal n (unit, a → b) is within
-    acos(flat) of a face normal of either: the other's face most turned towards that reference face, clipped
-    against it (its corners on the face and the crossings of its edges with the face's), every point whose
-    separation along the reference face's normal is within ``band`` (m) of the deepest. res (k, 6): the points
-    on a (0:3) and on b (3:6), world, m; seps (k,) their separations along the reference normal; poses (2,
+def face_patch(pos, quat, shapes, a, b, nx, ny, nz, flat, band, poses, poly, res, seps):
+    """Boxes and cylinders a and b (rows of pos (N, 3), quat (N, 4) w x y z, shapes) whose pair normal n (unit,
+    a → b) is within acos(flat) of a flat face of either (a box's face, a cylinder's end): their patch about the
+    reference face, the one nearest n (a box's before a cylinder's), every point whose separation along its
+    normal is within ``band`` (m) of the deepest. Against a box face: the other's face most turned towards it,
+    or a cylinder's rim or side within acos(flat) of it, clipped against it (pairs._face_manifold); two
+    cylinders: their ends, or a side on an end, within acos(flat) (_round_manifold). res (k, 6): the points on
+    a (0:3) and on b (3:6), world, m; seps (k,) their separations along the reference normal; poses (2,
     POSE_WIDTH) and poly (2, 16, 3) scratch. Returns (k, the reference normal a → b); k = 0 when no face is
-    within acos(flat) of n."""
+    within acos(flat) of n, or nothing of the other lies flat on it."""
     pa, pb = poses[0], poses[1]
-    set_pose(SHAPE_BOX, shapes[a, DIMS], shapes[a, DIMS + 1], shapes[a, DIMS + 2], pos[a, 0], pos[a, 1], pos[a, 2],
-             quat[a, 0], quat[a, 1], quat[a, 2], quat[a, 3], pa)
-    set_pose(SHAPE_BOX, shapes[b, DIMS], shapes[b, DIMS + 1], shapes[b, DIMS + 2], pos[b, 0], pos[b, 1], pos[b, 2],
-             quat[b, 0], quat[b, 1], quat[b, 2], quat[b, 3], pb)
-    ia, sa, ca = _face_of(pa, nx, ny, nz)
-    ib, sb, cb = _face_of(pb, -nx, -ny, -nz)
-    if max(ca, cb) < flat:
+    set_pose(int(shapes[a, KIND]), shapes[a, DIMS], shapes[a, DIMS + 1], shapes[a, DIMS + 2], pos[a, 0], pos[a, 1],
+             pos[a, 2], quat[a, 0], quat[a, 1], quat[a, 2], quat[a, 3], pa)
+    set_pose(int(shapes[b, KIND]), shapes[b, DIMS], shapes[b, DIMS + 1], shapes[b, DIMS + 2], pos[b, 0], pos[b, 1],
+             pos[b, 2], quat[b, 0], quat[b, 1], quat[b, 2], quat[b, 3], pb)
+    tilt = math.sqrt(2.0 * (1.0 - flat))  # 1 − tilt² / 2 = flat
+    box_a, box_b = int(pa[_KIND]) == CORE_BOX, int(pb[_KIND]) == CORE_BOX
+    if box_a or box_b:
+        ia, sa, ca = _face_of(pa, nx, ny, nz) if box_a else (0, 1.0, -1.0)
+        ib, sb, cb = _face_of(pb, -nx, -ny, -nz) if box_b else (0, 1.0, -1.0)
+        if max(ca, cb) < flat:
+            return 0, nx, ny, nz
+        if ca >= cb:
+            rx, ry, rz = _axis(pa, ia)
+            rx, ry, rz = sa * rx, sa * ry, sa * rz
+            count = _face_manifold(pa, pb, True, 0.0, 0.0, rx, ry, rz, 0.0, band, tilt, poly, res, seps)
+        else:
+            rx, ry, rz = _axis(pb, ib)
+            rx, ry, rz = -sb * rx, -sb * ry, -sb * rz
+            count = _face_manifold(pb, pa, False, 0.0, 0.0, rx, ry, rz, 0.0, band, tilt, poly, res, seps)
+        return count, rx, ry, rz
+    ua, ub = _axis(pa, 2), _axis(pb, 2)
+    ca = ua[0] * nx + ua[1] * ny + ua[2] * nz
+    cb = -(ub[0] * nx + ub[1] * ny + ub[2] * nz)
+    if max(abs(ca), abs(cb)) < flat:
         return 0, nx, ny, nz
-    if ca >= cb:
-        rx, ry, rz = _axis(pa, ia)
-        rx, ry, rz = sa * rx, sa * ry, sa * rz
-        count = _face_manifold(pa, pb, True, 0.0, 0.0, rx, ry, rz, 0.0, band, poly, res, seps)
+    if abs(ca) >= abs(cb):
+        s = 1.0 if ca > 0.0 else -1.0
+        rx, ry, rz = s * ua[0], s * ua[1], s * ua[2]
     else:
-        rx, ry, rz = _axis(pb, ib)
-        rx, ry, rz = -sb * rx, -sb * ry, -sb * rz
-        count = _face_manifold(pb, pa, False, 0.0, 0.0, rx, ry, rz, 0.0, band, poly, res, seps)
+        s = 1.0 if cb > 0.0 else -1.0
+        rx, ry, rz = -s * ub[0], -s * ub[1], -s * ub[2]
+    count = _round_manifold(pa, 0.0, pb, 0.0, rx, ry, rz, band, tilt, poly, res, seps)
     return count, rx, ry, rz
 
 
