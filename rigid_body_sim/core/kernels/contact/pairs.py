@@ -276,10 +276,7 @@ def _segment_segment(pa, ra, pb, rb, band, res, seps):
                 _round_pair(qx, qy, qz, ra, p2x + tt * d2x, p2y + tt * d2y, p2z + tt * d2z, rb, nx, ny, nz,
                             res, seps, count)
                 count += 1
-            if seps[1] < seps[0]:
-                for c in range(6):
-                    res[0, c], res[1, c] = res[1, c], res[0, c]
-                seps[0], seps[1] = seps[1], seps[0]
+            _deepest_first(res, seps, count)
     return sd, nx, ny, nz, count
 
 
@@ -504,6 +501,27 @@ def _clip(poly, src, n, px, py, pz, ox, oy, oz, limit):
     return m
 
 
+@njit(**INLINE)
+def _rim_point(pose, cx, cy, cz, r, j):
+    """Rim point j (0–3: along the core's local +x, +y, −x, −y) of the cylinder end centred at c, radius r (world)."""
+    c1 = 1.0 if j == 0 else (-1.0 if j == 2 else 0.0)
+    c2 = 1.0 if j == 1 else (-1.0 if j == 3 else 0.0)
+    e1x, e1y, e1z = _axis(pose, 0)
+    e2x, e2y, e2z = _axis(pose, 1)
+    return cx + r * (c1 * e1x + c2 * e2x), cy + r * (c1 * e1y + c2 * e2y), cz + r * (c1 * e1z + c2 * e2z)
+
+
+@njit(**INLINE)
+def _deepest_first(res, seps, count):
+    """Swap the deepest of the count points into place 0 (res, seps as written by _put)."""
+    for q in range(1, count):
+        if seps[q] < seps[0]:
+            for c in range(6):
+                res[0, c], res[q, c] = res[q, c], res[0, c]
+            seps[0], seps[q] = seps[q], seps[0]
+    _pin = res[0, 0], seps[0]
+
+
 @njit(**JIT)
 def _face_manifold(ref, inc, ref_is_a, ma, mb, nx, ny, nz, sd, band, tilt, poly, res, seps):
     """Clip the incident core's feature (box face or segment) against the reference box face nearest n.
@@ -543,14 +561,9 @@ def _face_manifold(ref, inc, ref_is_a, ma, mb, nx, ny, nz, sd, band, tilt, poly,
         if abs(c_axis) >= 1.0 - 0.5 * tilt * tilt:
             # standing on an end face: four rim points of the end facing the reference face
             s_end = -1.0 if c_axis > 0.0 else 1.0
-            e1x, e1y, e1z = _axis(inc, 0)
-            e2x, e2y, e2z = _axis(inc, 1)
             for k in range(4):
-                c1 = 1.0 if k == 0 else (-1.0 if k == 2 else 0.0)
-                c2 = 1.0 if k == 1 else (-1.0 if k == 3 else 0.0)
-                poly[0, k, 0] = inc[_C] + s_end * h * ux + r * (c1 * e1x + c2 * e2x)
-                poly[0, k, 1] = inc[_C + 1] + s_end * h * uy + r * (c1 * e1y + c2 * e2y)
-                poly[0, k, 2] = inc[_C + 2] + s_end * h * uz + r * (c1 * e1z + c2 * e2z)
+                poly[0, k, 0], poly[0, k, 1], poly[0, k, 2] = _rim_point(
+                    inc, inc[_C] + s_end * h * ux, inc[_C + 1] + s_end * h * uy, inc[_C + 2] + s_end * h * uz, r, k)
             n = 4
         elif abs(c_axis) <= tilt:
             # lying on its side: the line of the side nearest the reference face
@@ -599,12 +612,7 @@ def _face_manifold(ref, inc, ref_is_a, ma, mb, nx, ny, nz, sd, band, tilt, poly,
             else:
                 _put(res, seps, count, gx, gy, gz, fx, fy, fz, nx, ny, nz)
             count += 1
-    # deepest first
-    for q in range(1, count):
-        if seps[q] < seps[0]:
-            for c in range(6):
-                res[0, c], res[q, c] = res[q, c], res[0, c]
-            seps[0], seps[q] = seps[q], seps[0]
+    _deepest_first(res, seps, count)
     _pin = sd, ref[0], inc[0], poly[0, 0, 0], res[0, 0], seps[0]
     return count
 
@@ -768,15 +776,8 @@ def _disk_disk(pa, pb, ea, eb, tol, poly):
     k = 0
     for side in range(2):
         src, e, other = (pa, ea, eb) if side == 0 else (pb, eb, ea)
-        e1x, e1y, e1z = _axis(src, 0)
-        e2x, e2y, e2z = _axis(src, 1)
-        r = e[7]
         for j in range(4):
-            c1 = 1.0 if j == 0 else (-1.0 if j == 2 else 0.0)
-            c2 = 1.0 if j == 1 else (-1.0 if j == 3 else 0.0)
-            px = e[1] + r * (c1 * e1x + c2 * e2x)
-            py = e[2] + r * (c1 * e1y + c2 * e2y)
-            pz = e[3] + r * (c1 * e1z + c2 * e2z)
+            px, py, pz = _rim_point(src, e[1], e[2], e[3], e[7], j)
             d = (px - other[1]) * other[4] + (py - other[2]) * other[5] + (pz - other[3]) * other[6]
             qx, qy, qz = px - d * other[4] - other[1], py - d * other[5] - other[2], pz - d * other[6] - other[3]
             if qx * qx + qy * qy + qz * qz > (other[7] + tol) ** 2:
@@ -904,11 +905,7 @@ def _round_manifold(pa, ma, pb, mb, nx, ny, nz, band, tilt, poly, res, seps):
             _put(res, seps, count, poly[0, q, 0], poly[0, q, 1], poly[0, q, 2], poly[1, q, 0], poly[1, q, 1],
                  poly[1, q, 2], nx, ny, nz)
             count += 1
-    for q in range(1, count):  # deepest first
-        if seps[q] < seps[0]:
-            for c in range(6):
-                res[0, c], res[q, c] = res[q, c], res[0, c]
-            seps[0], seps[q] = seps[q], seps[0]
+    _deepest_first(res, seps, count)
     _pin = pa[0], pb[0], poly[0, 0, 0], res[0, 0], seps[0]
     return count
 
