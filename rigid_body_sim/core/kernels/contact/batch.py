@@ -36,12 +36,13 @@ from .persistent import (
     holding_wrench,
     normal_bias,
     project,
+    rim_turn_rate,
     slip_velocity,
 )
-from .shapes import MAX_FEATURES, body_points, feature_gaps, feature_points
+from .shapes import MAX_FEATURES, body_points, feature_gaps, feature_points, opposite_rim_gap
 
 __all__ = ["OK", "TO_SOLVER", "LOCKED", "LOCK_ACCELERATION", "CACHE_WIDTH", "hold_all", "settle_all", "split_bodies",
-           "record_holds", "gravity_gains", "busy_bodies"]
+           "record_holds", "gravity_gains", "fast_rims", "busy_bodies"]
 
 _OPTS = {"cache": True, "nogil": True, "error_model": "numpy"}
 
@@ -188,8 +189,8 @@ def settle_all(Y0, Y, prm, shapes, grounds, bodies, ground_of, tracked, pressed,
     Y: its end) and gets status LOCKED.
 
     Flagged for the solver instead: a slide whose slip reversed in the step, another ground
-    reached, a feature not tracked that is now below the ground, a tracked feature the holding
-    force did not push on that moved off.
+    reached, a feature not tracked that is now below the ground (or a can's end face come down:
+    shapes.opposite_rim_gap), a tracked feature the holding force did not push on that moved off.
     """
     points = np.empty((MAX_POINTS, 3))
     gaps = np.empty(MAX_POINTS)
@@ -229,6 +230,8 @@ def settle_all(Y0, Y, prm, shapes, grounds, bodies, ground_of, tracked, pressed,
             let_go = tracked[i] & (1 << k) and not pressed[i] & (1 << k) and features[k] > band[i]
             if inside or let_go:
                 status[i] = TO_SOLVER
+        if opposite_rim_gap(Y0[i], y, p, shapes[i], ground, tracked[i], band[i]) < 0.0:  # a can's end face came down
+            status[i] = TO_SOLVER
         if status[i] == OK:
             project(y, p, shapes[i], ground, tracked[i], not sliding[i], points, gaps, owners, work)
 
@@ -289,6 +292,20 @@ def gravity_gains(Y0, Y1, prm, bodies, status, bare, rose, before):
         if e1 > e0 + 1e-12 * abs(e0) + 1e-300:
             rose[n] = i
             before[n] = e0
+            n += 1
+    return n
+
+
+@njit(**_OPTS)
+def fast_rims(Y0, prm, shapes, grounds, bodies, ground_of, tracked, turn, out):
+    """Into ``out``, the ``bodies`` whose rim contact point turns faster than ``turn`` (rad/s) at the step's start
+    (persistent.rim_turn_rate at Y0 on their ground row, of their tracked features), in ``bodies``' order.
+    Returns their count."""
+    n = 0
+    for m in range(bodies.shape[0]):
+        i = bodies[m]
+        if rim_turn_rate(Y0[i], prm[i], shapes[i], grounds[ground_of[i]], tracked[i]) > turn:
+            out[n] = i
             n += 1
     return n
 

@@ -33,10 +33,10 @@ from ..layout import FRAME_SITE_WORLD_AXES, INV_INERTIA, INV_MASS, P, Q, Q_PB, V
 from ..rotation import exp_map, normalise, qmul, rotate, rotate_back
 from .impacts import _A, _ANG, _B, _LAM, _LIN, _row_velocity, apply_impulses, build_rows, pgs, summed_wrench
 from .layout import DIMS, KIND, NORMAL, SHAPE_CAPSULE, SHAPE_CYLINDER, SHAPE_SPHERE
-from .shapes import FEATURE_BAND, feature_points
+from .shapes import RIM_UPRIGHT, feature_points
 
 __all__ = ["LIFT_OFF", "STICK", "SLIDE", "START_SLIDE_ACCELERATION", "add_contact_wrench", "accelerations", "accelerations_from", "normal_bias", "normal_motion", "holding_wrench", "project",
-           "normal_speeds", "slip_velocity"]
+           "normal_speeds", "rim_turn_rate", "slip_velocity"]
 
 _OPTS = {"cache": True, "nogil": True, "error_model": "numpy"}
 
@@ -121,7 +121,9 @@ def normal_bias(y, p, shape, ground, mask, count, points, owners, bias, rdot, an
     flat face is a point of the body, bias = n·(ω × (ω × r)); a sphere's gap n·c − r has none;
     a capsule end's gap n·(c ± h u) − r gives n·(ω × (ω × (± h u))); a cylinder rim's lowest
     point, gap n·c + f(n·u) with f(x) = ±h x − r √(1 − x²), gives f'(x) n·(ω × (ω × u)) +
-    f''(x) (n·(ω × u))² (the rim's curvature: the contact point moves along the rim as it rolls).
+    f''(x) (n·(ω × u))² (the rim's curvature: the contact point moves along the rim as it rolls);
+    within RIM_UPRIGHT of upright, where those terms grow as 1/sin³ θ, the rim point is taken as a
+    point of the body.
     ``owners`` are the features of the points (shapes.feature_points).
 
     rdot[c] ← the world velocity of contact c's point relative to the centre of mass: ω × r for
@@ -139,12 +141,13 @@ def normal_bias(y, p, shape, ground, mask, count, points, owners, bias, rdot, an
     bw, bx, by, bz = qmul(qw, qx, qy, qz, p[Q_PB], p[Q_PB + 1], p[Q_PB + 2], p[Q_PB + 3])  # q_WB
     ux, uy, uz = rotate(bw, bx, by, bz, 0.0, 0.0, 1.0)  # the axis of a capsule or cylinder
     cos_a = nx * ux + ny * uy + nz * uz
+    # sin² θ of the tilt as |n − cos θ u|² (1 − cos² θ loses its digits near upright, where 1/sin θ is large)
+    sin2 = (nx - cos_a * ux) ** 2 + (ny - cos_a * uy) ** 2 + (nz - cos_a * uz) ** 2
     a0, a1 = shape[DIMS], shape[DIMS + 1]
     for c in range(count):
         end = owners[c]
         side = -1.0 if end % 2 == 0 else 1.0
-        face = kind == SHAPE_CYLINDER and (mask & (4 << (end % 2)) or a0 * a0 * (1.0 - cos_a * cos_a)
-                                           <= (FEATURE_BAND * max(a0, a1)) ** 2)
+        face = kind == SHAPE_CYLINDER and (mask & (4 << (end % 2)) or sin2 <= RIM_UPRIGHT * RIM_UPRIGHT)
         if kind == SHAPE_SPHERE:
             rx, ry, rz = 0.0, 0.0, 0.0
         elif kind == SHAPE_CAPSULE or (kind == SHAPE_CYLINDER and not face):
@@ -160,7 +163,6 @@ def normal_bias(y, p, shape, ground, mask, count, points, owners, bias, rdot, an
             px, py, pz = points[c, 0] - y[P], points[c, 1] - y[P + 1], points[c, 2] - y[P + 2]
             rdot[c, 0], rdot[c, 1], rdot[c, 2] = oy * pz - oz * py, oz * px - ox * pz, ox * py - oy * px
         if kind == SHAPE_CYLINDER and not face:  # − r √(1 − x²): f' = r x / s, f'' = r / s³
-            sin2 = max(1.0 - cos_a * cos_a, 1e-300)
             sin_a = math.sqrt(sin2)
             wux, wuy, wuz = oy * uz - oz * uy, oz * ux - ox * uz, ox * uy - oy * ux  # ω × u
             rate = nx * wux + ny * wuy + nz * wuz  # d(n·u)/dt
@@ -176,6 +178,31 @@ def normal_bias(y, p, shape, ground, mask, count, points, owners, bias, rdot, an
                 rdot[c, j] -= a0 * drho
         bias[c] = b
     _pin = y[P], p[0], shape[0], ground[0], points[0, 0], owners[0], bias[0], rdot[0, 0], anchors[0, 0]
+
+
+@njit(**_OPTS)
+def rim_turn_rate(y, p, shape, ground, mask):
+    """How fast (rad/s) the lowest point of a cylinder held on a rim turns about the plane's normal: |cot θ ρ·ω|.
+
+    θ is the tilt of the axis u from the normal n, ρ = (n − cos θ u)/sin θ the direction from the
+    rim's lowest point up across the axis, ω the angular velocity. A can wobbling near upright
+    sweeps its contact point round the rim at this rate, which grows as 1/θ: the solver cuts a step
+    into pieces that each turn it by less than about a radian. 0 for another shape, a body held on an
+    end face or on both rims (lying), and within RIM_UPRIGHT of upright (turning about a rim point).
+    """
+    if int(shape[KIND]) != SHAPE_CYLINDER or mask & 12 or (mask & 3) == 3:
+        return 0.0
+    nx, ny, nz = ground[NORMAL], ground[NORMAL + 1], ground[NORMAL + 2]
+    qw, qx, qy, qz = y[Q], y[Q + 1], y[Q + 2], y[Q + 3]
+    ox, oy, oz = rotate(qw, qx, qy, qz, y[W], y[W + 1], y[W + 2])  # ω_W
+    bw, bx, by, bz = qmul(qw, qx, qy, qz, p[Q_PB], p[Q_PB + 1], p[Q_PB + 2], p[Q_PB + 3])  # q_WB
+    ux, uy, uz = rotate(bw, bx, by, bz, 0.0, 0.0, 1.0)
+    cos_a = nx * ux + ny * uy + nz * uz
+    sin2 = (nx - cos_a * ux) ** 2 + (ny - cos_a * uy) ** 2 + (nz - cos_a * uz) ** 2
+    if sin2 <= RIM_UPRIGHT * RIM_UPRIGHT:
+        return 0.0
+    # ρ·ω sin θ = n·ω − cos θ u·ω
+    return abs(cos_a * (nx * ox + ny * oy + nz * oz - cos_a * (ux * ox + uy * oy + uz * oz))) / sin2
 
 
 @njit(**_OPTS)

@@ -20,8 +20,8 @@ import math
 import numpy as np
 from numba import njit
 
-from ..layout import P, Q, Q_PB
-from ..rotation import qmul, rotate
+from ..layout import P, Q, Q_PB, W
+from ..rotation import qmul, rotate, rotate_back
 from .layout import (
     DIMS,
     KIND,
@@ -35,11 +35,17 @@ from .layout import (
     SHAPE_SPHERE,
 )
 
-__all__ = ["FEATURE_BAND", "sphere_points", "box_points", "cylinder_points", "capsule_points", "shape_points",
-           "body_points", "body_gap", "min_gaps", "MAX_FEATURES", "feature_gaps", "feature_points"]
+__all__ = ["FEATURE_BAND", "RIM_UPRIGHT", "sphere_points", "box_points", "cylinder_points", "capsule_points",
+           "shape_points",
+           "body_points", "body_gap", "min_gaps", "MAX_FEATURES", "feature_gaps", "feature_points",
+           "opposite_rim_gap"]
 
 #: Points within this fraction of the shape's largest dimension of the lowest one are in contact together.
 FEATURE_BAND = 1e-9
+
+#: rad: within this of upright, a cylinder's rim contact turns about a point of its rim (persistent.normal_bias):
+#: the lowest point's travel along the rim, at a rate growing as 1/tilt, is not followed there.
+RIM_UPRIGHT = 1e-6
 
 _OPTS = {"cache": True, "nogil": True, "error_model": "numpy"}
 
@@ -191,7 +197,8 @@ def min_gaps(Y, prm, shapes, grounds, bodies, out):
 # A feature is what can touch the plane: the sphere's surface (1), a box corner (8), a capsule's
 # end sphere (2); a cylinder has its two rims' lowest points (0, 1) and their highest points
 # (2, 3): rim k's highest point reaching the ground is the end face k landing flat, after which
-# the face touches along its whole rim (4 rim points). Persistent contact tracks which features
+# the face touches along its whole rim (4 rim points); within 1e-9 rad of upright a rim's "lowest
+# point" is the one going down fastest (_rim_direction). Persistent contact tracks which features
 # touch, so that another feature reaching the ground is an event even while the body rests or pivots.
 
 #: Most features a shape has (the box's corners).
@@ -233,6 +240,33 @@ def feature_gaps(y, p, shape, ground, gaps):
         gaps[1] = base + a1 * cos_a - radial
     _pin = y[P], p[0], shape[0], ground[0], gaps[0]
     return count
+
+
+@njit(**_OPTS)
+def _rim_direction(y, ux, uy, uz, nx, ny, nz, px, py, pz, across, flat):
+    """The unit direction ρ (world, across the axis u) from a cylinder rim's lowest point −r ρ (from its end's
+    centre) back up: (n − (n·u) u) / sin θ against the plane of normal n, given p = n − (n·u) u and |p| = sin θ.
+
+    Within ``flat`` (rad) of upright the rim has no lowest point: ρ is then along n × ω across u (ω the
+    body's angular velocity, from the state row y), the rim point that goes down fastest (a can set tipping
+    from its end turns about that point); along p, or any direction across u, when the rim does not turn.
+    """
+    if across > flat:
+        return px / across, py / across, pz / across
+    ox, oy, oz = rotate(y[Q], y[Q + 1], y[Q + 2], y[Q + 3], y[W], y[W + 1], y[W + 2])  # ω, world axes
+    # the point −r ρ moves along n at −r n·(ω × ρ) = −r ρ·(n × ω): fastest down for ρ along n × ω
+    dx, dy, dz = ny * oz - nz * oy, nz * ox - nx * oz, nx * oy - ny * ox
+    size = 0.0
+    for _ in range(2):
+        along = dx * ux + dy * uy + dz * uz
+        dx, dy, dz = dx - along * ux, dy - along * uy, dz - along * uz
+        size = math.sqrt(dx * dx + dy * dy + dz * dz)
+        if size > 0.0:
+            break
+        dx, dy, dz = px, py, pz
+        if across == 0.0:  # any direction across u
+            dx, dy, dz = (0.0, uz, -uy) if abs(ux) < 0.7 else (-uz, 0.0, ux)
+    return dx / size, dy / size, dz / size
 
 
 @njit(**_OPTS)
@@ -283,7 +317,7 @@ def feature_points(y, p, shape, ground, mask, points, gaps, owners):
         for end in range(2):
             if mask & (1 << end) or mask & (4 << end):
                 side = -1.0 if end == 0 else 1.0
-                if a0 * across <= band or mask & (4 << end):  # standing on this end face: four rim points
+                if mask & (4 << end):  # standing on this end face: four rim points
                     e1x, e1y, e1z = rotate(qw, qx, qy, qz, 1.0, 0.0, 0.0)
                     e2x, e2y, e2z = rotate(qw, qx, qy, qz, 0.0, 1.0, 0.0)
                     for k in range(4):
@@ -298,7 +332,7 @@ def feature_points(y, p, shape, ground, mask, points, gaps, owners):
                             owners[count] = end
                             count += 1
                 elif count < MAX_POINTS:
-                    rx, ry, rz = px / across, py / across, pz / across
+                    rx, ry, rz = _rim_direction(y, ux, uy, uz, nx, ny, nz, px, py, pz, across, band / a0)
                     points[count, 0] = cx + side * a1 * ux - a0 * rx
                     points[count, 1] = cy + side * a1 * uy - a0 * ry
                     points[count, 2] = cz + side * a1 * uz - a0 * rz
@@ -307,3 +341,30 @@ def feature_points(y, p, shape, ground, mask, points, gaps, owners):
                     count += 1
     _pin = y[P], p[0], shape[0], ground[0], points[0, 0], gaps[0], owners[0]
     return count
+
+
+@njit(**_OPTS)
+def opposite_rim_gap(y0, y, p, shape, ground, mask, band):
+    """The gap (m) at state y of the point of a cylinder held on one rim (``mask``: that rim's feature alone)
+    that was the rim's highest at y0, the step's start: a point of the body, opposite the held one. It reaches
+    the ground when the end face comes down flat (the can rocking back onto its end), where the held lowest
+    point jumps across the rim and no feature of feature_gaps goes below. inf for another shape or mask, and
+    when that point was within ``band`` of the ground at y0 (the can just tipping from its end)."""
+    if int(shape[KIND]) != SHAPE_CYLINDER or mask & 12 or (mask & 3) == 3 or not mask & 3:
+        return math.inf
+    side = -1.0 if mask & 1 else 1.0
+    a0, a1 = shape[DIMS], shape[DIMS + 1]
+    nx, ny, nz = ground[NORMAL], ground[NORMAL + 1], ground[NORMAL + 2]
+    qw, qx, qy, qz = qmul(y0[Q], y0[Q + 1], y0[Q + 2], y0[Q + 3], p[Q_PB], p[Q_PB + 1], p[Q_PB + 2], p[Q_PB + 3])
+    ux, uy, uz = rotate(qw, qx, qy, qz, 0.0, 0.0, 1.0)
+    cos_a = nx * ux + ny * uy + nz * uz
+    px, py, pz = nx - cos_a * ux, ny - cos_a * uy, nz - cos_a * uz
+    across = math.sqrt(px * px + py * py + pz * pz)
+    rx, ry, rz = _rim_direction(y0, ux, uy, uz, nx, ny, nz, px, py, pz, across, FEATURE_BAND * max(a0, a1) / a0)
+    ox, oy, oz = side * a1 * ux + a0 * rx, side * a1 * uy + a0 * ry, side * a1 * uz + a0 * rz  # from the centre
+    if nx * (y0[P] + ox) + ny * (y0[P + 1] + oy) + nz * (y0[P + 2] + oz) - ground[OFFSET] <= band:
+        return math.inf
+    bx, by, bz = rotate_back(y0[Q], y0[Q + 1], y0[Q + 2], y0[Q + 3], ox, oy, oz)  # principal axes: fixed in the body
+    ox, oy, oz = rotate(y[Q], y[Q + 1], y[Q + 2], y[Q + 3], bx, by, bz)
+    _pin = y0[P], y[P], p[0], shape[0], ground[0]
+    return nx * (y[P] + ox) + ny * (y[P + 1] + oy) + nz * (y[P + 2] + oz) - ground[OFFSET]
