@@ -54,7 +54,10 @@ step (zero-order hold): exact for resting and sliding at constant force (the clo
 tests), order at most 2 where the force changes along the step (pivoting on an edge, a disk
 rolling on its rim, Euler's disk): there a step can raise the energy. Such a step of a body
 under gravity alone is taken again in up to MAX_REFINEMENT pieces (_refine_gains), whichever
-the method; what still gains is counted in ``energy_gains``.
+the method; what still gains is counted in ``energy_gains``. A cylinder rolling on its rim near
+upright, whose rim's lowest point sweeps round at a rate growing as 1/tilt, has its step taken in
+pieces that each turn that point by at most RIM_TURN (_rim_piece), and its end face coming down
+flat is located as a landing (shapes.opposite_rim_gap).
 
 Zeno guard: after an impact whose rebound would rise less than :data:`ZENO_APEX` (the normal
 speed u⁺ with u⁺²/(2a) < ZENO_APEX, a the free normal acceleration of the contact point toward
@@ -79,10 +82,10 @@ from ..quaternion import quat_rotate, quat_to_matrix
 from . import static_geometry, two_grounds
 from .events import ContactEvent
 from ..kernels.stepping import advance, step_reduced
-from ..kernels.contact.batch import (CACHE_WIDTH, OK, TO_SOLVER, busy_bodies, gravity_gains, hold_all, record_holds,
-                                     settle_all, split_bodies)
-from ..kernels.contact.impacts import _A, _LAM, IMPACT_WORK_SHAPE, impact
-from ..kernels.contact.layout import DIMS, FLIGHT, KIND, MAX_POINTS, NORMAL, PERSISTENT, SHAPE_BOX
+from ..kernels.contact.batch import (CACHE_WIDTH, OK, TO_SOLVER, busy_bodies, fast_rims, gravity_gains, hold_all,
+                                     record_holds, settle_all, split_bodies)
+from ..kernels.contact.impacts import _A, _LAM, IMPACT_WORK_SHAPE, impact, kinetic_energy_row, potential_energy_row
+from ..kernels.contact.layout import DIMS, FLIGHT, KIND, MAX_POINTS, NORMAL, PERSISTENT, SHAPE_BOX, SHAPE_CYLINDER
 from ..kernels.contact.island import SLEEP_SPEED
 from ..kernels.contact.materials import material
 from ..kernels.contact.persistent import (
@@ -94,6 +97,7 @@ from ..kernels.contact.persistent import (
     normal_motion,
     normal_speeds,
     project,
+    rim_turn_rate,
 )
 from ..kernels.contact.stage import hold_in_row, stage_rows, stepped_by_integrator
 from ..kernels.contact.shapes import (
@@ -104,6 +108,7 @@ from ..kernels.contact.shapes import (
     feature_gaps,
     feature_points,
     min_gaps,
+    opposite_rim_gap,
 )
 
 __all__ = ["ContactSolver", "ContactEvent", "ZENO_APEX", "SLIP_TOLERANCE", "TOUCHING_GAP", "MAX_EVENTS_PER_STEP"]
@@ -120,6 +125,11 @@ LIFT_OFF_SPEED = 1e-9
 MAX_EVENTS_PER_STEP = 10_000
 #: Most pieces a resting body's step is cut into when it gained energy (ContactSolver._refine_gains).
 MAX_REFINEMENT = 32
+#: rad: the most a piece of a step turns the lowest point of a cylinder rolling on its rim about the normal
+#: (persistent.rim_turn_rate): a can wobbling near upright has its step cut into pieces (_rim_piece).
+RIM_TURN = 0.25
+#: Most pieces a step is cut into for RIM_TURN (a can closer to upright turns more within a piece).
+MAX_RIM_PIECES = 64
 #: Samples of s in (0, 1] looked at for the first sign change of the gap in a step.
 BRACKET_SAMPLES = 16
 
@@ -217,11 +227,15 @@ class ContactSolver:
         #: tangent plane (a curved support, an edge or a rim: first order; static_geometry.py);
         #: ``static_pressed`` impacts of a resting body against a static shape it stays pressed on (not held
         #: there: it may reach into it by up to a h²/2 per step, a its acceleration towards it);
-        #: ``island_body_steps`` body-steps taken by the islands' first-order velocity step (island.py).
+        #: ``island_body_steps`` body-steps taken by the islands' first-order velocity step (island.py);
+        #: ``rim_pieces`` pieces of steps of cylinders rolling on a rim near upright (:meth:`_rim_piece`),
+        #: ``rim_capped`` those whose rim turned more than RIM_TURN even at MAX_RIM_PIECES; ``face_down``
+        #: projections of a cylinder held on a rim that went through upright onto its end face (:meth:`_project`).
         self._static_skipped: set[int] = set()  # bodies not looked at against static shapes for the rest of the step
         self.counts = dict.fromkeys(("restitution_capped", "multi_contact_elastic", "refined_steps",
                                      "second_half_space", "two_ground_overflow", "painleve",
-                                     "static_tangent", "static_pressed", "island_body_steps"), 0)
+                                     "static_tangent", "static_pressed", "island_body_steps", "rim_pieces",
+                                     "rim_capped", "face_down"), 0)
         #: Per body, a second half-space it is held on besides ``ground_of`` (two_grounds.py), or -1.
         self.other_ground = np.full(n, -1, dtype=np.int64)
         #: The features touching ``other_ground``, as bits.
@@ -246,6 +260,8 @@ class ContactSolver:
         #: centre of mass (N·m), world axes, of the step it fell asleep in, which hold it while it sleeps.
         self._rest_force, self._rest_torque = np.zeros((n, 3)), np.zeros((n, 3))
         self._rose, self._rose_energy = np.empty(m, dtype=np.int64), np.empty(m)  # batch.gravity_gains
+        self._rims = np.empty(m, dtype=np.int64)  # batch.fast_rims
+        self._any_cylinder = bool((self.shapes[:, KIND] == SHAPE_CYLINDER).any())
         # one-body buffers of the step map
         self._Y1 = np.zeros((2, 1, L.ROW_WIDTH))
         self._w1 = np.zeros((1, L.WRENCH_WIDTH))
@@ -398,13 +414,18 @@ class ContactSolver:
         return feature_points(y, sim._prm[i], self.shapes[i], self.grounds[j],
                               int(self.tracked[i]) if mask is None else mask, self._points, self._gaps, self._owners)
 
-    def _untracked_gap(self, sim, y: np.ndarray, i: int) -> float:
-        """The lowest gap of body i's features that are not tracked (inf if every one is)."""
+    def _untracked_gap(self, sim, y: np.ndarray, i: int, y0: np.ndarray | None = None) -> float:
+        """The lowest gap of body i's features that are not tracked (inf if every one is); with ``y0`` (the
+        step's start), also of a can's end face coming down (shapes.opposite_rim_gap)."""
         j = int(self.ground_of[i])
         count = feature_gaps(y, sim._prm[i], self.shapes[i], self.grounds[j], self._features)
         mask = int(self.tracked[i])
         free = [self._features[k] for k in range(count) if not mask & (1 << k)]
-        return min(free) if free else math.inf
+        lowest = min(free) if free else math.inf
+        if y0 is not None:
+            lowest = min(lowest, opposite_rim_gap(y0, y, sim._prm[i], self.shapes[i], self.grounds[j], mask,
+                                                  self._band[i]))
+        return lowest
 
     def _settle(self, sim, y: np.ndarray, i: int, sticking: bool) -> None:
         """Project body i onto its tracked features, adding every feature the projection leaves touching (≤ band)
@@ -420,9 +441,26 @@ class ContactSolver:
             self.tracked[i] = int(self.tracked[i]) | more
 
     def _project(self, sim, y: np.ndarray, i: int, sticking: bool) -> None:
+        """persistent.project of body i onto its tracked features at y (in place).
+
+        A cylinder held on a rim within a hair of upright has a kink in its lowest point's gap (the
+        point jumps across the rim as the tilt goes through zero): a projection that went through
+        upright leaves the rim below the ground and the end face flat on it. That face is then
+        down: it is tracked too and the body projected onto it (counted in ``face_down``)."""
         j = int(self.ground_of[i])
-        project(y, sim._prm[i], self.shapes[i], self.grounds[j], int(self.tracked[i]), sticking, self._points,
-                self._gaps, self._owners, self._work)
+        mask = int(self.tracked[i])
+        project(y, sim._prm[i], self.shapes[i], self.grounds[j], mask, sticking, self._points, self._gaps,
+                self._owners, self._work)
+        if self.shapes[i, KIND] != SHAPE_CYLINDER or mask & 12 or (mask & 3) == 3 or not mask & 3:
+            return
+        count = feature_gaps(y, sim._prm[i], self.shapes[i], self.grounds[j], self._features)
+        end = 0 if mask & 1 else 1
+        band = self._band[i]
+        if self._features[end] < -band and self._features[2 + end] <= band:  # the face is down, not a rim point
+            self.tracked[i] = mask | (4 << end)
+            self.counts["face_down"] += 1
+            project(y, sim._prm[i], self.shapes[i], self.grounds[j], int(self.tracked[i]), sticking, self._points,
+                    self._gaps, self._owners, self._work)
 
     def _normal_motion(self, sim, y: np.ndarray, i: int, j: int, count: int, w: np.ndarray, mask: int | None = None):
         """(lowest normal speed, its free normal acceleration, mean slip) of the points in self._points.
@@ -666,6 +704,8 @@ class ContactSolver:
             lowest = self._lowest[in_flight]
         settle_all(Y0, Y1, sim._prm, self.shapes, self.half_spaces, resting, self.ground_of, self.tracked,
                    self.pressed, self.sliding, self.slide_direction, self._band, self._status, self._locked)
+        if self._any_cylinder:
+            resting = self._fast_rims(sim, resting, Y0, Y1, t0, h)
         resting = self._refine_gains(sim, resting, Y0, Y1, t0, h)
         # only the bodies with an event in the step are looked at in Python
         for i in self._busy[:busy_bodies(resting, self._status, two, flying, lowest, self._busy)].tolist():
@@ -698,6 +738,75 @@ class ContactSolver:
                 done[i] = True
         return done
 
+    def _fast_rims(self, sim, resting: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, t0: float, h: float) -> np.ndarray:
+        """Take again, in pieces (:meth:`_persistent_span`), the step of every ``resting`` body rolling on a
+        cylinder rim whose lowest point turns by more than RIM_TURN in it; returns ``resting`` without them
+        (marked done in the status)."""
+        fast = fast_rims(Y0, sim._prm, self.shapes, self.grounds, resting, self.ground_of, self.tracked,
+                         RIM_TURN / h, self._rims)
+        if not fast:
+            return resting
+        prm = sim._prm
+        for i in self._rims[:fast].tolist():
+            y0 = Y0[i]
+            e0 = None
+            if self._bare_rows[i, L.ACTIVE] == 0.0:  # gravity alone: its energy must not rise (_refine_gains)
+                e0 = kinetic_energy_row(y0, prm[i]) + potential_energy_row(y0, prm[i])
+            Y1[i, :L.STATE_WIDTH] = self._retaken(sim, i, y0, t0, h, 1, e0)
+            self._status[i] = -1  # done here
+        return resting[self._status[resting] != -1]
+
+    def _retaken(self, sim, i: int, y0: np.ndarray, t0: float, h: float, pieces: int, e0: float | None) -> np.ndarray:
+        """Body i's step from y0 (the step's start, the solver's state of body i as it was there) taken again in
+        ``pieces`` pieces, each holding force found afresh; with ``e0`` (its energy at y0, under gravity alone),
+        in twice as many while its energy rose, up to MAX_REFINEMENT (a step taken in more than one piece is
+        counted in ``refined_steps``, one still gaining in :attr:`energy_gains`). Returns its state row."""
+        prm = sim._prm
+        saved = (int(self.modes[i]), int(self.tracked[i]), bool(self.sliding[i]), self.slide_direction[i].copy(),
+                 int(self.pressed[i]), int(self.ground_of[i]), len(self.events))
+        bare = self._bare_rows[i].copy()
+        gained = 0.0
+        while True:
+            self.modes[i], self.tracked[i], self.sliding[i], self.slide_direction[i], self.pressed[i], \
+                self.ground_of[i] = saved[:6]
+            del self.events[saved[6]:]
+            y = y0.copy()
+            for k in range(pieces):
+                t = t0 + k * h / pieces
+                if self.modes[i] == PERSISTENT:
+                    y = self._persistent_span(sim, i, y, bare.copy(), t, h / pieces)
+                else:
+                    y = self._with_events(sim, i, y, bare.copy(), t, h / pieces)
+            row = y[:L.STATE_WIDTH]
+            if e0 is None:
+                break
+            gained = kinetic_energy_row(row, prm[i]) + potential_energy_row(row, prm[i]) - e0
+            if gained <= 1e-12 * abs(e0) or pieces >= MAX_REFINEMENT:
+                break
+            pieces *= 2
+        if pieces > 1:
+            self.counts["refined_steps"] += 1
+        if e0 is not None and gained > 1e-12 * abs(e0):
+            self.energy_gains += 1
+        return row
+
+    def _rim_piece(self, sim, i: int, y: np.ndarray, h: float) -> float:
+        """How much of the span h body i, held at y, steps in one piece: all of it, or, on a cylinder rim whose
+        lowest point turns fast (persistent.rim_turn_rate), the time it takes to turn RIM_TURN (at least
+        dt / MAX_RIM_PIECES)."""
+        if self.shapes[i, KIND] != SHAPE_CYLINDER or self.other_ground[i] >= 0:
+            return h
+        j = int(self.ground_of[i])
+        rate = rim_turn_rate(y, sim._prm[i], self.shapes[i], self.grounds[j], int(self.tracked[i]))
+        if rate * h <= RIM_TURN:
+            return h
+        piece = RIM_TURN / rate
+        if piece < sim.dt / MAX_RIM_PIECES:
+            piece = sim.dt / MAX_RIM_PIECES
+            self.counts["rim_capped"] += 1
+        self.counts["rim_pieces"] += 1
+        return min(piece, h)
+
     def _refine_gains(self, sim, resting: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, t0: float,
                       h: float) -> np.ndarray:
         """Take again, in 2, 4, ... MAX_REFINEMENT pieces, each holding force found afresh, the step
@@ -713,34 +822,8 @@ class ContactSolver:
         rose = gravity_gains(Y0, Y1, sim._prm, resting, self._status, self._bare_rows, self._rose, self._rose_energy)
         if not rose:
             return resting
-        prm = sim._prm
         for i, e0 in zip(self._rose[:rose].tolist(), self._rose_energy[:rose].tolist()):
-            saved = (int(self.modes[i]), int(self.tracked[i]), bool(self.sliding[i]), self.slide_direction[i].copy(),
-                     int(self.pressed[i]), int(self.ground_of[i]), len(self.events))
-            bare = self._bare_rows[i].copy()
-            pieces = 2
-            while True:
-                self.modes[i], self.tracked[i], self.sliding[i], self.slide_direction[i], self.pressed[i], \
-                    self.ground_of[i] = saved[:6]
-                del self.events[saved[6]:]
-                y = Y0[i].copy()
-                for k in range(pieces):
-                    t = t0 + k * h / pieces
-                    if self.modes[i] == PERSISTENT:
-                        y = self._persistent_span(sim, i, y, bare.copy(), t, h / pieces)
-                    else:
-                        y = self._with_events(sim, i, y, bare.copy(), t, h / pieces)
-                row = y[:L.STATE_WIDTH]
-                gained = (0.5 * (prm[i, L.MASS] * row[L.V:L.V + 3] @ row[L.V:L.V + 3]
-                                 + prm[i, L.INERTIA:L.INERTIA + 3] @ row[L.W:L.W + 3] ** 2)
-                          - prm[i, L.MASS] * prm[i, L.GRAVITY:L.GRAVITY + 3] @ row[L.P:L.P + 3]) - e0
-                if gained <= 1e-12 * abs(e0) or pieces >= MAX_REFINEMENT:
-                    break
-                pieces *= 2
-            self.counts["refined_steps"] += 1
-            if gained > 1e-12 * abs(e0):
-                self.energy_gains += 1
-            Y1[i, :L.STATE_WIDTH] = row
+            Y1[i, :L.STATE_WIDTH] = self._retaken(sim, i, Y0[i], t0, h, 2, e0)
             self._status[i] = -1  # done here
         return resting[self._status[resting] != -1]
 
@@ -874,7 +957,17 @@ class ContactSolver:
     # ----------------------------------------------------------------- persistent contact
 
     def _persistent_span(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float, h: float) -> np.ndarray:
-        """Body i from y over h in persistent contact starting mid-step: holding force, step, projection."""
+        """Body i from y over h in persistent contact starting mid-step: holding force, step, projection; in
+        pieces while it rolls on a cylinder rim whose lowest point turns fast (:meth:`_rim_piece`)."""
+        while (piece := self._rim_piece(sim, i, y, h)) < h:
+            y = self._held_span(sim, i, y, w, t, piece)
+            t, h = t + piece, h - piece
+            if self.modes[i] != PERSISTENT:
+                return self._with_events(sim, i, y, w, t, h)
+        return self._held_span(sim, i, y, w, t, h)
+
+    def _held_span(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float, h: float) -> np.ndarray:
+        """Body i from y over h in persistent contact, in one piece: holding force, step, projection."""
         held = w.copy()
         if not self._hold(sim, y, i, held, t):
             return self._with_events(sim, i, y, w, t, h)
@@ -906,16 +999,29 @@ class ContactSolver:
                 _, _, vx, vy = self._normal_motion(sim, row, i, j, count, held, int(self.tracked[i]))
                 return vx * sx + vy * sy
 
-            if along(1.0) <= 0.0:  # the slip reversed inside the step: the stop, located
-                s = self._locate(along, along(0.0), -1.0)
-                s = 1.0 if s is None else s
-                stop = self.step_map(sim, i, y0, s * h, held)
-                self._project(sim, stop, i, True)
-                self.sliding[i] = False
-                self.events.append(ContactEvent(t + s * h, self.names[i], j, "stick"))
-                if s < 1.0:  # the rest of the step sticking, with the holding force found at the stop
-                    return self._persistent_span(sim, i, stop, self._bare(i, held), t + s * h, h - s * h)
-                return stop
+            reach = self._reaching(sim, i, y0, end, held, h)  # a stop counts before another feature lands
+            reach = 1.0 if reach is None else reach
+            if reach > 0.0 and along(reach) <= 0.0:  # the slip reversed before: the stop, located
+                s = self._locate(lambda f: along(f * reach), along(0.0), -1.0)
+                s = reach if s is None else s * reach
+                last = self.events[-1] if self.events else None
+                if s <= 1e-9 and last is not None and (last.body, last.kind, last.time) == (self.names[i], "stick", t):
+                    # it stuck here already, and the slide found from there reverses at once (within 1e-9 of the
+                    # span) under the force held over it (a zero-order hold): the span ends sticking, projected
+                    # so below
+                    self.sliding[i] = False
+                else:
+                    stop = self.step_map(sim, i, y0, s * h, held)
+                    # a feature that came down before the stop and is not down at the step's end (a can's face,
+                    # the can going through upright and on): the landing, first
+                    if (before := self._reaching(sim, i, y0, stop, held, s * h)) is not None:
+                        return self._land(sim, i, y0, held, t, h, before * s)
+                    self._project(sim, stop, i, True)
+                    self.sliding[i] = False
+                    self.events.append(ContactEvent(t + s * h, self.names[i], j, "stick"))
+                    if s < 1.0:  # the rest of the step sticking, with the holding force found at the stop
+                        return self._persistent_span(sim, i, stop, self._bare(i, held), t + s * h, h - s * h)
+                    return stop
         if self._other_gap(sim, end, i)[0] < 0.0:  # another half-space reached: an impact against it alone
             g0 = self._other_gap(sim, y0, i)[0]
             s = 0.0 if g0 <= 0.0 else self._locate(
@@ -925,13 +1031,8 @@ class ContactSolver:
             self._side_impact(sim, i, hit, held, t + s * h)
             self._project(sim, hit, i, False)
             return self._persistent_span(sim, i, hit, self._bare(i, held), t + s * h, h - s * h) if s < 1.0 else hit
-        if self._untracked_gap(sim, end, i) < 0.0:  # another feature reached the ground: an impact
-            g0 = self._untracked_gap(sim, y0, i)
-            s = 0.0 if g0 <= 0.0 else self._locate(
-                lambda s: self._untracked_gap(sim, self.step_map(sim, i, y0, s * h, held), i), g0, -1.0)
-            s = 0.0 if s is None else s
-            hit = self.step_map(sim, i, y0, s * h, held) if s > 0.0 else y0.copy()
-            return self._landing(sim, i, hit, self._bare(i, held), t + s * h, h - s * h)
+        if (s := self._reaching(sim, i, y0, end, held, h)) is not None:  # another feature reached the ground: an impact
+            return self._land(sim, i, y0, held, t, h, s)
         count = feature_gaps(end, sim._prm[i], self.shapes[i], self.grounds[j], self._features)
         tracked, pressed = int(self.tracked[i]), int(self.pressed[i])
         let_go = sum(1 << k for k in range(count)
@@ -947,6 +1048,28 @@ class ContactSolver:
         if self.other_ground[i] >= 0:  # held on ground_of alone, projected onto the second half-space too
             two_grounds.project_second(self, sim, i, end, TOUCHING_GAP)
         return end
+
+    def _land(self, sim, i: int, y0: np.ndarray, held: np.ndarray, t: float, h: float, s: float) -> np.ndarray:
+        """The landing (:meth:`_landing`) of a feature of body i at the fraction s of its step from y0 over h
+        under ``held``, then the rest of the step."""
+        hit = self.step_map(sim, i, y0, s * h, held) if s > 0.0 else y0.copy()
+        j, mask = int(self.ground_of[i]), int(self.tracked[i])
+        face = 0  # a can's end face come down flat: it lands as a whole
+        band = self._band[i]
+        if opposite_rim_gap(y0, hit, sim._prm[i], self.shapes[i], self.grounds[j], mask, band) <= band:
+            face = 4 << (0 if mask & 1 else 1)
+        return self._landing(sim, i, hit, self._bare(i, held), t + s * h, h - s * h, face)
+
+    def _reaching(self, sim, i: int, y0: np.ndarray, end: np.ndarray, held: np.ndarray, h: float) -> float | None:
+        """The fraction of the step (from y0 over h under ``held``, to ``end``) at which a feature of body i not
+        tracked reaches the ground (a can's face landing flat, a box's edge coming down), located on the step
+        map; None if none does."""
+        if self._untracked_gap(sim, end, i, y0) >= 0.0:
+            return None
+        g0 = self._untracked_gap(sim, y0, i, y0)
+        s = 0.0 if g0 <= 0.0 else self._locate(
+            lambda s: self._untracked_gap(sim, self.step_map(sim, i, y0, s * h, held), i, y0), g0, -1.0)
+        return 0.0 if s is None else s
 
     def _other_gap(self, sim, y: np.ndarray, i: int) -> tuple[float, int]:
         """(lowest gap, ground) of body i against the half-spaces other than the one it rests on."""
@@ -1026,12 +1149,13 @@ class ContactSolver:
             self.other_ground[i] = two_grounds.touching_other(self, sim, y, i, LIFT_OFF_SPEED,
                                                               max(TOUCHING_GAP, float(self._band[i])))
 
-    def _landing(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float, h: float) -> np.ndarray:
+    def _landing(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float, h: float, face: int = 0) -> np.ndarray:
         """A feature of body i, in persistent contact, reaches the ground at y: the impact of every touching
-        feature together, then the rest h of the step (persistent, or in flight if it bounces off)."""
+        feature together (and of the features ``face``, a can's end face come down), then the rest h of the
+        step (persistent, or in flight if it bounces off)."""
         j = int(self.ground_of[i])
         n = self.grounds[j, NORMAL:NORMAL + 3]
-        mask = int(self.tracked[i]) | self._touching(sim, y, i, j)
+        mask = int(self.tracked[i]) | self._touching(sim, y, i, j) | face
         count = self._tracked_points(sim, y, i, mask)
         before, _, _, _ = self._normal_motion(sim, y, i, j, count, w, mask)
         staying = mask  # nothing strikes (a feature that rose off the ground and came back within the step, located
