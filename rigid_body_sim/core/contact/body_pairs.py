@@ -40,7 +40,7 @@ After each step, before the ground pass:
    the other body; a body's velocity jumps are split over its events so that they add up). At
    a flying member's ground or static-shape root, the ground's impact law (solver._impact).
    After an event the bodies it touched finish the step on their own (solver._with_events, or
-   solver._persistent_end for a held one); the others go on together. A pair that does not
+   solver._held_rest for a held one); the others go on together. A pair that does not
    approach at its root (grazing) is not looked at again in that step.
 5. **Touching at a piece's start**: a pair overlapping (or touching, TOUCHING) at the start of
    a step or of a piece and approaching has its impacts there; if it overlaps, it is first moved
@@ -408,7 +408,7 @@ class BodyPairs:
             if s_hi is None:  # no event in the rest of the step
                 for i in list(active):
                     if i in held:
-                        y[i] = solver._persistent_end(sim, i, y[i], end[i], w[i], t, h)
+                        y[i] = solver._held_rest(sim, i, y[i], w[i], t, h, end[i])
                     else:
                         y[i] = end[i].copy()
                 active.clear()
@@ -459,8 +459,7 @@ class BodyPairs:
         if h <= 0.0:
             return
         if i in held:  # still under the holding force of the step's start
-            end = solver.step_map(sim, i, y[i], h, w[i])
-            y[i] = solver._persistent_end(sim, i, y[i], end, w[i], t, h)
+            y[i] = solver._held_rest(sim, i, y[i], w[i], t, h)
         else:
             y[i] = solver._with_events(sim, i, y[i], w[i], t, h)
 

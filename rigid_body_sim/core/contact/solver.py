@@ -800,12 +800,7 @@ class ContactSolver:
         rate = rim_turn_rate(y, sim._prm[i], self.shapes[i], self.grounds[j], int(self.tracked[i]))
         if rate * h <= RIM_TURN:
             return h
-        piece = RIM_TURN / rate
-        if piece < sim.dt / MAX_RIM_PIECES:
-            piece = sim.dt / MAX_RIM_PIECES
-            self.counts["rim_capped"] += 1
-        self.counts["rim_pieces"] += 1
-        return min(piece, h)
+        return min(max(RIM_TURN / rate, sim.dt / MAX_RIM_PIECES), h)
 
     def _refine_gains(self, sim, resting: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, t0: float,
                       h: float) -> np.ndarray:
@@ -960,11 +955,24 @@ class ContactSolver:
         """Body i from y over h in persistent contact starting mid-step: holding force, step, projection; in
         pieces while it rolls on a cylinder rim whose lowest point turns fast (:meth:`_rim_piece`)."""
         while (piece := self._rim_piece(sim, i, y, h)) < h:
+            self.counts["rim_pieces"] += 1
+            if piece == sim.dt / MAX_RIM_PIECES:
+                self.counts["rim_capped"] += 1
             y = self._held_span(sim, i, y, w, t, piece)
             t, h = t + piece, h - piece
             if self.modes[i] != PERSISTENT:
                 return self._with_events(sim, i, y, w, t, h)
         return self._held_span(sim, i, y, w, t, h)
+
+    def _held_rest(self, sim, i: int, y: np.ndarray, held: np.ndarray, t: float, h: float,
+                   end: np.ndarray | None = None) -> np.ndarray:
+        """Body i held at y over the rest h of its step under ``held`` (its row with the holding force of the
+        step's start), ``end`` that step's end if taken: :meth:`_persistent_end`, or on a fast rim
+        (:meth:`_rim_piece`) the span again in pieces, each with its holding force found afresh."""
+        if self._rim_piece(sim, i, y, h) < h:
+            return self._persistent_span(sim, i, y, self._bare(i, held), t, h)
+        end = self.step_map(sim, i, y, h, held) if end is None else end
+        return self._persistent_end(sim, i, y, end, held, t, h)
 
     def _held_span(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float, h: float) -> np.ndarray:
         """Body i from y over h in persistent contact, in one piece: holding force, step, projection."""
