@@ -56,8 +56,8 @@ rolling on its rim, Euler's disk): there a step can raise the energy. Such a ste
 under gravity alone is taken again in up to MAX_REFINEMENT pieces (_refine_gains), whichever
 the method; what still gains is counted in ``energy_gains``. A cylinder rolling on its rim near
 upright, whose rim's lowest point sweeps round at a rate growing as 1/tilt, has its step taken in
-pieces that each turn that point by at most RIM_TURN (_rim_piece), and its end face coming down
-flat is located as a landing (shapes.opposite_rim_gap).
+pieces that each turn that point by at most RIM_TURN (and shrink its tilt by at most that fraction:
+_rim_piece), and its end face coming down flat is located as a landing (shapes.opposite_rim_gap).
 
 Zeno guard: after an impact whose rebound would rise less than :data:`ZENO_APEX` (the normal
 speed u⁺ with u⁺²/(2a) < ZENO_APEX, a the free normal acceleration of the contact point toward
@@ -125,8 +125,9 @@ LIFT_OFF_SPEED = 1e-9
 MAX_EVENTS_PER_STEP = 10_000
 #: Most pieces a resting body's step is cut into when it gained energy (ContactSolver._refine_gains).
 MAX_REFINEMENT = 32
-#: rad: the most a piece of a step turns the lowest point of a cylinder rolling on its rim about the normal
-#: (persistent.rim_turn_rate): a can wobbling near upright has its step cut into pieces (_rim_piece).
+#: rad: the most a piece of a step turns the lowest point of a cylinder rolling on its rim about the normal, and
+#: the fraction its tilt may shrink by toward upright in one (persistent.rim_turn_rate): a can wobbling near
+#: upright, or coming down onto its end, has its step cut into pieces (_rim_piece).
 RIM_TURN = 0.25
 #: Most pieces a step is cut into for RIM_TURN (a can closer to upright turns more within a piece).
 MAX_RIM_PIECES = 64
@@ -593,7 +594,8 @@ class ContactSolver:
             self._rest_force[fell] = self.holding_forces[fell]
             self._rest_torque[fell] = _torques_about_com(Y0[fell], wrenches[fell] - self._bare_rows[fell])
 
-    def _hold(self, sim, y: np.ndarray, i: int, w: np.ndarray, t: float, stages: bool = True) -> bool:
+    def _hold(self, sim, y: np.ndarray, i: int, w: np.ndarray, t: float, stages: bool = True,
+              keep: bool = False) -> bool:
         """Add the holding force of body i at y into the wrench row w; False (and flight) if it lifts off.
 
         With ``stages`` and an integrator that evaluates dynamics.derivative at every stage, a body
@@ -609,7 +611,7 @@ class ContactSolver:
         speed, mode, sx, sy = self._holding_force(sim, y, i, count, w, mu)
         if count and self._painleve(count, mu, sx, sy):
             self.counts["painleve"] += 1
-        if count == 0 or mode == LIFT_OFF or speed > LIFT_OFF_SPEED or lowest > TOUCHING_GAP:
+        if count == 0 or (mode == LIFT_OFF and not keep) or speed > LIFT_OFF_SPEED or lowest > TOUCHING_GAP:
             self.modes[i] = FLIGHT
             self.sliding[i] = False
             self.events.append(ContactEvent(t, self.names[i], j, "lift-off", speed, speed))
@@ -964,6 +966,15 @@ class ContactSolver:
                 return self._with_events(sim, i, y, w, t, h)
         return self._held_span(sim, i, y, w, t, h)
 
+    def _came_back(self, i: int, t: float, dt: float) -> bool:
+        """Whether body i rests at t (its latest event) having lifted off within 1e-9 dt before: its contact
+        points accelerate away from the ground (no holding force), but the method's own step of its flight comes
+        down at once (a first-order method on a can spinning on its rim). It is then held with a zero force and
+        projected after the span, so that its time moves on instead of lifting off and resting again."""
+        mine = [e for e in self.events[-3:] if e.body == self.names[i]]
+        return (len(mine) >= 2 and mine[-1].kind == "rest" and mine[-1].time == t
+                and any(e.kind == "lift-off" and t - e.time <= 1e-9 * dt for e in mine[:-1]))
+
     def _held_rest(self, sim, i: int, y: np.ndarray, held: np.ndarray, t: float, h: float,
                    end: np.ndarray | None = None) -> np.ndarray:
         """Body i held at y over the rest h of its step under ``held`` (its row with the holding force of the
@@ -977,7 +988,7 @@ class ContactSolver:
     def _held_span(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float, h: float) -> np.ndarray:
         """Body i from y over h in persistent contact, in one piece: holding force, step, projection."""
         held = w.copy()
-        if not self._hold(sim, y, i, held, t):
+        if not self._hold(sim, y, i, held, t, keep=self._came_back(i, t, sim.dt)):
             return self._with_events(sim, i, y, w, t, h)
         end = self.step_map(sim, i, y, h, held)
         return self._persistent_end(sim, i, y, end, held, t, h)

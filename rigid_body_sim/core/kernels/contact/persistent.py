@@ -182,13 +182,16 @@ def normal_bias(y, p, shape, ground, mask, count, points, owners, bias, rdot, an
 
 @njit(**_OPTS)
 def rim_turn_rate(y, p, shape, ground, mask):
-    """How fast (rad/s) the lowest point of a cylinder held on a rim turns about the plane's normal: |cot θ ρ·ω|.
+    """How fast (rad/s) a cylinder held on a rim changes near upright: the larger of the rate at which its
+    rim's lowest point turns about the plane's normal, |cot θ ρ·ω|, and, while it tilts back toward upright,
+    its tilt's relative rate |θ̇|/θ.
 
     θ is the tilt of the axis u from the normal n, ρ = (n − cos θ u)/sin θ the direction from the
-    rim's lowest point up across the axis, ω the angular velocity. A can wobbling near upright
-    sweeps its contact point round the rim at this rate, which grows as 1/θ: the solver cuts a step
-    into pieces that each turn it by less than about a radian. 0 for another shape, a body held on an
-    end face or on both rims (lying), and within RIM_UPRIGHT of upright (turning about a rim point).
+    rim's lowest point up across the axis, ω the angular velocity. A can wobbling near upright sweeps its
+    contact point round the rim at a rate growing as 1/θ, and one coming down toward upright reaches it
+    in about θ/|θ̇|: the solver cuts a step into pieces that each turn the point, or shrink the tilt, by
+    less than a fraction. 0 for another shape, a body held on an end face or on both rims (lying), and within
+    RIM_UPRIGHT of upright (turning about a rim point).
     """
     if int(shape[KIND]) != SHAPE_CYLINDER or mask & 12 or (mask & 3) == 3:
         return 0.0
@@ -202,7 +205,14 @@ def rim_turn_rate(y, p, shape, ground, mask):
     if sin2 <= RIM_UPRIGHT * RIM_UPRIGHT:
         return 0.0
     # ρ·ω sin θ = n·ω − cos θ u·ω
-    return abs(cos_a * (nx * ox + ny * oy + nz * oz - cos_a * (ux * ox + uy * oy + uz * oz))) / sin2
+    turn = abs(cos_a * (nx * ox + ny * oy + nz * oz - cos_a * (ux * ox + uy * oy + uz * oz))) / sin2
+    # d(cos θ)/dt = n·(ω × u) = −sin θ θ̇; the tilt from the rim's end: upright is cos θ = ±1
+    sin_a = math.sqrt(sin2)
+    tilt = math.atan2(sin_a, abs(cos_a))
+    closing = (nx * (oy * uz - oz * uy) + ny * (oz * ux - ox * uz) + nz * (ox * uy - oy * ux)) / sin_a
+    if cos_a < 0.0:
+        closing = -closing
+    return max(turn, closing / tilt) if closing > 0.0 else turn
 
 
 @njit(**_OPTS)
