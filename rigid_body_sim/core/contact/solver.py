@@ -107,6 +107,7 @@ from ..kernels.contact.shapes import (
     body_points,
     feature_gaps,
     feature_points,
+    held_rim,
     min_gaps,
     opposite_rim_gap,
 )
@@ -260,7 +261,7 @@ class ContactSolver:
         #: Per body asleep on its ground alone (:meth:`_rest_alone`): the holding force (N) and its torque about the
         #: centre of mass (N·m), world axes, of the step it fell asleep in, which hold it while it sleeps.
         self._rest_force, self._rest_torque = np.zeros((n, 3)), np.zeros((n, 3))
-        self._rose, self._rose_energy = np.empty(m, dtype=np.int64), np.empty(m)  # batch.gravity_gains
+        self._rose = np.empty(m, dtype=np.int64)  # batch.gravity_gains
         self._rims = np.empty(m, dtype=np.int64)  # batch.fast_rims
         self._any_cylinder = bool((self.shapes[:, KIND] == SHAPE_CYLINDER).any())
         # one-body buffers of the step map
@@ -452,10 +453,10 @@ class ContactSolver:
         mask = int(self.tracked[i])
         project(y, sim._prm[i], self.shapes[i], self.grounds[j], mask, sticking, self._points, self._gaps,
                 self._owners, self._work)
-        if self.shapes[i, KIND] != SHAPE_CYLINDER or mask & 12 or (mask & 3) == 3 or not mask & 3:
+        end = held_rim(self.shapes[i], mask)
+        if end < 0:
             return
-        count = feature_gaps(y, sim._prm[i], self.shapes[i], self.grounds[j], self._features)
-        end = 0 if mask & 1 else 1
+        feature_gaps(y, sim._prm[i], self.shapes[i], self.grounds[j], self._features)
         band = self._band[i]
         if self._features[end] < -band and self._features[2 + end] <= band:  # the face is down, not a rim point
             self.tracked[i] = mask | (4 << end)
@@ -748,22 +749,20 @@ class ContactSolver:
                          RIM_TURN / h, self._rims)
         if not fast:
             return resting
-        prm = sim._prm
         for i in self._rims[:fast].tolist():
-            y0 = Y0[i]
-            e0 = None
-            if self._bare_rows[i, L.ACTIVE] == 0.0:  # gravity alone: its energy must not rise (_refine_gains)
-                e0 = kinetic_energy_row(y0, prm[i]) + potential_energy_row(y0, prm[i])
-            Y1[i, :L.STATE_WIDTH] = self._retaken(sim, i, y0, t0, h, 1, e0)
+            Y1[i, :L.STATE_WIDTH] = self._retaken(sim, i, Y0[i], t0, h, 1)
             self._status[i] = -1  # done here
         return resting[self._status[resting] != -1]
 
-    def _retaken(self, sim, i: int, y0: np.ndarray, t0: float, h: float, pieces: int, e0: float | None) -> np.ndarray:
+    def _retaken(self, sim, i: int, y0: np.ndarray, t0: float, h: float, pieces: int) -> np.ndarray:
         """Body i's step from y0 (the step's start, the solver's state of body i as it was there) taken again in
-        ``pieces`` pieces, each holding force found afresh; with ``e0`` (its energy at y0, under gravity alone),
-        in twice as many while its energy rose, up to MAX_REFINEMENT (a step taken in more than one piece is
-        counted in ``refined_steps``, one still gaining in :attr:`energy_gains`). Returns its state row."""
+        ``pieces`` pieces, each holding force found afresh; under gravity alone (an empty bare row: its energy
+        must not rise), in twice as many while its energy rose, up to MAX_REFINEMENT (a step taken in more than
+        one piece is counted in ``refined_steps``, one still gaining in :attr:`energy_gains`). Returns its state
+        row."""
         prm = sim._prm
+        e0 = None if self._bare_rows[i, L.ACTIVE] != 0.0 else (kinetic_energy_row(y0, prm[i])
+                                                                 + potential_energy_row(y0, prm[i]))
         saved = (int(self.modes[i]), int(self.tracked[i]), bool(self.sliding[i]), self.slide_direction[i].copy(),
                  int(self.pressed[i]), int(self.ground_of[i]), len(self.events))
         bare = self._bare_rows[i].copy()
@@ -816,11 +815,11 @@ class ContactSolver:
         done in the status).
         """
         # gravity alone (an empty bare row): the energy must not rise
-        rose = gravity_gains(Y0, Y1, sim._prm, resting, self._status, self._bare_rows, self._rose, self._rose_energy)
+        rose = gravity_gains(Y0, Y1, sim._prm, resting, self._status, self._bare_rows, self._rose)
         if not rose:
             return resting
-        for i, e0 in zip(self._rose[:rose].tolist(), self._rose_energy[:rose].tolist()):
-            Y1[i, :L.STATE_WIDTH] = self._retaken(sim, i, Y0[i], t0, h, 2, e0)
+        for i in self._rose[:rose].tolist():
+            Y1[i, :L.STATE_WIDTH] = self._retaken(sim, i, Y0[i], t0, h, 2)
             self._status[i] = -1  # done here
         return resting[self._status[resting] != -1]
 
@@ -1009,6 +1008,7 @@ class ContactSolver:
             return two_grounds.end_of_step(self, sim, i, end, t, h)
         end = end.copy()
         j = int(self.ground_of[i])
+        landing = self._reaching(sim, i, y0, end, held, h)  # another feature reaching the ground in the step
         sx, sy = self.slide_direction[i]
         if self.sliding[i] and (sx != 0.0 or sy != 0.0):  # sliding with friction: it may stop in this step
 
@@ -1018,8 +1018,7 @@ class ContactSolver:
                 _, _, vx, vy = self._normal_motion(sim, row, i, j, count, held, int(self.tracked[i]))
                 return vx * sx + vy * sy
 
-            reach = self._reaching(sim, i, y0, end, held, h)  # a stop counts before another feature lands
-            reach = 1.0 if reach is None else reach
+            reach = 1.0 if landing is None else landing  # a stop counts before another feature lands
             if reach > 0.0 and along(reach) <= 0.0:  # the slip reversed before: the stop, located
                 s = self._locate(lambda f: along(f * reach), along(0.0), -1.0)
                 s = reach if s is None else s * reach
@@ -1050,8 +1049,8 @@ class ContactSolver:
             self._side_impact(sim, i, hit, held, t + s * h)
             self._project(sim, hit, i, False)
             return self._persistent_span(sim, i, hit, self._bare(i, held), t + s * h, h - s * h) if s < 1.0 else hit
-        if (s := self._reaching(sim, i, y0, end, held, h)) is not None:  # another feature reached the ground: an impact
-            return self._land(sim, i, y0, held, t, h, s)
+        if landing is not None:  # another feature reached the ground: an impact
+            return self._land(sim, i, y0, held, t, h, landing)
         count = feature_gaps(end, sim._prm[i], self.shapes[i], self.grounds[j], self._features)
         tracked, pressed = int(self.tracked[i]), int(self.pressed[i])
         let_go = sum(1 << k for k in range(count)
@@ -1076,7 +1075,7 @@ class ContactSolver:
         face = 0  # a can's end face come down flat: it lands as a whole
         band = self._band[i]
         if opposite_rim_gap(y0, hit, sim._prm[i], self.shapes[i], self.grounds[j], mask, band) <= band:
-            face = 4 << (0 if mask & 1 else 1)
+            face = 4 << held_rim(self.shapes[i], mask)
         return self._landing(sim, i, hit, self._bare(i, held), t + s * h, h - s * h, face)
 
     def _reaching(self, sim, i: int, y0: np.ndarray, end: np.ndarray, held: np.ndarray, h: float) -> float | None:

@@ -278,10 +278,10 @@ def record_holds(bodies, modes, wrenches, bare, holding_forces, holding_impulses
 
 
 @njit(**_OPTS)
-def gravity_gains(Y0, Y1, prm, bodies, status, bare, rose, before):
+def gravity_gains(Y0, Y1, prm, bodies, status, bare, rose):
     """Of the ``bodies`` with status OK under gravity alone (their ``bare`` rows empty), those whose energy
-    (kinetic less m g·p) rose over the step (Y0 → Y1) by more than 1e-12 of itself: into ``rose``, their energy at
-    the start into ``before``, in ``bodies``' order. Returns their count."""
+    (kinetic less m g·p) rose over the step (Y0 → Y1) by more than 1e-12 of itself: into ``rose``, in ``bodies``'
+    order. Returns their count."""
     n = 0
     for m in range(bodies.shape[0]):
         i = bodies[m]
@@ -291,7 +291,6 @@ def gravity_gains(Y0, Y1, prm, bodies, status, bare, rose, before):
         e1 = kinetic_energy_row(Y1[i], prm[i]) + potential_energy_row(Y1[i], prm[i])
         if e1 > e0 + 1e-12 * abs(e0) + 1e-300:
             rose[n] = i
-            before[n] = e0
             n += 1
     return n
 

@@ -33,7 +33,7 @@ from ..layout import FRAME_SITE_WORLD_AXES, INV_INERTIA, INV_MASS, P, Q, Q_PB, V
 from ..rotation import exp_map, normalise, qmul, rotate, rotate_back
 from .impacts import _A, _ANG, _B, _LAM, _LIN, _row_velocity, apply_impulses, build_rows, pgs, summed_wrench
 from .layout import DIMS, KIND, NORMAL, SHAPE_CAPSULE, SHAPE_CYLINDER, SHAPE_SPHERE
-from .shapes import RIM_UPRIGHT, feature_points
+from .shapes import RIM_UPRIGHT, axis_tilt, feature_points, held_rim
 
 __all__ = ["LIFT_OFF", "STICK", "SLIDE", "START_SLIDE_ACCELERATION", "add_contact_wrench", "accelerations", "accelerations_from", "normal_bias", "normal_motion", "holding_wrench", "project",
            "normal_speeds", "rim_turn_rate", "slip_velocity"]
@@ -193,21 +193,16 @@ def rim_turn_rate(y, p, shape, ground, mask):
     less than a fraction. 0 for another shape, a body held on an end face or on both rims (lying), and within
     RIM_UPRIGHT of upright (turning about a rim point).
     """
-    if int(shape[KIND]) != SHAPE_CYLINDER or mask & 12 or (mask & 3) == 3:
+    if held_rim(shape, mask) < 0:
         return 0.0
     nx, ny, nz = ground[NORMAL], ground[NORMAL + 1], ground[NORMAL + 2]
-    qw, qx, qy, qz = y[Q], y[Q + 1], y[Q + 2], y[Q + 3]
-    ox, oy, oz = rotate(qw, qx, qy, qz, y[W], y[W + 1], y[W + 2])  # ω_W
-    bw, bx, by, bz = qmul(qw, qx, qy, qz, p[Q_PB], p[Q_PB + 1], p[Q_PB + 2], p[Q_PB + 3])  # q_WB
-    ux, uy, uz = rotate(bw, bx, by, bz, 0.0, 0.0, 1.0)
-    cos_a = nx * ux + ny * uy + nz * uz
-    sin2 = (nx - cos_a * ux) ** 2 + (ny - cos_a * uy) ** 2 + (nz - cos_a * uz) ** 2
-    if sin2 <= RIM_UPRIGHT * RIM_UPRIGHT:
+    ox, oy, oz = rotate(y[Q], y[Q + 1], y[Q + 2], y[Q + 3], y[W], y[W + 1], y[W + 2])  # ω_W
+    ux, uy, uz, cos_a, _, _, _, sin_a = axis_tilt(y, p, nx, ny, nz)
+    if sin_a <= RIM_UPRIGHT:
         return 0.0
     # ρ·ω sin θ = n·ω − cos θ u·ω
-    turn = abs(cos_a * (nx * ox + ny * oy + nz * oz - cos_a * (ux * ox + uy * oy + uz * oz))) / sin2
+    turn = abs(cos_a * (nx * ox + ny * oy + nz * oz - cos_a * (ux * ox + uy * oy + uz * oz))) / (sin_a * sin_a)
     # d(cos θ)/dt = n·(ω × u) = −sin θ θ̇; the tilt from the rim's end: upright is cos θ = ±1
-    sin_a = math.sqrt(sin2)
     tilt = math.atan2(sin_a, abs(cos_a))
     closing = (nx * (oy * uz - oz * uy) + ny * (oz * ux - ox * uz) + nz * (ox * uy - oy * ux)) / sin_a
     if cos_a < 0.0:

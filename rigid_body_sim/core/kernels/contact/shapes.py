@@ -38,7 +38,7 @@ from .layout import (
 __all__ = ["FEATURE_BAND", "RIM_UPRIGHT", "sphere_points", "box_points", "cylinder_points", "capsule_points",
            "shape_points",
            "body_points", "body_gap", "min_gaps", "MAX_FEATURES", "feature_gaps", "feature_points",
-           "opposite_rim_gap"]
+           "held_rim", "axis_tilt", "opposite_rim_gap"]
 
 #: Points within this fraction of the shape's largest dimension of the lowest one are in contact together.
 FEATURE_BAND = 1e-9
@@ -243,6 +243,26 @@ def feature_gaps(y, p, shape, ground, gaps):
 
 
 @njit(**_OPTS)
+def held_rim(shape, mask):
+    """The end (0 or 1) whose rim alone a cylinder is held on (``mask``: that rim's lowest-point feature, not
+    an end face, not both rims); -1 otherwise."""
+    if int(shape[KIND]) != SHAPE_CYLINDER or mask & 12 or (mask & 3) == 3 or not mask & 3:
+        return -1
+    return 0 if mask & 1 else 1
+
+
+@njit(**_OPTS)
+def axis_tilt(y, p, nx, ny, nz):
+    """(u, cos θ, p, sin θ) of a capsule's or cylinder's axis u (world) at state row y against the normal n:
+    cos θ = n·u, p = n − cos θ u and sin θ = |p| (accurate near upright, where √(1 − cos² θ) is not)."""
+    qw, qx, qy, qz = qmul(y[Q], y[Q + 1], y[Q + 2], y[Q + 3], p[Q_PB], p[Q_PB + 1], p[Q_PB + 2], p[Q_PB + 3])
+    ux, uy, uz = rotate(qw, qx, qy, qz, 0.0, 0.0, 1.0)
+    cos_a = nx * ux + ny * uy + nz * uz
+    px, py, pz = nx - cos_a * ux, ny - cos_a * uy, nz - cos_a * uz
+    return ux, uy, uz, cos_a, px, py, pz, math.sqrt(px * px + py * py + pz * pz)
+
+
+@njit(**_OPTS)
 def _rim_direction(y, ux, uy, uz, nx, ny, nz, px, py, pz, across, flat):
     """The unit direction ρ (world, across the axis u) from a cylinder rim's lowest point −r ρ (from its end's
     centre) back up: (n − (n·u) u) / sin θ against the plane of normal n, given p = n − (n·u) u and |p| = sin θ.
@@ -350,16 +370,13 @@ def opposite_rim_gap(y0, y, p, shape, ground, mask, band):
     the ground when the end face comes down flat (the can rocking back onto its end), where the held lowest
     point jumps across the rim and no feature of feature_gaps goes below. inf for another shape or mask, and
     when that point was within ``band`` of the ground at y0 (the can just tipping from its end)."""
-    if int(shape[KIND]) != SHAPE_CYLINDER or mask & 12 or (mask & 3) == 3 or not mask & 3:
+    end = held_rim(shape, mask)
+    if end < 0:
         return math.inf
-    side = -1.0 if mask & 1 else 1.0
+    side = -1.0 if end == 0 else 1.0
     a0, a1 = shape[DIMS], shape[DIMS + 1]
     nx, ny, nz = ground[NORMAL], ground[NORMAL + 1], ground[NORMAL + 2]
-    qw, qx, qy, qz = qmul(y0[Q], y0[Q + 1], y0[Q + 2], y0[Q + 3], p[Q_PB], p[Q_PB + 1], p[Q_PB + 2], p[Q_PB + 3])
-    ux, uy, uz = rotate(qw, qx, qy, qz, 0.0, 0.0, 1.0)
-    cos_a = nx * ux + ny * uy + nz * uz
-    px, py, pz = nx - cos_a * ux, ny - cos_a * uy, nz - cos_a * uz
-    across = math.sqrt(px * px + py * py + pz * pz)
+    ux, uy, uz, cos_a, px, py, pz, across = axis_tilt(y0, p, nx, ny, nz)
     rx, ry, rz = _rim_direction(y0, ux, uy, uz, nx, ny, nz, px, py, pz, across, FEATURE_BAND * max(a0, a1) / a0)
     ox, oy, oz = side * a1 * ux + a0 * rx, side * a1 * uy + a0 * ry, side * a1 * uz + a0 * rz  # from the centre
     if nx * (y0[P] + ox) + ny * (y0[P + 1] + oy) + nz * (y0[P + 2] + oz) - ground[OFFSET] <= band:
