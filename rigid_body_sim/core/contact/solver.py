@@ -747,10 +747,16 @@ class ContactSolver:
         (marked done in the status)."""
         fast = fast_rims(Y0, sim._prm, self.shapes, self.grounds, resting, self.ground_of, self.tracked,
                          RIM_TURN / h, self._rims)
-        if not fast:
+        return self._retake_all(sim, self._rims[:fast], resting, Y0, Y1, t0, h, 1)
+
+    def _retake_all(self, sim, bodies: np.ndarray, resting: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, t0: float,
+                    h: float, pieces: int) -> np.ndarray:
+        """The steps of ``bodies`` taken again from Y0 in ``pieces`` pieces (:meth:`_retaken`) into Y1; returns
+        ``resting`` without them (marked done in the status)."""
+        if not bodies.size:
             return resting
-        for i in self._rims[:fast].tolist():
-            Y1[i, :L.STATE_WIDTH] = self._retaken(sim, i, Y0[i], t0, h, 1)
+        for i in bodies.tolist():
+            Y1[i, :L.STATE_WIDTH] = self._retaken(sim, i, Y0[i], t0, h, pieces)
             self._status[i] = -1  # done here
         return resting[self._status[resting] != -1]
 
@@ -816,12 +822,7 @@ class ContactSolver:
         """
         # gravity alone (an empty bare row): the energy must not rise
         rose = gravity_gains(Y0, Y1, sim._prm, resting, self._status, self._bare_rows, self._rose)
-        if not rose:
-            return resting
-        for i in self._rose[:rose].tolist():
-            Y1[i, :L.STATE_WIDTH] = self._retaken(sim, i, Y0[i], t0, h, 2)
-            self._status[i] = -1  # done here
-        return resting[self._status[resting] != -1]
+        return self._retake_all(sim, self._rose[:rose], resting, Y0, Y1, t0, h, 2)
 
     # ----------------------------------------------------------------- flight: impacts
 
