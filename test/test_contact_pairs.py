@@ -455,10 +455,12 @@ def test_broad_phase_finds_exactly_the_overlapping_boxes(margin):
 
 
 def test_cylinder_on_a_box_face_standing_and_lying():
-    """A cylinder (r 0.1, half length 0.2) sunk 1 mm into a box's top face: 4 rim points standing, 2 lying."""
+    """A cylinder (r 0.1, half length 0.2) sunk 1 mm into a box's top face: standing, its 4 rim points and the
+    one toward the box's centre (the last on the −x point when the box's centre is along −x); lying, 2."""
     a = np.array([0.3, 0.3, 0.1])
     r, h = 0.1, 0.2
-    for shift, expect in (((0.05, 0.02), [(0.15, 0.02), (-0.05, 0.02), (0.05, 0.12), (0.05, -0.08)]),
+    toward = np.array([0.05, 0.02]) - r * np.array([0.05, 0.02]) / np.hypot(0.05, 0.02)
+    for shift, expect in (((0.05, 0.02), [(0.15, 0.02), (-0.05, 0.02), (0.05, 0.12), (0.05, -0.08), tuple(toward)]),
                           ((0.35, 0.0), [(0.25, 0.0), (0.3, 0.05), (0.3, -0.05)])):  # over the edge: clipped
         c = np.array([shift[0], shift[1], a[2] + h - 1e-3])
         dist, normal, count, points, seps = one(row("box", *a), row("cylinder", r, h), [0.0, 0.0, 0.0], c)
@@ -491,8 +493,9 @@ def on_both(ka, da, ca, qa, kb, db, cb, qb, points):
                                           (0.04, 0.1, (0.03, -0.01)), (0.1, 0.06, (0.09, 0.0))])
 def test_two_cylinders_end_on_end_touch_where_their_disks_overlap(ra, rb, offset):
     """B (radius rb) sunk 1 mm on A's top end, its axis offset: the points are each rim's four points (local ±x,
-    ±y) inside the other disk and the two points where the rims cross (closed form); every one is within both
-    disks, 1 mm deep, on both surfaces, and their hull holds B's centre when it lies over both disks."""
+    ±y) and its point toward the other's centre inside the other disk, and the two points where the rims cross
+    (closed form); every one is within both disks, 1 mm deep, on both surfaces, and their hull holds B's centre
+    when it lies over both disks."""
     h = 0.15
     ca, cb = np.zeros(3), np.array([offset[0], offset[1], 2 * h - 1e-3])
     da, db = np.array([ra, h, 0.0]), np.array([rb, h, 0.0])
@@ -503,7 +506,10 @@ def test_two_cylinders_end_on_end_touch_where_their_disks_overlap(ra, rb, offset
     on_both("cylinder", da, ca, IDENTITY, "cylinder", db, cb, IDENTITY, points)
     expect = []
     for centre, r, other, r_other in ((ca[:2], ra, cb[:2], rb), (cb[:2], rb, ca[:2], ra)):
-        for u in ((1, 0), (0, 1), (-1, 0), (0, -1)):
+        ways = [(1, 0), (0, 1), (-1, 0), (0, -1)]
+        if np.linalg.norm(other - centre) > 0:
+            ways.append((other - centre) / np.linalg.norm(other - centre))
+        for u in ways:
             p = centre + r * np.array(u)
             if np.linalg.norm(p - other) <= r_other + 1e-12:
                 expect.append(p)

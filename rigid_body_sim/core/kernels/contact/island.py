@@ -383,7 +383,9 @@ def _gather(Y, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdi
             m, rx, ry, rz = face_patch(pos, quat, shapes, a, b, pnormal[k, 0], pnormal[k, 1], pnormal[k, 2],
                                       PATCH_FLAT, max(reach - pdist[k], 0.0), poses, poly, res, seps)
             if m > 0:  # a face on a face: the clipped patch, each point at its own gap
+                lowest = math.inf
                 for c in range(m):
+                    lowest = min(lowest, seps[c])
                     if seps[c] <= reach:
                         _owners(cint, count, a, b, is_static)
                         for j in range(3):
@@ -392,6 +394,17 @@ def _gather(Y, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdi
                         cflt[count, C_GAP] = seps[c]
                         cflt[count, C_MU] = mu
                         count += 1
+                # a cylinder's patch is polygons on its round rims: the narrow phase's deepest point besides, where
+                # the patch left it out (a box's edge over a rim, beyond its clipped chord)
+                if ((shapes[a, KIND] == SHAPE_CYLINDER or shapes[b, KIND] == SHAPE_CYLINDER)
+                        and pseps[k, 0] <= limit and pseps[k, 0] < lowest - PROJECT_TOL * scale):
+                    _owners(cint, count, a, b, is_static)
+                    for j in range(3):
+                        cflt[count, C_X + j] = 0.5 * (ppoints[k, 0, j] + ppoints[k, 0, 3 + j])
+                        cflt[count, C_N + j] = pnormal[k, j]
+                    cflt[count, C_GAP] = pseps[k, 0]
+                    cflt[count, C_MU] = mu
+                    count += 1
                 continue
         for c in range(pcount[k]):
             if pseps[k, c] <= limit:

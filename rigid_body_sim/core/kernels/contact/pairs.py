@@ -12,8 +12,9 @@ writes
   (seps[m, 0] = dist[m]). More than one point where a feature touches flat: two box faces
   (the incident face clipped to the reference face: up to 8 points), a capsule lying on a box
   face or parallel to another capsule (2), a cylinder standing or lying on a box face (its rim's 4
-  points or its side's line, clipped), two cylinder ends (each rim's points within the other disk
-  and where the rims cross), a cylinder's or capsule's side on a cylinder's end (the chord over
+  points along its local ±x, ±y, its point toward the box's centre and, tilted, its deepest, clipped;
+  or its side's line, clipped), two cylinder ends (each rim's points within the other disk and where
+  the rims cross), a cylinder's or capsule's side on a cylinder's end (the chord over
   the disk, 2) or along a parallel cylinder (their overlap, 2). Every point whose separation is within
   ``FEATURE_BAND`` × the pair's size of the deepest, or that penetrates, is reported.
 
@@ -49,8 +50,14 @@ from .shapes import FEATURE_BAND
 __all__ = ["make_workspace_jit", "MAX_PAIR_POINTS", "FACE_ALIGNMENT", "set_pose", "surface_point", "pair_contact", "pair_contacts",
            "boxes_apart", "boxes_apart_turned", "apart_bounds", "face_patch"]
 
-#: Most contact points one pair reports (a box face clipped against another: a polygon of up to 8 corners).
-MAX_PAIR_POINTS = 8
+#: Most contact points one pair reports (a box face clipped against another: a polygon of up to 8 corners; a
+#: cylinder's end, up to 6 rim points, clipped against a box face: up to 10).
+MAX_PAIR_POINTS = 10
+#: A cylinder end's rim polygon (_rim_polygon) takes a rim point toward the other body's centre, and one deepest
+#: into the face it stands on, unless that direction's part across the axis is below RIM_ACROSS (× its length:
+#: along the axis, or so near it that every rim point is as deep to ~1e-12 of the radius) or it is within
+#: RIM_ACROSS (rad) of a point taken already.
+RIM_ACROSS = 1e-11
 #: A normal within this angle (rad) of a box face's normal makes that face a reference face for clipping.
 FACE_ALIGNMENT = 1e-6
 #: Polytopes apart by at most this × the pair's size take the separating-axis test's normal, as when they
@@ -512,6 +519,51 @@ def _rim_point(pose, cx, cy, cz, r, j):
 
 
 @njit(**INLINE)
+def _rim_angle(pose, wx, wy, wz):
+    """The angle (rad, in [0, 2π)) about the cylinder core's local z, from its local x, of direction w's part
+    across the axis, or NaN when that part is below RIM_ACROSS × |w|."""
+    e1x, e1y, e1z = _axis(pose, 0)
+    e2x, e2y, e2z = _axis(pose, 1)
+    lx, ly = wx * e1x + wy * e1y + wz * e1z, wx * e2x + wy * e2y + wz * e2z
+    if lx * lx + ly * ly <= (RIM_ACROSS * RIM_ACROSS) * (wx * wx + wy * wy + wz * wz):
+        return math.nan
+    a = math.atan2(ly, lx)
+    return a + 2.0 * math.pi if a < 0.0 else a
+
+
+@njit(**INLINE)
+def _at_angle(pose, cx, cy, cz, r, a):
+    """The rim point at angle a (rad about the core's local z, from its local x) of the end centred at c, radius r."""
+    e1x, e1y, e1z = _axis(pose, 0)
+    e2x, e2y, e2z = _axis(pose, 1)
+    ca, sa = r * math.cos(a), r * math.sin(a)
+    return cx + ca * e1x + sa * e2x, cy + ca * e1y + sa * e2y, cz + ca * e1z + sa * e2z
+
+
+@njit(**JIT)
+def _rim_polygon(pose, cx, cy, cz, r, a0, a1, poly):
+    """The rim of the cylinder end centred at c (world, m), radius r, as a convex polygon into poly[0]: its four
+    points along the core's local +x, +y, −x, −y (_rim_point) and the rim points at angles a0 and a1 (_rim_angle;
+    NaN: none) in their places between them, each unless within RIM_ACROSS (rad) of a point there. Returns the
+    count (4 to 6)."""
+    quarter = 0.5 * math.pi
+    lo, hi = (a0, a1) if math.isnan(a1) or a0 <= a1 else (a1, a0)  # NaN last
+    if math.isnan(lo):
+        lo, hi = hi, lo
+    if not math.isnan(hi) and hi - lo <= RIM_ACROSS:
+        hi = math.nan
+    n = 0
+    for j in range(4):
+        poly[0, n, 0], poly[0, n, 1], poly[0, n, 2] = _rim_point(pose, cx, cy, cz, r, j)
+        n += 1
+        for a in (lo, hi):
+            if not math.isnan(a) and j * quarter + RIM_ACROSS < a < (j + 1) * quarter - RIM_ACROSS:
+                poly[0, n, 0], poly[0, n, 1], poly[0, n, 2] = _at_angle(pose, cx, cy, cz, r, a)
+                n += 1
+    return n
+
+
+@njit(**INLINE)
 def _deepest_first(res, seps, count):
     """Swap the deepest of the count points into place 0 (res, seps as written by _put)."""
     for q in range(1, count):
@@ -527,8 +579,10 @@ def _face_manifold(ref, inc, ref_is_a, ma, mb, nx, ny, nz, sd, band, tilt, poly,
     """Clip the incident core's feature (box face or segment) against the reference box face nearest n.
 
     ``ref`` is a box core; ``inc`` a box, a segment (with margin; a segment is always A here) or
-    a cylinder standing on an end (four rim points, as against the ground) or lying on its side
-    (the side's line), each within ``tilt`` (rad, small) of the face, else nothing is clipped. Writes the points whose separation is within ``band`` of the
+    a cylinder standing on an end or lying on its side (the side's line), each within ``tilt`` (rad, small) of the
+    face, else nothing is clipped. A standing cylinder's rim is the polygon of its four points along its local ±x,
+    ±y, the rim point toward the reference box's centre (what rests on the end stands on the disk, not only on
+    that square) and, tilted, the rim point deepest into the face (_rim_polygon). Writes the points whose separation is within ``band`` of the
     deepest or below zero; returns their count (0 if clipping left nothing).
     """
     sgn_n = 1.0 if ref_is_a else -1.0  # the reference face's outward normal is ±n
@@ -559,12 +613,12 @@ def _face_manifold(ref, inc, ref_is_a, ma, mb, nx, ny, nz, sd, band, tilt, poly,
         c_axis = ux * rx + uy * ry + uz * rz
         r, h = inc[_DIM], inc[_DIM + 1]
         if abs(c_axis) >= 1.0 - 0.5 * tilt * tilt:
-            # standing on an end face: four rim points of the end facing the reference face
+            # standing on an end face: the rim of the end facing the reference face
             s_end = -1.0 if c_axis > 0.0 else 1.0
-            for k in range(4):
-                poly[0, k, 0], poly[0, k, 1], poly[0, k, 2] = _rim_point(
-                    inc, inc[_C] + s_end * h * ux, inc[_C + 1] + s_end * h * uy, inc[_C + 2] + s_end * h * uz, r, k)
-            n = 4
+            ex, ey, ez = inc[_C] + s_end * h * ux, inc[_C + 1] + s_end * h * uy, inc[_C + 2] + s_end * h * uz
+            toward = _rim_angle(inc, ref[_C] - ex, ref[_C + 1] - ey, ref[_C + 2] - ez)
+            deepest = _rim_angle(inc, -rx, -ry, -rz)
+            n = _rim_polygon(inc, ex, ey, ez, r, toward, deepest, poly)
         elif abs(c_axis) <= tilt:
             # lying on its side: the line of the side nearest the reference face
             px, py, pz = rx - c_axis * ux, ry - c_axis * uy, rz - c_axis * uz
@@ -770,14 +824,22 @@ def _add(poly, k, ax, ay, az, bx, by, bz, tol):
 
 @njit(**JIT)
 def _disk_disk(pa, pb, ea, eb, tol, poly):
-    """Two end faces touching flat (ea, eb: _flat_end of A along n, of B along −n): the four rim points of each
-    (along its core's local x and y axes) that lie within the other disk, and the two points where the rims
-    cross, each paired with the nearest point of the other face, into poly (_add); returns their count (≤ 10)."""
+    """Two end faces touching flat (ea, eb: _flat_end of A along n, of B along −n): the rim points of each that
+    lie within the other disk — its four along its core's local x and y axes, the one toward the other's centre
+    and, tilted, the one deepest into the other's face (_rim_angle) — and the two points where the rims cross,
+    each paired with the nearest point of the other face, into poly (_add); returns their count (≤ 14)."""
     k = 0
     for side in range(2):
         src, e, other = (pa, ea, eb) if side == 0 else (pb, eb, ea)
-        for j in range(4):
-            px, py, pz = _rim_point(src, e[1], e[2], e[3], e[7], j)
+        toward = _rim_angle(src, other[1] - e[1], other[2] - e[2], other[3] - e[3])
+        deepest = _rim_angle(src, -other[4], -other[5], -other[6])
+        for j in range(6):
+            if j < 4:
+                px, py, pz = _rim_point(src, e[1], e[2], e[3], e[7], j)
+            elif math.isnan(toward if j == 4 else deepest):
+                continue
+            else:
+                px, py, pz = _at_angle(src, e[1], e[2], e[3], e[7], toward if j == 4 else deepest)
             d = (px - other[1]) * other[4] + (py - other[2]) * other[5] + (pz - other[3]) * other[6]
             qx, qy, qz = px - d * other[4] - other[1], py - d * other[5] - other[2], pz - d * other[6] - other[3]
             if qx * qx + qy * qy + qz * qz > (other[7] + tol) ** 2:
