@@ -479,6 +479,31 @@ def test_cylinder_on_a_box_face_standing_and_lying():
     assert seps == pytest.approx([-1e-3] * 2, abs=1e-12)
 
 
+
+def test_a_cylinder_standing_tilted_within_the_face_alignment_touches_at_its_deepest_rim_point():
+    """A cylinder (r 0.1, half length 0.2) standing on a box's top face, tilted 5e-7 rad (within FACE_ALIGNMENT,
+    so its rim is clipped as standing) toward 30° from x, its lowest rim point 1 mm deep: that point (closed form:
+    the end's centre less r along the face normal's part across the axis) is one of the points, at the signed
+    distance, so the manifold is as deep as the pair; the square's points are shallower by up to
+    r sin θ (1 − cos 30°), 6.7e-9 m."""
+    a = np.array([0.3, 0.3, 0.1])
+    r, h, tilt = 0.1, 0.2, 5e-7
+    k = np.array([np.cos(np.radians(120.0)), np.sin(np.radians(120.0)), 0.0])  # the turn's axis
+    q = (np.cos(tilt / 2), *(np.sin(tilt / 2) * k))
+    u = matrix(q) @ [0.0, 0.0, 1.0]
+    c = np.array([0.05, 0.02, a[2] - 1e-3 + h * u[2] + r * np.sin(tilt)])
+    end = c - h * u
+    across = np.array([0.0, 0.0, 1.0]) - u[2] * u
+    deepest = end - r * across / np.linalg.norm(across)
+    dist, normal, count, points, seps = one(row("box", *a), row("cylinder", r, h), [0.0, 0.0, 0.0], c, IDENTITY, q)
+    assert dist == pytest.approx(-1e-3, abs=1e-12)
+    assert normal == pytest.approx([0.0, 0.0, 1.0], abs=1e-12)
+    assert seps.min() == pytest.approx(-1e-3, abs=1e-12)
+    # where along the rim: its direction across the axis is known to ~1e-16 / θ rad, so to ~r × 2e-10 m
+    assert np.min(np.linalg.norm(points[:, 3:] - deepest, axis=1)) <= 1e-9
+    assert count == 6  # the square's 4, the point toward the box's centre and the deepest
+    on_both("box", a, np.zeros(3), IDENTITY, "cylinder", np.array([r, h, 0.0]), c, q, points)
+
 ALONG_X = (np.cos(np.pi / 4), 0.0, np.sin(np.pi / 4), 0.0)  # the body's z axis along world x
 
 
