@@ -54,8 +54,8 @@ __all__ = ["make_workspace_jit", "MAX_PAIR_POINTS", "FACE_ALIGNMENT", "set_pose"
 #: cylinder's end, up to 6 rim points, clipped against a box face: up to 10).
 MAX_PAIR_POINTS = 10
 #: A cylinder end's rim polygon (_rim_polygon) takes a rim point toward the other body's centre, and one deepest
-#: into the face it stands on, unless that direction's part across the axis is below RIM_ACROSS (× its length:
-#: along the axis, or so near it that every rim point is as deep to ~1e-12 of the radius) or it is within
+#: into the face it stands on, unless that direction's part across the axis is below RIM_ACROSS × its length
+#: (along the axis, or so near it that every rim point is as deep to RIM_ACROSS × the radius) or it is within
 #: RIM_ACROSS (rad) of a point taken already.
 RIM_ACROSS = 1e-11
 #: A normal within this angle (rad) of a box face's normal makes that face a reference face for clipping.
@@ -579,11 +579,12 @@ def _face_manifold(ref, inc, ref_is_a, ma, mb, nx, ny, nz, sd, band, tilt, poly,
     """Clip the incident core's feature (box face or segment) against the reference box face nearest n.
 
     ``ref`` is a box core; ``inc`` a box, a segment (with margin; a segment is always A here) or
-    a cylinder standing on an end or lying on its side (the side's line), each within ``tilt`` (rad, small) of the
-    face, else nothing is clipped. A standing cylinder's rim is the polygon of its four points along its local ±x,
-    ±y, the rim point toward the reference box's centre (what rests on the end stands on the disk, not only on
-    that square) and, tilted, the rim point deepest into the face (_rim_polygon). Writes the points whose separation is within ``band`` of the
-    deepest or below zero; returns their count (0 if clipping left nothing).
+    a cylinder standing on an end or lying on its side (the side's line), each within ``tilt`` (rad, small) of
+    the face, else nothing is clipped. A standing cylinder's rim is the polygon of its four points along its
+    local ±x, ±y, the rim point toward the reference box's centre (what rests on the end stands on the disk, not
+    only on that square) and, tilted, the rim point deepest into the face (_rim_polygon). Writes the points
+    whose separation is within ``band`` of the deepest or below zero; returns their count (0 if clipping left
+    nothing).
     """
     sgn_n = 1.0 if ref_is_a else -1.0  # the reference face's outward normal is ±n
     i, s_ref, _ = _face_of(ref, sgn_n * nx, sgn_n * ny, sgn_n * nz)
