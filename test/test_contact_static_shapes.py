@@ -176,6 +176,8 @@ def test_a_box_dropped_flat_on_a_static_box_comes_to_rest_and_stays():
         worst_speed = max(worst_speed, np.linalg.norm(sim.state.v_WC_W[1]), np.linalg.norm(sim.state.w_WP_P[1]))
     assert worst_gap <= 1e-12 and worst_speed <= 1e-12, (worst_gap, worst_speed)
     assert sim.contact.counts["static_tangent"] == 0
+    # held by m g, as reported (rk4 finds the force at every stage; the record is the step start's)
+    assert sim.contact.holding_forces[1] == pytest.approx([0.0, 0.0, 2.0 * G], rel=1e-12, abs=1e-12)
 
 
 # ----------------------------------------------------------------------------- scene

@@ -559,13 +559,17 @@ class ContactSolver:
             self._hold(sim, Y[i], i, wrenches[i], sim.time, stages=False)
         for i in two:
             self._hold(sim, Y[i], i, wrenches[i], sim.time)
+        rows = wrenches  # with the holding forces: a row _hold staged (on a static box's face) has its in _held_rows
+        if (staged := np.flatnonzero(self._staged)).size:
+            rows = wrenches.copy()
+            rows[staged] = self._held_rows[staged]
         for bodies in (held_one, held_two):  # the contact forces go in as world-axes forces (add_wrench)
-            record_holds(bodies, self.modes, wrenches, self._bare_rows, self.holding_forces, self.holding_impulses,
+            record_holds(bodies, self.modes, rows, self._bare_rows, self.holding_forces, self.holding_impulses,
                          sim.dt)
         if self.track_torques:
             resting = np.concatenate((held_one, held_two))
             held = resting[self.modes[resting] == PERSISTENT]
-            added = wrenches[held] - self._bare_rows[held]
+            added = rows[held] - self._bare_rows[held]
             self.holding_angular_impulses[held] += _torques_about_com(Y[held], added) * sim.dt
         if sim._method.derivative_stages:  # the force found at every stage instead (stage.py)
             one = one[self.modes[one] == PERSISTENT]
