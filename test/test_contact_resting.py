@@ -80,3 +80,57 @@ def test_box_landing_flat_comes_to_rest_exactly_on_the_ground():
     after = sim.state.copy()
     sim.step(100)
     assert np.array_equal(sim.state.p_WC_W, after.p_WC_W) and np.array_equal(sim.state.q_WP, after.q_WP)
+
+
+R, LENGTH = 0.05, 0.2  # a can standing on an end: the push at its top's centre that tips it is m g R / LENGTH
+
+
+def can_scene(on: str):
+    """The can standing on the ground, or on a static box's top face (a table: a plane held as the ground is)."""
+    material = {"restitution": 0.0, "friction": MU}
+    bodies = {"can": {"mass": M, "inertia": {"cylinder": [R, LENGTH]}, "material": material,
+                      "pose": {"position": [0.0, 0.0, 0.5 * LENGTH]}}}
+    if on == "table":
+        bodies["table"] = {"mass": 10.0, "inertia": {"box": [1.0, 1.0, 0.5]}, "motion": "static", "material": material,
+                           "pose": {"position": [0.0, 0.0, -0.25]}}
+    ground = [{"normal": [0, 0, 1], "material": material}] if on == "ground" else []
+    return load_scene({"gravity": [0.0, 0.0, -G], "ground": ground, "bodies": bodies})
+
+
+def push_at_the_top(sim, fraction: float, heading: float, steps: int) -> float:
+    """Push the can at its top's centre, horizontally along ``heading`` (rad from world x), by ``fraction`` of
+    the tipping push, 10 steps at a time for ``steps``; returns the largest angle it turned through (rad)."""
+    push = fraction * M * G * R / LENGTH
+    start = sim.state.q_WP[0].copy()
+    largest = 0.0
+    for _ in range(steps // 10):
+        c = sim.state.p_WC_W[0]
+        sim.apply_force_at_point("can", (push * np.cos(heading), push * np.sin(heading), 0.0),
+                                 (c[0], c[1], c[2] + 0.5 * LENGTH))
+        sim.step(10)
+        largest = max(largest, 2.0 * np.arccos(min(1.0, abs(float(sim.state.q_WP[0] @ start)))))
+    return largest
+
+
+@pytest.mark.parametrize("integrator", ["rk4", "semi_implicit_euler"])
+@pytest.mark.parametrize("heading", [0.0, np.pi / 4, 0.3, 2.5])
+@pytest.mark.parametrize("on", ["ground", "table"])
+def test_a_can_pushed_at_its_top_rests_below_the_tipping_push_in_every_direction(on, integrator, heading):
+    """Its end holds over the whole disk: the push F at the top's centre, at height LENGTH, tips the can about
+    the rim point along the push once F LENGTH > m g R, whichever way it points (the rim points it stands on
+    turn toward the load: persistent.end_toward_load), on the ground and on a static box's face alike. At 0.99
+    of that push it stays exactly at rest, the contact holding −F and m g; at 1.01 it tips over about that rim
+    point, its centre moving off along the push."""
+    sim = Simulator(can_scene(on), integrator=integrator, dt=1e-3)
+    sim.step(50)
+    start = sim.state.copy()
+    assert push_at_the_top(sim, 0.99, heading, 300) < 1e-7  # arccos near 1: its resolution
+    assert np.abs(sim.state.p_WC_W - start.p_WC_W).max() <= 1e-15  # on the ground: locked, bitwise put
+    assert np.abs(sim.state.q_WP - start.q_WP).max() <= 1e-15
+    assert np.abs(sim.state.v_WC_W).max() <= 1e-15 and np.abs(sim.state.w_WP_P).max() <= 1e-15
+    push = 0.99 * M * G * R / LENGTH
+    assert sim.contact.holding_forces[0] == pytest.approx([-push * np.cos(heading), -push * np.sin(heading), M * G],
+                                                          rel=1e-12, abs=1e-12)
+    assert push_at_the_top(sim, 1.01, heading, 500) > 1e-2
+    c = sim.state.p_WC_W[0]
+    assert np.arctan2(c[1], c[0]) == pytest.approx(heading if heading <= np.pi else heading - 2 * np.pi, abs=1e-6)

@@ -81,6 +81,7 @@ from ..kernels import layout as L
 from ..quaternion import quat_rotate, quat_to_matrix
 from . import static_geometry, two_grounds
 from .events import ContactEvent
+from ..kernels.dynamics import derivative
 from ..kernels.stepping import advance, step_reduced
 from ..kernels.contact.batch import (CACHE_WIDTH, OK, TO_SOLVER, busy_bodies, fast_rims, gravity_gains, hold_all,
                                      record_holds, settle_all, split_bodies)
@@ -92,12 +93,14 @@ from ..kernels.contact.persistent import (
     LIFT_OFF,
     SLIDE,
     add_contact_wrench,
+    end_toward_load,
     holding_wrench,
     normal_bias,
     normal_motion,
     normal_speeds,
     project,
     rim_turn_rate,
+    stands_on_end,
 )
 from ..kernels.contact.stage import hold_in_row, stage_rows, stepped_by_integrator
 from ..kernels.contact.shapes import (
@@ -611,6 +614,10 @@ class ContactSolver:
             return two_grounds.hold(self, sim, y, i, w, t, LIFT_OFF_SPEED, TOUCHING_GAP, SLIP_TOLERANCE)
         j = int(self.ground_of[i])
         count = self._tracked_points(sim, y, i)
+        if stands_on_end(self.shapes[i], int(self.tracked[i]), count):  # its rim points turned toward the load
+            derivative(y, sim._prm[i], w, self._d)
+            end_toward_load(y, sim._prm[i], self.shapes[i], self.grounds[j], int(self.tracked[i]), self._points,
+                            self._gaps, self._d)
         lowest = float(self._gaps[:count].min()) if count else math.inf  # set_body_state may have lifted it
         mu = self.friction_of(i, j)
         speed, mode, sx, sy = self._holding_force(sim, y, i, count, w, mu)

@@ -33,11 +33,13 @@ from .persistent import (
     SLIDE,
     add_contact_wrench,
     STICK,
+    end_toward_load,
     holding_wrench,
     normal_bias,
     project,
     rim_turn_rate,
     slip_velocity,
+    stands_on_end,
 )
 from .shapes import MAX_FEATURES, body_points, feature_gaps, feature_points, opposite_rim_gap
 
@@ -135,6 +137,9 @@ def hold_all(Y, prm, wrenches, shapes, grounds, bodies, ground_of, tracked, fric
         if count == 0:
             status[i] = TO_SOLVER
             continue
+        if stands_on_end(shapes[i], tracked[i], count):  # its rim points turned toward the load
+            derivative(y, p, w, d)
+            end_toward_load(y, p, shapes[i], ground, tracked[i], points, gaps, d)
         lowest = math.inf
         for c in range(count):
             lowest = min(lowest, gaps[c])

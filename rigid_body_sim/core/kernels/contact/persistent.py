@@ -29,14 +29,14 @@ from numba import njit
 
 from ..dynamics import derivative
 from ..forces import add_wrench
-from ..layout import FRAME_SITE_WORLD_AXES, INV_INERTIA, INV_MASS, P, Q, Q_PB, V, W
+from ..layout import FRAME_SITE_WORLD_AXES, INV_INERTIA, INV_MASS, P, PROJECT, PROJECT_NONE, Q, Q_PB, V, W
 from ..rotation import exp_map, normalise, qmul, rotate, rotate_back
 from .impacts import _A, _ANG, _B, _LAM, _LIN, _row_velocity, apply_impulses, build_rows, pgs, summed_wrench
-from .layout import DIMS, KIND, NORMAL, SHAPE_CAPSULE, SHAPE_CYLINDER, SHAPE_SPHERE
+from .layout import DIMS, KIND, NORMAL, OFFSET, SHAPE_CAPSULE, SHAPE_CYLINDER, SHAPE_SPHERE
 from .shapes import RIM_UPRIGHT, axis_tilt, feature_points, held_rim
 
 __all__ = ["LIFT_OFF", "STICK", "SLIDE", "START_SLIDE_ACCELERATION", "add_contact_wrench", "accelerations", "accelerations_from", "normal_bias", "normal_motion", "holding_wrench", "project",
-           "normal_speeds", "rim_turn_rate", "slip_velocity"]
+           "normal_speeds", "rim_turn_rate", "slip_velocity", "stands_on_end", "end_toward_load"]
 
 _OPTS = {"cache": True, "nogil": True, "error_model": "numpy"}
 
@@ -208,6 +208,65 @@ def rim_turn_rate(y, p, shape, ground, mask):
     if cos_a < 0.0:
         closing = -closing
     return max(turn, closing / tilt) if closing > 0.0 else turn
+
+
+@njit(**_OPTS)
+def stands_on_end(shape, mask, count):
+    """True for a cylinder held on an end face (``mask``: its face feature), at its 4 rim points (``count``)."""
+    return int(shape[KIND]) == SHAPE_CYLINDER and (mask & 12) != 0 and count == 4
+
+
+@njit(**_OPTS)
+def end_toward_load(y, p, shape, ground, mask, points, gaps, d):
+    """Turn the 4 rim points of a cylinder standing on an end face (shapes.feature_points) toward its load.
+
+    The end holds over its whole disk; 4 rim points hold a centre of pressure inside their square
+    only. ``d`` holds dy/dt at y without contact (dynamics.derivative): the contact force and
+    moment that would hold the body still are F = −m a and τ = −I α (principal axes; about the
+    centre of mass), and their centre of pressure on the end face lies at s = n × τ_o / (n·F) from
+    the face's centre o (τ_o = τ + (c − o) × F, n the plane's normal; friction in the plane adds
+    nothing across it). Where s lies outside the square of the rim points along the body's ±x, ±y,
+    the 4 points (``points``, world, and their ``gaps``, m) are put at 90° steps from the rim point
+    along s: the disk holds a centre of pressure up to the radius along s, and beyond it the body
+    pivots about that rim point, where the whole disk's would. Else, and for a body whose motion is
+    projected (planar), or pressed off the plane, the points are left as they are.
+    """
+    inv_m = p[INV_MASS]
+    if p[PROJECT] != PROJECT_NONE or inv_m <= 0.0:
+        return
+    for k in range(3):
+        if p[INV_INERTIA + k] <= 0.0:
+            return
+    nx, ny, nz = ground[NORMAL], ground[NORMAL + 1], ground[NORMAL + 2]
+    fx, fy, fz = -d[V] / inv_m, -d[V + 1] / inv_m, -d[V + 2] / inv_m
+    normal = nx * fx + ny * fy + nz * fz
+    if not normal > 0.0:
+        return
+    tx, ty, tz = rotate(y[Q], y[Q + 1], y[Q + 2], y[Q + 3], -d[W] / p[INV_INERTIA], -d[W + 1] / p[INV_INERTIA + 1],
+                        -d[W + 2] / p[INV_INERTIA + 2])
+    qw, qx, qy, qz = qmul(y[Q], y[Q + 1], y[Q + 2], y[Q + 3], p[Q_PB], p[Q_PB + 1], p[Q_PB + 2], p[Q_PB + 3])
+    ux, uy, uz = rotate(qw, qx, qy, qz, 0.0, 0.0, 1.0)
+    e1x, e1y, e1z = rotate(qw, qx, qy, qz, 1.0, 0.0, 0.0)
+    e2x, e2y, e2z = rotate(qw, qx, qy, qz, 0.0, 1.0, 0.0)
+    r, half = shape[DIMS], shape[DIMS + 1]
+    side = -1.0 if mask & 4 else 1.0
+    lx, ly, lz = -side * half * ux, -side * half * uy, -side * half * uz  # c − o
+    tx, ty, tz = tx + ly * fz - lz * fy, ty + lz * fx - lx * fz, tz + lx * fy - ly * fx  # τ_o
+    sx, sy, sz = (ny * tz - nz * ty) / normal, (nz * tx - nx * tz) / normal, (nx * ty - ny * tx) / normal
+    s1, s2 = sx * e1x + sy * e1y + sz * e1z, sx * e2x + sy * e2y + sz * e2z
+    if abs(s1) + abs(s2) <= r:
+        return
+    size = math.sqrt(s1 * s1 + s2 * s2)
+    c, s = s1 / size, s2 / size
+    base = nx * y[P] + ny * y[P + 1] + nz * y[P + 2] - ground[OFFSET]
+    for k in range(4):
+        ox = -lx + r * (c * e1x + s * e2x)
+        oy = -ly + r * (c * e1y + s * e2y)
+        oz = -lz + r * (c * e1z + s * e2z)
+        points[k, 0], points[k, 1], points[k, 2] = y[P] + ox, y[P + 1] + oy, y[P + 2] + oz
+        gaps[k] = base + nx * ox + ny * oy + nz * oz
+        c, s = -s, c  # the next rim point, 90° on
+    _pin = y[P], p[0], shape[0], ground[0], points[0, 0], gaps[0], d[0]
 
 
 @njit(**_OPTS)

@@ -41,12 +41,12 @@ from ..dynamics import derivative
 from ..forces import project
 from ..layout import (ACTIVE, HELD, HELD_FEATURES, HELD_GROUND, HELD_MU, HELD_SHAPE, HELD_SLIDE, INV_INERTIA,
                       INV_MASS, MODEL, MODEL_FULL, MODEL_ISOTROPIC, MODEL_SYMMETRIC, NORMAL as PLANE_NORMAL, P,
-                      PROJECT, PROJECT_NONE, Q, V, W)
+                      PROJECT, PROJECT_NONE, Q, STATE_WIDTH, V, W)
 from ..rotation import rotate, rotate_back
 from .impacts import _B, IMPACT_WORK_SHAPE, build_rows, pgs_each, summed_wrench
 from .layout import DIMS, KIND, MAX_POINTS, NORMAL, OFFSET
 from .materials import material
-from .persistent import SLIDE, STICK, accelerations_from, normal_bias
+from .persistent import SLIDE, STICK, accelerations_from, end_toward_load, normal_bias, stands_on_end
 from .shapes import feature_points
 
 __all__ = ["held_derivative", "held_derivatives", "held_accelerations", "held_acceleration", "hold_in_row",
@@ -94,6 +94,8 @@ def held_accelerations(y, p, w, d):
     anchors = np.empty((MAX_POINTS, 3))
     work = np.zeros(IMPACT_WORK_SHAPE)
     count = feature_points(y, p, shape, ground, mask, points, gaps, owners)
+    if stands_on_end(shape, mask, count):  # a can's rim points turned toward its load, as at the step's start
+        end_toward_load(y, p, shape, ground, mask, points, gaps, d)
     if count > 0:
         nx, ny, nz = ground[NORMAL], ground[NORMAL + 1], ground[NORMAL + 2]
         normal_bias(y, p, shape, ground, mask, count, points, owners, bias, rdot, anchors)
@@ -152,6 +154,10 @@ def hold_in_row(w, bare, y, p, shape, ground, mask, mu, mode, sx, sy, slip_toler
         owners = np.zeros(MAX_POINTS, dtype=np.int64)
         work = np.zeros(IMPACT_WORK_SHAPE)
         count = feature_points(y, p, shape, ground, mask, points, gaps, owners)
+        if stands_on_end(shape, mask, count):  # the points of batch.hold_all, in its order
+            d = np.empty(STATE_WIDTH)
+            derivative(y, p, bare, d)
+            end_toward_load(y, p, shape, ground, mask, points, gaps, d)
         build_rows(y, p, count, points, ground[NORMAL], ground[NORMAL + 1], ground[NORMAL + 2], work)
         for c in range(MAX_POINTS):
             ux, uy = sx, sy
