@@ -199,6 +199,40 @@ def test_a_cube_dropped_off_centre_onto_a_can_on_the_ground_never_adds_energy_an
     assert speeds(sim) <= 1e-9
 
 
+@pytest.mark.parametrize("heading, offset", [(np.pi / 4, 0.05), (np.pi / 4, 0.06), (np.pi / 6, 0.055)])
+def test_a_heavy_box_off_centre_on_a_light_can_is_held_by_the_cans_whole_disk(heading, offset):
+    """A 4 kg cube (0.125 m) placed on a 0.4 kg can standing on the ground (radius 0.0625 m, length 0.125 m),
+    its centre ``offset`` off the can's axis along ``heading`` from the can's local x: along the diagonal of the
+    square of the can's rim points along its local ±x, ±y, the pair's centre of mass (50 and 54.5 mm off, and
+    50 mm at 30°) lies beyond that square (44.2 mm; 45.8 mm along 30°) but inside the disk, so the disk holds
+    them. Statics, whatever friction the solve spreads between them (nothing pushes sideways, so the friction on
+    each body sums to zero and leaves the normal forces' balance alone): at rest, the ground's normal impulse each
+    step is (M + m) g h with its centre of pressure under the pair's centre of mass, the cube's from the can M g h
+    under the cube's centre (1e-9 of them), and nothing moves (1e-9 m/s)."""
+    from rigid_body_sim.core.kernels.contact.island import C_IMPULSE, C_X, I_A, I_B
+
+    top, lower, h = 4.0, 0.4, 0.01
+    centre = np.array([offset * np.cos(heading), offset * np.sin(heading)])
+    sim = simulator({"a": can((0.0, 0.0, 0.0625)), "b": cube((*centre, 0.1875), mass=top, edge=0.125)}, dt=h)
+    islands = sim.contact.pairs.islands
+    sim.step(100)
+    for _ in range(20):
+        sim.step()
+        ints, floats = islands.contacts()
+        x, j = floats[:, C_X:C_X + 3], floats[:, C_IMPULSE:C_IMPULSE + 3]
+        ground, pair = ints[:, I_A] < 0, ints[:, I_A] >= 0
+        weight = (top + lower) * G * h
+        assert j[ground, 2].sum() == pytest.approx(weight, rel=1e-9)
+        cop = (j[ground, 2] @ x[ground, :2]) / j[ground, 2].sum()
+        assert cop == pytest.approx(top * centre / (top + lower), abs=1e-9)
+        assert np.abs(j[ground, :2].sum(axis=0)).max() <= 1e-9 * weight
+        assert np.abs(j[pair, :2].sum(axis=0)).max() <= 1e-9 * weight
+        assert j[pair, 2].sum() == pytest.approx(top * G * h, rel=1e-9)
+        assert (j[pair, 2] @ x[pair, :2]) / j[pair, 2].sum() == pytest.approx(centre, abs=1e-9)
+    assert sim.positions_world()[:, 2] == pytest.approx([0.0625, 0.1875], abs=1e-9)
+    assert speeds(sim) <= 1e-9
+
+
 @pytest.mark.parametrize("dt, within", [(1e-4, 2e-3), (1e-5, 2e-4)])
 def test_a_slender_block_rocking_on_a_box_keeps_housners_share_of_its_spin_at_each_landing(dt, within):
     """A block 0.2 × 0.2 × 1 m (1 kg, μ = 0.9, e = 0) tilted 0.02 rad onto one bottom edge, on a heavy box resting

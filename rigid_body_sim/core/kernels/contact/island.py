@@ -66,7 +66,7 @@ from .layout import DIMS, FRICTION, HAS_MATERIAL, KIND, NORMAL, OFFSET, SHAPE_BO
 from .convex import POSE_WIDTH
 from .impacts import kinetic_energy_row, potential_energy_row
 from .pair_impacts import normal_speed
-from .pairs import MAX_PAIR_POINTS, boxes_apart_turned, face_patch, pair_contacts
+from .pairs import MAX_PAIR_POINTS, RIM_ACROSS, boxes_apart_turned, face_patch, pair_contacts
 from .shapes import MAX_FEATURES, feature_gaps, feature_points
 
 __all__ = ["island_pass", "all_asleep", "rest_alone", "TOUCH", "SLEEP_SPEED", "SLEEP_STEPS", "DENSE_MAX", "PROJECT_TOL", "C_FLOATS", "C_INTS", "OUT_WIDTH"]
@@ -359,6 +359,48 @@ def _corners(pos, quat, shapes, k, a, b, pnormal, pcount, ppoints, limit, scale,
 
 
 @njit(**JIT)
+def _end_toward(Y, prm, shapes, grounds, gmu, i, other, limit, cint, cflt, count):
+    """Cylinder i standing on an end on a half-space (that end's face within ``limit`` of it, m) touching body
+    ``other``: besides its 4 rim points along its local ±x, ±y (the half-space's features, written by _gather),
+    the rim point of that end toward ``other``'s centre, so that the disk, not only that square, holds the load
+    that body puts on it (a heavy box resting off-centre on a can). A point of the disk: never a wrong contact.
+    Returns the count; nothing where ``other``'s centre is on the axis (within RIM_ACROSS of it)."""
+    qw, qx, qy, qz = qmul(Y[i, Q], Y[i, Q + 1], Y[i, Q + 2], Y[i, Q + 3], prm[i, Q_PB], prm[i, Q_PB + 1],
+                          prm[i, Q_PB + 2], prm[i, Q_PB + 3])
+    ux, uy, uz = rotate(qw, qx, qy, qz, 0.0, 0.0, 1.0)
+    dx, dy, dz = Y[other, P] - Y[i, P], Y[other, P + 1] - Y[i, P + 1], Y[other, P + 2] - Y[i, P + 2]
+    along = dx * ux + dy * uy + dz * uz
+    reach = math.sqrt(dx * dx + dy * dy + dz * dz)
+    dx, dy, dz = dx - along * ux, dy - along * uy, dz - along * uz
+    across = math.sqrt(dx * dx + dy * dy + dz * dz)
+    if not across > RIM_ACROSS * reach:
+        return count
+    r, half = shapes[i, DIMS], shapes[i, DIMS + 1]
+    for j in range(grounds.shape[0]):
+        nx, ny, nz = grounds[j, NORMAL], grounds[j, NORMAL + 1], grounds[j, NORMAL + 2]
+        cos_a = nx * ux + ny * uy + nz * uz
+        side = -1.0 if cos_a > 0.0 else 1.0  # the end facing the plane
+        px, py, pz = nx - cos_a * ux, ny - cos_a * uy, nz - cos_a * uz
+        base = nx * Y[i, P] + ny * Y[i, P + 1] + nz * Y[i, P + 2] - grounds[j, OFFSET] - half * abs(cos_a)
+        if base + r * math.sqrt(px * px + py * py + pz * pz) > limit:  # its end's highest rim point: not flat on it
+            continue
+        ox = side * half * ux + r * dx / across
+        oy = side * half * uy + r * dy / across
+        oz = side * half * uz + r * dz / across
+        cint[count, I_A], cint[count, I_B] = -1, i
+        cint[count, I_STATIC], cint[count, I_GROUND] = -1, j
+        cflt[count, C_X], cflt[count, C_X + 1], cflt[count, C_X + 2] = Y[i, P] + ox, Y[i, P + 1] + oy, Y[i, P + 2] + oz
+        for d in range(3):
+            cflt[count, C_N + d] = grounds[j, NORMAL + d]
+        cflt[count, C_GAP] = nx * (Y[i, P] + ox) + ny * (Y[i, P + 1] + oy) + nz * (Y[i, P + 2] + oz) - grounds[j, OFFSET]
+        cflt[count, C_MU] = gmu[i, j]
+        count += 1
+        break
+    _pin = Y[0, 0], prm[0, 0], shapes[0, 0], grounds[0, 0], gmu[0, 0], cint[0, 0], cflt[0, 0]
+    return count
+
+
+@njit(**JIT)
 def _gather(Y, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps,
             members, bound, size, is_static, default_mu, deep_only, extra, cint, cflt):
     """Contacts of the island bodies (island[i] == 1) at state rows Y into cint (a, b; −1: fixed) and cflt.
@@ -378,6 +420,10 @@ def _gather(Y, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdi
         scale = max(size[a], size[b])
         limit = TOUCH * scale + extra if deep_only else bound[k]
         mu = _pair_mu(shapes, a, b, default_mu)
+        for end, other in ((a, b), (b, a)):  # a can standing on a half-space: its rim point toward the other
+            if shapes[end, KIND] == SHAPE_CYLINDER and island[end] == 1 and not is_static[end]:
+                count = _end_toward(Y, prm, shapes, grounds, gmu, end, other, TOUCH * size[end] + extra, cint, cflt,
+                                    count)
         if _has_corners(shapes, a) and _has_corners(shapes, b) and pcount[k] > 0:
             reach = limit if deep_only else max(limit, PATCH_REACH * scale)
             m, rx, ry, rz = face_patch(pos, quat, shapes, a, b, pnormal[k, 0], pnormal[k, 1], pnormal[k, 2],
@@ -1752,7 +1798,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     need = 0
     for k in range(n_pairs):
         if island[nlist[k, 0]] == 1 or island[nlist[k, 1]] == 1:
-            need += pcount[k] + 16  # a pair's corners besides (_corners)
+            need += pcount[k] + 18  # its corners besides (_corners), a can's rim point on a half-space (_end_toward)
     for m in range(n):
         if island[members[m]] == 1:
             need += MAX_FEATURES * 4 * grounds.shape[0]
