@@ -230,18 +230,26 @@ def test_energy_never_rises_at_a_body_body_impact(kinds, dims, quats, spins, off
 
 
 @settings(max_examples=25, deadline=None)
+@example(kinds=("box", "cylinder"), dims=(0.1, 0.08, 0.06), quats=[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
+         masses=(4.0, 0.4), e=0.0, mu=0.5, gap=0.5)
+@example(kinds=("sphere", "box"), dims=(0.1, 0.08, 0.06), quats=[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
+         masses=(1.0, 1.0), e=0.5, mu=0.5, gap=0.5)
 @given(**_PAIRS, gap=st.floats(-0.5, 0.9))
 def test_a_pair_touching_at_a_step_start_while_it_strikes_is_an_impact(kinds, dims, quats, masses, e, mu, gap):
     """Random pairs of shapes (as above, no spin) set at a step's start at a signed distance of gap × the islands'
     TOUCH × the pair's size (the band the islands take as touching; overlapping when gap < 0), closing at 4 m/s:
-    they strike. The step holds an impact event for both bodies, the kinetic energy does not rise, and the islands
-    take no step."""
-    from rigid_body_sim.core.kernels.contact.island import TOUCH
+    they strike. With restitution, the step holds an impact event for both bodies and the islands take no step;
+    without (e = 0), the islands' velocity step is the inelastic impact (with whatever else the two touch, as a
+    ground under one): it takes both bodies, and stops them closing (after the step they are apart or touching,
+    within the projection's tolerance, where closing on at 4 m/s they would overlap by 8 mm). Either way the
+    kinetic energy does not rise."""
+    from rigid_body_sim.core.kernels.contact.island import PROJECT_TOL, TOUCH
     from rigid_body_sim.core.kernels import layout as L
 
     sim = _flying_pair(kinds, dims, quats, masses, e, mu)
     pairs = sim.contact.pairs
-    target = gap * TOUCH * max(pairs.size[0], pairs.size[1])
+    size = max(pairs.size[0], pairs.size[1])
+    target = gap * TOUCH * size
     ya, yb = sim.state.rows()[0].copy(), sim.state.rows()[1].copy()
     lo, hi = 0.0, 0.8  # b's x: overlapping, apart
     for _ in range(200):  # bisection on the signed distance (continuous in x) to round-off
@@ -253,8 +261,14 @@ def test_a_pair_touching_at_a_step_start_while_it_strikes_is_an_impact(kinds, di
     sim.set_body_state("b", position_world=(hi, 0.0, 1.0))
     before = _energy(sim)
     sim.step()
-    assert sim.contact.events_of("a", "impact") and sim.contact.events_of("b", "impact")
-    assert sim.contact.counts["island_body_steps"] == 0
+    if e > 0.0:
+        assert sim.contact.events_of("a", "impact") and sim.contact.events_of("b", "impact")
+        assert sim.contact.counts["island_body_steps"] == 0
+    else:
+        assert sim.contact.counts["island_body_steps"] == 2
+        assert not sim.contact.events_of("a", "impact")
+        rows = sim.state.rows()
+        assert pairs.contact(rows[0], 0, rows[1], 1) >= min(target, 0.0) - PROJECT_TOL * size
     assert _energy(sim) <= before * (1.0 + 1e-12)
 
 

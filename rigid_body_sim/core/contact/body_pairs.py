@@ -49,7 +49,8 @@ After each step, before the ground pass:
 Resting contact between bodies is the islands' (island.py): before the pass, components of the
 candidate pairs with a pair touching at the step's start and resting there (its normal speed
 within twice the change the step's forces make to it: else striking, an impact of item 5, or
-parting) are stepped together by a first-order velocity step and left out of this pass. A body
+parting), or striking with restitution 0 or with a body held on its ground (the velocity step is then
+its inelastic impact, with the bodies' other contacts), are stepped together by a first-order velocity step and left out of this pass. A body
 meeting another outside an island is kept up by the impacts of item 5 at each step's start until
 the two form an island at the next step (it may sink into the other by up to about a h²/2 within
 that step: counted in :attr:`BodyPairs.separations` when moved back out).

@@ -41,7 +41,8 @@ components with a deep point move, the others are held as fixed.
 Islands: union-find over the swept broad phase's candidate pairs of moving bodies (a sleeping
 body's with an awake one only when that is within the step's reach, with a sleeping one only when
 they fell asleep together); a component is an island when one of its pairs touches at the step's start (signed distance ≤ TOUCH × the
-pair's size), or when it holds a sleeping body. Sleeping (when enabled): a component of the step's
+pair's size) and rests there or strikes without restitution or with a body held on its ground, or when it holds
+a sleeping body. Sleeping (when enabled): a component of the step's
 contacts whose bodies all moved slower than SLEEP_SPEED at the start and end of the step (at rest), or, with
 the sleep speed raised, all stayed within it × SLEEP_STEPS steps of where they were SLEEP_STEPS steps ago, is
 locked (velocities set to zero, its rows copied forward, no narrow phase between its bodies) until a
@@ -62,7 +63,7 @@ from ..forces import body_wrench
 from ..jit import INLINE, JIT
 from ..layout import ACTIVE, BOUND, GRAVITY, INV_INERTIA, INV_MASS, INERTIA, MASS, P, Q, Q_PB, STATE_WIDTH, V, W
 from ..rotation import exp_map, matrix, normalise, qmul, rotate, rotate_back
-from .layout import DIMS, FRICTION, HAS_MATERIAL, KIND, NORMAL, OFFSET, SHAPE_BOX, SHAPE_CYLINDER
+from .layout import DIMS, FRICTION, HAS_MATERIAL, KIND, NORMAL, OFFSET, RESTITUTION, SHAPE_BOX, SHAPE_CYLINDER
 from .convex import POSE_WIDTH
 from .impacts import kinetic_energy_row, potential_energy_row
 from .pair_impacts import normal_speed
@@ -75,8 +76,9 @@ __all__ = ["island_pass", "all_asleep", "rest_alone", "TOUCH", "SLEEP_SPEED", "S
 TOUCH = 1e-6
 #: A touching pair rests unless its least normal speed is beyond IMPACT_MARGIN × the change the step's forces make to
 #: a point's and beyond APPROACH_SPEED (m/s), either way: striking, it is an impact, the impact law's
-#: (core/contact/body_pairs.py, restitution and all); parting, its bodies fly on. APPROACH_SPEED is also the impact
-#: law's: a normal velocity below −this approaches.
+#: (core/contact/body_pairs.py, restitution and all), unless its restitution is 0 or one of its bodies is held on its
+#: ground (_link: the island's velocity step is then the inelastic impact); parting, its bodies fly on.
+#: APPROACH_SPEED is also the impact law's: a normal velocity below −this approaches.
 IMPACT_MARGIN, APPROACH_SPEED = 2.0, 1e-12
 #: Bodies slower than this (m/s, and spin × bounding radius) at a step's start and after its solve are at rest.
 SLEEP_SPEED = 1e-9
@@ -1300,11 +1302,11 @@ def _inertia_world(Y, prm, i, iw):
 
 
 @njit(**INLINE)
-def _not_resting(Y0, Y1, pnormal, pcount, ppoints, k, a, b):
-    """Whether touching pair k (a, b) is not in resting contact at the step's start: its least normal speed over
-    its points (< 0 approaching) is beyond IMPACT_MARGIN × the largest change the step's forces make to one (Y1: the
-    free step's end) and beyond APPROACH_SPEED, either way: striking (an impact, the impact law's) or parting (each
-    body flies on, its own step)."""
+def _motion(Y0, Y1, pnormal, pcount, ppoints, k, a, b):
+    """Touching pair k (a, b) at the step's start: 0 resting, −1 striking, 1 parting. It does not rest when its least
+    normal speed over its points (< 0 approaching) is beyond IMPACT_MARGIN × the largest change the step's forces
+    make to one (Y1: the free step's end) and beyond APPROACH_SPEED, either way: striking (an impact, the impact
+    law's, unless _joins takes it) or parting (each body flies on, its own step)."""
     nx, ny, nz = pnormal[k, 0], pnormal[k, 1], pnormal[k, 2]
     least, change = math.inf, 0.0
     for c in range(pcount[k]):
@@ -1314,11 +1316,34 @@ def _not_resting(Y0, Y1, pnormal, pcount, ppoints, k, a, b):
         u0 = normal_speed(Y0[a], Y0[b], nx, ny, nz, x, y, z)
         least = min(least, u0)
         change = max(change, abs(normal_speed(Y1[a], Y1[b], nx, ny, nz, x, y, z) - u0))
-    return pcount[k] > 0 and abs(least) > max(IMPACT_MARGIN * change, APPROACH_SPEED)
+    if pcount[k] == 0 or abs(least) <= max(IMPACT_MARGIN * change, APPROACH_SPEED):
+        return 0
+    return -1 if least < 0.0 else 1
+
+
+@njit(**INLINE)
+def _inelastic(shapes, a, b):
+    """Whether pair (a, b) has restitution 0 by the pair rule (the larger of the two; a side without a material
+    takes the other's): False when neither has a material (the default restitution)."""
+    ha, hb = shapes[a, HAS_MATERIAL] != 0.0, shapes[b, HAS_MATERIAL] != 0.0
+    if not (ha or hb):
+        return False
+    ea = shapes[a, RESTITUTION] if ha else shapes[b, RESTITUTION]
+    eb = shapes[b, RESTITUTION] if hb else shapes[a, RESTITUTION]
+    return max(ea, eb) == 0.0
+
+
+@njit(**INLINE)
+def _joins(Y0, Y1, pnormal, pcount, ppoints, k, a, b, shapes, modes):
+    """Whether touching pair k (a, b) joins an island: resting, or striking without restitution or with a body held
+    on its ground (_motion)."""
+    motion = _motion(Y0, Y1, pnormal, pcount, ppoints, k, a, b)
+    return motion == 0 or (motion < 0 and (_inelastic(shapes, a, b) or modes[a] != 0 or modes[b] != 0))
 
 
 @njit(**JIT)
-def _link(Y0, Y1, nlist, lo, hi, pdist, pnormal, pcount, ppoints, bound, is_static, size, parent, flags):
+def _link(Y0, Y1, nlist, lo, hi, pdist, pnormal, pcount, ppoints, bound, is_static, size, shapes, modes, parent,
+          flags):
     """Pairs nlist[lo:hi] after their narrow phase at Y0 (bound: their reach, _bounds; Y1: the free step's end):
     moving pairs joined (flags bit 8 on a touching pair's first body)."""
     for k in range(lo, hi):
@@ -1327,9 +1352,12 @@ def _link(Y0, Y1, nlist, lo, hi, pdist, pnormal, pcount, ppoints, bound, is_stat
         if is_static[a] or is_static[b]:
             continue
         settling = flags[a] & 64 and flags[b] & 64 and pdist[k] <= bound[k]
-        if settling or (pdist[k] <= touch and not _not_resting(Y0, Y1, pnormal, pcount, ppoints, k, a, b)):
-            # touching and resting; or both stepped in an island last step and still within reach: the island
-            # holds them while they settle (a Gauss–Seidel residue may part them by more than TOUCH)
+        if settling or (pdist[k] <= touch and _joins(Y0, Y1, pnormal, pcount, ppoints, k, a, b, shapes, modes)):
+            # touching and resting, or striking without restitution or with a body held on its ground (the
+            # island's velocity step is then the inelastic impact, together with the bodies' other contacts: a box
+            # landing on a can held on its rim on the ground); or both stepped in an island last step and still
+            # within reach: the island holds them while they settle (a Gauss–Seidel residue may part them by more
+            # than TOUCH)
             _union(parent, a, b)
             flags[a] |= 8
         elif pdist[k] <= bound[k] or not (flags[a] & 32 or flags[b] & 32):
@@ -1762,7 +1790,8 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         n_pairs += 1
     _bounds(Y0, Y1, nlist, 0, n_pairs, is_static, spin_reach, size, h, bound, members, dx[:, 0])
     _narrow(Y0, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound, dx, False, rot)
-    _link(Y0, Y1, nlist, 0, n_pairs, pdist, pnormal, pcount, ppoints, bound, is_static, size, parent, flags)
+    _link(Y0, Y1, nlist, 0, n_pairs, pdist, pnormal, pcount, ppoints, bound, is_static, size, shapes, modes, parent,
+          flags)
     for m in range(n):
         i = members[m]
         r = _find(parent, i)
@@ -1792,7 +1821,8 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         _bounds(Y0, Y1, nlist, n0, n_pairs, is_static, spin_reach, size, h, bound, members, dx[:, 0])
         _narrow(Y0, prm, shapes, nlist[n0:], n_pairs - n0, pos, quat, pdist[n0:], pnormal[n0:], pcount[n0:],
                 ppoints[n0:], pseps[n0:], bound[n0:], dx, False, rot)
-        _link(Y0, Y1, nlist, n0, n_pairs, pdist, pnormal, pcount, ppoints, bound, is_static, size, parent, flags)
+        _link(Y0, Y1, nlist, n0, n_pairs, pdist, pnormal, pcount, ppoints, bound, is_static, size, shapes, modes,
+              parent, flags)
     out[OUT_WOKEN] = woken
     # room for the contacts (pairs' points and each island body's features against each half-space)
     need = 0
