@@ -299,6 +299,31 @@ def test_a_ball_dropped_onto_a_resting_box_stops_on_it():
     assert sim.state.p_WC_W[1, 2] == pytest.approx(0.25, abs=1e-12)
 
 
+@pytest.mark.parametrize("integrator", ["rk4", "semi_implicit_euler", "euler"])
+def test_a_ball_dropped_off_centre_onto_a_ball_resting_on_the_ground_moves_it_without_a_blow_up_error(integrator):
+    """A ball (5 kg, r = 36.9 mm) dropped 20 mm onto a frictionless ball (5 kg, r = 52.7 mm) resting on the ground,
+    22 mm off its top, e = 0, dt = 1 ms: the lower ball, locked at rest, takes energy from the upper one through
+    their contact (it rolls off sideways). Contact passes energy between bodies and never adds it, so that is not a
+    blow-up: no DivergenceError (its bound was the resting ball's √K ≈ 0, and the next step raised one), and the
+    energy of the two never rises above its start (1e-12 J) over 2 s."""
+    r_low, r_top, mass = 0.05268390686992388, 0.03689113879243165, 5.0
+    material = {"restitution": 0.0, "friction": 0.0}
+    bodies = {"a": {"mass": mass, "inertia": {"sphere": r_low}, "material": material, "pose": {"position": [0, 0, r_low]}},
+              "b": {"mass": mass, "inertia": {"sphere": r_top}, "material": material,
+                    "pose": {"position": [0.02, 0.01, 2.0 * r_low + r_top + 0.02]}}}
+    sim = Simulator(load_scene({"gravity": [0.0, 0.0, -9.81], "ground": [{"normal": [0, 0, 1], "material": material}],
+                                "bodies": bodies}), integrator, 1e-3)
+
+    def energy():
+        return _energy(sim) + 9.81 * mass * float(sim.state.p_WC_W[:, 2].sum())
+
+    start = energy()
+    for _ in range(2000):
+        sim.step()
+        assert energy() <= start + 1e-12
+    assert np.linalg.norm(sim.state.v_WC_W[0]) > 0.01  # the lower ball was set moving
+
+
 def test_a_box_sliding_on_the_ground_into_a_resting_box_pushes_it_on():
     """A cube (1 kg, 0.1 m) sliding frictionless on the ground at 1 m/s into a resting one 0.5 mm
     ahead, e = 0: they meet at 0.5 ms inside the first step (neither in flight, every pair then

@@ -731,6 +731,19 @@ class ContactSolver:
                 Y1[i, :L.STATE_WIDTH] = self._with_events(sim, i, Y0[i], wrenches[i], t0, h)[:L.STATE_WIDTH]
         if self._sleeping and self.pairs is not None:
             self._rest_alone(sim, wrenches, Y0, Y1)
+        self._bound_energy(sim, Y1)
+
+    def _bound_energy(self, sim, Y1: np.ndarray) -> None:
+        """Each contact body's blow-up bound (√J, simulator.DivergenceError) raised to at least √K at the step's end:
+        contact passes energy from body to body (an impact, an island's step) and never adds it, so what a body
+        took from another is not a blow-up (a ball resting on the ground, locked, hit by a falling one). A body in
+        flight has √K within its bound already: unchanged."""
+        b = self.bodies
+        p, rows = sim._prm[b], Y1[b]
+        v, w = rows[:, L.V:L.V + 3], rows[:, L.W:L.W + 3]
+        spin = np.einsum("ij,ij,ij->i", p[:, L.INERTIA:L.INERTIA + 3], w, w)
+        energy = 0.5 * (p[:, L.MASS] * np.einsum("ij,ij->i", v, v) + spin)
+        Y1[b, L.BOUND] = np.maximum(rows[:, L.BOUND], np.sqrt(energy))
 
     def _out_of_islands(self, sim, wrenches: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, t0: float, h: float,
                         done: np.ndarray | None) -> np.ndarray:
