@@ -27,7 +27,9 @@ After each step, before the ground pass:
    over the components k, with B_k a bound on |dF_k/dt| (relative speed plus spin × bounding
    radius, the largest over the piece; a sphere's spin does not count) and ε_k = 1e-4 × the
    pair's size; no component can cross zero between samples. The root in the bracket is found
-   by the solver's Illinois method, to round-off.
+   by the solver's Illinois method, to round-off. While a member is held on a cylinder rim whose
+   lowest point turns fast, the events are looked for piece by piece (solver._rim_piece), each
+   piece of that member held with its holding force found afresh.
 4. **At a pair's root** the two-body impact law (kernels/contact/pair_impacts.py) acts at the
    narrow phase's contact points (mid-way between the two surfaces' points) and normal, with the
    pair's material (materials.pair_material). The pairs touching at that instant are solved
@@ -370,11 +372,15 @@ class BodyPairs:
                 self._finish(sim, i, y, w, t, h, held)
             if on_ground:
                 continue
+            # a held can rocking on a rim whose lowest point turns fast: the events looked for piece by piece, each
+            # piece's holding force found afresh (solver._rim_piece), as on the ground pass
+            span = min([h] + [solver._rim_piece(sim, i, y[i], h) for i in active & held])
             cache: dict[float, dict[int, np.ndarray]] = {}
 
             def at(s: float) -> dict[int, np.ndarray]:
                 if s not in cache:
-                    cache[s] = {i: (solver.step_map(sim, i, y[i], s * h, w[i]) if s > 0.0 else y[i]) for i in active}
+                    cache[s] = {i: (solver.step_map(sim, i, y[i], s * span, w[i]) if s > 0.0 else y[i])
+                                for i in active}
                 return cache[s]
 
             def components(s: float) -> list[tuple[float, tuple]]:
@@ -386,10 +392,10 @@ class BodyPairs:
             end = at(1.0)
             bounds, skins = {}, {}
             for a, b in live:
-                bounds[("pair", a, b)] = self._pair_bound((y[a], end[a]), (y[b], end[b]), a, b) * h
+                bounds[("pair", a, b)] = self._pair_bound((y[a], end[a]), (y[b], end[b]), a, b) * span
                 skins[("pair", a, b)] = ADVANCE_SKIN * max(self.size[a], self.size[b])
             for i in flying:
-                bounds[("env", i)] = self._body_bound(y[i], end[i], i) * h
+                bounds[("env", i)] = self._body_bound(y[i], end[i], i) * span
                 skins[("env", i)] = ADVANCE_SKIN * self.size[i]
             s_lo, values = 0.0, components(0.0)
             s_hi = None
@@ -406,12 +412,18 @@ class BodyPairs:
                 if s >= 1.0:
                     break
                 s_lo, values = s, values_s
-            if s_hi is None:  # no event in the rest of the step
+            if s_hi is None:  # no event in the rest of the step (or of the piece)
                 for i in list(active):
                     if i in held:
-                        y[i] = solver._held_rest(sim, i, y[i], w[i], t, h, end[i])
+                        y[i] = solver._held_rest(sim, i, y[i], w[i], t, span, end[i])
+                        if solver.modes[i] != PERSISTENT:  # it left its ground in the piece: in flight from here
+                            held.discard(i)
+                            w[i] = solver._bare_rows[i].copy()
                     else:
                         y[i] = end[i].copy()
+                if span < h:
+                    t, h = t + span, h - span
+                    continue
                 active.clear()
                 break
             lo, hi = s_lo, s_hi
@@ -422,7 +434,7 @@ class BodyPairs:
             key = min(components(s), key=lambda vk: vk[0])[1]
             for i in active:
                 y[i] = states[i].copy()
-            t, h = t + s * h, h - s * h
+            t, h = t + s * span, h - s * span
             if key[0] == "pair":
                 _, a, b = key
                 if self._approaching(sim, y[a], a, y[b], b):  # with every other pair touching now
