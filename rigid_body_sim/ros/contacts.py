@@ -341,6 +341,7 @@ class ContactPublisher:
             _kv("island body-steps, first order (total)", solver.counts["island_body_steps"]),
             _kv("pieces of steps of cylinders rolling on a rim near upright (total)", solver.counts["rim_pieces"]),
             _kv("of them at the most pieces, the rim turning faster (total)", solver.counts["rim_capped"]),
+            _kv("of those, throwing the can: its end face landed instead (total)", solver.counts["face_landed"]),
             _kv("cylinders held on a rim projected onto their end face (total)", solver.counts["face_down"]),
         ]
         return status

@@ -135,6 +135,9 @@ MAX_REFINEMENT = 32
 RIM_TURN = 0.25
 #: Most pieces a step is cut into for RIM_TURN (a can closer to upright turns more within a piece).
 MAX_RIM_PIECES = 64
+#: A piece at MAX_RIM_PIECES that raised a can's K + U under gravity alone by more than this × |K + U| threw it: its
+#: end face lands instead (:meth:`ContactSolver._persistent_span`). rk4's own error over a piece is far below it.
+THROWN = 1e-3
 #: Samples of s in (0, 1] looked at for the first sign change of the gap in a step.
 BRACKET_SAMPLES = 16
 
@@ -234,13 +237,15 @@ class ContactSolver:
         #: there: it may reach into it by up to a h²/2 per step, a its acceleration towards it);
         #: ``island_body_steps`` body-steps taken by the islands' first-order velocity step (island.py);
         #: ``rim_pieces`` pieces of steps of cylinders rolling on a rim near upright (:meth:`_rim_piece`),
-        #: ``rim_capped`` those whose rim turned more than RIM_TURN even at MAX_RIM_PIECES; ``face_down``
+        #: ``rim_capped`` those whose rim turned more than RIM_TURN even at MAX_RIM_PIECES; ``face_landed`` of
+        #: those, the ones that threw the can (:meth:`_thrown`), taken instead as its end face landing;
+        #: ``face_down``
         #: projections of a cylinder held on a rim that went through upright onto its end face (:meth:`_project`).
         self._static_skipped: set[int] = set()  # bodies not looked at against static shapes for the rest of the step
         self.counts = dict.fromkeys(("restitution_capped", "multi_contact_elastic", "refined_steps",
                                      "second_half_space", "two_ground_overflow", "painleve",
                                      "static_tangent", "static_pressed", "island_body_steps", "rim_pieces",
-                                     "rim_capped", "face_down"), 0)
+                                     "rim_capped", "face_landed", "face_down"), 0)
         #: Per body, a second half-space it is held on besides ``ground_of`` (two_grounds.py), or -1.
         self.other_ground = np.full(n, -1, dtype=np.int64)
         #: The features touching ``other_ground``, as bits.
@@ -982,13 +987,30 @@ class ContactSolver:
         pieces while it rolls on a cylinder rim whose lowest point turns fast (:meth:`_rim_piece`)."""
         while (piece := self._rim_piece(sim, i, y, h)) < h:
             self.counts["rim_pieces"] += 1
-            if piece == sim.dt / MAX_RIM_PIECES:
-                self.counts["rim_capped"] += 1
+            capped = piece == sim.dt / MAX_RIM_PIECES
+            self.counts["rim_capped"] += capped
+            start, end = y, held_rim(self.shapes[i], int(self.tracked[i]))
             y = self._held_span(sim, i, y, w, t, piece)
+            if capped and end >= 0 and self._thrown(sim, i, start, y, w):
+                # within a hair of upright, its rim turning faster than the most pieces follow, the rim's force
+                # found at every stage (growing as 1/sin³ θ) threw the can: its end face comes down instead, a
+                # landing at the piece's start
+                self.counts["face_landed"] += 1
+                return self._landing(sim, i, start, w, t, h, 4 << end)
             t, h = t + piece, h - piece
             if self.modes[i] != PERSISTENT:
                 return self._with_events(sim, i, y, w, t, h)
         return self._held_span(sim, i, y, w, t, h)
+
+    @staticmethod
+    def _thrown(sim, i: int, y0: np.ndarray, y1: np.ndarray, w: np.ndarray) -> bool:
+        """Whether body i's K + U rose from y0 to y1 by more than THROWN of it under gravity alone (its wrench row
+        ``w``, without contact, empty; False otherwise)."""
+        if w[L.ACTIVE] != 0.0:
+            return False
+        p = sim._prm[i]
+        e0 = kinetic_energy_row(y0, p) + potential_energy_row(y0, p)
+        return kinetic_energy_row(y1, p) + potential_energy_row(y1, p) > e0 + THROWN * abs(e0)
 
     def _came_back(self, i: int, t: float, dt: float) -> bool:
         """Whether body i rests at t (its latest event) having lifted off within 1e-9 dt before: its contact
