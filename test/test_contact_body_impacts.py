@@ -383,6 +383,46 @@ def test_a_spinning_box_dropped_on_a_can_does_not_throw_it():
     assert sim.contact.counts["face_landed"] >= 1
 
 
+_DROP_DIMS = {"sphere": lambda s: (s, s, s), "box": lambda s: (2.0 * s, 1.6 * s, 1.2 * s),
+              "cylinder": lambda s: (s, 2.0 * s, 0.0), "capsule": lambda s: (0.6 * s, 1.6 * s, 0.0)}
+#: each kind's height standing on the ground (a capsule lying on its side) and its reach from its centre, / size
+_DROP_HEIGHT, _DROP_REACH = {"sphere": 2.0, "box": 1.2, "cylinder": 2.0, "capsule": 1.2}, 1.5
+
+
+@pytest.mark.slow
+@settings(max_examples=60, deadline=None)
+@given(kinds=st.tuples(st.sampled_from(sorted(_KINDS)), st.sampled_from(sorted(_KINDS))),
+       sizes=st.tuples(st.floats(0.04, 0.1), st.floats(0.03, 0.08)),
+       masses=st.tuples(st.sampled_from([0.2, 1.0, 5.0]), st.sampled_from([0.2, 1.0, 5.0])),
+       e=st.sampled_from([0.0, 0.3, 0.7]), mu=st.sampled_from([0.0, 0.3, 0.8]), dt=st.sampled_from([1e-3, 1e-2]),
+       offset=st.tuples(st.floats(0.0, 0.1), st.floats(0.0, 0.1)), drop=st.floats(1e-3, 5e-2),
+       quat=st.lists(_unit, min_size=4, max_size=4).filter(lambda q: np.linalg.norm(q) > 0.1),
+       spin=st.lists(st.floats(-3.0, 3.0), min_size=3, max_size=3))
+def test_energy_never_rises_when_a_body_drops_onto_one_resting_on_the_ground(kinds, sizes, masses, e, mu, dt, offset,
+                                                                            drop, quat, spin):
+    """Any shape dropped, turned and spinning, onto any shape resting on the ground (a capsule lying), off its axis,
+    with any of the materials and steps, rk4 for 2 s: impacts, rocking, rolling off, resting in an island. The energy
+    K + U of the two never rises above its start (1e-12 of it): contact passes energy on and takes it out, never adds
+    it. (The random scan this property comes from found gains of up to 2574 J before the pieces and the islands'
+    inelastic step at a step's start.)"""
+    (lower, top), (s_low, s_top) = kinds, sizes
+    material = {"restitution": e, "friction": mu}
+    bodies = {}
+    for name, kind, size, mass in (("low", lower, s_low, masses[0]), ("top", top, s_top, masses[1])):
+        shape, inertia = _shape(kind, _DROP_DIMS[kind](size))
+        bodies[name] = {"mass": mass, "inertia": inertia, "collision": shape, "material": material}
+    lying = [math.sin(math.pi / 4), 0.0, 0.0, math.cos(math.pi / 4)] if lower == "capsule" else [0.0, 0.0, 0.0, 1.0]
+    height = _DROP_HEIGHT[lower] * s_low
+    bodies["low"]["pose"] = {"position": [0.0, 0.0, 0.5 * height + 1e-3], "orientation": lying}
+    q = np.asarray(quat) / np.linalg.norm(quat)
+    bodies["top"]["pose"] = {"position": [offset[0], offset[1], height + 1e-3 + _DROP_REACH * s_top + drop],
+                             "orientation": [float(q[1]), float(q[2]), float(q[3]), float(q[0])]}
+    bodies["top"]["twist"] = {"angular": list(spin)}
+    sim = Simulator(load_scene({"gravity": [0.0, 0.0, -9.81], "ground": [{"normal": [0, 0, 1], "material": material}],
+                                "bodies": bodies}), "rk4", dt, threads=1)
+    _never_above_start(sim, np.array(masses), int(round(2.0 / dt)))
+
+
 def test_a_box_sliding_on_the_ground_into_a_resting_box_pushes_it_on():
     """A cube (1 kg, 0.1 m) sliding frictionless on the ground at 1 m/s into a resting one 0.5 mm
     ahead, e = 0: they meet at 0.5 ms inside the first step (neither in flight, every pair then
