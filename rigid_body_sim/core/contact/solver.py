@@ -81,7 +81,6 @@ from ..kernels import layout as L
 from ..quaternion import quat_rotate, quat_to_matrix
 from . import static_geometry, two_grounds
 from .events import ContactEvent
-from ..kernels.dynamics import derivative
 from ..kernels.stepping import advance, step_reduced
 from ..kernels.contact.batch import (CACHE_WIDTH, OK, TO_SOLVER, busy_bodies, fast_rims, gravity_gains, hold_all,
                                      record_holds, settle_all, split_bodies)
@@ -93,14 +92,13 @@ from ..kernels.contact.persistent import (
     LIFT_OFF,
     SLIDE,
     add_contact_wrench,
-    end_toward_load,
+    held_points,
     holding_wrench,
     normal_bias,
     normal_motion,
     normal_speeds,
     project,
     rim_turn_rate,
-    stands_on_end,
 )
 from ..kernels.contact.stage import hold_in_row, stage_rows, stepped_by_integrator
 from ..kernels.contact.shapes import (
@@ -618,11 +616,8 @@ class ContactSolver:
         if self.other_ground[i] >= 0 and not self.other_projected[i]:
             return two_grounds.hold(self, sim, y, i, w, t, LIFT_OFF_SPEED, TOUCHING_GAP, SLIP_TOLERANCE)
         j = int(self.ground_of[i])
-        count = self._tracked_points(sim, y, i)
-        if stands_on_end(self.shapes[i], int(self.tracked[i]), count):  # its rim points turned toward the load
-            derivative(y, sim._prm[i], w, self._d)
-            end_toward_load(y, sim._prm[i], self.shapes[i], self.grounds[j], int(self.tracked[i]), self._points,
-                            self._gaps, self._d)
+        count = held_points(y, sim._prm[i], w, self.shapes[i], self.grounds[j], int(self.tracked[i]), self._points,
+                            self._gaps, self._owners, self._d, True)  # a can on its end: turned toward the load
         lowest = float(self._gaps[:count].min()) if count else math.inf  # set_body_state may have lifted it
         mu = self.friction_of(i, j)
         speed, mode, sx, sy = self._holding_force(sim, y, i, count, w, mu)
@@ -734,9 +729,10 @@ class ContactSolver:
                 Y1[i, :L.STATE_WIDTH] = self._persistent_end(sim, i, Y0[i], Y1[i], wrenches[i], t0, h)[:L.STATE_WIDTH]
             else:
                 Y1[i, :L.STATE_WIDTH] = self._with_events(sim, i, Y0[i], wrenches[i], t0, h)[:L.STATE_WIDTH]
-        if self._sleeping and self.pairs is not None:
-            self._rest_alone(sim, wrenches, Y0, Y1)
-        self._bound_energy(sim, Y1)
+        if self.pairs is not None:  # bodies that meet each other (a ground alone takes energy, never passes it on)
+            if self._sleeping:
+                self._rest_alone(sim, wrenches, Y0, Y1)
+            self._bound_energy(sim, Y1)
 
     def _bound_energy(self, sim, Y1: np.ndarray) -> None:
         """Each contact body's blow-up bound (√J, simulator.DivergenceError) raised to at least √K at the step's end:

@@ -33,13 +33,12 @@ from .persistent import (
     SLIDE,
     add_contact_wrench,
     STICK,
-    end_toward_load,
+    held_points,
     holding_wrench,
     normal_bias,
     project,
     rim_turn_rate,
     slip_velocity,
-    stands_on_end,
 )
 from .shapes import MAX_FEATURES, body_points, feature_gaps, feature_points, opposite_rim_gap
 
@@ -133,13 +132,10 @@ def hold_all(Y, prm, wrenches, shapes, grounds, bodies, ground_of, tracked, fric
             locked[i] = 1
             continue
         cache[i, _VALID] = 0.0
-        count = feature_points(y, p, shapes[i], ground, tracked[i], points, gaps, owners)
+        count = held_points(y, p, w, shapes[i], ground, tracked[i], points, gaps, owners, d, True)
         if count == 0:
             status[i] = TO_SOLVER
             continue
-        if stands_on_end(shapes[i], tracked[i], count):  # its rim points turned toward the load
-            derivative(y, p, w, d)
-            end_toward_load(y, p, shapes[i], ground, tracked[i], points, gaps, d)
         lowest = math.inf
         for c in range(count):
             lowest = min(lowest, gaps[c])

@@ -36,7 +36,7 @@ from .layout import DIMS, KIND, NORMAL, OFFSET, SHAPE_CAPSULE, SHAPE_CYLINDER, S
 from .shapes import RIM_UPRIGHT, axis_tilt, feature_points, held_rim
 
 __all__ = ["LIFT_OFF", "STICK", "SLIDE", "START_SLIDE_ACCELERATION", "add_contact_wrench", "accelerations", "accelerations_from", "normal_bias", "normal_motion", "holding_wrench", "project",
-           "normal_speeds", "rim_turn_rate", "slip_velocity", "stands_on_end", "end_toward_load"]
+           "normal_speeds", "rim_turn_rate", "slip_velocity", "held_points", "end_toward_load"]
 
 _OPTS = {"cache": True, "nogil": True, "error_model": "numpy"}
 
@@ -211,9 +211,18 @@ def rim_turn_rate(y, p, shape, ground, mask):
 
 
 @njit(**_OPTS)
-def stands_on_end(shape, mask, count):
-    """True for a cylinder held on an end face (``mask``: its face feature), at its 4 rim points (``count``)."""
-    return int(shape[KIND]) == SHAPE_CYLINDER and (mask & 12) != 0 and count == 4
+def held_points(y, p, w, shape, ground, mask, points, gaps, owners, d, fresh):
+    """The contact points a hold solves at (shapes.feature_points of the tracked features ``mask``: world points,
+    gaps, features), a cylinder standing on an end face's 4 rim points turned toward its load (end_toward_load).
+    ``d`` holds dy/dt at y without contact under the wrench row ``w`` (dynamics.derivative), or, with ``fresh``,
+    is a 13-float scratch it is computed into when needed. Returns the count."""
+    count = feature_points(y, p, shape, ground, mask, points, gaps, owners)
+    if int(shape[KIND]) == SHAPE_CYLINDER and (mask & 12) != 0 and count == 4:  # standing on an end face
+        if fresh:
+            derivative(y, p, w, d)
+        end_toward_load(y, p, shape, ground, mask, points, gaps, d)
+    _pin = y[P], p[0], w[0], shape[0], ground[0], points[0, 0], gaps[0], owners[0], d[0]
+    return count
 
 
 @njit(**_OPTS)

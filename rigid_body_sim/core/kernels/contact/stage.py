@@ -46,8 +46,7 @@ from ..rotation import rotate, rotate_back
 from .impacts import _B, IMPACT_WORK_SHAPE, build_rows, pgs_each, summed_wrench
 from .layout import DIMS, KIND, MAX_POINTS, NORMAL, OFFSET
 from .materials import material
-from .persistent import SLIDE, STICK, accelerations_from, end_toward_load, normal_bias, stands_on_end
-from .shapes import feature_points
+from .persistent import SLIDE, STICK, accelerations_from, held_points, normal_bias
 
 __all__ = ["held_derivative", "held_derivatives", "held_accelerations", "held_acceleration", "hold_in_row",
            "stage_rows", "stepped_by_integrator"]
@@ -93,9 +92,7 @@ def held_accelerations(y, p, w, d):
     rdot = np.empty((MAX_POINTS, 3))
     anchors = np.empty((MAX_POINTS, 3))
     work = np.zeros(IMPACT_WORK_SHAPE)
-    count = feature_points(y, p, shape, ground, mask, points, gaps, owners)
-    if stands_on_end(shape, mask, count):  # a can's rim points turned toward its load, as at the step's start
-        end_toward_load(y, p, shape, ground, mask, points, gaps, d)
+    count = held_points(y, p, w, shape, ground, mask, points, gaps, owners, d, False)  # as at the step's start
     if count > 0:
         nx, ny, nz = ground[NORMAL], ground[NORMAL + 1], ground[NORMAL + 2]
         normal_bias(y, p, shape, ground, mask, count, points, owners, bias, rdot, anchors)
@@ -153,11 +150,7 @@ def hold_in_row(w, bare, y, p, shape, ground, mask, mu, mode, sx, sy, slip_toler
         gaps = np.empty(MAX_POINTS)
         owners = np.zeros(MAX_POINTS, dtype=np.int64)
         work = np.zeros(IMPACT_WORK_SHAPE)
-        count = feature_points(y, p, shape, ground, mask, points, gaps, owners)
-        if stands_on_end(shape, mask, count):  # the points of batch.hold_all, in its order
-            d = np.empty(STATE_WIDTH)
-            derivative(y, p, bare, d)
-            end_toward_load(y, p, shape, ground, mask, points, gaps, d)
+        count = held_points(y, p, bare, shape, ground, mask, points, gaps, owners, np.empty(STATE_WIDTH), True)
         build_rows(y, p, count, points, ground[NORMAL], ground[NORMAL + 1], ground[NORMAL + 2], work)
         for c in range(MAX_POINTS):
             ux, uy = sx, sy
