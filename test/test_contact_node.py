@@ -447,18 +447,20 @@ def test_a_crate_asleep_alone_on_the_ground_is_listed_resting_with_its_weight(tm
     np.testing.assert_allclose([pose.x, pose.y, pose.z], [2.0, 0.0, 0.1], atol=1e-12)
 
 
-def test_sleeping_goes_on_after_a_spawn(tmp_path: Path) -> None:
-    """``sleeping`` on and ``sleep_speed`` raised to 1 mm/s, a crate spawned 5 cm above the two-box stack (the
-    spawn makes a new simulator: both carry over): it lands, comes to rest, and within 1 s all three bodies are
-    asleep."""
+def test_the_contact_settings_go_on_after_a_spawn(tmp_path: Path) -> None:
+    """``sleeping`` on, ``sleep_speed`` raised to 1 mm/s and ``penetration_tolerance`` to 10 µm, a crate spawned
+    5 cm above the two-box stack (the spawn makes a new simulator: all three carry over): it lands, comes to rest,
+    and within 1 s all three bodies are asleep."""
     scene = tmp_path / "stack.yaml"
     scene.write_text(STACK)
-    with SimHarness(scene, {**PARAMETERS, "sleeping": True, "sleep_speed": 1e-3}) as h:
+    settings = {**PARAMETERS, "sleeping": True, "sleep_speed": 1e-3, "penetration_tolerance": 1e-5}
+    with SimHarness(scene, settings) as h:
         assert h.spawn(crate=CRATE).successful
         h.watch_body("crate")
         h.step(100)
         assert int(contact_status(h)["bodies asleep"]) == 3
         assert h.node.session.simulator.contact.sleep_speed == 1e-3
+        assert h.node.session.simulator.contact.penetration_tolerance == 1e-5
 
 
 PUSHED = """\

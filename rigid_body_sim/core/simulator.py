@@ -734,6 +734,7 @@ class Simulator:
         if new.contact is not None and self.contact is not None:
             new.contact.sleeping = self.contact.sleeping
             new.contact.sleep_speed = self.contact.sleep_speed
+            new.contact.penetration_tolerance = self.contact.penetration_tolerance
         state = new.state.copy()
         old_state = self.state
         for b, name in enumerate(scene.body_names):

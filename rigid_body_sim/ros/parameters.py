@@ -247,6 +247,12 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
                   "it began them (its mean speed below it: jittering in place is rest) and is then stopped where "
                   "it is, creeping or not (its kinetic energy dropped): a pile sleeps sooner.",
                   range=(1e-9, 1e3)),
+    ParameterSpec("penetration_tolerance", _T.DOUBLE, 0.0,
+                  "Depth (m) to which bodies resting on bodies may overlap before they are moved apart. 0 is exact "
+                  "(1e-12 × a body's size). Raised (1e-5: ten micrometres), a landing pile skips most of that "
+                  "correction and steps about twice as fast (docs/contact.md, 'Penetration tolerance'). A body touching "
+                  "no other body keeps its exact contact. No effect in a scene without contact.",
+                  range=(0.0, 1e-2)),
     ParameterSpec("threads", _T.INTEGER, 0,
                   "Threads the physics step may use over the bodies: 0 = every core (NUMBA_NUM_THREADS, by default "
                   f"the CPU count). The step runs in parallel only from {PARALLEL_MIN_BODIES} moving bodies; the results "

@@ -146,11 +146,13 @@ def build_simulator(path: str, settings: Mapping[str, Any]) -> Simulator:
 
 
 def _contact_settings(sim: Simulator, settings: Mapping[str, Any]) -> None:
-    """The ``sleeping`` and ``sleep_speed`` settings onto the simulator's contact solver (if it has one)."""
+    """The ``sleeping``, ``sleep_speed`` and ``penetration_tolerance`` settings onto the simulator's contact solver
+    (if it has one)."""
     if sim.contact is not None:
         sim.contact.sleeping = settings.get("sleeping", False)
-        if "sleep_speed" in settings:
-            sim.contact.sleep_speed = settings["sleep_speed"]
+        for name in ("sleep_speed", "penetration_tolerance"):
+            if name in settings:
+                setattr(sim.contact, name, settings[name])
 
 
 def _ignore(*_args: Any) -> None:

@@ -232,8 +232,9 @@ class Islands:
         args_head = (Y0, Y1, sim._prm, wrenches, solver._bare_rows, solver.modes, self.saved, solver.shapes,
                      solver.half_spaces, solver.half_space_friction, self.members, cand, len(cand),
                      self.pairs.is_static, sim._stopped, self.pairs.spin_reach, self.size, self.asleep, self._roused,
-                     self._wait, self._skips, self._still, self._anchor, h, bool(solver.sleeping), float(solver.sleep_speed),
-                     DEFAULT_FRICTION, self.n_contacts, self._rest_int, self._rest_flt, self.island, self._parent, self._flags)
+                     self._wait, self._skips, self._still, self._anchor, h, bool(solver.sleeping),
+                     float(solver.sleep_speed), DEFAULT_FRICTION, float(solver.penetration_tolerance), self.n_contacts,
+                     self._rest_int, self._rest_flt, self.island, self._parent, self._flags)
         was_asleep = self.asleep != 0
         while True:
             code = island_pass(*args_head, self._nlist, self._pos, self._quat, self._rot, self._pdist, self._pnormal,

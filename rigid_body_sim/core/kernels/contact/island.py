@@ -33,7 +33,8 @@ again at the next step instead (at most STICK_SKIPS steps in a row). Else
 projected Gauss–Seidel on the component's rows (over more than PILE_CONTACTS contacts, a pile, each
 component on its own, from the highest against gravity down, then back up, in turn: a weight passes
 down a pile and a stop up it within a sweep). Then the
-positions: every point found penetrating at the new poses (narrow phase again) is closed by a
+positions: every point found penetrating at the new poses (narrow phase again) deeper than the projection's
+tolerance (PROJECT_TOL × its body's size, or the solver's penetration tolerance where that is more) is closed by a
 mass-metric least correction (Gauss–Seidel on the linearised gaps, λ ≥ 0; over a pile, bottom-up with each
 upright pair's lower body held, _pile_rows), the narrow phase iterated PROJECT_ROUNDS times; only the
 components with a deep point move, the others are held as fixed.
@@ -93,7 +94,8 @@ SLEEP_STEPS = 10
 PATCH_FLAT, PATCH_REACH = math.cos(0.1), 1e-2
 #: Most rows (3 per contact point) of an island solved densely for the sticking case.
 DENSE_MAX = 360
-#: Points deeper than this × the pair's size (m per m) after the step are projected out.
+#: Points deeper than this × the pair's size (m per m) after the step are projected out, or than the solver's
+#: penetration tolerance (m) where that is more (_depth_tol).
 PROJECT_TOL = 1e-12
 #: A component's rise of K + U over a step within this × the sum of its bodies' |K + U| is round-off (_no_gain).
 RISE_ROUNDOFF = 1e-15
@@ -121,7 +123,7 @@ WOKEN_SWEEPS = PGS_SWEEPS
 #: Ranges of the islands' sort (_sort_by) at most this long are insertion sorted.
 SORT_SMALL = 16
 #: A component's warm start is kept as its sticking solve (_held) when its points' speeds after are within this ×
-#: PROJECT_TOL × their body's size / h: over a step a body at rest moves a hundredth of the projection's tolerance.
+#: the projection's tolerance (_depth_tol) / h: over a step a body at rest moves a hundredth of it.
 HELD_TOL = 1e-2
 #: Iterated Tikhonov steps of the sticking solve (fewer once the residual is below TIKHONOV_TOL × the right-hand
 #: side's), and its regularisation (× the largest diagonal); most pivots of its points let go or taken back.
@@ -168,6 +170,13 @@ WARM_REACH = 0.1
 (OUT_BODIES, OUT_CONTACTS, OUT_STICK, OUT_PGS, OUT_PROJECTED, OUT_DEPTH, OUT_WOKEN, OUT_SLEPT, OUT_STOPPED, OUT_HELD,
  OUT_TRIMMED, OUT_RESTORED) = range(12)
 OUT_WIDTH = 12
+
+
+@njit(**INLINE)
+def _depth_tol(size, i, depth_tol):
+    """How deep (m) a point of body i may be before the projection moves it out: PROJECT_TOL × its size, or the
+    solver's penetration tolerance ``depth_tol`` (m; 0: none) where that is more."""
+    return max(PROJECT_TOL * size[i], depth_tol)
 
 
 @njit(**INLINE)
@@ -874,14 +883,14 @@ def _copy_rows(src, dst, rbody, order, start, stop):
 
 
 @njit(**JIT)
-def _held(vel, rj, rw, rbody, rbias, rlam, cflt, cint, size, h, order, start, stop, saved):
+def _held(vel, rj, rw, rbody, rbias, rlam, cflt, cint, size, depth_tol, h, order, start, stop, saved):
     """Whether the contacts order[start:stop] are solved exactly by their warm start (rlam: the last step's λ
     carried over): every point with λ_n > 0 holds (its three rows' speeds after within 1e-9 × the largest row
-    speed before, a tenth of the sticking solve's EQUALITY_TOL, and within HELD_TOL × PROJECT_TOL × its body's
-    size / h: over the step it moves a hundredth of the projection's tolerance, so that a component at rest does
-    not creep), every other parts (u_n⁺ ≥ 0 to that tolerance), every point's gap after the step (linear) at least
-    −PROJECT_TOL × its body's size (as deep as the projection leaves a point: a component resting there is held as
-    at its faces), every λ_n ≥ 0 and every λ_t in its cone. Then the sticking solve's λ is that one, found without a
+    speed before, a tenth of the sticking solve's EQUALITY_TOL, and within HELD_TOL × the projection's tolerance
+    (_depth_tol) / h: over the step it moves a hundredth of that, so that a component at rest does not creep),
+    every other parts (u_n⁺ ≥ 0 to that tolerance), every point's gap after the step (linear) at least minus the
+    projection's tolerance (as deep as the projection leaves a point: a component resting there is held as at its
+    faces), every λ_n ≥ 0 and every λ_t in its cone. Then the sticking solve's λ is that one, found without a
     factorisation (a component at rest: the same λ step after step, until what it leaves of the speeds, the solve's round-off,
     grows past that tolerance: a held λ does not follow the bodies' turn, so its residue grows step by step).
     True: vel has λ applied; False: vel as it was (its bodies' rows kept in ``saved``, per body 6)."""
@@ -914,7 +923,7 @@ def _held(vel, rj, rw, rbody, rbias, rlam, cflt, cint, size, h, order, start, st
             q = order[c]
             r = 3 * q
             body = cint[q, I_B] if cint[q, I_B] >= 0 else cint[q, I_A]
-            reach = PROJECT_TOL * size[body]
+            reach = _depth_tol(size, body, depth_tol)
             close = min(slack, HELD_TOL * reach / h)
             un = _row_speed(vel, rj, rbody, r)
             if cflt[q, C_GAP] + h * un < -reach:
@@ -1494,9 +1503,9 @@ def _attribute(nc, cint, cflt, nd, sint, sflt, members, head):
 
 @njit(**JIT)
 def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, rot, pdist, pnormal, pcount, ppoints,
-             pseps, members, bound, size, is_static, default_mu, h, iw, dx, vel, cint, cflt, rj, rw, rdiag, rbias, rlam,
-             rbody, porder, out, comp, flags, rwork):
-    """The projection of the island bodies' poses Y1: points deeper than PROJECT_TOL × their pair's size closed by
+             pseps, members, bound, size, is_static, default_mu, depth_tol, h, iw, dx, vel, cint, cflt, rj, rw, rdiag,
+             rbias, rlam, rbody, porder, out, comp, flags, rwork):
+    """The projection of the island bodies' poses Y1: points deeper than its tolerance (_depth_tol) closed by
     the least mass-metric correction (over a pile, bottom-up with lower bodies held: _pile_rows), then their
     velocities kept from approaching where it moved them (_stop_approach); returns the largest depth it took on (m).
     Only the bodies of the velocity step's components (comp) with a deep point move; the others (solved exactly,
@@ -1530,7 +1539,7 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, r
         depth = 0.0
         for c in range(nd):
             i = cint[c, 1] if cint[c, 1] >= 0 else cint[c, 0]
-            if cflt[c, C_GAP] < -PROJECT_TOL * size[i]:
+            if cflt[c, C_GAP] < -_depth_tol(size, i, depth_tol):
                 deep += 1
                 depth = max(depth, -cflt[c, C_GAP])
                 if rnd == 0:  # its components move
@@ -1672,7 +1681,7 @@ def _energy(Y, prm, i):
 
 
 @njit(**JIT)
-def _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt, size, sums, flags, out):
+def _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt, size, depth_tol, sums, flags, out):
     """Keep each component of the step's contacts (comp) that nothing but gravity pushes (no applied wrench on
     its bodies; its fixed sides never move) from ending the step with more K + U than it began it with. What the
     step added (a Gauss–Seidel step short of convergence, the projection's lift) is taken out of its kinetic
@@ -1695,7 +1704,7 @@ def _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt
                 sums[r, j] = 0.0
     for c in range(nc):
         i = cint[c, I_B] if cint[c, I_B] >= 0 else cint[c, I_A]
-        if cflt[c, C_GAP] < -PROJECT_TOL * size[i]:
+        if cflt[c, C_GAP] < -_depth_tol(size, i, depth_tol):
             sums[_find(comp, i), 3] = -1.0
     for m in range(n):
         i = members[m]
@@ -1739,14 +1748,15 @@ def _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt
 
 @njit(**JIT)
 def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, members, cand, n_cand, is_static, stopped,
-                spin_reach, size, asleep, roused, wait, skips, still, anchor, h, sleeping, sleep_speed, default_mu, n_prev,
-                rest_int, rest_flt, island,
-                parent, flags, nlist, pos, quat, rot, pdist, pnormal, pcount, ppoints, pseps, bound, cint, cflt, vel, iw,
-                dx, rj, rw, rdiag, rbias, rlam, rbody, order, cstart, A, L, vec, out, comp, band, group, cwork, rwork,
-                bwork, blist):
+                spin_reach, size, asleep, roused, wait, skips, still, anchor, h, sleeping, sleep_speed, default_mu,
+                depth_tol, n_prev, rest_int, rest_flt, island, parent, flags, nlist, pos, quat, rot, pdist, pnormal,
+                pcount, ppoints, pseps, bound, cint, cflt, vel, iw, dx, rj, rw, rdiag, rbias, rlam, rbody, order,
+                cstart, A, L, vec, out, comp, band, group, cwork, rwork, bwork, blist):
     """One step of every island (module docstring): results into Y1 for the bodies marked island[i] = 1 (solved)
     or 2 (asleep: their rows copied from Y0). Returns 0, or −(contacts needed) when cint is too small
-    (then nothing was changed but ``asleep`` and the outputs; call again with room). ``wait`` (per body, kept
+    (then nothing was changed but ``asleep`` and the outputs; call again with room). ``depth_tol`` (m, ≥ 0): the
+    solver's penetration tolerance, how deep a point may be left before the projection moves it out, where that is
+    more than PROJECT_TOL × its body's size (_depth_tol; 0: exact). ``wait`` (per body, kept
     across calls): steps before its component is tried for the sticking solve again (≤ 0: at once; WAIT_SOLVED,
     WAIT_HELD); ``skips`` (per body, 2 columns, kept across calls): the steps in a row its component, due, was not
     tried (STICK_SKIPS), and 1 if a point of it slipped at the end of the step (SLIP); ``still`` (per body, kept
@@ -1940,7 +1950,8 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             skipped = _span(cint, order, lo, hi, skips[:, 0])[1]
             if left < 0:
                 if most == WAIT_HELD:  # dx (per body) is scratch until the projection
-                    kept = _held(vel, rj, rw, rbody, rbias, rlam, cflt, cint, size, h, order, lo, hi, dx)
+                    kept = _held(vel, rj, rw, rbody, rbias, rlam, cflt, cint, size, depth_tol, h, order, lo, hi,
+                                 dx)
                 if kept:
                     out[OUT_HELD] += 1
                     left = WAIT_HELD
@@ -1968,7 +1979,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             for c in range(lo, hi):
                 q = order[c]
                 body = cint[q, I_B] if cint[q, I_B] >= 0 else cint[q, I_A]
-                shallow = shallow and cflt[q, C_GAP] >= -0.5 * PROJECT_TOL * size[body]
+                shallow = shallow and cflt[q, C_GAP] >= -0.5 * _depth_tol(size, body, depth_tol)
             if shallow:
                 flags[i] |= 512  # its root: the component was solved exactly, nothing to project at the start
         else:
@@ -2023,15 +2034,16 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     for m in range(n):
         i = members[m]
         if island[i] == 1 and flags[_find(comp, i)] & 512:
-            if h * max(_speed(Y0, i, spin_reach), _speed(Y1, i, spin_reach)) <= PROJECT_TOL * size[i]:
+            if h * max(_speed(Y0, i, spin_reach), _speed(Y1, i, spin_reach)) <= _depth_tol(size, i, depth_tol):
                 island[i] = 3
     _bounds(Y0, Y1, nlist, 0, n_pairs, is_static, spin_reach, size, h, bound, members, dx[:, 0])
     deepest = _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, rot, pdist, pnormal, pcount,
-                       ppoints, pseps, members, bound, size, is_static, default_mu, h, iw, dx, vel, cint[half:],
+                       ppoints, pseps, members, bound, size, is_static, default_mu, depth_tol, h, iw, dx, vel,
+                       cint[half:],
                        cflt[half:], rj[3 * half:], rw[3 * half:], rdiag[3 * half:], rbias[3 * half:],
                        rlam[3 * half:], rbody[3 * half:], order, out, comp, flags, rwork[3 * half:])
     out[OUT_DEPTH] = deepest
-    _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt, size, dx, flags, out)
+    _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt, size, depth_tol, dx, flags, out)
     if out[OUT_STOPPED] > 0:
         _attribute(nc, cint, cflt, int(out[OUT_STOPPED]), cint[half:], cflt[half:], members, cstart)
     # sleeping: a component of the step's contacts whose bodies were and stay slower than the sleep speed (at
