@@ -33,7 +33,9 @@ Peers, set up as their documentation recommends (settings printed with the table
 
 Ours: rk4 (the default) and semi_implicit_euler, through :class:`Simulator`, one thread; sleeping at the
 default sleep speed (rest to round-off), and rk4 also at MuJoCo's default sleep_tolerance (``PEER_SLEEP_SPEED``,
-1e-3 m/s: the contact solver's ``sleep_speed``).
+1e-3 m/s: the contact solver's ``sleep_speed``). On the pile, rk4 also with the contact solver's
+``penetration_tolerance`` at ``PILE_TOLERANCE`` (1e-5 m: points that shallow are left, not projected out), sleeping
+off and on.
 """
 
 from __future__ import annotations
@@ -70,6 +72,7 @@ PILE_LATER = 8.0  # s: the sleeping settings are also timed from here (the pile 
 WALL_THICKNESS, WALL_HEIGHT = 0.1, 1.0
 SAMPLE_EVERY = 10  # steps between readings
 PEER_SLEEP_SPEED = 1e-3  # m/s: MuJoCo's default sleep_tolerance, printed with its settings
+PILE_TOLERANCE = 1e-5  # m: ours on the pile also with this penetration tolerance
 mujoco, pybullet = E.mujoco, E.pybullet
 
 
@@ -128,11 +131,15 @@ class Ours:
     name = "rigid_body_sim"
     restores_sleep = True  # a copy of the whole simulator
 
-    def __init__(self, cubes: list[Cube], integrator: str, sleeping: bool, sleep_speed: float | None = None):
-        """``sleep_speed``: the contact solver's (m/s; None: its default, rest to round-off)."""
+    def __init__(self, cubes: list[Cube], integrator: str, sleeping: bool, sleep_speed: float | None = None,
+                 penetration_tolerance: float = 0.0):
+        """``sleep_speed``, ``penetration_tolerance``: the contact solver's (m/s; None: its default, rest to
+        round-off; m: 0, exact)."""
         self.cubes, self.setting = cubes, integrator + (", sleeping" if sleeping else "")
         if sleep_speed is not None:
             self.setting += f" below {sleep_speed:g} m/s"
+        if penetration_tolerance:
+            self.setting += f", depth ≤ {penetration_tolerance:g} m"
         bodies = {}
         for k, c in enumerate(cubes):
             box = {"box": list(c.sizes)}
@@ -149,6 +156,7 @@ class Ours:
             self.sim.contact.sleeping = True
         if sleep_speed is not None:
             self.sim.contact.sleep_speed = sleep_speed
+        self.sim.contact.penetration_tolerance = penetration_tolerance
         self.moving = np.array([not c.static for c in cubes])
 
     def step(self, k: int) -> None:
@@ -314,8 +322,9 @@ def engines(cubes: list[Cube], sleeping_too: bool) -> list:
     """Every engine and setting on ``cubes`` (each with sleeping off, and on when ``sleeping_too``)."""
     sleeps = (False, True) if sleeping_too else (False,)
     out = [Ours(cubes, name, s) for name in OURS for s in sleeps]
-    if sleeping_too:  # and at MuJoCo's sleep threshold (its default sleep_tolerance)
+    if sleeping_too:  # and at MuJoCo's sleep threshold (its default sleep_tolerance); with a penetration tolerance
         out.append(Ours(cubes, OURS[0], True, PEER_SLEEP_SPEED))
+        out += [Ours(cubes, OURS[0], s, penetration_tolerance=PILE_TOLERANCE) for s in sleeps]
     if mujoco is not None:
         out += [MuJoCo(cubes, cone, s) for cone in ("pyramidal", "elliptic") for s in sleeps]
     if pybullet is not None:
