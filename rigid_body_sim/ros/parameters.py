@@ -250,8 +250,8 @@ PARAMETERS: tuple[ParameterSpec, ...] = (
     ParameterSpec("penetration_tolerance", _T.DOUBLE, 0.0,
                   "Depth (m) to which bodies resting on bodies may overlap before they are moved apart. 0 is exact "
                   "(1e-12 × a body's size). Raised (1e-5: ten micrometres), a landing pile skips most of that "
-                  "correction and steps about twice as fast (docs/contact.md, 'Penetration tolerance'). A body touching "
-                  "no other body keeps its exact contact. No effect in a scene without contact.",
+                  "correction and steps about 1.7 times as fast (docs/contact.md, 'Penetration tolerance'). A body "
+                  "touching no other body keeps its exact contact. No effect in a scene without contact.",
                   range=(0.0, 1e-2)),
     ParameterSpec("threads", _T.INTEGER, 0,
                   "Threads the physics step may use over the bodies: 0 = every core (NUMBA_NUM_THREADS, by default "
