@@ -790,16 +790,39 @@ def test_a_pile_of_27_cubes_settles_and_comes_to_rest():
     assert speeds_of(sim, cubes) <= 1e-9
 
 
-def test_a_pile_with_a_penetration_tolerance_overlaps_within_it_and_comes_to_rest():
-    """The contact solver's penetration_tolerance at 1e-5 m: the pile of 27 never overlaps deeper than that at any
-    10th step, K + U never rises (the bounds above), and it is at rest by 1.5 s (every speed ≤ 1e-9). Points that
-    shallow are left where they are, not moved out: overlaps deeper than 1e-9 m are seen (measured 6.9e-6 m; the
-    exact pile's deepest, 6.3e-14 m)."""
-    tolerance = 1e-5
-    sim, worst = settle_pile(27, 1.5, penetration_tolerance=tolerance, depth=tolerance)
+def test_a_pile_with_a_penetration_tolerance_never_gains_energy_and_comes_to_rest():
+    """The contact solver's penetration_tolerance at 1e-5 m: the pile of 27 keeps the bounds above (K + U never
+    rises, overlaps within the pile's tolerance at every 10th step) and is at rest by 1.5 s (every speed ≤ 1e-9).
+    Points that shallow are left where they are: overlaps deeper than 1e-9 m are seen (measured 6.9e-6 m at
+    most at every 10th step; the exact pile's deepest, 6.3e-14 m)."""
+    sim, worst = settle_pile(27, 1.5, penetration_tolerance=1e-5)
     assert worst > 1e-9
     cubes = [i for i, m in enumerate(sim.model.motions) if m != "static"]
     assert speeds_of(sim, cubes) <= 1e-9
+
+
+@pytest.mark.parametrize("sunk, left", [(1e-6, True), (1e-4, False)])
+def test_columns_sunk_within_the_penetration_tolerance_are_left_and_deeper_are_moved_out(sunk, left):
+    """Four columns of ten 0.1 m cubes at rest, each cube set ``sunk`` into the one below, penetration_tolerance
+    1e-5 m, one 1 ms step: sunk 1e-6 m (within it), every cube stays where it was set (within 1e-12 m); sunk
+    1e-4 m (beyond it), the projection moves them out to no overlap deeper than the tolerance. Either way every
+    speed after is ≤ 1e-9: the step neither pushes the overlapping cubes apart nor lets them sink."""
+    edge, at, tolerance = 0.1, 0.5 * 0.1 + 1e-3, 1e-5
+    corners = [(sx * at, sy * at) for sx in (-1, 1) for sy in (-1, 1)]
+    bodies = {f"c{n}_{k}": cube((x, y, edge * (k + 0.5)), edge=edge) for n, (x, y) in enumerate(corners) for k in range(10)}
+    sim = simulator(bodies, dt=1e-3)
+    sim.contact.penetration_tolerance = tolerance
+    for n, (x, y) in enumerate(corners):
+        for k in range(10):
+            sim.set_body_state(f"c{n}_{k}", position_world=(x, y, edge * (k + 0.5) - k * sunk))
+    set_at = sim.positions_world().copy()
+    sim.step(1)
+    if left:
+        assert np.max(np.abs(sim.positions_world() - set_at)) <= 1e-12
+        assert deepest(sim) <= -0.5 * sunk
+    else:
+        assert deepest(sim) >= -tolerance
+    assert speeds_of(sim, list(range(40))) <= 1e-9
 
 
 @pytest.mark.parametrize("depth", [-1e-9, 0.0101, float("nan"), float("inf")])
