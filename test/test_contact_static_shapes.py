@@ -251,6 +251,45 @@ def test_a_box_sliding_on_the_floor_into_a_static_wall_rebounds():
     assert sim.contact.is_resting("crate") and sim.contact.static_body_of(int(sim.contact.ground_of[1])) is None
 
 
+
+#: A 0.1 m cube of a pile settling in its bin (benchmarks/contact_stacks.py), in flight a hair above the ground
+#: beside the bin's static wall (its face 4.4e-7 m into it, leaving at 5.6e-5 m/s) and spinning at -1.73 rad/s
+#: about the vertical: a state row (position, quaternion w x y z, velocity, angular velocity in its axes).
+SPINNING_BY_THE_WALL = [-0.19894649452492108, -0.7999515715289529, 0.05023252783012482, 0.7071039776658533,
+                        0.7071055785591859, 0.0013034325100728036, -0.0019916333244841718, 0.09056871771734581,
+                        -6.965569379102539e-05, 0.08613935848519019, -1.5286147684083078e-05, 0.003060515819059404,
+                        -1.7278594039073631]
+
+
+def test_a_cube_spinning_on_the_ground_by_a_static_wall_steps_on():
+    """The cube above lands on the ground within its first step and, held there, its corner swings into the
+    wall while the point that touched it leaves: the impact against the wall is located where that corner
+    strikes (after the start), not taken again and again at the step's start (which recursed without end).
+    Over 0.2 s: no two of its impacts against the wall at one instant, K + U never above its start."""
+    from rigid_body_sim.core.model import State
+
+    box, mat = {"box": [0.1, 0.1, 0.1]}, {"restitution": 0.0, "friction": 0.5}
+    cube = {"mass": 1.0, "inertia": box, "collision": box, "material": mat, "pose": {"position": [-0.2, -0.7, 0.2]}}
+    wall = {"motion": "static", "mass": 1.0, "inertia": {"box": [1.9, 0.1, 1.0]}, "collision": {"box": [1.9, 0.1, 1.0]},
+            "material": mat, "pose": {"position": [0.0, -0.9, 0.5]}}
+    sim = Simulator(load_scene({"gravity": [0.0, 0.0, -G], "bodies": {"cube": cube, "wall": wall},
+                                "ground": [{"normal": [0, 0, 1], "material": mat}]}), "rk4", 1e-3)
+    rows = sim.state.rows().copy()
+    rows[0, :13] = SPINNING_BY_THE_WALL
+    sim.state = State.of_rows(rows)
+    sim.contact.reset(sim)
+
+    def energy() -> float:
+        v, w = sim.state.v_WC_W[0], sim.state.w_WP_P[0]
+        return 0.5 * v @ v + 0.5 * (1.0 / 600.0) * w @ w + G * sim.state.p_WC_W[0, 2]
+
+    start = energy()
+    while sim.time < 0.2:
+        sim.step()
+        assert energy() <= start + 1e-12 * abs(start)
+    times = [e.time for e in sim.contact.events_of("cube", "impact") if sim.contact.static_body_of(e.ground) == "wall"]
+    assert times and len(set(times)) == len(times)
+
 def test_resting_on_a_static_ball_is_held_on_its_tangent_plane_and_counted():
     """Not covered exactly (a curved support): held on the tangent plane, refreshed each step, counted.
     At the apex that plane is level: the ball stays there (the equilibrium), gap 0."""

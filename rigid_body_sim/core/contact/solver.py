@@ -241,12 +241,16 @@ class ContactSolver:
         #: ``rim_capped`` those whose rim turned more than RIM_TURN even at MAX_RIM_PIECES; ``face_landed`` of
         #: those, the ones that threw the can (:meth:`_thrown`), taken instead as its end face landing;
         #: ``face_down``
-        #: projections of a cylinder held on a rim that went through upright onto its end face (:meth:`_project`).
+        #: projections of a cylinder held on a rim that went through upright onto its end face (:meth:`_project`);
+        #: ``side_pressed`` spans of a resting body just struck against another half-space or static shape whose gap
+        #: there never opens within the span (a corner swinging in as the struck point leaves): not struck again
+        #: at the same instant, it stays pressed on it for the rest of the step (:meth:`_persistent_end`).
         self._static_skipped: set[int] = set()  # bodies not looked at against static shapes for the rest of the step
+        self._side_pressed: set[int] = set()  # bodies not looked at for side impacts for the rest of the step
         self.counts = dict.fromkeys(("restitution_capped", "multi_contact_elastic", "refined_steps",
                                      "second_half_space", "two_ground_overflow", "painleve",
                                      "static_tangent", "static_pressed", "island_body_steps", "rim_pieces",
-                                     "rim_capped", "face_landed", "face_down"), 0)
+                                     "rim_capped", "face_landed", "face_down", "side_pressed"), 0)
         #: Per body, a second half-space it is held on besides ``ground_of`` (two_grounds.py), or -1.
         self.other_ground = np.full(n, -1, dtype=np.int64)
         #: The features touching ``other_ground``, as bits.
@@ -704,6 +708,7 @@ class ContactSolver:
         for it, as :meth:`after_step` would have."""
         cur = sim._control[L.CUR]
         self._static_skipped.clear()
+        self._side_pressed.clear()
         self.pairs.islands.asleep_step(sim._Ys[1 - cur], sim._Ys[cur], sim.dt)
 
     def after_step(self, sim, wrenches: np.ndarray) -> None:
@@ -715,6 +720,7 @@ class ContactSolver:
         if sim._method.held is not None and (staged := np.flatnonzero(self._staged)).size:
             sim._method.held(Y0, Y1, sim._prm, wrenches, staged, h)  # their steps with the contact found at every stage
         self._static_skipped.clear()
+        self._side_pressed.clear()
         # body–body events first (body_pairs.py): the bodies it stepped are done
         done = self.pairs.after_step(sim, wrenches, Y0, Y1, t0, h) if self.pairs is not None else None
         if self.pairs is not None and len(self.pairs.islands.left):
@@ -1104,10 +1110,16 @@ class ContactSolver:
                     if s < 1.0:  # the rest of the step sticking, with the holding force found at the stop
                         return self._persistent_span(sim, i, stop, self._bare(i, held), t + s * h, h - s * h)
                     return stop
-        if self._other_gap(sim, end, i)[0] < 0.0:  # another half-space reached: an impact against it alone
-            g0 = self._other_gap(sim, y0, i)[0]
-            s = 0.0 if g0 <= 0.0 else self._locate(
-                lambda s: self._other_gap(sim, self.step_map(sim, i, y0, s * h, held), i)[0], g0, -1.0)
+        if self._other_gap(sim, end, i)[0] < 0.0 and i not in self._side_pressed:
+            # another half-space or static shape reached: an impact against it alone
+            g0, jj = self._other_gap(sim, y0, i)
+            again = self._side_impact_at(i, jj, t)  # just struck at y0: its gap opens first, the hit is later
+            gap = lambda s: self._other_gap(sim, self.step_map(sim, i, y0, s * h, held), i)[0]  # noqa: E731
+            s = 0.0 if g0 <= 0.0 and not again else self._locate(gap, min(g0, 0.0) if again else g0, -1.0)
+            if again and not s:  # it does not open: the struck body stays pressed on it for the rest of the step
+                self._side_pressed.add(i)
+                self.counts["side_pressed"] += 1
+                return self._persistent_end(sim, i, y0, end, held, t, h)
             s = 0.0 if s is None else s
             hit = self.step_map(sim, i, y0, s * h, held) if s > 0.0 else y0.copy()
             self._side_impact(sim, i, hit, held, t + s * h)
@@ -1167,6 +1179,15 @@ class ContactSolver:
             if dist < lowest:
                 lowest, which = dist, self.statics.plane_for(y, sim._prm[i], i, self.shapes[i], s)
         return lowest, which
+
+    def _side_impact_at(self, i: int, jj: int, t: float) -> bool:
+        """Whether body i's latest event is an impact against half-space or static plane ``jj`` at time t (the
+        side impact just taken at this span's start)."""
+        name = self.names[i]
+        for event in reversed(self.events):
+            if event.body == name:
+                return event.kind == "impact" and event.ground == jj and event.time == t
+        return False
 
     # ----------------------------------------------------------------- static shapes (static_geometry.py)
 
