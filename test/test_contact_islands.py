@@ -801,20 +801,32 @@ def test_a_pile_with_a_penetration_tolerance_never_gains_energy_and_comes_to_res
     assert speeds_of(sim, cubes) <= 1e-9
 
 
+#: The edge (m) of the cubes of sunk_columns.
+COLUMN_EDGE = 0.1
+
+
+def sunk_columns(sunk: float, penetration_tolerance: float = 0.0) -> Simulator:
+    """Four columns of ten COLUMN_EDGE cubes at rest on the ground, 2 mm apart, each cube set ``sunk`` (m) into
+    the one below (dt = 1 ms; the contact solver's ``penetration_tolerance``)."""
+    edge, at = COLUMN_EDGE, 0.5 * COLUMN_EDGE + 1e-3
+    corners = [(sx * at, sy * at) for sx in (-1, 1) for sy in (-1, 1)]
+    bodies = {f"c{n}_{k}": cube((x, y, edge * (k + 0.5)), edge=edge) for n, (x, y) in enumerate(corners) for k in range(10)}
+    sim = simulator(bodies, dt=1e-3)
+    sim.contact.penetration_tolerance = penetration_tolerance
+    for n, (x, y) in enumerate(corners):
+        for k in range(10):
+            sim.set_body_state(f"c{n}_{k}", position_world=(x, y, edge * (k + 0.5) - k * sunk))
+    return sim
+
+
 @pytest.mark.parametrize("sunk, left", [(1e-6, True), (1e-4, False)])
 def test_columns_sunk_within_the_penetration_tolerance_are_left_and_deeper_are_moved_out(sunk, left):
     """Four columns of ten 0.1 m cubes at rest, each cube set ``sunk`` into the one below, penetration_tolerance
     1e-5 m, one 1 ms step: sunk 1e-6 m (within it), every cube stays where it was set (within 1e-12 m); sunk
     1e-4 m (beyond it), the projection moves them out to no overlap deeper than the tolerance. Either way every
     speed after is ≤ 1e-9: the step neither pushes the overlapping cubes apart nor lets them sink."""
-    edge, at, tolerance = 0.1, 0.5 * 0.1 + 1e-3, 1e-5
-    corners = [(sx * at, sy * at) for sx in (-1, 1) for sy in (-1, 1)]
-    bodies = {f"c{n}_{k}": cube((x, y, edge * (k + 0.5)), edge=edge) for n, (x, y) in enumerate(corners) for k in range(10)}
-    sim = simulator(bodies, dt=1e-3)
-    sim.contact.penetration_tolerance = tolerance
-    for n, (x, y) in enumerate(corners):
-        for k in range(10):
-            sim.set_body_state(f"c{n}_{k}", position_world=(x, y, edge * (k + 0.5) - k * sunk))
+    tolerance = 1e-5
+    sim = sunk_columns(sunk, tolerance)
     set_at = sim.positions_world().copy()
     sim.step(1)
     if left:
@@ -855,13 +867,8 @@ def test_a_pile_s_projection_lifts_sunk_columns_to_their_stacked_heights_in_one_
     problem moved at 2.5e-4 m/s, where each tower, a component of the contacts, is the exact sticking case."""
     from rigid_body_sim.core.kernels.contact.island import OUT_STICK, PROJECT_TOL
 
-    edge, sunk, at = 0.1, 1e-4, 0.5 * 0.1 + 1e-3
-    corners = [(sx * at, sy * at) for sx in (-1, 1) for sy in (-1, 1)]
-    bodies = {f"c{n}_{k}": cube((x, y, edge * (k + 0.5)), edge=edge) for n, (x, y) in enumerate(corners) for k in range(10)}
-    sim = simulator(bodies, dt=1e-3)
-    for n, (x, y) in enumerate(corners):
-        for k in range(10):
-            sim.set_body_state(f"c{n}_{k}", position_world=(x, y, edge * (k + 0.5) - k * sunk))
+    edge = COLUMN_EDGE
+    sim = sunk_columns(1e-4)
     sim.step(1)
     heights = sim.positions_world()[:, 2].reshape(4, 10)
     assert np.max(np.abs(heights - edge * (np.arange(10) + 0.5))) <= 1e-12

@@ -265,14 +265,20 @@ def _reach_bound(Y0, Y1, i, spin_reach):
 
 
 @njit(**INLINE)
-def _pair_mu(shapes, a, b, default_mu):
-    mu = default_mu
-    if shapes[a, HAS_MATERIAL] != 0.0 or shapes[b, HAS_MATERIAL] != 0.0:
-        ma = shapes[a, FRICTION] if shapes[a, HAS_MATERIAL] != 0.0 else shapes[b, FRICTION]
-        mb = shapes[b, FRICTION] if shapes[b, HAS_MATERIAL] != 0.0 else shapes[a, FRICTION]
-        mu = math.sqrt(ma * mb)
+def _pair_sides(shapes, a, b, column):
+    """Pair (a, b)'s coefficient ``column`` (FRICTION or RESTITUTION) on each side, a side without a material taking
+    the other's (materials.pair_material's rule), and whether either side has one."""
+    ha, hb = shapes[a, HAS_MATERIAL] != 0.0, shapes[b, HAS_MATERIAL] != 0.0
+    ca = shapes[a, column] if ha else shapes[b, column]
+    cb = shapes[b, column] if hb else shapes[a, column]
     _pin = shapes[0, 0]
-    return mu
+    return ca, cb, ha or hb
+
+
+@njit(**INLINE)
+def _pair_mu(shapes, a, b, default_mu):
+    ma, mb, has = _pair_sides(shapes, a, b, FRICTION)
+    return math.sqrt(ma * mb) if has else default_mu
 
 
 @njit(**INLINE)
@@ -1334,12 +1340,8 @@ def _motion(Y0, Y1, pnormal, pcount, ppoints, k, a, b):
 def _inelastic(shapes, a, b):
     """Whether pair (a, b) has restitution 0 by the pair rule (the larger of the two; a side without a material
     takes the other's): False when neither has a material (the default restitution)."""
-    ha, hb = shapes[a, HAS_MATERIAL] != 0.0, shapes[b, HAS_MATERIAL] != 0.0
-    if not (ha or hb):
-        return False
-    ea = shapes[a, RESTITUTION] if ha else shapes[b, RESTITUTION]
-    eb = shapes[b, RESTITUTION] if hb else shapes[a, RESTITUTION]
-    return max(ea, eb) == 0.0
+    ea, eb, has = _pair_sides(shapes, a, b, RESTITUTION)
+    return has and max(ea, eb) == 0.0
 
 
 @njit(**INLINE)
