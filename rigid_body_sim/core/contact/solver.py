@@ -1036,12 +1036,14 @@ class ContactSolver:
         return kinetic_energy_row(y1, p) + potential_energy_row(y1, p) > e0 + THROWN * abs(e0)
 
     def _came_back(self, i: int, t: float, dt: float) -> bool:
-        """Whether body i rests at t (its latest event) having lifted off within 1e-9 dt before: its contact
+        """Whether body i rests at t (its latest event, dated within 1e-9 dt of t: a rest after an impact too
+        small to resolve is dated at its accumulation time) having lifted off within 1e-9 dt before: its contact
         points accelerate away from the ground (no holding force), but the method's own step of its flight comes
-        down at once (a first-order method on a can spinning on its rim). It is then held with a zero force and
-        projected after the span, so that its time moves on instead of lifting off and resting again."""
+        down at once (a first-order method on a can spinning on its rim; a body barely touching a static shape's
+        plane, struck again 1e-14 s on). It is then held with a zero force and projected after the span, so that
+        its time moves on instead of lifting off and resting again."""
         mine = [e for e in self.events[-3:] if e.body == self.names[i]]
-        return (len(mine) >= 2 and mine[-1].kind == "rest" and mine[-1].time == t
+        return (len(mine) >= 2 and mine[-1].kind == "rest" and abs(mine[-1].time - t) <= 1e-9 * dt
                 and any(e.kind == "lift-off" and t - e.time <= 1e-9 * dt for e in mine[:-1]))
 
     def _held_rest(self, sim, i: int, y: np.ndarray, held: np.ndarray, t: float, h: float,
@@ -1181,12 +1183,16 @@ class ContactSolver:
         return lowest, which
 
     def _side_impact_at(self, i: int, jj: int, t: float) -> bool:
-        """Whether body i's latest event is an impact against half-space or static plane ``jj`` at time t (the
-        side impact just taken at this span's start)."""
+        """Whether body i was struck against half-space or static plane ``jj`` at time t: an impact among its
+        events at t (the side impact just taken at this span's start, perhaps followed there by a lift-off and
+        a rest, as in a corner of the ground and a wall)."""
         name = self.names[i]
         for event in reversed(self.events):
             if event.body == name:
-                return event.kind == "impact" and event.ground == jj and event.time == t
+                if event.time != t:
+                    return False
+                if event.kind == "impact" and event.ground == jj:
+                    return True
         return False
 
     # ----------------------------------------------------------------- static shapes (static_geometry.py)
