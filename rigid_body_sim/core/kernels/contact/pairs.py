@@ -64,6 +64,12 @@ FACE_ALIGNMENT = 1e-6
 #: overlap: GJK's (its witnesses' difference over the distance) carries their round-off divided by the distance
 #: (a box's corner 3e-13 m from a face, at rest in a pile, got a normal 90° off the face's).
 NEAR_TOUCH = 1e-6
+#: A pair with a cylinder apart by d (GJK's, an upper bound of the distance, within ~2e-9 × the size of it) whose
+#: refined sep falls short of d by more than CLIMB_GAP × its size started the refinement too far off the normal (GJK's witnesses' round-off divided
+#: by a small distance: a box's edge 2.7e-7 m from a can's rim got a direction 1.3e-2 rad off, beyond refine.NEAR,
+#: and the refinement stopped at −1.07e-3 m): a pattern search (_climbed_normal) takes the direction from CLIMB_START
+#: rad down to CLIMB_END, in at most CLIMB_STEPS steps, before the refinement.
+CLIMB_GAP, CLIMB_START, CLIMB_END, CLIMB_STEPS = 1e-7, 5e-2, 1e-8, 400
 
 _KIND, _DIM, _C, _R = 0, 1, 4, 7
 
@@ -753,6 +759,47 @@ def _exact_normal(pa, pb, nx, ny, nz):
 
 
 @njit(**JIT)
+def _climbed_normal(pa, pb, nx, ny, nz):
+    """(sep, normal) from a start n too far off the normal for refine_normal (its strata are looked for within
+    refine.NEAR of the start): a pattern search on the unit sphere, the best of 8 directions at angle θ around the
+    current one taken while it separates more, θ halved when none does (from CLIMB_START to CLIMB_END rad), then
+    refine_normal from there. Every direction's sep is at most the signed distance: the search only comes nearer."""
+    best = _sep(pa, pb, nx, ny, nz)
+    theta = CLIMB_START
+    for _ in range(CLIMB_STEPS):
+        if theta < CLIMB_END:
+            break
+        # an orthonormal basis t1, t2 across n
+        if abs(nx) <= abs(ny) and abs(nx) <= abs(nz):
+            t1x, t1y, t1z = 0.0, -nz, ny
+        elif abs(ny) <= abs(nz):
+            t1x, t1y, t1z = nz, 0.0, -nx
+        else:
+            t1x, t1y, t1z = -ny, nx, 0.0
+        norm = math.sqrt(t1x * t1x + t1y * t1y + t1z * t1z)
+        t1x, t1y, t1z = t1x / norm, t1y / norm, t1z / norm
+        t2x, t2y, t2z = ny * t1z - nz * t1y, nz * t1x - nx * t1z, nx * t1y - ny * t1x
+        c, s = math.cos(theta), math.sin(theta)
+        moved = False
+        bx, by, bz = nx, ny, nz
+        for k in range(8):
+            ck, sk = math.cos(0.25 * math.pi * k), math.sin(0.25 * math.pi * k)
+            ux = c * nx + s * (ck * t1x + sk * t2x)
+            uy = c * ny + s * (ck * t1y + sk * t2y)
+            uz = c * nz + s * (ck * t1z + sk * t2z)
+            norm = math.sqrt(ux * ux + uy * uy + uz * uz)
+            ux, uy, uz = ux / norm, uy / norm, uz / norm
+            value = _sep(pa, pb, ux, uy, uz)
+            if value > best:
+                best, bx, by, bz, moved = value, ux, uy, uz, True
+        if moved:
+            nx, ny, nz = bx, by, bz
+        else:
+            theta *= 0.5
+    return _exact_normal(pa, pb, nx, ny, nz)
+
+
+@njit(**JIT)
 def _put_feature_points(pa, ma, pb, mb, nx, ny, nz, wax, way, waz, wbx, wby, wbz, res, seps):
     """Contact point 0: on A's support set along n nearest A's witness w_a, on B's along −n nearest w_b, plus margins.
 
@@ -1039,6 +1086,8 @@ def pair_contact(pa, ma, pb, mb, scale, ws_s, ws_lam, ws_tmp, ws_poly, verts, fa
             sd = d - ma - mb
             if kb == CORE_CYLINDER and d > 0.0:  # GJK's direction on a rim is ~1e-5 rad off: refined
                 sd_core, nx, ny, nz = _exact_normal(pa, pb, nx, ny, nz)
+                if sd_core < d - CLIMB_GAP * scale:  # GJK's distance bounds it above: n was too far off
+                    sd_core, nx, ny, nz = _climbed_normal(pa, pb, nx, ny, nz)
                 sd = sd_core - ma - mb
                 _put_feature_points(pa, ma, pb, mb, nx, ny, nz, ax, ay, az, bx, by, bz, res, seps)
             else:
