@@ -961,6 +961,8 @@ class ContactSolver:
         y[L.P:L.P + 3] -= gap * n
         count = self._contact_points(sim, y, i, j)
         before, _, _, _ = self._normal_motion(sim, y, i, j, count, w)
+        if before >= 0.0 and (other := self._approached_static(sim, y, i, gap, j, w)) is not None:
+            j, n, count, before = other  # touching a static shape as well, and moving into it: it is struck
         e, mu = self.restitution_of(i, j), self.friction_of(i, j)
         after_row = y.copy()
         impulse, e0, e1, alpha = impact(y, after_row, sim._prm[i], count, self._points, n[0], n[1], n[2], e, mu,
@@ -977,6 +979,36 @@ class ContactSolver:
             self._rest(sim, i, y, j, t, rest, speed)
             return -1.0
         return speed / (toward * h_left) if toward > 0.0 and h_left > 0.0 else -1.0
+
+    def _approached_static(self, sim, y: np.ndarray, i: int, gap: float, j: int, w: np.ndarray):
+        """Body i at y, not moving into plane j (its lowest gap, ``gap``): of the planes of the two static shapes
+        nearest it that it touches as well (their distance within the body's feature band of ``gap``), the one it
+        moves into fastest, put onto it: (its plane row, normal, contact points' count, normal speed); else None,
+        the contact points left as plane j's. A ball in a corner of the ground and two walls, rising off the ground
+        and rolling into the walls, was struck against the ground (the tie of the lowest gap went to it) again and
+        again at one instant."""
+        if self.statics is None:
+            return None
+        best = None
+        k = -1
+        for _ in range(2):
+            dist, k = self.statics.nearest(y, i, self.shapes[i], exclude=k)
+            if k < 0 or dist > gap + self._band[i]:
+                break
+            jj = self.statics.plane_for(y, sim._prm[i], i, self.shapes[i], k)
+            if jj == j:
+                continue
+            count = self._contact_points(sim, y, i, jj)
+            before, _, _, _ = self._normal_motion(sim, y, i, jj, count, w)
+            if before < 0.0 and (best is None or before < best[3]):
+                best = (jj, self.grounds[jj, NORMAL:NORMAL + 3].copy(), count, before, dist)
+        if best is None:
+            self._contact_points(sim, y, i, j)
+            return None
+        jj, n, count, before, dist = best
+        y[L.P:L.P + 3] -= min(dist, 0.0) * n
+        self._contact_points(sim, y, i, jj)
+        return jj, n, count, before
 
     def _jump(self, sim, i: int, before: np.ndarray, after: np.ndarray, count: int, e: float,
               alpha: float) -> tuple:
