@@ -914,3 +914,64 @@ def test_a_pile_of_1000_cubes_falls_asleep_within_3_s_where_it_rests(sleep_speed
 #: m: how far a cube of the 1000-cube pile asleep at 3 s may move over 0.3 s once woken (measured 1.1e-6 m and
 #: 1.5e-8 m: seeds 2026 and 1).
 SLEPT_MOVE = 1e-5
+
+
+def mixed_pile(count: int, seed: int, restitution: float) -> dict:
+    """``count`` bodies of every shape (spheres, boxes, capsules, cylinders; sizes 0.03–0.2 m, 0.1–5 kg, μ 0 to
+    1.2, e 0 or up to ``restitution``) on a lattice 0.25 m apart, each turned at random and thrown (about 0.5 m/s,
+    3 rad/s), over a bin of four static walls on the ground (a capsule's inertia: a cylinder's of its length)."""
+    rng = np.random.default_rng(seed)
+    side = int(np.ceil(round(count ** (1 / 3), 9)))
+    spacing, bodies = 0.25, {}
+    offset = 0.5 * spacing * (side - 1)
+    for k in range(count):
+        i, j, layer = k % side, (k // side) % side, k // (side * side)
+        kind = rng.choice(["sphere", "box", "capsule", "cylinder"])
+        s = rng.uniform(0.03, 0.1)
+        inertia = None
+        if kind == "sphere":
+            shape = {"sphere": s}
+        elif kind == "box":
+            shape = {"box": list(rng.uniform(0.04, 0.2, 3))}
+        elif kind == "capsule":
+            shape = {"capsule": [s * 0.7, rng.uniform(0.02, 0.12)]}
+            inertia = {"cylinder": [s * 0.7, shape["capsule"][1] + 1.4 * s]}
+        else:
+            shape = {"cylinder": [s, rng.uniform(0.02, 0.15)]}
+        axis = rng.normal(size=3)
+        axis /= np.linalg.norm(axis)
+        angle = rng.uniform(0, np.pi)
+        bodies[f"b{k}"] = {"mass": float(rng.uniform(0.1, 5.0)), "inertia": inertia or shape, "collision": shape,
+                           "material": {"restitution": float(rng.choice([0.0, 0.0, rng.uniform(0, restitution)])),
+                                        "friction": float(rng.choice([0.0, rng.uniform(0, 1.2)]))},
+                           "pose": {"position": [spacing * i - offset + rng.uniform(-0.02, 0.02),
+                                                 spacing * j - offset + rng.uniform(-0.02, 0.02),
+                                                 spacing * (layer + 0.5) + 0.1],
+                                    "orientation": [*(np.sin(angle / 2) * axis), np.cos(angle / 2)]},
+                           "twist": {"linear": list(rng.normal(0, 0.5, 3)), "angular": list(rng.normal(0, 3, 3))}}
+    inner = spacing * side + 0.2
+    reach, long = 0.5 * (inner + 0.1), inner + 0.2
+    for name, pos, size in (("wall_xp", (reach, 0.0), (0.1, long)), ("wall_xm", (-reach, 0.0), (0.1, long)),
+                            ("wall_yp", (0.0, reach), (long, 0.1)), ("wall_ym", (0.0, -reach), (long, 0.1))):
+        box = {"box": [*size, 1.0]}
+        bodies[name] = {"motion": "static", "mass": 1.0, "inertia": box, "collision": box,
+                        "material": {"restitution": 0.0, "friction": 0.5}, "pose": {"position": [*pos, 0.5]}}
+    return {"gravity": [0.0, 0.0, -G], "bodies": bodies,
+            "ground": [{"normal": [0, 0, 1], "material": {"restitution": 0.0, "friction": 0.6}}]}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("count, seed, restitution, integrator, dt, sleeping, depth", [
+    (27, 0, 0.0, "semi_implicit_euler", 1e-2, True, 1e-3), (125, 6, 0.0, "semi_implicit_euler", 1e-3, True, 1e-5),
+    (64, 8, 0.0, "rk4", 1e-3, True, 1e-5), (27, 21, 0.5, "semi_implicit_euler", 1e-3, False, 1e-5),
+    (64, 23, 0.5, "semi_implicit_euler", 5e-3, True, 1e-5)])
+def test_a_mixed_pile_thrown_into_a_bin_steps_on(count, seed, restitution, integrator, dt, sleeping, depth):
+    """Mixed piles (mixed_pile) thrown into their bin, 2 s, at the settings each ran with when it stopped the
+    simulator (a RecursionError against a wall, or 10,000 events in one step in a corner): every step taken and
+    the state finite. (Depth and energy are not asserted here: docs/contact.md, "What is not done yet".)"""
+    sim = Simulator(load_scene(mixed_pile(count, seed, restitution)), integrator=integrator, dt=dt)
+    sim.contact.sleeping = sleeping
+    sim.contact.penetration_tolerance = depth
+    for _ in range(int(round(2.0 / dt)) // 10):
+        sim.step(10)
+        assert np.all(np.isfinite(sim.state.rows()))
