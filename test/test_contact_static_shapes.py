@@ -365,6 +365,27 @@ def test_a_body_spinning_against_a_bin_s_wall_steps_on(name, body, inner, integr
     steps_on_never_gaining(in_a_bin(name, body, inner, integrator, dt, row), body["mass"], 0.2)
 
 
+def test_a_can_sliding_into_a_corner_of_two_walls_steps_on_pressed_on_them():
+    """A can (e = 0.11, μ = 0.64) lying on the ground in a corner of a bin, turning slowly: from its state in a
+    mixed pile it slides, stops, strikes one wall, then the other, again and again within one step (each event
+    3e-7 to 8e-7 s after the last, each a call deeper), which overflowed Python's stack (RecursionError). Past
+    MAX_SIDE_IMPACTS it stays pressed on them for the rest of the step (counted): every step taken over 0.2 s,
+    K + U never above its start."""
+    from rigid_body_sim.core.contact.solver import MAX_SIDE_IMPACTS
+
+    can = {"mass": 3.9281311971888626, "inertia": {"cylinder": [0.04041789711188699, 0.10589070104402448]},
+           "material": {"restitution": 0.10809181722129474, "friction": 0.6394651279353796}}
+    sim = in_a_bin("can", can, 0.475, "semi_implicit_euler", 1e-3,
+                   [0.4116255016963475, -0.4300008867716222, 0.055251363544712134, -0.5622423238572807,
+                    -0.13938854783009236, 0.8004857041173038, 0.15387345287997994, 0.0034729966473030795,
+                    -0.0003300040652187259, -0.0023490778389728658, -0.02686796787891014, 0.0571395587766255,
+                    2.5902936145249885e-17])
+    sim.step()
+    walls = [e for e in sim.contact.events_of("can", "impact") if sim.contact.static_body_of(e.ground) is not None]
+    assert len(walls) >= MAX_SIDE_IMPACTS and sim.contact.counts["side_pressed"] >= 1
+    steps_on_never_gaining(sim, can["mass"], 0.2)
+
+
 def test_a_ball_rising_into_a_corner_of_two_walls_is_struck_against_the_walls():
     """A frictionless ball (e = 0) touching the ground and two walls of a bin's corner, rising off the ground at
     0.041 m/s and rolling into both walls (a mixed pile's ball just struck by another body): each wall stops its

@@ -126,6 +126,9 @@ TOUCHING_GAP = 1e-12
 LIFT_OFF_SPEED = 1e-9
 #: Most events one body may have in one step (more is reported as an error, not looped on).
 MAX_EVENTS_PER_STEP = 10_000
+#: Most impacts of a body resting on the ground against other half-spaces or static shapes in one step (each taken
+#: a call deeper); past them it stays pressed on them for the rest of the step (counted in ``side_pressed``).
+MAX_SIDE_IMPACTS = 64
 #: Most pieces a resting body's step is cut into when it gained energy (ContactSolver._refine_gains).
 MAX_REFINEMENT = 32
 #: rad: the most a piece of a step turns the lowest point of a cylinder rolling on its rim about the normal, and
@@ -247,6 +250,7 @@ class ContactSolver:
         #: at the same instant, it stays pressed on it for the rest of the step (:meth:`_persistent_end`).
         self._static_skipped: set[int] = set()  # bodies not looked at against static shapes for the rest of the step
         self._side_pressed: set[int] = set()  # bodies not looked at for side impacts for the rest of the step
+        self._side_hits: dict[int, int] = {}  # side impacts of each body in this step
         self.counts = dict.fromkeys(("restitution_capped", "multi_contact_elastic", "refined_steps",
                                      "second_half_space", "two_ground_overflow", "painleve",
                                      "static_tangent", "static_pressed", "island_body_steps", "rim_pieces",
@@ -709,6 +713,7 @@ class ContactSolver:
         cur = sim._control[L.CUR]
         self._static_skipped.clear()
         self._side_pressed.clear()
+        self._side_hits.clear()
         self.pairs.islands.asleep_step(sim._Ys[1 - cur], sim._Ys[cur], sim.dt)
 
     def after_step(self, sim, wrenches: np.ndarray) -> None:
@@ -721,6 +726,7 @@ class ContactSolver:
             sim._method.held(Y0, Y1, sim._prm, wrenches, staged, h)  # their steps with the contact found at every stage
         self._static_skipped.clear()
         self._side_pressed.clear()
+        self._side_hits.clear()
         # body–body events first (body_pairs.py): the bodies it stepped are done
         done = self.pairs.after_step(sim, wrenches, Y0, Y1, t0, h) if self.pairs is not None else None
         if self.pairs is not None and len(self.pairs.islands.left):
@@ -1150,7 +1156,11 @@ class ContactSolver:
             again = self._side_impact_at(i, jj, t)  # just struck at y0: its gap opens first, the hit is later
             gap = lambda s: self._other_gap(sim, self.step_map(sim, i, y0, s * h, held), i)[0]  # noqa: E731
             s = 0.0 if g0 <= 0.0 and not again else self._locate(gap, min(g0, 0.0) if again else g0, -1.0)
-            if again and not s:  # it does not open: the struck body stays pressed on it for the rest of the step
+            hits = self._side_hits.get(i, 0) + 1
+            self._side_hits[i] = hits
+            if (again and not s) or hits > MAX_SIDE_IMPACTS:
+                # it does not open, or the body went from wall to wall MAX_SIDE_IMPACTS times in this step (each
+                # event a level deeper): it stays pressed on them for the rest of the step
                 self._side_pressed.add(i)
                 self.counts["side_pressed"] += 1
                 return self._persistent_end(sim, i, y0, end, held, t, h)
