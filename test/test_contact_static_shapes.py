@@ -389,8 +389,9 @@ def test_a_can_sliding_into_a_corner_of_two_walls_steps_on_pressed_on_them():
 def test_a_ball_rising_into_a_corner_of_two_walls_is_struck_against_the_walls():
     """A frictionless ball (e = 0) touching the ground and two walls of a bin's corner, rising off the ground at
     0.041 m/s and rolling into both walls (a mixed pile's ball just struck by another body): each wall stops its
-    motion into it (the impacts are against the walls, at the start; after the step it moves into neither), where it was struck against the ground
-    (the tie of the lowest gap went to it; it moves away from it) again and again, 10,000 times in one step.
+    motion into it (the impacts are against the walls, at the start; after the step it moves into neither), where
+    it was struck against the ground (the tie of the lowest gap went to it; it moves away from it) again and again,
+    10,000 times in one step.
     Then every step taken over 0.2 s, K + U never above its start (semi-implicit Euler, dt = 5 ms)."""
     ball = {"mass": 1.5951765266201263, "inertia": {"sphere": 0.07374914567620969},
             "material": {"restitution": 0.0, "friction": 0.0}}

@@ -65,10 +65,11 @@ FACE_ALIGNMENT = 1e-6
 #: (a box's corner 3e-13 m from a face, at rest in a pile, got a normal 90° off the face's).
 NEAR_TOUCH = 1e-6
 #: A pair with a cylinder apart by d (GJK's, an upper bound of the distance, within ~2e-9 × the size of it) whose
-#: refined sep falls short of d by more than CLIMB_GAP × its size started the refinement too far off the normal (GJK's witnesses' round-off divided
-#: by a small distance: a box's edge 2.7e-7 m from a can's rim got a direction 1.3e-2 rad off, beyond refine.NEAR,
-#: and the refinement stopped at −1.07e-3 m): a pattern search (_climbed_normal) takes the direction from CLIMB_START
-#: rad down to CLIMB_END, in at most CLIMB_STEPS steps, before the refinement.
+#: refined sep falls short of d by more than CLIMB_GAP × its size started the refinement too far off the normal
+#: (GJK's witnesses' round-off divided by a small distance: a box's edge 2.7e-7 m from a can's rim got a direction
+#: 1.3e-2 rad off, beyond refine.NEAR, and the refinement stopped at −1.07e-3 m): a pattern search
+#: (_climbed_normal) takes the direction from CLIMB_START rad down to CLIMB_END, in at most CLIMB_STEPS steps,
+#: before the refinement.
 CLIMB_GAP, CLIMB_START, CLIMB_END, CLIMB_STEPS = 1e-7, 5e-2, 1e-8, 400
 
 _KIND, _DIM, _C, _R = 0, 1, 4, 7
