@@ -386,6 +386,24 @@ def test_a_can_sliding_into_a_corner_of_two_walls_steps_on_pressed_on_them():
     steps_on_never_gaining(sim, can["mass"], 0.2)
 
 
+def test_a_can_standing_against_a_wall_is_never_thrown_by_its_held_force():
+    """A squat can (r 46 mm, 46 mm long) standing on its end against a bin's wall, tilted 2.6e-7 rad, at rest
+    (rk4, dt = 10 ms): its held step, on a rim point, spun it up to 3.4e5 rad/s (K + U up 3e7 J) and blew the pile
+    it stood in up. A held step that raises a can's K + U under gravity alone by more than THROWN of it on its rim is
+    its end face landing instead (counted), as for a rim piece: over 0.5 s it never turns faster than 1e-3 rad/s and
+    K + U never rises."""
+    can = {"mass": 0.6871287265198777, "inertia": {"cylinder": [0.04629392476346544, 0.0461623652861889]},
+           "material": {"restitution": 0.0, "friction": 0.7954485937657689}}
+    sim = in_a_bin("can", can, 0.85, "rk4", 1e-2,
+                   [0.8037058781713039, -0.6057061431785316, 0.023081206365903977, 0.8420407349763931,
+                    -8.265963422096969e-08, 2.424981508906366e-07, -0.5394139418297883, -1.0263751533643903e-12,
+                    -8.887006138571058e-06, 9.879142650439116e-14, 1.1928655409217033e-10, 1.5283245592492018e-10,
+                    -0.00037597601170864835])
+    steps_on_never_gaining(sim, can["mass"], 0.5)
+    assert np.linalg.norm(sim.state.w_WP_P[0]) <= 1e-3
+    assert sim.contact.counts["face_landed"] >= 1
+
+
 def test_a_ball_rising_into_a_corner_of_two_walls_is_struck_against_the_walls():
     """A frictionless ball (e = 0) touching the ground and two walls of a bin's corner, rising off the ground at
     0.041 m/s and rolling into both walls (a mixed pile's ball just struck by another body): each wall stops its

@@ -338,8 +338,10 @@ class ContactPublisher:
             _kv("two half-spaces with too many contact points: projected (total)", solver.counts["two_ground_overflow"]),
             _kv("steps held on a static shape's tangent plane, first order (total)", solver.counts["static_tangent"]),
             _kv("impacts of a resting body pressed on a static shape, not held (total)", solver.counts["static_pressed"]),
-            _kv("spans of a resting body just struck whose side gap never opened: pressed, not struck again (total)",
-                solver.counts["side_pressed"]),
+            _kv("spans of a resting body just struck whose side gap never opened, or struck too often: pressed, "
+                "not struck again (total)", solver.counts["side_pressed"]),
+            _kv("spans of a resting body whose held step threw it: left at rest where it was (total)",
+                solver.counts["held_thrown"]),
             _kv("island body-steps, first order (total)", solver.counts["island_body_steps"]),
             _kv("pieces of steps of cylinders rolling on a rim near upright (total)", solver.counts["rim_pieces"]),
             _kv("of them at the most pieces, the rim turning faster (total)", solver.counts["rim_capped"]),

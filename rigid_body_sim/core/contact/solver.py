@@ -247,14 +247,16 @@ class ContactSolver:
         #: projections of a cylinder held on a rim that went through upright onto its end face (:meth:`_project`);
         #: ``side_pressed`` spans of a resting body just struck against another half-space or static shape whose gap
         #: there never opens within the span (a corner swinging in as the struck point leaves): not struck again
-        #: at the same instant, it stays pressed on it for the rest of the step (:meth:`_persistent_end`).
+        #: at the same instant, it stays pressed on it for the rest of the step (:meth:`_persistent_end`), or struck
+        #: more than MAX_SIDE_IMPACTS times in the step; ``held_thrown`` spans of a resting body under gravity alone
+        #: whose held step raised its K + U by more than THROWN of it: it stays where it was, at rest (:meth:`_held_span`).
         self._static_skipped: set[int] = set()  # bodies not looked at against static shapes for the rest of the step
         self._side_pressed: set[int] = set()  # bodies not looked at for side impacts for the rest of the step
         self._side_hits: dict[int, int] = {}  # side impacts of each body in this step
         self.counts = dict.fromkeys(("restitution_capped", "multi_contact_elastic", "refined_steps",
                                      "second_half_space", "two_ground_overflow", "painleve",
                                      "static_tangent", "static_pressed", "island_body_steps", "rim_pieces",
-                                     "rim_capped", "face_landed", "face_down", "side_pressed"), 0)
+                                     "rim_capped", "face_landed", "face_down", "side_pressed", "held_thrown"), 0)
         #: Per body, a second half-space it is held on besides ``ground_of`` (two_grounds.py), or -1.
         self.other_ground = np.full(n, -1, dtype=np.int64)
         #: The features touching ``other_ground``, as bits.
@@ -1051,7 +1053,7 @@ class ContactSolver:
             capped = piece == sim.dt / MAX_RIM_PIECES
             self.counts["rim_capped"] += capped
             start, end = y, held_rim(self.shapes[i], int(self.tracked[i]))
-            y = self._held_span(sim, i, y, w, t, piece)
+            y = self._held_span(sim, i, y, w, t, piece, thrown_at_rest=False)  # a throw is a landing (below)
             if capped and end >= 0 and self._thrown(sim, i, start, y, w):
                 # within a hair of upright, its rim turning faster than the most pieces follow, the rim's force
                 # found at every stage (growing as 1/sin³ θ) threw the can: its end face comes down instead, a
@@ -1094,12 +1096,27 @@ class ContactSolver:
         end = self.step_map(sim, i, y, h, held) if end is None else end
         return self._persistent_end(sim, i, y, end, held, t, h)
 
-    def _held_span(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float, h: float) -> np.ndarray:
-        """Body i from y over h in persistent contact, in one piece: holding force, step, projection."""
+    def _held_span(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float, h: float,
+                   thrown_at_rest: bool = True) -> np.ndarray:
+        """Body i from y over h in persistent contact, in one piece: holding force, step, projection. A step that
+        threw it (:meth:`_thrown`) leaves it at rest at y, unless ``thrown_at_rest`` is False (a rim piece: the
+        caller lands the can's end face instead)."""
         held = w.copy()
         if not self._hold(sim, y, i, held, t, keep=self._came_back(i, t, sim.dt)):
             return self._with_events(sim, i, y, w, t, h)
         end = self.step_map(sim, i, y, h, held)
+        if thrown_at_rest and self._thrown(sim, i, y, end, w):
+            rim = held_rim(self.shapes[i], int(self.tracked[i]))
+            if rim >= 0:  # a can held on its rim: its end face lands instead, as after a rim piece
+                self.counts["face_landed"] += 1
+                return self._landing(sim, i, y, w, t, h, 4 << rim)
+            # else the holding force, held over the span, threw the body (a squat can standing on its end against
+            # a wall spun up to 3.4e5 rad/s in one 10 ms step): it stays where it was, at rest, for this span (it
+            # cannot gain energy), counted
+            self.counts["held_thrown"] += 1
+            end = y.copy()
+            end[L.V:L.W + 3] = 0.0
+            return end
         return self._persistent_end(sim, i, y, end, held, t, h)
 
     def _bare(self, i: int, held: np.ndarray) -> np.ndarray:
