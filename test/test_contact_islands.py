@@ -970,8 +970,8 @@ def mixed_pile(count: int, seed: int, restitution: float) -> dict:
 def test_a_mixed_pile_thrown_into_a_bin_steps_on(count, seed, restitution, integrator, dt, sleeping, depth):
     """Mixed piles (mixed_pile) thrown into their bin, 2 s, at the settings each ran with when it stopped the
     simulator (a RecursionError against a wall or in a corner, 10,000 events in one step in a corner, or a can
-    spun up by its held step until the pile diverged): every step taken and the state finite. (Depth and energy are not asserted here: docs/contact.md, "What is not done
-    yet".)"""
+    spun up by its held step until the pile diverged): every step taken and the state finite. (Depth and energy
+    are not asserted here: docs/contact.md, "What is not done yet".)"""
     sim = Simulator(load_scene(mixed_pile(count, seed, restitution)), integrator=integrator, dt=dt)
     sim.contact.sleeping = sleeping
     sim.contact.penetration_tolerance = depth
