@@ -693,6 +693,19 @@ def speeds_of(sim: Simulator, bodies: list[int]) -> float:
     return float(max(v.max(), w.max()))
 
 
+def bin_walls(inner: float) -> dict:
+    """Four static walls (0.1 m thick, 1 m high, μ = 0.5, e = 0) around a square of side ``inner`` (m) centred on
+    the origin: a bin on the ground."""
+    reach, long = 0.5 * (inner + 0.1), inner + 0.2
+    walls = {}
+    for name, pos, size in (("wall_xp", (reach, 0.0), (0.1, long)), ("wall_xm", (-reach, 0.0), (0.1, long)),
+                            ("wall_yp", (0.0, reach), (long, 0.1)), ("wall_ym", (0.0, -reach), (long, 0.1))):
+        box = {"box": [*size, 1.0]}
+        walls[name] = {"motion": "static", "mass": 1.0, "inertia": box, "collision": box,
+                       "material": {"restitution": 0.0, "friction": 0.5}, "pose": {"position": [*pos, 0.5]}}
+    return walls
+
+
 def pile(count: int, edge: float = 0.1, spacing: float = 0.15, tilt: float = 0.3, seed: int = 2026) -> dict:
     """``count`` cubes on a lattice, each turned by up to ``tilt`` rad about a random axis, inside four static
     walls (0.1 m thick, 1 m high) on the ground (as benchmarks/contact_stacks.py's pile)."""
@@ -708,13 +721,7 @@ def pile(count: int, edge: float = 0.1, spacing: float = 0.15, tilt: float = 0.3
         q = (*(np.sin(0.5 * angle) * axis), np.cos(0.5 * angle))
         bodies[f"c{k}"] = cube((spacing * i - offset, spacing * j - offset, spacing * (layer + 0.5) + 0.05),
                                edge=edge, orientation=q)
-    inner = spacing * side + 0.2
-    reach, long = 0.5 * (inner + 0.1), inner + 0.2
-    for name, pos, size in (("wall_xp", (reach, 0.0), (0.1, long)), ("wall_xm", (-reach, 0.0), (0.1, long)),
-                            ("wall_yp", (0.0, reach), (long, 0.1)), ("wall_ym", (0.0, -reach), (long, 0.1))):
-        box = {"box": [*size, 1.0]}
-        bodies[name] = {"motion": "static", "mass": 1.0, "inertia": box, "collision": box,
-                        "material": {"restitution": 0.0, "friction": 0.5}, "pose": {"position": [*pos, 0.5]}}
+    bodies.update(bin_walls(spacing * side + 0.2))
     return bodies
 
 
@@ -949,13 +956,7 @@ def mixed_pile(count: int, seed: int, restitution: float) -> dict:
                                                  spacing * (layer + 0.5) + 0.1],
                                     "orientation": [*(np.sin(angle / 2) * axis), np.cos(angle / 2)]},
                            "twist": {"linear": list(rng.normal(0, 0.5, 3)), "angular": list(rng.normal(0, 3, 3))}}
-    inner = spacing * side + 0.2
-    reach, long = 0.5 * (inner + 0.1), inner + 0.2
-    for name, pos, size in (("wall_xp", (reach, 0.0), (0.1, long)), ("wall_xm", (-reach, 0.0), (0.1, long)),
-                            ("wall_yp", (0.0, reach), (long, 0.1)), ("wall_ym", (0.0, -reach), (long, 0.1))):
-        box = {"box": [*size, 1.0]}
-        bodies[name] = {"motion": "static", "mass": 1.0, "inertia": box, "collision": box,
-                        "material": {"restitution": 0.0, "friction": 0.5}, "pose": {"position": [*pos, 0.5]}}
+    bodies.update(bin_walls(spacing * side + 0.2))
     return {"gravity": [0.0, 0.0, -G], "bodies": bodies,
             "ground": [{"normal": [0, 0, 1], "material": {"restitution": 0.0, "friction": 0.6}}]}
 
