@@ -129,6 +129,7 @@ MAX_EVENTS_PER_STEP = 10_000
 #: Most impacts of a body resting on the ground against other half-spaces or static shapes in one step (each taken
 #: a call deeper); past them it stays pressed on them for the rest of the step (counted in ``side_pressed``).
 MAX_SIDE_IMPACTS = 64
+PRESSED = -1  # ContactSolver._side_hits of a body pressed on them
 #: Most pieces a resting body's step is cut into when it gained energy (ContactSolver._refine_gains).
 MAX_REFINEMENT = 32
 #: rad: the most a piece of a step turns the lowest point of a cylinder rolling on its rim about the normal, and
@@ -251,8 +252,8 @@ class ContactSolver:
         #: more than MAX_SIDE_IMPACTS times in the step; ``held_thrown`` spans of a resting body under gravity alone
         #: whose held step raised its K + U by more than THROWN of it: it stays where it was, at rest (:meth:`_held_span`).
         self._static_skipped: set[int] = set()  # bodies not looked at against static shapes for the rest of the step
-        self._side_pressed: set[int] = set()  # bodies not looked at for side impacts for the rest of the step
-        self._side_hits: dict[int, int] = {}  # side impacts of each body in this step
+        #: side impacts of each body in this step; PRESSED: not looked at for them for the rest of the step
+        self._side_hits: dict[int, int] = {}
         self.counts = dict.fromkeys(("restitution_capped", "multi_contact_elastic", "refined_steps",
                                      "second_half_space", "two_ground_overflow", "painleve",
                                      "static_tangent", "static_pressed", "island_body_steps", "rim_pieces",
@@ -714,7 +715,6 @@ class ContactSolver:
         for it, as :meth:`after_step` would have."""
         cur = sim._control[L.CUR]
         self._static_skipped.clear()
-        self._side_pressed.clear()
         self._side_hits.clear()
         self.pairs.islands.asleep_step(sim._Ys[1 - cur], sim._Ys[cur], sim.dt)
 
@@ -727,7 +727,6 @@ class ContactSolver:
         if sim._method.held is not None and (staged := np.flatnonzero(self._staged)).size:
             sim._method.held(Y0, Y1, sim._prm, wrenches, staged, h)  # their steps with the contact found at every stage
         self._static_skipped.clear()
-        self._side_pressed.clear()
         self._side_hits.clear()
         # body–body events first (body_pairs.py): the bodies it stepped are done
         done = self.pairs.after_step(sim, wrenches, Y0, Y1, t0, h) if self.pairs is not None else None
@@ -1167,18 +1166,17 @@ class ContactSolver:
                     if s < 1.0:  # the rest of the step sticking, with the holding force found at the stop
                         return self._persistent_span(sim, i, stop, self._bare(i, held), t + s * h, h - s * h)
                     return stop
-        if self._other_gap(sim, end, i)[0] < 0.0 and i not in self._side_pressed:
+        if self._other_gap(sim, end, i)[0] < 0.0 and self._side_hits.get(i, 0) != PRESSED:
             # another half-space or static shape reached: an impact against it alone
             g0, jj = self._other_gap(sim, y0, i)
             again = self._side_impact_at(i, jj, t)  # just struck at y0: its gap opens first, the hit is later
             gap = lambda s: self._other_gap(sim, self.step_map(sim, i, y0, s * h, held), i)[0]  # noqa: E731
             s = 0.0 if g0 <= 0.0 and not again else self._locate(gap, min(g0, 0.0) if again else g0, -1.0)
-            hits = self._side_hits.get(i, 0) + 1
-            self._side_hits[i] = hits
-            if (again and not s) or hits > MAX_SIDE_IMPACTS:
+            self._side_hits[i] = self._side_hits.get(i, 0) + 1
+            if (again and not s) or self._side_hits[i] > MAX_SIDE_IMPACTS:
                 # it does not open, or the body went from wall to wall MAX_SIDE_IMPACTS times in this step (each
                 # event a level deeper): it stays pressed on them for the rest of the step
-                self._side_pressed.add(i)
+                self._side_hits[i] = PRESSED
                 self.counts["side_pressed"] += 1
                 return self._persistent_end(sim, i, y0, end, held, t, h)
             s = 0.0 if s is None else s
