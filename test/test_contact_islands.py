@@ -22,6 +22,8 @@ from hypothesis import strategies as st
 from rigid_body_sim.core import Simulator, load_scene
 from rigid_body_sim.core.kernels.contact.island import SLEEP_SPEED, SLEEP_STEPS
 
+from contact_support import bin_walls
+
 G = 9.81
 EDGE = 0.2
 
@@ -691,19 +693,6 @@ def speeds_of(sim: Simulator, bodies: list[int]) -> float:
     v = np.linalg.norm(sim.linear_velocities_world()[bodies], axis=1)
     w = np.linalg.norm(sim.angular_velocities_world()[bodies], axis=1) * 0.5 * EDGE
     return float(max(v.max(), w.max()))
-
-
-def bin_walls(inner: float) -> dict:
-    """Four static walls (0.1 m thick, 1 m high, μ = 0.5, e = 0) around a square of side ``inner`` (m) centred on
-    the origin: a bin on the ground."""
-    reach, long = 0.5 * (inner + 0.1), inner + 0.2
-    walls = {}
-    for name, pos, size in (("wall_xp", (reach, 0.0), (0.1, long)), ("wall_xm", (-reach, 0.0), (0.1, long)),
-                            ("wall_yp", (0.0, reach), (long, 0.1)), ("wall_ym", (0.0, -reach), (long, 0.1))):
-        box = {"box": [*size, 1.0]}
-        walls[name] = {"motion": "static", "mass": 1.0, "inertia": box, "collision": box,
-                       "material": {"restitution": 0.0, "friction": 0.5}, "pose": {"position": [*pos, 0.5]}}
-    return walls
 
 
 def pile(count: int, edge: float = 0.1, spacing: float = 0.15, tilt: float = 0.3, seed: int = 2026) -> dict:

@@ -36,6 +36,8 @@ from rigid_body_sim.core import SceneError, Simulator, load_scene
 from rigid_body_sim.core.kernels.contact.layout import PERSISTENT
 from rigid_body_sim.core.quaternion import quat_conjugate, quat_multiply, quat_rotate
 
+from contact_support import bin_walls
+
 CONFIG = Path(__file__).resolve().parents[1] / "config"
 G, E, R = 9.81, 0.5, 0.1
 TOP = 0.25  # m: the static box's top face (box 1 × 1 × 0.5 centred at the origin)
@@ -324,13 +326,7 @@ def in_a_bin(name: str, body: dict, inner: float, integrator: str, dt: float, ro
     from rigid_body_sim.core.model import State
 
     mat = {"restitution": 0.0, "friction": 0.6}
-    reach, long = inner + 0.05, 2.0 * inner + 0.2
-    bodies = {name: dict(body, pose={"position": [0.0, 0.0, 0.5]})}
-    for wall, pos, size in (("wall_xp", (reach, 0.0), (0.1, long)), ("wall_xm", (-reach, 0.0), (0.1, long)),
-                            ("wall_yp", (0.0, reach), (long, 0.1)), ("wall_ym", (0.0, -reach), (long, 0.1))):
-        box = {"box": [*size, 1.0]}
-        bodies[wall] = {"motion": "static", "mass": 1.0, "inertia": box, "collision": box,
-                        "material": {"restitution": 0.0, "friction": 0.5}, "pose": {"position": [*pos, 0.5]}}
+    bodies = {name: dict(body, pose={"position": [0.0, 0.0, 0.5]}), **bin_walls(2.0 * inner)}
     sim = Simulator(load_scene({"gravity": [0.0, 0.0, -G], "bodies": bodies,
                                 "ground": [{"normal": [0, 0, 1], "material": mat}]}), integrator, dt)
     rows = sim.state.rows().copy()
