@@ -16,6 +16,10 @@ The corner: a level floor n = (0, 0, 1) and a wall n = (−1, 0, 0), x ≤ 1, gr
 towards the wall. A ball (r = 0.1 m) launched on the floor at (0.5, 0.3, 0) m/s, frictionless,
 e = 0: it reaches the wall when 0.5 t + ½ g sin θ t² = 1 − r, stops against it (e = 0), and then
 slides along the crease at 0.3 m/s for ever, held by both.
+
+A capsule slid into a static wall while just lifting off the floor, one end raised: held on the wall and the
+floor, its raised end comes down onto the floor and stays on it (never below it, K + U never rising); it comes
+to rest lying level in the crease, r from both.
 """
 
 from __future__ import annotations
@@ -27,6 +31,8 @@ import pytest
 from helpers import ORDER, loglog_slope
 
 from rigid_body_sim.core import Simulator
+from rigid_body_sim.core.contact.query import lowest_gaps
+from rigid_body_sim.core.quaternion import quat_rotate
 from rigid_body_sim.core.scene import load_scene_text
 
 G = 9.81
@@ -193,3 +199,53 @@ bodies:
     assert np.linalg.norm(state.angular_velocity_world) <= 1e-12
     assert sim.contact.other_projected[0] and sim.contact.counts["two_ground_overflow"] >= 1
     np.testing.assert_allclose(gaps(sim, "crate"), 0.0, atol=1e-12)
+
+
+def test_capsule_thrown_into_the_corner_of_the_floor_and_a_static_wall_lands_its_raised_end_there() -> None:
+    """A capsule (r = 3 cm, half-length 3.6 cm) lying along a static wall, tilted 0.02 rad (one end raised), slid
+    into the wall at 0.2 m/s while just lifting off the floor (0.01 m/s: in flight, so the wall becomes its ground
+    and the floor its second one), μ = 0.5, e = 0, dt = 10 ms. Its raised end comes down onto the floor within the
+    second ground's step: taken into that contact, it never sinks into it (every step, the lowest gap ≥ −1e-9 m),
+    K + U never rises above its start, and after 0.6 s it lies at rest in the crease: axis level, centre at
+    z = r and r from the wall (1e-9)."""
+    r, half, tilt = 0.03, 0.036, 0.02
+    along = np.array([math.cos(tilt), 0.0, math.sin(tilt)])
+    centre = np.array([0.0, -0.2 + r + 1e-4, r]) + half * along
+    turn = math.acos(along[2])  # the capsule's own z onto ``along``, about y
+    material = "{restitution: 0.0, friction: 0.5}"
+    scene = f"""
+gravity: [0.0, 0.0, {-G}]
+ground:
+  - {{normal: [0, 0, 1], offset: 0.0, material: {material}}}
+bodies:
+  can:
+    mass: 1.0
+    inertia: {{cylinder: [{r}, {2 * half + 1.4 * r}]}}
+    collision: {{capsule: [{r}, {half}]}}
+    material: {material}
+    pose: {{position: [{centre[0]}, {centre[1]}, {centre[2]}], orientation: [0.0, {math.sin(turn / 2)}, 0.0, {math.cos(turn / 2)}]}}
+    twist: {{linear: [0.0, -0.2, 0.01]}}
+  wall:
+    motion: static
+    mass: 1.0
+    inertia: {{box: [1.0, 0.1, 1.0]}}
+    collision: {{box: [1.0, 0.1, 1.0]}}
+    material: {material}
+    pose: {{position: [0.0, -0.25, 0.5]}}
+"""
+    sim = Simulator(load_scene_text(scene, "crease"), "rk4", 1e-2, threads=1)
+
+    def energy() -> float:
+        return float(sim.kinetic_energy()[0] + sim.potential_energy()[0])
+
+    start = energy()
+    for _ in range(60):
+        sim.step()
+        assert float(lowest_gaps(sim)[0]) >= -1e-9
+        assert energy() <= start + 1e-12 * abs(start)
+    assert sim.contact.other_ground[0] == 0  # held on the wall and the floor
+    state = sim.body_state("can")
+    np.testing.assert_allclose(state.position_world[1:], [-0.2 + r, r], rtol=0, atol=1e-9)
+    axis = quat_rotate(np.roll(state.orientation_xyzw, 1), np.array([0.0, 0.0, 1.0]))  # its own z, world
+    np.testing.assert_allclose(axis, [1.0, 0.0, 0.0], rtol=0, atol=1e-9)
+    assert np.abs(state.linear_velocity_world).max() <= 1e-9 and np.abs(state.angular_velocity_world).max() <= 1e-9

@@ -18,7 +18,9 @@ to the joint one, at once when the two constraints are orthogonal in that metric
 Transitions: a half-space whose normal forces all vanish while its points move away is let go
 (the body goes on with the other, or flies); a slide along the crease whose slip reverses in a
 step stops there (the stop is not located inside the step, unlike on one half-space: first
-order in time). Limits (docs/contact.md): at most MAX_POINTS contact points over both (a sphere
+order in time), and a feature that went below either half-space in the step is taken into its contact at the
+step's end (the projection stops it there: an inelastic landing, not located). Limits (docs/contact.md): at most
+MAX_POINTS contact points over both (a sphere
 or a capsule in a groove); with more (a box with a face on each side) the body is held on its
 first half-space alone and projected onto both after each step (:func:`project_second`,
 ``ContactSolver.other_projected``: first order in the second one's force, without its friction).
@@ -206,10 +208,15 @@ def hold(solver, sim, y: np.ndarray, i: int, w: np.ndarray, t: float, lift_off_s
 
 
 def end_of_step(solver, sim, i: int, end: np.ndarray, t: float, h: float) -> np.ndarray:
-    """End of a step of body i held on two half-spaces: a slide along the crease that reversed stops
-    (``stick`` at the step's end), then the body is projected onto both contacts."""
+    """End of a step of body i held on two half-spaces: a feature that went below either of them in the step is
+    taken into its contact (a landing at the step's end, inelastic, not located: first order), a slide along the
+    crease that reversed stops (``stick`` at the step's end), then the body is projected onto both contacts."""
 
     end = end.copy()
+    gaps = np.empty(MAX_FEATURES)
+    for j, tracked in ((int(solver.ground_of[i]), solver.tracked), (int(solver.other_ground[i]), solver.other_tracked)):
+        count = feature_gaps(end, sim._prm[i], solver.shapes[i], solver.grounds[j], gaps)
+        tracked[i] = int(tracked[i]) | sum(1 << k for k in range(count) if gaps[k] < 0.0)  # landed: taken in
     sticking = not solver.sliding[i]
     if solver.sliding[i] and solver.slide_direction[i][0] != 0.0:
         if end[L.V:L.V + 3] @ crease(solver, i) * solver.slide_direction[i][0] <= 0.0:
