@@ -1035,9 +1035,12 @@ class ContactSolver:
         return tuple(dv.tolist()), tuple(dw.tolist()), tuple(q.tolist()), int(count), float(alpha)
 
     def _rest(self, sim, i: int, y: np.ndarray, j: int, t: float, remaining: float, speed: float) -> None:
-        """Body i goes into persistent contact with ground j at y (projected in place); 'rest' dated t + remaining."""
+        """Body i goes into persistent contact with ground j at y (projected in place), on it alone (a second ground
+        is taken when it meets one: :meth:`_side_impact`); 'rest' dated t + remaining."""
         self.modes[i] = PERSISTENT
         self.ground_of[i] = j
+        self.other_ground[i] = -1  # not the one of an earlier rest (it may be j itself, or parallel to it)
+        self.other_projected[i] = False
         self.tracked[i] = self._staying(sim, y, i, j, self._touching(sim, y, i, j))
         self._settle(sim, y, i, False)
         self.events.append(ContactEvent(t + remaining, self.names[i], j, "rest", speed, 0.0))
