@@ -21,6 +21,10 @@
 * A ball dropped onto a box resting on the ground, e = 0: it stops on it (the ground takes the
   box's share, round after round), the box stays resting. A box sliding on the ground into a
   resting one: both go on at half its speed.
+* Events within a group's step keep every body in it: a cube sliding into a resting one against a static wall,
+  and one sliding into a wall with a faster one behind it, stop there (the wall's law in the pair's rounds; the
+  wall met inside the step), positions and speeds within 1e-9; a ball sliding into one that lifts off the ground
+  (in flight, touching it) strikes it and never overlaps it, momentum along the ground kept.
 * A box falls onto a box (face on face) and a sphere onto a box: they do not pass through, and
   they come to rest on each other exactly (islands, island.py).
 * A scene with one moving body and no static shape has no body–body pass at all.
@@ -443,6 +447,70 @@ def test_a_box_sliding_on_the_ground_into_a_resting_box_pushes_it_on():
     np.testing.assert_allclose(sim.linear_velocities_world()[:, 0], [0.5, 0.5], rtol=0, atol=1e-9)
     np.testing.assert_allclose(sim.positions_world()[:, 0], [0.0005 + 0.5 * (t - 0.0005), 0.1005 + 0.5 * (t - 0.0005)],
                                rtol=0, atol=1e-9)
+
+
+def test_a_ball_sliding_into_a_ball_lifting_off_the_ground_strikes_it():
+    """A ball (5 cm, 1 kg) sliding frictionless on the ground at 3 m/s toward one 1 mm ahead that lifts off it at
+    0.1 m/s (in flight from the start, touching its ground): they meet inside the first step (dt = 1 ms), an
+    impact naming both, and never overlap (signed distance ≥ −1e-9 m at every step); momentum along the ground is
+    kept (every contact frictionless, the ground's normal vertical: 1e-12 relative) and K + U never rises."""
+    r, slick = 0.05, {"restitution": 0.0, "friction": 0.0}
+    ball = {"sphere": r}
+    bodies = {name: {"mass": 1.0, "inertia": ball, "collision": ball, "material": slick,
+                     "pose": {"position": [x, 0.0, r]}, "twist": {"linear": v}}
+              for name, x, v in (("a", 0.0, [3.0, 0.0, 0.0]), ("b", 2.0 * r + 1e-3, [0.0, 0.0, 0.1]))}
+    sim = Simulator(load_scene({"gravity": [0.0, 0.0, -9.81], "bodies": bodies,
+                                "ground": [{"normal": [0, 0, 1], "material": slick}]}), "rk4", 1e-3, threads=1)
+    masses = np.ones(2)
+
+    def energy():
+        return _energy(sim) + 9.81 * float(masses @ sim.state.p_WC_W[:, 2])
+
+    start = energy()
+    for _ in range(5):
+        sim.step()
+        rows = sim.state.rows()
+        assert sim.contact.pairs.contact(rows[0], 0, rows[1], 1) >= -1e-9
+        assert energy() <= start + 1e-12 * start
+        assert float(masses @ sim.linear_velocities_world()[:, 0]) == pytest.approx(3.0, rel=1e-12)
+    assert [e.other for e in sim.contact.events_of("a", "impact")] == ["b"]
+
+
+def _cubes_toward_a_wall(cubes: dict, wall_face: float) -> Simulator:
+    """Cubes (0.1 m, 1 kg; name: (x, speed along +x)) on a frictionless ground, a static wall whose face is at x =
+    wall_face, e = 0 everywhere, rk4 at dt = 1 ms."""
+    box, wall = {"box": [0.1, 0.1, 0.1]}, {"box": [0.1, 1.0, 1.0]}
+    slick = {"restitution": 0.0, "friction": 0.0}
+    bodies = {name: {"mass": 1.0, "inertia": box, "collision": box, "material": slick,
+                     "pose": {"position": [x, 0.0, 0.05]}, "twist": {"linear": [v, 0.0, 0.0]}}
+              for name, (x, v) in cubes.items()}
+    bodies["wall"] = {"motion": "static", "mass": 1.0, "inertia": wall, "collision": wall, "material": slick,
+                      "pose": {"position": [wall_face + 0.05, 0.0, 0.5]}}
+    return Simulator(load_scene({"gravity": [0.0, 0.0, -9.81], "bodies": bodies,
+                                 "ground": [{"normal": [0, 0, 1], "material": slick}]}), "rk4", 1e-3, threads=1)
+
+
+def _stay(sim: Simulator, x: list) -> None:
+    """Five steps, at the end of each the cubes at rest at x (m), within 1e-9."""
+    for _ in range(5):
+        sim.step()
+        np.testing.assert_allclose(sim.linear_velocities_world()[:2], 0.0, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(sim.positions_world()[:2, 0], x, rtol=0, atol=1e-9)
+
+
+def test_a_box_sliding_into_a_box_against_a_wall_stops():
+    """A cube sliding at 1 m/s into a resting one 0.5 mm ahead whose far face touches a static wall: they meet at
+    0.5 ms inside the first step, the wall takes the blow (the pair's impact and the wall's, round after round at
+    that instant) and both stop there: at the end of every step, positions 0.0005 and 0.1005 m, speeds 0."""
+    _stay(_cubes_toward_a_wall({"a": (0.0, 1.0), "b": (0.1005, 0.0)}, 0.1505), [0.0005, 0.1005])
+
+
+def test_a_box_sliding_into_a_wall_is_struck_there_by_a_faster_one_behind_it():
+    """Toward a static wall, the front cube at 1 m/s, its far face 0.3 mm from the wall; the one behind at 2 m/s,
+    0.5 mm behind it. The front one stops against the wall at 0.3 ms, the other meets it at 0.4 ms (0.2 mm left,
+    closing at 2 m/s) and stops there too (the wall takes the blow): at every step's end the front one at
+    0.1008 m, the other at 0.0008 m, both at rest."""
+    _stay(_cubes_toward_a_wall({"behind": (0.0, 2.0), "front": (0.1005, 1.0)}, 0.1508), [0.0008, 0.1008])
 
 
 def test_a_box_lies_on_a_box_and_a_ball_on_both():

@@ -21,13 +21,18 @@ After each step, before the ground pass:
    (static_geometry.py).
 3. **Groups**: bodies linked by such pairs are stepped together, event after event, from the
    step's start. Each event time is the first root of s ↦ F(s), F the least of the group's pair
-   signed distances d(Φ_a(y_a0, s h), Φ_b(y_b0, s h)) and of its flying members' gaps to the
-   ground and the static shapes, Φ each body's own step map (solver.step_map). Conservative
-   advancement finds a sample where F < 0: from s, the next sample is s + (F_k + ε_k)/(B_k h)
-   over the components k, with B_k a bound on |dF_k/dt| (relative speed plus spin × bounding
-   radius, the largest over the piece; a sphere's spin does not count) and ε_k = 1e-4 × the
-   pair's size; no component can cross zero between samples. The root in the bracket is found
-   by the solver's Illinois method, to round-off. While a member is held on a cylinder rim whose
+   signed distances d(Φ_a(y_a0, s h), Φ_b(y_b0, s h)), of its flying members' gaps to the
+   ground and the static shapes and of its held members' gaps to the other half-spaces and static
+   shapes (a wall a body sliding on the ground meets), Φ each body's own step map
+   (solver.step_map). Conservative advancement finds a sample where F < 0: from s, the next
+   sample is s + (F_k + ε_k)/(B_k h) over the components k, with B_k a bound on |dF_k/dt|
+   (relative speed plus spin × bounding radius, the largest over the piece; a sphere's spin does
+   not count) and ε_k = 1e-4 × the pair's size; no component can cross zero between samples
+   (past MAX_ADVANCE samples, the piece's end is looked at). The root in the bracket is found
+   by the solver's Illinois method, to round-off. A flying member touching its ground or a static
+   shape at a piece's start (within its feature band, or just struck) has its next meeting with
+   them located on its own step map instead, as the ground pass locates it (solver._with_events);
+   the piece ends there. While a member is held on a cylinder rim whose
    lowest point turns fast, the events are looked for piece by piece (solver._rim_piece), each
    piece of that member held with its holding force found afresh.
 4. **At a pair's root** the two-body impact law (kernels/contact/pair_impacts.py) acts at the
@@ -35,15 +40,18 @@ After each step, before the ground pass:
    pair's material (materials.pair_material). The pairs touching at that instant are solved
    together in sequential rounds (:meth:`BodyPairs._impacts`): each approaching pair's law in
    turn and, for a member resting on the ground that a pair drives into it, the ground's law
-   (impacts.impact on its tracked contact points), until nothing approaches (MAX_SEQUENTIAL
-   rounds at most): for e = 0 the simultaneous inelastic impact, for e > 0 a sequential answer
-   (docs/contact.md, "Between bodies"). A resting member stays held if any of its contact points
-   still presses on its ground, else it lifts off. One event per body and pair (``other`` names
-   the other body; a body's velocity jumps are split over its events so that they add up). At
-   a flying member's ground or static-shape root, the ground's impact law (solver._impact).
-   After an event the bodies it touched finish the step on their own (solver._with_events, or
-   solver._held_rest for a held one); the others go on together. A pair that does not
-   approach at its root (grazing) is not looked at again in that step.
+   (impacts.impact on its tracked contact points), and the same for a wall it touches (its second
+   ground, or another half-space or static shape within its feature band), until nothing approaches
+   (MAX_SEQUENTIAL rounds at most): for e = 0 the simultaneous inelastic impact, for e > 0 a
+   sequential answer (docs/contact.md, "Between bodies"). A resting member stays held if any of its
+   contact points still presses on its ground, else it lifts off; one still held whose velocity
+   changed has its holding force (and whether it slides) found afresh. One event per body and pair
+   (``other`` names the other body; a body's velocity jumps are split over its events so that they
+   add up). At a flying member's ground or static-shape root, the ground's impact law
+   (solver._impact; a rebound too small to resolve: its rest); at a held member's wall root, that
+   wall's (solver._strike_side). After any event every member goes on in the group, its pairs
+   still followed: one come to rest is held there with its holding force, one lifted off flies. A
+   pair that does not approach at its root (grazing) is not looked at again in that step.
 5. **Touching at a piece's start**: a pair overlapping (or touching, TOUCHING) at the start of
    a step or of a piece and approaching has its impacts there; if it overlaps, it is first moved
    apart along the normal by the depth, shared by inverse mass (a held member does not move).
@@ -71,6 +79,7 @@ from ..kernels.contact.layout import DIMS, KIND, MAX_POINTS, NORMAL, PERSISTENT,
 from ..kernels.contact.pair_impacts import PAIR_JACOBIAN_SHAPE, normal_speed, pair_impact
 from ..kernels.contact.pairs import MAX_PAIR_POINTS, pair_contacts
 from ..kernels.contact.persistent import normal_speeds
+from ..kernels.contact.shapes import body_points
 from ..kernels.contact.swept import grid_swept_pairs, screen_pairs, spheres_may_meet, swept_bounds
 from ..quaternion import quat_multiply, quat_rotate
 from .events import ContactEvent
@@ -343,10 +352,12 @@ class BodyPairs:
         w = {i: wrenches[i].copy() for i in members}
         pairs = [(a, b) for a, b in links if not self.is_static[b]]
         active = set(members)
-        #: members still held on their ground with the holding force of the step's start (w[i] holds it)
+        #: members held on their ground, with the holding force of the step's start or of their rest in it (w[i])
         held = {i for i in members if solver.modes[i] == PERSISTENT}
         rounds = 0
         grazed: set = set()
+        hints: dict[int, float] = {}  # a flying member just struck: its apex hint, its gap 0 (solver._with_events)
+        struck: set = set()
         for _ in range(MAX_GROUP_EVENTS):
             if h <= 0.0 or not active:
                 break
@@ -362,16 +373,20 @@ class BodyPairs:
                 rounds += 1
                 for a, b in closing:
                     self._separate(sim, a, b, y, held)
-                self._after_impacts(sim, touching, y, w, t, h, held, active)
+                self._impacts(sim, touching, y, w, t, held)
                 continue
             live = [p for p in pairs_now if p not in touching]
             flying = [i for i in active if solver.modes[i] == FLIGHT]
-            on_ground = [i for i in flying if solver._gap(sim, y[i], i)[0] <= 0.0]
-            for i in on_ground:  # on its ground already (just after an impact): on its own from here
-                active.discard(i)
-                self._finish(sim, i, y, w, t, h, held)
-            if on_ground:
-                continue
+            # a flying member on its ground or a static shape at the piece's start (just struck, or within its
+            # feature band: touching) has its next meeting with them located on its own step map, as the ground pass
+            # locates it (solver._with_events); the others' gaps are followed with the pairs'
+            band = solver._band
+            on_it = [i for i in flying if i in struck or solver._gap(sim, y[i], i)[0] <= band[i]]
+            watched = [i for i in flying if i not in on_it]
+            # a held member's gap to the other half-spaces and static shapes (a wall it slides into), while apart
+            # (touching one, it is the ground pass's, solver._persistent_end)
+            sides = [i for i in sorted(active & held) if solver._may_strike_side(i)
+                     and solver._other_gap(sim, y[i], i)[0] > band[i]]
             # a held can rocking on a rim whose lowest point turns fast: the events looked for piece by piece, each
             # piece's holding force found afresh (solver._rim_piece), as on the ground pass
             span = min([h] + [solver._rim_piece(sim, i, y[i], h) for i in active & held])
@@ -386,33 +401,48 @@ class BodyPairs:
             def components(s: float) -> list[tuple[float, tuple]]:
                 states = at(s)
                 values = [(self.contact(states[a], a, states[b], b), ("pair", a, b)) for a, b in live]
-                values += [(solver._gap(sim, states[i], i)[0], ("env", i)) for i in flying]
+                values += [(solver._gap(sim, states[i], i)[0], ("env", i)) for i in watched]
+                values += [(solver._other_gap(sim, states[i], i)[0], ("side", i)) for i in sides]
                 return values
 
             end = at(1.0)
+            s_env, first, rests = 1.0, None, False  # the first meeting of a member on_it: the piece ends there
+            for i in sorted(on_it):
+                if solver._gap(sim, end[i], i)[0] >= 0.0:
+                    continue
+                g0 = 0.0 if i in struck else solver._gap(sim, y[i], i)[0]
+                s = solver._locate(lambda u, i=i: solver._gap(sim, solver.step_map(sim, i, y[i], u * span, w[i]),
+                                                              i)[0], g0, hints.get(i, -1.0))
+                if first is None or (0.0 if s is None else s) < s_env:  # None: a rebound too small: it rests
+                    s_env, first, rests = (0.0 if s is None else s), i, s is None
             bounds, skins = {}, {}
             for a, b in live:
                 bounds[("pair", a, b)] = self._pair_bound((y[a], end[a]), (y[b], end[b]), a, b) * span
                 skins[("pair", a, b)] = ADVANCE_SKIN * max(self.size[a], self.size[b])
-            for i in flying:
-                bounds[("env", i)] = self._body_bound(y[i], end[i], i) * span
-                skins[("env", i)] = ADVANCE_SKIN * self.size[i]
+            for kind, group in (("env", watched), ("side", sides)):
+                for i in group:
+                    bounds[(kind, i)] = self._body_bound(y[i], end[i], i) * span
+                    skins[(kind, i)] = ADVANCE_SKIN * self.size[i]
             s_lo, values = 0.0, components(0.0)
             s_hi = None
-            for _ in range(MAX_ADVANCE):  # conservative advancement to a sample below zero
+            for _ in range(MAX_ADVANCE if values and s_env > 0.0 else 0):  # conservative advancement, to s_env
                 step = math.inf
                 for v, key in values:
                     if bounds[key] > 0.0:
                         step = min(step, (max(v, 0.0) + skins[key]) / bounds[key])
-                s = min(1.0, s_lo + step)
+                s = min(s_env, s_lo + step)
                 values_s = components(s)
-                if min((v for v, _ in values_s), default=math.inf) < 0.0:  # none: every pair touching, none flying
+                if min(v for v, _ in values_s) < 0.0:
                     s_hi = s
                     break
-                if s >= 1.0:
+                if s >= s_env:
                     break
                 s_lo, values = s, values_s
-            if s_hi is None:  # no event in the rest of the step (or of the piece)
+            else:  # the most samples taken short of s_env: its state is looked at (an event there is bracketed)
+                if values and s_env > 0.0 and min(v for v, _ in components(s_env)) < 0.0:
+                    s_hi = s_env
+            hints, struck = {}, set()  # an impact's apex hint and gap of 0 hold for the piece right after it
+            if s_hi is None and first is None:  # no event in the rest of the step (or of the piece)
                 for i in list(active):
                     if i in held:
                         y[i] = solver._held_rest(sim, i, y[i], w[i], t, span, end[i])
@@ -426,12 +456,16 @@ class BodyPairs:
                     continue
                 active.clear()
                 break
-            lo, hi = s_lo, s_hi
-            u = solver._locate(lambda u: min(v for v, _ in components(lo + u * (hi - lo))),
-                               min(v for v, _ in values), -1.0)
-            s = lo + (1.0 if u is None else u) * (hi - lo)
+            if s_hi is None:  # a member on_it meets its ground or a static shape first
+                s, key = s_env, ("env", first)
+            else:
+                lo, hi = s_lo, s_hi
+                u = solver._locate(lambda u: min(v for v, _ in components(lo + u * (hi - lo))),
+                                   min(v for v, _ in values), -1.0)
+                s = lo + (1.0 if u is None else u) * (hi - lo)
+                key = min(components(s), key=lambda vk: vk[0])[1]
+                rests = False
             states = at(s)
-            key = min(components(s), key=lambda vk: vk[0])[1]
             for i in active:
                 y[i] = states[i].copy()
             t, h = t + s * span, h - s * span
@@ -440,15 +474,35 @@ class BodyPairs:
                 if self._approaching(sim, y[a], a, y[b], b):  # with every other pair touching now
                     touching = [p for p in pairs_now if p == (a, b) or p in touching or self.contact(
                         y[p[0]], p[0], y[p[1]], p[1]) <= TOUCHING * max(self.size[p[0]], self.size[p[1]])]
-                    self._after_impacts(sim, touching, y, w, t, h, held, active)
+                    self._impacts(sim, touching, y, w, t, held)
                     rounds = 0
                 else:  # grazing: it does not approach at its root; looked at again from the next step
                     grazed.add((a, b))
+                continue
+            i = key[1]
+            if key[0] == "side":  # a held member meets a wall: its impact there, held again (or lifted off)
+                if solver._strike_side(sim, i, y[i], w[i], t):
+                    row = solver._bare(i, w[i])
+                    if solver.modes[i] == PERSISTENT and solver._hold(sim, y[i], i, row, t,
+                                                                      keep=solver._came_back(i, t, sim.dt)):
+                        w[i] = row
+                    else:
+                        held.discard(i)
+                        w[i] = solver._bare_rows[i].copy()
+                continue
+            # a flying member meets its ground or a static shape: its impact (or its rest), and it stays in the
+            # group (its pairs still followed); at rest, it is held with its holding force (else, lifted off at
+            # once, it flies on, its ground looked at again, as the ground pass does)
+            if rests:
+                solver._rest(sim, i, y[i], int(solver._gap(sim, y[i], i)[1]), t, 0.0, 0.0)
             else:
-                i = key[1]
-                solver._impact(sim, i, y[i], w[i], t, h)
-                active.discard(i)
-                self._finish(sim, i, y, w, t, h, held)
+                hints[i] = solver._impact(sim, i, y[i], w[i], t, h)
+                struck.add(i)
+            row = w[i].copy()
+            if solver.modes[i] == PERSISTENT and solver._hold(sim, y[i], i, row, t,
+                                                              keep=solver._came_back(i, t, sim.dt)):
+                held.add(i)
+                w[i] = row
         else:
             names = ", ".join(repr(solver.names[i]) for i in members)
             raise RuntimeError(f"bodies {names}: more than {MAX_GROUP_EVENTS} body–body events in one step at t = {t}")
@@ -456,15 +510,6 @@ class BodyPairs:
             self._finish(sim, i, y, w, t, h, held)
         for i in members:
             Y1[i, :L.STATE_WIDTH] = y[i][:L.STATE_WIDTH]
-
-    def _after_impacts(self, sim, pairs: list, y: dict, w: dict, t: float, h: float, held: set,
-                       active: set) -> None:
-        """The impacts of ``pairs`` at y; a member that lifted off its ground goes on on its own from there."""
-        was = held & {i for pair in pairs for i in pair}
-        self._impacts(sim, pairs, y, w, t, held)
-        for i in was - held:
-            active.discard(i)
-            self._finish(sim, i, y, w, t, h, held)
 
     def _finish(self, sim, i: int, y: dict, w: dict, t: float, h: float, held: set) -> None:
         """Body i's rest of the step (h from y[i]) on its own: the ground pass's flight or resting path."""
@@ -492,6 +537,7 @@ class BodyPairs:
         alphas = [g[3] for g in geometry]
         jumps = [{a: np.zeros(6), b: np.zeros(6)} for a, b in pairs]  # per pair, each body's share of its jump
         grounded = held & set(bodies)
+        entry = {i: y[i][L.V:L.W + 3].copy() for i in grounded}
         for _ in range(MAX_SEQUENTIAL):
             moved = False
             for k, (a, b) in enumerate(pairs):
@@ -508,8 +554,9 @@ class BodyPairs:
                 y[a][L.V:L.W + 3] = ya[L.V:L.W + 3]
                 y[b][L.V:L.W + 3] = yb[L.V:L.W + 3]
                 for i in (a, b):
-                    if i in grounded:  # its ground takes what drives it in
-                        self._ground_push(sim, i, y[i])
+                    if i in grounded:  # its ground takes what drives it in, and a wall it touches what drives it
+                        self._ground_push(sim, i, y[i])  # into that
+                        self._side_push(sim, i, y[i])
                     jumps[k][i] += np.concatenate((y[i][L.V:L.V + 3] - start[i][L.V:L.V + 3],
                                                    y[i][L.W:L.W + 3] - start[i][L.W:L.W + 3]))
             if not moved:
@@ -547,19 +594,43 @@ class BodyPairs:
                 solver.modes[i] = FLIGHT
                 solver.sliding[i] = False
                 solver.events.append(ContactEvent(t, solver.names[i], j, "lift-off", lowest, lowest))
+        for i in sorted(grounded & held):  # struck and still on its ground: its holding force (and whether it slides)
+            if not np.array_equal(y[i][L.V:L.W + 3], entry[i]):  # found afresh at its new velocity
+                row = solver._bare(i, w[i])
+                if solver._hold(sim, y[i], i, row, t):
+                    w[i] = row
+                else:  # lifted off (_hold's event)
+                    held.discard(i)
+                    w[i] = solver._bare_rows[i].copy()
+
+    def _side_push(self, sim, i: int, y: np.ndarray) -> bool:
+        """Body i, held on its ground and touching another half-space or static shape (its second ground, or within
+        its feature band of one), after a pair impulse: that one's impact law if its points now move into it (in
+        place), as its ground's (_ground_push); whether it did."""
+        solver = self.solver
+        jj = int(solver.other_ground[i])
+        if jj < 0:
+            gap, jj = solver._other_gap(sim, y, i, pressed=True)
+            if jj < 0 or gap > solver._band[i]:
+                return False
+        k = body_points(y, sim._prm[i], solver.shapes[i], solver.grounds[jj], solver._points, solver._gaps)
+        return self._push(sim, i, y, jj, k)
 
     def _ground_push(self, sim, i: int, y: np.ndarray) -> bool:
         """Body i, resting on its ground, after a pair impulse: the ground's impact law if its contact points
         now move into the ground (in place); whether it did."""
+        return self._push(sim, i, y, int(self.solver.ground_of[i]), self.solver._tracked_points(sim, y, i))
+
+    def _push(self, sim, i: int, y: np.ndarray, j: int, k: int) -> bool:
+        """The impact law of ground row j on body i at y (in place) at its k contact points in solver._points, if
+        they move into it; whether they did."""
         solver = self.solver
-        j = int(solver.ground_of[i])
-        g = solver.grounds[j, NORMAL:NORMAL + 3]
-        k = solver._tracked_points(sim, y, i)
-        lowest, _ = normal_speeds(y, sim._prm[i], k, solver._points, g[0], g[1], g[2], solver._work)
+        n = solver.grounds[j, NORMAL:NORMAL + 3]
+        lowest, _ = normal_speeds(y, sim._prm[i], k, solver._points, n[0], n[1], n[2], solver._work)
         if k == 0 or lowest >= -APPROACH_SPEED:
             return False
         out = y.copy()
-        impact(y, out, sim._prm[i], k, solver._points, g[0], g[1], g[2], solver.restitution_of(i, j),
+        impact(y, out, sim._prm[i], k, solver._points, n[0], n[1], n[2], solver.restitution_of(i, j),
                solver.friction_of(i, j), solver._work)
         y[L.V:L.W + 3] = out[L.V:L.W + 3]
         return True

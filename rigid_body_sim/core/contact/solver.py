@@ -1227,8 +1227,9 @@ class ContactSolver:
             lambda s: self._untracked_gap(sim, self.step_map(sim, i, y0, s * h, held), i, y0), g0, -1.0)
         return 0.0 if s is None else s
 
-    def _other_gap(self, sim, y: np.ndarray, i: int) -> tuple[float, int]:
-        """(lowest gap, ground) of body i against the half-spaces other than the one it rests on."""
+    def _other_gap(self, sim, y: np.ndarray, i: int, pressed: bool = False) -> tuple[float, int]:
+        """(lowest gap, ground) of body i against the half-spaces other than the one it rests on, and the static
+        shapes (not those it was found pressed on in this step, unless ``pressed``)."""
         lowest, which = math.inf, -1
         for jj in range(len(self.half_spaces)):
             if jj != self.ground_of[i] and jj != self.other_ground[i]:
@@ -1236,7 +1237,7 @@ class ContactSolver:
                 if count and self._gaps[:count].min() < lowest:
                     lowest, which = float(self._gaps[:count].min()), jj
         if (self.statics is not None and not self.statics.is_tangent(int(self.ground_of[i]))
-                and i not in self._static_skipped):
+                and (pressed or i not in self._static_skipped)):
             dist, s = self.statics.nearest(y, i, self.shapes[i], int(self.statics.row_owner[self.ground_of[i]]))
             if dist < lowest:
                 lowest, which = dist, self.statics.plane_for(y, sim._prm[i], i, self.shapes[i], s)
@@ -1289,6 +1290,24 @@ class ContactSolver:
         reached[self.bodies[looked]] = static_gaps < 0.0
         return np.concatenate((resting[self.ground_of[resting] >= g],
                                resting[(self.ground_of[resting] < g) & reached[resting]]))
+
+    def _may_strike_side(self, i: int) -> bool:
+        """Whether body i, resting on one ground, can be struck against another in this step (not held on two,
+        not pressed on them: :meth:`_strike_side`)."""
+        return self.other_ground[i] < 0 and self._side_hits.get(i, 0) != PRESSED
+
+    def _strike_side(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float) -> bool:
+        """Body i, resting on its ground, meets another half-space or static shape at y inside a body–body group's
+        step (body_pairs.py): the impact against it and the contact projected again (in place), as at a step's end
+        (:meth:`_persistent_end`); past MAX_SIDE_IMPACTS in the step it is pressed on them instead (False)."""
+        self._side_hits[i] = self._side_hits.get(i, 0) + 1
+        if self._side_hits[i] > MAX_SIDE_IMPACTS:
+            self._side_hits[i] = PRESSED
+            self.counts["side_pressed"] += 1
+            return False
+        self._side_impact(sim, i, y, w, t)
+        self._project(sim, y, i, False)
+        return True
 
     def _side_impact(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float) -> None:
         """Body i, resting on its ground, hits another half-space at y: the impact against that one (in place).
