@@ -752,9 +752,12 @@ class ContactSolver:
             lowest = self._lowest[in_flight]
         settle_all(Y0, Y1, sim._prm, self.shapes, self.half_spaces, resting, self.ground_of, self.tracked,
                    self.pressed, self.sliding, self.slide_direction, self._band, self._status, self._locked)
+        settled = resting
         if self._any_cylinder:
             resting = self._fast_rims(sim, resting, Y0, Y1, t0, h)
         resting = self._refine_gains(sim, resting, Y0, Y1, t0, h)
+        if len(resting) < len(settled) and len(two):  # a step taken again whole is done, near a static shape too
+            two = two[~np.isin(two, np.setdiff1d(settled, resting))]
         # only the bodies with an event in the step are looked at in Python
         for i in self._busy[:busy_bodies(resting, self._status, two, flying, lowest, self._busy)].tolist():
             if sim._stopped[i]:
@@ -829,13 +832,24 @@ class ContactSolver:
         e0 = None if self._bare_rows[i, L.ACTIVE] != 0.0 else (kinetic_energy_row(y0, prm[i])
                                                                  + potential_energy_row(y0, prm[i]))
         saved = (int(self.modes[i]), int(self.tracked[i]), bool(self.sliding[i]), self.slide_direction[i].copy(),
-                 int(self.pressed[i]), int(self.ground_of[i]), len(self.events))
+                 int(self.pressed[i]), int(self.ground_of[i]), int(self.other_ground[i]), bool(self.other_projected[i]),
+                 int(self.other_tracked[i]), len(self.events))
+        # what an attempt's impacts leave (a static shape it was found pressed on, its side impacts, the impulses
+        # it was given) is undone with it: an attempt taken again must meet the same walls
+        skipped, hits, impulses = i in self._static_skipped, self._side_hits.get(i), self.impact_impulses[i].copy()
         bare = self._bare_rows[i].copy()
         gained = 0.0
         while True:
             self.modes[i], self.tracked[i], self.sliding[i], self.slide_direction[i], self.pressed[i], \
-                self.ground_of[i] = saved[:6]
-            del self.events[saved[6]:]
+                self.ground_of[i], self.other_ground[i], self.other_projected[i], self.other_tracked[i] = saved[:9]
+            del self.events[saved[9]:]
+            if not skipped:
+                self._static_skipped.discard(i)
+            if hits is None:
+                self._side_hits.pop(i, None)
+            else:
+                self._side_hits[i] = hits
+            self.impact_impulses[i] = impulses
             y = y0.copy()
             for k in range(pieces):
                 t = t0 + k * h / pieces
