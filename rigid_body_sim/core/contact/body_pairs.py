@@ -482,13 +482,7 @@ class BodyPairs:
             i = key[1]
             if key[0] == "side":  # a held member meets a wall: its impact there, held again (or lifted off)
                 if solver._strike_side(sim, i, y[i], w[i], t):
-                    row = solver._bare(i, w[i])
-                    if solver.modes[i] == PERSISTENT and solver._hold(sim, y[i], i, row, t,
-                                                                      keep=solver._came_back(i, t, sim.dt)):
-                        w[i] = row
-                    else:
-                        held.discard(i)
-                        w[i] = solver._bare_rows[i].copy()
+                    self._hold_again(sim, i, y[i], w, solver._bare(i, w[i]), held, t, True)
                 continue
             # a flying member meets its ground or a static shape: its impact (or its rest), and it stays in the
             # group (its pairs still followed); at rest, it is held with its holding force (else, lifted off at
@@ -498,11 +492,7 @@ class BodyPairs:
             else:
                 hints[i] = solver._impact(sim, i, y[i], w[i], t, h)
                 struck.add(i)
-            row = w[i].copy()
-            if solver.modes[i] == PERSISTENT and solver._hold(sim, y[i], i, row, t,
-                                                              keep=solver._came_back(i, t, sim.dt)):
-                held.add(i)
-                w[i] = row
+            self._hold_again(sim, i, y[i], w, w[i], held, t, True)  # w[i]: its bare row (flying)
         else:
             names = ", ".join(repr(solver.names[i]) for i in members)
             raise RuntimeError(f"bodies {names}: more than {MAX_GROUP_EVENTS} body–body events in one step at t = {t}")
@@ -596,12 +586,22 @@ class BodyPairs:
                 solver.events.append(ContactEvent(t, solver.names[i], j, "lift-off", lowest, lowest))
         for i in sorted(grounded & held):  # struck and still on its ground: its holding force (and whether it slides)
             if not np.array_equal(y[i][L.V:L.W + 3], entry[i]):  # found afresh at its new velocity
-                row = solver._bare(i, w[i])
-                if solver._hold(sim, y[i], i, row, t):
-                    w[i] = row
-                else:  # lifted off (_hold's event)
-                    held.discard(i)
-                    w[i] = solver._bare_rows[i].copy()
+                self._hold_again(sim, i, y[i], w, solver._bare(i, w[i]), held, t, False)
+
+    def _hold_again(self, sim, i: int, y: np.ndarray, w: dict, bare: np.ndarray, held: set, t: float,
+                    came_back: bool) -> None:
+        """Member i at y (struck, or come to rest) from t: held on its ground with its holding force found afresh
+        (solver._hold, into w[i]; ``bare`` its wrench row without one; ``came_back``: kept through a lift-off found
+        at the instant it came back to rest, as the ground pass does), or, let go, in flight with ``bare``."""
+        solver = self.solver
+        row = bare.copy()
+        keep = came_back and solver._came_back(i, t, sim.dt)
+        if solver.modes[i] == PERSISTENT and solver._hold(sim, y, i, row, t, keep=keep):
+            held.add(i)
+            w[i] = row
+        else:
+            held.discard(i)
+            w[i] = bare.copy()
 
     def _side_push(self, sim, i: int, y: np.ndarray) -> bool:
         """Body i, held on its ground and touching another half-space or static shape (its second ground, or within

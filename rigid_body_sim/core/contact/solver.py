@@ -1189,17 +1189,13 @@ class ContactSolver:
             again = self._side_impact_at(i, jj, t)  # just struck at y0: its gap opens first, the hit is later
             gap = lambda s: self._other_gap(sim, self.step_map(sim, i, y0, s * h, held), i)[0]  # noqa: E731
             s = 0.0 if g0 <= 0.0 and not again else self._locate(gap, min(g0, 0.0) if again else g0, -1.0)
-            self._side_hits[i] = self._side_hits.get(i, 0) + 1
-            if (again and not s) or self._side_hits[i] > MAX_SIDE_IMPACTS:
-                # it does not open, or the body went from wall to wall MAX_SIDE_IMPACTS times in this step (each
-                # event a level deeper): it stays pressed on them for the rest of the step
-                self._side_hits[i] = PRESSED
-                self.counts["side_pressed"] += 1
+            if again and not s:  # it does not open: it stays pressed on them for the rest of the step
+                self._press_aside(i)
                 return self._persistent_end(sim, i, y0, end, held, t, h)
             s = 0.0 if s is None else s
             hit = self.step_map(sim, i, y0, s * h, held) if s > 0.0 else y0.copy()
-            self._side_impact(sim, i, hit, held, t + s * h)
-            self._project(sim, hit, i, False)
+            if not self._strike_side(sim, i, hit, held, t + s * h):  # pressed on them (from wall to wall)
+                return self._persistent_end(sim, i, y0, end, held, t, h)
             return self._persistent_span(sim, i, hit, self._bare(i, held), t + s * h, h - s * h) if s < 1.0 else hit
         if landing is not None:  # another feature reached the ground: an impact
             return self._land(sim, i, y0, held, t, h, landing)
@@ -1305,19 +1301,24 @@ class ContactSolver:
         return np.concatenate((resting[self.ground_of[resting] >= g],
                                resting[(self.ground_of[resting] < g) & reached[resting]]))
 
+    def _press_aside(self, i: int) -> None:
+        """Body i stays pressed on the walls it meets for the rest of the step (not struck there again)."""
+        self._side_hits[i] = PRESSED
+        self.counts["side_pressed"] += 1
+
     def _may_strike_side(self, i: int) -> bool:
         """Whether body i, resting on one ground, can be struck against another in this step (not held on two,
         not pressed on them: :meth:`_strike_side`)."""
         return self.other_ground[i] < 0 and self._side_hits.get(i, 0) != PRESSED
 
     def _strike_side(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float) -> bool:
-        """Body i, resting on its ground, meets another half-space or static shape at y inside a body–body group's
-        step (body_pairs.py): the impact against it and the contact projected again (in place), as at a step's end
-        (:meth:`_persistent_end`); past MAX_SIDE_IMPACTS in the step it is pressed on them instead (False)."""
+        """Body i, resting on its ground, meets another half-space or static shape at y (at a step's end,
+        :meth:`_persistent_end`, or inside a body–body group's step, body_pairs.py): the impact against it and the
+        contact projected again (in place); past MAX_SIDE_IMPACTS in the step (from wall to wall, each event a level
+        deeper) it is pressed on them instead (False)."""
         self._side_hits[i] = self._side_hits.get(i, 0) + 1
         if self._side_hits[i] > MAX_SIDE_IMPACTS:
-            self._side_hits[i] = PRESSED
-            self.counts["side_pressed"] += 1
+            self._press_aside(i)
             return False
         self._side_impact(sim, i, y, w, t)
         self._project(sim, y, i, False)

@@ -214,9 +214,8 @@ def end_of_step(solver, sim, i: int, end: np.ndarray, t: float, h: float) -> np.
 
     end = end.copy()
     gaps = np.empty(MAX_FEATURES)
-    for j, tracked in ((int(solver.ground_of[i]), solver.tracked), (int(solver.other_ground[i]), solver.other_tracked)):
-        count = feature_gaps(end, sim._prm[i], solver.shapes[i], solver.grounds[j], gaps)
-        tracked[i] = int(tracked[i]) | sum(1 << k for k in range(count) if gaps[k] < 0.0)  # landed: taken in
+    _take_in(solver, sim, i, end, int(solver.ground_of[i]), solver.tracked, gaps)
+    _take_in(solver, sim, i, end, int(solver.other_ground[i]), solver.other_tracked, gaps)
     sticking = not solver.sliding[i]
     if solver.sliding[i] and solver.slide_direction[i][0] != 0.0:
         if end[L.V:L.V + 3] @ crease(solver, i) * solver.slide_direction[i][0] <= 0.0:
@@ -231,15 +230,21 @@ def project_second(solver, sim, i: int, end: np.ndarray, touching_gap: float) ->
     """Body i, held on its ground alone this step (too many contact points for both), at the step's end
     ``end`` (in place): projected onto both half-spaces if it still reaches the second one, else that
     one is let go."""
-    j = int(solver.other_ground[i])
     gaps = np.empty(MAX_FEATURES)
-    count = feature_gaps(end, sim._prm[i], solver.shapes[i], solver.grounds[j], gaps)
+    count = _take_in(solver, sim, i, end, int(solver.other_ground[i]), solver.other_tracked, gaps)
     if not count or gaps[:count].min() > touching_gap:
         solver.other_ground[i] = -1
         solver.other_projected[i] = False
         return
-    solver.other_tracked[i] = int(solver.other_tracked[i]) | sum(1 << k for k in range(count) if gaps[k] <= 0.0)
     _alternate(solver, sim, i, end, not solver.sliding[i])
+
+
+def _take_in(solver, sim, i: int, end: np.ndarray, j: int, tracked: np.ndarray, gaps: np.ndarray) -> int:
+    """Body i's features on or below half-space j at ``end`` added to its feature mask ``tracked[i]`` (taken into
+    that contact); returns the features' count, their gaps in ``gaps``."""
+    count = feature_gaps(end, sim._prm[i], solver.shapes[i], solver.grounds[j], gaps)
+    tracked[i] = int(tracked[i]) | sum(1 << k for k in range(count) if gaps[k] <= 0.0)
+    return count
 
 
 def _alternate(solver, sim, i: int, end: np.ndarray, sticking: bool) -> None:
