@@ -129,6 +129,9 @@ MAX_EVENTS_PER_STEP = 10_000
 #: Most impacts of a body resting on the ground against other half-spaces or static shapes in one step (each taken
 #: a call deeper); past them it stays pressed on them for the rest of the step (counted in ``side_pressed``).
 MAX_SIDE_IMPACTS = 64
+#: A can held on its rim whose held span threw it more than this many times in one step is left at rest for the
+#: rest of that step (counted as ``held_thrown``), not landed on its end face again (:meth:`ContactSolver._held_span`).
+MAX_FACE_LANDINGS = 8
 PRESSED = -1  # ContactSolver._side_hits of a body pressed on them
 #: Most pieces a resting body's step is cut into when it gained energy (ContactSolver._refine_gains).
 MAX_REFINEMENT = 32
@@ -254,6 +257,7 @@ class ContactSolver:
         self._static_skipped: set[int] = set()  # bodies not looked at against static shapes for the rest of the step
         #: side impacts of each body in this step; PRESSED: not looked at for them for the rest of the step
         self._side_hits: dict[int, int] = {}
+        self._face_landings: dict[int, int] = {}  # end-face landings of each can in this step (_held_span)
         self.counts = dict.fromkeys(("restitution_capped", "multi_contact_elastic", "refined_steps",
                                      "second_half_space", "two_ground_overflow", "painleve",
                                      "static_tangent", "static_pressed", "island_body_steps", "rim_pieces",
@@ -716,6 +720,7 @@ class ContactSolver:
         cur = sim._control[L.CUR]
         self._static_skipped.clear()
         self._side_hits.clear()
+        self._face_landings.clear()
         self.pairs.islands.asleep_step(sim._Ys[1 - cur], sim._Ys[cur], sim.dt)
 
     def after_step(self, sim, wrenches: np.ndarray) -> None:
@@ -728,6 +733,7 @@ class ContactSolver:
             sim._method.held(Y0, Y1, sim._prm, wrenches, staged, h)  # their steps with the contact found at every stage
         self._static_skipped.clear()
         self._side_hits.clear()
+        self._face_landings.clear()
         # body–body events first (body_pairs.py): the bodies it stepped are done
         done = self.pairs.after_step(sim, wrenches, Y0, Y1, t0, h) if self.pairs is not None else None
         if self.pairs is not None and len(self.pairs.islands.left):
@@ -1123,12 +1129,15 @@ class ContactSolver:
         end = self.step_map(sim, i, y, h, held)
         if thrown_at_rest and self._thrown(sim, i, y, end, w):
             rim = held_rim(self.shapes[i], int(self.tracked[i]))
-            if rim >= 0:  # a can held on its rim: its end face lands instead, as after a rim piece
-                self.counts["face_landed"] += 1
+            landings = self._face_landings.get(i, 0)
+            if rim >= 0 and landings < MAX_FACE_LANDINGS:  # a can held on its rim: its end face lands instead, as
+                self.counts["face_landed"] += 1  # after a rim piece
+                self._face_landings[i] = landings + 1
                 return self._landing(sim, i, y, w, t, h, 4 << rim)
             # else the holding force, held over the span, threw the body (a squat can standing on its end against
-            # a wall spun up to 3.4e5 rad/s in one 10 ms step): it stays where it was, at rest, for this span (it
-            # cannot gain energy), counted
+            # a wall spun up to 3.4e5 rad/s in one 10 ms step; a can beside a wall landed on its end face and held
+            # on its rim again, thrown again, 150 times in one step, each a few tens of µs on): it stays where it
+            # was, at rest, for this span (it cannot gain energy), counted
             self.counts["held_thrown"] += 1
             end = y.copy()
             end[L.V:L.W + 3] = 0.0
