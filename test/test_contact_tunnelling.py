@@ -111,9 +111,38 @@ def test_swept_grid_finds_every_overlapping_pair_once():
         assert set(got) == brute
 
 
-def test_swept_bounds_hold_the_path_of_a_constant_acceleration():
-    """A body under constant acceleration a stays, all along the step, within its swept box
-    (the chord grown by |Δv| h/4 ≥ |a| h²/8, the parabola's largest distance from its chord)."""
+def test_swept_grid_query_finds_every_box_a_box_meets():
+    """grid_overlaps (kernels/contact/swept.py: the islands' second look, _late_pairs) against the brute force: for
+    query boxes from a tenth of a cell to wider than the grid holds, every member's box within the slack of the
+    query's (all three axes) is found once, movable ones through the grid grid_swept_pairs left, fixed ones each."""
+    from rigid_body_sim.core.kernels.contact.swept import grid_overlaps, grid_swept_pairs
+
+    rng = np.random.default_rng(3)
+    for n in (2, 30, 400):
+        centre = rng.uniform(-1.0, 1.0, (n, 3)) * n ** (1 / 3) * 0.3
+        half = rng.uniform(0.02, 0.2, (n, 3))
+        movable = rng.random(n) < 0.7
+        half[~movable] *= rng.uniform(1.0, 20.0, (int((~movable).sum()), 1))
+        lo, hi = centre - half, centre + half
+        cells, heads, chain = (np.empty((n, 3), dtype=np.int64), np.empty(1 << (2 * n - 1).bit_length(),
+                                                                        dtype=np.int64), np.empty(n, dtype=np.int64))
+        grid_swept_pairs(lo, hi, movable, cells, heads, chain, np.empty((n * n, 2), dtype=np.int64))
+        fixed = np.flatnonzero(~movable).astype(np.int64)
+        found = np.empty(n, dtype=np.int64)
+        for _ in range(40):
+            q_centre, q_half = rng.uniform(-1.2, 1.2, 3) * n ** (1 / 3) * 0.3, rng.uniform(0.005, 2.0, 3)
+            slack = float(rng.choice([0.0, 1e-3]))
+            qlo, qhi = q_centre - q_half, q_centre + q_half
+            count = grid_overlaps(qlo, qhi, slack, lo, hi, movable, fixed, cells, heads, chain, found)
+            brute = {i for i in range(n) if np.all(lo[i] <= qhi + slack) and np.all(qlo <= hi[i] + slack)}
+            got = found[:count].tolist()
+            assert len(got) == len(set(got)) and set(got) == brute
+
+
+def test_swept_bounds_hold_the_path_of_a_constant_acceleration_and_of_a_body_held():
+    """A body under constant acceleration a stays, all along the step, within its swept box (the chord grown by
+    GROWTH |Δv| h ≥ |a| h²/8, the parabola's largest distance from its chord), and so does the same body held
+    where it was by an island's step (p₀ + h v₀, its centre on a chord that far from the free one's)."""
     from rigid_body_sim.core.kernels.contact.swept import swept_bounds
     from rigid_body_sim.core.kernels.layout import P, ROW_WIDTH, V
 
@@ -129,6 +158,8 @@ def test_swept_bounds_hold_the_path_of_a_constant_acceleration():
         t = np.linspace(0.0, h, 101)[:, None]
         path = p0 + v0 * t + 0.5 * a * t * t
         assert np.all(path >= lo[0] - 1e-15) and np.all(path <= hi[0] + 1e-15)
+        held = p0 + v0 * t
+        assert np.all(held >= lo[0] - 1e-15) and np.all(held <= hi[0] + 1e-15)
 
 
 def test_swept_spheres_keep_every_pair_that_meets():

@@ -4,8 +4,11 @@ After each step the solver (core/contact/body_pairs.py) looks for pairs of shape
 met inside the step, not only at its end, so that a small fast body cannot pass through a thin
 one unseen. :func:`swept_bounds` writes, for each shape, a world-axis box that holds its
 bounding sphere (radius ``reach``, about the centre of mass) all along the step: the box of the
-sphere at the step's start and end, grown by ``|v₁ − v₀| h / 4``, twice the furthest a path of
-constant acceleration strays from its chord (|a| h²/8 = |Δv| h/8). :func:`grid_swept_pairs` files each movable box
+sphere at the step's start and end, grown by ``GROWTH × |v₁ − v₀| h`` (GROWTH = 1): eight times the furthest a
+path of constant acceleration strays from its chord (|a| h²/8 = |Δv| h/8), and as far as an island's step, whose
+contacts cancel the step's change of velocity (a body held at rest: p₀ + h v₀ against the free step's
+p₀ + h v₀ + h² a/2 or, semi-implicit Euler's, + h² a), moves its end (kernels/contact/island._late_pairs: a body an
+island's step moves farther from its free step's end than that is screened again). :func:`grid_swept_pairs` files each movable box
 under the cell of its centre in a hashed uniform grid (cell = the largest movable box's widest
 side, so two overlapping boxes sit in the same or neighbouring cells) and writes every
 overlapping pair: about linear in the number of shapes while the moving ones have comparable
@@ -30,7 +33,11 @@ from ..layout import P, Q, V, W
 from ..rotation import qmul
 from .pairs import apart_bounds, pair_contacts
 
-__all__ = ["swept_bounds", "grid_swept_pairs", "spheres_may_meet", "screen_pairs"]
+__all__ = ["GROWTH", "swept_bounds", "grid_swept_pairs", "grid_overlaps", "spheres_may_meet", "screen_pairs"]
+
+
+#: A body's box and sphere over the step are grown by this × |v₁ − v₀| h (m): module docstring.
+GROWTH = 1.0
 
 
 @njit(**JIT)
@@ -43,7 +50,7 @@ def swept_bounds(Y0, Y1, members, reach, h, lo, hi):
     for m in range(members.shape[0]):
         i = members[m]
         dvx, dvy, dvz = Y1[i, V] - Y0[i, V], Y1[i, V + 1] - Y0[i, V + 1], Y1[i, V + 2] - Y0[i, V + 2]
-        grow = reach[m] + 0.25 * h * math.sqrt(dvx * dvx + dvy * dvy + dvz * dvz)
+        grow = reach[m] + GROWTH * h * math.sqrt(dvx * dvx + dvy * dvy + dvz * dvz)
         for k in range(3):
             a, b = Y0[i, P + k], Y1[i, P + k]
             lo[m, k] = min(a, b) - grow
@@ -53,6 +60,72 @@ def swept_bounds(Y0, Y1, members, reach, h, lo, hi):
 @njit(**INLINE)
 def _cell_key(cx, cy, cz, mask):
     return ((cx * 73856093) ^ (cy * 19349663) ^ (cz * 83492791)) & mask
+
+
+@njit(**INLINE)
+def grid_cell(lo, hi, movable):
+    """The grid's cell edge (m): the largest extent of a movable box (lo, hi (M, 3)), 1 if none has one."""
+    cell = 0.0
+    for i in range(lo.shape[0]):
+        if movable[i]:
+            for k in range(3):
+                cell = max(cell, hi[i, k] - lo[i, k])
+    return cell if cell > 0.0 else 1.0
+
+
+@njit(**INLINE)
+def _cell_of(x, cell):
+    return int(math.floor(x / cell))
+
+
+@njit(**INLINE)
+def _boxes_meet(alo, ahi, blo, bhi, slack):
+    return (alo[0] <= bhi[0] + slack and blo[0] <= ahi[0] + slack and alo[1] <= bhi[1] + slack
+            and blo[1] <= ahi[1] + slack and alo[2] <= bhi[2] + slack and blo[2] <= ahi[2] + slack)
+
+
+@njit(**JIT)
+def grid_overlaps(qlo, qhi, slack, lo, hi, movable, fixed, cells, heads, chain, found):
+    """The members (rows of lo, hi) whose boxes come within ``slack`` (m) of the box qlo, qhi (3,) into found;
+    returns how many (beyond found's length only the first are written). The movable ones from the hashed grid
+    grid_swept_pairs built over lo, hi (cells, heads, chain as it left them), the others (``fixed``: their rows)
+    each looked at. A box meets the query only if its centre lies within half a cell of it, so the cells looked at
+    are those the query box grown by half a cell covers (all movable boxes when that is more than the grid holds)."""
+    cell = grid_cell(lo, hi, movable)
+    mask = heads.shape[0] - 1
+    count = 0
+    capacity = found.shape[0]
+    half = 0.5 * cell * (1.0 + 1e-9)  # (the grid's cells of centres found with its own rounding)
+    x0, x1 = _cell_of(qlo[0] - slack - half, cell), _cell_of(qhi[0] + slack + half, cell)
+    y0, y1 = _cell_of(qlo[1] - slack - half, cell), _cell_of(qhi[1] + slack + half, cell)
+    z0, z1 = _cell_of(qlo[2] - slack - half, cell), _cell_of(qhi[2] + slack + half, cell)
+    span = float(x1 - x0 + 1) * float(y1 - y0 + 1) * float(z1 - z0 + 1)
+    if span > lo.shape[0]:  # a query wider than the grid holds: every movable box
+        for i in range(lo.shape[0]):
+            if movable[i] and _boxes_meet(qlo, qhi, lo[i], hi[i], slack):
+                if count < capacity:
+                    found[count] = i
+                count += 1
+    else:
+        for cx in range(x0, x1 + 1):
+            for cy in range(y0, y1 + 1):
+                for cz in range(z0, z1 + 1):
+                    i = heads[_cell_key(cx, cy, cz, mask)]
+                    while i >= 0:
+                        if (cells[i, 0] == cx and cells[i, 1] == cy and cells[i, 2] == cz
+                                and _boxes_meet(qlo, qhi, lo[i], hi[i], slack)):
+                            if count < capacity:
+                                found[count] = i
+                            count += 1
+                        i = chain[i]
+    for f in range(fixed.shape[0]):
+        i = fixed[f]
+        if _boxes_meet(qlo, qhi, lo[i], hi[i], slack):
+            if count < capacity:
+                found[count] = i
+            count += 1
+    _pin = qlo[0], qhi[0], lo[0, 0], hi[0, 0], movable[0], fixed[:1], cells[0, 0], heads[0], chain[0], found[:1]
+    return count
 
 
 @njit(**JIT)
@@ -68,13 +141,7 @@ def grid_swept_pairs(lo, hi, movable, cells, heads, chain, pairs):
     the number found (beyond the capacity only the first ``capacity`` are written).
     """
     n = lo.shape[0]
-    cell = 0.0
-    for i in range(n):
-        if movable[i]:
-            for k in range(3):
-                cell = max(cell, hi[i, k] - lo[i, k])
-    if not cell > 0.0:
-        cell = 1.0
+    cell = grid_cell(lo, hi, movable)
     mask = heads.shape[0] - 1
     for b in range(heads.shape[0]):
         heads[b] = -1
@@ -120,7 +187,7 @@ def spheres_may_meet(Y0, Y1, members, reach, h, pairs, found):
     """Of the overlapping boxes' pairs (rows of members) pairs[:found], those whose bounding spheres can meet over
     the step kept at the front, in their order; returns how many. A pair is dropped when its centres' relative
     path, taken as the chord from its start to its end offset to its start, stays further from zero than both
-    spheres' radii (``reach``) plus both growths (|v₁ − v₀| h / 4 each, as swept_bounds') and 1e-6 of the radii:
+    spheres' radii (``reach``) plus both growths (GROWTH × |v₁ − v₀| h each, as swept_bounds') and 1e-6 of the radii:
     each centre stays within its growth of its own chord (swept_bounds), so their difference within both of the
     chords' difference. Y0, Y1, members, reach, h as for swept_bounds."""
     kept = 0
@@ -130,7 +197,7 @@ def spheres_may_meet(Y0, Y1, members, reach, h, pairs, found):
         grow = 0.0
         for i in (a, b):
             dvx, dvy, dvz = Y1[i, V] - Y0[i, V], Y1[i, V + 1] - Y0[i, V + 1], Y1[i, V + 2] - Y0[i, V + 2]
-            grow += 0.25 * h * math.sqrt(dvx * dvx + dvy * dvy + dvz * dvz)
+            grow += GROWTH * h * math.sqrt(dvx * dvx + dvy * dvy + dvz * dvz)
         r0x, r0y, r0z = Y0[b, P] - Y0[a, P], Y0[b, P + 1] - Y0[a, P + 1], Y0[b, P + 2] - Y0[a, P + 2]
         dx = Y1[b, P] - Y1[a, P] - r0x
         dy = Y1[b, P + 1] - Y1[a, P + 1] - r0y
