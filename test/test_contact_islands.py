@@ -648,6 +648,40 @@ def test_two_towers_a_millimetre_apart_are_solved_exactly():
     assert np.max(np.abs(sim.positions_world() - start)) <= 1e-9
 
 
+@pytest.mark.parametrize("integrator", ["rk4", "semi_implicit_euler"])
+def test_a_ball_the_island_step_drives_beyond_its_free_path_takes_the_ball_it_meets_along(integrator):
+    """Three balls (5 cm, 1, 2 and 3 kg) in a row on frictionless ground: the first, at 1 m/s, touches the second;
+    the third lies 1 mm beyond the second, farther than the second's free step (at rest) takes it, so the broad
+    phase does not list that pair. At dt = 10 ms the island's inelastic step sends the two on at 1/3 m/s, which
+    closes the millimetre within the step: the third is met and taken along within that step, the three at
+    m_a v₀ / (m_a + m_b + m_c) (momentum, 1e-12 relative), none inside another beyond round-off, and the island's
+    contacts hold the impulse that moved it (m_c v, 1e-12 relative). Left to the next step, the second ended it
+    2.3 mm inside the third."""
+    from rigid_body_sim.core.kernels.contact.island import C_IMPULSE, I_A, I_B, OUT_JOINED
+
+    r, v0, slick = 0.05, 1.0, {"restitution": 0.0, "friction": 0.0}
+    masses = (1.0, 2.0, 3.0)
+    bodies = {name: {"mass": m, "inertia": {"sphere": r}, "collision": {"sphere": r}, "material": slick,
+                     "pose": {"position": [x, 0.0, r]}, "twist": {"linear": [v, 0.0, 0.0]}}
+              for name, m, x, v in zip("abc", masses, (0.0, 2 * r, 4 * r + 1e-3), (v0, 0.0, 0.0))}
+    sim = Simulator(load_scene({"gravity": [0.0, 0.0, -G], "bodies": bodies,
+                                "ground": [{"normal": [0, 0, 1], "material": slick}]}), integrator=integrator,
+                    dt=0.01, threads=1)
+    sim.step()
+    islands = sim.contact.pairs.islands
+    assert islands.out[OUT_JOINED] == 1
+    v = sim.linear_velocities_world()
+    shared = masses[0] * v0 / sum(masses)
+    np.testing.assert_allclose(v[:, 0], shared, rtol=1e-12)
+    assert np.max(np.abs(v[:, 1:])) <= 1e-12
+    x = sim.positions_world()[:, 0]
+    assert np.min(np.diff(x)) >= 2 * r - 1e-12
+    ints, floats = islands.contacts()
+    between = ((ints[:, I_A] == 1) & (ints[:, I_B] == 2))
+    assert between.any()
+    np.testing.assert_allclose(floats[between, C_IMPULSE].sum(), masses[2] * shared, rtol=1e-12)
+
+
 @pytest.mark.parametrize("dt", [1e-3, 1e-2])
 @pytest.mark.parametrize("sunk", [0.0, 0.75])
 def test_a_resting_tower_is_held_by_its_warm_start_with_each_cube_s_weight(dt, sunk):

@@ -125,6 +125,7 @@ class BodyPairs:
         m = len(self.members)
         self.movable = np.zeros(m, dtype=np.bool_)
         self.movable[:len(solver.bodies)] = True
+        self._fixed = np.flatnonzero(~self.movable).astype(np.int64)
         radius = np.array([bounding_radius(shapes[i]) for i in range(len(shapes))])  # per body, m
         self.reach = radius[self.members]
         #: Per body: the radius its spin sweeps (0 for a sphere, whose distance its spin does not change).
@@ -242,6 +243,12 @@ class BodyPairs:
         pairs = self.members[self._pairs[:found]]
         self._last_swept = (lo, hi, pairs)
         return pairs
+
+    def broad_phase(self) -> tuple:
+        """The last broad phase's boxes and grid, as island_pass takes them (kernels/contact/island._late_pairs):
+        (lo, hi, movable, fixed, members, reach, cells, heads, chain), rows of :attr:`members`."""
+        return (self._lo, self._hi, self.movable, self._fixed, self.members, self.reach, self._cells, self._heads,
+                self._chain)
 
     def _hits(self, sim, pairs: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, h: float) -> list[tuple[int, int]]:
         """The candidate pairs that meet inside the step (module docstring, 2); a static shape is never first.

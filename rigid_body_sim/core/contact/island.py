@@ -31,7 +31,7 @@ import numpy as np
 
 from ..kernels import layout as L
 from ..kernels.contact.island import (C_FLOATS, C_IMPULSE, C_INTS, DENSE_MAX, I_A, I_B, OUT_BODIES, OUT_CONTACTS,
-                                      OUT_DEPTH, OUT_SLEPT, OUT_WIDTH, OUT_WOKEN, all_asleep,
+                                      OUT_DEPTH, OUT_LATE_LOST, OUT_SLEPT, OUT_WIDTH, OUT_WOKEN, all_asleep,
                                       island_pass, rest_alone)
 from ..kernels.contact.layout import DIMS, FLIGHT, PERSISTENT
 from ..kernels.contact.pairs import MAX_PAIR_POINTS
@@ -74,6 +74,8 @@ class Islands:
         self._vec = np.zeros((3, DENSE_MAX))
         self._band = np.zeros((2, DENSE_MAX), dtype=np.int64)  # the sticking solve's profile, points on
         self._group = np.zeros(n, dtype=np.int64)  # a sleeping body's component when it fell asleep
+        self._lhead = np.zeros(n, dtype=np.int64)  # _late_pairs' scratch: per body, per broad phase member
+        self._found = np.zeros(len(pairs.members), dtype=np.int64)
         self.out = np.zeros(OUT_WIDTH)
         self._grow_pairs(16)
         self._grow_contacts(64)
@@ -101,6 +103,7 @@ class Islands:
         self._pcount = np.zeros(k, dtype=np.int64)
         self._ppoints, self._pseps = np.zeros((k, MAX_PAIR_POINTS, 6)), np.zeros((k, MAX_PAIR_POINTS))
         self._bound = np.zeros(k + n)
+        self._lnext = np.zeros(2 * k, dtype=np.int64)  # _late_pairs': each body's rows of the pair list
 
     def _grow_contacts(self, c: int) -> None:
         """Room for c contacts in each half of the scratch (the velocity step's, the projection's); the last
@@ -241,11 +244,14 @@ class Islands:
                                self._pcount, self._ppoints, self._pseps, self._bound, self._cint, self._cflt, self._vel,
                                self._iw, self._dx, self._rj, self._rw, self._rdiag, self._rbias, self._rlam,
                                self._rbody, self._order, self._cstart, self._A, self._L, self._vec, self.out, self._comp,
-                               self._band, self._group, self._cwork, self._rwork, self._bwork, self._blist)
+                               self._band, self._group, self._cwork, self._rwork, self._bwork, self._blist,
+                               self.pairs.broad_phase(), self._lhead, self._lnext, self._found)
             if code >= 0:
                 break
             self._grow_contacts(2 * -code)
         out = self.out
+        if out[OUT_LATE_LOST]:  # room for the pairs left out, from the next step
+            self._grow_pairs(2 * len(self._nlist))
         self.n_contacts = int(out[OUT_CONTACTS])
         self._keep_resting(was_asleep, h)
         self._record(Y0, Y1, h)

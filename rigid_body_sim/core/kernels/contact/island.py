@@ -70,6 +70,7 @@ from .impacts import kinetic_energy_row, potential_energy_row
 from .pair_impacts import normal_speed
 from .pairs import MAX_PAIR_POINTS, RIM_ACROSS, boxes_apart_turned, face_patch, pair_contacts
 from .shapes import MAX_FEATURES, feature_gaps, feature_points
+from .swept import GROWTH, grid_overlaps
 
 __all__ = ["island_pass", "all_asleep", "rest_alone", "TOUCH", "SLEEP_SPEED", "SLEEP_STEPS", "DENSE_MAX", "PROJECT_TOL", "C_FLOATS", "C_INTS", "OUT_WIDTH"]
 
@@ -166,10 +167,14 @@ WARM_REACH = 0.1
 #: Columns of the per-call outputs: island body-steps, contact points, sticking solves kept, PGS islands,
 #: projected points, largest depth projected (m), bodies woken, bodies put to sleep, points whose approach was
 #: stopped after the projection, sticking solves kept from the warm start (_held, of OUT_STICK), components whose
-#: gain of K + U was taken out of their kinetic energy, components set back at rest where they began (_no_gain).
+#: gain of K + U was taken out of their kinetic energy, components set back at rest where they began (_no_gain),
+#: pairs the broad phase had not listed that the velocity step's paths may meet (_late_pairs), bodies those joined
+#: to the islands, and such pairs left out for want of room (the driver makes room for the next step).
 (OUT_BODIES, OUT_CONTACTS, OUT_STICK, OUT_PGS, OUT_PROJECTED, OUT_DEPTH, OUT_WOKEN, OUT_SLEPT, OUT_STOPPED, OUT_HELD,
- OUT_TRIMMED, OUT_RESTORED) = range(12)
-OUT_WIDTH = 12
+ OUT_TRIMMED, OUT_RESTORED, OUT_LATE, OUT_JOINED, OUT_LATE_LOST) = range(15)
+OUT_WIDTH = 15
+#: flags bit of a body whose velocity step left the path the broad phase screened it on (_late_pairs).
+LEFT_PATH = 4096
 
 
 @njit(**INLINE)
@@ -1486,11 +1491,14 @@ def _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, size, rj, rw
 
 
 @njit(**JIT)
-def _attribute(nc, cint, cflt, nd, sint, sflt, members, head):
+def _attribute(nc, cint, cflt, nd, sint, sflt, members, head, room):
     """The impulses of the nd points whose approach was stopped after the projection (sint/sflt) added to the
     step's contacts (cint/cflt[:nc]) of the same pair (the first listed), so that a pair's summed impulse is all
-    it gave. head (per body) and cint[:, I_NEXT] are overwritten."""
+    it gave; a point of a pair without one (met after the velocity step) is listed after them as it is (its
+    point and gap the step's end's), while there is room (rows). Returns the count. head (per body) and
+    cint[:, I_NEXT] are overwritten."""
     _list_per_body(cint, nc, members, head)
+    count = nc
     for p in range(nd):
         i = sint[p, I_B] if sint[p, I_B] >= 0 else sint[p, I_A]
         c = head[i]
@@ -1500,7 +1508,15 @@ def _attribute(nc, cint, cflt, nd, sint, sflt, members, head):
                     cflt[c, C_IMPULSE + k] += sflt[p, C_IMPULSE + k]
                 break
             c = cint[c, I_NEXT]
+        if c < 0 and count < room and (sflt[p, C_IMPULSE] != 0.0 or sflt[p, C_IMPULSE + 1] != 0.0
+                                       or sflt[p, C_IMPULSE + 2] != 0.0):
+            for k in range(C_INTS):
+                cint[count, k] = sint[p, k]
+            for k in range(C_FLOATS):
+                cflt[count, k] = sflt[p, k]
+            count += 1
     _pin = cint[0, 0], cflt[0, 0], sint[0, 0], sflt[0, 0], members[0], head[0]
+    return count
 
 
 @njit(**JIT)
@@ -1748,12 +1764,116 @@ def _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt
                 Y1[i, W + j] = 0.0
 
 
+@njit(**INLINE)
+def _listed(nlist, lhead, lnext, i, j):
+    """Whether pair (i, j) is a row of nlist (lhead, lnext: each body's rows, _late_pairs)."""
+    c = lhead[i]
+    while c >= 0:
+        if nlist[c // 2, 1 - c % 2] == j:
+            return True
+        c = lnext[c]
+    return False
+
+
+@njit(**JIT)
+def _late_pairs(Y0, Y1, island, stopped, is_static, members, nlist, n_pairs, comp, flags, broad, h, boxes, left,
+                n_left, lhead, lnext, found, out):
+    """The pairs the velocity step's paths may bring together that the broad phase, screening the free step's,
+    did not list: appended to nlist for the projection (returns the new n_pairs). ``left`` (n_left rows of members,
+    each flagged LEFT_PATH): the island bodies whose end left its free step's end by more than that screen's growth
+    (swept_bounds'); ``boxes`` (per body, 6 columns): each one's box over its new path (lo, hi). A pair is one of
+    those and a body whose box meets it (the broad phase's box, or the other's new one) whose bounding spheres
+    can meet over the step as now stepped (spheres_may_meet's test on their chords; a body not in an island keeps its
+    growth), not in nlist, neither stopped. A moving body outside the islands so met joins them (island 1, its
+    free step as it is: it is moved by the projection and the stop of approach, with momentum) and its component
+    joins the other's. ``broad``: the broad phase's (lo, hi, movable, fixed, members, reach, cells, heads, chain),
+    its members' first rows this pass's members. lhead (per body), lnext (2 per nlist row) and found (per broad
+    phase member) are scratch."""
+    lo, hi, movable, fixed, bmembers, reach, cells, heads, chain = broad
+    n = members.shape[0]
+    for m in range(n):
+        lhead[members[m]] = -1
+    for f in range(fixed.shape[0]):
+        lhead[bmembers[fixed[f]]] = -1
+    for k in range(n_pairs):
+        for side in range(2):
+            i = nlist[k, side]
+            lnext[2 * k + side] = lhead[i]
+            lhead[i] = 2 * k + side
+    most = 0.0  # a body on its box's path strays from it by up to 1e-6 of its reach (the test that listed it)
+    for m in range(n):
+        most = max(most, reach[m])
+    for e in range(n_left):
+        m = left[e]
+        i = members[m]
+        count = grid_overlaps(boxes[i, 0:3], boxes[i, 3:6], 1e-6 * most, lo, hi, movable, fixed, cells, heads, chain,
+                              found)
+        for c in range(min(count, found.shape[0])):
+            k = found[c]
+            if k < n and flags[members[k]] & LEFT_PATH:
+                continue  # another that left its path: the pairs of those below
+            n_pairs = _late_pair(Y0, Y1, island, stopped, is_static, nlist, n_pairs, comp, flags, bmembers, reach,
+                                 h, m, k, lhead, lnext, out)
+        for e2 in range(e + 1, n_left):
+            m2 = left[e2]
+            j = members[m2]
+            if (boxes[i, 0] <= boxes[j, 3] and boxes[j, 0] <= boxes[i, 3] and boxes[i, 1] <= boxes[j, 4]
+                    and boxes[j, 1] <= boxes[i, 4] and boxes[i, 2] <= boxes[j, 5] and boxes[j, 2] <= boxes[i, 5]):
+                n_pairs = _late_pair(Y0, Y1, island, stopped, is_static, nlist, n_pairs, comp, flags, bmembers,
+                                     reach, h, m, m2, lhead, lnext, out)
+    _pin = Y0[0, 0], Y1[0, 0], island[0], stopped[0], is_static[0], members[0], nlist[0, 0], comp[0], flags[0]
+    _pin2 = boxes[0, 0], left[0], lhead[0], lnext[0], found[0], out[0]
+    return n_pairs
+
+
+@njit(**INLINE)
+def _late_pair(Y0, Y1, island, stopped, is_static, nlist, n_pairs, comp, flags, bmembers, reach, h, m, k, lhead,
+               lnext, out):
+    """_late_pairs' test of broad phase members m (an island body that left its path) and k, and the pair added."""
+    i, j = bmembers[m], bmembers[k]
+    if i == j or stopped[i] or stopped[j] or _listed(nlist, lhead, lnext, i, j):
+        return n_pairs
+    grow = 0.0
+    if island[j] == 0 and not is_static[j]:
+        dvx, dvy, dvz = Y1[j, V] - Y0[j, V], Y1[j, V + 1] - Y0[j, V + 1], Y1[j, V + 2] - Y0[j, V + 2]
+        grow = GROWTH * h * math.sqrt(dvx * dvx + dvy * dvy + dvz * dvz)
+    r0x, r0y, r0z = Y0[j, P] - Y0[i, P], Y0[j, P + 1] - Y0[i, P + 1], Y0[j, P + 2] - Y0[i, P + 2]
+    dx = Y1[j, P] - Y1[i, P] - r0x
+    dy = Y1[j, P + 1] - Y1[i, P + 1] - r0y
+    dz = Y1[j, P + 2] - Y1[i, P + 2] - r0z
+    d2 = dx * dx + dy * dy + dz * dz
+    t = 0.0
+    if d2 > 0.0:
+        t = min(max(-(r0x * dx + r0y * dy + r0z * dz) / d2, 0.0), 1.0)
+    cx, cy, cz = r0x + t * dx, r0y + t * dy, r0z + t * dz
+    if math.sqrt(cx * cx + cy * cy + cz * cz) > (reach[m] + reach[k]) * (1.0 + 1e-6) + grow:
+        return n_pairs
+    if n_pairs == nlist.shape[0]:
+        out[OUT_LATE_LOST] += 1
+        return n_pairs
+    a, b = (i, j) if m < k else (j, i)  # as the broad phase lists them: a static shape second
+    nlist[n_pairs, 0], nlist[n_pairs, 1] = a, b
+    for side in range(2):
+        body = nlist[n_pairs, side]
+        lnext[2 * n_pairs + side] = lhead[body]
+        lhead[body] = 2 * n_pairs + side
+    out[OUT_LATE] += 1
+    if island[j] == 0 and not is_static[j]:
+        island[j] = 1
+        out[OUT_JOINED] += 1
+        out[OUT_BODIES] += 1
+    if island[j] == 1:
+        _union(comp, i, j)
+        flags[_find(comp, i)] &= ~512  # not solved exactly as one: its bodies may move in the projection
+    return n_pairs + 1
+
+
 @njit(**JIT)
 def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, members, cand, n_cand, is_static, stopped,
                 spin_reach, size, asleep, roused, wait, skips, still, anchor, h, sleeping, sleep_speed, default_mu,
                 depth_tol, n_prev, rest_int, rest_flt, island, parent, flags, nlist, pos, quat, rot, pdist, pnormal,
                 pcount, ppoints, pseps, bound, cint, cflt, vel, iw, dx, rj, rw, rdiag, rbias, rlam, rbody, order,
-                cstart, A, L, vec, out, comp, band, group, cwork, rwork, bwork, blist):
+                cstart, A, L, vec, out, comp, band, group, cwork, rwork, bwork, blist, broad, lhead, lnext, found):
     """One step of every island (module docstring): results into Y1 for the bodies marked island[i] = 1 (solved)
     or 2 (asleep: their rows copied from Y0). Returns 0, or −(contacts needed) when cint is too small
     (then nothing was changed but ``asleep`` and the outputs; call again with room). ``depth_tol`` (m, ≥ 0): the
@@ -1769,8 +1889,10 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     Gauss–Seidel solve gets PGS_SWEEPS sweeps (WOKEN_SWEEPS). The warm start: the last step's n_prev contacts (the
     first half of cint/cflt) and, while a body is roused, the contacts of the islands asleep (rest_int, rest_flt:
     each a force, N; × h, the λ that held it), so that one woken is solved from the rest it was locked in.
-    ``cwork`` (per contact, 3 columns), ``rwork`` (per row, 3 columns), ``bwork`` (per body, 13 columns, the last
-    zero between calls) and ``blist`` (per body) are scratch."""
+    ``broad``: the broad phase's boxes and grid (_late_pairs), which listed ``cand``. ``cwork`` (per contact, 3
+    columns), ``rwork`` (per row, 3 columns), ``bwork`` (per body, 13 columns, the last zero between calls),
+    ``blist`` (per body), ``lhead`` (per body), ``lnext`` (2 per row of nlist) and ``found`` (per broad phase
+    member) are scratch."""
     n = members.shape[0]
     for k in range(OUT_WIDTH):
         out[k] = 0.0
@@ -1903,6 +2025,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             skips[members[m], 0] = skips[members[m], 1] = 0
         _pin = Y0[0, 0], Y1[0, 0], prm[0, 0], wr[0, 0], bare[0, 0], modes[0], saved[0, 0], cand[0, 0], A[0, 0], L[0, 0], vec[0, 0], order[0], cstart[0]
         _pin2 = group[0], cwork[0, 0], rwork[0, 0], roused[0], rest_int[:1], rest_flt[:1], bwork[0, 0], blist[0]
+        _pin3 = broad[0][0, 0], lhead[0], lnext[0], found[0]
         return 0
     # the velocity problem
     nc = _gather(Y0, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps,
@@ -2012,11 +2135,26 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                 if cint[q, side] >= 0:
                     skips[cint[q, side], 1] = 1
     _impulses(nc, rj, rbody, rlam, cflt)
-    # positions: p + h v, q ⊗ exp(h ω_P)
+    # positions: p + h v, q ⊗ exp(h ω_P); a body whose end leaves its free step's by more than the broad phase's
+    # growth (swept_bounds) is listed with its box over the new path (dx: lo, hi), for _late_pairs
+    reach = broad[5]
+    n_left = 0
     for m in range(n):
         i = members[m]
         if island[i] != 1:
             continue
+        dvx, dvy, dvz = Y1[i, V] - Y0[i, V], Y1[i, V + 1] - Y0[i, V + 1], Y1[i, V + 2] - Y0[i, V + 2]
+        ex, ey, ez = (Y0[i, P] + h * vel[i, 0] - Y1[i, P], Y0[i, P + 1] + h * vel[i, 1] - Y1[i, P + 1],
+                      Y0[i, P + 2] + h * vel[i, 2] - Y1[i, P + 2])
+        if (math.sqrt(ex * ex + ey * ey + ez * ez)
+                > GROWTH * h * math.sqrt(dvx * dvx + dvy * dvy + dvz * dvz) + 1e-6 * reach[m]):
+            flags[i] |= LEFT_PATH
+            blist[n_left] = m
+            n_left += 1
+            for a in range(3):
+                end = Y0[i, P + a] + h * vel[i, a]
+                dx[i, a] = min(Y0[i, P + a], end) - reach[m]
+                dx[i, 3 + a] = max(Y0[i, P + a], end) + reach[m]
         qw, qx, qy, qz = normalise(Y0[i, Q], Y0[i, Q + 1], Y0[i, Q + 2], Y0[i, Q + 3])
         R = matrix(qw, qx, qy, qz)
         wp0 = R[0] * vel[i, 3] + R[3] * vel[i, 4] + R[6] * vel[i, 5]
@@ -2029,6 +2167,9 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         ew, ex, ey, ez = exp_map(h * wp0, h * wp1, h * wp2)
         q = qmul(qw, qx, qy, qz, ew, ex, ey, ez)
         Y1[i, Q], Y1[i, Q + 1], Y1[i, Q + 2], Y1[i, Q + 3] = normalise(q[0], q[1], q[2], q[3])
+    if n_left:
+        n_pairs = _late_pairs(Y0, Y1, island, stopped, is_static, members, nlist, n_pairs, comp, flags, broad, h, dx,
+                              blist, n_left, lhead, lnext, found, out)
     # the projection, on the second half of the contact and row scratch (the first keeps the velocity step's),
     # looking at the pairs within their reach over the step as solved. A body of a component solved exactly from
     # no point deeper than half the tolerance that moved less than PROJECT_TOL × its size over the step is held
@@ -2047,7 +2188,8 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     out[OUT_DEPTH] = deepest
     _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt, size, depth_tol, dx, flags, out)
     if out[OUT_STOPPED] > 0:
-        _attribute(nc, cint, cflt, int(out[OUT_STOPPED]), cint[half:], cflt[half:], members, cstart)
+        nc = _attribute(nc, cint, cflt, int(out[OUT_STOPPED]), cint[half:], cflt[half:], members, cstart, half)
+        out[OUT_CONTACTS] = nc
     # sleeping: a component of the step's contacts whose bodies were and stay slower than the sleep speed (at
     # rest, SLEEP_SPEED: one step), or with a sleep speed raised above rest stayed within sleep_speed × SLEEP_STEPS
     # steps of where they began SLEEP_STEPS steps ago (anchor: that pose), is locked (its island's other bodies are
@@ -2090,4 +2232,5 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                     saved[i, j] = Y1[i, j]
     _pin = Y0[0, 0], Y1[0, 0], prm[0, 0], wr[0, 0], bare[0, 0], modes[0], saved[0, 0], cand[0, 0], A[0, 0], L[0, 0], vec[0, 0], order[0], cstart[0]
     _pin2 = group[0], cwork[0, 0], rwork[0, 0], roused[0], rest_int[:1], rest_flt[:1], bwork[0, 0], blist[0]
+    _pin3 = broad[0][0, 0], lhead[0], lnext[0], found[0]
     return 0
