@@ -682,6 +682,42 @@ def test_a_ball_the_island_step_drives_beyond_its_free_path_takes_the_ball_it_me
     np.testing.assert_allclose(floats[between, C_IMPULSE].sum(), masses[2] * shared, rtol=1e-12)
 
 
+@pytest.mark.parametrize("sunk, lift", [(0.0, 0.0), (1e-4, 2e-5), (1e-4, 3e-4)])
+def test_an_islands_step_keeps_of_a_rise_only_what_a_lift_out_of_its_overlaps_may_add(sunk, lift):
+    """The islands' energy guard (kernels/contact/island._no_gain) on two 1 kg cubes, one component, parting at
+    0.05 J, whose step ended them 0.1 J faster and each raised by ``lift``, one contact of the step's start
+    ``sunk`` deep: K + U ends min(ΔU, Σ m |g| × sunk) above where it began (1e-12 J), the rest taken out of the
+    kinetic energy, the poses as stepped — apart, nothing; lifted less than the depth, the rise of U; lifted
+    more, the depth's worth. The kinetic gain of a component overlapping at its start is no longer its to keep."""
+    from rigid_body_sim.core.kernels import layout as L
+    from rigid_body_sim.core.kernels.contact.impacts import kinetic_energy_row, potential_energy_row
+    from rigid_body_sim.core.kernels.contact.island import (C_FLOATS, C_GAP, C_INTS, I_A, I_B, I_GROUND, I_STATIC,
+                                                           OUT_WIDTH, _no_gain)
+
+    sim = simulator({"a": cube((0.0, 0.0, 0.5 * EDGE)), "b": cube((EDGE, 0.0, 0.5 * EDGE))})
+    Y0 = sim._Ys[sim._control[L.CUR]].copy()
+    Y0[0, L.V], Y0[1, L.V] = -np.sqrt(0.05), np.sqrt(0.05)  # ½ m v² = 0.025 J each
+    Y1 = Y0.copy()
+    Y1[0, L.V], Y1[1, L.V] = -np.sqrt(0.15), np.sqrt(0.15)
+    Y1[:, L.P + 2] += lift
+    stepped = Y1.copy()
+    prm = sim._prm
+    cint, cflt = np.full((1, C_INTS), -1, dtype=np.int64), np.zeros((1, C_FLOATS))
+    cint[0, I_A], cint[0, I_B], cint[0, I_STATIC], cint[0, I_GROUND] = 0, 1, -1, -1
+    cflt[0, C_GAP] = -sunk
+    wrench = np.zeros((2, L.WRENCH_WIDTH))
+    _no_gain(Y0, Y1, prm, wrench, wrench, np.zeros(2, dtype=np.int64), np.arange(2), np.ones(2, dtype=np.int64),
+             np.zeros(2, dtype=np.int64), 1, cint, cflt, np.full(2, EDGE), 0.0, np.zeros((2, 6)),
+             np.zeros(2, dtype=np.int64), np.zeros(OUT_WIDTH), np.zeros(2))
+
+    def energy(Y):
+        return sum(kinetic_energy_row(Y[i], prm[i]) + potential_energy_row(Y[i], prm[i]) for i in range(2))
+
+    kept = min(2 * G * lift, 2 * G * sunk)
+    assert abs(energy(Y1) - energy(Y0) - kept) <= 1e-12
+    np.testing.assert_array_equal(Y1[:, L.P:L.P + 3], stepped[:, L.P:L.P + 3])
+
+
 @pytest.mark.parametrize("dt", [1e-3, 1e-2])
 @pytest.mark.parametrize("sunk", [0.0, 0.75])
 def test_a_resting_tower_is_held_by_its_warm_start_with_each_cube_s_weight(dt, sunk):

@@ -76,6 +76,7 @@ class Islands:
         self._group = np.zeros(n, dtype=np.int64)  # a sleeping body's component when it fell asleep
         self._lhead = np.zeros(n, dtype=np.int64)  # _late_pairs' scratch: per body, per broad phase member
         self._found = np.zeros(len(pairs.members), dtype=np.int64)
+        self._lifts = np.zeros(n)  # island_pass' scratch (_no_gain)
         self.out = np.zeros(OUT_WIDTH)
         self._grow_pairs(16)
         self._grow_contacts(64)
@@ -245,7 +246,7 @@ class Islands:
                                self._iw, self._dx, self._rj, self._rw, self._rdiag, self._rbias, self._rlam,
                                self._rbody, self._order, self._cstart, self._A, self._L, self._vec, self.out, self._comp,
                                self._band, self._group, self._cwork, self._rwork, self._bwork, self._blist,
-                               self.pairs.broad_phase(), self._lhead, self._lnext, self._found)
+                               self.pairs.broad_phase(), self._lhead, self._lnext, self._found, self._lifts)
             if code >= 0:
                 break
             self._grow_contacts(2 * -code)

@@ -1699,7 +1699,8 @@ def _energy(Y, prm, i):
 
 
 @njit(**JIT)
-def _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt, size, depth_tol, sums, flags, out):
+def _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt, size, depth_tol, sums, flags, out,
+             lifts):
     """Keep each component of the step's contacts (comp) that nothing but gravity pushes (no applied wrench on
     its bodies; its fixed sides never move) from ending the step with more K + U than it began it with. What the
     step added (a Gauss–Seidel step short of convergence, the projection's lift) is taken out of its kinetic
@@ -1708,22 +1709,26 @@ def _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt
     bodies are set back where they began the step, at rest (K + U then U₀ ≤ K₀ + U₀; OUT_RESTORED): it was nearly
     at rest, and it had no contact with another component over the step. That rest is imposed, not found: its root
     is flagged (128) and the sleep rule does not count the step as at rest (FROZEN_STEPS such steps in a row it
-    counts apart). A component with a point of the step's start (nc rows of cint, cflt) deeper than the projection's tolerance (overlapping as it was set) is left alone:
-    the projection's lift out of that overlap is its to keep. A rise within RISE_ROUNDOFF × Σ |E| is
-    round-off and left alone: the exact solve's steps are not touched. sums (per body, ≥ 4 columns) is scratch: per
-    root the rise, K at the end, Σ |E|, and what is done (−1: left alone, pushed or overlapping; 1: trimmed;
-    2: restored)."""
+    counts apart). A component with points of the step's start (nc rows of cint, cflt) deeper than the projection's
+    tolerance (overlapping as it was set) keeps what a lift out of them may add: its rise of U over the step, up to
+    its bodies' Σ m |g| × those depths summed (none is lifted farther out of them than that); only the rest of a
+    rise is taken out, and where that is more than its kinetic energy its bodies stop where they are (not set
+    back into the overlap). A rise within RISE_ROUNDOFF × Σ |E| is round-off and left alone: the exact solve's
+    steps are not touched. sums (per body, 6 columns) and lifts (per body) are scratch: per root the
+    rise, K at the end, Σ |E|, what is done (−1: left alone, pushed; 1: trimmed; 2: restored; 3: stopped where it
+    is), the depths summed, its rise of U; Σ m |g|."""
     n = members.shape[0]
     for m in range(n):
         i = members[m]
         if island[i] == 1:
             r = _find(comp, i)
-            for j in range(4):
+            for j in range(6):
                 sums[r, j] = 0.0
+            lifts[r] = 0.0
     for c in range(nc):
         i = cint[c, I_B] if cint[c, I_B] >= 0 else cint[c, I_A]
         if cflt[c, C_GAP] < -_depth_tol(size, i, depth_tol):
-            sums[_find(comp, i), 3] = -1.0
+            sums[_find(comp, i), 4] -= cflt[c, C_GAP]
     for m in range(n):
         i = members[m]
         if island[i] != 1:
@@ -1732,19 +1737,27 @@ def _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt
         row = bare[i] if modes[i] != 0 else wr[i]
         if row[ACTIVE] != 0.0:
             sums[r, 3] = -1.0
-        _, e0 = _energy(Y0, prm, i)
+        k0, e0 = _energy(Y0, prm, i)
         k1, e1 = _energy(Y1, prm, i)
         sums[r, 0] += e1 - e0
         sums[r, 1] += k1
         sums[r, 2] += abs(e0) + abs(e1)
+        sums[r, 5] += (e1 - k1) - (e0 - k0)
+        lifts[r] += prm[i, MASS] * math.sqrt(prm[i, GRAVITY] ** 2 + prm[i, GRAVITY + 1] ** 2
+                                             + prm[i, GRAVITY + 2] ** 2)
     for m in range(n):
         i = members[m]
         if island[i] != 1:
             continue
         r = _find(comp, i)
-        if sums[r, 3] == 0.0 and sums[r, 0] > RISE_ROUNDOFF * sums[r, 2]:
+        lift = min(max(sums[r, 5], 0.0), lifts[r] * sums[r, 4])  # what a lift out of its overlaps may add
+        if sums[r, 3] == 0.0 and sums[r, 0] - lift > RISE_ROUNDOFF * sums[r, 2]:
+            sums[r, 0] -= lift
             if sums[r, 0] < sums[r, 1]:
                 sums[r, 3] = 1.0
+                out[OUT_TRIMMED] += 1
+            elif sums[r, 4] > 0.0:
+                sums[r, 3] = 3.0
                 out[OUT_TRIMMED] += 1
             else:
                 sums[r, 3] = 2.0
@@ -1759,6 +1772,10 @@ def _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt
             for j in range(STATE_WIDTH):
                 Y1[i, j] = Y0[i, j]
             Y1[i, BOUND] = Y0[i, BOUND]
+            for j in range(3):
+                Y1[i, V + j] = 0.0
+                Y1[i, W + j] = 0.0
+        elif sums[r, 3] == 3.0:
             for j in range(3):
                 Y1[i, V + j] = 0.0
                 Y1[i, W + j] = 0.0
@@ -1873,7 +1890,8 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                 spin_reach, size, asleep, roused, wait, skips, still, anchor, h, sleeping, sleep_speed, default_mu,
                 depth_tol, n_prev, rest_int, rest_flt, island, parent, flags, nlist, pos, quat, rot, pdist, pnormal,
                 pcount, ppoints, pseps, bound, cint, cflt, vel, iw, dx, rj, rw, rdiag, rbias, rlam, rbody, order,
-                cstart, A, L, vec, out, comp, band, group, cwork, rwork, bwork, blist, broad, lhead, lnext, found):
+                cstart, A, L, vec, out, comp, band, group, cwork, rwork, bwork, blist, broad, lhead, lnext, found,
+                lifts):
     """One step of every island (module docstring): results into Y1 for the bodies marked island[i] = 1 (solved)
     or 2 (asleep: their rows copied from Y0). Returns 0, or −(contacts needed) when cint is too small
     (then nothing was changed but ``asleep`` and the outputs; call again with room). ``depth_tol`` (m, ≥ 0): the
@@ -1891,8 +1909,8 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     each a force, N; × h, the λ that held it), so that one woken is solved from the rest it was locked in.
     ``broad``: the broad phase's boxes and grid (_late_pairs), which listed ``cand``. ``cwork`` (per contact, 3
     columns), ``rwork`` (per row, 3 columns), ``bwork`` (per body, 13 columns, the last zero between calls),
-    ``blist`` (per body), ``lhead`` (per body), ``lnext`` (2 per row of nlist) and ``found`` (per broad phase
-    member) are scratch."""
+    ``blist`` (per body), ``lhead`` (per body), ``lnext`` (2 per row of nlist), ``found`` (per broad phase
+    member) and ``lifts`` (per body) are scratch."""
     n = members.shape[0]
     for k in range(OUT_WIDTH):
         out[k] = 0.0
@@ -2025,7 +2043,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             skips[members[m], 0] = skips[members[m], 1] = 0
         _pin = Y0[0, 0], Y1[0, 0], prm[0, 0], wr[0, 0], bare[0, 0], modes[0], saved[0, 0], cand[0, 0], A[0, 0], L[0, 0], vec[0, 0], order[0], cstart[0]
         _pin2 = group[0], cwork[0, 0], rwork[0, 0], roused[0], rest_int[:1], rest_flt[:1], bwork[0, 0], blist[0]
-        _pin3 = broad[0][0, 0], lhead[0], lnext[0], found[0]
+        _pin3 = broad[0][0, 0], lhead[0], lnext[0], found[0], lifts[0]
         return 0
     # the velocity problem
     nc = _gather(Y0, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps,
@@ -2186,7 +2204,8 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                        cflt[half:], rj[3 * half:], rw[3 * half:], rdiag[3 * half:], rbias[3 * half:],
                        rlam[3 * half:], rbody[3 * half:], order, out, comp, flags, rwork[3 * half:])
     out[OUT_DEPTH] = deepest
-    _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt, size, depth_tol, dx, flags, out)
+    _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt, size, depth_tol, dx, flags, out,
+             lifts)
     if out[OUT_STOPPED] > 0:
         nc = _attribute(nc, cint, cflt, int(out[OUT_STOPPED]), cint[half:], cflt[half:], members, cstart, half)
         out[OUT_CONTACTS] = nc
@@ -2232,5 +2251,5 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                     saved[i, j] = Y1[i, j]
     _pin = Y0[0, 0], Y1[0, 0], prm[0, 0], wr[0, 0], bare[0, 0], modes[0], saved[0, 0], cand[0, 0], A[0, 0], L[0, 0], vec[0, 0], order[0], cstart[0]
     _pin2 = group[0], cwork[0, 0], rwork[0, 0], roused[0], rest_int[:1], rest_flt[:1], bwork[0, 0], blist[0]
-    _pin3 = broad[0][0, 0], lhead[0], lnext[0], found[0]
+    _pin3 = broad[0][0, 0], lhead[0], lnext[0], found[0], lifts[0]
     return 0
