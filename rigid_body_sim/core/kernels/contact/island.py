@@ -70,7 +70,7 @@ from .impacts import kinetic_energy_row, potential_energy_row
 from .pair_impacts import normal_speed
 from .pairs import MAX_PAIR_POINTS, RIM_ACROSS, boxes_apart_turned, face_patch, pair_contacts
 from .shapes import MAX_FEATURES, feature_gaps, feature_points
-from .swept import GROWTH, grid_overlaps
+from .swept import chords_apart, grid_overlaps, growth
 
 __all__ = ["island_pass", "all_asleep", "rest_alone", "TOUCH", "SLEEP_SPEED", "SLEEP_STEPS", "DENSE_MAX", "PROJECT_TOL", "C_FLOATS", "C_INTS", "OUT_WIDTH"]
 
@@ -1850,20 +1850,8 @@ def _late_pair(Y0, Y1, island, stopped, is_static, nlist, n_pairs, comp, flags, 
     i, j = bmembers[m], bmembers[k]
     if i == j or stopped[i] or stopped[j] or _listed(nlist, lhead, lnext, i, j):
         return n_pairs
-    grow = 0.0
-    if island[j] == 0 and not is_static[j]:
-        dvx, dvy, dvz = Y1[j, V] - Y0[j, V], Y1[j, V + 1] - Y0[j, V + 1], Y1[j, V + 2] - Y0[j, V + 2]
-        grow = GROWTH * h * math.sqrt(dvx * dvx + dvy * dvy + dvz * dvz)
-    r0x, r0y, r0z = Y0[j, P] - Y0[i, P], Y0[j, P + 1] - Y0[i, P + 1], Y0[j, P + 2] - Y0[i, P + 2]
-    dx = Y1[j, P] - Y1[i, P] - r0x
-    dy = Y1[j, P + 1] - Y1[i, P + 1] - r0y
-    dz = Y1[j, P + 2] - Y1[i, P + 2] - r0z
-    d2 = dx * dx + dy * dy + dz * dz
-    t = 0.0
-    if d2 > 0.0:
-        t = min(max(-(r0x * dx + r0y * dy + r0z * dz) / d2, 0.0), 1.0)
-    cx, cy, cz = r0x + t * dx, r0y + t * dy, r0z + t * dz
-    if math.sqrt(cx * cx + cy * cy + cz * cz) > (reach[m] + reach[k]) * (1.0 + 1e-6) + grow:
+    grow = growth(Y0, Y1, j, h) if island[j] == 0 and not is_static[j] else 0.0  # a free step keeps its growth
+    if chords_apart(Y0, Y1, i, j) > (reach[m] + reach[k]) * (1.0 + 1e-6) + grow:
         return n_pairs
     if n_pairs == nlist.shape[0]:
         out[OUT_LATE_LOST] += 1
@@ -2161,11 +2149,9 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         i = members[m]
         if island[i] != 1:
             continue
-        dvx, dvy, dvz = Y1[i, V] - Y0[i, V], Y1[i, V + 1] - Y0[i, V + 1], Y1[i, V + 2] - Y0[i, V + 2]
         ex, ey, ez = (Y0[i, P] + h * vel[i, 0] - Y1[i, P], Y0[i, P + 1] + h * vel[i, 1] - Y1[i, P + 1],
                       Y0[i, P + 2] + h * vel[i, 2] - Y1[i, P + 2])
-        if (math.sqrt(ex * ex + ey * ey + ez * ez)
-                > GROWTH * h * math.sqrt(dvx * dvx + dvy * dvy + dvz * dvz) + 1e-6 * reach[m]):
+        if math.sqrt(ex * ex + ey * ey + ez * ez) > growth(Y0, Y1, i, h) + 1e-6 * reach[m]:
             flags[i] |= LEFT_PATH
             blist[n_left] = m
             n_left += 1

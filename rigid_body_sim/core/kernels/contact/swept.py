@@ -33,7 +33,7 @@ from ..layout import P, Q, V, W
 from ..rotation import qmul
 from .pairs import apart_bounds, pair_contacts
 
-__all__ = ["GROWTH", "swept_bounds", "grid_swept_pairs", "grid_overlaps", "spheres_may_meet", "screen_pairs"]
+__all__ = ["GROWTH", "growth", "chords_apart", "swept_bounds", "grid_swept_pairs", "grid_overlaps", "spheres_may_meet", "screen_pairs"]
 
 
 #: A body's box and sphere over the step are grown by this × |v₁ − v₀| h (m): module docstring.
@@ -49,8 +49,7 @@ def swept_bounds(Y0, Y1, members, reach, h, lo, hi):
     """
     for m in range(members.shape[0]):
         i = members[m]
-        dvx, dvy, dvz = Y1[i, V] - Y0[i, V], Y1[i, V + 1] - Y0[i, V + 1], Y1[i, V + 2] - Y0[i, V + 2]
-        grow = reach[m] + GROWTH * h * math.sqrt(dvx * dvx + dvy * dvy + dvz * dvz)
+        grow = reach[m] + growth(Y0, Y1, i, h)
         for k in range(3):
             a, b = Y0[i, P + k], Y1[i, P + k]
             lo[m, k] = min(a, b) - grow
@@ -182,6 +181,29 @@ def grid_swept_pairs(lo, hi, movable, cells, heads, chain, pairs):
     return count
 
 
+@njit(**INLINE)
+def growth(Y0, Y1, i, h):
+    """Body i's growth over the step (m): GROWTH × |v₁ − v₀| h (module docstring)."""
+    dvx, dvy, dvz = Y1[i, V] - Y0[i, V], Y1[i, V + 1] - Y0[i, V + 1], Y1[i, V + 2] - Y0[i, V + 2]
+    return GROWTH * h * math.sqrt(dvx * dvx + dvy * dvy + dvz * dvz)
+
+
+@njit(**INLINE)
+def chords_apart(Y0, Y1, a, b):
+    """The least distance (m) between the centres of bodies a and b over the step, each on its chord from its
+    position in Y0 to its position in Y1 at the same rate (the relative chord's closest point to zero)."""
+    r0x, r0y, r0z = Y0[b, P] - Y0[a, P], Y0[b, P + 1] - Y0[a, P + 1], Y0[b, P + 2] - Y0[a, P + 2]
+    dx = Y1[b, P] - Y1[a, P] - r0x
+    dy = Y1[b, P + 1] - Y1[a, P + 1] - r0y
+    dz = Y1[b, P + 2] - Y1[a, P + 2] - r0z
+    d2 = dx * dx + dy * dy + dz * dz
+    t = 0.0
+    if d2 > 0.0:
+        t = min(max(-(r0x * dx + r0y * dy + r0z * dz) / d2, 0.0), 1.0)
+    cx, cy, cz = r0x + t * dx, r0y + t * dy, r0z + t * dz
+    return math.sqrt(cx * cx + cy * cy + cz * cz)
+
+
 @njit(**JIT)
 def spheres_may_meet(Y0, Y1, members, reach, h, pairs, found):
     """Of the overlapping boxes' pairs (rows of members) pairs[:found], those whose bounding spheres can meet over
@@ -194,21 +216,8 @@ def spheres_may_meet(Y0, Y1, members, reach, h, pairs, found):
     for k in range(found):
         m, n = pairs[k, 0], pairs[k, 1]
         a, b = members[m], members[n]
-        grow = 0.0
-        for i in (a, b):
-            dvx, dvy, dvz = Y1[i, V] - Y0[i, V], Y1[i, V + 1] - Y0[i, V + 1], Y1[i, V + 2] - Y0[i, V + 2]
-            grow += GROWTH * h * math.sqrt(dvx * dvx + dvy * dvy + dvz * dvz)
-        r0x, r0y, r0z = Y0[b, P] - Y0[a, P], Y0[b, P + 1] - Y0[a, P + 1], Y0[b, P + 2] - Y0[a, P + 2]
-        dx = Y1[b, P] - Y1[a, P] - r0x
-        dy = Y1[b, P + 1] - Y1[a, P + 1] - r0y
-        dz = Y1[b, P + 2] - Y1[a, P + 2] - r0z
-        d2 = dx * dx + dy * dy + dz * dz
-        t = 0.0
-        if d2 > 0.0:
-            t = min(max(-(r0x * dx + r0y * dy + r0z * dz) / d2, 0.0), 1.0)
-        cx, cy, cz = r0x + t * dx, r0y + t * dy, r0z + t * dz
-        radii = reach[m] + reach[n]
-        if math.sqrt(cx * cx + cy * cy + cz * cz) <= radii * (1.0 + 1e-6) + grow:
+        grow = growth(Y0, Y1, a, h) + growth(Y0, Y1, b, h)
+        if chords_apart(Y0, Y1, a, b) <= (reach[m] + reach[n]) * (1.0 + 1e-6) + grow:
             pairs[kept, 0], pairs[kept, 1] = m, n
             kept += 1
     _pin = Y0[0, 0], Y1[0, 0], members[0], reach[0], pairs[0, 0]
