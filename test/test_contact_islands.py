@@ -670,6 +670,7 @@ def test_a_ball_the_island_step_drives_beyond_its_free_path_takes_the_ball_it_me
     sim.step()
     islands = sim.contact.pairs.islands
     assert islands.out[OUT_JOINED] == 1
+    assert sim.contact.counts["island_late_pairs"] == sim.contact.counts["island_late_joined"] == 1
     v = sim.linear_velocities_world()
     shared = masses[0] * v0 / sum(masses)
     np.testing.assert_allclose(v[:, 0], shared, rtol=1e-12)

@@ -31,8 +31,8 @@ import numpy as np
 
 from ..kernels import layout as L
 from ..kernels.contact.island import (C_FLOATS, C_IMPULSE, C_INTS, DENSE_MAX, I_A, I_B, OUT_BODIES, OUT_CONTACTS,
-                                      OUT_DEPTH, OUT_LATE_LOST, OUT_SLEPT, OUT_WIDTH, OUT_WOKEN, all_asleep,
-                                      island_pass, rest_alone)
+                                      OUT_DEPTH, OUT_JOINED, OUT_LATE, OUT_LATE_LOST, OUT_SLEPT, OUT_WIDTH, OUT_WOKEN,
+                                      all_asleep, island_pass, rest_alone)
 from ..kernels.contact.layout import DIMS, FLIGHT, PERSISTENT
 from ..kernels.contact.pairs import MAX_PAIR_POINTS
 from .island_contacts import IslandContactLog, body_sides
@@ -258,6 +258,8 @@ class Islands:
         self._record(Y0, Y1, h)
         self.body_steps += int(out[OUT_BODIES])
         solver.counts["island_body_steps"] += int(out[OUT_BODIES])
+        solver.counts["island_late_pairs"] += int(out[OUT_LATE])
+        solver.counts["island_late_joined"] += int(out[OUT_JOINED])
         self.deepest = max(self.deepest, float(out[OUT_DEPTH]))
         now = self.island != 0
         stepped = self.island == 1

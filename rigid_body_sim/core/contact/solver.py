@@ -253,7 +253,9 @@ class ContactSolver:
         #: there never opens within the span (a corner swinging in as the struck point leaves): not struck again
         #: at the same instant, it stays pressed on it for the rest of the step (:meth:`_persistent_end`), or struck
         #: more than MAX_SIDE_IMPACTS times in the step; ``held_thrown`` spans of a resting body under gravity alone
-        #: whose held step raised its K + U by more than THROWN of it: it stays where it was, at rest (:meth:`_held_span`).
+        #: whose held step raised its K + U by more than THROWN of it: it stays where it was, at rest (:meth:`_held_span`);
+        #: ``island_late_pairs`` pairs the islands found by screening a body again on the path their velocity step
+        #: gave it, ``island_late_joined`` bodies outside the islands those joined to them (island.py).
         self._static_skipped: set[int] = set()  # bodies not looked at against static shapes for the rest of the step
         #: side impacts of each body in this step; PRESSED: not looked at for them for the rest of the step
         self._side_hits: dict[int, int] = {}
@@ -261,7 +263,8 @@ class ContactSolver:
         self.counts = dict.fromkeys(("restitution_capped", "multi_contact_elastic", "refined_steps",
                                      "second_half_space", "two_ground_overflow", "painleve",
                                      "static_tangent", "static_pressed", "island_body_steps", "rim_pieces",
-                                     "rim_capped", "face_landed", "face_down", "side_pressed", "held_thrown"), 0)
+                                     "rim_capped", "face_landed", "face_down", "side_pressed", "held_thrown",
+                                     "island_late_pairs", "island_late_joined"), 0)
         #: Per body, a second half-space it is held on besides ``ground_of`` (two_grounds.py), or -1.
         self.other_ground = np.full(n, -1, dtype=np.int64)
         #: The features touching ``other_ground``, as bits.
