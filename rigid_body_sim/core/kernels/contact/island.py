@@ -33,7 +33,9 @@ again at the next step instead (at most STICK_SKIPS steps in a row). Else
 projected Gauss–Seidel on the component's rows (over more than PILE_CONTACTS contacts, a pile, each
 component on its own, from the highest against gravity down, then back up, in turn: a weight passes
 down a pile and a stop up it within a sweep). Then the
-positions: every point found penetrating at the new poses (narrow phase again) deeper than the projection's
+positions (a body the velocity step moved off the free path the broad phase screened it on is screened again on
+its new one, _late_pairs: a pair so found is projected, a body outside the islands so met joins them); then every
+point found penetrating at the new poses (narrow phase again) deeper than the projection's
 tolerance (PROJECT_TOL × its body's size, or the solver's penetration tolerance where that is more) is closed by a
 mass-metric least correction (Gauss–Seidel on the linearised gaps, λ ≥ 0; over a pile, bottom-up with each
 upright pair's lower body held, _pile_rows), the narrow phase iterated PROJECT_ROUNDS times; only the
@@ -70,7 +72,7 @@ from .impacts import kinetic_energy_row, potential_energy_row
 from .pair_impacts import normal_speed
 from .pairs import MAX_PAIR_POINTS, RIM_ACROSS, boxes_apart_turned, face_patch, pair_contacts
 from .shapes import MAX_FEATURES, feature_gaps, feature_points
-from .swept import chords_apart, grid_overlaps, growth
+from .swept import boxes_meet, chords_apart, grid_overlaps, growth
 
 __all__ = ["island_pass", "all_asleep", "rest_alone", "TOUCH", "SLEEP_SPEED", "SLEEP_STEPS", "DENSE_MAX", "PROJECT_TOL", "C_FLOATS", "C_INTS", "OUT_WIDTH"]
 
@@ -1834,8 +1836,7 @@ def _late_pairs(Y0, Y1, island, stopped, is_static, members, nlist, n_pairs, com
         for e2 in range(e + 1, n_left):
             m2 = left[e2]
             j = members[m2]
-            if (boxes[i, 0] <= boxes[j, 3] and boxes[j, 0] <= boxes[i, 3] and boxes[i, 1] <= boxes[j, 4]
-                    and boxes[j, 1] <= boxes[i, 4] and boxes[i, 2] <= boxes[j, 5] and boxes[j, 2] <= boxes[i, 5]):
+            if boxes_meet(boxes[i, 0:3], boxes[i, 3:6], boxes[j, 0:3], boxes[j, 3:6], 0.0):
                 n_pairs = _late_pair(Y0, Y1, island, stopped, is_static, nlist, n_pairs, comp, flags, bmembers,
                                      reach, h, m, m2, lhead, lnext, out)
     _pin = Y0[0, 0], Y1[0, 0], island[0], stopped[0], is_static[0], members[0], nlist[0, 0], comp[0], flags[0]

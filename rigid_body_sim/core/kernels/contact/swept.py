@@ -33,7 +33,8 @@ from ..layout import P, Q, V, W
 from ..rotation import qmul
 from .pairs import apart_bounds, pair_contacts
 
-__all__ = ["GROWTH", "growth", "chords_apart", "swept_bounds", "grid_swept_pairs", "grid_overlaps", "spheres_may_meet", "screen_pairs"]
+__all__ = ["GROWTH", "growth", "chords_apart", "swept_bounds", "grid_swept_pairs", "boxes_meet", "grid_overlaps",
+           "spheres_may_meet", "screen_pairs"]
 
 
 #: A body's box and sphere over the step are grown by this × |v₁ − v₀| h (m): module docstring.
@@ -78,7 +79,8 @@ def _cell_of(x, cell):
 
 
 @njit(**INLINE)
-def _boxes_meet(alo, ahi, blo, bhi, slack):
+def boxes_meet(alo, ahi, blo, bhi, slack):
+    """Whether boxes (alo, ahi) and (blo, bhi) (3,) come within ``slack`` (m) of each other on all three axes."""
     return (alo[0] <= bhi[0] + slack and blo[0] <= ahi[0] + slack and alo[1] <= bhi[1] + slack
             and blo[1] <= ahi[1] + slack and alo[2] <= bhi[2] + slack and blo[2] <= ahi[2] + slack)
 
@@ -101,7 +103,7 @@ def grid_overlaps(qlo, qhi, slack, lo, hi, movable, fixed, cells, heads, chain, 
     span = float(x1 - x0 + 1) * float(y1 - y0 + 1) * float(z1 - z0 + 1)
     if span > lo.shape[0]:  # a query wider than the grid holds: every movable box
         for i in range(lo.shape[0]):
-            if movable[i] and _boxes_meet(qlo, qhi, lo[i], hi[i], slack):
+            if movable[i] and boxes_meet(qlo, qhi, lo[i], hi[i], slack):
                 if count < capacity:
                     found[count] = i
                 count += 1
@@ -112,14 +114,14 @@ def grid_overlaps(qlo, qhi, slack, lo, hi, movable, fixed, cells, heads, chain, 
                     i = heads[_cell_key(cx, cy, cz, mask)]
                     while i >= 0:
                         if (cells[i, 0] == cx and cells[i, 1] == cy and cells[i, 2] == cz
-                                and _boxes_meet(qlo, qhi, lo[i], hi[i], slack)):
+                                and boxes_meet(qlo, qhi, lo[i], hi[i], slack)):
                             if count < capacity:
                                 found[count] = i
                             count += 1
                         i = chain[i]
     for f in range(fixed.shape[0]):
         i = fixed[f]
-        if _boxes_meet(qlo, qhi, lo[i], hi[i], slack):
+        if boxes_meet(qlo, qhi, lo[i], hi[i], slack):
             if count < capacity:
                 found[count] = i
             count += 1
