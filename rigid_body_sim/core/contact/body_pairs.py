@@ -22,9 +22,15 @@ After each step, before the ground pass:
 3. **Groups**: bodies linked by such pairs are stepped together, event after event, from the
    step's start. Each event time is the first root of s ↦ F(s), F the least of the group's pair
    signed distances d(Φ_a(y_a0, s h), Φ_b(y_b0, s h)), of its flying members' gaps to the
-   ground and the static shapes and of its held members' gaps to the other half-spaces and static
-   shapes (a wall a body sliding on the ground meets), Φ each body's own step map
-   (solver.step_map). Conservative advancement finds a sample where F < 0: from s, the next
+   ground and the static shapes, of its held members' gaps to the other half-spaces and static
+   shapes (a wall a body sliding on the ground meets) and of their features not on their ground
+   (a tipping box's other edge coming down: its landing, solver._landing, and it is held again),
+   Φ each body's own step map (solver.step_map; a held member's projected onto its ground,
+   solver.held_path: the step map alone drifts off it). A pair touching at a piece's start and not
+   approaching (just struck; sliding on the other), or met without approaching (grazing), is
+   followed too, to a skin ε_k deeper than it was then: it sets no sample's length, its sign
+   is read at every sample; met there approaching, it is moved apart (item 5) and has its
+   impacts. Conservative advancement finds a sample where F < 0: from s, the next
    sample is s + (F_k + ε_k)/(B_k h) over the components k, with B_k a bound on |dF_k/dt|
    (relative speed plus spin × bounding radius, the largest over the piece; a sphere's spin does
    not count) and ε_k = 1e-4 × the pair's size; no component can cross zero between samples
@@ -51,7 +57,7 @@ After each step, before the ground pass:
    (solver._impact; a rebound too small to resolve: its rest); at a held member's wall root, that
    wall's (solver._strike_side). After any event every member goes on in the group, its pairs
    still followed: one come to rest is held there with its holding force, one lifted off flies. A
-   pair that does not approach at its root (grazing) is not looked at again in that step.
+   pair met without approaching more than MAX_GRAZES times in a step is not looked at again in it.
 5. **Touching at a piece's start**: a pair overlapping (or touching, TOUCHING) at the start of
    a step or of a piece and approaching has its impacts there; if it overlaps, it is first moved
    apart along the normal by the depth, shared by inverse mass (a held member does not move).
@@ -62,8 +68,8 @@ within twice the change the step's forces make to it: else striking, an impact o
 parting), or striking with restitution 0 or with a body held on its ground (the velocity step is then
 its inelastic impact, with the bodies' other contacts), are stepped together by a first-order velocity step and left out of this pass. A body
 meeting another outside an island is kept up by the impacts of item 5 at each step's start until
-the two form an island at the next step (it may sink into the other by up to about a h²/2 within
-that step: counted in :attr:`BodyPairs.separations` when moved back out).
+the two form an island at the next step (within that step it is followed to ε_k deeper than it
+touched, then moved back out: counted in :attr:`BodyPairs.separations`).
 """
 
 from __future__ import annotations
@@ -98,6 +104,8 @@ MAX_ADVANCE = 400
 MAX_SEQUENTIAL = 200
 #: Most events of one group in one step (more is reported as an error, not looped on).
 MAX_GROUP_EVENTS = 10_000
+#: Most times a pair is met without approaching in one step (then it is not looked at again in that step).
+MAX_GRAZES = 8
 #: Rounds of impacts at one piece's start before the pairs still approaching are left for the piece.
 MAX_ROUNDS = 10
 #: A pair whose signed distance is below this × its size (m per m) touches.
@@ -362,13 +370,14 @@ class BodyPairs:
         #: members held on their ground, with the holding force of the step's start or of their rest in it (w[i])
         held = {i for i in members if solver.modes[i] == PERSISTENT}
         rounds = 0
-        grazed: set = set()
+        grazed: dict = {}  # a pair met without approaching: its floor (below) and how often it was so met
+        dropped: set = set()  # grazed more than MAX_GRAZES times: not looked at again in the step
         hints: dict[int, float] = {}  # a flying member just struck: its apex hint, its gap 0 (solver._with_events)
         struck: set = set()
         for _ in range(MAX_GROUP_EVENTS):
             if h <= 0.0 or not active:
                 break
-            pairs_now = [(a, b) for a, b in pairs if a in active and b in active and (a, b) not in grazed]
+            pairs_now = [(a, b) for a, b in pairs if a in active and b in active and (a, b) not in dropped]
             if not pairs_now and not any(solver.modes[i] == FLIGHT for i in active):
                 break
             # pairs touching at the piece's start: those that approach have their impacts now, all together
@@ -382,7 +391,12 @@ class BodyPairs:
                     self._separate(sim, a, b, y, held)
                 self._impacts(sim, touching, y, w, t, held)
                 continue
-            live = [p for p in pairs_now if p not in touching]
+            # a pair touching at the piece's start and not approaching (just struck, sliding on the other), or met
+            # without approaching (grazed), is followed to a floor a skin deeper than it was then (its meeting): it
+            # sets no sample's length (its bound against a gap of 0 would), its sign is read at every sample
+            floors = {p: grazed[p][0] for p in pairs_now if p in grazed and p not in touching}
+            floors.update((p, self._floor(y, p)) for p in touching)
+            live = [p for p in pairs_now if p not in floors]
             flying = [i for i in active if solver.modes[i] == FLIGHT]
             # a flying member on its ground or a static shape at the piece's start (just struck, or within its
             # feature band: touching) has its next meeting with them located on its own step map, as the ground pass
@@ -394,22 +408,29 @@ class BodyPairs:
             # (touching one, it is the ground pass's, solver._persistent_end)
             sides = [i for i in sorted(active & held) if solver._may_strike_side(i)
                      and solver._other_gap(sim, y[i], i)[0] > band[i]]
+            # a held member's features not on its ground (a box tipping on an edge: its other edge comes down), while
+            # apart: a landing there changes its path (solver._reaching, on the ground pass)
+            lands = [i for i in sorted(active & held) if solver.other_ground[i] < 0
+                     and solver._untracked_gap(sim, y[i], i, y[i]) > 0.0]
             # a held can rocking on a rim whose lowest point turns fast: the events looked for piece by piece, each
             # piece's holding force found afresh (solver._rim_piece), as on the ground pass
             span = min([h] + [solver._rim_piece(sim, i, y[i], h) for i in active & held])
             cache: dict[float, dict[int, np.ndarray]] = {}
 
             def at(s: float) -> dict[int, np.ndarray]:
-                if s not in cache:
-                    cache[s] = {i: (solver.step_map(sim, i, y[i], s * span, w[i]) if s > 0.0 else y[i])
-                                for i in active}
+                if s not in cache:  # a held member on its ground (solver.held_path), the others on their step maps
+                    cache[s] = {i: y[i] if s == 0.0 else solver.held_path(sim, i, y[i], s * span, w[i]) if i in held
+                                else solver.step_map(sim, i, y[i], s * span, w[i]) for i in active}
                 return cache[s]
 
             def components(s: float) -> list[tuple[float, tuple]]:
                 states = at(s)
                 values = [(self.contact(states[a], a, states[b], b), ("pair", a, b)) for a, b in live]
+                values += [(self.contact(states[a], a, states[b], b) - floors[(a, b)], ("pair", a, b))
+                           for a, b in floors]
                 values += [(solver._gap(sim, states[i], i)[0], ("env", i)) for i in watched]
                 values += [(solver._other_gap(sim, states[i], i)[0], ("side", i)) for i in sides]
+                values += [(solver._untracked_gap(sim, states[i], i, y[i]), ("land", i)) for i in lands]
                 return values
 
             end = at(1.0)
@@ -426,7 +447,7 @@ class BodyPairs:
             for a, b in live:
                 bounds[("pair", a, b)] = self._pair_bound((y[a], end[a]), (y[b], end[b]), a, b) * span
                 skins[("pair", a, b)] = ADVANCE_SKIN * max(self.size[a], self.size[b])
-            for kind, group in (("env", watched), ("side", sides)):
+            for kind, group in (("env", watched), ("side", sides), ("land", lands)):
                 for i in group:
                     bounds[(kind, i)] = self._body_bound(y[i], end[i], i) * span
                     skins[(kind, i)] = ADVANCE_SKIN * self.size[i]
@@ -435,7 +456,7 @@ class BodyPairs:
             for _ in range(MAX_ADVANCE if values and s_env > 0.0 else 0):  # conservative advancement, to s_env
                 step = math.inf
                 for v, key in values:
-                    if bounds[key] > 0.0:
+                    if bounds.get(key, 0.0) > 0.0:
                         step = min(step, (max(v, 0.0) + skins[key]) / bounds[key])
                 s = min(s_env, s_lo + step)
                 values_s = components(s)
@@ -452,7 +473,7 @@ class BodyPairs:
             if s_hi is None and first is None:  # no event in the rest of the step (or of the piece)
                 for i in list(active):
                     if i in held:
-                        y[i] = solver._held_rest(sim, i, y[i], w[i], t, span, end[i])
+                        y[i] = solver._held_rest(sim, i, y[i], w[i], t, span)  # from its step map's end
                         if solver.modes[i] != PERSISTENT:  # it left its ground in the piece: in flight from here
                             held.discard(i)
                             w[i] = solver._bare_rows[i].copy()
@@ -472,21 +493,31 @@ class BodyPairs:
                 s = lo + (1.0 if u is None else u) * (hi - lo)
                 key = min(components(s), key=lambda vk: vk[0])[1]
                 rests = False
-            states = at(s)
+            states, starts = at(s), dict(y)
             for i in active:
                 y[i] = states[i].copy()
             t, h = t + s * span, h - s * span
             if key[0] == "pair":
                 _, a, b = key
                 if self._approaching(sim, y[a], a, y[b], b):  # with every other pair touching now
+                    if (a, b) in floors:  # met a skin deeper than it started: moved apart first
+                        self._separate(sim, a, b, y, held)
                     touching = [p for p in pairs_now if p == (a, b) or p in touching or self.contact(
                         y[p[0]], p[0], y[p[1]], p[1]) <= TOUCHING * max(self.size[p[0]], self.size[p[1]])]
                     self._impacts(sim, touching, y, w, t, held)
                     rounds = 0
-                else:  # grazing: it does not approach at its root; looked at again from the next step
-                    grazed.add((a, b))
+                else:  # grazing: it does not approach at its root; followed to a skin deeper (a few times)
+                    times = grazed.get((a, b), (0.0, 0))[1] + 1
+                    grazed[(a, b)] = (self._floor(y, (a, b)), times)
+                    if times > MAX_GRAZES:
+                        dropped.add((a, b))
                 continue
             i = key[1]
+            if key[0] == "land":  # a held member's other feature comes down: its landing, held again (or in flight)
+                bare = solver._bare(i, w[i])
+                y[i] = solver._landing(sim, i, y[i], bare, t, 0.0, solver.landing_face(sim, i, starts[i], y[i]))
+                self._hold_again(sim, i, y[i], w, bare, held, t, True)
+                continue
             if key[0] == "side":  # a held member meets a wall: its impact there, held again (or lifted off)
                 if solver._strike_side(sim, i, y[i], w[i], t):
                     self._hold_again(sim, i, y[i], w, solver._bare(i, w[i]), held, t, True)
@@ -507,6 +538,11 @@ class BodyPairs:
             self._finish(sim, i, y, w, t, h, held)
         for i in members:
             Y1[i, :L.STATE_WIDTH] = y[i][:L.STATE_WIDTH]
+
+    def _floor(self, y: dict, pair: tuple[int, int]) -> float:
+        """The signed distance (m) a pair at y, touching or just met, is followed to: a skin below its own."""
+        a, b = pair
+        return min(self.contact(y[a], a, y[b], b), 0.0) - ADVANCE_SKIN * max(self.size[a], self.size[b])
 
     def _finish(self, sim, i: int, y: dict, w: dict, t: float, h: float, held: set) -> None:
         """Body i's rest of the step (h from y[i]) on its own: the ground pass's flight or resting path."""

@@ -509,6 +509,17 @@ class ContactSolver:
             project(y, sim._prm[i], self.shapes[i], self.grounds[j], int(self.tracked[i]), sticking, self._points,
                     self._gaps, self._owners, self._work)
 
+    def held_path(self, sim, i: int, y0: np.ndarray, h: float, held: np.ndarray) -> np.ndarray:
+        """Body i held on its ground from y0 over h under ``held`` (its row with the holding force): the step map's
+        state projected onto its tracked features, as a held step's end is (:meth:`_persistent_end`, without its
+        events; none for a body held on two grounds). The path a held body's meetings with others are looked for
+        on: the step map alone drifts off the ground by O(h² ω²) (a box tipping on an edge)."""
+        y = self.step_map(sim, i, y0, h, held)
+        if self.other_ground[i] < 0:
+            project(y, sim._prm[i], self.shapes[i], self.grounds[int(self.ground_of[i])], int(self.tracked[i]),
+                    not self.sliding[i], self._points, self._gaps, self._owners, self._work)
+        return y
+
     def _normal_motion(self, sim, y: np.ndarray, i: int, j: int, count: int, w: np.ndarray, mask: int | None = None):
         """(lowest normal speed, its free normal acceleration, mean slip) of the points in self._points.
 
@@ -1231,12 +1242,15 @@ class ContactSolver:
         """The landing (:meth:`_landing`) of a feature of body i at the fraction s of its step from y0 over h
         under ``held``, then the rest of the step."""
         hit = self.step_map(sim, i, y0, s * h, held) if s > 0.0 else y0.copy()
+        return self._landing(sim, i, hit, self._bare(i, held), t + s * h, h - s * h, self.landing_face(sim, i, y0, hit))
+
+    def landing_face(self, sim, i: int, y0: np.ndarray, hit: np.ndarray) -> int:
+        """The features of a can's end face come down flat from y0 to ``hit`` (it lands as a whole), else 0."""
         j, mask = int(self.ground_of[i]), int(self.tracked[i])
-        face = 0  # a can's end face come down flat: it lands as a whole
         band = self._band[i]
         if opposite_rim_gap(y0, hit, sim._prm[i], self.shapes[i], self.grounds[j], mask, band) <= band:
-            face = 4 << held_rim(self.shapes[i], mask)
-        return self._landing(sim, i, hit, self._bare(i, held), t + s * h, h - s * h, face)
+            return 4 << held_rim(self.shapes[i], mask)
+        return 0
 
     def _reaching(self, sim, i: int, y0: np.ndarray, end: np.ndarray, held: np.ndarray, h: float) -> float | None:
         """The fraction of the step (from y0 over h under ``held``, to ``end``) at which a feature of body i not
