@@ -373,6 +373,33 @@ def test_a_ball_bouncing_on_a_can_that_rocks_on_its_rim_never_adds_energy():
     _never_above_start(_on_the_ground(bodies, material), np.array([5.0, 0.2]), 200)
 
 
+def test_a_ball_the_ground_sends_back_meets_the_ball_above_it_in_the_same_step():
+    """Two balls (1 kg, r = 50 mm, e = 1, frictionless) one above the other over the ground (e = 1), no gravity: the
+    lower 1 mm above the ground at 2 m/s down, the upper 2 mm above it at 1 m/s down (rk4, dt = 10 ms). On their
+    free paths they draw apart (the broad phase lists no pair); the lower bounces off the ground at 0.5 ms, meets the
+    upper at 4/3 ms (equal masses, e = 1: they swap velocities) and bounces off the ground again at 3 ms. After the
+    step each is where the closed form has it (1e-12 m, 1e-12 m/s), the events at its times (1e-12 s), and the
+    step was taken again once (counted in ``pairs_looked_again``)."""
+    r, g0, s0, h = 0.05, 0.001, 0.002, 0.01
+    material = {"restitution": 1.0, "friction": 0.0}
+    bodies = {"lower": _ball(r, 1.0, (0.0, 0.0, r + g0), (0.0, 0.0, -2.0), e=1.0, mu=0.0),
+              "upper": _ball(r, 1.0, (0.0, 0.0, 3.0 * r + g0 + s0), (0.0, 0.0, -1.0), e=1.0, mu=0.0)}
+    sim = Simulator(load_scene({"gravity": [0.0, 0.0, 0.0], "ground": [{"normal": [0, 0, 1], "material": material}],
+                                "bodies": bodies}), "rk4", h, threads=1)
+    sim.step()
+    t1 = g0 / 2.0  # the lower one's bounce
+    t2 = t1 + (s0 + (2.0 - 1.0) * t1) / 3.0  # the two meet, closing at 3 m/s, and swap velocities
+    z_lower = r + 2.0 * (t2 - t1)
+    t3 = t2 + (z_lower - r) / 1.0  # the lower one's second bounce
+    np.testing.assert_allclose(sim.state.p_WC_W[:, 2], [r + (h - t3), z_lower + 2.0 * r + 2.0 * (h - t2)], rtol=0,
+                               atol=1e-12)
+    np.testing.assert_allclose(sim.state.v_WC_W, [[0.0, 0.0, 1.0], [0.0, 0.0, 2.0]], rtol=0, atol=1e-12)
+    times = [(e.body, e.other, e.time) for e in sim.contact.events if e.kind == "impact"]
+    assert [(b, o) for b, o, _ in times] == [("lower", ""), ("lower", "upper"), ("upper", "lower"), ("lower", "")]
+    np.testing.assert_allclose([t for *_, t in times], [t1, t2, t2, t3], rtol=0, atol=1e-12)
+    assert sim.contact.counts["pairs_looked_again"] == 1
+
+
 def test_a_spinning_box_dropped_on_a_can_does_not_throw_it():
     """A box (5 kg, 89.7 × 71.8 × 53.8 mm) dropped spinning (2.5 rad/s) onto a can (1 kg, r = 52 mm, 104 mm long) set
     1 mm above the ground, e = 0.7 and μ = 0.3 everywhere (a case a random scan found; rk4 at dt = 10 ms). The can,

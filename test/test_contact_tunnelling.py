@@ -139,6 +139,62 @@ def test_swept_grid_query_finds_every_box_a_box_meets():
             assert len(got) == len(set(got)) and set(got) == brute
 
 
+def test_bodies_out_of_their_free_box_are_paired_with_every_body_they_may_have_met():
+    """left_pairs (kernels/contact/swept.py: the body–body pass's look again) against the brute force: bodies on
+    free steps, some of them sent elsewhere (new ends and velocities, as an impact does), some skipped (an island's):
+    the ones listed are exactly the movable, unskipped bodies whose box over the path as stepped is not inside
+    their free step's box, and the pairs (as a set) exactly those of such a body with an unskipped movable body
+    whose free box (or, for two such, new box) meets its new box and whose bounding spheres can meet on the chords
+    as stepped."""
+    from rigid_body_sim.core.kernels.contact.swept import (boxes_meet, grid_swept_pairs, left_pairs, spheres_may_meet,
+                                                           swept_bounds)
+    from rigid_body_sim.core.kernels.layout import P, ROW_WIDTH, V
+
+    rng = np.random.default_rng(4)
+    h = 0.01
+    for n in (2, 40, 300):
+        Y0, free = np.zeros((n, ROW_WIDTH)), np.zeros((n, ROW_WIDTH))
+        Y0[:, P:P + 3], Y0[:, V:V + 3] = rng.uniform(-1.0, 1.0, (n, 3)) * n ** (1 / 3) * 0.2, rng.normal(0, 2, (n, 3))
+        free[:, V:V + 3] = Y0[:, V:V + 3] + rng.normal(0, 0.1, (n, 3))
+        free[:, P:P + 3] = Y0[:, P:P + 3] + 0.5 * h * (Y0[:, V:V + 3] + free[:, V:V + 3])
+        stepped = free.copy()
+        sent = rng.random(n) < 0.3
+        stepped[sent, V:V + 3] = rng.normal(0, 4, (int(sent.sum()), 3))
+        stepped[sent, P:P + 3] = Y0[sent, P:P + 3] + h * stepped[sent, V:V + 3]
+        members, reach = np.arange(n, dtype=np.int64), rng.uniform(0.02, 0.15, n)
+        movable, skip = rng.random(n) < 0.9, rng.random(n) < 0.1
+        lo, hi, alo, ahi = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3))
+        swept_bounds(Y0, free, members, reach, h, lo, hi)
+        cells, heads, chain = (np.empty((n, 3), dtype=np.int64), np.empty(1 << (2 * n - 1).bit_length(),
+                                                                        dtype=np.int64), np.empty(n, dtype=np.int64))
+        grid_swept_pairs(lo, hi, movable, cells, heads, chain, np.empty((n * n, 2), dtype=np.int64))
+        left, out = np.empty(n, dtype=np.int64), np.empty((n * n, 2), dtype=np.int64)
+        n_left, count = left_pairs(Y0, stepped, members, reach, h, lo, hi, movable,
+                                   np.flatnonzero(~movable).astype(np.int64), skip, cells, heads, chain, alo, ahi,
+                                   left, np.empty(n, dtype=np.int64), out)
+        new_lo, new_hi = np.empty((n, 3)), np.empty((n, 3))
+        swept_bounds(Y0, stepped, members, reach, h, new_lo, new_hi)
+        outside = movable & ~skip & (np.any(new_lo < lo, axis=1) | np.any(new_hi > hi, axis=1))
+        assert sorted(left[:n_left].tolist()) == np.flatnonzero(outside).tolist()
+        one = np.zeros((1, 2), dtype=np.int64)
+
+        def may_meet(m, k):
+            one[0] = m, k
+            return spheres_may_meet(Y0, stepped, members, reach, h, one, 1) == 1
+
+        brute = set()
+        for m in np.flatnonzero(outside).tolist():
+            for k in range(n):
+                if k == m or not movable[k] or skip[k]:
+                    continue
+                meets = boxes_meet(new_lo[m], new_hi[m], lo[k], hi[k], 0.0) or (
+                    outside[k] and boxes_meet(new_lo[m], new_hi[m], new_lo[k], new_hi[k], 0.0))
+                if meets and may_meet(m, k):
+                    brute.add((min(m, k), max(m, k)))
+        assert {(min(a, b), max(a, b)) for a, b in out[:count].tolist()} == brute
+        assert n < 40 or brute  # the scene has pairs to find
+
+
 def test_swept_bounds_hold_the_path_of_a_constant_acceleration_and_of_a_body_held():
     """A body under constant acceleration a stays, all along the step, within its swept box (the chord grown by
     GROWTH |Δv| h ≥ |a| h²/8, the parabola's largest distance from its chord), and so does the same body held

@@ -345,6 +345,8 @@ class ContactPublisher:
             _kv("island body-steps, first order (total)", solver.counts["island_body_steps"]),
             _kv("island pairs found on the paths the islands' step gave (total)", solver.counts["island_late_pairs"]),
             _kv("of them, bodies joined to the islands (total)", solver.counts["island_late_joined"]),
+            _kv("groups of bodies stepped again, two having ended the step inside each other (total)",
+                solver.counts["pairs_looked_again"]),
             _kv("pieces of steps of cylinders rolling on a rim near upright (total)", solver.counts["rim_pieces"]),
             _kv("of them at the most pieces, the rim turning faster (total)", solver.counts["rim_capped"]),
             _kv("of those, throwing the can: its end face landed instead (total)", solver.counts["face_landed"]),

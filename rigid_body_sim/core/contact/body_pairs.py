@@ -61,6 +61,15 @@ After each step, before the ground pass:
 5. **Touching at a piece's start**: a pair overlapping (or touching, TOUCHING) at the start of
    a step or of a piece and approaching has its impacts there; if it overlaps, it is first moved
    apart along the normal by the depth, shared by inverse mass (a held member does not move).
+6. **Looked at again** (:meth:`BodyPairs.look_again`, after the ground pass): items 1–2 screen the
+   free paths, and a ground, a static shape or a third body can send a body into one that was no
+   candidate or no hit. The candidates of a body whose end the passes changed are looked at at
+   the ends as stepped, and a body whose box over its path as stepped left its free step's box is
+   screened again (the grid, then the bounding spheres on the chords as stepped); two moving
+   bodies ending more than ε_k inside each other, in no group together, have their steps taken
+   again from the step's start in one group with the pair linked (the solver's state of its bodies
+   and their events of the step set back first; counted as ``pairs_looked_again``), up to
+   MAX_LOOKS rounds.
 
 Resting contact between bodies is the islands' (island.py): before the pass, components of the
 candidate pairs with a pair touching at the step's start and resting there (its normal speed
@@ -86,7 +95,7 @@ from ..kernels.contact.pair_impacts import PAIR_JACOBIAN_SHAPE, normal_speed, pa
 from ..kernels.contact.pairs import MAX_PAIR_POINTS, pair_contacts
 from ..kernels.contact.persistent import normal_speeds
 from ..kernels.contact.shapes import body_points
-from ..kernels.contact.swept import grid_swept_pairs, screen_pairs, spheres_may_meet, swept_bounds
+from ..kernels.contact.swept import grid_swept_pairs, left_pairs, screen_pairs, spheres_may_meet, swept_bounds
 from ..quaternion import quat_multiply, quat_rotate
 from .events import ContactEvent
 from .island import Islands
@@ -106,6 +115,11 @@ MAX_SEQUENTIAL = 200
 MAX_GROUP_EVENTS = 10_000
 #: Most times a pair is met without approaching in one step (then it is not looked at again in that step).
 MAX_GRAZES = 8
+#: Most rounds of look_again in one step.
+MAX_LOOKS = 4
+#: The solver's per-body state that look_again sets back to the step's start before a group's step is taken again.
+_RESTORED = ("modes", "tracked", "sliding", "slide_direction", "pressed", "ground_of", "other_ground",
+             "other_projected", "other_tracked", "impact_impulses")
 #: Rounds of impacts at one piece's start before the pairs still approaching are left for the piece.
 MAX_ROUNDS = 10
 #: A pair whose signed distance is below this × its size (m per m) touches.
@@ -165,6 +179,12 @@ class BodyPairs:
         self.impacts = 0
         #: Pairs found overlapping at a step's start and moved apart (a body lying on another: module docstring).
         self.separations = 0
+        self._look: dict | None = None  # what look_again looks at: the step's candidates, hits, bodies left alone
+        self._start = {name: getattr(solver, name).copy() for name in _RESTORED}  # (after_step keeps them)
+        # look_again's screen (swept.left_pairs): boxes over the paths as stepped, the members that left theirs,
+        # the grid's answers and the pairs found
+        self._alo, self._ahi, self._left = np.empty((m, 3)), np.empty((m, 3)), np.empty(m, dtype=np.int64)
+        self._found, self._left_pairs = np.empty(max(m, 16), dtype=np.int64), np.empty((64, 2), dtype=np.int64)
         #: Bodies resting on bodies, stepped together (island.py).
         self.islands = Islands(solver, sim, self)
 
@@ -199,6 +219,11 @@ class BodyPairs:
     def after_step(self, sim, wrenches: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, t0: float,
                    h: float) -> np.ndarray | None:
         """Find and resolve the step's body–body events; the bodies done here as a bool mask (None: none)."""
+        solver = self.solver
+        for name in _RESTORED:  # as the step began, for look_again
+            np.copyto(self._start[name], getattr(solver, name))
+        self._look = {"events": len(solver.events), "pairs": np.zeros((0, 2), dtype=np.int64), "hits": [],
+                      "kept": self.is_static | sim._stopped}
         pairs = self._candidates(Y0, Y1, h)
         found = len(pairs)
         islands = self.islands
@@ -210,6 +235,8 @@ class BodyPairs:
         in_island = None
         if found or held:  # islands first (island.py)
             in_island = islands.step(sim, wrenches, Y0, Y1, pairs, h)
+            self._look["kept"] = self._look["kept"] | in_island
+            self._look["kept"][islands.left] = True
             if in_island[self.solver.bodies].all():  # every pair has a moving body first: none is left
                 pairs = pairs[:0]
             elif in_island.any():
@@ -223,6 +250,8 @@ class BodyPairs:
             return in_island
         self._step_wrenches = wrenches
         hits = self._hits(sim, pairs, Y0, Y1, h)
+        moving = np.unique(pairs[~self.is_static[pairs]])
+        self._look.update(pairs=pairs, hits=list(hits), moving=moving, free=Y1[moving, :L.STATE_WIDTH].copy())
         if not hits:
             return in_island
         done = np.zeros(len(sim._stopped), dtype=bool) if in_island is None else in_island.copy()
@@ -232,6 +261,77 @@ class BodyPairs:
             self._group_step(sim, members, links, Y0, Y1, wrenches, t0, h)
             done[members] = True
         return done
+
+    def look_again(self, sim, wrenches: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, t0: float, h: float) -> None:
+        """After the ground pass: two moving bodies that end the step more than the skin (ADVANCE_SKIN × the pair's
+        size) inside each other, in no group together, have their steps taken again from the step's start, in one
+        group with the pair linked. The candidates were screened on free paths, and a ground, a static shape or a
+        third body can send a body into one that was no candidate or no hit: looked at again are the candidates of
+        a body whose end the passes changed (at their ends), and the bodies a body whose box over its path as
+        stepped (swept_bounds from the step's start to its end) left its free step's box may meet (the broad
+        phase's grid, then the bounding spheres on the chords as stepped). A group's bodies are first set back as
+        the step began (the solver's state of each, _RESTORED) and their events of the step dropped. Up to
+        MAX_LOOKS rounds (a step taken again may meet another body)."""
+        look, self._look = self._look, None
+        if look is None:
+            return
+        kept, hits = look["kept"], look["hits"]
+        links = {tuple(p) for p in look["pairs"].tolist()}
+        for _ in range(MAX_LOOKS):
+            near = set()
+            if "moving" in look:  # the candidates of a body whose end changed
+                moving = look["moving"]
+                changed = set(moving[np.any(Y1[moving, :L.STATE_WIDTH] != look["free"], axis=1)].tolist())
+                near.update(p for p in links if (p[0] in changed or p[1] in changed) and not kept[p[0]]
+                            and not kept[p[1]])
+            # a body an event sent out of its free step's box (none without an event), and whom it may have met
+            while len(self.solver.events) > look["events"]:
+                _, count = left_pairs(Y0, Y1, self.members, self.reach, h, self._lo, self._hi, self.movable,
+                                      self._fixed, kept, self._cells, self._heads, self._chain, self._alo, self._ahi,
+                                      self._left, self._found, self._left_pairs)
+                if count <= len(self._left_pairs):
+                    near.update(map(tuple, np.sort(self.members[self._left_pairs[:count]], axis=1).tolist()))
+                    break
+                self._left_pairs = np.empty((2 * count, 2), dtype=np.int64)
+            if not near:
+                return
+            rows = np.array(sorted(near), dtype=np.int64)
+            k = len(rows)
+            if k > len(self._reach):
+                self._grow_screen(2 * k)
+            screen_pairs(Y0, Y1, self._q_PB, self._shapes, self.spin_reach, rows, h, self._spos, self._squat,
+                         self._near, self._which, self._lower, self._sdist, self._snormal, self._scount,
+                         self._spoints, self._sseps, self._reach, self._d0, self._d1)
+            group_of = {i: g for g, group in enumerate(_groups(hits, self.is_static)) for i in group}
+            skins = ADVANCE_SKIN * np.maximum(self.size[rows[:, 0]], self.size[rows[:, 1]])
+            new = [(a, b) for (a, b), inside in zip(rows.tolist(), self._d1[:k] < -skins)
+                   if inside and group_of.get(a, ("alone", a)) != group_of.get(b, ("alone", b))]
+            if not new:
+                return
+            hits = hits + new
+            links.update(near)
+            for group in _groups(hits, self.is_static):
+                if not any(a in group for a, _ in new):
+                    continue
+                members = sorted(group)
+                self._restore(look["events"], members)
+                self._group_step(sim, members, sorted(p for p in links if p[0] in group and p[1] in group), Y0, Y1,
+                                 wrenches, t0, h)
+                self.solver.counts["pairs_looked_again"] += 1
+
+    def _restore(self, events: int, members: list[int]) -> None:
+        """The solver's state of ``members`` set back to the step's start (_RESTORED, as after_step kept it), their
+        events of the step (from index ``events``) dropped and what the step's attempts left of them (static shapes
+        skipped, side hits, face landings) forgotten."""
+        solver = self.solver
+        for name in _RESTORED:
+            getattr(solver, name)[members] = self._start[name][members]
+        names = {solver.names[i] for i in members}
+        solver.events[events:] = [e for e in solver.events[events:] if e.body not in names]
+        for i in members:
+            solver._static_skipped.discard(i)
+            solver._side_hits.pop(i, None)
+            solver._face_landings.pop(i, None)
 
     def _candidates(self, Y0: np.ndarray, Y1: np.ndarray, h: float) -> np.ndarray:
         """The broad phase's pairs (k, 2) of global body indices whose boxes swept over the step overlap, a moving

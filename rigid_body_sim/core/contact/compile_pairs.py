@@ -19,14 +19,14 @@ from ..kernels.contact.impacts import IMPACT_WORK_SHAPE
 from ..kernels.contact.layout import DIMS, KIND, SHAPE_BOX, SHAPE_CAPSULE, SHAPE_CYLINDER, SHAPE_SPHERE, SHAPE_WIDTH
 from ..kernels.contact.pair_impacts import PAIR_JACOBIAN_SHAPE, normal_speed, pair_impact
 from ..kernels.contact.pairs import MAX_PAIR_POINTS, apart_bounds, pair_contacts
-from ..kernels.contact.swept import grid_swept_pairs, screen_pairs, spheres_may_meet, swept_bounds
+from ..kernels.contact.swept import grid_swept_pairs, left_pairs, screen_pairs, spheres_may_meet, swept_bounds
 from ..kernels.layout import INERTIA, INV_INERTIA, INV_MASS, MASS, PRM_WIDTH, P, Q, STATE_WIDTH, V
 
 __all__ = ["PAIR_ENTRY_POINTS", "compile_pair_kernels"]
 
 #: The body–body contact kernels called from Python.
 PAIR_ENTRY_POINTS = (shape_aabbs, grid_pairs, sweep_pairs, pair_contacts, apart_bounds, pair_impact, normal_speed,
-                     swept_bounds, grid_swept_pairs, spheres_may_meet, screen_pairs)
+                     swept_bounds, grid_swept_pairs, spheres_may_meet, left_pairs, screen_pairs)
 
 
 def compile_pair_kernels() -> None:
@@ -56,9 +56,13 @@ def compile_pair_kernels() -> None:
     members = np.arange(n, dtype=np.int64)
     swept_bounds(Ys[0], Ys[1], members, np.full(n, 0.1), 1e-3, lo, hi)
     swept = np.empty((4 * n, 2), dtype=np.int64)
-    found = grid_swept_pairs(lo, hi, np.ones(n, dtype=np.bool_), np.empty((n, 3), dtype=np.int64),
-                             np.empty(16, dtype=np.int64), np.empty(n, dtype=np.int64), swept)
+    cells, heads, chain = np.empty((n, 3), dtype=np.int64), np.empty(16, dtype=np.int64), np.empty(n, dtype=np.int64)
+    movable = np.ones(n, dtype=np.bool_)
+    found = grid_swept_pairs(lo, hi, movable, cells, heads, chain, swept)
     spheres_may_meet(Ys[0], Ys[1], members, np.full(n, 0.1), 1e-3, swept, found)
+    left_pairs(Ys[0], Ys[1], members, np.full(n, 0.1), 1e-3, lo, hi, movable, np.zeros(0, dtype=np.int64),
+               np.zeros(n, dtype=np.bool_), cells, heads, chain, np.empty((n, 3)), np.empty((n, 3)),
+               np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64), swept)
     Ys[:, :, Q] = 1.0
     k = len(pairs)
     screen_pairs(Ys[0], Ys[1], quat.copy(), shapes, np.full(n, 0.1), pairs, 1e-3, np.zeros((2, n, 3)),

@@ -255,7 +255,9 @@ class ContactSolver:
         #: more than MAX_SIDE_IMPACTS times in the step; ``held_thrown`` spans of a resting body under gravity alone
         #: whose held step raised its K + U by more than THROWN of it: it stays where it was, at rest (:meth:`_held_span`);
         #: ``island_late_pairs`` pairs the islands found by screening a body again on the path their velocity step
-        #: gave it, ``island_late_joined`` bodies outside the islands those joined to them (island.py).
+        #: gave it, ``island_late_joined`` bodies outside the islands those joined to them (island.py);
+        #: ``pairs_looked_again`` groups of bodies whose step was taken again after the ground pass, two of them
+        #: having ended it inside each other (body_pairs.BodyPairs.look_again).
         self._static_skipped: set[int] = set()  # bodies not looked at against static shapes for the rest of the step
         #: side impacts of each body in this step; PRESSED: not looked at for them for the rest of the step
         self._side_hits: dict[int, int] = {}
@@ -264,7 +266,7 @@ class ContactSolver:
                                      "second_half_space", "two_ground_overflow", "painleve",
                                      "static_tangent", "static_pressed", "island_body_steps", "rim_pieces",
                                      "rim_capped", "face_landed", "face_down", "side_pressed", "held_thrown",
-                                     "island_late_pairs", "island_late_joined"), 0)
+                                     "island_late_pairs", "island_late_joined", "pairs_looked_again"), 0)
         #: Per body, a second half-space it is held on besides ``ground_of`` (two_grounds.py), or -1.
         self.other_ground = np.full(n, -1, dtype=np.int64)
         #: The features touching ``other_ground``, as bits.
@@ -364,6 +366,7 @@ class ContactSolver:
         self.events.clear()
         if self.pairs is not None:
             self.pairs.impacts = self.pairs.separations = 0
+            self.pairs._look = None
         self.impact_impulses[:] = 0.0
         self.holding_angular_impulses[:] = 0.0
         for key in self.counts:
@@ -787,6 +790,7 @@ class ContactSolver:
             else:
                 Y1[i, :L.STATE_WIDTH] = self._with_events(sim, i, Y0[i], wrenches[i], t0, h)[:L.STATE_WIDTH]
         if self.pairs is not None:  # bodies that meet each other (a ground alone takes energy, never passes it on)
+            self.pairs.look_again(sim, wrenches, Y0, Y1, t0, h)  # a pair a ground or a third body sent in, again
             if self._sleeping:
                 self._rest_alone(sim, wrenches, Y0, Y1)
             self._bound_energy(sim, Y1)

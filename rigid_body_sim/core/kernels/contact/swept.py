@@ -15,7 +15,9 @@ overlapping pair: about linear in the number of shapes while the moving ones hav
 sizes (one huge box, a very fast body's sweep, makes every cell huge). The fixed boxes (static
 shapes, any size) are tested against every movable box: S × N tests for S of them.
 :func:`spheres_may_meet` keeps of these the pairs whose bounding spheres can meet over the step
-(boxes overlap where spheres do not: every diagonal neighbour of a lattice). :func:`screen_pairs`
+(boxes overlap where spheres do not: every diagonal neighbour of a lattice). :func:`left_pairs` looks
+again after the step's passes: the bodies an event sent out of their free step's box, and each pair
+such a body may have met on the grid. :func:`screen_pairs`
 then gives each candidate its bound on how fast its distance changes and, unless it is provably
 apart over the whole step, its signed distances at the step's two ends (two batched narrow-phase
 calls). No allocation: the caller owns every array, so a step without any candidate pair costs
@@ -34,7 +36,7 @@ from ..rotation import qmul
 from .pairs import apart_bounds, pair_contacts
 
 __all__ = ["GROWTH", "growth", "chords_apart", "swept_bounds", "grid_swept_pairs", "boxes_meet", "grid_overlaps",
-           "spheres_may_meet", "screen_pairs"]
+           "spheres_may_meet", "left_pairs", "screen_pairs"]
 
 
 #: A body's box and sphere over the step are grown by this × |v₁ − v₀| h (m): module docstring.
@@ -217,13 +219,69 @@ def spheres_may_meet(Y0, Y1, members, reach, h, pairs, found):
     kept = 0
     for k in range(found):
         m, n = pairs[k, 0], pairs[k, 1]
-        a, b = members[m], members[n]
-        grow = growth(Y0, Y1, a, h) + growth(Y0, Y1, b, h)
-        if chords_apart(Y0, Y1, a, b) <= (reach[m] + reach[n]) * (1.0 + 1e-6) + grow:
+        if _spheres_meet(Y0, Y1, members, reach, h, m, n):
             pairs[kept, 0], pairs[kept, 1] = m, n
             kept += 1
     _pin = Y0[0, 0], Y1[0, 0], members[0], reach[0], pairs[0, 0]
     return kept
+
+
+@njit(**INLINE)
+def _spheres_meet(Y0, Y1, members, reach, h, m, n):
+    """spheres_may_meet's test of members m and n (rows)."""
+    a, b = members[m], members[n]
+    grow = growth(Y0, Y1, a, h) + growth(Y0, Y1, b, h)
+    return chords_apart(Y0, Y1, a, b) <= (reach[m] + reach[n]) * (1.0 + 1e-6) + grow
+
+
+@njit(**JIT)
+def left_pairs(Y0, Y1, members, reach, h, lo, hi, movable, fixed, skip, cells, heads, chain, alo, ahi, left, found,
+               out):
+    """The step's passes done (Y1: the ends as stepped), the pairs a body they sent out of its free step's box may
+    have met: into out (capacity, 2), rows of members; returns (how many left their box, how many pairs; beyond
+    out's capacity only the first are written).
+
+    A movable member whose body is not ``skip``ped (per body) left its box when its box over the step as stepped
+    (swept_bounds' from Y0 to Y1, into alo, ahi (M, 3)) is not inside the broad phase's (lo, hi, of the free step);
+    those are listed in ``left``. A pair is one of them and another movable member not skipped whose box meets that
+    one (lo, hi as grid_swept_pairs filed them in cells, heads, chain, queried by grid_overlaps with scratch
+    ``found``; for two that left, their new boxes), whose bounding spheres can meet on the chords as stepped
+    (spheres_may_meet's test)."""
+    n_left = 0
+    for m in range(members.shape[0]):
+        i = members[m]
+        if not movable[m] or skip[i]:
+            continue
+        grow = reach[m] + growth(Y0, Y1, i, h)
+        outside = False
+        for k in range(3):
+            a, b = Y0[i, P + k], Y1[i, P + k]
+            alo[m, k] = min(a, b) - grow
+            ahi[m, k] = max(a, b) + grow
+            outside = outside or alo[m, k] < lo[m, k] or ahi[m, k] > hi[m, k]
+        if outside:
+            left[n_left] = m
+            n_left += 1
+    count = 0
+    capacity = out.shape[0]
+    for e in range(n_left):
+        m = left[e]
+        got = grid_overlaps(alo[m], ahi[m], 0.0, lo, hi, movable, fixed, cells, heads, chain, found)
+        for c in range(min(got, found.shape[0])):
+            k = found[c]
+            if k != m and movable[k] and not skip[members[k]] and _spheres_meet(Y0, Y1, members, reach, h, m, k):
+                if count < capacity:
+                    out[count, 0], out[count, 1] = m, k
+                count += 1
+        for e2 in range(e + 1, n_left):
+            k = left[e2]
+            if boxes_meet(alo[m], ahi[m], alo[k], ahi[k], 0.0) and _spheres_meet(Y0, Y1, members, reach, h, m, k):
+                if count < capacity:
+                    out[count, 0], out[count, 1] = m, k
+                count += 1
+    _pin = Y0[0, 0], Y1[0, 0], members[0], reach[0], lo[0, 0], hi[0, 0], movable[0], fixed[:1], skip[0]
+    _pin2 = cells[0, 0], heads[0], chain[0], alo[0, 0], ahi[0, 0], left[0], found[0], out[0, 0]
+    return n_left, count
 
 
 @njit(**INLINE)
