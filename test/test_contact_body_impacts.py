@@ -455,6 +455,48 @@ def test_a_box_falling_onto_a_box_tipping_beside_a_wall_ends_no_step_inside_it()
     _never_above_start(sim, np.array([2.3246026649304694, 3.3239980568389464]), 20, apart=True)
 
 
+def test_a_capsule_rolling_into_a_wall_struck_from_above_ends_no_step_inside_either():
+    """A capsule (4.5 kg, r 33 mm, 113 mm long, frictionless) moving on the ground at 0.49 m/s, 0.40 m/s of it
+    toward a wall 0.65 mm away, struck from above by a ball (3.3 kg, r 78 mm, e = 0.076) falling at 3.4 m/s (rk4 at dt = 10 ms; a
+    case a mixed pile gave). The capsule meets the wall at 1.5 ms and the ball at 8.3 ms, which drives it into the
+    wall it touches: that wall's impact is the group's, at once, and the wall stays in view for the rest of the
+    step. Over 3 steps no shape ends deeper in another than the pair pass's skin (ADVANCE_SKIN × the larger size),
+    and K + U never rises above its start (1e-12 of it)."""
+    from rigid_body_sim.core.contact.query import overlapping_bodies
+
+    wall = {"box": [1.65, 0.1, 1.0]}
+    scene = {"gravity": [0.0, 0.0, -9.81],
+             "ground": [{"normal": [0, 0, 1], "offset": 0.0, "material": {"restitution": 0.0, "friction": 0.6}}],
+             "bodies": {
+                 "capsule": {"mass": 4.490152075751307, "inertia": {"cylinder": [0.03338863704621533, 0.1793270488594026]},
+                     "collision": {"capsule": [0.03338863704621533, 0.11254977476697194]},
+                     "material": {"restitution": 0.0, "friction": 0.0},
+                     "pose": {"position": [0.5845571063313574, 0.663079701452315, 0.03338863704621533],
+                              "orientation": [-0.45762882683783707, -0.5390508852112432, 0.1304335195334756, 0.6949727311068475]},
+                     "twist": {"linear": [0.2713524210704908, 0.40431192069171507, -9.818818400153388e-19],
+                               "angular": [0.8899315366767471, -0.5076077618654741, -0.6534523851167029]}},
+                 "ball": {"mass": 3.31622030624216, "inertia": {"sphere": 0.0782412487590709},
+                     "collision": {"sphere": 0.0782412487590709},
+                     "material": {"restitution": 0.076280103157291, "friction": 0.0},
+                     "pose": {"position": [0.541874680314708, 0.628654161713313, 0.16252810765527803],
+                              "orientation": [-0.10621053901017861, 0.16542254345558383, 0.0521402980800631, 0.9790996337635794]},
+                     "twist": {"linear": [0.8353120039760804, 0.3474929518201109, -3.3282219231797874],
+                               "angular": [-0.4253163132457793, 0.7368937531880942, 0.22110065340838964]}},
+                 "wall": {"motion": "static", "mass": 1.0, "inertia": wall, "collision": wall,
+                          "material": {"restitution": 0.0, "friction": 0.5}, "pose": {"position": [0.0, 0.775, 0.5]}}}}
+    sim = Simulator(load_scene(scene), integrator="rk4", dt=1e-2, threads=1)
+    masses = np.array([4.490152075751307, 3.31622030624216])
+    start = _energy(sim) + 9.81 * float(masses @ sim.state.p_WC_W[:2, 2])
+    skin = ADVANCE_SKIN * float(sim.contact.pairs.size.max())
+    moving = np.array([m != "static" for m in sim.model.motions])
+    for _ in range(3):
+        sim.step()
+        assert _energy(sim) + 9.81 * float(masses @ sim.state.p_WC_W[:2, 2]) <= start + 1e-12 * start
+        overlaps = overlapping_bodies(sim.positions_world(), sim.orientations_xyzw()[:, [3, 0, 1, 2]],
+                                      sim.contact.shapes, moving)
+        assert all(depth <= skin for _, _, depth in overlaps), overlaps
+
+
 _DROP_DIMS = {"sphere": lambda s: (s, s, s), "box": lambda s: (2.0 * s, 1.6 * s, 1.2 * s),
               "cylinder": lambda s: (s, 2.0 * s, 0.0), "capsule": lambda s: (0.6 * s, 1.6 * s, 0.0)}
 #: each kind's height standing on the ground (a capsule lying on its side) and its reach from its centre, / size

@@ -23,7 +23,8 @@ After each step, before the ground pass:
    step's start. Each event time is the first root of s ↦ F(s), F the least of the group's pair
    signed distances d(Φ_a(y_a0, s h), Φ_b(y_b0, s h)), of its flying members' gaps to the
    ground and the static shapes, of its held members' gaps to the other half-spaces and static
-   shapes (a wall a body sliding on the ground meets) and of their features not on their ground
+   shapes (a wall a body sliding on the ground meets; one it touches at a piece's start and goes
+   into is struck at once, _strike_wall, and stays in view) and of their features not on their ground
    (a tipping box's other edge coming down: its landing, solver._landing, and it is held again),
    Φ each body's own step map (solver.step_map; a held member's projected onto its ground,
    solver.held_path: the step map alone drifts off it). A pair touching at a piece's start and not
@@ -474,6 +475,7 @@ class BodyPairs:
         dropped: set = set()  # grazed more than MAX_GRAZES times: not looked at again in the step
         hints: dict[int, float] = {}  # a flying member just struck: its apex hint, its gap 0 (solver._with_events)
         struck: set = set()
+        struck_walls: set = set()  # (held member, instant) struck against a wall it touched at a piece's start
         for _ in range(MAX_GROUP_EVENTS):
             if h <= 0.0 or not active:
                 break
@@ -491,6 +493,18 @@ class BodyPairs:
                     self._separate(sim, a, b, y, held)
                 self._impacts(sim, touching, y, w, t, held)
                 continue
+            # a held member touching another half-space or a static shape (a wall) at the piece's start, whose step
+            # goes into it: its impact there now, once at an instant (as solver._persistent_end has it at a span's
+            # start), then held again; its path from there is the group's to follow
+            band = solver._band
+            walled = [i for i in sorted(active & held) if (i, t) not in struck_walls and solver._may_strike_side(i)
+                      and solver._other_gap(sim, y[i], i)[0] <= band[i]
+                      and solver._other_gap(sim, solver.step_map(sim, i, y[i], h, w[i]), i)[0] < 0.0]
+            if walled:
+                for i in walled:
+                    struck_walls.add((i, t))
+                    self._strike_wall(sim, i, y, w, held, t)
+                continue
             # a pair touching at the piece's start and not approaching (just struck, sliding on the other), or met
             # without approaching (grazed), is followed to a floor a skin deeper than it was then (its meeting): it
             # sets no sample's length (its bound against a gap of 0 would), its sign is read at every sample
@@ -501,7 +515,6 @@ class BodyPairs:
             # a flying member on its ground or a static shape at the piece's start (just struck, or within its
             # feature band: touching) has its next meeting with them located on its own step map, as the ground pass
             # locates it (solver._with_events); the others' gaps are followed with the pairs'
-            band = solver._band
             on_it = [i for i in flying if i in struck or solver._gap(sim, y[i], i)[0] <= band[i]]
             watched = [i for i in flying if i not in on_it]
             # a held member's gap to the other half-spaces and static shapes (a wall it slides into), while apart
@@ -619,8 +632,7 @@ class BodyPairs:
                 self._hold_again(sim, i, y[i], w, bare, held, t, True)
                 continue
             if key[0] == "side":  # a held member meets a wall: its impact there, held again (or lifted off)
-                if solver._strike_side(sim, i, y[i], w[i], t):
-                    self._hold_again(sim, i, y[i], w, solver._bare(i, w[i]), held, t, True)
+                self._strike_wall(sim, i, y, w, held, t)
                 continue
             # a flying member meets its ground or a static shape: its impact (or its rest), and it stays in the
             # group (its pairs still followed); at rest, it is held with its holding force (else, lifted off at
@@ -638,6 +650,15 @@ class BodyPairs:
             self._finish(sim, i, y, w, t, h, held)
         for i in members:
             Y1[i, :L.STATE_WIDTH] = y[i][:L.STATE_WIDTH]
+
+    def _strike_wall(self, sim, i: int, y: dict, w: dict, held: set, t: float) -> None:
+        """Held member i at y[i] meets another half-space or a static shape (a wall) at t: its impact there
+        (solver._strike_side), then held again. The wall stays in view for the rest of the group's step (the ground
+        pass leaves a static shape a body stays pressed on out of it: here a partner can still drive it in)."""
+        solver = self.solver
+        if solver._strike_side(sim, i, y[i], w[i], t):
+            self._hold_again(sim, i, y[i], w, solver._bare(i, w[i]), held, t, True)
+        solver._static_skipped.discard(i)
 
     def _floor(self, y: dict, pair: tuple[int, int]) -> float:
         """The signed distance (m) a pair at y, touching or just met, is followed to: a skin below its own."""
