@@ -330,7 +330,7 @@ class BodyPairs:
         names = {solver.names[i] for i in members}
         solver.events[events:] = [e for e in solver.events[events:] if e.body not in names]
         for i in members:
-            solver._static_skipped.discard(i)
+            solver._static_skipped.pop(i, None)
             solver._side_hits.pop(i, None)
             solver._face_landings.pop(i, None)
 
@@ -658,7 +658,7 @@ class BodyPairs:
         solver = self.solver
         if solver._strike_side(sim, i, y[i], w[i], t):
             self._hold_again(sim, i, y[i], w, solver._bare(i, w[i]), held, t, True)
-        solver._static_skipped.discard(i)
+        solver._static_skipped.pop(i, None)
 
     def _floor(self, y: dict, pair: tuple[int, int]) -> float:
         """The signed distance (m) a pair at y, touching or just met, is followed to: a skin below its own."""

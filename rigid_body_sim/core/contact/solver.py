@@ -258,7 +258,8 @@ class ContactSolver:
         #: gave it, ``island_late_joined`` bodies outside the islands those joined to them (island.py);
         #: ``pairs_looked_again`` groups of bodies whose step was taken again after the ground pass, two of them
         #: having ended it inside each other (body_pairs.BodyPairs.look_again).
-        self._static_skipped: set[int] = set()  # bodies not looked at against static shapes for the rest of the step
+        #: per body, the static shape (static index) it was found pressed on: not looked at for the rest of the step
+        self._static_skipped: dict[int, int] = {}
         #: side impacts of each body in this step; PRESSED: not looked at for them for the rest of the step
         self._side_hits: dict[int, int] = {}
         self._face_landings: dict[int, int] = {}  # end-face landings of each can in this step (_held_span)
@@ -860,15 +861,17 @@ class ContactSolver:
                  int(self.other_tracked[i]), len(self.events))
         # what an attempt's impacts leave (a static shape it was found pressed on, its side impacts, the impulses
         # it was given) is undone with it: an attempt taken again must meet the same walls
-        skipped, hits, impulses = i in self._static_skipped, self._side_hits.get(i), self.impact_impulses[i].copy()
+        skipped, hits, impulses = self._static_skipped.get(i), self._side_hits.get(i), self.impact_impulses[i].copy()
         bare = self._bare_rows[i].copy()
         gained = 0.0
         while True:
             self.modes[i], self.tracked[i], self.sliding[i], self.slide_direction[i], self.pressed[i], \
                 self.ground_of[i], self.other_ground[i], self.other_projected[i], self.other_tracked[i] = saved[:9]
             del self.events[saved[9]:]
-            if not skipped:
-                self._static_skipped.discard(i)
+            if skipped is None:
+                self._static_skipped.pop(i, None)
+            else:
+                self._static_skipped[i] = skipped
             if hits is None:
                 self._side_hits.pop(i, None)
             else:
@@ -1269,16 +1272,16 @@ class ContactSolver:
 
     def _other_gap(self, sim, y: np.ndarray, i: int, pressed: bool = False) -> tuple[float, int]:
         """(lowest gap, ground) of body i against the half-spaces other than the one it rests on, and the static
-        shapes (not those it was found pressed on in this step, unless ``pressed``)."""
+        shapes (not the one it was found pressed on in this step, unless ``pressed``)."""
         lowest, which = math.inf, -1
         for jj in range(len(self.half_spaces)):
             if jj != self.ground_of[i] and jj != self.other_ground[i]:
                 count = body_points(y, sim._prm[i], self.shapes[i], self.grounds[jj], self._points, self._gaps)
                 if count and self._gaps[:count].min() < lowest:
                     lowest, which = float(self._gaps[:count].min()), jj
-        if (self.statics is not None and not self.statics.is_tangent(int(self.ground_of[i]))
-                and (pressed or i not in self._static_skipped)):
-            dist, s = self.statics.nearest(y, i, self.shapes[i], int(self.statics.row_owner[self.ground_of[i]]))
+        if self.statics is not None and not self.statics.is_tangent(int(self.ground_of[i])):
+            dist, s = self.statics.nearest(y, i, self.shapes[i], int(self.statics.row_owner[self.ground_of[i]]),
+                                           -1 if pressed else self._static_skipped.get(i, -1))
             if dist < lowest:
                 lowest, which = dist, self.statics.plane_for(y, sim._prm[i], i, self.shapes[i], s)
         return lowest, which
@@ -1377,7 +1380,7 @@ class ContactSolver:
         self.events.append(ContactEvent(t, self.names[i], jj, "impact", before, after, impulse, e0, e1, *jump))
         if after <= LIFT_OFF_SPEED and jj >= len(self.half_spaces):  # stays pressed on a static shape (not held)
             self.counts["static_pressed"] += 1
-            self._static_skipped.add(i)
+            self._static_skipped[i] = int(self.statics.row_owner[jj])
         elif after <= LIFT_OFF_SPEED and self.other_ground[i] < 0:  # it stays on the second one: held on both
             self.other_ground[i] = two_grounds.touching_other(self, sim, y, i, LIFT_OFF_SPEED,
                                                               max(TOUCHING_GAP, float(self._band[i])))

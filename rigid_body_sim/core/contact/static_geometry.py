@@ -212,10 +212,11 @@ class StaticGeometry:
 
     # ----------------------------------------------------------------- narrow phase
 
-    def nearest(self, y: np.ndarray, i: int, shape: np.ndarray, exclude: int = -1) -> tuple[float, int]:
+    def nearest(self, y: np.ndarray, i: int, shape: np.ndarray, exclude: int = -1,
+                also: int = -1) -> tuple[float, int]:
         """(signed distance in m, static index) of body i at state row y to its nearest static shape.
 
-        ``exclude``: a static index not looked at. (inf, -1) if there is none. The normal (static to
+        ``exclude``, ``also``: static indices not looked at (-1: none). (inf, -1) if there is none. The normal (static to
         body, world axes) and the contact point on the static surface are left in
         ``self._normal[s]`` and ``self._points[s, 0, 0:3]``.
         """
@@ -227,7 +228,7 @@ class StaticGeometry:
                       self._points, self._seps)
         best, which = math.inf, -1
         for s in range(k):
-            if s != exclude and self._dist[s] < best:
+            if s != exclude and s != also and self._dist[s] < best:
                 best, which = float(self._dist[s]), s
         return best, which
 
