@@ -404,9 +404,9 @@ def test_a_spinning_box_dropped_on_a_can_does_not_throw_it():
     """A box (5 kg, 89.7 × 71.8 × 53.8 mm) dropped spinning (2.5 rad/s) onto a can (1 kg, r = 52 mm, 104 mm long) set
     1 mm above the ground, e = 0.7 and μ = 0.3 everywhere (a case a random scan found; rk4 at dt = 10 ms). The can,
     struck, bounces between the box and the ground, up to some two hundred events in a step, and rocks on its rim
-    near upright. A pair touching after an impact and not approaching is followed for the rest of the step, and a
-    held can on its path projected onto the ground: unfollowed, the box went 8.8 mm into the can, whose rim force,
-    found at every stage near upright, then threw it. The energy of the two never rises above its start (1e-12 of
+    near upright. A pair touching after an impact and not approaching is followed for the rest of the step:
+    unfollowed, the box went 8.8 mm into the can, whose rim force, found at every stage near upright, then threw
+    it. The energy of the two never rises above its start (1e-12 of
     it) over 2 s, and no step ends with the box deeper in the can than the pair pass's skin (ADVANCE_SKIN × the
     pair's size)."""
     material = {"restitution": 0.7, "friction": 0.3}
@@ -427,8 +427,7 @@ def test_a_box_falling_onto_a_box_tipping_beside_a_wall_ends_no_step_inside_it()
     120 × 163 × 119 mm, μ = 0.029) standing 20 µm above the ground and touching a wall (rk4 at dt = 5 ms; a case a
     mixed pile gave). The lower box, struck on its edge, tips on the ground and slams back flat while the upper one
     rides on it and on the wall, some forty events in the first step: each landing of the lower box's other edge is
-    an event of the pair pass, its path between them projected onto the ground, and a pair touching after an impact
-    is followed on. No step of 0.1 s ends with the upper box deeper in the lower than the pair pass's skin
+    an event of the pair pass, and a pair touching after an impact is followed on. No step of 0.1 s ends with the upper box deeper in the lower than the pair pass's skin
     (ADVANCE_SKIN × the pair's size), and K + U never rises above its start (1e-12 of it)."""
     lower = {"box": [0.1196153711080292, 0.16333327062734618, 0.11881858497869019]}
     upper = {"box": [0.06764387584437448, 0.12924208749251154, 0.10269876632233799]}

@@ -26,8 +26,7 @@ After each step, before the ground pass:
    shapes (a wall a body sliding on the ground meets; one it touches at a piece's start and goes
    into is struck at once, _strike_wall, and stays in view) and of their features not on their ground
    (a tipping box's other edge coming down: its landing, solver._landing, and it is held again),
-   Φ each body's own step map (solver.step_map; a held member's projected onto its ground,
-   solver.held_path: the step map alone drifts off it). A pair touching at a piece's start and not
+   Φ each body's own step map (solver.step_map). A pair touching at a piece's start and not
    approaching (just struck; sliding on the other), or met without approaching (grazing), is
    followed too, to a skin ε_k deeper than it was then: it sets no sample's length, its sign
    is read at every sample; met there approaching, it is moved apart (item 5) and has its
@@ -531,9 +530,9 @@ class BodyPairs:
             cache: dict[float, dict[int, np.ndarray]] = {}
 
             def at(s: float) -> dict[int, np.ndarray]:
-                if s not in cache:  # a held member on its ground (solver.held_path), the others on their step maps
-                    cache[s] = {i: y[i] if s == 0.0 else solver.held_path(sim, i, y[i], s * span, w[i]) if i in held
-                                else solver.step_map(sim, i, y[i], s * span, w[i]) for i in active}
+                if s not in cache:
+                    cache[s] = {i: (solver.step_map(sim, i, y[i], s * span, w[i]) if s > 0.0 else y[i])
+                                for i in active}
                 return cache[s]
 
             def components(s: float) -> list[tuple[float, tuple]]:
@@ -586,7 +585,7 @@ class BodyPairs:
             if s_hi is None and first is None:  # no event in the rest of the step (or of the piece)
                 for i in list(active):
                     if i in held:
-                        y[i] = solver._held_rest(sim, i, y[i], w[i], t, span)  # from its step map's end
+                        y[i] = solver._held_rest(sim, i, y[i], w[i], t, span, end[i])
                         if solver.modes[i] != PERSISTENT:  # it left its ground in the piece: in flight from here
                             held.discard(i)
                             w[i] = solver._bare_rows[i].copy()

@@ -513,17 +513,6 @@ class ContactSolver:
             project(y, sim._prm[i], self.shapes[i], self.grounds[j], int(self.tracked[i]), sticking, self._points,
                     self._gaps, self._owners, self._work)
 
-    def held_path(self, sim, i: int, y0: np.ndarray, h: float, held: np.ndarray) -> np.ndarray:
-        """Body i held on its ground from y0 over h under ``held`` (its row with the holding force): the step map's
-        state projected onto its tracked features, as a held step's end is (:meth:`_persistent_end`, without its
-        events; none for a body held on two grounds). The path a held body's meetings with others are looked for
-        on: the step map alone drifts off the ground by O(h² ω²) (a box tipping on an edge)."""
-        y = self.step_map(sim, i, y0, h, held)
-        if self.other_ground[i] < 0:
-            project(y, sim._prm[i], self.shapes[i], self.grounds[int(self.ground_of[i])], int(self.tracked[i]),
-                    not self.sliding[i], self._points, self._gaps, self._owners, self._work)
-        return y
-
     def _normal_motion(self, sim, y: np.ndarray, i: int, j: int, count: int, w: np.ndarray, mask: int | None = None):
         """(lowest normal speed, its free normal acceleration, mean slip) of the points in self._points.
 
