@@ -90,7 +90,7 @@ import numpy as np
 from ..kernels import layout as L
 from ..kernels.contact.impacts import IMPACT_WORK_SHAPE, impact, kinetic_energy_row
 from ..kernels.contact.island import APPROACH_SPEED  # a relative normal velocity below −this (m/s) approaches
-from ..kernels.contact.layout import DIMS, KIND, MAX_POINTS, NORMAL, PERSISTENT, FLIGHT, SHAPE_SPHERE
+from ..kernels.contact.layout import DIMS, KIND, MAX_POINTS, NORMAL, PERSISTENT, FLIGHT, SHAPE_CYLINDER, SHAPE_SPHERE
 from ..kernels.contact.pair_impacts import PAIR_JACOBIAN_SHAPE, normal_speed, pair_impact
 from ..kernels.contact.pairs import MAX_PAIR_POINTS, pair_contacts
 from ..kernels.contact.persistent import normal_speeds
@@ -521,9 +521,10 @@ class BodyPairs:
             sides = [i for i in sorted(active & held) if solver._may_strike_side(i)
                      and solver._other_gap(sim, y[i], i)[0] > band[i]]
             # a held member's features not on its ground (a box tipping on an edge: its other edge comes down), while
-            # apart: a landing there changes its path (solver._reaching, on the ground pass)
+            # apart: a landing there changes its path (solver._reaching, on the ground pass); not a cylinder's (its
+            # rim and end face are the ground pass's, with their guards against a rim force that throws it)
             lands = [i for i in sorted(active & held) if solver.other_ground[i] < 0
-                     and solver._untracked_gap(sim, y[i], i, y[i]) > 0.0]
+                     and self._shapes[i, KIND] != SHAPE_CYLINDER and solver._untracked_gap(sim, y[i], i, y[i]) > 0.0]
             # a held can rocking on a rim whose lowest point turns fast: the events looked for piece by piece, each
             # piece's holding force found afresh (solver._rim_piece), as on the ground pass
             span = min([h] + [solver._rim_piece(sim, i, y[i], h) for i in active & held])
