@@ -586,7 +586,14 @@ class BodyPairs:
             if s_hi is None and first is None:  # no event in the rest of the step (or of the piece)
                 for i in list(active):
                     if i in held:
-                        y[i] = solver._held_rest(sim, i, y[i], w[i], t, span, end[i])
+                        start = y[i]
+                        y[i] = solver._held_rest(sim, i, start, w[i], t, span, end[i])
+                        if solver._thrown(sim, i, start, y[i], solver._bare(i, w[i])):
+                            # the held force threw it (a can on its rim near upright, its force found at every
+                            # stage): it stays where it was, at rest, for this piece, as on the ground pass
+                            solver.counts["held_thrown"] += 1
+                            y[i] = start.copy()
+                            y[i][L.V:L.W + 3] = 0.0
                         if solver.modes[i] != PERSISTENT:  # it left its ground in the piece: in flight from here
                             held.discard(i)
                             w[i] = solver._bare_rows[i].copy()
