@@ -275,15 +275,16 @@ class BodyPairs:
         look, self._look = self._look, None
         if look is None:
             return
-        kept, hits = look["kept"], look["hits"]
-        links = {tuple(p) for p in look["pairs"].tolist()}
+        kept, hits, pairs = look["kept"], look["hits"], look["pairs"]
+        links: set = set()  # pairs looked at again, followed by a group stepped again
         for _ in range(MAX_LOOKS):
             near = set()
             if "moving" in look:  # the candidates of a body whose end changed
-                moving = look["moving"]
-                changed = set(moving[np.any(Y1[moving, :L.STATE_WIDTH] != look["free"], axis=1)].tolist())
-                near.update(p for p in links if (p[0] in changed or p[1] in changed) and not kept[p[0]]
-                            and not kept[p[1]])
+                moving, changed = look["moving"], np.zeros(len(kept), dtype=bool)
+                changed[moving] = np.any(Y1[moving, :L.STATE_WIDTH] != look["free"], axis=1)
+                changed &= ~kept
+                these = pairs[(changed[pairs[:, 0]] | changed[pairs[:, 1]]) & ~kept[pairs[:, 0]] & ~kept[pairs[:, 1]]]
+                near.update(map(tuple, these.tolist()))
             # a body an event sent out of its free step's box (none without an event), and whom it may have met
             while len(self.solver.events) > look["events"]:
                 _, count = left_pairs(Y0, Y1, self.members, self.reach, h, self._lo, self._hi, self.movable,
@@ -315,8 +316,9 @@ class BodyPairs:
                     continue
                 members = sorted(group)
                 self._restore(look["events"], members)
-                self._group_step(sim, members, sorted(p for p in links if p[0] in group and p[1] in group), Y0, Y1,
-                                 wrenches, t0, h)
+                inside = pairs[np.isin(pairs[:, 0], members) & np.isin(pairs[:, 1], members)]
+                group_links = set(map(tuple, inside.tolist())) | {p for p in links if p[0] in group and p[1] in group}
+                self._group_step(sim, members, sorted(group_links), Y0, Y1, wrenches, t0, h)
                 self.solver.counts["pairs_looked_again"] += 1
 
     def _restore(self, events: int, members: list[int]) -> None:
@@ -589,11 +591,7 @@ class BodyPairs:
                         start = y[i]
                         y[i] = solver._held_rest(sim, i, start, w[i], t, span, end[i])
                         if solver._thrown(sim, i, start, y[i], solver._bare(i, w[i])):
-                            # the held force threw it (a can on its rim near upright, its force found at every
-                            # stage): it stays where it was, at rest, for this piece, as on the ground pass
-                            solver.counts["held_thrown"] += 1
-                            y[i] = start.copy()
-                            y[i][L.V:L.W + 3] = 0.0
+                            y[i] = solver._left_at_rest(start)  # as on the ground pass (a can on its rim)
                         if solver.modes[i] != PERSISTENT:  # it left its ground in the piece: in flight from here
                             held.discard(i)
                             w[i] = solver._bare_rows[i].copy()

@@ -1148,11 +1148,16 @@ class ContactSolver:
             # a wall spun up to 3.4e5 rad/s in one 10 ms step; a can beside a wall landed on its end face and held
             # on its rim again, thrown again, 150 times in one step, each a few tens of µs on): it stays where it
             # was, at rest, for this span (it cannot gain energy), counted
-            self.counts["held_thrown"] += 1
-            end = y.copy()
-            end[L.V:L.W + 3] = 0.0
-            return end
+            return self._left_at_rest(y)
         return self._persistent_end(sim, i, y, end, held, t, h)
+
+    def _left_at_rest(self, y: np.ndarray) -> np.ndarray:
+        """A held step threw the body from y (its holding force, found at every stage, raised its K + U under gravity
+        alone by more than THROWN): it stays where it was, at rest, for the span, counted in ``held_thrown``."""
+        self.counts["held_thrown"] += 1
+        rest = y.copy()
+        rest[L.V:L.W + 3] = 0.0
+        return rest
 
     def _bare(self, i: int, held: np.ndarray) -> np.ndarray:
         """The wrench row ``held`` without the holding force _hold added to it for body i."""
