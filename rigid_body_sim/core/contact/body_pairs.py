@@ -612,9 +612,17 @@ class BodyPairs:
                 key = min(components(s), key=lambda vk: vk[0])[1]
                 rests = False
             states, starts = at(s), dict(y)
+            # a held member whose step to the meeting threw it (its holding force, held over the piece, raised its
+            # K + U under gravity alone: a can on its rim) stays at rest where it was, as on the ground pass; the
+            # meeting, found on that throw, is not had: the piece goes on from there
+            thrown = [i for i in sorted(active & held) if solver._thrown(sim, i, y[i], states[i], solver._bare(i, w[i]))]
             for i in active:
                 y[i] = states[i].copy()
             t, h = t + s * span, h - s * span
+            if thrown:
+                for i in thrown:
+                    y[i] = solver._left_at_rest(starts[i])
+                continue
             if key[0] == "pair":
                 _, a, b = key
                 if self._approaching(sim, y[a], a, y[b], b):  # with every other pair touching now
