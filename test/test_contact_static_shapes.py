@@ -415,6 +415,42 @@ def test_a_box_sliding_into_a_corner_of_two_walls_ends_no_step_inside_either():
     assert sim.contact.counts["static_pressed"] >= 1
 
 
+def test_a_box_resting_on_a_wall_s_top_edge_sliding_into_the_next_wall_is_not_moved_into_it():
+    """A box (3.68 kg, 81 × 153 × 45 mm, μ = 0.22, e = 0) resting tilted on the top inner edge of a bin's wall, held on
+    the edge's tangent plane, sliding along it at 0.31 m/s into the corner with the next wall (rk4, dt = 1 ms; its
+    state in a mixed pile). Its plane is refreshed against the wall it rests on; when the next wall is nearer it
+    lifts off and its flight meets whichever it reaches. (The plane, refreshed against the nearest wall, became the
+    next wall's while the features held were the first's, and the box was moved 7 cm into the walls in one step,
+    its K + U up 1.6 J.) Over 0.3 s it is never deeper in a wall than its one step's travel (0.32 mm: a body held on
+    a static shape meets another one a step late), never moved more than that off its free step, and K + U never
+    rises above its start."""
+    box = {"mass": 3.6849575813438182, "inertia": {"box": [0.08125638450646401, 0.15314557870419326, 0.04492328466994563]},
+           "collision": {"box": [0.08125638450646401, 0.15314557870419326, 0.04492328466994563]},
+           "material": {"restitution": 0.0, "friction": 0.21606845625622342}}
+    row = [0.6514907690227308, -0.6827874718254205, 1.008888506149661, 0.043857384584905935, 0.2553983188692946,
+           0.95190759708085, -0.1634630085244726, 0.3086456814530568, 0.08219034341985552, -0.029085377155726504, 0.0,
+           2.7755575615628914e-17, -0.1950644254744148]
+    sim = in_a_bin("box", box, 0.725, "rk4", 1e-3, row)
+    assert sim.contact.modes[0] == PERSISTENT and sim.contact.statics.is_tangent(int(sim.contact.ground_of[0]))
+    moving = np.array([m != "static" for m in sim.model.motions])
+    travel = np.linalg.norm(row[7:10]) * sim.dt
+
+    def energy() -> float:
+        v, w = sim.state.v_WC_W[0], sim.state.w_WP_P[0]
+        return 0.5 * box["mass"] * v @ v + 0.5 * sim._prm[0, 2:5] @ (w * w) + box["mass"] * G * sim.state.p_WC_W[0, 2]
+
+    start = energy()
+    while sim.time < 0.3:
+        p0, v0 = sim.state.p_WC_W[0].copy(), sim.state.v_WC_W[0].copy()
+        sim.step()
+        assert np.linalg.norm(sim.state.p_WC_W[0] - p0 - v0 * sim.dt) <= travel
+        overlaps = overlapping_bodies(sim.positions_world(), sim.orientations_xyzw()[:, [3, 0, 1, 2]],
+                                      sim.contact.shapes, moving)
+        assert all(depth <= travel for *_, depth in overlaps), overlaps
+        assert energy() <= start + 1e-12 * abs(start)
+    assert sim.contact.counts["static_tangent"] > 0
+
+
 def test_a_can_standing_against_a_wall_is_never_thrown_by_its_held_force():
     """A squat can (r 46 mm, 46 mm long) standing on its end against a bin's wall, tilted 2.6e-7 rad, at rest
     (rk4, dt = 10 ms): its held step, on a rim point, spun it up to 3.4e5 rad/s (K + U up 3e7 J) and blew the pile

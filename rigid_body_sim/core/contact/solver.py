@@ -1297,20 +1297,29 @@ class ContactSolver:
 
     def _refresh_static(self, sim, Y: np.ndarray, on_static: np.ndarray) -> np.ndarray:
         """Before the step, the bodies resting on a static shape's plane: one on a face row whose tracked contact
-        points left the face goes on on its tangent row; a tangent row is refreshed from the narrow phase
-        (each such body-step counted in ``static_tangent``). Returns them, for the Python hold."""
+        points left the face goes on on its tangent row; a tangent row is refreshed from the narrow phase against
+        the static shape it belongs to (each such body-step counted in ``static_tangent``), and a body to which
+        another static shape is nearer than that one lifts off (StaticGeometry.refresh). Returns those still held,
+        for the Python hold."""
         statics = self.statics
-        for i in on_static:
+        held = np.ones(len(on_static), dtype=bool)
+        for k, i in enumerate(on_static):
             j = int(self.ground_of[i])
             if not statics.is_tangent(j):
                 count = self._tracked_points(sim, Y[i], i)
                 if statics.within_face(j, self._points[:count]):
                     continue
             self.counts["static_tangent"] += 1
-            row = statics.refresh(Y[i], sim._prm[i], i, self.shapes[i])
+            row = statics.refresh(Y[i], sim._prm[i], i, self.shapes[i], j, self._band[i])
             if row >= 0:
                 self.ground_of[i] = row
-        return on_static
+            else:  # another static shape is nearer (a box sliding along a wall's top into the next wall): its held
+                # features are not that one's, so it flies this step, its contacts with every shape located afresh
+                self.modes[i] = FLIGHT
+                self.sliding[i] = False
+                self.events.append(ContactEvent(sim.time, self.names[i], j, "lift-off"))
+                held[k] = False
+        return on_static[held]
 
     def _static_busy(self, Y1: np.ndarray, resting: np.ndarray, moving: np.ndarray) -> np.ndarray:
         """After the step: ``_lowest`` (the half-spaces' lowest gaps of the bodies in flight, else inf) lowered, in

@@ -28,7 +28,9 @@ Persistent contact on a face row is the ground's, exact (held and projected on t
 plane, the force found at every stage by the methods that do so on the ground) while the contact
 points stay within the face. On a tangent row (a curved static
 support, an edge, a corner, or a face the body has slid over the rim of) the row is refreshed
-from the narrow phase before each step and the body is held on that plane: first order in time,
+from the narrow phase before each step, against the static shape the row is for, and the body is held on
+that plane (where another static shape has come nearer than that one, by more than the body's feature band, it
+lifts off: its held features are not that shape's, and its flight meets whichever it reaches): first order in time,
 not checked against a closed form, and counted (``ContactSolver.counts["static_tangent"]``, per
 body-step).
 """
@@ -330,13 +332,16 @@ class StaticGeometry:
                 return False
         return True
 
-    def refresh(self, y: np.ndarray, p: np.ndarray, i: int, shape: np.ndarray) -> int:
-        """Body i's tangent row rewritten from the narrow phase at y (its support moved or is curved):
-        the row index (a face row if the contact is now within a face), or -1 if no static shape is near."""
-        _, s = self.nearest(y, i, shape)
-        if s < 0:
+    def refresh(self, y: np.ndarray, p: np.ndarray, i: int, shape: np.ndarray, j: int, band: float) -> int:
+        """Body i, held on plane row j, its row rewritten from the narrow phase at y against the static shape j
+        belongs to (its support moved or is curved): the row index (a face row if the contact is now within a
+        face), or -1 if another static shape is nearer than that one by more than ``band`` (m): the body's
+        support is no longer the one its held features were found on."""
+        owner = int(self.row_owner[j])
+        dist, s = self.nearest(y, i, shape)
+        if s != owner and dist < float(self._dist[owner]) - band:
             return -1
-        return self.plane_for(y, p, i, shape, s)
+        return self.plane_for(y, p, i, shape, owner)
 
     def static_of(self, j: int) -> int:
         """The body index of the static shape plane row j belongs to (now), or -1 for a half-space."""
