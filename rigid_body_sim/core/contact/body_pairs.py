@@ -477,6 +477,11 @@ class BodyPairs:
         hints: dict[int, float] = {}  # a flying member just struck: its apex hint, its gap 0 (solver._with_events)
         struck: set = set()
         struck_walls: set = set()  # (held member, instant) struck against a wall it touched at a piece's start
+        rested: dict[int, np.ndarray] = {}  # held members a held step threw, left at rest: their state while at rest
+
+        def still(i: int) -> bool:  # left at rest by a throw and not moved since (no event of its own)
+            return i in rested and np.array_equal(y[i], rested[i])
+
         for _ in range(MAX_GROUP_EVENTS):
             if h <= 0.0 or not active:
                 break
@@ -534,8 +539,8 @@ class BodyPairs:
 
             def at(s: float) -> dict[int, np.ndarray]:
                 if s not in cache:
-                    cache[s] = {i: (solver.step_map(sim, i, y[i], s * span, w[i]) if s > 0.0 else y[i])
-                                for i in active}
+                    cache[s] = {i: (solver.step_map(sim, i, y[i], s * span, w[i]) if s > 0.0 and not still(i)
+                                    else y[i]) for i in active}
                 return cache[s]
 
             def components(s: float) -> list[tuple[float, tuple]]:
@@ -587,6 +592,8 @@ class BodyPairs:
             hints, struck = {}, set()  # an impact's apex hint and gap of 0 hold for the piece right after it
             if s_hi is None and first is None:  # no event in the rest of the step (or of the piece)
                 for i in list(active):
+                    if still(i):
+                        continue
                     if i in held:
                         start = y[i]
                         y[i] = solver._held_rest(sim, i, start, w[i], t, span, end[i])
@@ -612,17 +619,19 @@ class BodyPairs:
                 key = min(components(s), key=lambda vk: vk[0])[1]
                 rests = False
             states, starts = at(s), dict(y)
-            # a held member whose step to the meeting threw it (its holding force, held over the piece, raised its
-            # K + U under gravity alone: a can on its rim) stays at rest where it was, as on the ground pass; the
-            # meeting, found on that throw, is not had: the piece goes on from there
+            # a held member whose step to the event threw it (its holding force, held over the piece, raised its
+            # K + U under gravity alone: a can on its rim) stays at rest where it was for the rest of the step, as on
+            # the ground pass, until an event of its own; the event, found on that throw, is not had: the piece is
+            # looked at again with it at rest
             thrown = [i for i in sorted(active & held) if solver._thrown(sim, i, y[i], states[i], solver._bare(i, w[i]))]
+            if thrown:
+                for i in thrown:
+                    y[i] = solver._left_at_rest(y[i])
+                    rested[i] = y[i].copy()
+                continue
             for i in active:
                 y[i] = states[i].copy()
             t, h = t + s * span, h - s * span
-            if thrown:
-                for i in thrown:
-                    y[i] = solver._left_at_rest(starts[i])
-                continue
             if key[0] == "pair":
                 _, a, b = key
                 if self._approaching(sim, y[a], a, y[b], b):  # with every other pair touching now
@@ -660,7 +669,8 @@ class BodyPairs:
             names = ", ".join(repr(solver.names[i]) for i in members)
             raise RuntimeError(f"bodies {names}: more than {MAX_GROUP_EVENTS} body–body events in one step at t = {t}")
         for i in list(active):
-            self._finish(sim, i, y, w, t, h, held)
+            if not still(i):
+                self._finish(sim, i, y, w, t, h, held)
         for i in members:
             Y1[i, :L.STATE_WIDTH] = y[i][:L.STATE_WIDTH]
 
