@@ -620,14 +620,20 @@ class BodyPairs:
                 rests = False
             states, starts = at(s), dict(y)
             # a held member whose step to the event threw it (its holding force, held over the piece, raised its
-            # K + U under gravity alone: a can on its rim) stays at rest where it was for the rest of the step, as on
-            # the ground pass, until an event of its own; the event, found on that throw, is not had: the piece is
-            # looked at again with it at rest
+            # K + U under gravity alone): as on the ground pass, a can held on its rim has its end face land where
+            # it was, and any other body stays at rest there for the rest of the step, until an event of its own;
+            # the event, found on that throw, is not had: the piece is looked at again from its start
             thrown = [i for i in sorted(active & held) if solver._thrown(sim, i, y[i], states[i], solver._bare(i, w[i]))]
             if thrown:
                 for i in thrown:
-                    y[i] = solver._left_at_rest(y[i])
-                    rested[i] = y[i].copy()
+                    bare = solver._bare(i, w[i])
+                    landed = solver._face_instead(sim, i, y[i], bare, t, 0.0)
+                    if landed is not None:
+                        y[i] = landed
+                        self._hold_again(sim, i, y[i], w, bare, held, t, True)
+                    else:
+                        y[i] = solver._left_at_rest(y[i])
+                        rested[i] = y[i].copy()
                 continue
             for i in active:
                 y[i] = states[i].copy()

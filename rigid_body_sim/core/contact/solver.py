@@ -1138,18 +1138,25 @@ class ContactSolver:
             return self._with_events(sim, i, y, w, t, h)
         end = self.step_map(sim, i, y, h, held)
         if thrown_at_rest and self._thrown(sim, i, y, end, w):
-            rim = held_rim(self.shapes[i], int(self.tracked[i]))
-            landings = self._face_landings.get(i, 0)
-            if rim >= 0 and landings < MAX_FACE_LANDINGS:  # a can held on its rim: its end face lands instead, as
-                self.counts["face_landed"] += 1  # after a rim piece
-                self._face_landings[i] = landings + 1
-                return self._landing(sim, i, y, w, t, h, 4 << rim)
+            landed = self._face_instead(sim, i, y, w, t, h)
             # else the holding force, held over the span, threw the body (a squat can standing on its end against
             # a wall spun up to 3.4e5 rad/s in one 10 ms step; a can beside a wall landed on its end face and held
             # on its rim again, thrown again, 150 times in one step, each a few tens of µs on): it stays where it
             # was, at rest, for this span (it cannot gain energy), counted
-            return self._left_at_rest(y)
+            return self._left_at_rest(y) if landed is None else landed
         return self._persistent_end(sim, i, y, end, held, t, h)
+
+    def _face_instead(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float, h: float) -> np.ndarray | None:
+        """Body i, held at y, thrown by its held step (:meth:`_thrown`): a can held on its rim has its end face land
+        there instead, as after a rim piece, then the rest h of its span (:meth:`_landing`; ``w`` its wrench row
+        without the holding force), at most MAX_FACE_LANDINGS times a step; None for any other body (or past that)."""
+        rim = held_rim(self.shapes[i], int(self.tracked[i]))
+        landings = self._face_landings.get(i, 0)
+        if rim < 0 or landings >= MAX_FACE_LANDINGS:
+            return None
+        self.counts["face_landed"] += 1
+        self._face_landings[i] = landings + 1
+        return self._landing(sim, i, y, w, t, h, 4 << rim)
 
     def _left_at_rest(self, y: np.ndarray) -> np.ndarray:
         """A held step threw the body from y (its holding force, found at every stage, raised its K + U under gravity
