@@ -944,6 +944,39 @@ def test_a_pile_s_projection_lifts_sunk_columns_to_their_stacked_heights_in_one_
     assert speeds_of(sim, list(range(40))) <= 1e-9
 
 
+def test_a_pile_s_projection_moves_a_box_out_of_a_ball_with_a_plank_leaning_on_it_whose_centre_is_lower():
+    """A 0.1 m cube tilted 40° about y, a ball (r 50 mm) set 0.1 mm into its lower face, a plank (0.4 × 0.2 × 0.02 m)
+    lying on its upper face along the slope, its centre 18 mm lower than the cube's, beside 16 towers of two 0.1 m
+    cubes each set 0.1 mm into the one below (a pile's projection: more than PILE_CONTACTS points). Both the cube's
+    pairs are within 60° of upright, along one line: held as the lower body of the pair with the plank by the
+    centres' heights, the cube could move out of neither (0.12 mm left in the ball); held as the one the normal
+    points down to, after one 1 ms step no pair is deeper than PROJECT_TOL × its size."""
+    from rigid_body_sim.core.kernels.contact.island import PROJECT_TOL
+
+    tilt = np.radians(40.0)
+    along, up = np.array([np.cos(tilt), 0.0, -np.sin(tilt)]), np.array([np.sin(tilt), 0.0, np.cos(tilt)])
+    turned = (0.0, np.sin(tilt / 2), 0.0, np.cos(tilt / 2))
+    centre = np.array([0.0, 0.0, 0.2])
+    ball, plank = {"sphere": 0.05}, {"box": [0.4, 0.2, 0.02]}
+    bodies = {"box": cube(centre, edge=0.1, orientation=turned),
+              "ball": {"mass": 1.0, "inertia": ball, "collision": ball, "material": {"restitution": 0.0, "friction": 0.5},
+                       "pose": {"position": list(centre - 0.1001 * up)}},
+              "plank": {"mass": 1.0, "inertia": plank, "collision": plank,
+                        "material": {"restitution": 0.0, "friction": 0.5},
+                        "pose": {"position": list(centre + 0.0601 * up + 0.1 * along), "orientation": list(turned)}}}
+    bodies.update({f"t{k}_{level}": cube((1.0 + 0.3 * (k % 4), 0.3 * (k // 4), 0.05 + 0.1 * level), edge=0.1)
+                   for k in range(16) for level in range(2)})
+    sim = simulator(bodies, dt=1e-3)
+    sim.set_body_state("ball", position_world=tuple(centre - (0.1 - 1e-4) * up))
+    sim.set_body_state("plank", position_world=tuple(centre + 0.06 * up + 0.1 * along))
+    for k in range(16):
+        sim.set_body_state(f"t{k}_1", position_world=(1.0 + 0.3 * (k % 4), 0.3 * (k // 4), 0.15 - 1e-4))
+    assert sim.positions_world()[2, 2] < centre[2] - 0.018
+    assert deepest(sim) <= -0.99e-4
+    sim.step(1)
+    assert deepest(sim) >= -PROJECT_TOL * 0.05
+
+
 @pytest.mark.slow
 def test_a_pile_of_1000_cubes_settles():
     sim, _ = settle_pile(1000, 3.0)  # 3000 steps of one island of up to 1000 cubes: minutes

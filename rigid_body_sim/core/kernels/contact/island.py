@@ -1390,8 +1390,9 @@ def _link(Y0, Y1, nlist, lo, hi, pdist, pnormal, pcount, ppoints, bound, is_stat
 @njit(**JIT)
 def _pile_rows(Y1, prm, nd, cint, cflt, rj, rw, rdiag, rbody, porder, key):
     """The order of the nd normal rows' Gauss–Seidel in porder[:nd]: over a pile (more than PILE_CONTACTS, under
-    gravity) from the lowest point up, with each upright pair's lower body held (its M⁻¹Jᵀ side zeroed, the
-    diagonal the upper's alone), and True; else their order, and False. key (per row) is the sort's scratch."""
+    gravity) from the lowest point up, with each upright pair's lower body (the one its normal points down to)
+    held (its M⁻¹Jᵀ side zeroed, the diagonal the upper's alone), and True; else their order, and False. key (per
+    row) is the sort's scratch."""
     for c in range(nd):
         porder[c] = c
     pile = False
@@ -1409,9 +1410,10 @@ def _pile_rows(Y1, prm, nd, cint, cflt, rj, rw, rdiag, rbody, porder, key):
             upright = abs(gx * cflt[c, C_N] + gy * cflt[c, C_N + 1] + gz * cflt[c, C_N + 2]) >= PILE_UPRIGHT * g
             if a < 0 or b < 0 or not upright:
                 continue
-            below_a = gx * Y1[a, P] + gy * Y1[a, P + 1] + gz * Y1[a, P + 2]
-            below_b = gx * Y1[b, P] + gy * Y1[b, P + 1] + gz * Y1[b, P + 2]
-            low = 0 if below_a > below_b else 1
+            # the lower body: the one the normal (a → b) points down to, not the one whose centre is lower (a box
+            # leaning on a body whose centre is a little higher would be the lower of both its pairs, held from
+            # above and below at once: a point between the two that neither may move out of)
+            low = 1 if gx * cflt[c, C_N] + gy * cflt[c, C_N + 1] + gz * cflt[c, C_N + 2] > 0.0 else 0
             d = 0.0
             for j in range(6):
                 rw[c, 6 * low + j] = 0.0
