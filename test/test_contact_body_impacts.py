@@ -543,6 +543,8 @@ def test_a_can_held_on_its_rim_whose_held_step_would_throw_it_into_a_falling_can
 @settings(max_examples=60, deadline=None)
 @example(kinds=("cylinder", "cylinder"), sizes=(0.041015625, 0.03125), masses=(1.0, 0.2), e=0.3, mu=0.3, dt=1e-2,
          offset=(0.03515625, 0.0), drop=0.03125, quat=[0.0, 0.0, 0.0, 1.0], spin=[0.0, 2.5, 1.0])
+@example(kinds=("cylinder", "box"), sizes=(0.04, 0.03), masses=(5.0, 0.2), e=0.7, mu=0.0, dt=1e-2,
+         offset=(0.0, 0.0234375), drop=0.04729514828667772, quat=[0.0, 1.0, 0.78125, 0.3046875], spin=[0.0, 1.0, 0.0])
 @given(kinds=st.tuples(st.sampled_from(sorted(_KINDS)), st.sampled_from(sorted(_KINDS))),
        sizes=st.tuples(st.floats(0.04, 0.1), st.floats(0.03, 0.08)),
        masses=st.tuples(st.sampled_from([0.2, 1.0, 5.0]), st.sampled_from([0.2, 1.0, 5.0])),

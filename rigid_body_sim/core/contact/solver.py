@@ -1248,9 +1248,15 @@ class ContactSolver:
 
     def _land(self, sim, i: int, y0: np.ndarray, held: np.ndarray, t: float, h: float, s: float) -> np.ndarray:
         """The landing (:meth:`_landing`) of a feature of body i at the fraction s of its step from y0 over h
-        under ``held``, then the rest of the step."""
+        under ``held``, then the rest of the step. A held step to the landing that threw the body (:meth:`_thrown`:
+        a can's rim force, held over it) is taken as in :meth:`_held_span`: a can on its rim lands its end face at
+        y0, any other body stays at rest there for the step."""
         hit = self.step_map(sim, i, y0, s * h, held) if s > 0.0 else y0.copy()
-        return self._landing(sim, i, hit, self._bare(i, held), t + s * h, h - s * h, self.landing_face(sim, i, y0, hit))
+        bare = self._bare(i, held)
+        if s > 0.0 and self._thrown(sim, i, y0, hit, bare):
+            landed = self._face_instead(sim, i, y0, bare, t, h)
+            return self._left_at_rest(y0) if landed is None else landed
+        return self._landing(sim, i, hit, bare, t + s * h, h - s * h, self.landing_face(sim, i, y0, hit))
 
     def landing_face(self, sim, i: int, y0: np.ndarray, hit: np.ndarray) -> int:
         """The features of a can's end face come down flat from y0 to ``hit`` (it lands as a whole), else 0."""
