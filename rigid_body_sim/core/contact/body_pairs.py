@@ -627,12 +627,10 @@ class BodyPairs:
             if thrown:
                 for i in thrown:
                     bare = solver._bare(i, w[i])
-                    landed = solver._face_instead(sim, i, y[i], bare, t, 0.0)
-                    if landed is not None:
-                        y[i] = landed
+                    y[i], landed = solver._instead_of_throw(sim, i, y[i], bare, t, 0.0)
+                    if landed:
                         self._hold_again(sim, i, y[i], w, bare, held, t, True)
                     else:
-                        y[i] = solver._left_at_rest(y[i])
                         rested[i] = y[i].copy()
                 continue
             for i in active:

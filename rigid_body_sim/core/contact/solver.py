@@ -1138,25 +1138,24 @@ class ContactSolver:
             return self._with_events(sim, i, y, w, t, h)
         end = self.step_map(sim, i, y, h, held)
         if thrown_at_rest and self._thrown(sim, i, y, end, w):
-            landed = self._face_instead(sim, i, y, w, t, h)
-            # else the holding force, held over the span, threw the body (a squat can standing on its end against
-            # a wall spun up to 3.4e5 rad/s in one 10 ms step; a can beside a wall landed on its end face and held
-            # on its rim again, thrown again, 150 times in one step, each a few tens of µs on): it stays where it
-            # was, at rest, for this span (it cannot gain energy), counted
-            return self._left_at_rest(y) if landed is None else landed
+            return self._instead_of_throw(sim, i, y, w, t, h)[0]
         return self._persistent_end(sim, i, y, end, held, t, h)
 
-    def _face_instead(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float, h: float) -> np.ndarray | None:
-        """Body i, held at y, thrown by its held step (:meth:`_thrown`): a can held on its rim has its end face land
-        there instead, as after a rim piece, then the rest h of its span (:meth:`_landing`; ``w`` its wrench row
-        without the holding force), at most MAX_FACE_LANDINGS times a step; None for any other body (or past that)."""
+    def _instead_of_throw(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float,
+                          h: float) -> tuple[np.ndarray, bool]:
+        """Body i, held at y, thrown by its held step (:meth:`_thrown`): (its state instead, whether a face landed).
+        A can held on its rim has its end face land there, as after a rim piece, then the rest h of its span
+        (:meth:`_landing`; ``w`` its wrench row without the holding force), at most MAX_FACE_LANDINGS times a step;
+        any other body (or a can past that) stays where it was, at rest, for the span (:meth:`_left_at_rest`: a
+        squat can standing on its end against a wall spun up to 3.4e5 rad/s in one 10 ms step; a can beside a wall
+        landed on its end face and held on its rim again, thrown again, 150 times in one step)."""
         rim = held_rim(self.shapes[i], int(self.tracked[i]))
         landings = self._face_landings.get(i, 0)
         if rim < 0 or landings >= MAX_FACE_LANDINGS:
-            return None
+            return self._left_at_rest(y), False
         self.counts["face_landed"] += 1
         self._face_landings[i] = landings + 1
-        return self._landing(sim, i, y, w, t, h, 4 << rim)
+        return self._landing(sim, i, y, w, t, h, 4 << rim), True
 
     def _left_at_rest(self, y: np.ndarray) -> np.ndarray:
         """A held step threw the body from y (its holding force, found at every stage, raised its K + U under gravity
@@ -1254,8 +1253,7 @@ class ContactSolver:
         hit = self.step_map(sim, i, y0, s * h, held) if s > 0.0 else y0.copy()
         bare = self._bare(i, held)
         if s > 0.0 and self._thrown(sim, i, y0, hit, bare):
-            landed = self._face_instead(sim, i, y0, bare, t, h)
-            return self._left_at_rest(y0) if landed is None else landed
+            return self._instead_of_throw(sim, i, y0, bare, t, h)[0]
         return self._landing(sim, i, hit, bare, t + s * h, h - s * h, self.landing_face(sim, i, y0, hit))
 
     def landing_face(self, sim, i: int, y0: np.ndarray, hit: np.ndarray) -> int:

@@ -1388,7 +1388,7 @@ def _link(Y0, Y1, nlist, lo, hi, pdist, pnormal, pcount, ppoints, bound, is_stat
 
 
 @njit(**JIT)
-def _pile_rows(Y1, prm, nd, cint, cflt, rj, rw, rdiag, rbody, porder, key):
+def _pile_rows(prm, nd, cint, cflt, rj, rw, rdiag, rbody, porder, key):
     """The order of the nd normal rows' Gauss–Seidel in porder[:nd]: over a pile (more than PILE_CONTACTS, under
     gravity) from the lowest point up, with each upright pair's lower body (the one its normal points down to)
     held (its M⁻¹Jᵀ side zeroed, the diagonal the upper's alone), and True; else their order, and False. key (per
@@ -1419,8 +1419,7 @@ def _pile_rows(Y1, prm, nd, cint, cflt, rj, rw, rdiag, rbody, porder, key):
                 rw[c, 6 * low + j] = 0.0
                 d += rj[c, 6 * (1 - low) + j] * rw[c, 6 * (1 - low) + j]
             rdiag[c] = d
-    _pin = Y1[0, 0], prm[0, 0], cint[0, 0], cflt[0, 0], rj[0, 0], rw[0, 0], rdiag[0], rbody[0, 0], porder[0]
-    _pin2 = key[0]
+    _pin = prm[0, 0], cint[0, 0], cflt[0, 0], rj[0, 0], rw[0, 0], rdiag[0], rbody[0, 0], porder[0], key[0]
     return pile
 
 
@@ -1595,7 +1594,7 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, r
         for c in range(nd):  # every touching point is a row (λ ≥ 0): closing one gap must not open another
             rlam[c] = 0.0
             deepest = max(deepest, -cflt[c, C_GAP])
-        pile = _pile_rows(Y1, prm, nd, cint, cflt, rj, rw, rdiag, rbody, porder, rwork[:, 1])
+        pile = _pile_rows(prm, nd, cint, cflt, rj, rw, rdiag, rbody, porder, rwork[:, 1])
         inv = rwork[:, 0]  # the rows' 1 / rdiag
         moving = 0
         for k in range(nd):
