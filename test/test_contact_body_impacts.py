@@ -29,6 +29,8 @@
   they come to rest on each other exactly (islands, island.py).
 * A can held on its rim whose held step, its holding force held over the piece, would throw it into a can
   falling on it: its end face lands where it was instead, as on the ground pass; K + U of the two never rises.
+* A can lying on its side, held on one rim point, whose held step would throw it: it stays at rest (only a can
+  near upright has its end face land instead); K + U never rises.
 * A scene with one moving body and no static shape has no body–body pass at all.
 """
 
@@ -539,8 +541,22 @@ def test_a_can_held_on_its_rim_whose_held_step_would_throw_it_into_a_falling_can
     assert sim.contact.counts["face_landed"] >= 1
 
 
+def test_a_can_lying_on_its_side_whose_held_step_would_throw_it_is_not_stood_on_its_end():
+    """A can (0.2 kg, r = 30 mm) dropped 16 mm, tilted, onto a can (0.2 kg, r = 55 mm) standing on the ground
+    (e = 0.3, μ = 0.8, rk4 at dt = 10 ms; a case a random scan found) rolls off it and comes to lie on its side, held
+    on one rim point; its held step throws it, again and again. Only a can within a hair of upright has its end
+    face land instead: this one stays at rest where it lay (landing its end face stood it on that end at once, 15 cm
+    up, K + U from 0.17 J to 0.47 J). K + U of the two never rises above its start (1e-12 of it) over 0.5 s."""
+    sim = _dropped_pair(("cylinder", "cylinder"), (0.0546875, 0.03), (0.2, 0.2), 0.3, 0.8, 1e-2, (0.0625, 0.0625),
+                        0.015625, [-0.03125, -0.25, 1.0, 0.09375], [0.0, 1.0, 0.0])
+    _never_above_start(sim, np.array([0.2, 0.2]), 50)
+    assert sim.contact.counts["held_thrown"] >= 1 and sim.contact.counts["face_landed"] == 0
+
+
 @pytest.mark.slow
 @settings(max_examples=60, deadline=None)
+@example(kinds=("cylinder", "cylinder"), sizes=(0.0546875, 0.03), masses=(0.2, 0.2), e=0.3, mu=0.8, dt=1e-2,
+         offset=(0.0625, 0.0625), drop=0.015625, quat=[-0.03125, -0.25, 1.0, 0.09375], spin=[0.0, 1.0, 0.0])
 @example(kinds=("cylinder", "cylinder"), sizes=(0.041015625, 0.03125), masses=(1.0, 0.2), e=0.3, mu=0.3, dt=1e-2,
          offset=(0.03515625, 0.0), drop=0.03125, quat=[0.0, 0.0, 0.0, 1.0], spin=[0.0, 2.5, 1.0])
 @example(kinds=("cylinder", "box"), sizes=(0.04, 0.03), masses=(5.0, 0.2), e=0.7, mu=0.0, dt=1e-2,

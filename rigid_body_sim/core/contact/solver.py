@@ -104,6 +104,7 @@ from ..kernels.contact.stage import hold_in_row, stage_rows, stepped_by_integrat
 from ..kernels.contact.shapes import (
     FEATURE_BAND,
     MAX_FEATURES,
+    axis_tilt,
     body_gap,
     body_points,
     feature_gaps,
@@ -132,6 +133,10 @@ MAX_SIDE_IMPACTS = 64
 #: A can held on its rim whose held span threw it more than this many times in one step is left at rest for the
 #: rest of that step (counted as ``held_thrown``), not landed on its end face again (:meth:`ContactSolver._held_span`).
 MAX_FACE_LANDINGS = 8
+#: A thrown can held on its rim lands its end face only while its axis is within this (sin of the tilt) of the
+#: ground's normal, its face within a hair of flat; one tilted further is left at rest (landing a face held up at
+#: a slant turns it flat at once: a can lying on its side was stood on its end, 15 cm up).
+FACE_TILT = 0.05
 PRESSED = -1  # ContactSolver._side_hits of a body pressed on them
 #: Most pieces a resting body's step is cut into when it gained energy (ContactSolver._refine_gains).
 MAX_REFINEMENT = 32
@@ -1144,18 +1149,24 @@ class ContactSolver:
     def _instead_of_throw(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float,
                           h: float) -> tuple[np.ndarray, bool]:
         """Body i, held at y, thrown by its held step (:meth:`_thrown`): (its state instead, whether a face landed).
-        A can held on its rim has its end face land there, as after a rim piece, then the rest h of its span
-        (:meth:`_landing`; ``w`` its wrench row without the holding force), at most MAX_FACE_LANDINGS times a step;
-        any other body (or a can past that) stays where it was, at rest, for the span (:meth:`_left_at_rest`: a
-        squat can standing on its end against a wall spun up to 3.4e5 rad/s in one 10 ms step; a can beside a wall
-        landed on its end face and held on its rim again, thrown again, 150 times in one step)."""
+        A can held on its rim near upright (FACE_TILT) has its end face land there, as after a rim piece, then the
+        rest h of its span (:meth:`_landing`; ``w`` its wrench row without the holding force), at most
+        MAX_FACE_LANDINGS times a step; any other body (or a can past those) stays where it was, at rest, for the
+        span (:meth:`_left_at_rest`: a squat can standing on its end against a wall spun up to 3.4e5 rad/s in one
+        10 ms step; a can beside a wall landed on its end face and held on its rim again, thrown again, 150 times in
+        one step)."""
         rim = held_rim(self.shapes[i], int(self.tracked[i]))
         landings = self._face_landings.get(i, 0)
-        if rim < 0 or landings >= MAX_FACE_LANDINGS:
+        if rim < 0 or landings >= MAX_FACE_LANDINGS or self._tilt(sim, y, i) > FACE_TILT:
             return self._left_at_rest(y), False
         self.counts["face_landed"] += 1
         self._face_landings[i] = landings + 1
         return self._landing(sim, i, y, w, t, h, 4 << rim), True
+
+    def _tilt(self, sim, y: np.ndarray, i: int) -> float:
+        """sin of the tilt of body i's axis (a can's, a capsule's) at y from its ground's normal."""
+        n = self.grounds[int(self.ground_of[i]), NORMAL:NORMAL + 3]
+        return float(axis_tilt(y, sim._prm[i], n[0], n[1], n[2])[7])
 
     def _left_at_rest(self, y: np.ndarray) -> np.ndarray:
         """A held step threw the body from y (its holding force, found at every stage, raised its K + U under gravity
