@@ -29,8 +29,13 @@
   they come to rest on each other exactly (islands, island.py).
 * A can held on its rim whose held step, its holding force held over the piece, would throw it into a can
   falling on it: its end face lands where it was instead, as on the ground pass; K + U of the two never rises.
+* A can rocking on its rim with a ball falling onto it: its end face coming down is an event of the pair's step;
+  the ball ends no step deeper in it than the pair pass's skin; K + U never rises.
 * A can lying on its side, held on one rim point, whose held step would throw it: it stays at rest (only a can
   near upright has its end face land instead); K + U never rises.
+* A box held on the ground on one corner, struck again and again by a capsule, with the corner it pivoted on
+  touching the ground: that corner takes its share of each blow and lands, and the capsule ends no step deeper in
+  the box than the pair pass's skin; K + U never rises.
 * A scene with one moving body and no static shape has no body–body pass at all.
 """
 
@@ -458,6 +463,68 @@ def test_a_box_falling_onto_a_box_tipping_beside_a_wall_ends_no_step_inside_it()
                           "material": {"restitution": 0.0, "friction": 0.5}, "pose": {"position": [0.775, 0.0, 0.5]}}}}
     sim = Simulator(load_scene(scene), integrator="rk4", dt=5e-3, threads=1)
     _never_above_start(sim, np.array([2.3246026649304694, 3.3239980568389464]), 20, apart=True)
+
+
+def test_a_box_held_on_a_corner_pressed_by_a_capsule_lands_on_its_face_and_ends_no_step_inside_it():
+    """A box (3.35 kg, 74.7 × 132 × 194 mm, μ = 0.79, e = 0) tipping on the ground, its centre falling at 0.54 m/s,
+    and a capsule (3.0 kg, r = 37 mm, 44 mm long, frictionless) falling onto it at 2.6 m/s, 1.7 mm above it
+    (semi-implicit Euler at dt = 10 ms; a state a mixed pile gave). In the first step the capsule strikes the box
+    ten times, while the box, landed on a second corner and held on that one alone, turns the corner it pivoted on,
+    still touching the ground, into it: the ground takes that corner's share of each blow, and its coming down is
+    followed to a skin below the ground, where it lands, and the box rests on its face. (The pair pass followed
+    only corners apart from the ground: the box sank 6.8 mm into it within the step, and the ground pass lifting it
+    back out at the step's end put it 4.0 mm into the capsule.) No step of 0.2 s ends with the capsule deeper in the box than
+    the pair pass's skin (ADVANCE_SKIN × the pair's size), and K + U never rises above its start (1e-12 of it)."""
+    box = {"box": [0.07472232121404399, 0.13225288340539815, 0.19430112238451042]}
+    capsule = {"capsule": [0.037383631085788786, 0.04427693224933546]}
+    scene = {"gravity": [0.0, 0.0, -9.81],
+             "ground": [{"normal": [0, 0, 1], "offset": 0.0, "material": {"restitution": 0.0, "friction": 0.6}}],
+             "bodies": {
+                 "box": {"mass": 3.354985276976695, "inertia": box, "collision": box,
+                         "material": {"restitution": 0.0, "friction": 0.7929917230119307},
+                         "pose": {"position": [-0.5504001577895177, -0.21377141197210248, 0.04119093643479703],
+                                  "orientation": [-0.5975865209026648, -0.379146881760635, -0.61691308890908,
+                                                  0.34431995704474294]},
+                         "twist": {"linear": [0.20828486212903446, 0.22350052428035383, -0.540439899925706],
+                                   "angular": [3.976767320776437, 8.012215452716859, 1.0178844430428686]}},
+                 "capsule": {"mass": 3.0045413692500627,
+                             "inertia": {"cylinder": [0.037383631085788786, 0.11904419442091303]},
+                             "collision": capsule, "material": {"restitution": 0.0, "friction": 0.0},
+                             "pose": {"position": [-0.5754141892892619, -0.21624890125896612, 0.12635369047913658],
+                                      "orientation": [-0.8332588158567259, -0.19081160877798828, -0.16330912243880258,
+                                                      0.4925452327257582]},
+                             "twist": {"linear": [-0.29850533928005174, 0.14949583408696573, -2.6246786535202187],
+                                       "angular": [-2.6617371858844825, 2.7100455687467915, -0.24860009150323936]}}}}
+    sim = Simulator(load_scene(scene), integrator="semi_implicit_euler", dt=1e-2, threads=1)
+    _never_above_start(sim, np.array([3.354985276976695, 3.0045413692500627]), 20, apart=True)
+
+
+def test_a_can_rocking_on_its_rim_under_a_falling_ball_lands_its_face_within_the_pair_s_step():
+    """A can (1.72 kg, r = 38 mm, 149 mm long, frictionless, e = 0) rocking on its rim, its centre falling at
+    0.38 m/s, and a ball (4.0 kg, r = 61 mm) falling onto it at 1.5 m/s, 4 mm above it (semi-implicit Euler at
+    dt = 10 ms; a state a mixed pile gave). The can's end face coming down flat within the pair's step is an event
+    of the pair pass, as a box's other edge is: it lands there, before the ball strikes it. (Not followed, the face
+    went 1.6 mm into the ground before the ball's blow; with the ground taking that blow at every feature touching
+    it, the can was then held there, and the ball ended 5.9 mm inside it.) No step of 0.2 s ends with the ball
+    deeper in the can than the pair pass's skin, and K + U never rises above its start (1e-12 of it)."""
+    can = {"cylinder": [0.038289745889627, 0.14850738028329688]}
+    ball = {"sphere": 0.061094240991385496}
+    slick = {"restitution": 0.0, "friction": 0.0}
+    scene = {"gravity": [0.0, 0.0, -9.81],
+             "ground": [{"normal": [0, 0, 1], "offset": 0.0, "material": {"restitution": 0.0, "friction": 0.6}}],
+             "bodies": {
+                 "can": {"mass": 1.7163517537400321, "inertia": can, "collision": can, "material": slick,
+                         "pose": {"position": [0.24065268692682057, -0.1283348648225178, 0.03890898626364186],
+                                  "orientation": [-0.5201585949018805, 0.48333611746270805, 0.37510498399042136,
+                                                  0.5959173471978497]},
+                         "twist": {"linear": [0.5603237528371232, -0.06793097793810743, -0.38355411582065924],
+                                   "angular": [5.836565427156192, 2.9429484314512697, 1.9407915151290407]}},
+                 "ball": {"mass": 4.016008608497218, "inertia": ball, "collision": ball, "material": slick,
+                          "pose": {"position": [0.29240867568394396, -0.2071125422479163, 0.11949028320729396]},
+                          "twist": {"linear": [-0.35206876596577563, -0.23849510404912064, -1.4597974373187985],
+                                    "angular": [-1.0714939335951885, 4.537876783841494, -0.3085741631727438]}}}}
+    sim = Simulator(load_scene(scene), integrator="semi_implicit_euler", dt=1e-2, threads=1)
+    _never_above_start(sim, np.array([1.7163517537400321, 4.016008608497218]), 20, apart=True)
 
 
 def test_a_capsule_rolling_into_a_wall_struck_from_above_ends_no_step_inside_either():

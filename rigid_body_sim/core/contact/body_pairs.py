@@ -90,7 +90,7 @@ import numpy as np
 from ..kernels import layout as L
 from ..kernels.contact.impacts import IMPACT_WORK_SHAPE, impact, kinetic_energy_row
 from ..kernels.contact.island import APPROACH_SPEED  # a relative normal velocity below −this (m/s) approaches
-from ..kernels.contact.layout import DIMS, KIND, MAX_POINTS, NORMAL, PERSISTENT, FLIGHT, SHAPE_CYLINDER, SHAPE_SPHERE
+from ..kernels.contact.layout import DIMS, KIND, MAX_POINTS, NORMAL, PERSISTENT, FLIGHT, SHAPE_SPHERE
 from ..kernels.contact.pair_impacts import PAIR_JACOBIAN_SHAPE, normal_speed, pair_impact
 from ..kernels.contact.pairs import MAX_PAIR_POINTS, pair_contacts
 from ..kernels.contact.persistent import normal_speeds
@@ -478,6 +478,7 @@ class BodyPairs:
         struck: set = set()
         struck_walls: set = set()  # (held member, instant) struck against a wall it touched at a piece's start
         rested: dict[int, np.ndarray] = {}  # held members a held step threw, left at rest: their state while at rest
+        sunk: dict[int, int] = {}  # held members whose untracked feature, touching, was met at its floor: how often
 
         def still(i: int) -> bool:  # left at rest by a throw and not moved since (no event of its own)
             return i in rested and np.array_equal(y[i], rested[i])
@@ -527,11 +528,21 @@ class BodyPairs:
             # (touching one, it is the ground pass's, solver._persistent_end)
             sides = [i for i in sorted(active & held) if solver._may_strike_side(i)
                      and solver._other_gap(sim, y[i], i)[0] > band[i]]
-            # a held member's features not on its ground (a box tipping on an edge: its other edge comes down), while
-            # apart: a landing there changes its path (solver._reaching, on the ground pass); not a cylinder's (its
-            # rim and end face are the ground pass's, with their guards against a rim force that throws it)
-            lands = [i for i in sorted(active & held) if solver.other_ground[i] < 0
-                     and self._shapes[i, KIND] != SHAPE_CYLINDER and solver._untracked_gap(sim, y[i], i, y[i]) > 0.0]
+            # a held member's features not on its ground (a box tipping on an edge: its other edge comes down; a can
+            # rocking on its rim: its end face): a landing there changes its path (solver._reaching, on the ground
+            # pass). One touching at the piece's start (just landed and not held, a partner's impulse on it) is
+            # followed to a floor a skin deeper than it was, as a pair that touches is (landed there more than
+            # MAX_GRAZES times: no longer)
+            lands, land_floors = [], {}
+            for i in sorted(active & held):
+                if solver.other_ground[i] >= 0 or sunk.get(i, 0) > MAX_GRAZES:
+                    continue
+                gap = solver._untracked_gap(sim, y[i], i, y[i])
+                if gap > 0.0:
+                    lands.append(i)
+                elif math.isfinite(gap):
+                    lands.append(i)
+                    land_floors[i] = gap - ADVANCE_SKIN * self.size[i]
             # a held can rocking on a rim whose lowest point turns fast: the events looked for piece by piece, each
             # piece's holding force found afresh (solver._rim_piece), as on the ground pass
             span = min([h] + [solver._rim_piece(sim, i, y[i], h) for i in active & held])
@@ -550,7 +561,8 @@ class BodyPairs:
                            for a, b in floors]
                 values += [(solver._gap(sim, states[i], i)[0], ("env", i)) for i in watched]
                 values += [(solver._other_gap(sim, states[i], i)[0], ("side", i)) for i in sides]
-                values += [(solver._untracked_gap(sim, states[i], i, y[i]), ("land", i)) for i in lands]
+                values += [(solver._untracked_gap(sim, states[i], i, y[i]) - land_floors.get(i, 0.0), ("land", i))
+                           for i in lands]
                 return values
 
             end = at(1.0)
@@ -653,6 +665,8 @@ class BodyPairs:
                 continue
             i = key[1]
             if key[0] == "land":  # a held member's other feature comes down: its landing, held again (or in flight)
+                if i in land_floors:
+                    sunk[i] = sunk.get(i, 0) + 1
                 bare = solver._bare(i, w[i])
                 y[i] = solver._landing(sim, i, y[i], bare, t, 0.0, solver.landing_face(sim, i, starts[i], y[i]))
                 self._hold_again(sim, i, y[i], w, bare, held, t, True)
@@ -809,8 +823,13 @@ class BodyPairs:
 
     def _ground_push(self, sim, i: int, y: np.ndarray) -> bool:
         """Body i, resting on its ground, after a pair impulse: the ground's impact law if its contact points
-        now move into the ground (in place); whether it did."""
-        return self._push(sim, i, y, int(self.solver.ground_of[i]), self.solver._tracked_points(sim, y, i))
+        now move into the ground (in place); whether it did. Its points are its tracked features' and those of
+        any other feature touching the ground (within its band of the lowest: a box held on the corner it has just
+        landed on, the one it pivoted on still touching), which the impulse must not drive in either."""
+        solver = self.solver
+        j = int(solver.ground_of[i])
+        mask = int(solver.tracked[i]) | solver._touching(sim, y, i, j)
+        return self._push(sim, i, y, j, solver._tracked_points(sim, y, i, mask))
 
     def _push(self, sim, i: int, y: np.ndarray, j: int, k: int) -> bool:
         """The impact law of ground row j on body i at y (in place) at its k contact points in solver._points, if
