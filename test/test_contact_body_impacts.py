@@ -31,6 +31,8 @@
   falling on it: its end face lands where it was instead, as on the ground pass; K + U of the two never rises.
 * A can rocking on its rim with a ball falling onto it: its end face coming down is an event of the pair's step;
   the ball ends no step deeper in it than the pair pass's skin; K + U never rises.
+* A can standing near upright whose step in the compiled pass, handed to the solver for an event, threw it: its end
+  face lands instead; K + U never rises.
 * A can lying on its side, held on one rim point, whose held step would throw it: it stays at rest (only a can
   near upright has its end face land instead); K + U never rises.
 * A box held on the ground on one corner, struck again and again by a capsule, with the corner it pivoted on
@@ -620,8 +622,27 @@ def test_a_can_lying_on_its_side_whose_held_step_would_throw_it_is_not_stood_on_
     assert sim.contact.counts["held_thrown"] >= 1 and sim.contact.counts["face_landed"] == 0
 
 
+def test_a_can_standing_on_its_end_whose_compiled_held_step_throws_it_lands_its_face():
+    """A capsule (0.2 kg, r = 20 mm) dropped 1 mm, tilted and spinning, onto a can (1 kg, r = 75 mm, 151 mm long)
+    standing on its end (e = μ = 0.3, rk4 at dt = 10 ms; a case a random scan found) rolls off it; the can, rocked
+    on its rim, settles near upright. At 0.95 s its step, taken in the compiled pass with the rim's holding force
+    held over it and handed to the solver for an event in it, threw the can up at 11 m/s (K + U from 0.74 J to
+    724 J). That step is guarded as every held step is: the can's end face lands where it was. K + U of the two
+    never rises above its start (1e-12 of it) over 1.2 s."""
+    sim = _dropped_pair(("cylinder", "capsule"), (0.07539949411987433, 0.032825317808619345), (1.0, 0.2), 0.3, 0.3,
+                        1e-2, (0.07103583662093957, 0.06240356168564353), 0.001,
+                        [0.0, 1.0, -0.12479268146700018, -0.6139012753048182],
+                        [2.333780328927162, -1.490698576417424, -1.490698576417424])
+    _never_above_start(sim, np.array([1.0, 0.2]), 120)
+    assert sim.contact.counts["face_landed"] >= 1
+
+
 @pytest.mark.slow
 @settings(max_examples=60, deadline=None)
+@example(kinds=("cylinder", "capsule"), sizes=(0.07539949411987433, 0.032825317808619345), masses=(1.0, 0.2), e=0.3,
+         mu=0.3, dt=1e-2, offset=(0.07103583662093957, 0.06240356168564353), drop=0.001,
+         quat=[0.0, 1.0, -0.12479268146700018, -0.6139012753048182],
+         spin=[2.333780328927162, -1.490698576417424, -1.490698576417424])
 @example(kinds=("cylinder", "cylinder"), sizes=(0.0546875, 0.03), masses=(0.2, 0.2), e=0.3, mu=0.8, dt=1e-2,
          offset=(0.0625, 0.0625), drop=0.015625, quat=[-0.03125, -0.25, 1.0, 0.09375], spin=[0.0, 1.0, 0.0])
 @example(kinds=("cylinder", "cylinder"), sizes=(0.041015625, 0.03125), masses=(1.0, 0.2), e=0.3, mu=0.3, dt=1e-2,

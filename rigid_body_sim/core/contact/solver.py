@@ -781,7 +781,12 @@ class ContactSolver:
             if sim._stopped[i]:
                 continue
             if self.modes[i] == PERSISTENT:
-                Y1[i, :L.STATE_WIDTH] = self._persistent_end(sim, i, Y0[i], Y1[i], wrenches[i], t0, h)[:L.STATE_WIDTH]
+                bare = self._bare(i, wrenches[i])
+                if self._thrown(sim, i, Y0[i], Y1[i], bare):  # the compiled held step threw it: as in _held_span
+                    end = self._instead_of_throw(sim, i, Y0[i].copy(), bare, t0, h)[0]
+                else:
+                    end = self._persistent_end(sim, i, Y0[i], Y1[i], wrenches[i], t0, h)
+                Y1[i, :L.STATE_WIDTH] = end[:L.STATE_WIDTH]
             else:
                 Y1[i, :L.STATE_WIDTH] = self._with_events(sim, i, Y0[i], wrenches[i], t0, h)[:L.STATE_WIDTH]
         if self.pairs is not None:  # bodies that meet each other (a ground alone takes energy, never passes it on)
