@@ -537,11 +537,9 @@ class BodyPairs:
             for i in sorted(active & held):
                 if solver.other_ground[i] >= 0 or sunk.get(i, 0) > MAX_GRAZES:
                     continue
+                lands.append(i)
                 gap = solver._untracked_gap(sim, y[i], i, y[i])
-                if gap > 0.0:
-                    lands.append(i)
-                elif math.isfinite(gap):
-                    lands.append(i)
+                if gap <= 0.0:
                     land_floors[i] = gap - ADVANCE_SKIN * self.size[i]
             # a held can rocking on a rim whose lowest point turns fast: the events looked for piece by piece, each
             # piece's holding force found afresh (solver._rim_piece), as on the ground pass

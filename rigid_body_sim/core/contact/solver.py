@@ -781,11 +781,7 @@ class ContactSolver:
             if sim._stopped[i]:
                 continue
             if self.modes[i] == PERSISTENT:
-                bare = self._bare(i, wrenches[i])
-                if self._thrown(sim, i, Y0[i], Y1[i], bare):  # the compiled held step threw it: as in _held_span
-                    end = self._instead_of_throw(sim, i, Y0[i].copy(), bare, t0, h)[0]
-                else:
-                    end = self._persistent_end(sim, i, Y0[i], Y1[i], wrenches[i], t0, h)
+                end = self._held_end(sim, i, Y0[i], Y1[i], wrenches[i], self._bare(i, wrenches[i]), t0, h)
                 Y1[i, :L.STATE_WIDTH] = end[:L.STATE_WIDTH]
             else:
                 Y1[i, :L.STATE_WIDTH] = self._with_events(sim, i, Y0[i], wrenches[i], t0, h)[:L.STATE_WIDTH]
@@ -1141,15 +1137,24 @@ class ContactSolver:
     def _held_span(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float, h: float,
                    thrown_at_rest: bool = True) -> np.ndarray:
         """Body i from y over h in persistent contact, in one piece: holding force, step, projection. A step that
-        threw it (:meth:`_thrown`) leaves it at rest at y, unless ``thrown_at_rest`` is False (a rim piece: the
-        caller lands the can's end face instead)."""
+        threw it is taken as :meth:`_held_end` has it, unless ``thrown_at_rest`` is False (a rim piece: the caller
+        lands the can's end face instead)."""
         held = w.copy()
         if not self._hold(sim, y, i, held, t, keep=self._came_back(i, t, sim.dt)):
             return self._with_events(sim, i, y, w, t, h)
         end = self.step_map(sim, i, y, h, held)
-        if thrown_at_rest and self._thrown(sim, i, y, end, w):
-            return self._instead_of_throw(sim, i, y, w, t, h)[0]
-        return self._persistent_end(sim, i, y, end, held, t, h)
+        if not thrown_at_rest:
+            return self._persistent_end(sim, i, y, end, held, t, h)
+        return self._held_end(sim, i, y, end, held, w, t, h)
+
+    def _held_end(self, sim, i: int, y0: np.ndarray, end: np.ndarray, held: np.ndarray, bare: np.ndarray, t: float,
+                  h: float) -> np.ndarray:
+        """The end of body i's held step from y0 over h (``end``, under ``held``; ``bare`` its row without the
+        holding force): one that threw it (:meth:`_thrown`) taken as :meth:`_instead_of_throw` has it, else
+        :meth:`_persistent_end`. y0 is not changed."""
+        if self._thrown(sim, i, y0, end, bare):
+            return self._instead_of_throw(sim, i, y0.copy(), bare, t, h)[0]
+        return self._persistent_end(sim, i, y0, end, held, t, h)
 
     def _instead_of_throw(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float,
                           h: float) -> tuple[np.ndarray, bool]:

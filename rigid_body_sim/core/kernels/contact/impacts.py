@@ -255,7 +255,7 @@ def restitution(work, rows, linear, before, compressed, e):
 
 
 @njit(**_OPTS)
-def _approaches(y, p, work, rows, limit):
+def _approaches(y, work, rows, limit):
     """Whether a contact of ``work``'s rows (as build_rows filled them) moves toward the ground at y faster than
     −``limit`` (m/s, limit ≤ 0: its normal velocity below it)."""
     for a in range(0, rows, 3):
@@ -263,7 +263,6 @@ def _approaches(y, p, work, rows, limit):
              + work[a, _ANG] * y[W] + work[a, _ANG + 1] * y[W + 1] + work[a, _ANG + 2] * y[W + 2])
         if u < limit:
             return True
-    _pin = p[0]
     return False
 
 
@@ -320,7 +319,7 @@ def impact(y0, y, p, count, points, nx, ny, nz, e, mu, work):
             work[a, _LAM] = 0.0
         pgs(work, count, mu, 0.0, 0.0)
         apply_impulses(y, y, p, work, rows, _LAM, 1.0)
-        if kinetic_energy_row(y, p) > mid or _approaches(y, p, work, rows, APPROACH_LEFT * approach):
+        if kinetic_energy_row(y, p) > mid or _approaches(y, work, rows, APPROACH_LEFT * approach):
             # not dissipative, or short of stopping every approach: undo it, and the frictionless one instead
             for a in range(rows):
                 work[a, _LAM] = -work[a, _LAM]
