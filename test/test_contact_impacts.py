@@ -104,7 +104,7 @@ def test_box_landing_flat_frictionless_obeys_newton_at_every_corner():
 
 
 @SETTINGS
-@example(seed=479001599, count=4, e=0.5, mu=2.0, spin=0.0)  # Gauss–Seidel short at μ = 2: frictionless instead
+@example(seed=479001599, count=4, e=0.5, mu=2.0, spin=0.0)  # Gauss–Seidel short at μ = 2: frictionless after
 @given(seed=st.integers(0, 2**32 - 1), count=st.sampled_from([1, 2, 4]), e=st.floats(0.0, 1.0),
        mu=st.floats(0.0, 2.0), spin=st.floats(0.0, 50.0))
 def test_energy_never_rises_with_friction_and_spin(seed, count, e, mu, spin):

@@ -20,7 +20,10 @@ t1, t2, coefficients e (restitution) and μ (friction):
    every update, so it cannot gain energy.
 4. With several contacts, one contact's restitution impulse can push another into the ground;
    then a second compression from the state after restitution removes every approach again
-   (dissipative, like the first). So no contact point leaves an impact approaching the ground.
+   (dissipative, like the first). Where Gauss–Seidel with friction stops far short of that (a
+   contact still approaching faster than APPROACH_LEFT × the fastest approach), a frictionless
+   compression from there follows. So no contact point leaves an impact approaching the ground
+   (beyond that fraction of its approach).
 
 Velocities change, positions do not. Everything is in world axes except the body's angular
 velocity row (principal axes P, layout.py). ``work`` is the caller's scratch (IMPACT_WORK_SHAPE).
@@ -54,10 +57,10 @@ IMPACT_WORK_SHAPE = (_ROWS, _U + 1)
 #: Projected Gauss–Seidel: at most this many sweeps, until no multiplier moves by more than the tolerance × their size.
 PGS_MAX_SWEEPS = 2000
 PGS_TOLERANCE = 1e-15
-#: A compression after which a contact still approaches faster than this × the fastest approach before it fell
-#: short (Gauss–Seidel unconverged): taken frictionless instead (:func:`impact`). Far above what Gauss–Seidel
-#: leaves on points that span more rows than the body has freedoms (at 1e-9, a 1000-cube pile no longer came to
-#: rest where it landed).
+#: A second compression with friction after which a contact still approaches faster than this × the fastest
+#: approach (before the impact or before that compression) fell short (Gauss–Seidel unconverged): a frictionless
+#: compression follows it (:func:`impact`, pair_impacts.pair_impact). Far above what Gauss–Seidel leaves on points
+#: that span more rows than the body has freedoms (at 1e-9, a 1000-cube pile no longer came to rest where it landed).
 APPROACH_LEFT = 1e-3
 
 
@@ -276,8 +279,11 @@ def impact(y0, y, p, count, points, nx, ny, nz, e, mu, work):
         y[j] = y0[j]
     rows = build_rows(y0, p, count, points, nx, ny, nz, work)
     before = kinetic_energy_row(y0, p)
+    approach = 0.0  # the fastest approach (m/s, ≤ 0)
     for a in range(rows):
         work[a, _LAM] = 0.0
+        if a % 3 == 0:
+            approach = min(approach, work[a, _B])
     pgs(work, count, mu, 0.0, 0.0)
     apply_impulses(y0, y, p, work, rows, _LAM, 1.0)
     compressed = kinetic_energy_row(y, p)
@@ -308,22 +314,31 @@ def impact(y0, y, p, count, points, nx, ny, nz, e, mu, work):
     # (Poisson's law per contact ignores the others). Then a second compression from there takes
     # every approach out again; being a compression, it can only lower the energy.
     # A compression with friction that Gauss–Seidel leaves short (high μ over coupled points: a contact still
-    # approaching after PGS_MAX_SWEEPS) is taken frictionless instead, which always converges.
+    # approaching faster than APPROACH_LEFT × the fastest approach, before the impact or before this compression)
+    # is followed by a frictionless one from there, which always converges.
     build_rows(y, p, count, points, nx, ny, nz, work)
-    approach = 0.0
+    again = 0.0
     for a in range(0, rows, 3):
-        approach = min(approach, work[a, _B])
-    if approach < 0.0:
+        again = min(again, work[a, _B])
+    if again < 0.0:
         mid = kinetic_energy_row(y, p)
         for a in range(rows):
             work[a, _LAM] = 0.0
         pgs(work, count, mu, 0.0, 0.0)
         apply_impulses(y, y, p, work, rows, _LAM, 1.0)
-        if kinetic_energy_row(y, p) > mid or _approaches(y, work, rows, APPROACH_LEFT * approach):
-            # not dissipative, or short of stopping every approach: undo it, and the frictionless one instead
+        if kinetic_energy_row(y, p) > mid:  # not dissipative: undo it, and the frictionless one instead
             for a in range(rows):
                 work[a, _LAM] = -work[a, _LAM]
             apply_impulses(y, y, p, work, rows, _LAM, 1.0)
+            for a in range(rows):
+                work[a, _LAM] = 0.0
+            pgs(work, count, 0.0, 0.0, 0.0)
+            apply_impulses(y, y, p, work, rows, _LAM, 1.0)
+        elif _approaches(y, work, rows, APPROACH_LEFT * min(approach, again)):
+            # short of stopping every approach: a frictionless compression from there takes out what is left
+            for a in range(0, rows, 3):
+                total += work[a, _LAM]
+            build_rows(y, p, count, points, nx, ny, nz, work)
             for a in range(rows):
                 work[a, _LAM] = 0.0
             pgs(work, count, 0.0, 0.0, 0.0)

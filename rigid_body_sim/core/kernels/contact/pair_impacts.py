@@ -21,7 +21,7 @@ from numba import njit
 from ..jit import INLINE, JIT
 from ..layout import INV_INERTIA, INV_MASS, P, Q, V, W
 from ..rotation import rotate, rotate_back
-from .impacts import _A, _B, _LAM, _SAVED, kinetic_energy_row, pgs, restitution, tangents
+from .impacts import _A, _B, _LAM, _SAVED, APPROACH_LEFT, kinetic_energy_row, pgs, restitution, tangents
 from .layout import MAX_POINTS
 
 __all__ = ["PAIR_JACOBIAN_SHAPE", "normal_speed", "pair_rows", "pair_impact"]
@@ -99,6 +99,19 @@ def _apply(y0a, ya, pa, y0b, yb, pb, jac, work, rows, column):
 
 
 @njit(**JIT)
+def _approaches(ya, yb, jac, rows, limit):
+    """Whether a contact of the rows pair_rows filled in ``jac`` has b moving toward a at ya, yb faster than
+    −``limit`` (m/s, limit ≤ 0: its relative normal velocity below it)."""
+    for a in range(0, rows, 3):
+        u = 0.0
+        for j in range(3):
+            u += jac[a, j] * ya[V + j] + jac[a, 3 + j] * ya[W + j] + jac[a, 6 + j] * yb[V + j] + jac[a, 9 + j] * yb[W + j]
+        if u < limit:
+            return True
+    return False
+
+
+@njit(**JIT)
 def _energy(ya, pa, yb, pb):
     return kinetic_energy_row(ya, pa) + kinetic_energy_row(yb, pb)
 
@@ -115,8 +128,11 @@ def pair_impact(y0a, ya, pa, y0b, yb, pb, count, points, nx, ny, nz, e, mu, jac,
         yb[j] = y0b[j]
     rows = pair_rows(y0a, pa, y0b, pb, count, points, nx, ny, nz, jac, work)
     before = _energy(y0a, pa, y0b, pb)
+    approach = 0.0  # the fastest approach (m/s, ≤ 0)
     for a in range(rows):
         work[a, _LAM] = 0.0
+        if a % 3 == 0:
+            approach = min(approach, work[a, _B])
     pgs(work, count, mu, 0.0, 0.0)
     _apply(y0a, ya, pa, y0b, yb, pb, jac, work, rows, _LAM)
     compressed = _energy(ya, pa, yb, pb)
@@ -144,12 +160,14 @@ def pair_impact(y0a, ya, pa, y0b, yb, pb, count, points, nx, ny, nz, e, mu, jac,
         _apply(y0a, ya, pa, y0b, yb, pb, jac, work, rows, _LAM)
         after = _energy(ya, pa, yb, pb)
         alpha = 0.0
-    # one contact's restitution can drive another together: a second compression from there
+    # one contact's restitution can drive another together: a second compression from there; where Gauss–Seidel
+    # with friction leaves it short (a contact still approaching faster than impacts.APPROACH_LEFT × the fastest
+    # approach, before the impact or before this compression), a frictionless one follows
     pair_rows(ya, pa, yb, pb, count, points, nx, ny, nz, jac, work)
-    approach = 0.0
+    again = 0.0
     for a in range(0, rows, 3):
-        approach = min(approach, work[a, _B])
-    if approach < 0.0:
+        again = min(again, work[a, _B])
+    if again < 0.0:
         mid = after
         for a in range(rows):
             work[a, _SAVED] = 0.0
@@ -160,6 +178,15 @@ def pair_impact(y0a, ya, pa, y0b, yb, pb, count, points, nx, ny, nz, e, mu, jac,
             for a in range(rows):
                 work[a, _LAM] = -work[a, _LAM]
             _apply(ya, ya, pa, yb, yb, pb, jac, work, rows, _LAM)
+            for a in range(rows):
+                work[a, _LAM] = 0.0
+            pgs(work, count, 0.0, 0.0, 0.0)
+            _apply(ya, ya, pa, yb, yb, pb, jac, work, rows, _LAM)
+        elif _approaches(ya, yb, jac, rows, APPROACH_LEFT * min(approach, again)):
+            # short of stopping every approach: a frictionless compression from there takes out what is left
+            for a in range(0, rows, 3):
+                total += work[a, _LAM]
+            pair_rows(ya, pa, yb, pb, count, points, nx, ny, nz, jac, work)
             for a in range(rows):
                 work[a, _LAM] = 0.0
             pgs(work, count, 0.0, 0.0, 0.0)
