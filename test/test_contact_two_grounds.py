@@ -169,6 +169,51 @@ bodies:
     np.testing.assert_allclose(gaps(sim, "ball"), 0.0, atol=1e-12)
 
 
+@pytest.mark.parametrize("third", ["half-space", "static box"])
+def test_ball_sliding_along_the_crease_into_a_third_wall_stops_there_without_entering_it(third) -> None:
+    """The corner above with a third wall across the crease, y ≤ 0.5 (a half-space, or the face of a static box):
+    the ball, held on the floor and the first wall, slides along the crease at 0.3 m/s into it and stops there
+    (e = 0, frictionless). Taken in at the end of the step it reaches it in (not located: the impact is listed at
+    that step's end, within a step of t = (0.5 − r)/0.3), it never ends a step inside any of the three (1e-12 m)
+    and rests in the corner, at (1 − r, 0.5 − r, r) with no speed (1e-9)."""
+    theta, r, v0, dt = math.radians(10.0), 0.1, 0.5, 1e-3
+    wall = ("  - {normal: [0, -1, 0], offset: -0.5, material: {restitution: 0.0, friction: 0.0}}"
+            if third == "half-space" else "")
+    box = ("""  wall:
+    motion: static
+    mass: 1.0
+    inertia: {box: [2.0, 0.2, 1.0]}
+    collision: {box: [2.0, 0.2, 1.0]}
+    material: {restitution: 0.0, friction: 0.0}
+    pose: {position: [0.0, 0.6, 0.5]}
+""" if third == "static box" else "")
+    scene = f"""
+gravity: [{G * math.sin(theta)}, 0.0, {-G * math.cos(theta)}]
+ground:
+  - {{normal: [0, 0, 1], offset: 0.0, material: {{restitution: 0.0, friction: 0.0}}}}
+  - {{normal: [-1, 0, 0], offset: -1.0, material: {{restitution: 0.0, friction: 0.0}}}}
+{wall}
+bodies:
+  ball:
+    mass: 1.0
+    inertia: {{sphere: {r}}}
+    material: {{restitution: 0.0, friction: 0.0}}
+    pose: {{position: [0.0, 0.0, {r}]}}
+    twist: {{linear: [{v0}, 0.3, 0]}}
+{box}"""
+    sim = Simulator(load_scene_text(scene, "corner"), "rk4", dt, threads=1)
+    for _ in range(2000):
+        sim.step()
+        y = sim.body_state("ball").position_world
+        assert min(y[2] - r, 1.0 - r - y[0], 0.5 - r - y[1]) >= -1e-12
+    impacts = sim.contact.events_of("ball", "impact")
+    assert len(impacts) == 2 and impacts[0].ground == 1
+    assert 0.0 <= impacts[1].time - (0.5 - r) / 0.3 <= dt + 1e-12 and sim.contact.counts["third_half_space"] == 1
+    state = sim.body_state("ball")
+    np.testing.assert_allclose(state.position_world, [1.0 - r, 0.5 - r, r], rtol=0, atol=1e-9)
+    assert np.abs(state.linear_velocity_world).max() <= 1e-9 and np.abs(state.angular_velocity_world).max() <= 1e-9
+
+
 def test_box_sliding_into_a_wall_stops_against_it_and_slides_along_the_crease() -> None:
     """The corner with a cube (0.2 m) instead of the ball: a face on each half-space is 8 contact points,
     more than the rows hold together, so it is held on the floor and projected onto both after each step

@@ -262,7 +262,9 @@ class ContactSolver:
         #: ``island_late_pairs`` pairs the islands found by screening a body again on the path their velocity step
         #: gave it, ``island_late_joined`` bodies outside the islands those joined to them (island.py);
         #: ``pairs_looked_again`` groups of bodies whose step was taken again after the ground pass, two of them
-        #: having ended it inside each other (body_pairs.BodyPairs.look_again).
+        #: having ended it inside each other (body_pairs.BodyPairs.look_again); ``third_half_space`` steps of a body
+        #: held on two half-spaces that ended below a third half-space or static shape, taken in at the step's end
+        #: (two_grounds.end_of_step).
         #: per body, the static shape (static index) it was found pressed on: not looked at for the rest of the step
         self._static_skipped: dict[int, int] = {}
         #: side impacts of each body in this step; PRESSED: not looked at for them for the rest of the step
@@ -272,7 +274,7 @@ class ContactSolver:
                                      "second_half_space", "two_ground_overflow", "painleve",
                                      "static_tangent", "static_pressed", "island_body_steps", "rim_pieces",
                                      "rim_capped", "face_landed", "face_down", "side_pressed", "held_thrown",
-                                     "island_late_pairs", "island_late_joined", "pairs_looked_again"), 0)
+                                     "island_late_pairs", "island_late_joined", "pairs_looked_again", "third_half_space"), 0)
         #: Per body, a second half-space it is held on besides ``ground_of`` (two_grounds.py), or -1.
         self.other_ground = np.full(n, -1, dtype=np.int64)
         #: The features touching ``other_ground``, as bits.
@@ -1199,7 +1201,7 @@ class ContactSolver:
         the ground dropped (none left: lift-off); then the projection onto the contact.
         """
         if self.other_ground[i] >= 0 and not self.other_projected[i]:
-            return two_grounds.end_of_step(self, sim, i, end, t, h)
+            return two_grounds.end_of_step(self, sim, i, end, t, h, LIFT_OFF_SPEED)
         end = end.copy()
         j = int(self.ground_of[i])
         landing = self._reaching(sim, i, y0, end, held, h)  # another feature reaching the ground in the step

@@ -24,8 +24,10 @@ MAX_POINTS contact points over both (a sphere
 or a capsule in a groove); with more (a box with a face on each side) the body is held on its
 first half-space alone and projected onto both after each step (:func:`project_second`,
 ``ContactSolver.other_projected``: first order in the second one's force, without its friction).
-The smaller of the two pairs' friction coefficients when they differ, no third half-space, and
-no located landing of another feature.
+The smaller of the two pairs' friction coefficients when they differ; a third half-space or static
+shape the body reaches in a step is taken in at the step's end (projected onto with the two, its
+normal velocity removed: an inelastic impact, not located, first order) but not held; and no
+located landing of another feature.
 """
 
 from __future__ import annotations
@@ -38,7 +40,7 @@ from ..kernels import layout as L
 from ..kernels.contact.impacts import _A, _ANG, _B, _LAM, _LIN, _row_velocity, pgs
 from ..kernels.contact.layout import MAX_POINTS, NORMAL, PERSISTENT
 from ..kernels.contact.persistent import START_SLIDE_ACCELERATION, accelerations, add_contact_wrench, normal_bias, project
-from ..kernels.contact.shapes import MAX_FEATURES, feature_gaps, feature_points
+from ..kernels.contact.shapes import MAX_FEATURES, body_points, feature_gaps, feature_points
 from ..quaternion import cross3, quat_rotate
 from .events import ContactEvent
 
@@ -207,10 +209,12 @@ def hold(solver, sim, y: np.ndarray, i: int, w: np.ndarray, t: float, lift_off_s
     return True
 
 
-def end_of_step(solver, sim, i: int, end: np.ndarray, t: float, h: float) -> np.ndarray:
+def end_of_step(solver, sim, i: int, end: np.ndarray, t: float, h: float, lift_off_speed: float) -> np.ndarray:
     """End of a step of body i held on two half-spaces: a feature that went below either of them in the step is
     taken into its contact (a landing at the step's end, inelastic, not located: first order), a slide along the
-    crease that reversed stops (``stick`` at the step's end), then the body is projected onto both contacts."""
+    crease that reversed stops (``stick`` at the step's end), then the body is projected onto both contacts, and
+    onto a third half-space or static shape it reached in the step (:func:`_third`; an ``impact`` there, listed
+    if it came at more than ``lift_off_speed``)."""
 
     end = end.copy()
     gaps = np.empty(MAX_FEATURES)
@@ -222,8 +226,53 @@ def end_of_step(solver, sim, i: int, end: np.ndarray, t: float, h: float) -> np.
             solver.sliding[i] = False
             sticking = True
             solver.events.append(ContactEvent(t + h, solver.names[i], int(solver.ground_of[i]), "stick"))
-    _alternate(solver, sim, i, end, sticking)
+    third = _third(solver, sim, i, end)
+    _alternate(solver, sim, i, end, sticking, third)
+    if third is not None and third[2] < -lift_off_speed:
+        _struck_third(solver, sim, i, end, third, t + h)
     return end
+
+
+def _third(solver, sim, i: int, y: np.ndarray) -> tuple[int, int, float] | None:
+    """A half-space or static shape other than body i's two that it reached at y, moving into it (its plane row,
+    the features below it as bits, their lowest normal speed, m/s, < 0), or None. Its tangent row (a static shape
+    touched off a box face) is not rewritten while one of the two is that row."""
+    j_a, j_b = int(solver.ground_of[i]), int(solver.other_ground[i])
+    prm, shape = sim._prm[i], solver.shapes[i]
+    lowest, which = 0.0, -1
+    for jj in range(len(solver.half_spaces)):
+        if jj != j_a and jj != j_b:
+            count = body_points(y, prm, shape, solver.grounds[jj], solver._points, solver._gaps)
+            if count and solver._gaps[:count].min() < lowest:
+                lowest, which = float(solver._gaps[:count].min()), jj
+    statics = solver.statics
+    if statics is not None and not statics.is_tangent(j_a) and not statics.is_tangent(j_b):
+        owners = [int(statics.row_owner[j]) for j in (j_a, j_b) if j >= len(solver.half_spaces)] + [-1, -1]
+        dist, s = statics.nearest(y, i, shape, owners[0], owners[1])
+        if dist < lowest:
+            which = statics.plane_for(y, prm, i, shape, s)
+    if which < 0:
+        return None
+    gaps = np.empty(MAX_FEATURES)
+    count = feature_gaps(y, prm, shape, solver.grounds[which], gaps)
+    mask = sum(1 << k for k in range(count) if gaps[k] <= 0.0)
+    speed = _lowest_speed(solver, sim, y, i, which, mask) if mask else 0.0
+    return (which, mask, speed) if speed < 0.0 else None
+
+
+def _lowest_speed(solver, sim, y: np.ndarray, i: int, j: int, mask: int) -> float:
+    """The lowest normal velocity (m/s, positive away) of body i's features ``mask`` at y against plane row j."""
+    points, gaps, owners = np.empty((MAX_POINTS, 3)), np.empty(MAX_POINTS), np.zeros(MAX_POINTS, dtype=np.int64)
+    n = feature_points(y, sim._prm[i], solver.shapes[i], solver.grounds[j], mask, points, gaps, owners)
+    return float((_point_velocities(sim, y, i, points[:n]) @ solver.grounds[j, NORMAL:NORMAL + 3]).min())
+
+
+def _struck_third(solver, sim, i: int, end: np.ndarray, third: tuple[int, int, float], t: float) -> None:
+    """The event of body i taken onto a third half-space or static shape at t (an inelastic impact, not located)."""
+    j, mask, before = third
+    solver.counts["third_half_space"] += 1
+    solver.events.append(ContactEvent(t, solver.names[i], j, "impact", before,
+                                      _lowest_speed(solver, sim, end, i, j, mask)))
 
 
 def project_second(solver, sim, i: int, end: np.ndarray, touching_gap: float) -> None:
@@ -247,16 +296,21 @@ def _take_in(solver, sim, i: int, end: np.ndarray, j: int, tracked: np.ndarray, 
     return count
 
 
-def _alternate(solver, sim, i: int, end: np.ndarray, sticking: bool) -> None:
-    """Project body i's row ``end`` (in place) onto both its half-spaces, alternately, to a fixed point."""
+def _alternate(solver, sim, i: int, end: np.ndarray, sticking: bool,
+               third: tuple[int, int, float] | None = None) -> None:
+    """Project body i's row ``end`` (in place) onto both its half-spaces, alternately, to a fixed point; and onto
+    ``third`` (:func:`_third`) too if given, its normal velocities alone removed."""
     prm, shape, work = sim._prm[i], solver.shapes[i], solver._work
     points, gaps, owners = solver._points, solver._gaps, solver._owners
-    pairs = ((int(solver.ground_of[i]), int(solver.tracked[i])), (int(solver.other_ground[i]), int(solver.other_tracked[i])))
+    pairs = [(int(solver.ground_of[i]), int(solver.tracked[i]), sticking),
+             (int(solver.other_ground[i]), int(solver.other_tracked[i]), sticking)]
+    if third is not None:
+        pairs.append((third[0], third[1], False))
     scale = 4.0 * np.finfo(float).eps * max(1.0, float(np.abs(end[:L.STATE_WIDTH]).max()))
     for _ in range(PROJECTION_ROUNDS):
         before = end[:L.STATE_WIDTH].copy()
-        for j, mask in pairs:
-            project(end, prm, shape, solver.grounds[j], mask, sticking, points, gaps, owners, work)
+        for j, mask, stick in pairs:
+            project(end, prm, shape, solver.grounds[j], mask, stick, points, gaps, owners, work)
         if np.abs(end[:L.STATE_WIDTH] - before).max() <= scale:  # a fixed point, to round-off
             break
 
