@@ -71,6 +71,9 @@ NEAR_TOUCH = 1e-6
 #: (_climbed_normal) takes the direction from CLIMB_START rad down to CLIMB_END, in at most CLIMB_STEPS steps,
 #: before the refinement.
 CLIMB_GAP, CLIMB_START, CLIMB_END, CLIMB_STEPS = 1e-7, 5e-2, 1e-8, 400
+#: Touching cores whose direction from GJK climbs to less than its distance: GJK again with B moved this × the
+#: pair's size along the centres' offset (m per m), for a direction from witnesses that far apart.
+NUDGE = 1e-4
 
 _KIND, _DIM, _C, _R = 0, 1, 4, 7
 
@@ -801,6 +804,35 @@ def _climbed_normal(pa, pb, nx, ny, nz):
 
 
 @njit(**JIT)
+def _nudged_direction(pa, pb, scale, ws_s, ws_lam, ws_tmp, verts, faces, face_nd, edges, out):
+    """GJK's (or EPA's) direction from A to B with B moved NUDGE × scale along the centres' offset: for cores that
+    touch, where GJK's own direction is the round-off of two witnesses a hair apart (m). Leaves pb as it was."""
+    ox, oy, oz = pb[_C] - pa[_C], pb[_C + 1] - pa[_C + 1], pb[_C + 2] - pa[_C + 2]
+    norm = math.sqrt(ox * ox + oy * oy + oz * oz)
+    if norm == 0.0:
+        ox, oy, oz, norm = 0.0, 0.0, 1.0, 1.0
+    step = NUDGE * scale / norm
+    cx, cy, cz = pb[_C], pb[_C + 1], pb[_C + 2]
+    pb[_C], pb[_C + 1], pb[_C + 2] = cx + step * ox, cy + step * oy, cz + step * oz
+    d, nv, overlap = gjk(pa, pb, ws_s, ws_lam, ws_tmp, scale)
+    if overlap:
+        epa(pa, pb, ws_s, nv, verts, faces, face_nd, edges, scale, out)
+        ux, uy, uz = out[1], out[2], out[3]
+    else:
+        ux = uy = uz = 0.0
+        for k in range(nv):
+            ux += ws_lam[k] * (ws_s[1, k, 0] - ws_s[0, k, 0])
+            uy += ws_lam[k] * (ws_s[1, k, 1] - ws_s[0, k, 1])
+            uz += ws_lam[k] * (ws_s[1, k, 2] - ws_s[0, k, 2])
+        if d > 0.0:
+            ux, uy, uz = ux / d, uy / d, uz / d
+        else:
+            ux, uy, uz = ox / norm, oy / norm, oz / norm
+    pb[_C], pb[_C + 1], pb[_C + 2] = cx, cy, cz
+    return ux, uy, uz
+
+
+@njit(**JIT)
 def _put_feature_points(pa, ma, pb, mb, nx, ny, nz, wax, way, waz, wbx, wby, wbz, res, seps):
     """Contact point 0: on A's support set along n nearest A's witness w_a, on B's along −n nearest w_b, plus margins.
 
@@ -1089,6 +1121,15 @@ def pair_contact(pa, ma, pb, mb, scale, ws_s, ws_lam, ws_tmp, ws_poly, verts, fa
                 sd_core, nx, ny, nz = _exact_normal(pa, pb, nx, ny, nz)
                 if sd_core < d - CLIMB_GAP * scale:  # GJK's distance bounds it above: n was too far off
                     sd_core, nx, ny, nz = _climbed_normal(pa, pb, nx, ny, nz)
+                if sd_core < d - CLIMB_GAP * scale:  # touching: GJK's direction is its witnesses' round-off
+                    ux, uy, uz = _nudged_direction(pa, pb, scale, ws_s, ws_lam, ws_tmp, verts, faces, face_nd, edges,
+                                                   out)
+                    for k in range(2):  # refined, then climbed from there: the best kept (sep ≤ the distance)
+                        found = _exact_normal(pa, pb, ux, uy, uz) if k == 0 else _climbed_normal(pa, pb, ux, uy, uz)
+                        if found[0] > sd_core:
+                            sd_core, nx, ny, nz = found
+                        if sd_core >= d - CLIMB_GAP * scale:
+                            break
                 sd = sd_core - ma - mb
                 _put_feature_points(pa, ma, pb, mb, nx, ny, nz, ax, ay, az, bx, by, bz, res, seps)
             else:
