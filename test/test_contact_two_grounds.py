@@ -174,8 +174,9 @@ def test_ball_sliding_along_the_crease_into_a_third_wall_stops_there_without_ent
     """The corner above with a third wall across the crease, y ≤ 0.5 (a half-space, or the face of a static box):
     the ball, held on the floor and the first wall, slides along the crease at 0.3 m/s into it and stops there
     (e = 0, frictionless). Taken in at the end of the step it reaches it in (not located: the impact is listed at
-    that step's end, within a step of t = (0.5 − r)/0.3), it never ends a step inside any of the three (1e-12 m)
-    and rests in the corner, at (1 − r, 0.5 − r, r) with no speed (1e-9)."""
+    that step's end, within a step of t = (0.5 − r)/0.3, with the jump of a stop from 0.3 m/s: Δv = (0, −0.3, 0),
+    impulse 0.3 N·s, kinetic energy 0.045 J to 0), it never ends a step inside any of the three (1e-12 m) and rests
+    in the corner, at (1 − r, 0.5 − r, r) with no speed (1e-9)."""
     theta, r, v0, dt = math.radians(10.0), 0.1, 0.5, 1e-3
     wall = ("  - {normal: [0, -1, 0], offset: -0.5, material: {restitution: 0.0, friction: 0.0}}"
             if third == "half-space" else "")
@@ -208,7 +209,13 @@ bodies:
         assert min(y[2] - r, 1.0 - r - y[0], 0.5 - r - y[1]) >= -1e-12
     impacts = sim.contact.events_of("ball", "impact")
     assert len(impacts) == 2 and impacts[0].ground == 1
-    assert 0.0 <= impacts[1].time - (0.5 - r) / 0.3 <= dt + 1e-12 and sim.contact.counts["third_half_space"] == 1
+    third_wall = impacts[1]
+    assert 0.0 <= third_wall.time - (0.5 - r) / 0.3 <= dt + 1e-12 and sim.contact.counts["third_half_space"] == 1
+    # the jump of an inelastic stop from 0.3 m/s along the crease: what the IMU and `contacts` read
+    np.testing.assert_allclose(third_wall.delta_v_world, [0.0, -0.3, 0.0], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(third_wall.delta_w_principal, 0.0, rtol=0, atol=1e-12)
+    assert third_wall.impulse == pytest.approx(0.3, abs=1e-12)
+    assert third_wall.energy_before == pytest.approx(0.5 * 0.3 ** 2, abs=1e-12) and abs(third_wall.energy_after) <= 1e-24
     state = sim.body_state("ball")
     np.testing.assert_allclose(state.position_world, [1.0 - r, 0.5 - r, r], rtol=0, atol=1e-9)
     assert np.abs(state.linear_velocity_world).max() <= 1e-9 and np.abs(state.angular_velocity_world).max() <= 1e-9

@@ -37,7 +37,7 @@ import math
 import numpy as np
 
 from ..kernels import layout as L
-from ..kernels.contact.impacts import _A, _ANG, _B, _LAM, _LIN, _row_velocity, pgs
+from ..kernels.contact.impacts import _A, _ANG, _B, _LAM, _LIN, _row_velocity, kinetic_energy_row, pgs
 from ..kernels.contact.layout import MAX_POINTS, NORMAL, PERSISTENT
 from ..kernels.contact.persistent import START_SLIDE_ACCELERATION, accelerations, add_contact_wrench, normal_bias, project
 from ..kernels.contact.shapes import MAX_FEATURES, body_points, feature_gaps, feature_points
@@ -227,9 +227,10 @@ def end_of_step(solver, sim, i: int, end: np.ndarray, t: float, h: float, lift_o
             sticking = True
             solver.events.append(ContactEvent(t + h, solver.names[i], int(solver.ground_of[i]), "stick"))
     third = _third(solver, sim, i, end)
+    before = end.copy()
     _alternate(solver, sim, i, end, sticking, third)
     if third is not None and third[2] < -lift_off_speed:
-        _struck_third(solver, sim, i, end, third, t + h)
+        _struck_third(solver, sim, i, before, end, third, t + h)
     return end
 
 
@@ -267,12 +268,20 @@ def _lowest_speed(solver, sim, y: np.ndarray, i: int, j: int, mask: int) -> floa
     return float((_point_velocities(sim, y, i, points[:n]) @ solver.grounds[j, NORMAL:NORMAL + 3]).min())
 
 
-def _struck_third(solver, sim, i: int, end: np.ndarray, third: tuple[int, int, float], t: float) -> None:
-    """The event of body i taken onto a third half-space or static shape at t (an inelastic impact, not located)."""
-    j, mask, before = third
+def _struck_third(solver, sim, i: int, before: np.ndarray, end: np.ndarray, third: tuple[int, int, float],
+                  t: float) -> None:
+    """The event of body i taken onto a third half-space or static shape at t (an inelastic impact, not located),
+    from state row ``before`` to ``end``: its velocity jump (that of the whole projection, onto the two as well),
+    its impulse m Δv·n along the third's normal n, the kinetic energies."""
+    j, mask, speed = third
+    prm = sim._prm[i]
+    n = solver.grounds[j, NORMAL:NORMAL + 3]
+    impulse = max(float(prm[L.MASS] * (end[L.V:L.V + 3] - before[L.V:L.V + 3]) @ n), 0.0)
+    jump = solver._jump(sim, i, before, end, bin(mask).count("1"), 0.0, 0.0)
     solver.counts["third_half_space"] += 1
-    solver.events.append(ContactEvent(t, solver.names[i], j, "impact", before,
-                                      _lowest_speed(solver, sim, end, i, j, mask)))
+    after = _lowest_speed(solver, sim, end, i, j, mask)
+    solver.events.append(ContactEvent(t, solver.names[i], j, "impact", speed, after, impulse,
+                                      kinetic_energy_row(before, prm), kinetic_energy_row(end, prm), *jump))
 
 
 def project_second(solver, sim, i: int, end: np.ndarray, touching_gap: float) -> None:
