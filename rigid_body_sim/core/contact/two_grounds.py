@@ -40,7 +40,7 @@ from ..kernels import layout as L
 from ..kernels.contact.impacts import _A, _ANG, _B, _LAM, _LIN, _row_velocity, kinetic_energy_row, pgs
 from ..kernels.contact.layout import MAX_POINTS, NORMAL, PERSISTENT
 from ..kernels.contact.persistent import START_SLIDE_ACCELERATION, accelerations, add_contact_wrench, normal_bias, project
-from ..kernels.contact.shapes import MAX_FEATURES, body_points, feature_gaps, feature_points
+from ..kernels.contact.shapes import MAX_FEATURES, feature_gaps, feature_points
 from ..quaternion import cross3, quat_rotate
 from .events import ContactEvent
 
@@ -234,52 +234,40 @@ def end_of_step(solver, sim, i: int, end: np.ndarray, t: float, h: float, lift_o
     return end
 
 
-def _third(solver, sim, i: int, y: np.ndarray) -> tuple[int, int, float] | None:
-    """A half-space or static shape other than body i's two that it reached at y, moving into it (its plane row,
-    the features below it as bits, their lowest normal speed, m/s, < 0), or None. Its tangent row (a static shape
-    touched off a box face) is not rewritten while one of the two is that row."""
-    j_a, j_b = int(solver.ground_of[i]), int(solver.other_ground[i])
-    prm, shape = sim._prm[i], solver.shapes[i]
-    lowest, which = 0.0, -1
-    for jj in range(len(solver.half_spaces)):
-        if jj != j_a and jj != j_b:
-            count = body_points(y, prm, shape, solver.grounds[jj], solver._points, solver._gaps)
-            if count and solver._gaps[:count].min() < lowest:
-                lowest, which = float(solver._gaps[:count].min()), jj
-    statics = solver.statics
-    if statics is not None and not statics.is_tangent(j_a) and not statics.is_tangent(j_b):
-        owners = [int(statics.row_owner[j]) for j in (j_a, j_b) if j >= len(solver.half_spaces)] + [-1, -1]
-        dist, s = statics.nearest(y, i, shape, owners[0], owners[1])
-        if dist < lowest:
-            which = statics.plane_for(y, prm, i, shape, s)
-    if which < 0:
+def _third(solver, sim, i: int, y: np.ndarray) -> tuple[int, int, float, int] | None:
+    """A half-space or static shape other than body i's two (``ContactSolver._other_gap``: its second one is always a
+    half-space) that it reached at y, moving into it: (its plane row, the features below it as bits, their lowest
+    normal speed, m/s, < 0, their contact points), or None."""
+    gap, which = solver._other_gap(sim, y, i)
+    if gap >= 0.0 or which < 0:
         return None
     gaps = np.empty(MAX_FEATURES)
-    count = feature_gaps(y, prm, shape, solver.grounds[which], gaps)
+    count = feature_gaps(y, sim._prm[i], solver.shapes[i], solver.grounds[which], gaps)
     mask = sum(1 << k for k in range(count) if gaps[k] <= 0.0)
-    speed = _lowest_speed(solver, sim, y, i, which, mask) if mask else 0.0
-    return (which, mask, speed) if speed < 0.0 else None
+    speed, points = _lowest_speed(solver, sim, y, i, which, mask) if mask else (0.0, 0)
+    return (which, mask, speed, points) if speed < 0.0 else None
 
 
-def _lowest_speed(solver, sim, y: np.ndarray, i: int, j: int, mask: int) -> float:
-    """The lowest normal velocity (m/s, positive away) of body i's features ``mask`` at y against plane row j."""
+def _lowest_speed(solver, sim, y: np.ndarray, i: int, j: int, mask: int) -> tuple[float, int]:
+    """The lowest normal velocity (m/s, positive away) of body i's features ``mask`` at y against plane row j, and
+    their number of contact points."""
     points, gaps, owners = np.empty((MAX_POINTS, 3)), np.empty(MAX_POINTS), np.zeros(MAX_POINTS, dtype=np.int64)
     n = feature_points(y, sim._prm[i], solver.shapes[i], solver.grounds[j], mask, points, gaps, owners)
-    return float((_point_velocities(sim, y, i, points[:n]) @ solver.grounds[j, NORMAL:NORMAL + 3]).min())
+    return float((_point_velocities(sim, y, i, points[:n]) @ solver.grounds[j, NORMAL:NORMAL + 3]).min()), n
 
 
-def _struck_third(solver, sim, i: int, before: np.ndarray, end: np.ndarray, third: tuple[int, int, float],
+def _struck_third(solver, sim, i: int, before: np.ndarray, end: np.ndarray, third: tuple[int, int, float, int],
                   t: float) -> None:
     """The event of body i taken onto a third half-space or static shape at t (an inelastic impact, not located),
     from state row ``before`` to ``end``: its velocity jump (that of the whole projection, onto the two as well),
     its impulse m Δv·n along the third's normal n, the kinetic energies."""
-    j, mask, speed = third
+    j, mask, speed, points = third
     prm = sim._prm[i]
     n = solver.grounds[j, NORMAL:NORMAL + 3]
     impulse = max(float(prm[L.MASS] * (end[L.V:L.V + 3] - before[L.V:L.V + 3]) @ n), 0.0)
-    jump = solver._jump(sim, i, before, end, bin(mask).count("1"), 0.0, 0.0)
+    jump = solver._jump(sim, i, before, end, points, 0.0, 0.0)
     solver.counts["third_half_space"] += 1
-    after = _lowest_speed(solver, sim, end, i, j, mask)
+    after = _lowest_speed(solver, sim, end, i, j, mask)[0]
     solver.events.append(ContactEvent(t, solver.names[i], j, "impact", speed, after, impulse,
                                       kinetic_energy_row(before, prm), kinetic_energy_row(end, prm), *jump))
 
@@ -306,7 +294,7 @@ def _take_in(solver, sim, i: int, end: np.ndarray, j: int, tracked: np.ndarray, 
 
 
 def _alternate(solver, sim, i: int, end: np.ndarray, sticking: bool,
-               third: tuple[int, int, float] | None = None) -> None:
+               third: tuple[int, int, float, int] | None = None) -> None:
     """Project body i's row ``end`` (in place) onto both its half-spaces, alternately, to a fixed point; and onto
     ``third`` (:func:`_third`) too if given, its normal velocities alone removed."""
     prm, shape, work = sim._prm[i], solver.shapes[i], solver._work

@@ -41,7 +41,8 @@ from ..rotation import rotate_back
 from .layout import MAX_POINTS
 
 __all__ = ["IMPACT_WORK_SHAPE", "restitution", "PGS_MAX_SWEEPS", "PGS_TOLERANCE", "tangents", "build_rows", "pgs", "pgs_each",
-           "kinetic_energy_row", "potential_energy_row", "apply_impulses", "impact", "summed_wrench"]
+           "kinetic_energy_row", "potential_energy_row", "apply_impulses", "frictionless_after_short", "impact",
+           "summed_wrench"]
 
 _OPTS = {"cache": True, "nogil": True, "error_model": "numpy"}
 
@@ -258,15 +259,28 @@ def restitution(work, rows, linear, before, compressed, e):
 
 
 @njit(**_OPTS)
-def _approaches(y, work, rows, limit):
-    """Whether a contact of ``work``'s rows (as build_rows filled them) moves toward the ground at y faster than
-    −``limit`` (m/s, limit ≤ 0: its normal velocity below it)."""
+def frictionless_after_short(work, rows, count, limit):
+    """After a compression λ in ``work`` (either law's rows: b the velocities before it, A): if a contact still
+    approaches faster than −``limit`` (m/s, limit ≤ 0; its normal velocity b + Aλ below it), b ← the rows'
+    velocities after λ and λ ← the frictionless compression from there, and returns Σ of the first λ's normal
+    impulses (N·s), for the caller to add and to apply the new λ; else leaves ``work`` and returns −1."""
+    short = False
     for a in range(0, rows, 3):
-        u = (work[a, _LIN] * y[V] + work[a, _LIN + 1] * y[V + 1] + work[a, _LIN + 2] * y[V + 2]
-             + work[a, _ANG] * y[W] + work[a, _ANG + 1] * y[W + 1] + work[a, _ANG + 2] * y[W + 2])
-        if u < limit:
-            return True
-    return False
+        if _row_velocity(work, rows, a) < limit:
+            short = True
+            break
+    if not short:
+        return -1.0
+    total = 0.0
+    for a in range(rows):  # b + A λ: row a's own b read once, before it is written
+        work[a, _SAVED] = _row_velocity(work, rows, a)
+    for a in range(rows):
+        if a % 3 == 0:
+            total += work[a, _LAM]
+        work[a, _B] = work[a, _SAVED]
+        work[a, _LAM] = 0.0
+    pgs(work, count, 0.0, 0.0, 0.0)
+    return total
 
 
 @njit(**_OPTS)
@@ -334,15 +348,11 @@ def impact(y0, y, p, count, points, nx, ny, nz, e, mu, work):
                 work[a, _LAM] = 0.0
             pgs(work, count, 0.0, 0.0, 0.0)
             apply_impulses(y, y, p, work, rows, _LAM, 1.0)
-        elif _approaches(y, work, rows, APPROACH_LEFT * min(approach, again)):
-            # short of stopping every approach: a frictionless compression from there takes out what is left
-            for a in range(0, rows, 3):
-                total += work[a, _LAM]
-            build_rows(y, p, count, points, nx, ny, nz, work)
-            for a in range(rows):
-                work[a, _LAM] = 0.0
-            pgs(work, count, 0.0, 0.0, 0.0)
-            apply_impulses(y, y, p, work, rows, _LAM, 1.0)
+        else:  # short of stopping every approach: a frictionless compression from there takes out what is left
+            first = frictionless_after_short(work, rows, count, APPROACH_LEFT * min(approach, again))
+            if first >= 0.0:
+                total += first
+                apply_impulses(y, y, p, work, rows, _LAM, 1.0)
         for a in range(0, rows, 3):
             total += work[a, _LAM]
         after = kinetic_energy_row(y, p)

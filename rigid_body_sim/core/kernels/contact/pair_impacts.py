@@ -21,7 +21,8 @@ from numba import njit
 from ..jit import INLINE, JIT
 from ..layout import INV_INERTIA, INV_MASS, P, Q, V, W
 from ..rotation import rotate, rotate_back
-from .impacts import _A, _B, _LAM, _SAVED, APPROACH_LEFT, kinetic_energy_row, pgs, restitution, tangents
+from .impacts import (_A, _B, _LAM, _SAVED, APPROACH_LEFT, frictionless_after_short, kinetic_energy_row, pgs,
+                      restitution, tangents)
 from .layout import MAX_POINTS
 
 __all__ = ["PAIR_JACOBIAN_SHAPE", "normal_speed", "pair_rows", "pair_impact"]
@@ -99,19 +100,6 @@ def _apply(y0a, ya, pa, y0b, yb, pb, jac, work, rows, column):
 
 
 @njit(**JIT)
-def _approaches(ya, yb, jac, rows, limit):
-    """Whether a contact of the rows pair_rows filled in ``jac`` has b moving toward a at ya, yb faster than
-    −``limit`` (m/s, limit ≤ 0: its relative normal velocity below it)."""
-    for a in range(0, rows, 3):
-        u = 0.0
-        for j in range(3):
-            u += jac[a, j] * ya[V + j] + jac[a, 3 + j] * ya[W + j] + jac[a, 6 + j] * yb[V + j] + jac[a, 9 + j] * yb[W + j]
-        if u < limit:
-            return True
-    return False
-
-
-@njit(**JIT)
 def _energy(ya, pa, yb, pb):
     return kinetic_energy_row(ya, pa) + kinetic_energy_row(yb, pb)
 
@@ -182,15 +170,11 @@ def pair_impact(y0a, ya, pa, y0b, yb, pb, count, points, nx, ny, nz, e, mu, jac,
                 work[a, _LAM] = 0.0
             pgs(work, count, 0.0, 0.0, 0.0)
             _apply(ya, ya, pa, yb, yb, pb, jac, work, rows, _LAM)
-        elif _approaches(ya, yb, jac, rows, APPROACH_LEFT * min(approach, again)):
-            # short of stopping every approach: a frictionless compression from there takes out what is left
-            for a in range(0, rows, 3):
-                total += work[a, _LAM]
-            pair_rows(ya, pa, yb, pb, count, points, nx, ny, nz, jac, work)
-            for a in range(rows):
-                work[a, _LAM] = 0.0
-            pgs(work, count, 0.0, 0.0, 0.0)
-            _apply(ya, ya, pa, yb, yb, pb, jac, work, rows, _LAM)
+        else:  # short of stopping every approach: a frictionless compression from there takes out what is left
+            first = frictionless_after_short(work, rows, count, APPROACH_LEFT * min(approach, again))
+            if first >= 0.0:
+                total += first
+                _apply(ya, ya, pa, yb, yb, pb, jac, work, rows, _LAM)
         for a in range(0, rows, 3):
             total += work[a, _LAM]
         after = _energy(ya, pa, yb, pb)
