@@ -977,6 +977,31 @@ def test_a_pile_s_projection_moves_a_box_out_of_a_ball_with_a_plank_leaning_on_i
     assert deepest(sim) >= -PROJECT_TOL * 0.05
 
 
+def test_a_body_the_projection_moves_out_is_not_left_inside_one_the_broad_phase_did_not_pair_it_with():
+    """A 0.1 m cube set 5 cm into a 0.2 × 0.2 × 0.1 m slab on the ground (its centre on the slab's top face), and a
+    ball (r 20 mm) at rest 0.115 m above the cube's centre: their boxes over the step do not meet (the cube's
+    bounding sphere reaches 86.6 mm up), so the broad phase does not pair them. One 1 ms step: the projection lifts
+    the cube 5 cm out of the slab, to 5 mm inside the ball, which it then meets on its way there (screened again on
+    the path the projection gave it); after the step no two bodies and no body and the ground overlap by more than
+    PROJECT_TOL × the slab's size, and every state is finite."""
+    from rigid_body_sim.core.kernels.contact.island import PROJECT_TOL
+
+    slab, ball = {"box": [0.2, 0.2, 0.1]}, {"sphere": 0.02}
+    material = {"restitution": 0.0, "friction": 0.5}
+    bodies = {"slab": {"mass": 1.0, "inertia": slab, "collision": slab, "material": material,
+                       "pose": {"position": [0.0, 0.0, 0.05]}},
+              "cube": cube((1.0, 0.0, 0.05), edge=0.1),
+              "ball": {"mass": 0.2, "inertia": ball, "collision": ball, "material": material,
+                       "pose": {"position": [0.0, 0.0, 0.215]}}}
+    sim = simulator(bodies, dt=1e-3)
+    sim.set_body_state("cube", position_world=(0.0, 0.0, 0.1))
+    assert deepest(sim) <= -0.05 + 1e-12
+    sim.step(1)
+    assert np.all(np.isfinite(sim.state.rows()))
+    assert sim.positions_world()[1, 2] >= 0.15 - 1e-3  # the cube lifted out of the slab
+    assert deepest(sim) >= -PROJECT_TOL * 0.2
+
+
 @pytest.mark.slow
 def test_a_pile_of_1000_cubes_settles():
     sim, _ = settle_pile(1000, 3.0)  # 3000 steps of one island of up to 1000 cubes: minutes

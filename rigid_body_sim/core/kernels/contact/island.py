@@ -34,8 +34,9 @@ projected Gauss–Seidel on the component's rows (over more than PILE_CONTACTS c
 component on its own, from the highest against gravity down, then back up, in turn: a weight passes
 down a pile and a stop up it within a sweep). Then the
 positions (a body the velocity step moved off the free path the broad phase screened it on is screened again on
-its new one, _late_pairs: a pair so found is projected, a body outside the islands so met joins them); then every
-point found penetrating at the new poses (narrow phase again) deeper than the projection's
+its new one, _late_pairs: a pair so found is projected, a body outside the islands so met joins them; a body the
+projection below moves off it likewise, after it, and the projection is taken once more if that finds a pair); then
+every point found penetrating at the new poses (narrow phase again) deeper than the projection's
 tolerance (PROJECT_TOL × its body's size, or the solver's penetration tolerance where that is more) is closed by a
 mass-metric least correction (Gauss–Seidel on the linearised gaps, λ ≥ 0; over a pile, bottom-up with each
 upright pair's lower body held, _pile_rows), the narrow phase iterated PROJECT_ROUNDS times; only the
@@ -170,12 +171,13 @@ WARM_REACH = 0.1
 #: projected points, largest depth projected (m), bodies woken, bodies put to sleep, points whose approach was
 #: stopped after the projection, sticking solves kept from the warm start (_held, of OUT_STICK), components whose
 #: gain of K + U was taken out of their kinetic energy, components set back at rest where they began (_no_gain),
-#: pairs the broad phase had not listed that the velocity step's paths may meet (_late_pairs), bodies those joined
-#: to the islands, and such pairs left out for want of room (the driver makes room for the next step).
+#: pairs the broad phase had not listed that the island step's paths (after the velocity step or the projection) may
+#: meet (_late_pairs), bodies those joined to the islands, and such pairs left out for want of room (the driver makes
+#: room for the next step).
 (OUT_BODIES, OUT_CONTACTS, OUT_STICK, OUT_PGS, OUT_PROJECTED, OUT_DEPTH, OUT_WOKEN, OUT_SLEPT, OUT_STOPPED, OUT_HELD,
  OUT_TRIMMED, OUT_RESTORED, OUT_LATE, OUT_JOINED, OUT_LATE_LOST) = range(15)
 OUT_WIDTH = 15
-#: flags bit of a body whose velocity step left the path the broad phase screened it on (_late_pairs).
+#: flags bit of a body whose velocity step (or projection) left the path the broad phase screened it on (_late_pairs).
 LEFT_PATH = 4096
 
 
@@ -1876,6 +1878,30 @@ def _late_pair(Y0, Y1, island, stopped, is_static, nlist, n_pairs, comp, flags, 
 
 
 @njit(**JIT)
+def _left_path(Y0, Y1, island, members, flags, reach, free, boxes, left):
+    """The island bodies whose end (Y1) is farther from their free step's end (free[i, :3], world, m) than its
+    growth (free[i, 3], m) and 1e-6 of their reach (m): listed in left (rows of members, each flagged LEFT_PATH,
+    the flag cleared on the others) with their box over the path from Y0 to that end (boxes: lo, hi), for
+    _late_pairs. Returns how many."""
+    n_left = 0
+    for m in range(members.shape[0]):
+        i = members[m]
+        flags[i] &= ~LEFT_PATH
+        if island[i] != 1:
+            continue
+        ex, ey, ez = Y1[i, P] - free[i, 0], Y1[i, P + 1] - free[i, 1], Y1[i, P + 2] - free[i, 2]
+        if math.sqrt(ex * ex + ey * ey + ez * ez) > free[i, 3] + 1e-6 * reach[m]:
+            flags[i] |= LEFT_PATH
+            left[n_left] = m
+            n_left += 1
+            for a in range(3):
+                boxes[i, a] = min(Y0[i, P + a], Y1[i, P + a]) - reach[m]
+                boxes[i, 3 + a] = max(Y0[i, P + a], Y1[i, P + a]) + reach[m]
+    _pin = Y0[0, 0], Y1[0, 0], island[0], members[0], flags[0], reach[0], free[0, 0], boxes[0, 0], left[0]
+    return n_left
+
+
+@njit(**JIT)
 def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, members, cand, n_cand, is_static, stopped,
                 spin_reach, size, asleep, roused, wait, skips, still, anchor, h, sleeping, sleep_speed, default_mu,
                 depth_tol, n_prev, rest_int, rest_flt, island, parent, flags, nlist, pos, quat, rot, pdist, pnormal,
@@ -2146,6 +2172,11 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     # positions: p + h v, q ⊗ exp(h ω_P); a body whose end leaves its free step's by more than the broad phase's
     # growth (swept_bounds) is listed with its box over the new path (dx: lo, hi), for _late_pairs
     reach = broad[5]
+    for m in range(n):  # each member's free step's end and growth, which the broad phase screened (bwork: scratch
+        i = members[m]  # after the velocity step), for the screen again after the projection (_left_path)
+        for a in range(3):
+            bwork[i, a] = Y1[i, P + a]
+        bwork[i, 3] = growth(Y0, Y1, i, h)
     n_left = 0
     for m in range(n):
         i = members[m]
@@ -2186,17 +2217,37 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             if h * max(_speed(Y0, i, spin_reach), _speed(Y1, i, spin_reach)) <= _depth_tol(size, i, depth_tol):
                 island[i] = 3
     _bounds(Y0, Y1, nlist, 0, n_pairs, is_static, spin_reach, size, h, bound, members, dx[:, 0])
-    deepest = _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, rot, pdist, pnormal, pcount,
-                       ppoints, pseps, members, bound, size, is_static, default_mu, depth_tol, h, iw, dx, vel,
-                       cint[half:],
-                       cflt[half:], rj[3 * half:], rw[3 * half:], rdiag[3 * half:], rbias[3 * half:],
-                       rlam[3 * half:], rbody[3 * half:], order, out, comp, flags, rwork[3 * half:])
+    deepest = 0.0
+    n_stopped = 0
+    n_step = nc  # the velocity step's contacts (_no_gain's); the projection's stopped points are added after them
+    for again in range(2):
+        deepest = max(deepest, _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, rot, pdist,
+                                        pnormal, pcount, ppoints, pseps, members, bound, size, is_static, default_mu,
+                                        depth_tol, h, iw, dx, vel, cint[half:], cflt[half:], rj[3 * half:],
+                                        rw[3 * half:], rdiag[3 * half:], rbias[3 * half:], rlam[3 * half:],
+                                        rbody[3 * half:], order, out, comp, flags, rwork[3 * half:]))
+        if out[OUT_STOPPED] > 0:  # its impulses to their pairs' contacts, before another projection's replace them
+            nc = _attribute(nc, cint, cflt, int(out[OUT_STOPPED]), cint[half:], cflt[half:], members, cstart, half)
+            n_stopped += int(out[OUT_STOPPED])
+            out[OUT_STOPPED] = 0
+        if again == 1:
+            break
+        # a body the projection moved off the path the broad phase screened it on (by more than its growth, as
+        # after the velocity step) is screened again on its path to where it ends: a pair so found (and a body
+        # outside the islands it meets) is projected again, the bodies already at their tolerance held
+        n_left = _left_path(Y0, Y1, island, members, flags, reach, bwork, dx, blist)
+        late = out[OUT_LATE]
+        if n_left:
+            n_pairs = _late_pairs(Y0, Y1, island, stopped, is_static, members, nlist, n_pairs, comp, flags,
+                                  broad, h, dx, blist, n_left, lhead, lnext, found, out)
+        if out[OUT_LATE] == late:
+            break
+        _bounds(Y0, Y1, nlist, 0, n_pairs, is_static, spin_reach, size, h, bound, members, dx[:, 0])
     out[OUT_DEPTH] = deepest
-    _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, nc, cint, cflt, size, depth_tol, dx, flags, out,
-             lifts)
-    if out[OUT_STOPPED] > 0:
-        nc = _attribute(nc, cint, cflt, int(out[OUT_STOPPED]), cint[half:], cflt[half:], members, cstart, half)
-        out[OUT_CONTACTS] = nc
+    out[OUT_STOPPED] = n_stopped
+    out[OUT_CONTACTS] = nc
+    _no_gain(Y0, Y1, prm, wr, bare, modes, members, island, comp, n_step, cint, cflt, size, depth_tol, dx, flags,
+             out, lifts)
     # sleeping: a component of the step's contacts whose bodies were and stay slower than the sleep speed (at
     # rest, SLEEP_SPEED: one step), or with a sleep speed raised above rest stayed within sleep_speed × SLEEP_STEPS
     # steps of where they began SLEEP_STEPS steps ago (anchor: that pose), is locked (its island's other bodies are
