@@ -247,7 +247,8 @@ class ContactSolver:
         #: Painlevé configuration (:meth:`_painleve`); ``static_tangent`` body-steps held on a static shape's
         #: tangent plane (a curved support, an edge or a rim: first order; static_geometry.py);
         #: ``static_pressed`` impacts of a resting body against a static shape it stays pressed on (not held
-        #: there: it may reach into it by up to a h²/2 per step, a its acceleration towards it);
+        #: there: its point struck may reach into it by up to a h²/2 per step, a its acceleration towards it, and
+        #: a spinning body's other points further);
         #: ``island_body_steps`` body-steps taken by the islands' first-order velocity step (island.py);
         #: ``rim_pieces`` pieces of steps of cylinders rolling on a rim near upright (:meth:`_rim_piece`),
         #: ``rim_capped`` those whose rim turned more than RIM_TURN even at MAX_RIM_PIECES; ``face_landed`` of
