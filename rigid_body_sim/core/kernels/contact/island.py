@@ -2170,28 +2170,17 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                     skips[cint[q, side], 1] = 1
     _impulses(nc, rj, rbody, rlam, cflt)
     # positions: p + h v, q ⊗ exp(h ω_P); a body whose end leaves its free step's by more than the broad phase's
-    # growth (swept_bounds) is listed with its box over the new path (dx: lo, hi), for _late_pairs
+    # growth (swept_bounds) is listed with its box over the new path (dx: lo, hi), for _late_pairs (_left_path)
     reach = broad[5]
     for m in range(n):  # each member's free step's end and growth, which the broad phase screened (bwork: scratch
-        i = members[m]  # after the velocity step), for the screen again after the projection (_left_path)
+        i = members[m]  # after the velocity step), for _left_path after the velocity step and after the projection
         for a in range(3):
             bwork[i, a] = Y1[i, P + a]
         bwork[i, 3] = growth(Y0, Y1, i, h)
-    n_left = 0
     for m in range(n):
         i = members[m]
         if island[i] != 1:
             continue
-        ex, ey, ez = (Y0[i, P] + h * vel[i, 0] - Y1[i, P], Y0[i, P + 1] + h * vel[i, 1] - Y1[i, P + 1],
-                      Y0[i, P + 2] + h * vel[i, 2] - Y1[i, P + 2])
-        if math.sqrt(ex * ex + ey * ey + ez * ez) > growth(Y0, Y1, i, h) + 1e-6 * reach[m]:
-            flags[i] |= LEFT_PATH
-            blist[n_left] = m
-            n_left += 1
-            for a in range(3):
-                end = Y0[i, P + a] + h * vel[i, a]
-                dx[i, a] = min(Y0[i, P + a], end) - reach[m]
-                dx[i, 3 + a] = max(Y0[i, P + a], end) + reach[m]
         qw, qx, qy, qz = normalise(Y0[i, Q], Y0[i, Q + 1], Y0[i, Q + 2], Y0[i, Q + 3])
         R = matrix(qw, qx, qy, qz)
         wp0 = R[0] * vel[i, 3] + R[3] * vel[i, 4] + R[6] * vel[i, 5]
@@ -2204,6 +2193,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         ew, ex, ey, ez = exp_map(h * wp0, h * wp1, h * wp2)
         q = qmul(qw, qx, qy, qz, ew, ex, ey, ez)
         Y1[i, Q], Y1[i, Q + 1], Y1[i, Q + 2], Y1[i, Q + 3] = normalise(q[0], q[1], q[2], q[3])
+    n_left = _left_path(Y0, Y1, island, members, flags, reach, bwork, dx, blist)
     if n_left:
         n_pairs = _late_pairs(Y0, Y1, island, stopped, is_static, members, nlist, n_pairs, comp, flags, broad, h, dx,
                               blist, n_left, lhead, lnext, found, out)
