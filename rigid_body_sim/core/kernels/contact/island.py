@@ -120,6 +120,9 @@ PILE_CONTACTS = DENSE_MAX // 3
 #: (nonsmooth nonlinear conjugate gradient). A pile's projection: at most PILE_SWEEPS sweeps a round, from the lowest point up, and a pair whose
 #: normal is within acos(PILE_UPRIGHT) of gravity moves only its upper body (the lower held: shock propagation).
 PILE_PGS_SWEEPS, PILE_SWEEPS, PILE_UPRIGHT = 20, 20, 0.5
+#: A pile's projection round that begins with more than half the depth the round before it began with (Gauss–Seidel
+#: slow over a chain of bodies wedged wall to wall): it and the later rounds sweep up to PILE_SLOW_SWEEPS times.
+PILE_SLOW_SWEEPS = 400
 #: The first velocity step of a pile's component just woken: at most this many sweeps. Solved from the rest it was
 #: locked in (its λ the warm start), PILE_PGS_SWEEPS short of convergence can let a column that rests slide (a
 #: tenth of a millimetre in the 1000-cube pile); the converged solve holds it.
@@ -1538,6 +1541,8 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, r
     deepest = 0.0
     settled = False
     live = n_pairs
+    before = math.inf  # the depth the last round began with (m)
+    slow = False
     path = vel  # per body: what it moved (m) and turned (rad) since the first round, summed (a static body's row is
     # never written: zero, as it does not move)
     for m in range(n):
@@ -1572,6 +1577,8 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, r
         if deep == 0:
             settled = True  # nd: the touching points at the final poses
             break
+        slow = slow or depth > 0.5 * before
+        before = depth
         if rnd == 0:  # the components without a deep point are held (island 3 until the end)
             for m in range(n):
                 i = members[m]
@@ -1605,7 +1612,7 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, r
             if rdiag[c] > 0.0:  # in their order; the others (between bodies held) are not swept
                 porder[moving] = c
                 moving += 1
-        for _s in range(PILE_SWEEPS if pile else PROJECT_SWEEPS):
+        for _s in range((PILE_SLOW_SWEEPS if slow else PILE_SWEEPS) if pile else PROJECT_SWEEPS):
             change = 0.0
             for k in range(moving):
                 c = porder[k]
