@@ -175,6 +175,46 @@ def test_a_copied_contact_simulator_steps_on_the_kernels_its_original_uses(copie
     assert after == before, "a copied simulator called a kernel with other array types than its original"
 
 
+def test_every_compiled_function_has_a_name_of_its_own() -> None:
+    """numba names a function's machine code by module, qualname, a count per process and argument types, and
+    a cached function carries its callees' code under those names as weak symbols. Two closures of one factory
+    compiled in different processes can so share a name, and a process loading both cached callers keeps one
+    body for both: one caller then runs the other's closure (kernels/jit.py, named). So no two compiled functions
+    of the core share a module and qualname."""
+    import gc
+    import importlib
+    import pkgutil
+    from collections import Counter
+
+    from numba.extending import is_jitted
+
+    import rigid_body_sim.core
+    from rigid_body_sim.core.simulator import ensure_kernels
+
+    ensure_kernels()  # kernels/single_step.py compiles (or loads) a cfunc at import
+    for module in pkgutil.walk_packages(rigid_body_sim.core.__path__, "rigid_body_sim.core."):
+        importlib.import_module(module.name)
+    compiled = [f.py_func for f in gc.get_objects() if is_jitted(f) and f.py_func.__module__.startswith("rigid_body_sim.")]
+    assert len(compiled) > 100, "the search found too few of the core's compiled functions"
+    names = Counter((f.__module__, f.__qualname__) for f in compiled)
+    assert [name for name, count in names.items() if count > 1] == []
+
+
+def test_an_unpickled_simulator_waits_for_a_complete_kernel_cache(monkeypatch) -> None:
+    """An unpickled Simulator skips ``__init__``; in a fresh process it still steps only once every kernel is
+    compiled into the cache under its lock (ensure_kernels), never compiling them one by one as it calls them."""
+    import pickle
+
+    from rigid_body_sim.core import Simulator, load_scene
+    from rigid_body_sim.core import simulator
+
+    scene = load_scene({"bodies": {"ball": {"mass": 1.0, "inertia": {"sphere": 0.1}}}})
+    data = pickle.dumps(Simulator(scene, "rk4", 0.01))
+    monkeypatch.setattr(simulator, "_kernels_ready", False)  # as in a process that has built no Simulator yet
+    pickle.loads(data)
+    assert simulator._kernels_ready
+
+
 #: Waits for the kernel cache (ensure_kernels) and says when it got past it.
 WAITER = (
     "import time\n"

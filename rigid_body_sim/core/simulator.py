@@ -316,6 +316,7 @@ class Simulator:
         return state
 
     def __setstate__(self, state: dict) -> None:
+        ensure_kernels()  # a copy unpickled in a fresh process steps on a complete cache, as a new Simulator does
         self.__dict__.update(state)
         self._views = (State.of_rows(self._Ys[0]), State.of_rows(self._Ys[1]))
         self._block_address = int(self._block.ctypes.data)

@@ -66,7 +66,7 @@ from .layout import (
     V,
     W,
 )
-from .jit import INLINE, JIT, LOOP
+from .jit import INLINE, JIT, LOOP, named
 from .rotation import exp_map, normalise, qmul, rotate
 
 __all__ = ["Method", "INTEGRATORS", "COMPILED", "euler_held", "rk4_held", "get_integrator", "kick_and_drift", "final_kick", "EULER_TABLEAU", "RK4_TABLEAU"]
@@ -102,6 +102,7 @@ def _explicit_rk_on(rhs):
     """The explicit tableau's step on the right-hand side ``rhs(y, p, w, d)`` (inlined where it is called)."""
 
     @njit(**LOOP, inline="always")  # a closure: compiled into its cached callers (jit.py)
+    @named(rhs.__name__)
     def explicit_rk(A, b, y, out, p, w, dt, k):
         """One step of the explicit tableau (A, b): stage derivatives in k[0..s), the stage state in k[s]."""
         s = b.shape[0]

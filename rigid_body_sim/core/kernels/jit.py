@@ -29,15 +29,35 @@ import fcntl
 import hashlib
 import os
 from pathlib import Path
-from typing import Iterator
+from typing import Callable, Iterator, TypeVar
 
-__all__ = ["JIT", "INLINE", "LOOP", "invalidate_stale_cache", "cache_lock", "cache_complete", "mark_cache_complete",
+__all__ = ["JIT", "INLINE", "LOOP", "named", "invalidate_stale_cache", "cache_lock", "cache_complete", "mark_cache_complete",
            "sources_unchanged"]
 
 JIT = {"cache": True, "error_model": "numpy", "nogil": True}
 INLINE = {**JIT, "inline": "always"}
 #: For functions built at import (closures, stepping.py): compiled into a cached caller, not cached on their own.
 LOOP = {"error_model": "numpy", "nogil": True}
+
+F = TypeVar("F", bound=Callable)
+
+
+def named(tag: str) -> Callable[[F], F]:
+    """Decorator, under ``njit``: names a function a factory builds (a closure) ``<qualname>[tag]``.
+
+    Every function a factory returns must get a ``tag`` no other of them gets. numba names a
+    function's machine code after its module, its qualname, a number counted per process and its
+    argument types, and a cached function carries the code of every function it calls under those
+    names, as weak symbols. Closures of one factory share a qualname, so two of them compiled in
+    different processes can get the same name; a process that loads both callers from the cache
+    keeps one body for that name, and one caller then runs the other's closure: wrong results,
+    no error. With a qualname of its own, a name stands for one body whichever process compiled it.
+    """
+    def rename(function: F) -> F:
+        function.__qualname__ = f"{function.__qualname__}[{tag}]"
+        return function
+    return rename
+
 
 #: The kernels' folder: the sources the cached machine code is built from (nothing outside it).
 SOURCE_DIR = Path(__file__).resolve().parent

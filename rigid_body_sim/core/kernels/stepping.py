@@ -84,7 +84,7 @@ from .layout import (
     W,
 )
 from .reduced_models import isotropic_free, kinematic, planar, symmetric_free, torque_free, translation
-from .jit import INLINE, JIT, LOOP
+from .jit import INLINE, JIT, LOOP, named
 
 __all__ = ["new_buffers", "advance", "advance_in", "add_pending", "step_reduced", "check_members", "clear_wrenches", "wrench_rows",
            "integrate", "step_group"]
@@ -209,7 +209,7 @@ def _group_loop(step, when_torque_free=False):
     ~70 ns a body otherwise). ``step`` is a free variable of the loop, a constant to numba, so
     ``INLINE`` inlines it as it would a global. Not cached on its own (numba keys a closure's
     cache on its free variables, which a compiled function cannot be pickled stably as): it is
-    compiled into the cached functions that call it.
+    compiled into the cached functions that call it, named after ``step`` (jit.named).
 
     ``when_torque_free`` (the isotropic and symmetric models): a body under a torque
     (reduced_models.torque_free) is not the model's: it goes into ``deferred`` for the
@@ -218,6 +218,7 @@ def _group_loop(step, when_torque_free=False):
     """
     if when_torque_free:
         @njit(**LOOP)
+        @named(step.__name__)
         def loop(Y, Ynew, prm, wrenches, bodies, status, dt, limit, k, deferred):
             seen = OK
             count = 0
@@ -237,6 +238,7 @@ def _group_loop(step, when_torque_free=False):
             return _worst_seen(seen), count
     else:
         @njit(**LOOP)
+        @named(step.__name__)
         def loop(Y, Ynew, prm, wrenches, bodies, status, dt, limit, k, deferred):
             seen = OK
             last = np.uint64(wrenches.shape[0] - 1)
@@ -258,20 +260,23 @@ def _no_loop(Y, Ynew, prm, wrenches, bodies, status, dt, limit, k, deferred):
     return OK, 0
 
 
-def _dispatch_from(loops, code=0):
+def _dispatch_from(chain, loops, code=0):
     """``dispatch(code, ...)``: runs ``loops[code]``, as a chain of compiled calls from ``code`` on.
 
     Each link holds one loop and the rest of the chain as free variables (direct calls, no
-    function-typed values); it runs once per group per step, not per body.
+    function-typed values); it runs once per group per step, not per body. ``chain`` names the
+    chain, each link ``dispatch[chain code]`` (jit.named).
     """
     if code == len(loops):
         @njit(**LOOP)
+        @named(f"{chain} end")
         def dispatch(which, Y, Ynew, prm, wrenches, bodies, status, dt, limit, k, deferred):
             return OK, 0
     else:
-        loop, rest = loops[code], _dispatch_from(loops, code + 1)
+        loop, rest = loops[code], _dispatch_from(chain, loops, code + 1)
 
         @njit(**LOOP)
+        @named(f"{chain} {code}")
         def dispatch(which, Y, Ynew, prm, wrenches, bodies, status, dt, limit, k, deferred):
             if which == code:
                 result = loop(Y, Ynew, prm, wrenches, bodies, status, dt, limit, k, deferred)
@@ -282,14 +287,14 @@ def _dispatch_from(loops, code=0):
 
 
 #: The loops of the compiled integrators, built from integrators.INTEGRATORS (by Method.code).
-_INTEGRATOR_LOOPS = _dispatch_from(tuple(_group_loop(step) for step in COMPILED))
+_INTEGRATOR_LOOPS = _dispatch_from("integrators", tuple(_group_loop(step) for step in COMPILED))
 
 #: The reduced models' loops, by layout.MODEL_* code.
 _MODEL_STEPS = {MODEL_KINEMATIC: (kinematic, False), MODEL_TRANSLATION: (translation, False),
                 MODEL_PLANAR: (planar, False), MODEL_ISOTROPIC: (isotropic_free, True),
                 MODEL_SYMMETRIC: (symmetric_free, True)}
-_MODEL_LOOPS = _dispatch_from(tuple(_group_loop(*_MODEL_STEPS[code]) if code in _MODEL_STEPS else _no_loop
-                                    for code in range(MODEL_COUNT)))
+_MODEL_LOOPS = _dispatch_from("models", tuple(_group_loop(*_MODEL_STEPS[code]) if code in _MODEL_STEPS
+                                              else _no_loop for code in range(MODEL_COUNT)))
 
 
 @njit(**JIT)
