@@ -416,6 +416,40 @@ def test_a_box_sliding_into_a_corner_of_two_walls_ends_no_step_inside_either():
     assert sim.contact.counts["static_pressed"] >= 1
 
 
+def test_a_box_turning_on_the_ground_into_a_corner_of_two_walls_is_held_on_one_and_ends_no_step_inside_either():
+    """A box (0.58 kg, 52 × 187 × 110 mm, μ = 0.54, e = 0) sliding on the ground at 0.69 m/s into a corner of a bin,
+    turning at 6.5 rad/s (rk4, dt = 5 ms; its state in a mixed pile). Struck against a wall and staying on it, it is
+    held on the ground and that wall's face together (two_grounds.py); a wall it is pressed on but not held on
+    is out of the rest of its step's view, and the box is taken out of it at the step's end. Over 0.1 s no step
+    ends with the box inside either wall (1e-9 m), and K + U never rises above its start."""
+    from rigid_body_sim.core.contact.query import overlapping_bodies
+
+    box = {"mass": 0.5787400912131158,
+           "inertia": {"box": [0.051731844232701205, 0.1873574680605085, 0.10973606564341284]},
+           "material": {"restitution": 0.0, "friction": 0.5449202178297207}}
+    sim = in_a_bin("box", box, 0.475, "rk4", 5e-3,
+                   [0.40239587041739766, -0.40972221741861675, 0.10436193709050023, 0.25816485627327235,
+                    -0.06321241399260667, 0.6482191426183491, -0.7135594164789365, 0.12486473506382093,
+                    -0.6474824946141121, -0.23858259426007616, -6.126942533133614, 0.8025537328525567,
+                    2.1209437228761985])
+    moving = np.array([m != "static" for m in sim.model.motions])
+
+    def energy() -> float:
+        v, w = sim.state.v_WC_W[0], sim.state.w_WP_P[0]
+        return 0.5 * box["mass"] * v @ v + 0.5 * sim._prm[0, 2:5] @ (w * w) + box["mass"] * G * sim.state.p_WC_W[0, 2]
+
+    start, held_on = energy(), set()
+    while sim.time < 0.1:
+        sim.step()
+        overlaps = overlapping_bodies(sim.positions_world(), sim.orientations_xyzw()[:, [3, 0, 1, 2]],
+                                      sim.contact.shapes, moving)
+        assert all(depth <= 1e-9 for *_, depth in overlaps), (sim.time, overlaps)
+        assert energy() <= start + 1e-12 * abs(start)
+        if sim.contact.other_ground[0] >= 0:
+            held_on.add(sim.contact.static_body_of(int(sim.contact.other_ground[0])))
+    assert held_on and None not in held_on  # held on a wall's face, beside the ground
+
+
 def test_a_box_resting_on_a_wall_s_top_edge_sliding_into_the_next_wall_is_not_moved_into_it():
     """A box (3.68 kg, 81 × 153 × 45 mm, μ = 0.22, e = 0) resting tilted on the top inner edge of a bin's wall, held on
     the edge's tangent plane, sliding along it at 0.31 m/s into the corner with the next wall (rk4, dt = 1 ms; its

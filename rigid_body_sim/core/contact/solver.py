@@ -246,9 +246,9 @@ class ContactSolver:
         #: contact points than the rows take (two_grounds.py); ``painleve`` sliding holds in a
         #: Painlevé configuration (:meth:`_painleve`); ``static_tangent`` body-steps held on a static shape's
         #: tangent plane (a curved support, an edge or a rim: first order; static_geometry.py);
-        #: ``static_pressed`` impacts of a resting body against a static shape it stays pressed on (not held
-        #: there: its point struck may reach into it by up to a h²/2 per step, a its acceleration towards it, and
-        #: a spinning body's other points further);
+        #: ``static_pressed`` impacts of a resting body against a static shape it stays pressed on but is not held
+        #: on (a curved one, an edge, a second wall: out of the rest of its step's view; a static box's face beside
+        #: its ground holds it, two_grounds.py);
         #: ``island_body_steps`` body-steps taken by the islands' first-order velocity step (island.py);
         #: ``rim_pieces`` pieces of steps of cylinders rolling on a rim near upright (:meth:`_rim_piece`),
         #: ``rim_capped`` those whose rim turned more than RIM_TURN even at MAX_RIM_PIECES; ``face_landed`` of
@@ -265,7 +265,8 @@ class ContactSolver:
         #: ``pairs_looked_again`` groups of bodies whose step was taken again after the ground pass, two of them
         #: having ended it inside each other (body_pairs.BodyPairs.look_again); ``third_half_space`` steps of a body
         #: held on two half-spaces that ended below a third half-space or static shape, taken in at the step's end
-        #: (two_grounds.end_of_step).
+        #: (two_grounds.end_of_step); ``static_taken_out`` steps of a resting body that ended inside a static shape
+        #: it was pressed on and not held on, projected out of it at the step's end (two_grounds.take_out_of_pressed).
         #: per body, the static shape (static index) it was found pressed on: not looked at for the rest of the step
         self._static_skipped: dict[int, int] = {}
         #: side impacts of each body in this step; PRESSED: not looked at for them for the rest of the step
@@ -275,7 +276,8 @@ class ContactSolver:
                                      "second_half_space", "two_ground_overflow", "painleve",
                                      "static_tangent", "static_pressed", "island_body_steps", "rim_pieces",
                                      "rim_capped", "face_landed", "face_down", "side_pressed", "held_thrown",
-                                     "island_late_pairs", "island_late_joined", "pairs_looked_again", "third_half_space"), 0)
+                                     "island_late_pairs", "island_late_joined", "pairs_looked_again", "third_half_space",
+                                     "static_taken_out"), 0)
         #: Per body, a second half-space it is held on besides ``ground_of`` (two_grounds.py), or -1.
         self.other_ground = np.full(n, -1, dtype=np.int64)
         #: The features touching ``other_ground``, as bits.
@@ -1267,6 +1269,8 @@ class ContactSolver:
         self._project(sim, end, i, not self.sliding[i])
         if self.other_ground[i] >= 0:  # held on ground_of alone, projected onto the second half-space too
             two_grounds.project_second(self, sim, i, end, TOUCHING_GAP)
+        if i in self._static_skipped:  # pressed on a static shape, out of the step's view: taken out of it
+            two_grounds.take_out_of_pressed(self, sim, i, end, t + h, not self.sliding[i], LIFT_OFF_SPEED)
         return end
 
     def _land(self, sim, i: int, y0: np.ndarray, held: np.ndarray, t: float, h: float, s: float) -> np.ndarray:
@@ -1309,8 +1313,10 @@ class ContactSolver:
                 if count and self._gaps[:count].min() < lowest:
                     lowest, which = float(self._gaps[:count].min()), jj
         if self.statics is not None and not self.statics.is_tangent(int(self.ground_of[i])):
-            dist, s = self.statics.nearest(y, i, self.shapes[i], int(self.statics.row_owner[self.ground_of[i]]),
-                                           -1 if pressed else self._static_skipped.get(i, -1))
+            held = int(self.statics.row_owner[self.ground_of[i]])  # the static shape it rests on, or the one beside
+            if held < 0 and self.other_ground[i] >= 0:  # its ground that it is held on too (two_grounds.py)
+                held = int(self.statics.row_owner[self.other_ground[i]])
+            dist, s = self.statics.nearest(y, i, self.shapes[i], held, -1 if pressed else self._static_skipped.get(i, -1))
             if dist < lowest:
                 lowest, which = dist, self.statics.plane_for(y, sim._prm[i], i, self.shapes[i], s)
         return lowest, which
@@ -1416,12 +1422,16 @@ class ContactSolver:
         y[L.V:L.W + 3] = after_row[L.V:L.W + 3]
         after, _ = normal_speeds(y, sim._prm[i], count, self._points, n[0], n[1], n[2], self._work)
         self.events.append(ContactEvent(t, self.names[i], jj, "impact", before, after, impulse, e0, e1, *jump))
-        if after <= LIFT_OFF_SPEED and jj >= len(self.half_spaces):  # stays pressed on a static shape (not held)
+        g = len(self.half_spaces)
+        if after <= LIFT_OFF_SPEED and self.other_ground[i] < 0 and (
+                jj < g or (self.ground_of[i] < g and not self.statics.is_tangent(jj))):
+            # it stays on the second one (a half-space, or a static box's face beside its ground): held on both
+            self.other_ground[i] = two_grounds.touching_other(self, sim, y, i, LIFT_OFF_SPEED,
+                                                              max(TOUCHING_GAP, float(self._band[i])),
+                                                              None if jj < g else (jj,))
+        if after <= LIFT_OFF_SPEED and jj >= g and self.other_ground[i] != jj:  # pressed on a static shape, not held
             self.counts["static_pressed"] += 1
             self._static_skipped[i] = int(self.statics.row_owner[jj])
-        elif after <= LIFT_OFF_SPEED and self.other_ground[i] < 0:  # it stays on the second one: held on both
-            self.other_ground[i] = two_grounds.touching_other(self, sim, y, i, LIFT_OFF_SPEED,
-                                                              max(TOUCHING_GAP, float(self._band[i])))
 
     def _landing(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float, h: float, face: int = 0) -> np.ndarray:
         """A feature of body i, in persistent contact, reaches the ground at y: the impact of every touching

@@ -2,7 +2,8 @@
 
 A body in persistent contact with its ground A (``ContactSolver.ground_of``) that also touches a
 second half-space B (``ContactSolver.other_ground``, its touching features
-``ContactSolver.other_tracked``) is held by both together: one acceleration-level problem on
+``ContactSolver.other_tracked``), or a static box's face beside a half-space it rests on (while its
+points on B lie within the face), is held by both together: one acceleration-level problem on
 the contact rows of both sets of points, each point with its own half-space's normal, and one
 tangent basis for all of them — t1 along the crease n_A × n_B, t2 = n × t1 — so that a slide
 along the crease is the same direction (±1, 0) at every point and the Coulomb law of
@@ -44,7 +45,8 @@ from ..kernels.contact.shapes import MAX_FEATURES, feature_gaps, feature_points
 from ..quaternion import cross3, quat_rotate
 from .events import ContactEvent
 
-__all__ = ["touching_other", "hold", "end_of_step", "project_second", "crease", "start_if_touching"]
+__all__ = ["touching_other", "hold", "end_of_step", "project_second", "take_out_of_pressed", "crease",
+           "start_if_touching"]
 
 #: Alternating projections onto the two contacts: at most this many rounds (each round changing the
 #: state by more than round-off; orthogonal constraints need one).
@@ -59,14 +61,16 @@ def crease(solver, i: int) -> np.ndarray:
     return t / np.linalg.norm(t)
 
 
-def touching_other(solver, sim, y: np.ndarray, i: int, speed_limit: float, gap_limit: float) -> int:
-    """A half-space other than body i's ground that it touches (gap ≤ ``gap_limit``) without moving away
-    from it (contact points slower than ``speed_limit``) and that is not parallel to its ground; -1 if none.
-    Sets :attr:`other_tracked` to the touching features when one is found."""
+def touching_other(solver, sim, y: np.ndarray, i: int, speed_limit: float, gap_limit: float,
+                   rows: tuple[int, ...] | None = None) -> int:
+    """A half-space other than body i's ground (or one of the plane ``rows`` given: a static box's face) that it
+    touches (gap ≤ ``gap_limit``; on a face, its contact points within it) without moving away from it (contact
+    points slower than ``speed_limit``) and that is not parallel to its ground; -1 if none. Sets
+    :attr:`other_tracked` to the touching features when one is found."""
     j = int(solver.ground_of[i])
     prm, shape = sim._prm[i], solver.shapes[i]
     gaps = np.empty(MAX_FEATURES)
-    for jj in range(len(solver.half_spaces)):  # the half-spaces (static shapes: static_geometry.py)
+    for jj in range(len(solver.half_spaces)) if rows is None else rows:
         if jj == j or abs(abs(solver.grounds[jj, NORMAL:NORMAL + 3] @ solver.grounds[j, NORMAL:NORMAL + 3]) - 1.0) < 1e-12:
             continue
         count = feature_gaps(y, prm, shape, solver.grounds[jj], gaps)
@@ -75,6 +79,8 @@ def touching_other(solver, sim, y: np.ndarray, i: int, speed_limit: float, gap_l
             continue
         points, pgaps, owners = np.empty((MAX_POINTS, 3)), np.empty(MAX_POINTS), np.zeros(MAX_POINTS, dtype=np.int64)
         n = feature_points(y, prm, shape, solver.grounds[jj], mask, points, pgaps, owners)
+        if jj >= len(solver.half_spaces) and not solver.statics.within_face(jj, points[:n]):
+            continue
         velocity = _point_velocities(sim, y, i, points[:n])
         if n and np.max(velocity @ solver.grounds[jj, NORMAL:NORMAL + 3]) <= speed_limit:
             solver.other_tracked[i] = mask
@@ -162,6 +168,12 @@ def hold(solver, sim, y: np.ndarray, i: int, w: np.ndarray, t: float, lift_off_s
         solver.other_projected[i] = True
         return solver._hold(sim, y, i, w, t)
     points, bias, rdot, anchors, normals, which, gaps, count = found
+    j_b = int(solver.other_ground[i])
+    if j_b >= len(solver.half_spaces) and not solver.statics.within_face(j_b, points[:count][which == j_b]):
+        # off the static box's face it was held on (past its edge): let go, its contact with that box found afresh
+        solver.events.append(ContactEvent(t, name, j_b, "lift-off", 0.0, 0.0))
+        solver.other_ground[i] = -1
+        return solver._hold(sim, y, i, w, t)
     t1 = crease(solver, i)
     work, d = solver._work, solver._d
     rows = _build_rows(y, prm, points, normals, t1, work)
@@ -199,6 +211,8 @@ def hold(solver, sim, y: np.ndarray, i: int, w: np.ndarray, t: float, lift_off_s
             solver.events.append(ContactEvent(t, name, j, "lift-off", speed, speed))
             if j == j_a:
                 solver.ground_of[i], solver.tracked[i] = j_b, solver.other_tracked[i]
+            elif j >= len(solver.half_spaces):  # a static box's face: not looked at again in this step (as pressed)
+                solver._static_skipped[i] = int(solver.statics.row_owner[j])
             solver.other_ground[i] = -1
             return solver._hold(sim, y, i, w, t)
     solver.sliding[i] = sliding
@@ -235,10 +249,10 @@ def end_of_step(solver, sim, i: int, end: np.ndarray, t: float, h: float, lift_o
 
 
 def _third(solver, sim, i: int, y: np.ndarray) -> tuple[int, int, float, int] | None:
-    """A half-space or static shape other than body i's two (``ContactSolver._other_gap``: its second one is always a
-    half-space) that it reached at y, moving into it: (its plane row, the features below it as bits, their lowest
-    normal speed, m/s, < 0, their contact points), or None."""
-    gap, which = solver._other_gap(sim, y, i)
+    """A half-space or static shape other than body i's two (``ContactSolver._other_gap``; one it was pressed on
+    earlier in the step too) that it reached at y, moving into it: (its plane row, the features below it as bits,
+    their lowest normal speed, m/s, < 0, their contact points), or None."""
+    gap, which = solver._other_gap(sim, y, i, pressed=True)
     if gap >= 0.0 or which < 0:
         return None
     gaps = np.empty(MAX_FEATURES)
@@ -257,7 +271,7 @@ def _lowest_speed(solver, sim, y: np.ndarray, i: int, j: int, mask: int) -> tupl
 
 
 def _struck_third(solver, sim, i: int, before: np.ndarray, end: np.ndarray, third: tuple[int, int, float, int],
-                  t: float) -> None:
+                  t: float, counted: str = "third_half_space") -> None:
     """The event of body i taken onto a third half-space or static shape at t (an inelastic impact, not located),
     from state row ``before`` to ``end``: its velocity jump (that of the whole projection, onto the two as well),
     its impulse m Δv·n along the third's normal n, the kinetic energies."""
@@ -266,7 +280,7 @@ def _struck_third(solver, sim, i: int, before: np.ndarray, end: np.ndarray, thir
     n = solver.grounds[j, NORMAL:NORMAL + 3]
     impulse = max(float(prm[L.MASS] * (end[L.V:L.V + 3] - before[L.V:L.V + 3]) @ n), 0.0)
     jump = solver._jump(sim, i, before, end, points, 0.0, 0.0)
-    solver.counts["third_half_space"] += 1
+    solver.counts[counted] += 1
     after = _lowest_speed(solver, sim, end, i, j, mask)[0]
     solver.events.append(ContactEvent(t, solver.names[i], j, "impact", speed, after, impulse,
                                       kinetic_energy_row(before, prm), kinetic_energy_row(end, prm), *jump))
@@ -285,6 +299,31 @@ def project_second(solver, sim, i: int, end: np.ndarray, touching_gap: float) ->
     _alternate(solver, sim, i, end, not solver.sliding[i])
 
 
+def take_out_of_pressed(solver, sim, i: int, end: np.ndarray, t: float, sticking: bool,
+                        lift_off_speed: float) -> None:
+    """Body i, held on its ground (and projected onto a second one, :func:`project_second`) and pressed in this step
+    on a static shape it is not held on (left out of the step's view from then: ``ContactSolver._static_skipped``),
+    at the step's end ``end`` (in place): if it went into that shape (a spinning body turning its other points
+    in), it is projected onto its ground (and second one) and that shape's plane together, its normal velocities
+    into the shape removed (an inelastic impact at the step's end, not located: first order; an ``impact`` event
+    if it came at more than ``lift_off_speed``)."""
+    gap, which = solver._other_gap(sim, end, i, pressed=True)
+    if gap >= 0.0 or which < len(solver.half_spaces):
+        return
+    gaps = np.empty(MAX_FEATURES)
+    count = feature_gaps(end, sim._prm[i], solver.shapes[i], solver.grounds[which], gaps)
+    mask = sum(1 << k for k in range(count) if gaps[k] <= 0.0)
+    if not mask:
+        return
+    speed, points = _lowest_speed(solver, sim, end, i, which, mask)
+    before = end.copy()
+    _alternate(solver, sim, i, end, sticking, (which, mask, speed, points), second=solver.other_ground[i] >= 0)
+    if speed < -lift_off_speed:
+        _struck_third(solver, sim, i, before, end, (which, mask, speed, points), t, "static_taken_out")
+    else:
+        solver.counts["static_taken_out"] += 1
+
+
 def _take_in(solver, sim, i: int, end: np.ndarray, j: int, tracked: np.ndarray, gaps: np.ndarray) -> int:
     """Body i's features on or below half-space j at ``end`` added to its feature mask ``tracked[i]`` (taken into
     that contact); returns the features' count, their gaps in ``gaps``."""
@@ -294,13 +333,15 @@ def _take_in(solver, sim, i: int, end: np.ndarray, j: int, tracked: np.ndarray, 
 
 
 def _alternate(solver, sim, i: int, end: np.ndarray, sticking: bool,
-               third: tuple[int, int, float, int] | None = None) -> None:
-    """Project body i's row ``end`` (in place) onto both its half-spaces, alternately, to a fixed point; and onto
-    ``third`` (:func:`_third`) too if given, its normal velocities alone removed."""
+               third: tuple[int, int, float, int] | None = None, second: bool = True) -> None:
+    """Project body i's row ``end`` (in place) onto both its half-spaces (its ground alone without ``second``),
+    alternately, to a fixed point; and onto ``third`` (:func:`_third`) too if given, its normal velocities alone
+    removed."""
     prm, shape, work = sim._prm[i], solver.shapes[i], solver._work
     points, gaps, owners = solver._points, solver._gaps, solver._owners
-    pairs = [(int(solver.ground_of[i]), int(solver.tracked[i]), sticking),
-             (int(solver.other_ground[i]), int(solver.other_tracked[i]), sticking)]
+    pairs = [(int(solver.ground_of[i]), int(solver.tracked[i]), sticking)]
+    if second:
+        pairs.append((int(solver.other_ground[i]), int(solver.other_tracked[i]), sticking))
     if third is not None:
         pairs.append((third[0], third[1], False))
     scale = 4.0 * np.finfo(float).eps * max(1.0, float(np.abs(end[:L.STATE_WIDTH]).max()))
