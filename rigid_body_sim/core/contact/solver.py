@@ -1269,7 +1269,7 @@ class ContactSolver:
         self._project(sim, end, i, not self.sliding[i])
         if self.other_ground[i] >= 0:  # held on ground_of alone, projected onto the second half-space too
             two_grounds.project_second(self, sim, i, end, TOUCHING_GAP)
-        if i in self._static_skipped:  # pressed on a static shape, out of the step's view: taken out of it
+        if i in self._static_skipped or self._side_hits.get(i, 0) == PRESSED:  # pressed on walls out of its view
             two_grounds.take_out_of_pressed(self, sim, i, end, t + h, not self.sliding[i], LIFT_OFF_SPEED)
         return end
 

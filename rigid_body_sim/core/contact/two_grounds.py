@@ -302,13 +302,13 @@ def project_second(solver, sim, i: int, end: np.ndarray, touching_gap: float) ->
 def take_out_of_pressed(solver, sim, i: int, end: np.ndarray, t: float, sticking: bool,
                         lift_off_speed: float) -> None:
     """Body i, held on its ground (and projected onto a second one, :func:`project_second`) and pressed in this step
-    on a static shape it is not held on (left out of the step's view from then: ``ContactSolver._static_skipped``),
-    at the step's end ``end`` (in place): if it went into that shape (a spinning body turning its other points
-    in), it is projected onto its ground (and second one) and that shape's plane together, its normal velocities
-    into the shape removed (an inelastic impact at the step's end, not located: first order; an ``impact`` event
-    if it came at more than ``lift_off_speed``)."""
+    on a static shape it is not held on, or on the walls it was struck against (left out of the step's view from
+    then: ``ContactSolver._static_skipped``, ``_press_aside``), at the step's end ``end`` (in place): if it went
+    into the nearest of them (a spinning body turning its other points in), it is projected onto its ground (and
+    second one) and that one's plane together, its normal velocities into it removed (an inelastic impact at the
+    step's end, not located: first order; an ``impact`` event if it came at more than ``lift_off_speed``)."""
     gap, which = solver._other_gap(sim, end, i, pressed=True)
-    if gap >= 0.0 or which < len(solver.half_spaces):
+    if gap >= 0.0 or which < 0:
         return
     gaps = np.empty(MAX_FEATURES)
     count = feature_gaps(end, sim._prm[i], solver.shapes[i], solver.grounds[which], gaps)
@@ -317,7 +317,13 @@ def take_out_of_pressed(solver, sim, i: int, end: np.ndarray, t: float, sticking
         return
     speed, points = _lowest_speed(solver, sim, end, i, which, mask)
     before = end.copy()
-    _alternate(solver, sim, i, end, sticking, (which, mask, speed, points), second=solver.other_ground[i] >= 0)
+    for _ in range(count):  # a feature the projection turns in (a can's other rim, as it lifts one) is taken in too
+        _alternate(solver, sim, i, end, sticking, (which, mask, speed, points), second=solver.other_ground[i] >= 0)
+        feature_gaps(end, sim._prm[i], solver.shapes[i], solver.grounds[which], gaps)
+        below = sum(1 << k for k in range(count) if gaps[k] < 0.0)
+        if not below & ~mask:
+            break
+        mask |= below
     if speed < -lift_off_speed:
         _struck_third(solver, sim, i, before, end, (which, mask, speed, points), t, "static_taken_out")
     else:
