@@ -265,8 +265,9 @@ class ContactSolver:
         #: ``pairs_looked_again`` groups of bodies whose step was taken again after the ground pass, two of them
         #: having ended it inside each other (body_pairs.BodyPairs.look_again); ``third_half_space`` steps of a body
         #: held on two half-spaces that ended below a third half-space or static shape, taken in at the step's end
-        #: (two_grounds.end_of_step); ``static_taken_out`` steps of a resting body that ended inside a static shape
-        #: it was pressed on and not held on, projected out of it at the step's end (two_grounds.take_out_of_pressed).
+        #: (two_grounds.end_of_step); ``static_taken_out`` steps of a resting body that ended inside a wall it was
+        #: pressed on and not held on (a static shape, or a half-space it was left pressed on: ``side_pressed``),
+        #: projected out of it at the step's end (two_grounds.take_out_of_pressed).
         #: per body, the static shape (static index) it was found pressed on: not looked at for the rest of the step
         self._static_skipped: dict[int, int] = {}
         #: side impacts of each body in this step; PRESSED: not looked at for them for the rest of the step
