@@ -1125,3 +1125,31 @@ def test_a_capsule_wedged_against_a_wall_in_a_pile_is_projected_out_of_it():
                                       scene.contact.shapes, moving)
         assert not overlaps, overlaps[:3]
         assert np.nanmin(lowest_gaps(sim)) >= -TOUCHING
+
+
+
+def test_two_bodies_held_on_the_ground_and_struck_together_end_their_step_no_deeper_than_the_tolerance():
+    """A capsule and a can sliding on the ground in a mixed pile (``mixed_pile(64, 347, 0)``, rk4, dt = 5 ms,
+    sleeping on, tolerance 1e-5 m; its state at 0.495 s, ``test/data/mixed_pile_347_rows_at_0.495s.npy``) meet
+    within a step, an impact that spins the can into the ground. The group's step samples the pair on their held
+    paths, and then each is projected onto the ground at its end, which carried the can 0.48 mm into the capsule:
+    two bodies held on one ground that end inside each other are moved apart in the ground's plane. After that
+    step and the next, no two bodies overlap by more than the tolerance."""
+    from pathlib import Path
+
+    from rigid_body_sim.core.contact.query import overlapping_bodies
+    from rigid_body_sim.core.model import State
+
+    tolerance = 1e-5
+    scene = load_scene(mixed_pile(64, 347, 0.0))
+    sim = Simulator(scene, integrator="rk4", dt=5e-3)
+    sim.contact.sleeping = True
+    sim.contact.penetration_tolerance = tolerance
+    sim.state = State.of_rows(np.load(Path(__file__).parent / "data" / "mixed_pile_347_rows_at_0.495s.npy"))
+    sim.contact.reset(sim)
+    moving = np.array([m != "static" for m in scene.model.motion])
+    for _ in range(2):
+        sim.step()
+        overlaps = overlapping_bodies(sim.positions_world(), sim.orientations_xyzw()[:, [3, 0, 1, 2]],
+                                      scene.contact.shapes, moving)
+        assert all(depth <= tolerance for *_, depth in overlaps), overlaps[:3]

@@ -687,8 +687,35 @@ class BodyPairs:
         for i in list(active):
             if not still(i):
                 self._finish(sim, i, y, w, t, h, held)
+        for a, b in pairs:  # two members held on one ground that their ends' projections moved into each other
+            self._part_held(sim, a, b, y)
         for i in members:
             Y1[i, :L.STATE_WIDTH] = y[i][:L.STATE_WIDTH]
+
+    def _part_held(self, sim, a: int, b: int, y: dict) -> None:
+        """Bodies a and b, both held on the same ground alone at their step's end y (in place), overlapping (each
+        one's end projected onto its ground after the group sampled their paths: a can spun into the ground by an
+        impact with the other): moved apart along the normal's part in the ground's plane, by the depth, shared by
+        inverse mass, their velocities kept (counted in :attr:`separations`; the two form an island at the next
+        step)."""
+        solver = self.solver
+        j = int(solver.ground_of[a])
+        if (solver.modes[a] != PERSISTENT or solver.modes[b] != PERSISTENT or int(solver.ground_of[b]) != j
+                or solver.other_ground[a] >= 0 or solver.other_ground[b] >= 0):
+            return
+        d = self.contact(y[a], a, y[b], b)
+        if d >= -TOUCHING * max(self.size[a], self.size[b]):
+            return
+        g = solver.grounds[j, NORMAL:NORMAL + 3]
+        n = self._normal1[0]
+        along = n - (n @ g) * g  # the normal's part in the ground's plane
+        share = along @ along
+        if share < 0.5:  # mostly across the ground (one body above the other): not for this
+            return
+        inv_a, inv_b = sim._prm[a, L.INV_MASS], sim._prm[b, L.INV_MASS]
+        y[a][L.P:L.P + 3] += d / share * along * inv_a / (inv_a + inv_b)
+        y[b][L.P:L.P + 3] -= d / share * along * inv_b / (inv_a + inv_b)
+        self.separations += 1
 
     def _strike_wall(self, sim, i: int, y: dict, w: dict, held: set, t: float) -> None:
         """Held member i at y[i] meets another half-space or a static shape (a wall) at t: its impact there
