@@ -78,7 +78,9 @@ parting), or striking with restitution 0 or with a body held on its ground (the 
 its inelastic impact, with the bodies' other contacts), are stepped together by a first-order velocity step and left out of this pass. A body
 meeting another outside an island is kept up by the impacts of item 5 at each step's start until
 the two form an island at the next step (within that step it is followed to ε_k deeper than it
-touched, then moved back out: counted in :attr:`BodyPairs.separations`).
+touched, then moved back out: counted in :attr:`BodyPairs.separations`; so are two members held on one
+ground whose ends' projections onto it leave them inside each other, moved apart in its plane:
+:meth:`BodyPairs._part_held`).
 """
 
 from __future__ import annotations
@@ -177,7 +179,8 @@ class BodyPairs:
         self._step_wrenches = np.zeros((len(shapes), L.WRENCH_WIDTH))  # the wrench rows of the step being looked at
         #: Impacts between moving bodies since the solver was made or reset.
         self.impacts = 0
-        #: Pairs found overlapping at a step's start and moved apart (a body lying on another: module docstring).
+        #: Pairs found overlapping at a step's start, or held on one ground at a group's end, and moved apart
+        #: (a body lying on another, a can projected into its partner: module docstring).
         self.separations = 0
         self._look: dict | None = None  # what look_again looks at: the step's candidates, hits, bodies left alone
         self._start = {name: getattr(solver, name).copy() for name in _RESTORED}  # (after_step keeps them)
