@@ -1107,25 +1107,38 @@ def test_a_capsule_wedged_against_a_wall_in_a_pile_is_projected_out_of_it():
     rounds took off a quarter to a half of the depth each, and the steps ended 0.2 to 0.7 mm in the wall. A round
     that leaves more than half the depth of the one before has the later rounds sweep further: over 3 steps no
     body ends deeper than 1e-9 m in another, a wall or the ground."""
-    from pathlib import Path
+    from rigid_body_sim.core.contact.query import TOUCHING, lowest_gaps
 
-    from rigid_body_sim.core.contact.query import TOUCHING, lowest_gaps, overlapping_bodies
-    from rigid_body_sim.core.model import State
-
-    scene = load_scene(mixed_pile(125, 218, 0.0))
-    sim = Simulator(scene, integrator="rk4", dt=1e-2)
-    sim.contact.sleeping = False
-    sim.contact.penetration_tolerance = 0.0
-    sim.state = State.of_rows(np.load(Path(__file__).parent / "data" / "mixed_pile_218_rows_at_1.38s.npy"))
-    sim.contact.reset(sim)
-    moving = np.array([m != "static" for m in scene.model.motion])
+    sim = pile_from_rows(125, 218, 1e-2, "mixed_pile_218_rows_at_1.38s.npy", sleeping=False, tolerance=0.0)
     for _ in range(3):
-        sim.step()
-        overlaps = overlapping_bodies(sim.positions_world(), sim.orientations_xyzw()[:, [3, 0, 1, 2]],
-                                      scene.contact.shapes, moving)
+        overlaps = step_and_overlaps(sim)
         assert not overlaps, overlaps[:3]
         assert np.nanmin(lowest_gaps(sim)) >= -TOUCHING
 
+
+def pile_from_rows(count: int, seed: int, dt: float, rows: str, sleeping: bool, tolerance: float) -> Simulator:
+    """``mixed_pile(count, seed, 0)`` with rk4 at ``dt`` (sleeping, penetration tolerance in m), set to the state
+    rows saved in test/data/``rows`` from a run (the contacts' memory starts afresh)."""
+    from pathlib import Path
+
+    from rigid_body_sim.core.model import State
+
+    sim = Simulator(load_scene(mixed_pile(count, seed, 0.0)), integrator="rk4", dt=dt)
+    sim.contact.sleeping = sleeping
+    sim.contact.penetration_tolerance = tolerance
+    sim.state = State.of_rows(np.load(Path(__file__).parent / "data" / rows))
+    sim.contact.reset(sim)
+    return sim
+
+
+def step_and_overlaps(sim: Simulator) -> list:
+    """One step of ``sim``; then its overlapping pairs of bodies (contact.query.overlapping_bodies), deepest first."""
+    from rigid_body_sim.core.contact.query import overlapping_bodies
+
+    sim.step()
+    moving = np.array([m != "static" for m in sim.model.motions])
+    return overlapping_bodies(sim.positions_world(), sim.orientations_xyzw()[:, [3, 0, 1, 2]], sim.contact.shapes,
+                              moving)
 
 
 def test_two_bodies_held_on_the_ground_and_struck_together_end_their_step_no_deeper_than_the_tolerance():
@@ -1135,21 +1148,8 @@ def test_two_bodies_held_on_the_ground_and_struck_together_end_their_step_no_dee
     paths, and then each is projected onto the ground at its end, which carried the can 0.48 mm into the capsule:
     two bodies held on one ground that end inside each other are moved apart in the ground's plane. After that
     step and the next, no two bodies overlap by more than the tolerance."""
-    from pathlib import Path
-
-    from rigid_body_sim.core.contact.query import overlapping_bodies
-    from rigid_body_sim.core.model import State
-
     tolerance = 1e-5
-    scene = load_scene(mixed_pile(64, 347, 0.0))
-    sim = Simulator(scene, integrator="rk4", dt=5e-3)
-    sim.contact.sleeping = True
-    sim.contact.penetration_tolerance = tolerance
-    sim.state = State.of_rows(np.load(Path(__file__).parent / "data" / "mixed_pile_347_rows_at_0.495s.npy"))
-    sim.contact.reset(sim)
-    moving = np.array([m != "static" for m in scene.model.motion])
+    sim = pile_from_rows(64, 347, 5e-3, "mixed_pile_347_rows_at_0.495s.npy", sleeping=True, tolerance=tolerance)
     for _ in range(2):
-        sim.step()
-        overlaps = overlapping_bodies(sim.positions_world(), sim.orientations_xyzw()[:, [3, 0, 1, 2]],
-                                      scene.contact.shapes, moving)
+        overlaps = step_and_overlaps(sim)
         assert all(depth <= tolerance for *_, depth in overlaps), overlaps[:3]
