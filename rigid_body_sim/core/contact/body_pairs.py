@@ -715,10 +715,7 @@ class BodyPairs:
         share = along @ along
         if share < 0.5:  # mostly across the ground (one body above the other): not for this
             return
-        inv_a, inv_b = sim._prm[a, L.INV_MASS], sim._prm[b, L.INV_MASS]
-        y[a][L.P:L.P + 3] += d / share * along * inv_a / (inv_a + inv_b)
-        y[b][L.P:L.P + 3] -= d / share * along * inv_b / (inv_a + inv_b)
-        self.separations += 1
+        self._move_apart(a, b, y, d / share, along, sim._prm[a, L.INV_MASS], sim._prm[b, L.INV_MASS])
 
     def _strike_wall(self, sim, i: int, y: dict, w: dict, held: set, t: float) -> None:
         """Held member i at y[i] meets another half-space or a static shape (a wall) at t: its impact there
@@ -884,10 +881,15 @@ class BodyPairs:
         inv_b = 0.0 if b in held else sim._prm[b, L.INV_MASS]
         if inv_a + inv_b == 0.0:
             return 0.0
-        y[a][L.P:L.P + 3] += d * n * inv_a / (inv_a + inv_b)
-        y[b][L.P:L.P + 3] -= d * n * inv_b / (inv_a + inv_b)
-        self.separations += 1
+        self._move_apart(a, b, y, d, n, inv_a, inv_b)
         return -d
+
+    def _move_apart(self, a: int, b: int, y: dict, d: float, u: np.ndarray, inv_a: float, inv_b: float) -> None:
+        """Bodies a and b at y (in place) moved apart by d u in all (d < 0: b away from a along u), each by its share
+        of the inverse masses ``inv_a``, ``inv_b`` (0: that one stays); counted in :attr:`separations`."""
+        y[a][L.P:L.P + 3] += d * u * inv_a / (inv_a + inv_b)
+        y[b][L.P:L.P + 3] -= d * u * inv_b / (inv_a + inv_b)
+        self.separations += 1
 
 
 def _spanning(points: np.ndarray) -> np.ndarray:
