@@ -368,8 +368,8 @@ def test_a_can_sliding_into_a_corner_of_two_walls_steps_on_pressed_on_them():
     """A can (e = 0.11, μ = 0.64) lying on the ground in a corner of a bin, turning slowly: from its state in a
     mixed pile it slides, stops, strikes one wall, then the other, again and again within one step (each event
     3e-7 to 8e-7 s after the last, each a call deeper), which overflowed Python's stack (RecursionError). Past
-    MAX_SIDE_IMPACTS it stays pressed on them for the rest of the step (counted), and so at every step after it:
-    every step taken over 0.05 s (50 steps, each pressed on them again), K + U never above its start."""
+    MAX_SIDE_IMPACTS it stays pressed on them for the rest of the step (counted). Then every step is taken over
+    0.05 s, K + U never above its start."""
     from rigid_body_sim.core.contact.solver import MAX_SIDE_IMPACTS
 
     can = {"mass": 3.9281311971888626, "inertia": {"cylinder": [0.04041789711188699, 0.10589070104402448]},
@@ -383,7 +383,6 @@ def test_a_can_sliding_into_a_corner_of_two_walls_steps_on_pressed_on_them():
     walls = [e for e in sim.contact.events_of("can", "impact") if sim.contact.static_body_of(e.ground) is not None]
     assert len(walls) >= MAX_SIDE_IMPACTS and sim.contact.counts["side_pressed"] == 1
     steps_on_never_gaining(sim, can["mass"], 0.05)
-    assert sim.contact.counts["side_pressed"] >= 50
 
 
 def test_a_box_sliding_into_a_corner_of_two_walls_ends_no_step_inside_either():
@@ -430,15 +429,15 @@ def test_a_box_turning_on_the_ground_into_a_corner_of_two_walls_is_held_on_one_a
                     -0.06321241399260667, 0.6482191426183491, -0.7135594164789365, 0.12486473506382093,
                     -0.6474824946141121, -0.23858259426007616, -6.126942533133614, 0.8025537328525567,
                     2.1209437228761985])
-    held_on = ends_no_step_inside_a_wall(sim, box["mass"], 0.1)
+    held_on = ends_no_step_inside_anything(sim, box["mass"], 0.1)
     assert held_on and None not in held_on  # held on a wall's face, beside the ground
 
 
-def ends_no_step_inside_a_wall(sim: Simulator, mass: float, seconds: float) -> set:
-    """Step body 0 of ``sim`` for ``seconds``: no step ends with it inside another body (1e-9 m), its K + U never
-    above its start (e = 0, gravity the only force). Returns the static bodies it was held on beside its ground
-    (two_grounds.py) at the ends of steps (None for a half-space)."""
-    from rigid_body_sim.core.contact.query import overlapping_bodies
+def ends_no_step_inside_anything(sim: Simulator, mass: float, seconds: float) -> set:
+    """Step body 0 of ``sim`` for ``seconds``: no step ends with it inside another body or the ground (1e-9 m), its
+    K + U never above its start (e = 0, gravity the only force). Returns the static bodies it was held on beside
+    its ground (two_grounds.py) at the ends of steps (None for a half-space)."""
+    from rigid_body_sim.core.contact.query import lowest_gaps, overlapping_bodies
 
     moving = np.array([m != "static" for m in sim.model.motions])
 
@@ -452,10 +451,30 @@ def ends_no_step_inside_a_wall(sim: Simulator, mass: float, seconds: float) -> s
         overlaps = overlapping_bodies(sim.positions_world(), sim.orientations_xyzw()[:, [3, 0, 1, 2]],
                                       sim.contact.shapes, moving)
         assert all(depth <= 1e-9 for *_, depth in overlaps), (sim.time, overlaps)
+        assert float(lowest_gaps(sim)[0]) >= -1e-9, sim.time
         assert energy() <= start + 1e-12 * abs(start)
         if sim.contact.other_ground[0] >= 0:
             held_on.add(sim.contact.static_body_of(int(sim.contact.other_ground[0])))
     return held_on
+
+
+def test_a_box_leaning_on_an_edge_in_a_corner_of_the_ground_and_a_wall_ends_no_step_inside_either():
+    """A box (2.06 kg, 153 × 84 × 198 mm, μ = 0.17, e = 0) coming down edge first, spinning, into a corner of the
+    ground and a bin's wall (semi-implicit Euler, dt = 10 ms; its state in a mixed pile). It comes to lean there on
+    an edge, held on the ground and the wall's face together, and each step's end is projected onto both at once:
+    one projection onto each after the other, repeated, reaches that joint projection only slowly here (their rows
+    nearly parallel in the box's mass metric): 60 rounds left a corner 83 µm in the ground. Over 0.1 s no
+    step ends with the box inside the ground or the wall (1e-9 m), and K + U never rises above its start."""
+    box = {"mass": 2.0593700261059396,
+           "inertia": {"box": [0.15253527789245844, 0.08433672764143352, 0.19841347122369116]},
+           "material": {"restitution": 0.0, "friction": 0.1733344631478857}}
+    sim = in_a_bin("box", box, 0.6, "semi_implicit_euler", 1e-2,
+                   [-0.5066597060941107, -0.39592926203385076, 0.11486829040739491, 0.1615877757612124,
+                    0.01057794604074107, -0.15531517104913561, -0.974502280871667, -0.6411512812084411,
+                    -0.16577607678379205, -1.365144870859098, -4.966237700773998, -6.6022460896078154,
+                    -1.4692920810831582])
+    held_on = ends_no_step_inside_anything(sim, box["mass"], 0.1)
+    assert held_on and None not in held_on  # held on a wall's face, beside the ground
 
 
 def test_a_can_on_its_side_rolling_into_a_wall_ends_no_step_inside_it():
@@ -470,7 +489,7 @@ def test_a_can_on_its_side_rolling_into_a_wall_ends_no_step_inside_it():
                    [-0.089968345548037, 0.5605030193659176, 0.036439462878206534, -0.37814043286538457,
                     0.6168550370185681, -0.34567305840175183, 0.5975029816096148, 0.019535211445958628,
                     0.13067163016700784, 0.0, -1.1418210529139667, 2.111207014662922, 1.185969834757766])
-    ends_no_step_inside_a_wall(sim, can["mass"], 0.1)
+    ends_no_step_inside_anything(sim, can["mass"], 0.1)
 
 
 def test_a_box_resting_on_a_wall_s_top_edge_sliding_into_the_next_wall_is_not_moved_into_it():

@@ -9,12 +9,12 @@ tangent basis for all of them — t1 along the crease n_A × n_B, t2 = n × t1 �
 along the crease is the same direction (±1, 0) at every point and the Coulomb law of
 impacts.pgs applies unchanged (friction −μ f_n along the slip while sliding, on the cone while
 sticking; the normal forces ≥ 0 and complementary). The compiled pieces are the ones the
-one-ground contact uses (persistent.accelerations, impacts.pgs, persistent.add_contact_wrench,
-persistent.project); only the rows are built here, with numpy.
+one-ground contact uses (persistent.accelerations, impacts.pgs, persistent.add_contact_wrench);
+only the rows are built here, with numpy.
 
-After the step the body is projected onto both contacts by alternating the one-ground
-projections (each is the least-energy correction in the mass metric; alternating them converges
-to the joint one, at once when the two constraints are orthogonal in that metric).
+After the step the body is projected onto both contacts at once (:func:`_project_jointly`: the least-energy
+correction in the mass metric that closes every contact point's gap, as persistent.project onto one, then its
+velocities), with numpy.
 
 Transitions: a half-space whose normal forces all vanish while its points move away is let go
 (the body goes on with the other, or flies); a slide along the crease whose slip reverses in a
@@ -40,17 +40,17 @@ import numpy as np
 from ..kernels import layout as L
 from ..kernels.contact.impacts import _A, _ANG, _B, _LAM, _LIN, _row_velocity, kinetic_energy_row, pgs
 from ..kernels.contact.layout import MAX_POINTS, NORMAL, PERSISTENT
-from ..kernels.contact.persistent import START_SLIDE_ACCELERATION, accelerations, add_contact_wrench, normal_bias, project
+from ..kernels.contact.persistent import START_SLIDE_ACCELERATION, accelerations, add_contact_wrench, normal_bias
 from ..kernels.contact.shapes import MAX_FEATURES, feature_gaps, feature_points
-from ..quaternion import cross3, quat_rotate
+from ..quaternion import cross3, quat_conjugate, quat_from_rotation_vector, quat_multiply, quat_rotate
 from .events import ContactEvent
 
 __all__ = ["touching_other", "hold", "end_of_step", "project_second", "take_out_of_pressed", "crease",
            "start_if_touching"]
 
-#: Alternating projections onto the two contacts: at most this many rounds (each round changing the
-#: state by more than round-off; orthogonal constraints need one).
-PROJECTION_ROUNDS = 60
+#: The joint projection onto the contacts: at most this many Gauss–Newton rounds (each closes the gaps to second
+#: order in the correction; two or three reach round-off).
+PROJECTION_ROUNDS = 8
 
 
 def crease(solver, i: int) -> np.ndarray:
@@ -242,7 +242,7 @@ def end_of_step(solver, sim, i: int, end: np.ndarray, t: float, h: float, lift_o
             solver.events.append(ContactEvent(t + h, solver.names[i], int(solver.ground_of[i]), "stick"))
     third = _third(solver, sim, i, end)
     before = end.copy()
-    _alternate(solver, sim, i, end, sticking, third)
+    _project_all(solver, sim, i, end, sticking, third)
     if third is not None and third[2] < -lift_off_speed:
         _struck_third(solver, sim, i, before, end, third, t + h)
     return end
@@ -296,7 +296,7 @@ def project_second(solver, sim, i: int, end: np.ndarray, touching_gap: float) ->
         solver.other_ground[i] = -1
         solver.other_projected[i] = False
         return
-    _alternate(solver, sim, i, end, not solver.sliding[i])
+    _project_all(solver, sim, i, end, not solver.sliding[i])
 
 
 def take_out_of_pressed(solver, sim, i: int, end: np.ndarray, t: float, sticking: bool,
@@ -318,7 +318,7 @@ def take_out_of_pressed(solver, sim, i: int, end: np.ndarray, t: float, sticking
     speed, points = _lowest_speed(solver, sim, end, i, which, mask)
     before = end.copy()
     for _ in range(count):  # a feature the projection turns in (a can's other rim, as it lifts one) is taken in too
-        _alternate(solver, sim, i, end, sticking, (which, mask, speed, points), second=solver.other_ground[i] >= 0)
+        _project_all(solver, sim, i, end, sticking, (which, mask, speed, points), second=solver.other_ground[i] >= 0)
         feature_gaps(end, sim._prm[i], solver.shapes[i], solver.grounds[which], gaps)
         below = sum(1 << k for k in range(count) if gaps[k] < 0.0)
         if not below & ~mask:
@@ -338,25 +338,74 @@ def _take_in(solver, sim, i: int, end: np.ndarray, j: int, tracked: np.ndarray, 
     return count
 
 
-def _alternate(solver, sim, i: int, end: np.ndarray, sticking: bool,
-               third: tuple[int, int, float, int] | None = None, second: bool = True) -> None:
-    """Project body i's row ``end`` (in place) onto both its half-spaces (its ground alone without ``second``),
-    alternately, to a fixed point; and onto ``third`` (:func:`_third`) too if given, its normal velocities alone
-    removed."""
-    prm, shape, work = sim._prm[i], solver.shapes[i], solver._work
-    points, gaps, owners = solver._points, solver._gaps, solver._owners
-    pairs = [(int(solver.ground_of[i]), int(solver.tracked[i]), sticking)]
+def _project_all(solver, sim, i: int, end: np.ndarray, sticking: bool,
+                 third: tuple[int, int, float, int] | None = None, second: bool = True) -> None:
+    """Project body i's row ``end`` (in place) onto both its half-spaces at once (its ground alone without
+    ``second``), and onto ``third`` (:func:`_third`) too if given, its normal velocities alone removed there: as
+    persistent.project onto one (:func:`_project_jointly`)."""
+    planes = [(int(solver.ground_of[i]), int(solver.tracked[i]), sticking)]
     if second:
-        pairs.append((int(solver.other_ground[i]), int(solver.other_tracked[i]), sticking))
+        planes.append((int(solver.other_ground[i]), int(solver.other_tracked[i]), sticking))
     if third is not None:
-        pairs.append((third[0], third[1], False))
-    scale = 4.0 * np.finfo(float).eps * max(1.0, float(np.abs(end[:L.STATE_WIDTH]).max()))
+        planes.append((third[0], third[1], False))
+    _project_jointly(solver, sim, i, end, planes)
+
+
+def _project_jointly(solver, sim, i: int, end: np.ndarray, planes: list[tuple[int, int, bool]]) -> None:
+    """Body i's row ``end`` (in place) put onto every plane of ``planes`` (its plane row, the features on it as
+    bits, whether sticking there) together, as persistent.project puts it onto one: positions by the smallest
+    displacement in the body's mass metric that closes the gaps of all their contact points at once (Gauss–Newton,
+    to round-off: the joint projection, which projections onto one plane after the other reach only in the limit,
+    slowly when the planes' rows are nearly parallel in that metric), then velocities by the impulse of least
+    kinetic energy that removes the points' normal velocities and, on a sticking plane, their tangential ones;
+    sticking points that span the body (rank 6, three or more points) leave it exactly at rest."""
+    prm, shape = sim._prm[i], solver.shapes[i]
+    inverse = np.concatenate(([prm[L.INV_MASS]] * 3, prm[L.INV_INERTIA:L.INV_INERTIA + 3]))
+    tolerance = 4.0 * np.finfo(float).eps * max(1.0, float(np.abs(end[L.P:L.P + 3]).max()))
     for _ in range(PROJECTION_ROUNDS):
-        before = end[:L.STATE_WIDTH].copy()
-        for j, mask, stick in pairs:
-            project(end, prm, shape, solver.grounds[j], mask, stick, points, gaps, owners, work)
-        if np.abs(end[:L.STATE_WIDTH] - before).max() <= scale:  # a fixed point, to round-off
+        J, gaps, _ = _plane_rows(solver, sim, i, end, planes, False)
+        if not len(gaps) or np.abs(gaps).max() <= tolerance:
             break
+        step = inverse * (J.T @ np.linalg.lstsq((J * inverse) @ J.T, -gaps, rcond=None)[0])
+        end[L.P:L.P + 3] += step[:3]
+        q = quat_multiply(end[L.Q:L.Q + 4], quat_from_rotation_vector(step[3:]))  # Δθ in principal axes
+        end[L.Q:L.Q + 4] = q / np.linalg.norm(q)
+    J, _, stuck = _plane_rows(solver, sim, i, end, planes, True)
+    if not len(J):
+        return
+    if stuck.sum() >= 9 and np.linalg.matrix_rank(J[stuck]) == 6:  # three or more sticking points spanning it
+        end[L.V:L.W + 3] = 0.0
+        return
+    u = np.concatenate((end[L.V:L.V + 3], end[L.W:L.W + 3]))
+    u += inverse * (J.T @ np.linalg.lstsq((J * inverse) @ J.T, -(J @ u), rcond=None)[0])
+    end[L.V:L.V + 3], end[L.W:L.W + 3] = u[:3], u[3:]
+
+
+def _plane_rows(solver, sim, i: int, y: np.ndarray, planes: list[tuple[int, int, bool]], tangents: bool):
+    """The contact rows of body i at y on ``planes`` (_project_jointly): (J (rows, 6): each row's direction and its
+    angular part in principal axes, the gaps (m) of the normal rows, which rows are a sticking plane's), a normal
+    row per contact point, and with ``tangents`` two tangent rows per point of a sticking plane."""
+    prm, shape = sim._prm[i], solver.shapes[i]
+    points, gaps, owners = np.empty((MAX_POINTS, 3)), np.empty(MAX_POINTS), np.zeros(MAX_POINTS, dtype=np.int64)
+    directions, at, normal_gaps, stuck = [], [], [], []
+    for j, mask, sticking in planes:
+        n = solver.grounds[j, NORMAL:NORMAL + 3]
+        count = feature_points(y, prm, shape, solver.grounds[j], mask, points, gaps, owners)
+        normal_gaps.extend(gaps[:count])
+        basis = [n]
+        if tangents and sticking:
+            t1 = cross3(n, np.eye(3)[int(np.argmin(np.abs(n)))])
+            t1 /= np.linalg.norm(t1)
+            basis += [t1, cross3(n, t1)]
+        for c in range(count):
+            directions.extend(basis)
+            at.extend([points[c].copy()] * len(basis))  # the scratch rows are filled again for the next plane
+            stuck.extend([sticking] * len(basis))
+    if not directions:
+        return np.zeros((0, 6)), np.zeros(0), np.zeros(0, dtype=bool)
+    directions = np.array(directions)
+    angular_P = quat_rotate(quat_conjugate(y[L.Q:L.Q + 4]), cross3(np.array(at) - y[L.P:L.P + 3], directions))
+    return np.concatenate((directions, angular_P), axis=1), np.array(normal_gaps), np.array(stuck)
 
 
 def start_if_touching(solver, sim, y: np.ndarray, i: int, speed_limit: float, gap_limit: float) -> None:
