@@ -30,7 +30,7 @@ After each step, before the ground pass:
    approaching (just struck; sliding on the other), or met without approaching (grazing), is
    followed too, to a skin ε_k deeper than it was then: it sets no sample's length, its sign
    is read at every sample; met there approaching, it is moved apart (item 5) and has its
-   impacts. Conservative advancement finds a sample where F < 0: from s, the next
+   impacts, and so has every other pair so followed that approaches at that instant. Conservative advancement finds a sample where F < 0: from s, the next
    sample is s + (F_k + ε_k)/(B_k h) over the components k, with B_k a bound on |dF_k/dt|
    (relative speed plus spin × bounding radius, the largest over the piece; a sphere's spin does
    not count) and ε_k = 1e-4 × the pair's size; no component can cross zero between samples
@@ -655,6 +655,10 @@ class BodyPairs:
                         self._separate(sim, a, b, y, held)
                     touching = [p for p in pairs_now if p == (a, b) or p in touching or self.contact(
                         y[p[0]], p[0], y[p[1]], p[1]) <= TOUCHING * max(self.size[p[0]], self.size[p[1]])]
+                    for p in touching:  # so is every other pair followed to its floor that approaches now (a chain
+                        # struck again and again would go a skin deeper at each event)
+                        if p != (a, b) and p in floors and self._approaching(sim, y[p[0]], p[0], y[p[1]], p[1]):
+                            self._separate(sim, p[0], p[1], y, held)
                     self._impacts(sim, touching, y, w, t, held)
                     rounds = 0
                 else:  # grazing: it does not approach at its root; followed to a skin deeper (a few times)
