@@ -461,10 +461,11 @@ def ends_no_step_inside_anything(sim: Simulator, mass: float, seconds: float) ->
 def test_a_box_leaning_on_an_edge_in_a_corner_of_the_ground_and_a_wall_ends_no_step_inside_either():
     """A box (2.06 kg, 153 × 84 × 198 mm, μ = 0.17, e = 0) coming down edge first, spinning, into a corner of the
     ground and a bin's wall (semi-implicit Euler, dt = 10 ms; its state in a mixed pile). It comes to lean there on
-    an edge, held on the ground and the wall's face together, and each step's end is projected onto both at once:
-    one projection onto each after the other, repeated, reaches that joint projection only slowly here (their rows
-    nearly parallel in the box's mass metric): 60 rounds left a corner 83 µm in the ground. Over 0.1 s no
-    step ends with the box inside the ground or the wall (1e-9 m), and K + U never rises above its start."""
+    an edge, held on the ground and the wall's face together. Projecting each step's end onto one and then the
+    other, repeated, reaches the projection onto both only slowly here (their rows nearly parallel in the box's
+    mass metric: 60 rounds left a corner 83 µm in the ground), so after 8 rounds it is projected onto both at once.
+    Over 0.1 s no step ends with the box inside the ground or the wall (1e-9 m), and K + U never rises above its
+    start."""
     box = {"mass": 2.0593700261059396,
            "inertia": {"box": [0.15253527789245844, 0.08433672764143352, 0.19841347122369116]},
            "material": {"restitution": 0.0, "friction": 0.1733344631478857}}

@@ -9,12 +9,13 @@ tangent basis for all of them — t1 along the crease n_A × n_B, t2 = n × t1 �
 along the crease is the same direction (±1, 0) at every point and the Coulomb law of
 impacts.pgs applies unchanged (friction −μ f_n along the slip while sliding, on the cone while
 sticking; the normal forces ≥ 0 and complementary). The compiled pieces are the ones the
-one-ground contact uses (persistent.accelerations, impacts.pgs, persistent.add_contact_wrench);
-only the rows are built here, with numpy.
+one-ground contact uses (persistent.accelerations, impacts.pgs, persistent.add_contact_wrench,
+persistent.project); only the rows are built here, with numpy.
 
-After the step the body is projected onto both contacts at once (:func:`_project_jointly`: the least-energy
-correction in the mass metric that closes every contact point's gap, as persistent.project onto one, then its
-velocities), with numpy.
+After the step the body is projected onto both contacts: onto each in turn (persistent.project, the least-energy
+correction in the mass metric) to a fixed point, which is the joint projection; where that has not come within
+ALTERNATE_ROUNDS (the two contacts' rows nearly parallel in the mass metric), onto both at once
+(:func:`_project_jointly`, with numpy).
 
 Transitions: a half-space whose normal forces all vanish while its points move away is let go
 (the body goes on with the other, or flies); a slide along the crease whose slip reverses in a
@@ -40,14 +41,18 @@ import numpy as np
 from ..kernels import layout as L
 from ..kernels.contact.impacts import _A, _ANG, _B, _LAM, _LIN, _row_velocity, kinetic_energy_row, pgs
 from ..kernels.contact.layout import MAX_POINTS, NORMAL, PERSISTENT
-from ..kernels.contact.persistent import START_SLIDE_ACCELERATION, accelerations, add_contact_wrench, normal_bias
+from ..kernels.contact.persistent import (START_SLIDE_ACCELERATION, accelerations, add_contact_wrench, normal_bias,
+                                          project)
 from ..kernels.contact.shapes import MAX_FEATURES, feature_gaps, feature_points
-from ..quaternion import cross3, quat_conjugate, quat_from_rotation_vector, quat_multiply, quat_rotate
+from ..quaternion import cross3, quat_from_rotation_vector, quat_multiply, quat_rotate, quat_to_matrix
 from .events import ContactEvent
 
 __all__ = ["touching_other", "hold", "end_of_step", "project_second", "take_out_of_pressed", "crease",
            "start_if_touching"]
 
+#: Projections onto each contact in turn: at most this many rounds before the joint projection takes over (one or
+#: two reach a fixed point when the contacts' rows are orthogonal in the body's mass metric).
+ALTERNATE_ROUNDS = 8
 #: The joint projection onto the contacts: at most this many Gauss–Newton rounds (each closes the gaps to second
 #: order in the correction; two or three reach round-off).
 PROJECTION_ROUNDS = 8
@@ -340,15 +345,32 @@ def _take_in(solver, sim, i: int, end: np.ndarray, j: int, tracked: np.ndarray, 
 
 def _project_all(solver, sim, i: int, end: np.ndarray, sticking: bool,
                  third: tuple[int, int, float, int] | None = None, second: bool = True) -> None:
-    """Project body i's row ``end`` (in place) onto both its half-spaces at once (its ground alone without
-    ``second``), and onto ``third`` (:func:`_third`) too if given, its normal velocities alone removed there: as
-    persistent.project onto one (:func:`_project_jointly`)."""
+    """Project body i's row ``end`` (in place) onto both its half-spaces (its ground alone without ``second``), and
+    onto ``third`` (:func:`_third`) too if given, its normal velocities alone removed there: onto each in turn to a
+    fixed point (:func:`_alternate`), or where that is slow, onto all at once (:func:`_project_jointly`)."""
     planes = [(int(solver.ground_of[i]), int(solver.tracked[i]), sticking)]
     if second:
         planes.append((int(solver.other_ground[i]), int(solver.other_tracked[i]), sticking))
     if third is not None:
         planes.append((third[0], third[1], False))
-    _project_jointly(solver, sim, i, end, planes)
+    if not _alternate(solver, sim, i, end, planes):
+        _project_jointly(solver, sim, i, end, planes)
+
+
+def _alternate(solver, sim, i: int, end: np.ndarray, planes: list[tuple[int, int, bool]]) -> bool:
+    """Body i's row ``end`` (in place) projected onto each plane of ``planes`` in turn (persistent.project), round
+    after round, at most ALTERNATE_ROUNDS: whether a round left it unchanged to round-off (a fixed point: the joint
+    projection, reached in one or two rounds when the planes' rows are orthogonal in the mass metric)."""
+    prm, shape, work = sim._prm[i], solver.shapes[i], solver._work
+    points, gaps, owners = solver._points, solver._gaps, solver._owners
+    scale = 4.0 * np.finfo(float).eps * max(1.0, float(np.abs(end[:L.STATE_WIDTH]).max()))
+    for _ in range(ALTERNATE_ROUNDS):
+        before = end[:L.STATE_WIDTH].copy()
+        for j, mask, stick in planes:
+            project(end, prm, shape, solver.grounds[j], mask, stick, points, gaps, owners, work)
+        if np.abs(end[:L.STATE_WIDTH] - before).max() <= scale:
+            return True
+    return False
 
 
 def _project_jointly(solver, sim, i: int, end: np.ndarray, planes: list[tuple[int, int, bool]]) -> None:
@@ -386,26 +408,32 @@ def _plane_rows(solver, sim, i: int, y: np.ndarray, planes: list[tuple[int, int,
     angular part in principal axes, the gaps (m) of the normal rows, which rows are a sticking plane's), a normal
     row per contact point, and with ``tangents`` two tangent rows per point of a sticking plane."""
     prm, shape = sim._prm[i], solver.shapes[i]
-    points, gaps, owners = np.empty((MAX_POINTS, 3)), np.empty(MAX_POINTS), np.zeros(MAX_POINTS, dtype=np.int64)
+    points, gaps, owners = solver._points, solver._gaps, solver._owners
     directions, at, normal_gaps, stuck = [], [], [], []
     for j, mask, sticking in planes:
         n = solver.grounds[j, NORMAL:NORMAL + 3]
         count = feature_points(y, prm, shape, solver.grounds[j], mask, points, gaps, owners)
-        normal_gaps.extend(gaps[:count])
-        basis = [n]
+        normal_gaps.append(gaps[:count].copy())
+        basis = n[None, :]
         if tangents and sticking:
-            t1 = cross3(n, np.eye(3)[int(np.argmin(np.abs(n)))])
+            t1 = _cross(n[None, :], np.eye(3)[None, int(np.argmin(np.abs(n)))])[0]
             t1 /= np.linalg.norm(t1)
-            basis += [t1, cross3(n, t1)]
-        for c in range(count):
-            directions.extend(basis)
-            at.extend([points[c].copy()] * len(basis))  # the scratch rows are filled again for the next plane
-            stuck.extend([sticking] * len(basis))
-    if not directions:
-        return np.zeros((0, 6)), np.zeros(0), np.zeros(0, dtype=bool)
-    directions = np.array(directions)
-    angular_P = quat_rotate(quat_conjugate(y[L.Q:L.Q + 4]), cross3(np.array(at) - y[L.P:L.P + 3], directions))
-    return np.concatenate((directions, angular_P), axis=1), np.array(normal_gaps), np.array(stuck)
+            basis = np.array([n, t1, _cross(n[None, :], t1[None, :])[0]])
+        directions.append(np.tile(basis, (count, 1)))
+        at.append(np.repeat(points[:count], len(basis), axis=0))  # copied: the scratch is filled again next plane
+        stuck.append(np.full(count * len(basis), sticking))
+    directions = np.concatenate(directions)
+    angular_P = _cross(np.concatenate(at) - y[L.P:L.P + 3], directions) @ quat_to_matrix(y[L.Q:L.Q + 4])
+    return np.concatenate((directions, angular_P), axis=1), np.concatenate(normal_gaps), np.concatenate(stuck)
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise cross products of (k, 3) arrays (numpy.cross costs some 20 µs a call at these sizes)."""
+    out = np.empty_like(b)
+    out[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
+    out[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
+    out[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    return out
 
 
 def start_if_touching(solver, sim, y: np.ndarray, i: int, speed_limit: float, gap_limit: float) -> None:
