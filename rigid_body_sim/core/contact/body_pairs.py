@@ -30,7 +30,8 @@ After each step, before the ground pass:
    approaching (just struck; sliding on the other), or met without approaching (grazing), is
    followed too, to a skin ε_k deeper than it was then: it sets no sample's length, its sign
    is read at every sample; met there approaching, it is moved apart (item 5) and has its
-   impacts, and so has every other pair so followed that approaches at that instant. Conservative advancement finds a sample where F < 0: from s, the next
+   impacts, and so has every other pair so followed that approaches at that instant.
+   Conservative advancement finds a sample where F < 0: from s, the next
    sample is s + (F_k + ε_k)/(B_k h) over the components k, with B_k a bound on |dF_k/dt|
    (relative speed plus spin × bounding radius, the largest over the piece; a sphere's spin does
    not count) and ε_k = 1e-4 × the pair's size; no component can cross zero between samples
