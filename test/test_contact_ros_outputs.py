@@ -91,7 +91,7 @@ def test_contact_wrench_and_diagnostics_of_the_dropped_ball() -> None:
     assert int(status["multi-contact impacts with e > 0, model-dependent (total)"]) == 0
     assert int(status["impacts with restitution capped (total)"]) == 0
     assert int(status["impacts on a second half-space while resting (total)"]) == 0
-    assert int(status["steps of a resting body projected out of a wall it was pressed on, first order (total)"]) == 0
+    assert int(status["steps of a resting body projected out of a wall it went into, first order (total)"]) == 0
 
 
 def test_contact_wrench_of_a_sliding_box_has_friction_and_no_torque() -> None:

@@ -529,6 +529,23 @@ def test_a_box_resting_on_a_wall_s_top_edge_sliding_into_the_next_wall_is_not_mo
     assert sim.contact.counts["static_tangent"] > 0
 
 
+def test_a_box_lying_across_a_bin_s_corner_on_two_walls_top_edges_ends_no_step_inside_either():
+    """A box (2.65 kg, 42 × 118 × 153 mm, μ = 0.90, e = 0.04) lying across a corner of a bin on the top inner edges
+    of its two walls (rk4, dt = 5 ms; its state in a mixed pile). Held on one edge's tangent plane, it does not see
+    the other wall within its step: each step took it into the other wall, and the next, finding that one nearer,
+    held it there and took it into the first (up to 0.18 mm). At each step's end it is taken out of another static
+    shape it went into, through the tangent plane of their contact. Over 0.1 s no step ends with it inside either
+    wall (1e-9 m), and K + U never rises above its start."""
+    box = {"mass": 2.650458858285881, "inertia": {"box": [0.04207934160487229, 0.1182257399723185, 0.15277238918538757]},
+           "material": {"restitution": 0.042472458454032413, "friction": 0.8953977138373029}}
+    sim = in_a_bin("box", box, 0.85, "rk4", 5e-3,
+                   [-0.8118045561949755, 0.770461083275929, 1.0475793740855877, 0.606529497076377, -0.675198819541459,
+                    -0.02874726085821201, -0.41881036073531813, -0.5581560963747597, 0.43627940620947264,
+                    -2.1562882603467046, -2.178864297395131, -5.140156642341217, -4.624026556167017])
+    ends_no_step_inside_anything(sim, box["mass"], 0.1)
+    assert sim.contact.counts["static_tangent"] > 0 and sim.contact.counts["static_taken_out"] > 0
+
+
 def test_a_can_standing_against_a_wall_is_never_thrown_by_its_held_force():
     """A squat can (r 46 mm, 46 mm long) standing on its end against a bin's wall, tilted 2.6e-7 rad, at rest
     (rk4, dt = 10 ms): its held step, on a rim point, spun it up to 3.4e5 rad/s (K + U up 3e7 J) and blew the pile

@@ -338,7 +338,7 @@ class ContactPublisher:
             _kv("two half-spaces with too many contact points: projected (total)", solver.counts["two_ground_overflow"]),
             _kv("steps held on a static shape's tangent plane, first order (total)", solver.counts["static_tangent"]),
             _kv("impacts of a resting body pressed on a static shape, not held (total)", solver.counts["static_pressed"]),
-            _kv("steps of a resting body projected out of a wall it was pressed on, first order (total)",
+            _kv("steps of a resting body projected out of a wall it went into, first order (total)",
                 solver.counts["static_taken_out"]),
             _kv("spans of a resting body just struck whose side gap never opened, or struck too often: pressed, "
                 "not struck again (total)", solver.counts["side_pressed"]),

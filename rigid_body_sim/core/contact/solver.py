@@ -266,8 +266,9 @@ class ContactSolver:
         #: having ended it inside each other (body_pairs.BodyPairs.look_again); ``third_half_space`` steps of a body
         #: held on two half-spaces that ended below a third half-space or static shape, taken in at the step's end
         #: (two_grounds.end_of_step); ``static_taken_out`` steps of a resting body that ended inside a wall it was
-        #: pressed on and not held on (a static shape, or a half-space it was left pressed on: ``side_pressed``),
-        #: projected out of it at the step's end (two_grounds.take_out_of_pressed).
+        #: pressed on and not held on (a static shape, or a half-space it was left pressed on: ``side_pressed``), or
+        #: inside another static shape while held on a static shape's tangent row, projected out of it at the
+        #: step's end (two_grounds.take_out_of_pressed, take_out_of_static).
         #: per body, the static shape (static index) it was found pressed on: not looked at for the rest of the step
         self._static_skipped: dict[int, int] = {}
         #: side impacts of each body in this step; PRESSED: not looked at for them for the rest of the step
@@ -1272,6 +1273,8 @@ class ContactSolver:
             two_grounds.project_second(self, sim, i, end, TOUCHING_GAP)
         if i in self._static_skipped or self._side_hits.get(i, 0) == PRESSED:  # pressed on walls out of its view
             two_grounds.take_out_of_pressed(self, sim, i, end, t + h, not self.sliding[i], LIFT_OFF_SPEED)
+        if self.statics is not None and self.statics.is_tangent(int(self.ground_of[i])):  # the others were out of view
+            two_grounds.take_out_of_static(self, sim, i, end, not self.sliding[i])
         return end
 
     def _land(self, sim, i: int, y0: np.ndarray, held: np.ndarray, t: float, h: float, s: float) -> np.ndarray:
@@ -1321,6 +1324,13 @@ class ContactSolver:
             if dist < lowest:
                 lowest, which = dist, self.statics.plane_for(y, sim._prm[i], i, self.shapes[i], s)
         return lowest, which
+
+    def _other_static(self, sim, y: np.ndarray, i: int) -> tuple[float, np.ndarray | None]:
+        """(signed distance in m, plane row through their contact: StaticGeometry.plane_through) of body i at y,
+        held on a static shape's tangent row, to the nearest other static shape; (inf, None) if there is none."""
+        held = int(self.statics.row_owner[self.ground_of[i]])
+        dist, s = self.statics.nearest(y, i, self.shapes[i], held)
+        return (dist, self.statics.plane_through(s)) if s >= 0 else (math.inf, None)
 
     def _side_impact_at(self, i: int, jj: int, t: float) -> bool:
         """Whether body i was struck against half-space or static plane ``jj`` at time t: an impact among its

@@ -290,6 +290,14 @@ class StaticGeometry:
         self.tangent_restitution[i], self.tangent_friction[i] = self._pair_e[i, s], self._pair_mu[i, s]
         return j
 
+    def plane_through(self, s: int) -> np.ndarray:
+        """A plane row, none of :attr:`rows`, through the contact :meth:`nearest` last found with static shape s:
+        its normal (static to body) and its point on the static surface."""
+        row = np.zeros(self.rows.shape[1])
+        row[NORMAL:NORMAL + 3] = self._normal[s]
+        row[OFFSET] = float(self._normal[s] @ self._points[s, 0, 0:3])
+        return row
+
     def plane_rows(self, bodies: np.ndarray, static_bodies: np.ndarray, normals_W: np.ndarray,
                    points_W: np.ndarray) -> np.ndarray:
         """The plane row of each contact of a body in an island with a static shape (island_contacts.py).

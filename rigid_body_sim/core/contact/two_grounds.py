@@ -47,8 +47,8 @@ from ..kernels.contact.shapes import MAX_FEATURES, feature_gaps, feature_points
 from ..quaternion import cross3, quat_from_rotation_vector, quat_multiply, quat_rotate, quat_to_matrix
 from .events import ContactEvent
 
-__all__ = ["touching_other", "hold", "end_of_step", "project_second", "take_out_of_pressed", "crease",
-           "start_if_touching"]
+__all__ = ["touching_other", "hold", "end_of_step", "project_second", "take_out_of_pressed", "take_out_of_static",
+           "crease", "start_if_touching"]
 
 #: Projections onto each contact in turn: at most this many rounds before the joint projection takes over (one or
 #: two reach a fixed point when the contacts' rows are orthogonal in the body's mass metric).
@@ -247,7 +247,7 @@ def end_of_step(solver, sim, i: int, end: np.ndarray, t: float, h: float, lift_o
             solver.events.append(ContactEvent(t + h, solver.names[i], int(solver.ground_of[i]), "stick"))
     third = _third(solver, sim, i, end)
     before = end.copy()
-    _project_all(solver, sim, i, end, sticking, third)
+    _project_all(solver, sim, i, end, sticking, None if third is None else (solver.grounds[third[0]], third[1]))
     if third is not None and third[2] < -lift_off_speed:
         _struck_third(solver, sim, i, before, end, third, t + h)
     return end
@@ -263,16 +263,16 @@ def _third(solver, sim, i: int, y: np.ndarray) -> tuple[int, int, float, int] | 
     gaps = np.empty(MAX_FEATURES)
     count = feature_gaps(y, sim._prm[i], solver.shapes[i], solver.grounds[which], gaps)
     mask = sum(1 << k for k in range(count) if gaps[k] <= 0.0)
-    speed, points = _lowest_speed(solver, sim, y, i, which, mask) if mask else (0.0, 0)
+    speed, points = _lowest_speed(solver, sim, y, i, solver.grounds[which], mask) if mask else (0.0, 0)
     return (which, mask, speed, points) if speed < 0.0 else None
 
 
-def _lowest_speed(solver, sim, y: np.ndarray, i: int, j: int, mask: int) -> tuple[float, int]:
-    """The lowest normal velocity (m/s, positive away) of body i's features ``mask`` at y against plane row j, and
-    their number of contact points."""
+def _lowest_speed(solver, sim, y: np.ndarray, i: int, plane: np.ndarray, mask: int) -> tuple[float, int]:
+    """The lowest normal velocity (m/s, positive away) of body i's features ``mask`` at y against the plane row
+    ``plane``, and their number of contact points."""
     points, gaps, owners = np.empty((MAX_POINTS, 3)), np.empty(MAX_POINTS), np.zeros(MAX_POINTS, dtype=np.int64)
-    n = feature_points(y, sim._prm[i], solver.shapes[i], solver.grounds[j], mask, points, gaps, owners)
-    return float((_point_velocities(sim, y, i, points[:n]) @ solver.grounds[j, NORMAL:NORMAL + 3]).min()), n
+    n = feature_points(y, sim._prm[i], solver.shapes[i], plane, mask, points, gaps, owners)
+    return float((_point_velocities(sim, y, i, points[:n]) @ plane[NORMAL:NORMAL + 3]).min()), n
 
 
 def _struck_third(solver, sim, i: int, before: np.ndarray, end: np.ndarray, third: tuple[int, int, float, int],
@@ -286,7 +286,7 @@ def _struck_third(solver, sim, i: int, before: np.ndarray, end: np.ndarray, thir
     impulse = max(float(prm[L.MASS] * (end[L.V:L.V + 3] - before[L.V:L.V + 3]) @ n), 0.0)
     jump = solver._jump(sim, i, before, end, points, 0.0, 0.0)
     solver.counts[counted] += 1
-    after = _lowest_speed(solver, sim, end, i, j, mask)[0]
+    after = _lowest_speed(solver, sim, end, i, solver.grounds[j], mask)[0]
     solver.events.append(ContactEvent(t, solver.names[i], j, "impact", speed, after, impulse,
                                       kinetic_energy_row(before, prm), kinetic_energy_row(end, prm), *jump))
 
@@ -309,30 +309,53 @@ def take_out_of_pressed(solver, sim, i: int, end: np.ndarray, t: float, sticking
     """Body i, held on its ground (and projected onto a second one, :func:`project_second`) and pressed in this step
     on a static shape it is not held on, or on the walls it was struck against (left out of the step's view from
     then: ``ContactSolver._static_skipped``, ``_press_aside``), at the step's end ``end`` (in place): if it went
-    into the nearest of them (a spinning body turning its other points in), it is projected onto its ground (and
-    second one) and that one's plane together, its normal velocities into it removed (an inelastic impact at the
-    step's end, not located: first order; an ``impact`` event if it came at more than ``lift_off_speed``)."""
+    into the nearest of them (a spinning body turning its other points in), it is taken out of it (:func:`_take_out`:
+    an inelastic impact at the step's end, not located: first order; an ``impact`` event if it came at more than
+    ``lift_off_speed``)."""
     gap, which = solver._other_gap(sim, end, i, pressed=True)
     if gap >= 0.0 or which < 0:
         return
-    gaps = np.empty(MAX_FEATURES)
-    count = feature_gaps(end, sim._prm[i], solver.shapes[i], solver.grounds[which], gaps)
-    mask = sum(1 << k for k in range(count) if gaps[k] <= 0.0)
-    if not mask:
+    taken = _take_out(solver, sim, i, end, solver.grounds[which], sticking)
+    if taken is None:
         return
-    speed, points = _lowest_speed(solver, sim, end, i, which, mask)
-    before = end.copy()
-    for _ in range(count):  # a feature the projection turns in (a can's other rim, as it lifts one) is taken in too
-        _project_all(solver, sim, i, end, sticking, (which, mask, speed, points), second=solver.other_ground[i] >= 0)
-        feature_gaps(end, sim._prm[i], solver.shapes[i], solver.grounds[which], gaps)
-        below = sum(1 << k for k in range(count) if gaps[k] < 0.0)
-        if not below & ~mask:
-            break
-        mask |= below
+    before, mask, speed, points = taken
     if speed < -lift_off_speed:
         _struck_third(solver, sim, i, before, end, (which, mask, speed, points), t, "static_taken_out")
     else:
         solver.counts["static_taken_out"] += 1
+
+
+def take_out_of_static(solver, sim, i: int, end: np.ndarray, sticking: bool) -> None:
+    """Body i, held on a static shape's tangent row (ContactSolver._other_gap looks at no static shape for it: one
+    would write that row), at the step's end ``end`` (in place): if it went into another static shape (a box
+    lying across a bin's corner on one wall's top edge, pushed into the other's), it is taken out of it through the
+    tangent plane of their contact (:func:`_take_out`, first order; counted in ``static_taken_out``, not listed as
+    an event: that plane is not a row of the solver's)."""
+    gap, plane = solver._other_static(sim, end, i)
+    if gap < 0.0 and _take_out(solver, sim, i, end, plane, sticking) is not None:
+        solver.counts["static_taken_out"] += 1
+
+
+def _take_out(solver, sim, i: int, end: np.ndarray, plane: np.ndarray, sticking: bool):
+    """Body i's step end ``end`` (in place), its features below the plane row ``plane``, projected onto its ground
+    (and second one) and that plane together, its normal velocities into it removed; repeated while the projection
+    turns another feature in (a can's other rim, as it lifts one). (its state before, the features taken in as
+    bits, their lowest normal speed before, m/s, their contact points), or None if no feature is below."""
+    gaps = np.empty(MAX_FEATURES)
+    count = feature_gaps(end, sim._prm[i], solver.shapes[i], plane, gaps)
+    mask = sum(1 << k for k in range(count) if gaps[k] <= 0.0)
+    if not mask:
+        return None
+    speed, points = _lowest_speed(solver, sim, end, i, plane, mask)
+    before = end.copy()
+    for _ in range(count):
+        _project_all(solver, sim, i, end, sticking, (plane, mask), second=solver.other_ground[i] >= 0)
+        feature_gaps(end, sim._prm[i], solver.shapes[i], plane, gaps)
+        below = sum(1 << k for k in range(count) if gaps[k] < 0.0)
+        if not below & ~mask:
+            break
+        mask |= below
+    return before, mask, speed, points
 
 
 def _take_in(solver, sim, i: int, end: np.ndarray, j: int, tracked: np.ndarray, gaps: np.ndarray) -> int:
@@ -344,20 +367,21 @@ def _take_in(solver, sim, i: int, end: np.ndarray, j: int, tracked: np.ndarray, 
 
 
 def _project_all(solver, sim, i: int, end: np.ndarray, sticking: bool,
-                 third: tuple[int, int, float, int] | None = None, second: bool = True) -> None:
+                 third: tuple[np.ndarray, int] | None = None, second: bool = True) -> None:
     """Project body i's row ``end`` (in place) onto both its half-spaces (its ground alone without ``second``), and
-    onto ``third`` (:func:`_third`) too if given, its normal velocities alone removed there: onto each in turn to a
-    fixed point (:func:`_alternate`), or where that is slow, onto all at once (:func:`_project_jointly`)."""
-    planes = [(int(solver.ground_of[i]), int(solver.tracked[i]), sticking)]
+    onto ``third`` (a plane row, the features on it as bits) too if given, its normal velocities alone removed
+    there: onto each in turn to a fixed point (:func:`_alternate`), or where that is slow, onto all at once
+    (:func:`_project_jointly`)."""
+    planes = [(solver.grounds[int(solver.ground_of[i])], int(solver.tracked[i]), sticking)]
     if second:
-        planes.append((int(solver.other_ground[i]), int(solver.other_tracked[i]), sticking))
+        planes.append((solver.grounds[int(solver.other_ground[i])], int(solver.other_tracked[i]), sticking))
     if third is not None:
         planes.append((third[0], third[1], False))
     if not _alternate(solver, sim, i, end, planes):
         _project_jointly(solver, sim, i, end, planes)
 
 
-def _alternate(solver, sim, i: int, end: np.ndarray, planes: list[tuple[int, int, bool]]) -> bool:
+def _alternate(solver, sim, i: int, end: np.ndarray, planes: list[tuple[np.ndarray, int, bool]]) -> bool:
     """Body i's row ``end`` (in place) projected onto each plane of ``planes`` in turn (persistent.project), round
     after round, at most ALTERNATE_ROUNDS: whether a round left it unchanged to round-off (a fixed point: the joint
     projection, reached in one or two rounds when the planes' rows are orthogonal in the mass metric)."""
@@ -366,16 +390,16 @@ def _alternate(solver, sim, i: int, end: np.ndarray, planes: list[tuple[int, int
     scale = 4.0 * np.finfo(float).eps * max(1.0, float(np.abs(end[:L.STATE_WIDTH]).max()))
     for _ in range(ALTERNATE_ROUNDS):
         before = end[:L.STATE_WIDTH].copy()
-        for j, mask, stick in planes:
-            project(end, prm, shape, solver.grounds[j], mask, stick, points, gaps, owners, work)
+        for plane, mask, stick in planes:
+            project(end, prm, shape, plane, mask, stick, points, gaps, owners, work)
         if np.abs(end[:L.STATE_WIDTH] - before).max() <= scale:
             return True
     return False
 
 
-def _project_jointly(solver, sim, i: int, end: np.ndarray, planes: list[tuple[int, int, bool]]) -> None:
-    """Body i's row ``end`` (in place) put onto every plane of ``planes`` (its plane row, the features on it as
-    bits, whether sticking there) together, as persistent.project puts it onto one: positions by the smallest
+def _project_jointly(solver, sim, i: int, end: np.ndarray, planes: list[tuple[np.ndarray, int, bool]]) -> None:
+    """Body i's row ``end`` (in place) put onto every plane of ``planes`` (a plane row, the features on it as bits,
+    whether sticking there) together, as persistent.project puts it onto one: positions by the smallest
     displacement in the body's mass metric that closes the gaps of all their contact points at once (Gauss–Newton,
     to round-off: the joint projection, which projections onto one plane after the other reach only in the limit,
     slowly when the planes' rows are nearly parallel in that metric), then velocities by the impulse of least
@@ -403,16 +427,16 @@ def _project_jointly(solver, sim, i: int, end: np.ndarray, planes: list[tuple[in
     end[L.V:L.V + 3], end[L.W:L.W + 3] = u[:3], u[3:]
 
 
-def _plane_rows(solver, sim, i: int, y: np.ndarray, planes: list[tuple[int, int, bool]], tangents: bool):
+def _plane_rows(solver, sim, i: int, y: np.ndarray, planes: list[tuple[np.ndarray, int, bool]], tangents: bool):
     """The contact rows of body i at y on ``planes`` (_project_jointly): (J (rows, 6): each row's direction and its
     angular part in principal axes, the gaps (m) of the normal rows, which rows are a sticking plane's), a normal
     row per contact point, and with ``tangents`` two tangent rows per point of a sticking plane."""
     prm, shape = sim._prm[i], solver.shapes[i]
     points, gaps, owners = solver._points, solver._gaps, solver._owners
     directions, at, normal_gaps, stuck = [], [], [], []
-    for j, mask, sticking in planes:
-        n = solver.grounds[j, NORMAL:NORMAL + 3]
-        count = feature_points(y, prm, shape, solver.grounds[j], mask, points, gaps, owners)
+    for plane, mask, sticking in planes:
+        n = plane[NORMAL:NORMAL + 3]
+        count = feature_points(y, prm, shape, plane, mask, points, gaps, owners)
         normal_gaps.append(gaps[:count].copy())
         basis = n[None, :]
         if tangents and sticking:
