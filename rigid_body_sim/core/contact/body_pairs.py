@@ -124,6 +124,9 @@ _RESTORED = ("modes", "tracked", "sliding", "slide_direction", "pressed", "groun
              "other_projected", "other_tracked", "impact_impulses")
 #: Rounds of impacts at one piece's start before the pairs still approaching are left for the piece.
 MAX_ROUNDS = 10
+#: Two held members parted at a group's end in their ground's plane (BodyPairs._part) when the normal's part in it
+#: is at least this squared: the move is then at most twice the depth.
+PART_SHARE = 0.25
 #: A pair whose signed distance is below this × its size (m per m) touches.
 TOUCHING = 1e-12
 #: A resting body whose contact points move away from its ground faster than this (m/s) lifts off.
@@ -723,7 +726,7 @@ class BodyPairs:
         n = self._normal1[0]
         along = n - (n @ g) * g  # the normal's part in the ground's plane
         share = along @ along
-        if share < 0.5:  # mostly across the ground (one body above the other): not for this
+        if share < PART_SHARE:  # mostly across the ground (one body above the other): not for this
             return
         self._move_apart(a, b, y, d / share, along, sim._prm[a, L.INV_MASS], sim._prm[b, L.INV_MASS])
 
