@@ -44,7 +44,7 @@ from ..kernels.contact.layout import MAX_POINTS, NORMAL, PERSISTENT
 from ..kernels.contact.persistent import (START_SLIDE_ACCELERATION, accelerations, add_contact_wrench, normal_bias,
                                           project)
 from ..kernels.contact.shapes import MAX_FEATURES, feature_gaps, feature_points
-from ..quaternion import cross3, quat_from_rotation_vector, quat_multiply, quat_rotate, quat_to_matrix
+from ..quaternion import cross3, quat_from_rotation_vector, quat_multiply, quat_rotate
 from .events import ContactEvent
 
 __all__ = ["touching_other", "hold", "end_of_step", "project_second", "take_out_of_pressed", "take_out_of_static",
@@ -139,16 +139,26 @@ def _build_rows(y: np.ndarray, prm: np.ndarray, points: np.ndarray, normals: np.
         directions[3 * c] = n
         directions[3 * c + 1] = t1
         directions[3 * c + 2] = cross3(n, t1)
-    r = np.repeat(points[:count] - y[L.P:L.P + 3], 3, axis=0)
-    q = y[L.Q:L.Q + 4]
-    angular_P = quat_rotate(q * np.array([1.0, -1.0, -1.0, -1.0]), cross3(r, directions))
+    J = _jacobian(y, np.repeat(points[:count], 3, axis=0), directions)
     work[:rows, _LIN:_LIN + 3] = directions
-    work[:rows, _ANG:_ANG + 3] = angular_P
-    inverse = np.concatenate(([prm[L.INV_MASS]] * 3, prm[L.INV_INERTIA:L.INV_INERTIA + 3]))
-    J = np.concatenate((directions, angular_P), axis=1)
+    work[:rows, _ANG:_ANG + 3] = J[:, 3:]
+    inverse = _inverse_mass(prm)
     work[:rows, _A:_A + rows] = (J * inverse) @ J.T
     work[:rows, _B] = J @ np.concatenate((y[L.V:L.V + 3], y[L.W:L.W + 3]))
     return rows
+
+
+def _jacobian(y: np.ndarray, points: np.ndarray, directions: np.ndarray) -> np.ndarray:
+    """(k, 6) rows of body state y: each row's direction (world) and its angular part r × direction in principal
+    axes, r from the centre of mass to its point ``points`` (k, 3, world)."""
+    q = y[L.Q:L.Q + 4]
+    angular_P = quat_rotate(q * np.array([1.0, -1.0, -1.0, -1.0]), cross3(points - y[L.P:L.P + 3], directions))
+    return np.concatenate((directions, angular_P), axis=1)
+
+
+def _inverse_mass(prm: np.ndarray) -> np.ndarray:
+    """The body's inverse mass metric, diagonal in (world translation, principal rotation): (6,)."""
+    return np.concatenate(([prm[L.INV_MASS]] * 3, prm[L.INV_INERTIA:L.INV_INERTIA + 3]))
 
 
 def _tangential_acceleration(work: np.ndarray, rows: int, count: int) -> float:
@@ -405,8 +415,7 @@ def _project_jointly(solver, sim, i: int, end: np.ndarray, planes: list[tuple[np
     slowly when the planes' rows are nearly parallel in that metric), then velocities by the impulse of least
     kinetic energy that removes the points' normal velocities and, on a sticking plane, their tangential ones;
     sticking points that span the body (rank 6, three or more points) leave it exactly at rest."""
-    prm, shape = sim._prm[i], solver.shapes[i]
-    inverse = np.concatenate(([prm[L.INV_MASS]] * 3, prm[L.INV_INERTIA:L.INV_INERTIA + 3]))
+    inverse = _inverse_mass(sim._prm[i])
     tolerance = 4.0 * np.finfo(float).eps * max(1.0, float(np.abs(end[L.P:L.P + 3]).max()))
     for _ in range(PROJECTION_ROUNDS):
         J, gaps, _ = _plane_rows(solver, sim, i, end, planes, False)
@@ -446,9 +455,8 @@ def _plane_rows(solver, sim, i: int, y: np.ndarray, planes: list[tuple[np.ndarra
         directions.append(np.tile(basis, (count, 1)))
         at.append(np.repeat(points[:count], len(basis), axis=0))  # copied: the scratch is filled again next plane
         stuck.append(np.full(count * len(basis), sticking))
-    directions = np.concatenate(directions)
-    angular_P = cross3(np.concatenate(at) - y[L.P:L.P + 3], directions) @ quat_to_matrix(y[L.Q:L.Q + 4])
-    return np.concatenate((directions, angular_P), axis=1), np.concatenate(normal_gaps), np.concatenate(stuck)
+    J = _jacobian(y, np.concatenate(at), np.concatenate(directions))
+    return J, np.concatenate(normal_gaps), np.concatenate(stuck)
 
 
 def start_if_touching(solver, sim, y: np.ndarray, i: int, speed_limit: float, gap_limit: float) -> None:
