@@ -21,7 +21,8 @@ then: a locked island is still held. A scene wholly asleep (:meth:`Islands.all_a
 asleep, none pushed, stopped or set) is not stepped: the simulator carries its state over and
 :meth:`Islands.asleep_step` lists and logs the locked contacts, as the island pass would have. A body woken is
 solved from that rest: the locked contacts are the warm start of its next step (the island pass's), and
-its component's first Gauss–Seidel solve gets WOKEN_SWEEPS. A body resting alone on a half-space (the ground
+its component's first Gauss–Seidel solve gets WOKEN_SWEEPS (so does the step after one the energy step set back
+at rest). A body resting alone on a half-space (the ground
 pass's) sleeps by the same rule (:meth:`Islands.rest_alone`): it keeps its mode, ground and holding force.
 """
 

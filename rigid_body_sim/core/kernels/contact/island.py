@@ -123,9 +123,12 @@ PILE_PGS_SWEEPS, PILE_SWEEPS, PILE_UPRIGHT = 20, 20, 0.5
 #: A pile's projection round that begins with more than half the depth the round before it began with (Gauss–Seidel
 #: slow over a chain of bodies wedged wall to wall): it and the later rounds sweep up to PILE_SLOW_SWEEPS times.
 PILE_SLOW_SWEEPS = 400
-#: The first velocity step of a pile's component just woken: at most this many sweeps. Solved from the rest it was
-#: locked in (its λ the warm start), PILE_PGS_SWEEPS short of convergence can let a column that rests slide (a
-#: tenth of a millimetre in the 1000-cube pile); the converged solve holds it.
+#: The first velocity step of a pile's component just woken, or set back at rest by the energy step (_no_gain) at
+#: the step before: at most this many sweeps. Solved from the rest it was locked in (its λ the warm start),
+#: PILE_PGS_SWEEPS short of convergence can let a column that rests slide (a tenth of a millimetre in the 1000-cube
+#: pile); the converged solve holds it. Set back, a component would otherwise take the same short step from the
+#: same rest and warm start at every step, and be set back again: a column balanced where it should tip was held
+#: there until it slept (FROZEN_STEPS) and, woken, tipped.
 WOKEN_SWEEPS = PGS_SWEEPS
 #: Ranges of the islands' sort (_sort_by) at most this long are insertion sorted.
 SORT_SMALL = 16
@@ -1129,7 +1132,8 @@ def _pgs(vel, rj, rw, rbody, rdiag, rbias, rlam, cflt, cint, comp, flags, order,
     speed by more than PGS_TOL (m/s), at most PGS_SWEEPS or PGS_WORK / stop. More than PILE_CONTACTS contacts (a
     pile): each component on its own (_pile_sweeps), from the highest against gravity (gx, gy, gz) down, then back
     up, in turn (a weight passes down a pile, and a stop up it, within one sweep), at most PILE_PGS_SWEEPS or
-    PGS_WORK / stop (WOKEN_SWEEPS for a component whose root has flag 2048: just woken); fewer, in their order.
+    PGS_WORK / stop (WOKEN_SWEEPS for a component whose root has flag 2048: just woken or set back at rest); fewer,
+    in their order.
     Scratch: cwork (per contact: the tangents' cross terms, the sort's key), rwork (per row: 1 / the diagonal, the
     last sweep's λ, the extrapolation), bwork and blist (per body: _pile_sweeps')."""
     cross, key = cwork[:, 0:2], cwork[:, 2]
@@ -1926,9 +1930,10 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     across calls): the steps in a row it was at rest by the sleep rule (end of this function) in an island, from
     the pose ``anchor`` (per body: position, quaternion) with a sleep speed raised above rest; negative, the steps
     in a row _no_gain set it back where it began (FROZEN_STEPS). ``roused`` (per body, kept across calls): 1 from
-    when it wakes (here, or all at once when sleeping is turned off) to its first step in an island, whose
-    Gauss–Seidel solve gets PGS_SWEEPS sweeps (WOKEN_SWEEPS). The warm start: the last step's n_prev contacts (the
-    first half of cint/cflt) and, while a body is roused, the contacts of the islands asleep (rest_int, rest_flt:
+    when it wakes (here, or all at once when sleeping is turned off), 2 from a step _no_gain set it back at rest, to
+    its next step in an island, whose Gauss–Seidel solve gets PGS_SWEEPS sweeps (WOKEN_SWEEPS). The warm start:
+    the last step's n_prev contacts (the first half of cint/cflt) and, while a body is woken (roused 1), the
+    contacts of the islands asleep (rest_int, rest_flt:
     each a force, N; × h, the λ that held it), so that one woken is solved from the rest it was locked in.
     ``broad``: the broad phase's boxes and grid (_late_pairs), which listed ``cand``. ``cwork`` (per contact, 3
     columns), ``rwork`` (per row, 3 columns), ``bwork`` (per body, 13 columns, the last zero between calls),
@@ -2010,7 +2015,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         bound[n_pairs + m] = 0.0
     n_warm = n_prev  # and the asleep islands' contacts while a body woken has not had its first island step
     for m in range(n):
-        if roused[members[m]]:
+        if roused[members[m]] == 1:
             n_warm = n_prev + rest_int.shape[0]
             break
     half = cint.shape[0] // 2
@@ -2154,7 +2159,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                 stop += 1
             out[OUT_PGS] += 1
         lo = hi
-    for m in range(n):  # the components of bodies just woken: their first solve converged (WOKEN_SWEEPS)
+    for m in range(n):  # the components of bodies just woken or set back at rest: a converged solve (WOKEN_SWEEPS)
         i = members[m]
         if island[i] == 1 and roused[i]:
             flags[_find(comp, i)] |= 2048
@@ -2262,6 +2267,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         r = _find(comp, i)
         if flags[r] & 128:  # set back where it began by _no_gain: a rest imposed, not found; counted apart (< 0)
             still[i] = min(still[i], 0) - 1
+            roused[i] = 2  # its next step's Gauss–Seidel solve converges (WOKEN_SWEEPS)
         elif at_rest:
             still[i] = max(still[i], 0) + 1
         else:
