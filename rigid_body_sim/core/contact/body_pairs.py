@@ -79,9 +79,8 @@ parting), or striking with restitution 0 or with a body held on its ground (the 
 its inelastic impact, with the bodies' other contacts), are stepped together by a first-order velocity step and left out of this pass. A body
 meeting another outside an island is kept up by the impacts of item 5 at each step's start until
 the two form an island at the next step (within that step it is followed to ε_k deeper than it
-touched, then moved back out: counted in :attr:`BodyPairs.separations`; so are two members held on one
-ground whose ends' projections onto it leave them inside each other, moved apart in its plane:
-:meth:`BodyPairs._part_held`).
+touched, then moved back out: counted in :attr:`BodyPairs.separations`; so are two members of a group that
+its held members' ends, projected onto their grounds, leave inside each other: :meth:`BodyPairs._part`).
 """
 
 from __future__ import annotations
@@ -125,8 +124,8 @@ _RESTORED = ("modes", "tracked", "sliding", "slide_direction", "pressed", "groun
              "other_projected", "other_tracked", "impact_impulses")
 #: Rounds of impacts at one piece's start before the pairs still approaching are left for the piece.
 MAX_ROUNDS = 10
-#: Two held members are parted at a group's end in their ground's plane (BodyPairs._part_held) when the normal's
-#: part in it is at least this squared: the move is then at most twice the depth.
+#: Two held members parted at a group's end in their ground's plane (BodyPairs._part) when the normal's part in it
+#: is at least this squared: the move is then at most twice the depth.
 PART_SHARE = 0.25
 #: A pair whose signed distance is below this × its size (m per m) touches.
 TOUCHING = 1e-12
@@ -183,7 +182,7 @@ class BodyPairs:
         self._step_wrenches = np.zeros((len(shapes), L.WRENCH_WIDTH))  # the wrench rows of the step being looked at
         #: Impacts between moving bodies since the solver was made or reset.
         self.impacts = 0
-        #: Pairs found overlapping at a step's start, or held on one ground at a group's end, and moved apart
+        #: Pairs found overlapping at a step's start, or at a group's end with a held member, and moved apart
         #: (a body lying on another, a can projected into its partner: module docstring).
         self.separations = 0
         self._look: dict | None = None  # what look_again looks at: the step's candidates, hits, bodies left alone
@@ -698,25 +697,30 @@ class BodyPairs:
         for i in list(active):
             if not still(i):
                 self._finish(sim, i, y, w, t, h, held)
-        for a, b in pairs:  # two members held on one ground that their ends' projections moved into each other
-            self._part_held(sim, a, b, y)
+        for a, b in pairs:  # members whose ends, projected onto their grounds, the group did not sample together
+            self._part(sim, a, b, y)
         for i in members:
             Y1[i, :L.STATE_WIDTH] = y[i][:L.STATE_WIDTH]
 
-    def _part_held(self, sim, a: int, b: int, y: dict) -> None:
-        """Bodies a and b, both held on the same ground alone at their step's end y (in place), overlapping (each
-        one's end projected onto its ground after the group sampled their paths: a can spun into the ground by an
-        impact with the other): moved apart along the normal's part in the ground's plane, by the depth, shared by
-        inverse mass, their velocities kept (counted in :attr:`separations`; the two form an island at the next
-        step). A held member and a flying one are not parted here (docs/contact.md, "Not modelled between
-        bodies")."""
+    def _part(self, sim, a: int, b: int, y: dict) -> None:
+        """Bodies a and b at their step's end y (in place), overlapping: the group sampled their paths on the step
+        maps, then each held member's end was projected onto its ground (a can spun into the ground by an impact
+        with the other; a box held flat on it, tipped a little by a partner's pushes over the group's pieces). Moved
+        apart by the depth, their velocities kept (counted in :attr:`separations`; at the next step the two have
+        their impacts or form an island): two held on the same ground alone along the normal's part in the
+        ground's plane, shared by inverse mass; a held one and a flying one along the normal, the held one staying
+        (:meth:`_separate`)."""
         solver = self.solver
-        j = int(solver.ground_of[a])
-        if (solver.modes[a] != PERSISTENT or solver.modes[b] != PERSISTENT or int(solver.ground_of[b]) != j
-                or solver.other_ground[a] >= 0 or solver.other_ground[b] >= 0):
-            return
         d = self.contact(y[a], a, y[b], b)
         if d >= -TOUCHING * max(self.size[a], self.size[b]):
+            return
+        held = {i for i in (a, b) if solver.modes[i] == PERSISTENT}
+        if len(held) == 1:
+            self._separate(sim, a, b, y, held)
+        if len(held) < 2:  # two flying ones: on their own maps, followed to a skin deeper at most (item 3)
+            return
+        j = int(solver.ground_of[a])
+        if int(solver.ground_of[b]) != j or solver.other_ground[a] >= 0 or solver.other_ground[b] >= 0:
             return
         g = solver.grounds[j, NORMAL:NORMAL + 3]
         n = self._normal1[0]
