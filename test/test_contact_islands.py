@@ -1185,6 +1185,17 @@ def test_a_box_held_on_the_ground_and_struck_in_a_group_ends_its_step_outside_th
     two_steps_no_deeper_than(sim, 1e-5)
 
 
+def test_a_body_held_on_the_ground_struck_again_and_again_by_one_held_on_a_wall_goes_no_deeper_at_each_event():
+    """A body held on the ground and one held on a bin's wall in a mixed pile (``mixed_pile(125, 238, 0)``, rk4,
+    dt = 10 ms, sleeping off, tolerance 0; its state at 0.39 s, ``test/data/mixed_pile_238_rows_at_0.39s.npy``)
+    strike each other again and again within one step. At each event the pair was a skin (1e-4 × its size)
+    deeper than at the last: two held bodies were not moved apart, as neither may leave its ground, and the step
+    ended 36 µm in. Two held ones are moved apart each within its ground's plane. After that step and the next,
+    no two bodies overlap by more than 1e-9 m."""
+    sim = pile_from_rows(125, 238, 1e-2, "mixed_pile_238_rows_at_0.39s.npy", sleeping=False, tolerance=0.0)
+    two_steps_no_deeper_than(sim, 1e-9)
+
+
 def test_a_chain_of_bodies_struck_again_and_again_in_one_step_goes_no_deeper_at_each_event():
     """Three bodies in a chain in a mixed pile (``mixed_pile(125, 383, 0)``, semi-implicit Euler, dt = 5 ms,
     sleeping off, tolerance 0; its state at 0.395 s, ``test/data/mixed_pile_383_rows_at_0.395s.npy``), the middle

@@ -79,8 +79,9 @@ parting), or striking with restitution 0 or with a body held on its ground (the 
 its inelastic impact, with the bodies' other contacts), are stepped together by a first-order velocity step and left out of this pass. A body
 meeting another outside an island is kept up by the impacts of item 5 at each step's start until
 the two form an island at the next step (within that step it is followed to ε_k deeper than it
-touched, then moved back out: counted in :attr:`BodyPairs.separations`; so are two members of a group that
-its held members' ends, projected onto their grounds, leave inside each other: :meth:`BodyPairs._part`).
+touched, then moved back out, two held ones each within its ground's plane: counted in
+:attr:`BodyPairs.separations`; so are two members of a group that its held members' ends, projected onto their
+grounds, leave inside each other: :meth:`BodyPairs._part`).
 """
 
 from __future__ import annotations
@@ -124,8 +125,9 @@ _RESTORED = ("modes", "tracked", "sliding", "slide_direction", "pressed", "groun
              "other_projected", "other_tracked", "impact_impulses")
 #: Rounds of impacts at one piece's start before the pairs still approaching are left for the piece.
 MAX_ROUNDS = 10
-#: Two held members parted at a group's end in their ground's plane (BodyPairs._part) when the normal's part in it
-#: is at least this squared: the move is then at most twice the depth.
+#: Two held members are moved apart each in its ground's plane (BodyPairs._slide_apart) when the normal's parts in
+#: those planes, squared and weighted by inverse mass, are at least this share of Σ m⁻¹: on one ground, the move is
+#: then at most twice the depth.
 PART_SHARE = 0.25
 #: A pair whose signed distance is below this × its size (m per m) touches.
 TOUCHING = 1e-12
@@ -707,28 +709,15 @@ class BodyPairs:
         maps, then each held member's end was projected onto its ground (a can spun into the ground by an impact
         with the other; a box held flat on it, tipped a little by a partner's pushes over the group's pieces). Moved
         apart by the depth, their velocities kept (counted in :attr:`separations`; at the next step the two have
-        their impacts or form an island): two held on the same ground alone along the normal's part in the
-        ground's plane, shared by inverse mass; a held one and a flying one along the normal, the held one staying
-        (:meth:`_separate`)."""
+        their impacts or form an island; :meth:`_separate`): two held ones each within its ground's plane, a held
+        one and a flying one along the normal, the held one staying."""
         solver = self.solver
         d = self.contact(y[a], a, y[b], b)
         if d >= -TOUCHING * max(self.size[a], self.size[b]):
             return
         held = {i for i in (a, b) if solver.modes[i] == PERSISTENT}
-        if len(held) == 1:
+        if held:  # two flying ones: on their own maps, followed to a skin deeper at most (item 3)
             self._separate(sim, a, b, y, held)
-        if len(held) < 2:  # two flying ones: on their own maps, followed to a skin deeper at most (item 3)
-            return
-        j = int(solver.ground_of[a])
-        if int(solver.ground_of[b]) != j or solver.other_ground[a] >= 0 or solver.other_ground[b] >= 0:
-            return
-        g = solver.grounds[j, NORMAL:NORMAL + 3]
-        n = self._normal1[0]
-        along = n - (n @ g) * g  # the normal's part in the ground's plane
-        share = along @ along
-        if share < PART_SHARE:  # mostly across the ground (one body above the other): not for this
-            return
-        self._move_apart(a, b, y, d / share, along, sim._prm[a, L.INV_MASS], sim._prm[b, L.INV_MASS])
 
     def _strike_wall(self, sim, i: int, y: dict, w: dict, held: set, t: float) -> None:
         """Held member i at y[i] meets another half-space or a static shape (a wall) at t: its impact there
@@ -884,18 +873,46 @@ class BodyPairs:
         return True
 
     def _separate(self, sim, a: int, b: int, y: dict, held: set) -> float:
-        """Bodies a and b overlapping at y (a step's start): moved apart along the normal by the depth (a held one
-        stays: its ground is under it), shared by inverse mass otherwise; returns the depth (m)."""
+        """Bodies a and b overlapping at y: moved apart along the normal by the depth (a held one stays: its ground
+        is under it), shared by inverse mass otherwise; two held ones each within its ground's plane
+        (:meth:`_slide_apart`). Returns the depth (m), 0 where they were not moved."""
         d = self.contact(y[a], a, y[b], b)
         if d >= 0.0:
             return 0.0
         n = self._normal1[0]
+        if a in held and b in held:
+            return -d if self._slide_apart(sim, a, b, y, d, n) else 0.0
         inv_a = 0.0 if a in held else sim._prm[a, L.INV_MASS]
         inv_b = 0.0 if b in held else sim._prm[b, L.INV_MASS]
-        if inv_a + inv_b == 0.0:
-            return 0.0
         self._move_apart(a, b, y, d, n, inv_a, inv_b)
         return -d
+
+    def _slide_apart(self, sim, a: int, b: int, y: dict, d: float, n: np.ndarray) -> bool:
+        """Bodies a and b, both held, at y (in place) d < 0 into each other along n (a → b): each moved along the
+        normal's part u in its ground's plane (along the crease of its two grounds where it is held on two), by
+        −d × its inverse mass / Σ m⁻¹ |u|² (the least move in the mass metric that closes the depth to first
+        order); not where that sum is below PART_SHARE × Σ m⁻¹, mostly across their grounds (one body above the
+        other: the moves would be large beside the depth). True when moved (counted in :attr:`separations`)."""
+        solver = self.solver
+        moves, total, inv = {}, 0.0, 0.0
+        for i in (a, b):
+            g = solver.grounds[int(solver.ground_of[i]), NORMAL:NORMAL + 3]
+            k = int(solver.other_ground[i])
+            if k >= 0:  # along the crease
+                e = np.cross(g, solver.grounds[k, NORMAL:NORMAL + 3])
+                e /= np.linalg.norm(e)
+                u = (n @ e) * e
+            else:
+                u = n - (n @ g) * g
+            moves[i] = u
+            total += sim._prm[i, L.INV_MASS] * (u @ u)
+            inv += sim._prm[i, L.INV_MASS]
+        if total < PART_SHARE * inv:
+            return False
+        y[a][L.P:L.P + 3] += d * sim._prm[a, L.INV_MASS] / total * moves[a]
+        y[b][L.P:L.P + 3] -= d * sim._prm[b, L.INV_MASS] / total * moves[b]
+        self.separations += 1
+        return True
 
     def _move_apart(self, a: int, b: int, y: dict, d: float, u: np.ndarray, inv_a: float, inv_b: float) -> None:
         """Bodies a and b at y (in place) moved apart by d u in all (d < 0: b away from a along u), each by its share
