@@ -21,6 +21,7 @@ from hypothesis import strategies as st
 
 from rigid_body_sim.core import Simulator, load_scene
 from rigid_body_sim.core.kernels.contact.island import SLEEP_SPEED, SLEEP_STEPS
+from rigid_body_sim.core.kernels.contact.layout import SHAPE_SPHERE
 
 from contact_support import bin_walls
 
@@ -1194,6 +1195,22 @@ def test_a_body_held_on_the_ground_struck_again_and_again_by_one_held_on_a_wall_
     no two bodies overlap by more than 1e-9 m."""
     sim = pile_from_rows(125, 238, 1e-2, "mixed_pile_238_rows_at_0.39s.npy", sleeping=False, tolerance=0.0)
     two_steps_no_deeper_than(sim, 1e-9)
+
+
+def test_a_ball_spun_into_a_bins_corner_ends_its_steps_outside_both_walls():
+    """A ball sliding on the ground in a bin's corner in a mixed pile (``mixed_pile(216, 273, 0.5)``, rk4,
+    dt = 5 ms, sleeping off, tolerance 0; its state at 0.64 s, ``test/data/mixed_pile_273_rows_at_0.64s.npy``),
+    spinning at 20 rad/s, is driven by its friction into both walls, struck on them until it is pressed on them.
+    At the step's end it was taken out of the nearer wall alone and stayed 18 µm inside the other: it is taken
+    out of each wall it is still in, projected onto those before. After that step and the next, the ball (body
+    115) overlaps no wall and no body by more than 1e-9 m."""
+    sim = pile_from_rows(216, 273, 5e-3, "mixed_pile_273_rows_at_0.64s.npy", sleeping=False, tolerance=0.0,
+                         restitution=0.5)
+    ball = 115
+    assert sim.contact.shapes[ball, 0] == SHAPE_SPHERE
+    for _ in range(2):
+        overlaps = [(a, b, d) for a, b, d in step_and_overlaps(sim) if ball in (a, b)]
+        assert all(d <= 1e-9 for *_, d in overlaps), overlaps
 
 
 def test_a_chain_of_bodies_struck_again_and_again_in_one_step_goes_no_deeper_at_each_event():

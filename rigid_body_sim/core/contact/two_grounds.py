@@ -56,6 +56,9 @@ ALTERNATE_ROUNDS = 8
 #: The joint projection onto the contacts: at most this many Gauss–Newton rounds (each closes the gaps to second
 #: order in the correction; two or three reach round-off).
 PROJECTION_ROUNDS = 8
+#: A body pressed on walls it is not held on is taken out of at most this many of them at a step's end (a bin's
+#: corner: two).
+PRESSED_WALLS = 3
 
 
 def crease(solver, i: int) -> np.ndarray:
@@ -257,7 +260,7 @@ def end_of_step(solver, sim, i: int, end: np.ndarray, t: float, h: float, lift_o
             solver.events.append(ContactEvent(t + h, solver.names[i], int(solver.ground_of[i]), "stick"))
     third = _third(solver, sim, i, end)
     before = end.copy()
-    _project_all(solver, sim, i, end, sticking, None if third is None else (solver.grounds[third[0]], third[1]))
+    _project_all(solver, sim, i, end, sticking, () if third is None else ((solver.grounds[third[0]], third[1]),))
     if third is not None and third[2] < -lift_off_speed:
         _struck_third(solver, sim, i, before, end, third, t + h)
     return end
@@ -321,18 +324,24 @@ def take_out_of_pressed(solver, sim, i: int, end: np.ndarray, t: float, sticking
     then: ``ContactSolver._static_skipped``, ``_press_aside``), at the step's end ``end`` (in place): if it went
     into the nearest of them (a spinning body turning its other points in), it is taken out of it (:func:`_take_out`:
     an inelastic impact at the step's end, not located: first order; an ``impact`` event if it came at more than
-    ``lift_off_speed``)."""
-    gap, which = solver._other_gap(sim, end, i, pressed=True)
-    if gap >= 0.0 or which < 0:
-        return
-    taken = _take_out(solver, sim, i, end, solver.grounds[which], sticking)
-    if taken is None:
-        return
-    before, mask, speed, points = taken
-    if speed < -lift_off_speed:
-        _struck_third(solver, sim, i, before, end, (which, mask, speed, points), t, "static_taken_out")
-    else:
-        solver.counts["static_taken_out"] += 1
+    ``lift_off_speed``). Then out of the next one it is still in, if any (a ball spun into a bin's corner, pressed
+    on both walls), projected onto the first too: up to PRESSED_WALLS of them."""
+    taken_out: list[tuple[np.ndarray, int]] = []
+    seen: set[int] = set()
+    for _ in range(PRESSED_WALLS):
+        gap, which = solver._other_gap(sim, end, i, pressed=True)
+        if gap >= 0.0 or which < 0 or which in seen:
+            return
+        taken = _take_out(solver, sim, i, end, solver.grounds[which], sticking, taken_out)
+        if taken is None:
+            return
+        before, mask, speed, points = taken
+        if speed < -lift_off_speed:
+            _struck_third(solver, sim, i, before, end, (which, mask, speed, points), t, "static_taken_out")
+        else:
+            solver.counts["static_taken_out"] += 1
+        seen.add(which)
+        taken_out.append((solver.grounds[which], mask))
 
 
 def take_out_of_static(solver, sim, i: int, end: np.ndarray, sticking: bool) -> None:
@@ -346,11 +355,13 @@ def take_out_of_static(solver, sim, i: int, end: np.ndarray, sticking: bool) -> 
         solver.counts["static_taken_out"] += 1
 
 
-def _take_out(solver, sim, i: int, end: np.ndarray, plane: np.ndarray, sticking: bool):
+def _take_out(solver, sim, i: int, end: np.ndarray, plane: np.ndarray, sticking: bool,
+              earlier: list[tuple[np.ndarray, int]] = ()):
     """Body i's step end ``end`` (in place), its features below the plane row ``plane``, projected onto its ground
-    (and second one) and that plane together, its normal velocities into it removed; repeated while the projection
-    turns another feature in (a can's other rim, as it lifts one). (its state before, the features taken in as
-    bits, their lowest normal speed before, m/s, their contact points), or None if no feature is below."""
+    (and second one), the planes it was taken out of ``earlier`` (rows, the features on each as bits) and that
+    plane together, its normal velocities into it removed; repeated while the projection turns another feature in
+    (a can's other rim, as it lifts one). (its state before, the features taken in as bits, their lowest normal
+    speed before, m/s, their contact points), or None if no feature is below."""
     gaps = np.empty(MAX_FEATURES)
     count = feature_gaps(end, sim._prm[i], solver.shapes[i], plane, gaps)
     mask = sum(1 << k for k in range(count) if gaps[k] <= 0.0)
@@ -359,7 +370,7 @@ def _take_out(solver, sim, i: int, end: np.ndarray, plane: np.ndarray, sticking:
     speed, points = _lowest_speed(solver, sim, end, i, plane, mask)
     before = end.copy()
     for _ in range(count):
-        _project_all(solver, sim, i, end, sticking, (plane, mask), second=solver.other_ground[i] >= 0)
+        _project_all(solver, sim, i, end, sticking, (*earlier, (plane, mask)), second=solver.other_ground[i] >= 0)
         feature_gaps(end, sim._prm[i], solver.shapes[i], plane, gaps)
         below = sum(1 << k for k in range(count) if gaps[k] < 0.0)
         if not below & ~mask:
@@ -377,16 +388,15 @@ def _take_in(solver, sim, i: int, end: np.ndarray, j: int, tracked: np.ndarray, 
 
 
 def _project_all(solver, sim, i: int, end: np.ndarray, sticking: bool,
-                 third: tuple[np.ndarray, int] | None = None, second: bool = True) -> None:
+                 others: tuple[tuple[np.ndarray, int], ...] = (), second: bool = True) -> None:
     """Project body i's row ``end`` (in place) onto both its half-spaces (its ground alone without ``second``), and
-    onto ``third`` (a plane row, the features on it as bits) too if given, its normal velocities alone removed
+    onto each of ``others`` (plane rows, the features on each as bits) too, its normal velocities alone removed
     there: onto each in turn to a fixed point (:func:`_alternate`), or where that is slow, onto all at once
     (:func:`_project_jointly`)."""
     planes = [(solver.grounds[int(solver.ground_of[i])], int(solver.tracked[i]), sticking)]
     if second:
         planes.append((solver.grounds[int(solver.other_ground[i])], int(solver.other_tracked[i]), sticking))
-    if third is not None:
-        planes.append((third[0], third[1], False))
+    planes += [(plane, mask, False) for plane, mask in others]
     if not _alternate(solver, sim, i, end, planes):
         _project_jointly(solver, sim, i, end, planes)
 
