@@ -716,8 +716,9 @@ class BodyPairs:
         if d >= -TOUCHING * max(self.size[a], self.size[b]):
             return
         held = {i for i in (a, b) if solver.modes[i] == PERSISTENT}
-        if held:  # two flying ones: on their own maps, followed to a skin deeper at most (item 3)
-            self._separate(sim, a, b, y, held)
+        if not held:  # two flying ones: on their own maps, followed to a skin deeper at most (item 3)
+            return
+        self._separate(sim, a, b, y, held)
 
     def _strike_wall(self, sim, i: int, y: dict, w: dict, held: set, t: float) -> None:
         """Held member i at y[i] meets another half-space or a static shape (a wall) at t: its impact there

@@ -332,7 +332,7 @@ def take_out_of_pressed(solver, sim, i: int, end: np.ndarray, t: float, sticking
         gap, which = solver._other_gap(sim, end, i, pressed=True)
         if gap >= 0.0 or which < 0 or which in seen:
             return
-        taken = _take_out(solver, sim, i, end, solver.grounds[which], sticking, taken_out)
+        taken = _take_out(solver, sim, i, end, solver.grounds[which], sticking, tuple(taken_out))
         if taken is None:
             return
         before, mask, speed, points = taken
@@ -356,7 +356,7 @@ def take_out_of_static(solver, sim, i: int, end: np.ndarray, sticking: bool) -> 
 
 
 def _take_out(solver, sim, i: int, end: np.ndarray, plane: np.ndarray, sticking: bool,
-              earlier: list[tuple[np.ndarray, int]] = ()):
+              earlier: tuple[tuple[np.ndarray, int], ...] = ()):
     """Body i's step end ``end`` (in place), its features below the plane row ``plane``, projected onto its ground
     (and second one), the planes it was taken out of ``earlier`` (rows, the features on each as bits) and that
     plane together, its normal velocities into it removed; repeated while the projection turns another feature in
