@@ -104,6 +104,7 @@ from .events import ContactEvent
 from .island import Islands
 from .materials import pair_material
 from .static_geometry import bounding_radius
+from .two_grounds import crease
 
 __all__ = ["BodyPairs", "ADVANCE_SKIN", "MAX_ADVANCE"]
 
@@ -711,14 +712,10 @@ class BodyPairs:
         apart by the depth, their velocities kept (counted in :attr:`separations`; at the next step the two have
         their impacts or form an island; :meth:`_separate`): two held ones each within its ground's plane, a held
         one and a flying one along the normal, the held one staying."""
-        solver = self.solver
-        d = self.contact(y[a], a, y[b], b)
-        if d >= -TOUCHING * max(self.size[a], self.size[b]):
-            return
-        held = {i for i in (a, b) if solver.modes[i] == PERSISTENT}
+        held = {i for i in (a, b) if self.solver.modes[i] == PERSISTENT}
         if not held:  # two flying ones: on their own maps, followed to a skin deeper at most (item 3)
             return
-        self._separate(sim, a, b, y, held)
+        self._separate(sim, a, b, y, held, -TOUCHING * max(self.size[a], self.size[b]))
 
     def _strike_wall(self, sim, i: int, y: dict, w: dict, held: set, t: float) -> None:
         """Held member i at y[i] meets another half-space or a static shape (a wall) at t: its impact there
@@ -873,12 +870,12 @@ class BodyPairs:
         y[L.V:L.W + 3] = out[L.V:L.W + 3]
         return True
 
-    def _separate(self, sim, a: int, b: int, y: dict, held: set) -> float:
-        """Bodies a and b overlapping at y: moved apart along the normal by the depth (a held one stays: its ground
-        is under it), shared by inverse mass otherwise; two held ones each within its ground's plane
-        (:meth:`_slide_apart`). Returns the depth (m), 0 where they were not moved."""
+    def _separate(self, sim, a: int, b: int, y: dict, held: set, below: float = 0.0) -> float:
+        """Bodies a and b at y, overlapping (their signed distance below ``below``, m): moved apart along the normal
+        by the depth (a held one stays: its ground is under it), shared by inverse mass otherwise; two held ones
+        each within its ground's plane (:meth:`_slide_apart`). Returns the depth (m), 0 where they were not moved."""
         d = self.contact(y[a], a, y[b], b)
-        if d >= 0.0:
+        if d >= below:
             return 0.0
         n = self._normal1[0]
         if a in held and b in held:
@@ -897,13 +894,11 @@ class BodyPairs:
         solver = self.solver
         moves, total, inv = {}, 0.0, 0.0
         for i in (a, b):
-            g = solver.grounds[int(solver.ground_of[i]), NORMAL:NORMAL + 3]
-            k = int(solver.other_ground[i])
-            if k >= 0:  # along the crease
-                e = np.cross(g, solver.grounds[k, NORMAL:NORMAL + 3])
-                e /= np.linalg.norm(e)
+            if solver.other_ground[i] >= 0:  # along the crease
+                e = crease(solver, i)
                 u = (n @ e) * e
             else:
+                g = solver.grounds[int(solver.ground_of[i]), NORMAL:NORMAL + 3]
                 u = n - (n @ g) * g
             moves[i] = u
             total += sim._prm[i, L.INV_MASS] * (u @ u)
