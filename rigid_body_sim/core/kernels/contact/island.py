@@ -120,8 +120,10 @@ PILE_CONTACTS = DENSE_MAX // 3
 #: (nonsmooth nonlinear conjugate gradient). A pile's projection: at most PILE_SWEEPS sweeps a round, from the lowest point up, and a pair whose
 #: normal is within acos(PILE_UPRIGHT) of gravity moves only its upper body (the lower held: shock propagation).
 PILE_PGS_SWEEPS, PILE_SWEEPS, PILE_UPRIGHT = 20, 20, 0.5
-#: A pile's projection round that begins with more than half the depth the round before it began with (Gauss–Seidel
-#: slow over a chain of bodies wedged wall to wall): it and the later rounds sweep up to PILE_SLOW_SWEEPS times.
+#: A pile's projection round that begins with more than half the depth the round before it began with, or with a
+#: depth that the rounds left, each taking off what the last one did in proportion, would not bring within its
+#: tolerance (Gauss–Seidel slow over a chain of bodies wedged wall to wall): it and the later rounds sweep up to
+#: PILE_SLOW_SWEEPS times.
 PILE_SLOW_SWEEPS = 400
 #: The first velocity step of a pile's component just woken, or set back at rest by the energy step (_no_gain) at
 #: the step before: at most this many sweeps. Solved from the rest it was locked in (its λ the warm start),
@@ -1569,11 +1571,13 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, r
                      members, bound, size, is_static, default_mu, True, 0.0, cint, cflt)
         deep = 0
         depth = 0.0
+        tol = 0.0  # the deepest point's tolerance (m)
         for c in range(nd):
             i = cint[c, 1] if cint[c, 1] >= 0 else cint[c, 0]
             if cflt[c, C_GAP] < -_depth_tol(size, i, depth_tol):
                 deep += 1
-                depth = max(depth, -cflt[c, C_GAP])
+                if -cflt[c, C_GAP] > depth:
+                    depth, tol = -cflt[c, C_GAP], _depth_tol(size, i, depth_tol)
                 if rnd == 0:  # its components move
                     for side in range(2):
                         if cint[c, side] >= 0:
@@ -1581,7 +1585,9 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, r
         if deep == 0:
             settled = True  # nd: the touching points at the final poses
             break
-        slow = slow or depth > 0.5 * before
+        if rnd > 0 and not slow:  # the rounds left, at the last one's rate, would not close it
+            rate = depth / before
+            slow = rate > 0.5 or depth * rate ** (PROJECT_ROUNDS - rnd) > tol
         before = depth
         if rnd == 0:  # the components without a deep point are held (island 3 until the end)
             for m in range(n):
