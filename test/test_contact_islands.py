@@ -21,7 +21,7 @@ from hypothesis import strategies as st
 
 from rigid_body_sim.core import Simulator, load_scene
 from rigid_body_sim.core.kernels.contact.island import SLEEP_SPEED, SLEEP_STEPS
-from rigid_body_sim.core.kernels.contact.layout import SHAPE_SPHERE
+from rigid_body_sim.core.kernels.contact.layout import SHAPE_BOX, SHAPE_CAPSULE, SHAPE_SPHERE
 
 from contact_support import bin_walls
 
@@ -1195,6 +1195,27 @@ def test_a_body_held_on_the_ground_struck_again_and_again_by_one_held_on_a_wall_
     no two bodies overlap by more than 1e-9 m."""
     sim = pile_from_rows(125, 238, 1e-2, "mixed_pile_238_rows_at_0.39s.npy", sleeping=False, tolerance=0.0)
     two_steps_no_deeper_than(sim, 1e-9)
+
+
+def test_a_capsule_pivoting_on_a_wall_at_one_end_and_the_box_pushing_it_move_as_their_speeds_say():
+    """A capsule (body 77) in a mixed pile (``mixed_pile(216, 537, 0.5)``, rk4, dt = 10 ms, sleeping off,
+    tolerance 0; its state at 1.67 s, ``test/data/mixed_pile_537_rows_at_1.67s.npy``) touches a bin's wall at one
+    end, 2.6° off parallel to it, spinning at 12 rad/s about the vertical, pushed by a box (body 4) at 0.4 m/s.
+    With the pair's nearest point alone as a row, the spin about that point swung the other end into the wall
+    at every velocity step, the projection set it back, and stopping the approach at the touching point left
+    the spin and the push: for 0.4 s both stayed in place while their speeds said 0.28 and 0.4 m/s. Each end of
+    the capsule is a row (its ball at its exact distance to the wall). Over 20 steps, neither ends a step faster
+    than 0.1 m/s having moved less than half of that speed × dt."""
+    sim = pile_from_rows(216, 537, 1e-2, "mixed_pile_537_rows_at_1.67s.npy", sleeping=False, tolerance=0.0,
+                         restitution=0.5)
+    capsule, box = 77, 4
+    assert sim.contact.shapes[capsule, 0] == SHAPE_CAPSULE and sim.contact.shapes[box, 0] == SHAPE_BOX
+    for _ in range(20):
+        before = sim.positions_world()[[capsule, box]]
+        sim.step()
+        moved = np.linalg.norm(sim.positions_world()[[capsule, box]] - before, axis=1)
+        speed = np.linalg.norm(sim.linear_velocities_world()[[capsule, box]], axis=1)
+        assert np.all((speed <= 0.1) | (moved >= 0.5 * speed * sim.dt)), (speed, moved / sim.dt)
 
 
 def test_a_ball_spun_into_a_bins_corner_ends_its_steps_outside_both_walls():

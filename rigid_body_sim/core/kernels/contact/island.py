@@ -67,11 +67,12 @@ from ..forces import body_wrench
 from ..jit import INLINE, JIT
 from ..layout import ACTIVE, BOUND, GRAVITY, INV_INERTIA, INV_MASS, INERTIA, MASS, P, Q, Q_PB, STATE_WIDTH, V, W
 from ..rotation import exp_map, matrix, normalise, qmul, rotate, rotate_back
-from .layout import DIMS, FRICTION, HAS_MATERIAL, KIND, NORMAL, OFFSET, RESTITUTION, SHAPE_BOX, SHAPE_CYLINDER
+from .layout import (DIMS, FRICTION, HAS_MATERIAL, KIND, NORMAL, OFFSET, RESTITUTION, SHAPE_BOX, SHAPE_CAPSULE,
+                     SHAPE_CYLINDER, SHAPE_SPHERE)
 from .convex import POSE_WIDTH
 from .impacts import kinetic_energy_row, potential_energy_row
 from .pair_impacts import normal_speed
-from .pairs import MAX_PAIR_POINTS, RIM_ACROSS, boxes_apart_turned, face_patch, pair_contacts
+from .pairs import MAX_PAIR_POINTS, RIM_ACROSS, ball_contact, boxes_apart_turned, face_patch, pair_contacts, set_pose
 from .shapes import MAX_FEATURES, feature_gaps, feature_points
 from .swept import boxes_meet, chords_apart, grid_overlaps, growth
 
@@ -299,24 +300,38 @@ def _pair_mu(shapes, a, b, default_mu):
 
 
 @njit(**INLINE)
-def _inside(pos, quat, shapes, i, x, y, z, slack):
-    """Whether the world point (x, y, z) is inside box or cylinder i grown by ``slack`` (m)."""
+def _on_box(pos, quat, shapes, i, x, y, z, slack):
+    """Whether the world point (x, y, z) is inside box i grown by ``slack`` (m)."""
     lx, ly, lz = rotate_back(quat[i, 0], quat[i, 1], quat[i, 2], quat[i, 3], x - pos[i, 0], y - pos[i, 1], z - pos[i, 2])
-    if shapes[i, KIND] == SHAPE_CYLINDER:
-        r = shapes[i, DIMS] + slack
-        inside = lx * lx + ly * ly <= r * r and abs(lz) <= shapes[i, DIMS + 1] + slack
-    else:
-        inside = (abs(lx) <= shapes[i, DIMS] + slack and abs(ly) <= shapes[i, DIMS + 1] + slack
-                  and abs(lz) <= shapes[i, DIMS + 2] + slack)
     _pin = shapes[0, 0]
-    return inside
+    return (abs(lx) <= shapes[i, DIMS] + slack and abs(ly) <= shapes[i, DIMS + 1] + slack
+            and abs(lz) <= shapes[i, DIMS + 2] + slack)
 
 
 @njit(**INLINE)
-def _corner(pos, quat, shapes, i, corner):
-    """Corner ``corner`` (0–7) of box i, or of cylinder i the rim point along its local ±x or ±y (corner & 3) of
-    its end at ±z (corner & 4), as the narrow phase's rims standing flat (pairs._disk_disk): world, m."""
-    if shapes[i, KIND] == SHAPE_CYLINDER:
+def _corner(pos, quat, shapes, i, corner, dx, dy, dz):
+    """Ball ``corner`` of body i's corner set: (found, its centre x, y, z (world, m), its radius (m)). A box's
+    corners 0–7 (radius 0). A cylinder's rim points (radius 0) along its local ±x, ±y (corner & 3) of its end at
+    ±z (corner & 4), as the narrow phase's rims standing flat (pairs._disk_disk), and (8, 9) each end's rim point
+    farthest along the world direction d (not found where d is within RIM_ACROSS of its axis: every rim point is
+    as far). A capsule's segment ends (0, 1), balls of its radius."""
+    kind = shapes[i, KIND]
+    if kind == SHAPE_CAPSULE:
+        end = shapes[i, DIMS + 1] if corner == 1 else -shapes[i, DIMS + 1]
+        ox, oy, oz = rotate(quat[i, 0], quat[i, 1], quat[i, 2], quat[i, 3], 0.0, 0.0, end)
+        return True, pos[i, 0] + ox, pos[i, 1] + oy, pos[i, 2] + oz, shapes[i, DIMS]
+    if kind == SHAPE_CYLINDER and corner >= 8:
+        ux, uy, uz = rotate(quat[i, 0], quat[i, 1], quat[i, 2], quat[i, 3], 0.0, 0.0, 1.0)
+        t = dx * ux + dy * uy + dz * uz
+        px, py, pz = dx - t * ux, dy - t * uy, dz - t * uz
+        across = math.sqrt(px * px + py * py + pz * pz)
+        if not across > RIM_ACROSS:
+            return False, 0.0, 0.0, 0.0, 0.0
+        r = shapes[i, DIMS] / across
+        end = shapes[i, DIMS + 1] if corner == 9 else -shapes[i, DIMS + 1]
+        return (True, pos[i, 0] + end * ux + r * px, pos[i, 1] + end * uy + r * py, pos[i, 2] + end * uz + r * pz,
+                0.0)
+    if kind == SHAPE_CYLINDER:
         j = corner & 3
         r = shapes[i, DIMS]
         lx = r if j == 0 else (-r if j == 2 else 0.0)
@@ -327,7 +342,7 @@ def _corner(pos, quat, shapes, i, corner):
         ly = shapes[i, DIMS + 1] if corner & 2 else -shapes[i, DIMS + 1]
         lz = shapes[i, DIMS + 2] if corner & 4 else -shapes[i, DIMS + 2]
     ox, oy, oz = rotate(quat[i, 0], quat[i, 1], quat[i, 2], quat[i, 3], lx, ly, lz)
-    return pos[i, 0] + ox, pos[i, 1] + oy, pos[i, 2] + oz
+    return True, pos[i, 0] + ox, pos[i, 1] + oy, pos[i, 2] + oz, 0.0
 
 
 @njit(**INLINE)
@@ -347,11 +362,17 @@ def _owners(cint, c, a, b, is_static):
 
 
 @njit(**JIT)
-def _corners(pos, quat, shapes, k, a, b, pnormal, pcount, ppoints, limit, scale, is_static, mu, cint, cflt, count):
-    """Pair k of boxes and cylinders not face on face (no patch): besides the narrow phase's points (the deepest
-    feature), each corner of one (a box's, a cylinder's rim points: _corner) whose separation along the pair's
-    normal from the other's supporting plane is within ``limit`` and whose foot on that plane lies on the other:
-    a tilted box's other corners, a tilted cylinder's other side of its rim, which a spin brings in."""
+def _corners(pos, quat, shapes, k, a, b, pnormal, pcount, ppoints, limit, scale, is_static, mu, cint, cflt, count,
+             poses, res, seps):
+    """Pair k of boxes, cylinders and capsules not face on face (no patch): besides the narrow phase's points (the
+    nearest feature), each ball of one's corner set (_corner: a box's corners, a cylinder's rim points, a
+    capsule's ends) within ``limit`` of the other: a tilted box's other corners, a tilted can's other side of its
+    rim, a box's edge lying across a can's end, a capsule's other end, which a spin or a push about the touching
+    point brings in. Between two boxes (the pair's normal a face's or two edges'), a corner's separation along
+    the pair's normal from the other's supporting plane, where its foot on that plane lies on the other box;
+    otherwise the ball's exact distance to the other and its normal (pairs.ball_contact, closed forms): a
+    curved surface leaves its tangent plane, and a can's rim over a box's edge is nearest to a face the pair's
+    normal is not. poses (2, POSE_WIDTH), res and seps are scratch. Returns the count."""
     nx, ny, nz = pnormal[k, 0], pnormal[k, 1], pnormal[k, 2]
     plane_a = nx * ppoints[k, 0, 0] + ny * ppoints[k, 0, 1] + nz * ppoints[k, 0, 2]  # a's support along n
     plane_b = nx * ppoints[k, 0, 3] + ny * ppoints[k, 0, 4] + nz * ppoints[k, 0, 5]  # b's support along −n
@@ -359,19 +380,33 @@ def _corners(pos, quat, shapes, k, a, b, pnormal, pcount, ppoints, limit, scale,
     for side in range(2):
         i = b if side == 0 else a
         other = a if side == 0 else b
-        for corner in range(8):
-            x, y, z = _corner(pos, quat, shapes, i, corner)
-            along = nx * x + ny * y + nz * z
-            sep = along - plane_a if side == 0 else plane_b - along
-            if sep > limit:
+        sign = -1.0 if side == 0 else 1.0  # the ball's normal (from i to the other) as the pair's, a to b
+        margin = set_pose(int(shapes[other, KIND]), shapes[other, DIMS], shapes[other, DIMS + 1],
+                          shapes[other, DIMS + 2], pos[other, 0], pos[other, 1], pos[other, 2], quat[other, 0],
+                          quat[other, 1], quat[other, 2], quat[other, 3], poses[1])
+        kind = shapes[i, KIND]
+        corners = 2 if kind == SHAPE_CAPSULE else (10 if kind == SHAPE_CYLINDER else 8)
+        boxes = kind == SHAPE_BOX and shapes[other, KIND] == SHAPE_BOX
+        for corner in range(corners):
+            found, x, y, z, r = _corner(pos, quat, shapes, i, corner, sign * nx, sign * ny, sign * nz)
+            if not found:
                 continue
-            # its foot on the other box's supporting plane, on that box
-            fx = x - sep * nx if side == 0 else x + sep * nx
-            fy = y - sep * ny if side == 0 else y + sep * ny
-            fz = z - sep * nz if side == 0 else z + sep * nz
-            if not _inside(pos, quat, shapes, other, fx, fy, fz, slack):
-                continue
-            mx, my, mz = 0.5 * (x + fx), 0.5 * (y + fy), 0.5 * (z + fz)
+            if boxes:
+                along = nx * x + ny * y + nz * z
+                sd = along - plane_a if side == 0 else plane_b - along
+                if sd > limit:
+                    continue
+                fx, fy, fz = x + sign * sd * nx, y + sign * sd * ny, z + sign * sd * nz  # its foot on that plane
+                if not _on_box(pos, quat, shapes, other, fx, fy, fz, slack):
+                    continue
+                mx, my, mz = 0.5 * (x + fx), 0.5 * (y + fy), 0.5 * (z + fz)
+                ux, uy, uz = sign * nx, sign * ny, sign * nz
+            else:
+                set_pose(SHAPE_SPHERE, r, 0.0, 0.0, x, y, z, 1.0, 0.0, 0.0, 0.0, poses[0])
+                sd, ux, uy, uz = ball_contact(poses[0], r, poses[1], margin, res, seps)
+                if sd > limit:
+                    continue
+                mx, my, mz = 0.5 * (res[0, 0] + res[0, 3]), 0.5 * (res[0, 1] + res[0, 4]), 0.5 * (res[0, 2] + res[0, 5])
             seen = False
             for c in range(pcount[k]):  # already one of the narrow phase's points
                 px = 0.5 * (ppoints[k, c, 0] + ppoints[k, c, 3])
@@ -383,12 +418,12 @@ def _corners(pos, quat, shapes, k, a, b, pnormal, pcount, ppoints, limit, scale,
                 continue
             _owners(cint, count, a, b, is_static)
             cflt[count, C_X], cflt[count, C_X + 1], cflt[count, C_X + 2] = mx, my, mz
-            cflt[count, C_N], cflt[count, C_N + 1], cflt[count, C_N + 2] = nx, ny, nz
-            cflt[count, C_GAP] = sep
+            cflt[count, C_N], cflt[count, C_N + 1], cflt[count, C_N + 2] = sign * ux, sign * uy, sign * uz
+            cflt[count, C_GAP] = sd
             cflt[count, C_MU] = mu
             count += 1
     _pin = pos[0, 0], quat[0, 0], shapes[0, 0], pnormal[0, 0], pcount[0], ppoints[0, 0, 0], is_static[0], cint[0, 0]
-    _pin2 = cflt[0, 0]
+    _pin2 = cflt[0, 0], poses[0, 0], res[0, 0], seps[0]
     return count
 
 
@@ -495,9 +530,9 @@ def _gather(Y, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdi
                 cflt[count, C_GAP] = pseps[k, c]
                 cflt[count, C_MU] = mu
                 count += 1
-        if _has_corners(shapes, a) and _has_corners(shapes, b) and pcount[k] > 0:
+        if shapes[a, KIND] != SHAPE_SPHERE and shapes[b, KIND] != SHAPE_SPHERE and pcount[k] > 0:
             count = _corners(pos, quat, shapes, k, a, b, pnormal, pcount, ppoints, limit, scale, is_static, mu, cint,
-                             cflt, count)
+                             cflt, count, poses, res, seps)
     gaps = np.empty(MAX_FEATURES)
     points = np.empty((4, 3))
     pg = np.empty(4)
@@ -2014,7 +2049,8 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     need = 0
     for k in range(n_pairs):
         if island[nlist[k, 0]] == 1 or island[nlist[k, 1]] == 1:
-            need += pcount[k] + 18  # its corners besides (_corners), a can's rim point on a half-space (_end_toward)
+            need += pcount[k] + 24  # its corners besides (_corners: up to 10 a body), a can's rim point on a
+            # half-space (_end_toward)
     for m in range(n):
         if island[members[m]] == 1:
             need += MAX_FEATURES * 4 * grounds.shape[0]

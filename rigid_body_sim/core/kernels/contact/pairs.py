@@ -47,7 +47,8 @@ from .layout import DIMS, KIND, SHAPE_BOX, SHAPE_CAPSULE, SHAPE_SPHERE
 from .refine import feature_point, refine_normal
 from .shapes import FEATURE_BAND
 
-__all__ = ["make_workspace_jit", "MAX_PAIR_POINTS", "FACE_ALIGNMENT", "set_pose", "surface_point", "pair_contact", "pair_contacts",
+__all__ = ["make_workspace_jit", "MAX_PAIR_POINTS", "FACE_ALIGNMENT", "set_pose", "surface_point", "ball_contact",
+           "pair_contact", "pair_contacts",
            "boxes_apart", "boxes_apart_turned", "apart_bounds", "face_patch"]
 
 #: Most contact points one pair reports (a box face clipped against another: a polygon of up to 8 corners; a
@@ -1054,6 +1055,23 @@ def _round_manifold(pa, ma, pb, mb, nx, ny, nz, band, tilt, poly, res, seps):
 
 
 @njit(**INLINE)
+def ball_contact(pa, ra, pb, mb, res, seps):
+    """A ball (the point core pa's centre, radius ra) against the posed core pb with margin mb (set_pose): closed
+    forms. Returns (sd, nx, ny, nz), the normal from the ball to B; writes the one point pair into res[0], seps[0]."""
+    kb = int(pb[_KIND])
+    if kb == CORE_POINT:
+        sd, nx, ny, nz = _round_pair(pa[_C], pa[_C + 1], pa[_C + 2], ra, pb[_C], pb[_C + 1], pb[_C + 2], mb,
+                                     0.0, 0.0, 1.0, res, seps, 0)
+    elif kb == CORE_SEGMENT:
+        sd, nx, ny, nz, _ = _point_segment(pa, ra, pb, mb, res, seps)
+    elif kb == CORE_BOX:
+        sd, nx, ny, nz, _ = _point_box(pa, ra, pb, res, seps)
+    else:
+        sd, nx, ny, nz, _ = _point_cylinder(pa, ra, pb, res, seps)
+    return sd, nx, ny, nz
+
+
+@njit(**INLINE)
 def pair_contact(pa, ma, pb, mb, scale, ws_s, ws_lam, ws_tmp, ws_poly, verts, faces, face_nd, edges, out, res, seps):
     """Signed distance, normal (A to B) and contact points of two posed cores with margins (set_pose).
 
@@ -1064,15 +1082,8 @@ def pair_contact(pa, ma, pb, mb, scale, ws_s, ws_lam, ws_tmp, ws_poly, verts, fa
     ka, kb = int(pa[_KIND]), int(pb[_KIND])
     band = FEATURE_BAND * scale
     sd, nx, ny, nz, count = 0.0, 0.0, 0.0, 1.0, 1
-    if ka == CORE_POINT and kb == CORE_POINT:
-        sd, nx, ny, nz = _round_pair(pa[_C], pa[_C + 1], pa[_C + 2], ma, pb[_C], pb[_C + 1], pb[_C + 2], mb,
-                                     0.0, 0.0, 1.0, res, seps, 0)
-    elif ka == CORE_POINT and kb == CORE_SEGMENT:
-        sd, nx, ny, nz, count = _point_segment(pa, ma, pb, mb, res, seps)
-    elif ka == CORE_POINT and kb == CORE_BOX:
-        sd, nx, ny, nz, count = _point_box(pa, ma, pb, res, seps)
-    elif ka == CORE_POINT and kb == CORE_CYLINDER:
-        sd, nx, ny, nz, count = _point_cylinder(pa, ma, pb, res, seps)
+    if ka == CORE_POINT:
+        sd, nx, ny, nz = ball_contact(pa, ma, pb, mb, res, seps)
     elif ka == CORE_SEGMENT and kb == CORE_SEGMENT:
         sd, nx, ny, nz, count = _segment_segment(pa, ma, pb, mb, band, res, seps)
     else:
