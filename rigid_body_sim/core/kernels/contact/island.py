@@ -346,8 +346,8 @@ def _corner(pos, quat, shapes, i, corner, dx, dy, dz):
 
 
 @njit(**INLINE)
-def _has_corners(shapes, i):
-    """Box or cylinder: the shapes _corners looks at."""
+def _flat_faced(shapes, i):
+    """Box or cylinder: the shapes with a flat face, whose pairs face_patch looks at."""
     return shapes[i, KIND] == SHAPE_BOX or shapes[i, KIND] == SHAPE_CYLINDER
 
 
@@ -493,7 +493,7 @@ def _gather(Y, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdi
             if shapes[end, KIND] == SHAPE_CYLINDER and island[end] == 1 and not is_static[end]:
                 count = _end_toward(Y, prm, shapes, grounds, gmu, end, other, TOUCH * size[end] + extra, cint, cflt,
                                     count)
-        if _has_corners(shapes, a) and _has_corners(shapes, b) and pcount[k] > 0:
+        if _flat_faced(shapes, a) and _flat_faced(shapes, b) and pcount[k] > 0:
             reach = limit if deep_only else max(limit, PATCH_REACH * scale)
             m, rx, ry, rz = face_patch(pos, quat, shapes, a, b, pnormal[k, 0], pnormal[k, 1], pnormal[k, 2],
                                       PATCH_FLAT, max(reach - pdist[k], 0.0), poses, poly, res, seps)
