@@ -381,12 +381,14 @@ def _corners(pos, quat, shapes, k, a, b, pnormal, pcount, ppoints, limit, scale,
         i = b if side == 0 else a
         other = a if side == 0 else b
         sign = -1.0 if side == 0 else 1.0  # the ball's normal (from i to the other) as the pair's, a to b
-        margin = set_pose(int(shapes[other, KIND]), shapes[other, DIMS], shapes[other, DIMS + 1],
-                          shapes[other, DIMS + 2], pos[other, 0], pos[other, 1], pos[other, 2], quat[other, 0],
-                          quat[other, 1], quat[other, 2], quat[other, 3], poses[1])
         kind = shapes[i, KIND]
         corners = 2 if kind == SHAPE_CAPSULE else (10 if kind == SHAPE_CYLINDER else 8)
         boxes = kind == SHAPE_BOX and shapes[other, KIND] == SHAPE_BOX
+        margin = 0.0
+        if not boxes:  # the other posed once for ball_contact (not between two boxes: a pile of cubes' pairs)
+            margin = set_pose(int(shapes[other, KIND]), shapes[other, DIMS], shapes[other, DIMS + 1],
+                              shapes[other, DIMS + 2], pos[other, 0], pos[other, 1], pos[other, 2], quat[other, 0],
+                              quat[other, 1], quat[other, 2], quat[other, 3], poses[1])
         for corner in range(corners):
             found, x, y, z, r = _corner(pos, quat, shapes, i, corner, sign * nx, sign * ny, sign * nz)
             if not found:
