@@ -504,6 +504,62 @@ def test_a_cylinder_standing_tilted_within_the_face_alignment_touches_at_its_dee
     assert count == 6  # the square's 4, the point toward the box's centre and the deepest
     on_both("box", a, np.zeros(3), IDENTITY, "cylinder", np.array([r, h, 0.0]), c, q, points)
 
+#: A box and a thin can lying on its face, end on face (two bodies of a mixed pile): the end 3.7e-8 rad off the
+#: face, sunk 2.6e-10 m below the face's plane at its lowest rim point, which is 11.6 mm beyond the face's edge.
+CAN_END_OVER_AN_EDGE = (
+    row("box", 0.07773482225249503, 0.08640051186020783, 0.09385453290184612),
+    row("cylinder", 0.07283314984857345, 0.014193023298215831),
+    [(0.33795162727972283, -0.6198536327078117, 0.07773510843959801),
+     (0.3206009410049598, -0.6521668277484056, 0.16966303589283574)],
+    [(0.7067378149494463, 0.022856919323420193, -0.706736678544643, 0.022858026144244876),
+     (0.5530751129991458, 2.0589275611430137e-07, 1.0839873391914898e-06, 0.8331313938267868)])
+
+
+def test_a_can_end_overhanging_a_box_faces_edge_overlaps_by_the_reference_depth():
+    """The pair above overlaps by 1.24e-10 m (exact/convex_distance.py), along a direction 1.8e-8 rad off the
+    face's normal: what is sunk over the face, where the rim crosses the face's edge. Along the face's normal
+    the supports overlap by 2.57e-10 m, which is what EPA reported, and the rim polygon's points, on chords,
+    said 0. The distance is the reference's within 1e-12 m, and point 0 is at it."""
+    from rigid_body_sim.exact.convex_distance import signed_distance
+    box, can, pos, quat = CAN_END_OVER_AN_EDGE
+    dist, normal, count, points, seps = contacts([box, can], pos, quat, [[0, 1]])
+    sd, n, certified = signed_distance(("box", box[DIMS:DIMS + 3], np.array(pos[0]), matrix(quat[0])),
+                                       ("cylinder", can[DIMS:DIMS + 3], np.array(pos[1]), matrix(quat[1])))
+    assert certified and -1.3e-10 < sd < -1.2e-10
+    assert abs(dist[0] - sd) <= 1e-12
+    assert seps[0, 0] == dist[0] and np.all(seps[0, :count[0]] >= dist[0])
+    on_both("box", box[DIMS:DIMS + 3], np.array(pos[0]), quat[0], "cylinder", can[DIMS:DIMS + 3], np.array(pos[1]),
+            quat[1], points[0, :count[0]])
+
+
+def test_a_can_standing_on_a_box_face_over_its_edge_or_corner_is_as_deep_as_its_deepest_point():
+    """Cans standing on a box's top face within the face alignment (tilt 0 to 1e-6 rad about a random horizontal
+    axis), their end's centre within 0.9 r of the face's edge (even poses) or corner (odd), sunk 0 to 1e-7 m, the
+    pair turned at random: the distance is exact/convex_distance.py's within 1e-12 m, and point 0 is at it (the
+    rim polygon's points lie on chords, up to 2.6e-9 m shallower where the rim crosses the face's side)."""
+    from scipy.spatial.transform import Rotation
+    from rigid_body_sim.exact.convex_distance import signed_distance
+    rng = np.random.default_rng(5)
+    for t in range(12):
+        d, r, h = rng.uniform(0.05, 0.2, 3), rng.uniform(0.03, 0.1), rng.uniform(0.01, 0.1)
+        across = d[0] + rng.uniform(-0.9, 0.9) * r
+        along = d[1] + rng.uniform(-0.9, 0.9) * r if t % 2 else rng.uniform(-d[1], d[1])
+        turn = rng.uniform(0.0, 2.0 * np.pi)
+        tilt = Rotation.from_rotvec(rng.uniform(0.0, 1e-6) * np.array([np.cos(turn), np.sin(turn), 0.0]))
+        end = np.array([across, along, d[2] - rng.uniform(0.0, 1e-7)])
+        world = Rotation.random(random_state=rng.integers(1 << 31))
+        pos = np.array([[0.3, 0.3, 0.3], world.apply(end + h * tilt.apply([0.0, 0.0, 1.0])) + 0.3])
+        quat = [_quat(world.as_matrix()), _quat((world * tilt).as_matrix())]
+        box, can = row("box", *d), row("cylinder", r, h)
+        dist, normal, count, points, seps = contacts([box, can], pos, quat, [[0, 1]])
+        sd, _, certified = signed_distance(("box", d, pos[0], world.as_matrix()),
+                                           ("cylinder", can[DIMS:DIMS + 3], pos[1], (world * tilt).as_matrix()))
+        assert certified
+        assert abs(dist[0] - sd) <= 1e-12, (t, dist[0], sd)
+        assert abs(seps[0, 0] - dist[0]) <= 1e-12 and np.all(seps[0, :count[0]] >= dist[0] - 1e-12), (t, seps[0])
+        on_both("box", d, pos[0], quat[0], "cylinder", can[DIMS:DIMS + 3], pos[1], quat[1], points[0, :count[0]])
+
+
 ALONG_X = (np.cos(np.pi / 4), 0.0, np.sin(np.pi / 4), 0.0)  # the body's z axis along world x
 
 

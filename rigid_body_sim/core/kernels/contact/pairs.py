@@ -574,6 +574,64 @@ def _rim_polygon(pose, cx, cy, cz, r, a0, a1, poly):
     return n
 
 
+@njit(**JIT)
+def _deepest_over_face(ref, i, rx, ry, rz, cx, cy, cz, inc, ox, oy, oz, r, deepest):
+    """The point of a cylinder end's disk (centre o, radius r, world, m) deepest along −r over the reference box
+    face i (outward normal r, centre c): a vertex of the disk cut by the face's four side planes, so the best of
+    the rim point deepest along −r (angle ``deepest``, _rim_angle; NaN: none), the rim's crossings with the side
+    planes and the face's corners carried along r onto the end's plane, each within the other sides and the disk
+    (to round-off). The rim polygon's points, on chords, can lie above it where the rim crosses a side. Returns
+    (found, x, y, z)."""
+    ux, uy, uz = _axis(inc, 2)
+    slack = 1e-12 * max(r, max(ref[_DIM + (i + 1) % 3], ref[_DIM + (i + 2) % 3]))
+    best, bx, by, bz = math.inf, 0.0, 0.0, 0.0
+    for cand in range(13):  # 0: the deepest rim point; 1–8: two crossings per side plane; 9–12: the corners
+        px, py, pz, ok = 0.0, 0.0, 0.0, True
+        if cand == 0:
+            ok = not math.isnan(deepest)
+            if ok:
+                px, py, pz = _at_angle(inc, ox, oy, oz, r, deepest)
+        elif cand <= 8:
+            side = (cand - 1) // 2
+            j = (i + 1 + side // 2) % 3
+            sx, sy, sz = _axis(ref, j)
+            sg = 1.0 if side % 2 == 0 else -1.0
+            sx, sy, sz = sg * sx, sg * sy, sg * sz
+            e1x, e1y, e1z = _axis(inc, 0)
+            e2x, e2y, e2z = _axis(inc, 1)
+            ca = r * (e1x * sx + e1y * sy + e1z * sz)
+            cb = r * (e2x * sx + e2y * sy + e2z * sz)
+            c = ref[_DIM + j] - ((ox - cx) * sx + (oy - cy) * sy + (oz - cz) * sz)
+            rho = math.sqrt(ca * ca + cb * cb)
+            ok = rho > 0.0 and abs(c) <= rho
+            if ok:
+                ang = math.atan2(cb, ca) + (1.0 if cand % 2 == 1 else -1.0) * math.acos(c / rho)
+                px, py, pz = _at_angle(inc, ox, oy, oz, r, ang)
+        else:
+            corner = cand - 9
+            j, k = (i + 1) % 3, (i + 2) % 3
+            sj = ref[_DIM + j] * (1.0 if corner == 0 or corner == 1 else -1.0)
+            sk = ref[_DIM + k] * (1.0 if corner == 1 or corner == 2 else -1.0)
+            jx, jy, jz = _axis(ref, j)
+            kx, ky, kz = _axis(ref, k)
+            qx, qy, qz = cx + sj * jx + sk * kx, cy + sj * jy + sk * ky, cz + sj * jz + sk * kz
+            t = ((ox - qx) * ux + (oy - qy) * uy + (oz - qz) * uz) / (rx * ux + ry * uy + rz * uz)
+            px, py, pz = qx + t * rx, qy + t * ry, qz + t * rz
+            dx, dy, dz = px - ox, py - oy, pz - oz
+            ok = dx * dx + dy * dy + dz * dz <= (r + slack) ** 2
+        inside = ok
+        for side in range(4):
+            j = (i + 1 + side // 2) % 3
+            sx, sy, sz = _axis(ref, j)
+            sg = 1.0 if side % 2 == 0 else -1.0
+            inside = inside and sg * ((px - cx) * sx + (py - cy) * sy + (pz - cz) * sz) <= ref[_DIM + j] + slack
+        d = (px - cx) * rx + (py - cy) * ry + (pz - cz) * rz
+        if inside and d < best:
+            best, bx, by, bz = d, px, py, pz
+    _pin = ref[0], inc[0]
+    return best < math.inf, bx, by, bz
+
+
 @njit(**INLINE)
 def _deepest_first(res, seps, count):
     """Swap the deepest of the count points into place 0 (res, seps as written by _put)."""
@@ -593,7 +651,8 @@ def _face_manifold(ref, inc, ref_is_a, ma, mb, nx, ny, nz, sd, band, tilt, poly,
     a cylinder standing on an end or lying on its side (the side's line), each within ``tilt`` (rad, small) of
     the face, else nothing is clipped. A standing cylinder's rim is the polygon of its four points along its
     local ±x, ±y, the rim point toward the reference box's centre (what rests on the end stands on the disk, not
-    only on that square) and, tilted, the rim point deepest into the face (_rim_polygon). Writes the points
+    only on that square) and, tilted, the rim point deepest into the face (_rim_polygon); clipped, with the end's
+    deepest point over the face where that is deeper (_deepest_over_face). Writes the points
     whose separation is within ``band`` of the deepest or below zero; returns their count (0 if clipping left
     nothing).
     """
@@ -605,6 +664,8 @@ def _face_manifold(ref, inc, ref_is_a, ma, mb, nx, ny, nz, sd, band, tilt, poly,
     cy = ref[_C + 1] + ref[_DIM + i] * ry
     cz = ref[_C + 2] + ref[_DIM + i] * rz
     n = 0
+    standing = False  # a cylinder on an end: its rim's polygon, plus the end's deepest point over the face
+    endx = endy = endz = r = deepest = 0.0
     if int(inc[_KIND]) == CORE_BOX:
         l, s_inc, _ = _face_of(inc, -rx, -ry, -rz)
         j, k = (l + 1) % 3, (l + 2) % 3
@@ -631,6 +692,7 @@ def _face_manifold(ref, inc, ref_is_a, ma, mb, nx, ny, nz, sd, band, tilt, poly,
             toward = _rim_angle(inc, ref[_C] - ex, ref[_C + 1] - ey, ref[_C + 2] - ez)
             deepest = _rim_angle(inc, -rx, -ry, -rz)
             n = _rim_polygon(inc, ex, ey, ez, r, toward, deepest, poly)
+            standing, endx, endy, endz = True, ex, ey, ez
         elif abs(c_axis) <= tilt:
             # lying on its side: the line of the side nearest the reference face
             px, py, pz = rx - c_axis * ux, ry - c_axis * uy, rz - c_axis * uz
@@ -658,12 +720,20 @@ def _face_manifold(ref, inc, ref_is_a, ma, mb, nx, ny, nz, sd, band, tilt, poly,
             else:
                 n = _clip(poly, src, n, sgn * ex, sgn * ey, sgn * ez, cx, cy, cz, ref[_DIM + axis])
                 src = 1 - src
-    if n == 0:
-        return 0
     lowest = math.inf
     for q in range(n):
         d = (poly[src, q, 0] - cx) * rx + (poly[src, q, 1] - cy) * ry + (poly[src, q, 2] - cz) * rz - ma - mb
         lowest = min(lowest, d)
+    if standing:  # the polygon's points lie on chords: the disk's own deepest point over the face, if deeper
+        found, px, py, pz = _deepest_over_face(ref, i, rx, ry, rz, cx, cy, cz, inc, endx, endy, endz, r,
+                                            deepest)
+        d = (px - cx) * rx + (py - cy) * ry + (pz - cz) * rz - ma - mb
+        if found and d < lowest - 1e-6 * band and n < poly.shape[1]:
+            poly[src, n, 0], poly[src, n, 1], poly[src, n, 2] = px, py, pz
+            n += 1
+            lowest = d
+    if n == 0:
+        return 0
     keep = max(lowest + band, 0.0)
     count = 0
     for q in range(n):
@@ -1166,10 +1236,18 @@ def pair_contact(pa, ma, pb, mb, scale, ws_s, ws_lam, ws_tmp, ws_poly, verts, fa
                     m = _face_manifold(pb, pa, False, ma, mb, nx, ny, nz, sd, band, FACE_ALIGNMENT, ws_poly, res, seps)
                 count = max(m, 1)
         elif ka == CORE_BOX:  # a cylinder on a box face, standing or lying: its rim or side clipped
-            _, _, ca = _face_of(pa, nx, ny, nz)
-            if ca >= 1.0 - 0.5 * FACE_ALIGNMENT * FACE_ALIGNMENT:
+            ia, _, ca = _face_of(pa, nx, ny, nz)
+            flat = 1.0 - 0.5 * FACE_ALIGNMENT * FACE_ALIGNMENT
+            if ca >= flat:
                 m = _face_manifold(pa, pb, True, ma, mb, nx, ny, nz, sd, band, FACE_ALIGNMENT, ws_poly, res, seps)
                 count = max(m, 1)
+                ux, uy, uz = _axis(pb, 2)
+                fx, fy, fz = _axis(pa, ia)
+                # overlapping, standing on an end: lifting it by its deepest point's depth over the face parts them
+                # (beyond the face's sides the can is outside the box), so sd is at least that point's separation;
+                # EPA's can be ~1e-10 m deeper where the end overhangs an edge, its normal on the face's
+                if m > 0 and sd < min(seps[0], 0.0) and abs(ux * fx + uy * fy + uz * fz) >= flat:
+                    sd = seps[0]
         else:  # a capsule or a cylinder against a cylinder: flat ends and lying sides
             m = _round_manifold(pa, ma, pb, mb, nx, ny, nz, band, FACE_ALIGNMENT, ws_poly, res, seps)
             count = max(m, 1)
