@@ -111,6 +111,10 @@ TOUCH_GAP = 0.5 * PROJECT_TOL
 #: Narrow-phase rounds of the position projection, the first TURN_ROUNDS in the mass metric (turning and
 #: translating), the others translating only; Gauss–Seidel sweeps per round.
 PROJECT_ROUNDS, TURN_ROUNDS, PROJECT_SWEEPS = 8, 1, 100
+#: Most of the projection's first-round points deeper than TOUCH × the size (and its tolerance), between two bodies
+#: one of them a cylinder (_with_a_can), that are kept as rows of the stop of approach after it: the velocity step
+#: drove the bodies in there at a point it had no row for.
+DRIVEN_KEPT = 256
 #: Most projected Gauss–Seidel sweeps of the velocity problem, or PGS_WORK / its contacts when that is more (the
 #: last few columns of a pile still moving get more); it stops earlier below PGS_TOL (m/s). What a step short of
 #: convergence adds to K + U is taken out by _no_gain.
@@ -343,6 +347,19 @@ def _corner(pos, quat, shapes, i, corner, dx, dy, dz):
         lz = shapes[i, DIMS + 2] if corner & 4 else -shapes[i, DIMS + 2]
     ox, oy, oz = rotate(quat[i, 0], quat[i, 1], quat[i, 2], quat[i, 3], lx, ly, lz)
     return True, pos[i, 0] + ox, pos[i, 1] + oy, pos[i, 2] + oz, 0.0
+
+
+@njit(**INLINE)
+def _with_a_can(shapes, cint, c):
+    """Whether contact c is between two bodies, one of them a cylinder: the narrow phase gives its rim as a
+    polygon and its deepest point, so a rim crossing an edge can be driven in where the velocity step had no row
+    (box and sphere pairs' manifolds have every vertex)."""
+    found = False
+    if cint[c, I_GROUND] < 0:
+        for col in range(3):  # I_A, I_B, I_STATIC
+            j = cint[c, col]
+            found = found or (j >= 0 and shapes[j, KIND] == SHAPE_CYLINDER)
+    return found
 
 
 @njit(**INLINE)
@@ -1576,7 +1593,9 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, r
              rbias, rlam, rbody, porder, out, comp, flags, rwork):
     """The projection of the island bodies' poses Y1: points deeper than its tolerance (_depth_tol) closed by
     the least mass-metric correction (over a pile, bottom-up with lower bodies held: _pile_rows), then their
-    velocities kept from approaching where it moved them (_stop_approach); returns the largest depth it took on (m).
+    velocities kept from approaching where it moved them (_stop_approach: the touching points at the final poses,
+    and the first round's points deeper than TOUCH × the size with a cylinder, at most DRIVEN_KEPT, where the
+    velocity step drove bodies in at a point it had no row for); returns the largest depth it took on (m).
     Only the bodies of the velocity step's components (comp) with a deep point move; the others (solved exactly,
     at their contacts' gaps to round-off) are held as fixed, and their pairs with each other not looked at again.
     rwork (per row, 2 columns) and rot (per body, _narrow's) are scratch."""
@@ -1586,6 +1605,8 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, r
     live = n_pairs
     before = math.inf  # the depth the last round began with (m)
     slow = False
+    kept = 0  # the first round's points deep beyond TOUCH × the size, kept at the scratch's tail until the end
+    tail = cint.shape[0] - DRIVEN_KEPT
     path = vel  # per body: what it moved (m) and turned (rad) since the first round, summed (a static body's row is
     # never written: zero, as it does not move)
     for m in range(n):
@@ -1619,6 +1640,13 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, r
                     for side in range(2):
                         if cint[c, side] >= 0:
                             flags[_find(comp, cint[c, side])] |= 256
+                    if -cflt[c, C_GAP] > TOUCH * size[i] and kept < DRIVEN_KEPT and _with_a_can(shapes, cint, c):
+                        for j in range(C_INTS):
+                            cint[tail + kept, j] = cint[c, j]
+                        for j in range(C_FLOATS):
+                            cflt[tail + kept, j] = cflt[c, j]
+                        cflt[tail + kept, C_GAP] = 0.0
+                        kept += 1
         if deep == 0:
             settled = True  # nd: the touching points at the final poses
             break
@@ -1689,6 +1717,12 @@ def _project(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, r
                     rot)
             nd = _gather(Y1, prm, shapes, grounds, gmu, island, nlist, n_pairs, pos, quat, pdist, pnormal, pcount,
                          ppoints, pseps, members, bound, size, is_static, default_mu, True, 0.0, cint, cflt)
+        for c in range(kept):  # and the first round's deep points: the velocity step drove the bodies in there
+            for j in range(C_INTS):
+                cint[nd + c, j] = cint[tail + c, j]
+            for j in range(C_FLOATS):
+                cflt[nd + c, j] = cflt[tail + c, j]
+        nd += kept
         _stop_approach(Y1, prm, members, island, nd, cint, cflt, iw, h, size, rj, rw, rdiag, rbias, rbody, rlam, vel,
                        rwork[:, 0], porder)
         out[OUT_STOPPED] = nd
@@ -2063,8 +2097,8 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             n_warm = n_prev + rest_int.shape[0]
             break
     half = cint.shape[0] // 2
-    if max(need, n_warm) > half:  # the first half: the velocity step's contacts; the second: the projection's
-        return -max(need, n_warm)
+    if max(need + DRIVEN_KEPT, n_warm) > half:  # the first half: the velocity step's contacts; the second: the
+        return -max(need + DRIVEN_KEPT, n_warm)  # projection's, its last DRIVEN_KEPT rows _project's own
     for c in range(n_prev):  # the last step's contacts (the first half) kept in the second for the warm start
         for j in range(C_INTS):
             cint[half + c, j] = cint[c, j]
