@@ -1197,6 +1197,17 @@ def test_a_body_held_on_the_ground_struck_again_and_again_by_one_held_on_a_wall_
     two_steps_no_deeper_than(sim, 1e-9)
 
 
+def move_as_their_speeds_say(sim: Simulator, bodies: list, steps: int) -> None:
+    """``steps`` steps of ``sim``; after each, none of ``bodies`` ends it faster than 0.1 m/s having moved less
+    than half of that speed × dt (a speed that the projection undoes at every step)."""
+    for _ in range(steps):
+        before = sim.positions_world()[bodies]
+        sim.step()
+        moved = np.linalg.norm(sim.positions_world()[bodies] - before, axis=1)
+        speed = np.linalg.norm(sim.linear_velocities_world()[bodies], axis=1)
+        assert np.all((speed <= 0.1) | (moved >= 0.5 * speed * sim.dt)), (speed, moved / sim.dt)
+
+
 def test_a_capsule_pivoting_on_a_wall_at_one_end_and_the_box_pushing_it_move_as_their_speeds_say():
     """A capsule (body 77) in a mixed pile (``mixed_pile(216, 537, 0.5)``, rk4, dt = 10 ms, sleeping off,
     tolerance 0; its state at 1.67 s, ``test/data/mixed_pile_537_rows_at_1.67s.npy``) touches a bin's wall at one
@@ -1210,12 +1221,7 @@ def test_a_capsule_pivoting_on_a_wall_at_one_end_and_the_box_pushing_it_move_as_
                          restitution=0.5)
     capsule, box = 77, 4
     assert sim.contact.shapes[capsule, 0] == SHAPE_CAPSULE and sim.contact.shapes[box, 0] == SHAPE_BOX
-    for _ in range(20):
-        before = sim.positions_world()[[capsule, box]]
-        sim.step()
-        moved = np.linalg.norm(sim.positions_world()[[capsule, box]] - before, axis=1)
-        speed = np.linalg.norm(sim.linear_velocities_world()[[capsule, box]], axis=1)
-        assert np.all((speed <= 0.1) | (moved >= 0.5 * speed * sim.dt)), (speed, moved / sim.dt)
+    move_as_their_speeds_say(sim, [capsule, box], 20)
 
 
 def test_a_can_whose_end_lies_across_a_boxs_edge_and_the_box_move_as_their_speeds_say():
@@ -1230,12 +1236,7 @@ def test_a_can_whose_end_lies_across_a_boxs_edge_and_the_box_move_as_their_speed
     can, box = 163, 97
     assert sim.contact.shapes[can, 0] == SHAPE_CYLINDER and sim.contact.shapes[box, 0] == SHAPE_BOX
     sim.step()
-    for _ in range(19):
-        before = sim.positions_world()[[can, box]]
-        sim.step()
-        moved = np.linalg.norm(sim.positions_world()[[can, box]] - before, axis=1)
-        speed = np.linalg.norm(sim.linear_velocities_world()[[can, box]], axis=1)
-        assert np.all((speed <= 0.1) | (moved >= 0.5 * speed * sim.dt)), (speed, moved / sim.dt)
+    move_as_their_speeds_say(sim, [can, box], 19)
 
 
 def test_a_ball_spun_into_a_bins_corner_ends_its_steps_outside_both_walls():
