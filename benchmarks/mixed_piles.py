@@ -99,7 +99,7 @@ def run(seed: int) -> str:
 
 def summary(paths: list[str]) -> None:
     runs = [dict(kv.split("=", 1) for kv in line.split() if "=" in kv)
-            for path in paths for line in open(path) if "skipped" not in line and line.strip()]
+            for path in paths for line in Path(path).read_text().splitlines() if "skipped" not in line and line.strip()]
     print(f"{len(runs)} runs, all finite: {all(r['finite'] == 'True' for r in runs)}")
     for dt in ("0.001", "0.005", "0.01"):
         rows = [r for r in runs if r["dt"] == dt]

@@ -132,3 +132,27 @@ def test_performance_page_block_is_the_one_in_results_md():
     assert (per_integrator_marker + per_integrator).strip() in results
     tables = costs.split("\n", 2)[2].strip()  # after the one-line lead-in: the two tables, one heading level down
     assert tables.replace("\n#### ", "\n### ").replace("#### ", "### ", 1) in results
+
+
+def test_mixed_piles_draws_its_documented_settings_and_counts_a_run_beyond_its_tolerance(tmp_path, capsys):
+    """benchmarks/mixed_piles.py (docs/contact.md's mixed-pile figures): each seed's settings are among those its
+    docstring lists (at most 64 bodies at dt = 1 ms) and the same when drawn again; ``summary`` counts a run
+    beyond its tolerance where an overlap is deeper than the tolerance + 1e-9 m, body, wall and ground apart."""
+    from benchmarks.mixed_piles import settings, summary
+    for seed in range(200):
+        s = settings(seed)
+        assert s == settings(seed)
+        assert s["n"] in (27, 64, 125, 216) and s["e"] in (0.0, 0.5) and s["tol"] in (0.0, 1e-5, 1e-3)
+        assert s["integrator"] in ("rk4", "semi_implicit_euler") and s["dt"] in (1e-3, 5e-3, 1e-2)
+        assert s["dt"] != 1e-3 or s["n"] <= 64
+    common = "integrator=rk4 dt=0.01 sleep=False finite=True rise=0.00e+00 worst=- seconds=1"
+    lines = [f"seed=1 n=27 e=0.0 tol=1e-05 body=1.000e-05 wall=0.000e+00 ground=1.0000005e-05 {common}",  # within
+             f"seed=2 n=27 e=0.0 tol=0.0 body=2.000e-09 wall=0.000e+00 ground=0.000e+00 {common}",  # body beyond
+             f"seed=3 n=27 e=0.0 tol=0.001 body=0.000e+00 wall=0.000e+00 ground=1.1e-03 {common}",  # ground beyond
+             "seed=4 n=216 skipped: bodies that start apart"]
+    runs = tmp_path / "piles.txt"
+    runs.write_text("\n".join(lines) + "\n")
+    summary([str(runs)])
+    out = capsys.readouterr().out
+    assert out.startswith("3 runs, all finite: True")
+    assert "dt = 0.01 s: 3 runs" in out and "beyond tolerance 2: body 1" in out and "wall 0, ground 1" in out
