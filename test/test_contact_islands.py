@@ -1197,6 +1197,20 @@ def test_a_body_held_on_the_ground_struck_again_and_again_by_one_held_on_a_wall_
     two_steps_no_deeper_than(sim, 1e-9)
 
 
+def test_a_can_coming_down_beside_a_ball_its_ground_stops_ends_its_step_outside_the_ball():
+    """A mixed pile (``mixed_pile(216, 146, 0.5)``, semi-implicit Euler, dt = 10 ms, sleeping off, tolerance 0; its
+    state at 0.39 s, ``test/data/mixed_pile_146_rows_at_0.39s.npy``): a ball (body 150, r = 52 mm) touches the
+    ground falling at 4.6 m/s, and a can (body 73) comes down at 3.4 m/s beside it, touching another body. On
+    their free chords their bounding spheres keep apart (the ball falls faster), so the broad phase did not pair
+    them; the ground's pass then stopped the ball, and the can, stepped by the islands, ended the step 13 mm
+    inside it. A body whose sphere ends its free step past a half-space is screened anywhere on its chord. Over
+    two steps no two bodies overlap by more than 1e-9 m."""
+    sim = pile_from_rows(216, 146, 1e-2, "mixed_pile_146_rows_at_0.39s.npy", sleeping=False, tolerance=0.0,
+                         restitution=0.5, integrator="semi_implicit_euler")
+    assert sim.contact.shapes[150, 0] == SHAPE_SPHERE and sim.contact.shapes[73, 0] == SHAPE_CYLINDER
+    two_steps_no_deeper_than(sim, 1e-9)
+
+
 def move_as_their_speeds_say(sim: Simulator, bodies: list, steps: int) -> None:
     """``steps`` steps of ``sim``; after each, none of ``bodies`` ends it faster than 0.1 m/s having moved less
     than half of that speed × dt (a speed that the projection undoes at every step)."""

@@ -180,7 +180,7 @@ def test_bodies_out_of_their_free_box_are_paired_with_every_body_they_may_have_m
 
         def may_meet(m, k):
             one[0] = m, k
-            return spheres_may_meet(Y0, stepped, members, reach, h, one, 1) == 1
+            return spheres_may_meet(Y0, stepped, members, reach, h, np.zeros((0, 7)), one, 1) == 1
 
         brute = set()
         for m in np.flatnonzero(outside).tolist():
@@ -233,7 +233,7 @@ def test_swept_spheres_keep_every_pair_that_meets():
     Y0[:, P:P + 3], Y0[:, V:V + 3] = p0, v0
     Y1[:, P:P + 3], Y1[:, V:V + 3] = p0 + v0 * h + 0.5 * a * h * h, v0 + a * h
     pairs = np.array([(i, j) for i in range(n) for j in range(i + 1, n)], dtype=np.int64)
-    kept = spheres_may_meet(Y0, Y1, np.arange(n, dtype=np.int64), radius, h, pairs, len(pairs))
+    kept = spheres_may_meet(Y0, Y1, np.arange(n, dtype=np.int64), radius, h, np.zeros((0, 7)), pairs, len(pairs))
     kept_set = {tuple(q) for q in pairs[:kept].tolist()}
     t = np.linspace(0.0, h, 1001)[:, None, None]
     path = p0 + v0 * t + 0.5 * a * t * t  # (instants, bodies, 3)
@@ -246,3 +246,47 @@ def test_swept_spheres_keep_every_pair_that_meets():
                 assert (i, j) in kept_set, f"pair {i}, {j} meets (gap {gap:.3g} m) but was dropped"
             dropped += (i, j) not in kept_set
     assert meeting > 20 and dropped > 100
+
+
+def test_swept_spheres_keep_every_pair_a_ground_may_bring_together():
+    """spheres_may_meet with the ground z ≥ 0: a body whose bounding sphere ends its free step below the ground is
+    stopped by the ground's pass somewhere on its chord, and may go back along it (a rebound). Over random bodies
+    falling at 2 to 6 m/s, some landing, each landing one stopped at a random point of its chord and sent back
+    along it by a random part of what is left (sampled at 1001 instants), every pair whose spheres touch at some
+    instant is kept; without the ground (the free chords only), some of those are dropped."""
+    from rigid_body_sim.core.kernels.contact.swept import spheres_may_meet
+    from rigid_body_sim.core.kernels.layout import P, ROW_WIDTH, V
+
+    rng = np.random.default_rng(7)
+    h, n = 0.01, 80
+    radius = rng.uniform(0.02, 0.06, n)
+    p0 = np.column_stack([rng.uniform(-0.15, 0.15, (n, 2)), radius + rng.uniform(0.0, 0.08, n)])
+    v = np.column_stack([rng.normal(0, 0.5, (n, 2)), -rng.uniform(2.0, 6.0, n)])
+    p1 = p0 + v * h
+    Y0, Y1 = np.zeros((n, ROW_WIDTH)), np.zeros((n, ROW_WIDTH))
+    Y0[:, P:P + 3], Y0[:, V:V + 3], Y1[:, P:P + 3], Y1[:, V:V + 3] = p0, v, p1, v
+    lands = p1[:, 2] < radius
+    stop, back = rng.uniform(0.0, 1.0, n), rng.uniform(0.0, 1.0, n)
+    s = np.linspace(0.0, 1.0, 1001)[:, None]
+    along = np.where(lands, np.where(s <= stop, s, np.maximum(stop - back * (s - stop), 0.0)), s)  # (instants, n)
+    path = p0 + along[:, :, None] * (p1 - p0)
+    pairs = np.array([(i, j) for i in range(n) for j in range(i + 1, n)], dtype=np.int64)
+    ground = np.zeros((1, 7))
+    ground[0, 2] = 1.0
+
+    def screened(grounds: np.ndarray) -> set:
+        rows = pairs.copy()
+        return {tuple(q) for q in rows[:spheres_may_meet(Y0, Y1, np.arange(n, dtype=np.int64), radius, h, grounds,
+                                                         rows, len(rows))].tolist()}
+
+    kept, free = screened(ground), screened(np.zeros((0, 7)))
+    meeting = missed_free = 0
+    for i, j in pairs.tolist():
+        gap = np.min(np.linalg.norm(path[:, j] - path[:, i], axis=1)) - radius[i] - radius[j]
+        if gap <= 0.0:
+            meeting += 1
+            assert (i, j) in kept, f"pair {i}, {j} meets (gap {gap:.3g} m) but was dropped"
+            missed_free += (i, j) not in free
+    print(f"{lands.sum()} landing; {meeting} pairs meet, {missed_free} of them dropped on the free chords; kept {len(kept)}, "
+          f"free chords {len(free)} of {len(pairs)}")
+    assert lands.sum() > 10 and meeting > 20 and missed_free > 0 and len(kept) < len(pairs)

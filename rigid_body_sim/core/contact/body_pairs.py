@@ -358,7 +358,7 @@ class BodyPairs:
             self._pairs = np.empty((2 * found, 2), dtype=np.int64)
             found = grid_swept_pairs(self._lo, self._hi, self.movable, self._cells, self._heads, self._chain,
                                      self._pairs)
-        found = spheres_may_meet(Y0, Y1, self.members, self.reach, h, self._pairs, found)
+        found = spheres_may_meet(Y0, Y1, self.members, self.reach, h, self.solver.half_spaces, self._pairs, found)
         pairs = self.members[self._pairs[:found]]
         self._last_swept = (lo, hi, pairs)
         return pairs

@@ -16,7 +16,8 @@ import numpy as np
 
 from ..kernels.contact.broadphase import grid_pairs, shape_aabbs, sweep_pairs
 from ..kernels.contact.impacts import IMPACT_WORK_SHAPE
-from ..kernels.contact.layout import DIMS, KIND, SHAPE_BOX, SHAPE_CAPSULE, SHAPE_CYLINDER, SHAPE_SPHERE, SHAPE_WIDTH
+from ..kernels.contact.layout import (DIMS, GROUND_WIDTH, KIND, SHAPE_BOX, SHAPE_CAPSULE, SHAPE_CYLINDER, SHAPE_SPHERE,
+                                     SHAPE_WIDTH)
 from ..kernels.contact.pair_impacts import PAIR_JACOBIAN_SHAPE, normal_speed, pair_impact
 from ..kernels.contact.pairs import MAX_PAIR_POINTS, apart_bounds, pair_contacts
 from ..kernels.contact.swept import grid_swept_pairs, left_pairs, screen_pairs, spheres_may_meet, swept_bounds
@@ -59,7 +60,7 @@ def compile_pair_kernels() -> None:
     cells, heads, chain = np.empty((n, 3), dtype=np.int64), np.empty(16, dtype=np.int64), np.empty(n, dtype=np.int64)
     movable = np.ones(n, dtype=np.bool_)
     found = grid_swept_pairs(lo, hi, movable, cells, heads, chain, swept)
-    spheres_may_meet(Ys[0], Ys[1], members, np.full(n, 0.1), 1e-3, swept, found)
+    spheres_may_meet(Ys[0], Ys[1], members, np.full(n, 0.1), 1e-3, np.zeros((1, GROUND_WIDTH)), swept, found)
     left_pairs(Ys[0], Ys[1], members, np.full(n, 0.1), 1e-3, lo, hi, movable, np.zeros(0, dtype=np.int64),
                np.zeros(n, dtype=np.bool_), cells, heads, chain, np.empty((n, 3)), np.empty((n, 3)),
                np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64), swept)

@@ -74,7 +74,7 @@ from .impacts import kinetic_energy_row, potential_energy_row
 from .pair_impacts import normal_speed
 from .pairs import MAX_PAIR_POINTS, RIM_ACROSS, ball_contact, boxes_apart_turned, face_patch, pair_contacts, set_pose
 from .shapes import MAX_FEATURES, feature_gaps, feature_points
-from .swept import boxes_meet, chords_apart, grid_overlaps, growth
+from .swept import boxes_meet, grid_overlaps, growth, paths_may_meet
 
 __all__ = ["island_pass", "all_asleep", "rest_alone", "TOUCH", "SLEEP_SPEED", "SLEEP_STEPS", "DENSE_MAX", "PROJECT_TOL", "C_FLOATS", "C_INTS", "OUT_WIDTH"]
 
@@ -1886,16 +1886,17 @@ def _listed(nlist, lhead, lnext, i, j):
 
 
 @njit(**JIT)
-def _late_pairs(Y0, Y1, island, stopped, is_static, members, nlist, n_pairs, comp, flags, broad, h, boxes, left,
-                n_left, lhead, lnext, found, out):
+def _late_pairs(Y0, Y1, grounds, island, stopped, is_static, members, nlist, n_pairs, comp, flags, broad, h, boxes,
+                left, n_left, lhead, lnext, found, out):
     """The pairs the velocity step's paths may bring together that the broad phase, screening the free step's,
     did not list: appended to nlist for the projection (returns the new n_pairs). ``left`` (n_left rows of members,
     each flagged LEFT_PATH): the island bodies whose end left its free step's end by more than that screen's growth
     (swept_bounds'); ``boxes`` (per body, 6 columns): each one's box over its new path (lo, hi). A pair is one of
     those and a body whose box meets it (the broad phase's box, or the other's new one) whose bounding spheres
     can meet over the step as now stepped (spheres_may_meet's test on their chords; a body not in an island keeps its
-    growth), not in nlist, neither stopped. A moving body outside the islands so met joins them (island 1, its
-    free step as it is: it is moved by the projection and the stop of approach, with momentum) and its component
+    growth, and may be stopped by a half-space of ``grounds``: paths_may_meet), not in nlist, neither stopped. A
+    moving body outside the islands so met joins them (island 1, its free step as it is: it is moved by the
+    projection and the stop of approach, with momentum) and its component
     joins the other's. ``broad``: the broad phase's (lo, hi, movable, fixed, members, reach, cells, heads, chain),
     its members' first rows this pass's members. lhead (per body), lnext (2 per nlist row) and found (per broad
     phase member) are scratch."""
@@ -1922,28 +1923,29 @@ def _late_pairs(Y0, Y1, island, stopped, is_static, members, nlist, n_pairs, com
             k = found[c]
             if k < n and flags[members[k]] & LEFT_PATH:
                 continue  # another that left its path: the pairs of those below
-            n_pairs = _late_pair(Y0, Y1, island, stopped, is_static, nlist, n_pairs, comp, flags, bmembers, reach,
-                                 h, m, k, lhead, lnext, out)
+            n_pairs = _late_pair(Y0, Y1, grounds, island, stopped, is_static, nlist, n_pairs, comp, flags, bmembers,
+                                 reach, h, m, k, lhead, lnext, out)
         for e2 in range(e + 1, n_left):
             m2 = left[e2]
             j = members[m2]
             if boxes_meet(boxes[i, 0:3], boxes[i, 3:6], boxes[j, 0:3], boxes[j, 3:6], 0.0):
-                n_pairs = _late_pair(Y0, Y1, island, stopped, is_static, nlist, n_pairs, comp, flags, bmembers,
-                                     reach, h, m, m2, lhead, lnext, out)
+                n_pairs = _late_pair(Y0, Y1, grounds, island, stopped, is_static, nlist, n_pairs, comp, flags,
+                                     bmembers, reach, h, m, m2, lhead, lnext, out)
     _pin = Y0[0, 0], Y1[0, 0], island[0], stopped[0], is_static[0], members[0], nlist[0, 0], comp[0], flags[0]
     _pin2 = boxes[0, 0], left[0], lhead[0], lnext[0], found[0], out[0]
     return n_pairs
 
 
 @njit(**INLINE)
-def _late_pair(Y0, Y1, island, stopped, is_static, nlist, n_pairs, comp, flags, bmembers, reach, h, m, k, lhead,
-               lnext, out):
+def _late_pair(Y0, Y1, grounds, island, stopped, is_static, nlist, n_pairs, comp, flags, bmembers, reach, h, m, k,
+               lhead, lnext, out):
     """_late_pairs' test of broad phase members m (an island body that left its path) and k, and the pair added."""
     i, j = bmembers[m], bmembers[k]
     if i == j or stopped[i] or stopped[j] or _listed(nlist, lhead, lnext, i, j):
         return n_pairs
-    grow = growth(Y0, Y1, j, h) if island[j] == 0 and not is_static[j] else 0.0  # a free step keeps its growth
-    if chords_apart(Y0, Y1, i, j) > (reach[m] + reach[k]) * (1.0 + 1e-6) + grow:
+    free = island[j] == 0 and not is_static[j]  # a free step keeps its growth, and its ground may stop it
+    grow = growth(Y0, Y1, j, h) if free else 0.0
+    if not paths_may_meet(Y0, Y1, grounds, i, j, reach[m], reach[k], grow, False, free):
         return n_pairs
     if n_pairs == nlist.shape[0]:
         out[OUT_LATE_LOST] += 1
@@ -2285,8 +2287,8 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         Y1[i, Q], Y1[i, Q + 1], Y1[i, Q + 2], Y1[i, Q + 3] = normalise(q[0], q[1], q[2], q[3])
     n_left = _left_path(Y0, Y1, island, members, flags, reach, bwork, dx, blist)
     if n_left:
-        n_pairs = _late_pairs(Y0, Y1, island, stopped, is_static, members, nlist, n_pairs, comp, flags, broad, h, dx,
-                              blist, n_left, lhead, lnext, found, out)
+        n_pairs = _late_pairs(Y0, Y1, grounds, island, stopped, is_static, members, nlist, n_pairs, comp, flags, broad,
+                              h, dx, blist, n_left, lhead, lnext, found, out)
     # the projection, on the second half of the contact and row scratch (the first keeps the velocity step's),
     # looking at the pairs within their reach over the step as solved. A body of a component solved exactly from
     # no point deeper than half the tolerance that moved less than PROJECT_TOL × its size over the step is held
@@ -2318,7 +2320,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         n_left = _left_path(Y0, Y1, island, members, flags, reach, bwork, dx, blist)
         late = out[OUT_LATE]
         if n_left:
-            n_pairs = _late_pairs(Y0, Y1, island, stopped, is_static, members, nlist, n_pairs, comp, flags,
+            n_pairs = _late_pairs(Y0, Y1, grounds, island, stopped, is_static, members, nlist, n_pairs, comp, flags,
                                   broad, h, dx, blist, n_left, lhead, lnext, found, out)
         if out[OUT_LATE] == late:
             break

@@ -15,7 +15,8 @@ overlapping pair: about linear in the number of shapes while the moving ones hav
 sizes (one huge box, a very fast body's sweep, makes every cell huge). The fixed boxes (static
 shapes, any size) are tested against every movable box: S × N tests for S of them.
 :func:`spheres_may_meet` keeps of these the pairs whose bounding spheres can meet over the step
-(boxes overlap where spheres do not: every diagonal neighbour of a lattice). :func:`left_pairs` looks
+(boxes overlap where spheres do not: every diagonal neighbour of a lattice), a body that a half-space may stop
+within the step taken anywhere on its chord (the ground's pass, after this one, changes its path). :func:`left_pairs` looks
 again after the step's passes: the bodies an event sent out of their free step's box, and each pair
 such a body may have met on the grid. :func:`screen_pairs`
 then gives each candidate its bound on how fast its distance changes and, unless it is provably
@@ -33,9 +34,10 @@ from numba import njit
 from ..jit import INLINE, JIT
 from ..layout import P, Q, V, W
 from ..rotation import qmul
+from .layout import NORMAL, OFFSET
 from .pairs import apart_bounds, pair_contacts
 
-__all__ = ["GROWTH", "growth", "chords_apart", "swept_bounds", "grid_swept_pairs", "boxes_meet", "grid_overlaps",
+__all__ = ["GROWTH", "growth", "chords_apart", "chords_near", "rebound", "paths_may_meet", "swept_bounds", "grid_swept_pairs", "boxes_meet", "grid_overlaps",
            "spheres_may_meet", "left_pairs", "screen_pairs"]
 
 
@@ -208,27 +210,95 @@ def chords_apart(Y0, Y1, a, b):
     return math.sqrt(cx * cx + cy * cy + cz * cz)
 
 
+@njit(**INLINE)
+def chords_near(Y0, Y1, a, b):
+    """The least distance (m) between the chords of bodies a and b (each centre's segment from its position in Y0
+    to its position in Y1), each anywhere on its own: the closest points of two segments (Ericson, Real-Time
+    Collision Detection, 5.1.9)."""
+    d1x, d1y, d1z = Y1[a, P] - Y0[a, P], Y1[a, P + 1] - Y0[a, P + 1], Y1[a, P + 2] - Y0[a, P + 2]
+    d2x, d2y, d2z = Y1[b, P] - Y0[b, P], Y1[b, P + 1] - Y0[b, P + 1], Y1[b, P + 2] - Y0[b, P + 2]
+    rx, ry, rz = Y0[a, P] - Y0[b, P], Y0[a, P + 1] - Y0[b, P + 1], Y0[a, P + 2] - Y0[b, P + 2]
+    aa, ee = d1x * d1x + d1y * d1y + d1z * d1z, d2x * d2x + d2y * d2y + d2z * d2z
+    ff, cc, bb = d2x * rx + d2y * ry + d2z * rz, d1x * rx + d1y * ry + d1z * rz, d1x * d2x + d1y * d2y + d1z * d2z
+    s = t = 0.0
+    if aa == 0.0:
+        if ee > 0.0:
+            t = min(max(ff / ee, 0.0), 1.0)
+    elif ee == 0.0:
+        s = min(max(-cc / aa, 0.0), 1.0)
+    else:
+        denom = aa * ee - bb * bb
+        if denom > 0.0:
+            s = min(max((bb * ff - cc * ee) / denom, 0.0), 1.0)
+        t = (bb * s + ff) / ee
+        if t < 0.0:
+            t, s = 0.0, min(max(-cc / aa, 0.0), 1.0)
+        elif t > 1.0:
+            t, s = 1.0, min(max((bb - cc) / aa, 0.0), 1.0)
+    cx, cy, cz = rx + s * d1x - t * d2x, ry + s * d1y - t * d2y, rz + s * d1z - t * d2z
+    return math.sqrt(cx * cx + cy * cy + cz * cz)
+
+
+@njit(**INLINE)
+def rebound(Y0, Y1, grounds, i, r):
+    """How far (m) body i, on its free step, may be from where its chord puts it at a time, when a half-space of
+    ``grounds`` (rows n·x ≥ offset) may stop it within the step: the chord's length, where its bounding sphere
+    (radius r) at the step's end reaches past one (its ground pass stops it anywhere on the chord or sends it
+    back along it, by at most what is left of the chord); −1 where none does (its path is the chord's)."""
+    x, y, z = Y1[i, P], Y1[i, P + 1], Y1[i, P + 2]
+    reaches = False
+    for g in range(grounds.shape[0]):
+        reaches = reaches or grounds[g, NORMAL] * x + grounds[g, NORMAL + 1] * y + grounds[g, NORMAL + 2] * z \
+            - grounds[g, OFFSET] < r
+    if not reaches:
+        return -1.0
+    dx, dy, dz = x - Y0[i, P], y - Y0[i, P + 1], z - Y0[i, P + 2]
+    return math.sqrt(dx * dx + dy * dy + dz * dz)
+
+
+@njit(**INLINE)
+def paths_may_meet(Y0, Y1, grounds, a, b, ra, rb, grow, free_a, free_b):
+    """Whether the bounding spheres (radii ra, rb; their growths summed, ``grow``) of bodies a and b can meet over
+    the step: on their chords at the same rate (chords_apart), or, where one on its free step (free_a, free_b) may
+    be stopped by a half-space of ``grounds`` (rebound), each anywhere on its chord (chords_near) within the radii,
+    the growths and the rebounds. A ball on the ground moving down, whose free chord goes on into the ground, is
+    stopped by its ground pass: a can coming down beside it meets it though their free chords keep apart."""
+    limit = (ra + rb) * (1.0 + 1e-6) + grow
+    if chords_apart(Y0, Y1, a, b) <= limit:
+        return True
+    back_a = rebound(Y0, Y1, grounds, a, ra) if free_a else -1.0
+    back_b = rebound(Y0, Y1, grounds, b, rb) if free_b else -1.0
+    if back_a < 0.0 and back_b < 0.0:
+        return False
+    return chords_near(Y0, Y1, a, b) <= limit + max(back_a, 0.0) + max(back_b, 0.0)
+
+
 @njit(**JIT)
-def spheres_may_meet(Y0, Y1, members, reach, h, pairs, found):
+def spheres_may_meet(Y0, Y1, members, reach, h, grounds, pairs, found):
     """Of the overlapping boxes' pairs (rows of members) pairs[:found], those whose bounding spheres can meet over
     the step kept at the front, in their order; returns how many. A pair is dropped when its centres' relative
     path, taken as the chord from its start to its end offset to its start, stays further from zero than both
     spheres' radii (``reach``) plus both growths (GROWTH × |v₁ − v₀| h each, as swept_bounds') and 1e-6 of the radii:
     each centre stays within its growth of its own chord (swept_bounds), so their difference within both of the
-    chords' difference. Y0, Y1, members, reach, h as for swept_bounds."""
+    chords' difference; and, where one of them may be stopped by a half-space of ``grounds`` (the ground's pass
+    after this one changes its path: paths_may_meet), when the chords themselves stay that far apart, the
+    rebounds added. Y0, Y1, members, reach, h as for swept_bounds."""
     kept = 0
     for k in range(found):
         m, n = pairs[k, 0], pairs[k, 1]
-        if _spheres_meet(Y0, Y1, members, reach, h, m, n):
+        a, b = members[m], members[n]
+        if paths_may_meet(Y0, Y1, grounds, a, b, reach[m], reach[n], growth(Y0, Y1, a, h) + growth(Y0, Y1, b, h),
+                          True, True):
             pairs[kept, 0], pairs[kept, 1] = m, n
             kept += 1
-    _pin = Y0[0, 0], Y1[0, 0], members[0], reach[0], pairs[0, 0]
+    _pin = Y0[0, 0], Y1[0, 0], members[0], reach[0], grounds.shape[0], pairs[0, 0]
     return kept
 
 
 @njit(**INLINE)
 def _spheres_meet(Y0, Y1, members, reach, h, m, n):
-    """spheres_may_meet's test of members m and n (rows)."""
+    """spheres_may_meet's test of members m and n (rows) on chords that no ground will change (the paths as
+    stepped)."""
     a, b = members[m], members[n]
     grow = growth(Y0, Y1, a, h) + growth(Y0, Y1, b, h)
     return chords_apart(Y0, Y1, a, b) <= (reach[m] + reach[n]) * (1.0 + 1e-6) + grow
@@ -246,7 +316,7 @@ def left_pairs(Y0, Y1, members, reach, h, lo, hi, movable, fixed, skip, cells, h
     those are listed in ``left``. A pair is one of them and another movable member not skipped whose box meets that
     one (lo, hi as grid_swept_pairs filed them in cells, heads, chain, queried by grid_overlaps with scratch
     ``found``; for two that left, their new boxes), whose bounding spheres can meet on the chords as stepped
-    (spheres_may_meet's test)."""
+    (spheres_may_meet's test, no ground left to change a path)."""
     n_left = 0
     for m in range(members.shape[0]):
         i = members[m]
