@@ -1211,6 +1211,22 @@ def test_a_can_coming_down_beside_a_ball_its_ground_stops_ends_its_step_outside_
     two_steps_no_deeper_than(sim, 1e-9)
 
 
+def test_a_ball_out_of_its_island_that_comes_down_on_a_landing_ball_ends_its_step_outside_it():
+    """A mixed pile (``mixed_pile(125, 10, 0)``, rk4, dt = 10 ms, sleeping off, tolerance 0; its state at 0.22 s,
+    ``test/data/mixed_pile_10_rows_at_0.22s.npy``). At its second step a ball (body 35, r = 75 mm) leaves its
+    island in flight, 2.5 m/s down, just above a ball (body 10) that lands on the ground within the step. On their
+    free paths they keep apart, and the ground's pass stopped the lower ball; the body–body pass looks again at
+    the pairs of a body whose end changed, but not at a body out of its island, so the upper ball ended the step
+    4.0 mm inside the lower one. A body out of its island in flight is looked at again like any other. Over two
+    steps ball 35 ends no step inside ball 10 by more than 1e-9 m."""
+    sim = pile_from_rows(125, 10, 1e-2, "mixed_pile_10_rows_at_0.22s.npy", sleeping=False, tolerance=0.0)
+    upper, lower = 35, 10
+    assert sim.contact.shapes[upper, 0] == SHAPE_SPHERE and sim.contact.shapes[lower, 0] == SHAPE_SPHERE
+    for _ in range(2):
+        overlaps = {(a, b): d for a, b, d in step_and_overlaps(sim)}
+        assert overlaps.get((lower, upper), 0.0) <= 1e-9, overlaps
+
+
 def move_as_their_speeds_say(sim: Simulator, bodies: list, steps: int) -> None:
     """``steps`` steps of ``sim``; after each, none of ``bodies`` ends it faster than 0.1 m/s having moved less
     than half of that speed × dt (a speed that the projection undoes at every step)."""

@@ -285,6 +285,8 @@ class BodyPairs:
         if look is None:
             return
         kept, hits, pairs = look["kept"], look["hits"], look["pairs"]
+        left = self.islands.left  # out of their island this step: in flight, bodies of the passes like any other
+        kept[left[self.solver.modes[left] == FLIGHT]] = False
         links: set = set()  # pairs looked at again, followed by a group stepped again
         for _ in range(MAX_LOOKS):
             near = set()
