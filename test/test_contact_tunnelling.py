@@ -287,6 +287,6 @@ def test_swept_spheres_keep_every_pair_a_ground_may_bring_together():
             meeting += 1
             assert (i, j) in kept, f"pair {i}, {j} meets (gap {gap:.3g} m) but was dropped"
             missed_free += (i, j) not in free
-    print(f"{lands.sum()} landing; {meeting} pairs meet, {missed_free} of them dropped on the free chords; kept {len(kept)}, "
-          f"free chords {len(free)} of {len(pairs)}")
+    print(f"{lands.sum()} landing; {meeting} pairs meet, {missed_free} of them dropped on the free chords; kept "
+          f"{len(kept)}, free chords {len(free)} of {len(pairs)}")
     assert lands.sum() > 10 and meeting > 20 and missed_free > 0 and len(kept) < len(pairs)

@@ -15,12 +15,12 @@ overlapping pair: about linear in the number of shapes while the moving ones hav
 sizes (one huge box, a very fast body's sweep, makes every cell huge). The fixed boxes (static
 shapes, any size) are tested against every movable box: S × N tests for S of them.
 :func:`spheres_may_meet` keeps of these the pairs whose bounding spheres can meet over the step
-(boxes overlap where spheres do not: every diagonal neighbour of a lattice), a body that a half-space may stop
-within the step taken anywhere on its chord (the ground's pass, after this one, changes its path). :func:`left_pairs` looks
-again after the step's passes: the bodies an event sent out of their free step's box, and each pair
-such a body may have met on the grid. :func:`screen_pairs`
-then gives each candidate its bound on how fast its distance changes and, unless it is provably
-apart over the whole step, its signed distances at the step's two ends (two batched narrow-phase
+(boxes overlap where spheres do not: every diagonal neighbour of a lattice), a body that a half-space
+may stop within the step taken anywhere on its chord (the ground's pass, after this one, changes its
+path). :func:`left_pairs` looks again after the step's passes: the bodies an event sent out of their
+free step's box, and each pair such a body may have met on the grid. :func:`screen_pairs` then gives
+each candidate its bound on how fast its distance changes and, unless it is provably apart over the
+whole step, its signed distances at the step's two ends (two batched narrow-phase
 calls). No allocation: the caller owns every array, so a step without any candidate pair costs
 two compiled loops over the shapes and nothing else.
 """
@@ -37,8 +37,8 @@ from ..rotation import qmul
 from .layout import NORMAL, OFFSET
 from .pairs import apart_bounds, pair_contacts
 
-__all__ = ["GROWTH", "growth", "chords_apart", "chords_near", "rebound", "paths_may_meet", "swept_bounds", "grid_swept_pairs", "boxes_meet", "grid_overlaps",
-           "spheres_may_meet", "left_pairs", "screen_pairs"]
+__all__ = ["GROWTH", "growth", "chords_apart", "chords_near", "rebound", "paths_may_meet", "swept_bounds",
+           "grid_swept_pairs", "boxes_meet", "grid_overlaps", "spheres_may_meet", "left_pairs", "screen_pairs"]
 
 
 #: A body's box and sphere over the step are grown by this × |v₁ − v₀| h (m): module docstring.
