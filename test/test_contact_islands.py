@@ -1227,6 +1227,27 @@ def test_a_ball_out_of_its_island_that_comes_down_on_a_landing_ball_ends_its_ste
         assert overlaps.get((lower, upper), 0.0) <= 1e-9, overlaps
 
 
+def test_a_can_at_rest_on_its_end_held_on_one_rim_point_lands_its_face_instead_of_tipping_into_the_ground():
+    """A mixed pile (``mixed_pile(216, 109, 0)``, semi-implicit Euler, dt = 10 ms, sleeping off, tolerance 0; its
+    state at 0.39 s, ``test/data/mixed_pile_109_rows_at_0.39s.npy``): a can (body 18, r = 97 mm) stands at rest
+    on its end on the ground, its velocities at the islands' round-off (1e-9 m/s). The point of its rim opposite
+    the lowest rises at 1.4e-9 m/s, faster than the lift-off speed: it is held on that lowest point alone. Tipped
+    about it by gravity, its face came down through the ground, the opposite point, within the band at the
+    step's start, not looked at: it ended the step 0.38 mm inside the ground. That point is followed to a floor
+    a band below where it was: the face lands. Over three steps the can ends no step deeper than 1e-9 m in the
+    ground, resting on its face (both points of its end rim tracked)."""
+    from rigid_body_sim.core.contact.query import lowest_gaps
+
+    sim = pile_from_rows(216, 109, 1e-2, "mixed_pile_109_rows_at_0.39s.npy", sleeping=False, tolerance=0.0,
+                         integrator="semi_implicit_euler")
+    can = 18
+    assert sim.contact.shapes[can, 0] == SHAPE_CYLINDER and sim.contact.tracked[can] == 1  # one rim point
+    for _ in range(3):
+        sim.step()
+        assert lowest_gaps(sim)[can] >= -1e-9
+    assert sim.contact.tracked[can] == 0b101
+
+
 def move_as_their_speeds_say(sim: Simulator, bodies: list, steps: int) -> None:
     """``steps`` steps of ``sim``; after each, none of ``bodies`` ends it faster than 0.1 m/s having moved less
     than half of that speed × dt (a speed that the projection undoes at every step)."""

@@ -368,8 +368,11 @@ def opposite_rim_gap(y0, y, p, shape, ground, mask, band):
     """The gap (m) at state y of the point of a cylinder held on one rim (``mask``: that rim's feature alone)
     that was the rim's highest at y0, the step's start: a point of the body, opposite the held one. It reaches
     the ground when the end face comes down flat (the can rocking back onto its end), where the held lowest
-    point jumps across the rim and no feature of feature_gaps goes below. inf for another shape or mask, and
-    when that point was within ``band`` of the ground at y0 (the can just tipping from its end)."""
+    point jumps across the rim and no feature of feature_gaps goes below. inf for another shape or mask. Where
+    that point was within ``band`` of the ground at y0 (the can on its end, held on one rim point), its gap
+    above a floor ``band`` below where it was: it reaches that floor when the face comes down (a can at rest
+    whose opposite point rose at round-off speed, 1e-9 m/s, tipped about the held point), not when the can
+    tips from its end (the point rises)."""
     end = held_rim(shape, mask)
     if end < 0:
         return math.inf
@@ -379,9 +382,9 @@ def opposite_rim_gap(y0, y, p, shape, ground, mask, band):
     ux, uy, uz, cos_a, px, py, pz, across = axis_tilt(y0, p, nx, ny, nz)
     rx, ry, rz = _rim_direction(y0, ux, uy, uz, nx, ny, nz, px, py, pz, across, FEATURE_BAND * max(a0, a1) / a0)
     ox, oy, oz = side * a1 * ux + a0 * rx, side * a1 * uy + a0 * ry, side * a1 * uz + a0 * rz  # from the centre
-    if nx * (y0[P] + ox) + ny * (y0[P + 1] + oy) + nz * (y0[P + 2] + oz) - ground[OFFSET] <= band:
-        return math.inf
+    start = nx * (y0[P] + ox) + ny * (y0[P + 1] + oy) + nz * (y0[P + 2] + oz) - ground[OFFSET]
+    floor = start - band if start <= band else 0.0
     bx, by, bz = rotate_back(y0[Q], y0[Q + 1], y0[Q + 2], y0[Q + 3], ox, oy, oz)  # principal axes: fixed in the body
     ox, oy, oz = rotate(y[Q], y[Q + 1], y[Q + 2], y[Q + 3], bx, by, bz)
     _pin = y0[P], y[P], p[0], shape[0], ground[0]
-    return nx * (y[P] + ox) + ny * (y[P + 1] + oy) + nz * (y[P + 2] + oz) - ground[OFFSET]
+    return nx * (y[P] + ox) + ny * (y[P + 1] + oy) + nz * (y[P + 2] + oz) - ground[OFFSET] - floor
