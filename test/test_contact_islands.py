@@ -1248,6 +1248,25 @@ def test_a_can_at_rest_on_its_end_held_on_one_rim_point_lands_its_face_instead_o
     assert sim.contact.tracked[can] == 0b101
 
 
+def test_a_ball_held_in_a_bins_corner_and_struck_there_ends_its_step_outside_the_walls():
+    """A mixed pile (``mixed_pile(27, 160, 0)``, rk4, dt = 10 ms, sleeping on, tolerance 0; its state at 0.69 s,
+    ``test/data/mixed_pile_160_rows_at_0.69s.npy``): a ball (body 13) held on the ground in a bin's corner is
+    struck there by a box (body 15) at 0.92 m/s, in a group's step. At that instant the ball is struck against
+    the box and both walls, round after round; the group followed its gap to a wall only while apart from it,
+    so the box pressed it 1.2 mm into a wall (body 30) over the rest of the step. A held member touching a wall
+    it was struck against at that instant is followed to a floor a skin below (ADVANCE_SKIN × its size), as a
+    touching pair is. Over two steps the ball ends no step deeper than that in a wall."""
+    from rigid_body_sim.core.contact.body_pairs import ADVANCE_SKIN
+
+    sim = pile_from_rows(27, 160, 1e-2, "mixed_pile_160_rows_at_0.69s.npy", sleeping=True, tolerance=0.0)
+    ball, walls = 13, {27, 28, 29, 30}
+    assert sim.contact.shapes[ball, 0] == SHAPE_SPHERE and sim.contact.is_resting("b13")
+    skin = ADVANCE_SKIN * sim.contact.pairs.size[ball]
+    for _ in range(2):
+        into_walls = [d for a, b, d in step_and_overlaps(sim) if ball in (a, b) and {a, b} & walls]
+        assert max(into_walls, default=0.0) <= skin, into_walls
+
+
 def move_as_their_speeds_say(sim: Simulator, bodies: list, steps: int) -> None:
     """``steps`` steps of ``sim``; after each, none of ``bodies`` ends it faster than 0.1 m/s having moved less
     than half of that speed × dt (a speed that the projection undoes at every step)."""

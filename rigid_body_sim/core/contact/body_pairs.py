@@ -490,6 +490,7 @@ class BodyPairs:
         struck_walls: set = set()  # (held member, instant) struck against a wall it touched at a piece's start
         rested: dict[int, np.ndarray] = {}  # held members a held step threw, left at rest: their state while at rest
         sunk: dict[int, int] = {}  # held members whose untracked feature, touching, was met at its floor: how often
+        pressed_on: dict[int, int] = {}  # held members touching a wall struck at an instant, met at its floor: how often
 
         def still(i: int) -> bool:  # left at rest by a throw and not moved since (no event of its own)
             return i in rested and np.array_equal(y[i], rested[i])
@@ -539,6 +540,15 @@ class BodyPairs:
             # (touching one, it is the ground pass's, solver._persistent_end)
             sides = [i for i in sorted(active & held) if solver._may_strike_side(i)
                      and solver._other_gap(sim, y[i], i)[0] > band[i]]
+            # one touching a wall it was struck against at this instant (a partner presses it there) is followed
+            # to a floor a skin deeper than it was, as a pair that touches is (met there MAX_GRAZES times: no longer)
+            side_floors = {}
+            for i in sorted(active & held):
+                if (i, t) in struck_walls and pressed_on.get(i, 0) <= MAX_GRAZES and solver._may_strike_side(i):
+                    gap = solver._other_gap(sim, y[i], i)[0]
+                    if gap <= band[i]:
+                        side_floors[i] = min(gap, 0.0) - ADVANCE_SKIN * self.size[i]
+                        sides.append(i)
             # a held member's features not on its ground (a box tipping on an edge: its other edge comes down; a can
             # rocking on its rim: its end face): a landing there changes its path (solver._reaching, on the ground
             # pass). One touching at the piece's start (just landed and not held, a partner's impulse on it) is
@@ -569,7 +579,8 @@ class BodyPairs:
                 values += [(self.contact(states[a], a, states[b], b) - floors[(a, b)], ("pair", a, b))
                            for a, b in floors]
                 values += [(solver._gap(sim, states[i], i)[0], ("env", i)) for i in watched]
-                values += [(solver._other_gap(sim, states[i], i)[0], ("side", i)) for i in sides]
+                values += [(solver._other_gap(sim, states[i], i)[0] - side_floors.get(i, 0.0), ("side", i))
+                           for i in sides]
                 values += [(solver._untracked_gap(sim, states[i], i, y[i]) - land_floors.get(i, 0.0), ("land", i))
                            for i in lands]
                 return values
@@ -685,6 +696,9 @@ class BodyPairs:
                 self._hold_again(sim, i, y[i], w, bare, held, t, True)
                 continue
             if key[0] == "side":  # a held member meets a wall: its impact there, held again (or lifted off)
+                if i in side_floors:
+                    pressed_on[i] = pressed_on.get(i, 0) + 1
+                struck_walls.add((i, t))
                 self._strike_wall(sim, i, y, w, held, t)
                 continue
             # a flying member meets its ground or a static shape: its impact (or its rest), and it stays in the
