@@ -245,7 +245,6 @@ class BodyPairs:
         if found or held:  # islands first (island.py)
             in_island = islands.step(sim, wrenches, Y0, Y1, pairs, h)
             self._look["kept"] = self._look["kept"] | in_island
-            self._look["kept"][islands.left] = True
             if in_island[self.solver.bodies].all():  # every pair has a moving body first: none is left
                 pairs = pairs[:0]
             elif in_island.any():
@@ -285,8 +284,8 @@ class BodyPairs:
         if look is None:
             return
         kept, hits, pairs = look["kept"], look["hits"], look["pairs"]
-        left = self.islands.left  # out of their island this step: in flight, bodies of the passes like any other
-        kept[left[self.solver.modes[left] == FLIGHT]] = False
+        left = self.islands.left  # out of their island this step: those held from its start were stepped again
+        kept[left[self.solver.modes[left] == PERSISTENT]] = True  # held (_out_of_islands); in flight, like any other
         links: set = set()  # pairs looked at again, followed by a group stepped again
         for _ in range(MAX_LOOKS):
             near = set()
@@ -537,18 +536,19 @@ class BodyPairs:
             on_it = [i for i in flying if i in struck or solver._gap(sim, y[i], i)[0] <= band[i]]
             watched = [i for i in flying if i not in on_it]
             # a held member's gap to the other half-spaces and static shapes (a wall it slides into), while apart
-            # (touching one, it is the ground pass's, solver._persistent_end)
-            sides = [i for i in sorted(active & held) if solver._may_strike_side(i)
-                     and solver._other_gap(sim, y[i], i)[0] > band[i]]
-            # one touching a wall it was struck against at this instant (a partner presses it there) is followed
-            # to a floor a skin deeper than it was, as a pair that touches is (met there MAX_GRAZES times: no longer)
-            side_floors = {}
+            # (touching one, it is the ground pass's, solver._persistent_end); touching a wall it was struck against
+            # at this instant (a partner presses it there), followed to a floor a skin deeper than it was, as a pair
+            # that touches is (met there MAX_GRAZES times: no longer)
+            sides, side_floors = [], {}
             for i in sorted(active & held):
-                if (i, t) in struck_walls and pressed_on.get(i, 0) <= MAX_GRAZES and solver._may_strike_side(i):
-                    gap = solver._other_gap(sim, y[i], i)[0]
-                    if gap <= band[i]:
-                        side_floors[i] = min(gap, 0.0) - ADVANCE_SKIN * self.size[i]
-                        sides.append(i)
+                if not solver._may_strike_side(i):
+                    continue
+                gap = solver._other_gap(sim, y[i], i)[0]
+                if gap > band[i]:
+                    sides.append(i)
+                elif (i, t) in struck_walls and pressed_on.get(i, 0) <= MAX_GRAZES:
+                    side_floors[i] = min(gap, 0.0) - ADVANCE_SKIN * self.size[i]
+                    sides.append(i)
             # a held member's features not on its ground (a box tipping on an edge: its other edge comes down; a can
             # rocking on its rim: its end face): a landing there changes its path (solver._reaching, on the ground
             # pass). One touching at the piece's start (just landed and not held, a partner's impulse on it) is
