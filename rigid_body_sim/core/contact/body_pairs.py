@@ -7,8 +7,11 @@ After each step, before the ground pass:
 1. **Swept broad phase** (compiled, no allocation; kernels/contact/swept.py): every moving body
    with a shape and every static shape gets the world box its bounding sphere stays in over the
    step; overlapping boxes, found with a hashed uniform grid, whose bounding spheres can meet over
-   the step, are the candidate pairs. A step without a candidate costs these compiled loops and
-   nothing else (no Python per body or per pair).
+   the step, are the candidate pairs. Where two moving bodies are candidates, a hit between them
+   can send each off its free path by at most h × a bound on its change of velocity (_deflections):
+   the broad phase is taken again with those spheres grown by that, and the islands' reach too. A
+   step without a candidate costs these compiled loops and nothing else (no Python per body or per
+   pair).
 2. **Narrow phase** on the candidates (one compiled call, kernels/contact/swept.py's screen_pairs:
    two boxes provably apart over the whole step are left out, the others' signed distances taken at the
    step's end and at its start, batched; kernels/contact/pairs.py). A pair of moving bodies meets in
@@ -161,6 +164,9 @@ class BodyPairs:
         #: Per body: the radius its spin sweeps (0 for a sphere, whose distance its spin does not change).
         self.spin_reach = np.where(shapes[:, KIND] == SHAPE_SPHERE, 0.0, radius)
         self.size = shapes[:, DIMS:DIMS + 3].max(axis=1)
+        self._skin = ADVANCE_SKIN * self.size[self.members]  # per member (m)
+        #: Per body: the change of velocity (m/s) a hit in this step may give it (_candidates; 0 within its skin).
+        self.deflection = np.zeros(len(shapes))
         self.is_static = np.zeros(len(shapes), dtype=bool)
         self.is_static[statics] = True
         self._lo, self._hi = np.empty((m, 3)), np.empty((m, 3))
@@ -233,7 +239,7 @@ class BodyPairs:
             np.copyto(self._start[name], getattr(solver, name))
         self._look = {"events": len(solver.events), "pairs": np.zeros((0, 2), dtype=np.int64), "hits": [],
                       "kept": self.is_static | sim._stopped}
-        pairs = self._candidates(Y0, Y1, h)
+        pairs = self._candidates(sim._prm, Y0, Y1, h)
         found = len(pairs)
         islands = self.islands
         islands.left = islands.left[:0]  # none out of their island this step unless the islands' step says so
@@ -345,24 +351,47 @@ class BodyPairs:
             solver._side_hits.pop(i, None)
             solver._face_landings.pop(i, None)
 
-    def _candidates(self, Y0: np.ndarray, Y1: np.ndarray, h: float) -> np.ndarray:
+    def _candidates(self, prm: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, h: float) -> np.ndarray:
         """The broad phase's pairs (k, 2) of global body indices whose boxes swept over the step overlap, a moving
         body first (a static shape never is: each row is its two members in order, the moving bodies listed
-        first). The same boxes as the last step's (a scene asleep or stopped) give the same pairs: they are not
-        searched again."""
+        first). A hit changes a body's velocity by at most what its pair's kinetic energy allows (:func:`_deflections`),
+        so over the rest of the step its bounding sphere leaves its free chord by at most h × that: when two moving
+        bodies are candidates, the broad phase is taken again with each such body's radius grown by that (the
+        largest over its pairs), and those pairs too are candidates. One hit each: a chain of hits inside one step
+        can send a body farther (look_again screens the ends as stepped). The same boxes as the last step's (a scene
+        asleep or stopped) give the same pairs: they are not searched again."""
         swept_bounds(Y0, Y1, self.members, self.reach, h, self._lo, self._hi)
         last, lo, hi = self._last_swept, self._lo.tobytes(), self._hi.tobytes()
         if last is not None and lo == last[0] and hi == last[1]:
             return last[2]
+        found = self._swept_pairs(Y0, Y1, self.reach, h)
+        self.deflection[:] = 0.0
+        rows = self._pairs[:found]
+        moving = rows[self.movable[rows[:, 0]] & self.movable[rows[:, 1]]]
+        if len(moving):
+            grow = np.zeros(len(self.members))
+            da, db = _deflections(prm, Y0, Y1, self.members[moving[:, 0]], self.members[moving[:, 1]])
+            np.maximum.at(grow, moving[:, 0], h * da)
+            np.maximum.at(grow, moving[:, 1], h * db)
+            grow[grow <= self._skin] = 0.0  # (within the skin the body–body pass leaves: look_again)
+            self.deflection[self.members] = grow / h
+            if grow.any():
+                reach = self.reach + grow
+                swept_bounds(Y0, Y1, self.members, reach, h, self._lo, self._hi)
+                found = self._swept_pairs(Y0, Y1, reach, h)
+        pairs = self.members[self._pairs[:found]]
+        self._last_swept = (lo, hi, pairs)
+        return pairs
+
+    def _swept_pairs(self, Y0: np.ndarray, Y1: np.ndarray, reach: np.ndarray, h: float) -> int:
+        """The grid's pairs of the boxes in _lo, _hi whose spheres (radii ``reach``, per member) may meet on their
+        chords (spheres_may_meet), into _pairs; how many."""
         found = grid_swept_pairs(self._lo, self._hi, self.movable, self._cells, self._heads, self._chain, self._pairs)
         if found > len(self._pairs):
             self._pairs = np.empty((2 * found, 2), dtype=np.int64)
             found = grid_swept_pairs(self._lo, self._hi, self.movable, self._cells, self._heads, self._chain,
                                      self._pairs)
-        found = spheres_may_meet(Y0, Y1, self.members, self.reach, h, self.solver.half_spaces, self._pairs, found)
-        pairs = self.members[self._pairs[:found]]
-        self._last_swept = (lo, hi, pairs)
-        return pairs
+        return spheres_may_meet(Y0, Y1, self.members, reach, h, self.solver.half_spaces, self._pairs, found)
 
     def broad_phase(self) -> tuple:
         """The last broad phase's boxes and grid, as island_pass takes them (kernels/contact/island._late_pairs):
@@ -932,6 +961,24 @@ class BodyPairs:
         y[a][L.P:L.P + 3] += d * u * inv_a / (inv_a + inv_b)
         y[b][L.P:L.P + 3] -= d * u * inv_b / (inv_a + inv_b)
         self.separations += 1
+
+
+def _deflections(prm: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, a: np.ndarray,
+                 b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds (m/s) on the change of velocity one impact between moving bodies a[k] and b[k] (parameter rows prm)
+    can give each, from the step's start Y0 or its free end Y1: the law conserves momentum and adds no energy, so
+    the relative velocity after is at most √(2 K_rel / μ) (K_rel: the pair's kinetic energy in its centre of
+    mass' frame, spins included; μ the reduced mass), its change at most that plus |v_a − v_b| before; a's share
+    m_b / (m_a + m_b), b's m_a / (m_a + m_b)."""
+    mass_a, mass_b = prm[a, L.MASS], prm[b, L.MASS]
+    reduced = mass_a * mass_b / (mass_a + mass_b)
+    change = np.zeros(len(a))
+    for Y in (Y0, Y1):
+        dv = Y[a, L.V:L.V + 3] - Y[b, L.V:L.V + 3]
+        relative = np.einsum("ij,ij->i", dv, dv)  # squared
+        spin = (prm[:, L.INERTIA:L.INERTIA + 3] * Y[:, L.W:L.W + 3] ** 2).sum(axis=1)  # 2 × each spin's energy
+        change = np.maximum(change, np.sqrt(relative) + np.sqrt(relative + (spin[a] + spin[b]) / reduced))
+    return change * mass_b / (mass_a + mass_b), change * mass_a / (mass_a + mass_b)
 
 
 def _spanning(points: np.ndarray) -> np.ndarray:

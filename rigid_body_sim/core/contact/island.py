@@ -247,7 +247,8 @@ class Islands:
                                self._iw, self._dx, self._rj, self._rw, self._rdiag, self._rbias, self._rlam,
                                self._rbody, self._order, self._cstart, self._A, self._L, self._vec, self.out, self._comp,
                                self._band, self._group, self._cwork, self._rwork, self._bwork, self._blist,
-                               self.pairs.broad_phase(), self._lhead, self._lnext, self._found, self._lifts)
+                               self.pairs.broad_phase(), self._lhead, self._lnext, self._found, self._lifts,
+                               self.pairs.deflection)
             if code >= 0:
                 break
             self._grow_contacts(2 * -code)

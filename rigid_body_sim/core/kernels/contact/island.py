@@ -1360,11 +1360,14 @@ def _narrow(Y, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, p
 
 
 @njit(**JIT)
-def _bounds(Y0, Y1, nlist, lo, hi, is_static, spin_reach, size, h, bound, members, speed):
+def _bounds(Y0, Y1, nlist, lo, hi, is_static, spin_reach, size, h, bound, members, speed, deflect, hit):
     """Each pair's reach over the step from Y0 to Y1 (m): how close it must be to meet within the step. speed (per
-    body) is scratch: each member's _reach_bound, taken once."""
+    body) is scratch: each member's _reach_bound, taken once, plus ``hit`` × its ``deflect`` (per body, m/s: the
+    change of velocity a hit in the step may give it; ``hit`` 1 before the velocity step, 0 after, on its
+    velocities)."""
     for m in range(members.shape[0]):
-        speed[members[m]] = _reach_bound(Y0, Y1, members[m], spin_reach)
+        i = members[m]
+        speed[i] = _reach_bound(Y0, Y1, i, spin_reach) + hit * deflect[i]
     for k in range(lo, hi):
         a, b = nlist[k, 0], nlist[k, 1]
         reach = 0.0
@@ -1374,6 +1377,7 @@ def _bounds(Y0, Y1, nlist, lo, hi, is_static, spin_reach, size, h, bound, member
             reach += speed[b]
         bound[k] = reach * h + TOUCH * max(size[a], size[b])
     _pin = Y0[0, 0], Y1[0, 0], nlist[0, 0], is_static[0], spin_reach[0], size[0], bound[0], members[0], speed[0]
+    _pin2 = deflect[0]
 
 
 @njit(**INLINE)
@@ -1997,7 +2001,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                 depth_tol, n_prev, rest_int, rest_flt, island, parent, flags, nlist, pos, quat, rot, pdist, pnormal,
                 pcount, ppoints, pseps, bound, cint, cflt, vel, iw, dx, rj, rw, rdiag, rbias, rlam, rbody, order,
                 cstart, A, L, vec, out, comp, band, group, cwork, rwork, bwork, blist, broad, lhead, lnext, found,
-                lifts):
+                lifts, deflect):
     """One step of every island (module docstring): results into Y1 for the bodies marked island[i] = 1 (solved)
     or 2 (asleep: their rows copied from Y0). Returns 0, or −(contacts needed) when cint is too small
     (then nothing was changed but ``asleep`` and the outputs; call again with room). ``depth_tol`` (m, ≥ 0): the
@@ -2017,7 +2021,9 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     ``broad``: the broad phase's boxes and grid (_late_pairs), which listed ``cand``. ``cwork`` (per contact, 3
     columns), ``rwork`` (per row, 3 columns), ``bwork`` (per body, 13 columns, the last zero between calls),
     ``blist`` (per body), ``lhead`` (per body), ``lnext`` (2 per row of nlist), ``found`` (per broad phase
-    member) and ``lifts`` (per body) are scratch."""
+    member) and ``lifts`` (per body) are scratch. ``deflect`` (per body, m/s): the change of velocity a hit in the
+    step may give it (the broad phase's bound, body_pairs._deflections; 0 where within its skin), added to its
+    reach before the velocity step: a pair a hit may bring together within the step has its points there."""
     n = members.shape[0]
     for k in range(OUT_WIDTH):
         out[k] = 0.0
@@ -2047,7 +2053,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             continue
         nlist[n_pairs, 0], nlist[n_pairs, 1] = a, b
         n_pairs += 1
-    _bounds(Y0, Y1, nlist, 0, n_pairs, is_static, spin_reach, size, h, bound, members, dx[:, 0])
+    _bounds(Y0, Y1, nlist, 0, n_pairs, is_static, spin_reach, size, h, bound, members, dx[:, 0], deflect, 1.0)
     _narrow(Y0, prm, shapes, nlist, n_pairs, pos, quat, pdist, pnormal, pcount, ppoints, pseps, bound, dx, False, rot)
     _link(Y0, Y1, nlist, 0, n_pairs, pdist, pnormal, pcount, ppoints, bound, is_static, size, shapes, modes, parent,
           flags)
@@ -2077,7 +2083,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             if flags[a] & 32 and (is_static[b] or flags[b] & 32):  # skipped above (asleep with asleep)
                 nlist[n_pairs, 0], nlist[n_pairs, 1] = a, b
                 n_pairs += 1
-        _bounds(Y0, Y1, nlist, n0, n_pairs, is_static, spin_reach, size, h, bound, members, dx[:, 0])
+        _bounds(Y0, Y1, nlist, n0, n_pairs, is_static, spin_reach, size, h, bound, members, dx[:, 0], deflect, 1.0)
         _narrow(Y0, prm, shapes, nlist[n0:], n_pairs - n0, pos, quat, pdist[n0:], pnormal[n0:], pcount[n0:],
                 ppoints[n0:], pseps[n0:], bound[n0:], dx, False, rot)
         _link(Y0, Y1, nlist, n0, n_pairs, pdist, pnormal, pcount, ppoints, bound, is_static, size, shapes, modes,
@@ -2122,7 +2128,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
             Y1[i, BOUND] = Y0[i, BOUND]
         elif island[i] == 1:
             bodies += 1
-            bound[n_pairs + m] = _reach_bound(Y0, Y1, i, spin_reach) * h + TOUCH * size[i]
+            bound[n_pairs + m] = (_reach_bound(Y0, Y1, i, spin_reach) + deflect[i]) * h + TOUCH * size[i]
             # the free velocity: v + h f/m, ω_P + h I⁻¹ (τ_P − ω × I ω), then ω in world axes
             row = bare[i] if modes[i] != 0 else wr[i]  # a body held on its ground until now: without that force
             fx, fy, fz, tx, ty, tz = body_wrench(Y0[i], prm[i], row)
@@ -2298,7 +2304,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
         if island[i] == 1 and flags[_find(comp, i)] & 512:
             if h * max(_speed(Y0, i, spin_reach), _speed(Y1, i, spin_reach)) <= _depth_tol(size, i, depth_tol):
                 island[i] = 3
-    _bounds(Y0, Y1, nlist, 0, n_pairs, is_static, spin_reach, size, h, bound, members, dx[:, 0])
+    _bounds(Y0, Y1, nlist, 0, n_pairs, is_static, spin_reach, size, h, bound, members, dx[:, 0], deflect, 0.0)
     deepest = 0.0
     n_stopped = 0
     n_step = nc  # the velocity step's contacts (_no_gain's); the projection's stopped points are added after them
@@ -2324,7 +2330,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
                                   broad, h, dx, blist, n_left, lhead, lnext, found, out)
         if out[OUT_LATE] == late:
             break
-        _bounds(Y0, Y1, nlist, 0, n_pairs, is_static, spin_reach, size, h, bound, members, dx[:, 0])
+        _bounds(Y0, Y1, nlist, 0, n_pairs, is_static, spin_reach, size, h, bound, members, dx[:, 0], deflect, 0.0)
     out[OUT_DEPTH] = deepest
     out[OUT_STOPPED] = n_stopped
     out[OUT_CONTACTS] = nc
