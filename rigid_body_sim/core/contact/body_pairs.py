@@ -354,12 +354,13 @@ class BodyPairs:
     def _candidates(self, prm: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, h: float) -> np.ndarray:
         """The broad phase's pairs (k, 2) of global body indices whose boxes swept over the step overlap, a moving
         body first (a static shape never is: each row is its two members in order, the moving bodies listed
-        first). A hit changes a body's velocity by at most what its pair's kinetic energy allows (:func:`_deflections`),
-        so over the rest of the step its bounding sphere leaves its free chord by at most h × that: when two moving
-        bodies are candidates, the broad phase is taken again with each such body's radius grown by that (the
-        largest over its pairs), and those pairs too are candidates. One hit each: a chain of hits inside one step
-        can send a body farther (look_again screens the ends as stepped). The same boxes as the last step's (a scene
-        asleep or stopped) give the same pairs: they are not searched again."""
+        first). A hit changes a body's velocity by at most what its pair's kinetic energy allows
+        (:func:`_deflections`), so over the rest of the step its bounding sphere leaves its free chord by at most
+        h × that: when two moving bodies are candidates, the broad phase is taken again with each such body's
+        radius grown by that (the largest over its pairs; not within its skin), and those pairs too are
+        candidates. One hit each: a chain of hits inside one step can send a body farther (look_again looks at the
+        ends as stepped, of bodies outside the islands only). The same boxes as the last step's (a scene asleep or
+        stopped) give the same pairs: they are not searched again."""
         swept_bounds(Y0, Y1, self.members, self.reach, h, self._lo, self._hi)
         last, lo, hi = self._last_swept, self._lo.tobytes(), self._hi.tobytes()
         if last is not None and lo == last[0] and hi == last[1]:
