@@ -691,7 +691,7 @@ def test_a_ball_a_hit_sends_into_an_island_is_stepped_with_it(integrator):
     beyond them at rest, a fourth 2 mm beyond that at 5 m/s toward them. On their free paths only the last two may
     meet: the third is no candidate of the island. A hit of the fourth can send it across the millimetre within
     the step (dt = 10 ms), so the broad phase also screens each body of a pair of moving candidates with its reach
-    grown by what such a hit may change its velocity (body_pairs._deflections), and the island's velocity step has
+    grown by what such a hit may change its velocity (swept.deflections), and the island's velocity step has
     the pair's points: all four are stepped together. Over three steps no two overlap beyond 1e-9 m, the
     momentum is kept (1e-12 relative) and K + U never rises. Stepped by the events alone, the third ended the first
     step 3.5 cm inside the island's ball."""

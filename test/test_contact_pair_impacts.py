@@ -189,14 +189,21 @@ def test_nothing_approaches_after_a_pair_impact_on_a_patch_with_high_friction():
 
 
 def test_a_pair_impact_changes_no_velocity_beyond_the_broad_phases_deflection_bound():
-    """The broad phase grows each body's reach by h × the change of velocity a hit may give it
-    (body_pairs._deflections, from momentum and energy alone). Over random pairs (masses, inertias, poses, velocities,
-    spins, 1–MAX_POINTS points, e, μ ≤ 2), neither body's velocity changes by more than its bound; a head-on
-    elastic impact without friction or spin attains it (closed form: Δv_a = 2 m_b (v_b − v_a) / (m_a + m_b))."""
-    from rigid_body_sim.core.contact.body_pairs import _deflections
+    """The broad phase grows each body's reach by h × the change of velocity a hit may give it (swept.deflections,
+    from momentum and energy alone). Over random pairs (masses, inertias, poses, velocities, spins,
+    1–MAX_POINTS points, e, μ ≤ 2), neither body's velocity changes by more than its bound; a head-on elastic
+    impact without friction or spin attains it (closed form: Δv_a = 2 m_b (v_b − v_a) / (m_a + m_b))."""
+    from rigid_body_sim.core.kernels.contact.swept import deflections
+
+    def bounds(ya, pa, yb, pb):
+        """Each body's bound (m/s): deflections over the one pair, h = 1, no skin."""
+        grow, deflect = np.zeros(2), np.zeros(2)
+        Y, prm = np.stack((ya, yb)), np.stack((pa, pb))
+        deflections(Y, Y, prm, np.array([0, 1]), np.ones(2, dtype=np.bool_), np.array([[0, 1]]), 1, 1.0,
+                    np.zeros(2), grow, deflect)
+        return deflect
 
     rng = np.random.default_rng(26)
-    first, second = np.array([0]), np.array([1])
     for _ in range(400):
         ya, pa = body(rng.uniform(0.1, 5), rng.uniform(0.01, 1, 3), rng.normal(size=3), random_quat(rng),
                       rng.normal(size=3) * 3, rng.normal(size=3) * 10)
@@ -207,14 +214,12 @@ def test_a_pair_impact_changes_no_velocity_beyond_the_broad_phases_deflection_bo
         count = int(rng.integers(1, MAX_POINTS + 1))
         points = 0.5 * (ya[P:P + 3] + yb[P:P + 3]) + 0.3 * rng.normal(size=(count, 3))
         ya1, yb1, _, _ = run(ya, pa, yb, pb, points, n, rng.uniform(0, 1), rng.uniform(0, 2))
-        Y, prm = np.stack((ya, yb)), np.stack((pa, pb))
-        da, db = _deflections(prm, Y, Y, first, second)
-        assert np.linalg.norm(ya1[V:V + 3] - ya[V:V + 3]) <= da[0] * (1 + 1e-12)
-        assert np.linalg.norm(yb1[V:V + 3] - yb[V:V + 3]) <= db[0] * (1 + 1e-12)
+        da, db = bounds(ya, pa, yb, pb)
+        assert np.linalg.norm(ya1[V:V + 3] - ya[V:V + 3]) <= da * (1 + 1e-12)
+        assert np.linalg.norm(yb1[V:V + 3] - yb[V:V + 3]) <= db * (1 + 1e-12)
     ma, mb, speed = 1.0, 3.0, 2.0
     ya, pa = body(ma, (0.1, 0.1, 0.1), (0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0), (speed, 0.0, 0.0), (0.0, 0.0, 0.0))
     yb, pb = body(mb, (0.1, 0.1, 0.1), (0.2, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
     ya1, yb1, _, _ = run(ya, pa, yb, pb, [(0.1, 0.0, 0.0)], (1.0, 0.0, 0.0), 1.0, 0.0)
-    da, db = _deflections(np.stack((pa, pb)), np.stack((ya, yb)), np.stack((ya, yb)), first, second)
     np.testing.assert_allclose(ya1[V] - ya[V], -2 * mb * speed / (ma + mb), rtol=1e-12)
-    np.testing.assert_allclose([abs(ya1[V] - ya[V]), abs(yb1[V] - yb[V])], [da[0], db[0]], rtol=1e-12)
+    np.testing.assert_allclose([abs(ya1[V] - ya[V]), abs(yb1[V] - yb[V])], bounds(ya, pa, yb, pb), rtol=1e-12)

@@ -8,7 +8,7 @@ After each step, before the ground pass:
    with a shape and every static shape gets the world box its bounding sphere stays in over the
    step; overlapping boxes, found with a hashed uniform grid, whose bounding spheres can meet over
    the step, are the candidate pairs. Where two moving bodies are candidates, a hit between them
-   can send each off its free path by at most h × a bound on its change of velocity (_deflections):
+   can send each off its free path by at most h × a bound on its change of velocity (swept.deflections):
    the broad phase is taken again with those spheres grown by that, and the islands' reach too. A
    step without a candidate costs these compiled loops and nothing else (no Python per body or per
    pair).
@@ -101,7 +101,8 @@ from ..kernels.contact.pair_impacts import PAIR_JACOBIAN_SHAPE, normal_speed, pa
 from ..kernels.contact.pairs import MAX_PAIR_POINTS, pair_contacts
 from ..kernels.contact.persistent import normal_speeds
 from ..kernels.contact.shapes import body_points
-from ..kernels.contact.swept import grid_swept_pairs, left_pairs, screen_pairs, spheres_may_meet, swept_bounds
+from ..kernels.contact.swept import (deflections, grid_swept_pairs, left_pairs, screen_pairs, spheres_may_meet,
+                                     swept_bounds)
 from ..quaternion import quat_multiply, quat_rotate
 from .events import ContactEvent
 from .island import Islands
@@ -164,7 +165,8 @@ class BodyPairs:
         #: Per body: the radius its spin sweeps (0 for a sphere, whose distance its spin does not change).
         self.spin_reach = np.where(shapes[:, KIND] == SHAPE_SPHERE, 0.0, radius)
         self.size = shapes[:, DIMS:DIMS + 3].max(axis=1)
-        self._skin = ADVANCE_SKIN * self.size[self.members]  # per member (m)
+        self._skin = ADVANCE_SKIN * self.size[self.members]  # per member (m): a deflection within it is left out
+        self._grow, self._grown = np.zeros(m), np.zeros(m)  # per member: h × its deflection, and the reach grown by it
         #: Per body: the change of velocity (m/s) a hit in this step may give it (_candidates; 0 within its skin).
         self.deflection = np.zeros(len(shapes))
         self.is_static = np.zeros(len(shapes), dtype=bool)
@@ -355,7 +357,7 @@ class BodyPairs:
         """The broad phase's pairs (k, 2) of global body indices whose boxes swept over the step overlap, a moving
         body first (a static shape never is: each row is its two members in order, the moving bodies listed
         first). A hit changes a body's velocity by at most what its pair's kinetic energy allows
-        (:func:`_deflections`), so over the rest of the step its bounding sphere leaves its free chord by at most
+        (swept.deflections), so over the rest of the step its bounding sphere leaves its free chord by at most
         h × that: when two moving bodies are candidates, the broad phase is taken again with each such body's
         radius grown by that (the largest over its pairs; not within its skin), and those pairs too are
         candidates. One hit each: a chain of hits inside one step can send a body farther (look_again looks at the
@@ -366,20 +368,11 @@ class BodyPairs:
         if last is not None and lo == last[0] and hi == last[1]:
             return last[2]
         found = self._swept_pairs(Y0, Y1, self.reach, h)
-        self.deflection[:] = 0.0
-        rows = self._pairs[:found]
-        moving = rows[self.movable[rows[:, 0]] & self.movable[rows[:, 1]]]
-        if len(moving):
-            grow = np.zeros(len(self.members))
-            da, db = _deflections(prm, Y0, Y1, self.members[moving[:, 0]], self.members[moving[:, 1]])
-            np.maximum.at(grow, moving[:, 0], h * da)
-            np.maximum.at(grow, moving[:, 1], h * db)
-            grow[grow <= self._skin] = 0.0  # (within the skin the body–body pass leaves: look_again)
-            self.deflection[self.members] = grow / h
-            if grow.any():
-                reach = self.reach + grow
-                swept_bounds(Y0, Y1, self.members, reach, h, self._lo, self._hi)
-                found = self._swept_pairs(Y0, Y1, reach, h)
+        if deflections(Y0, Y1, prm, self.members, self.movable, self._pairs, found, h, self._skin, self._grow,
+                       self.deflection):
+            np.add(self.reach, self._grow, out=self._grown)
+            swept_bounds(Y0, Y1, self.members, self._grown, h, self._lo, self._hi)
+            found = self._swept_pairs(Y0, Y1, self._grown, h)
         pairs = self.members[self._pairs[:found]]
         self._last_swept = (lo, hi, pairs)
         return pairs
@@ -962,24 +955,6 @@ class BodyPairs:
         y[a][L.P:L.P + 3] += d * u * inv_a / (inv_a + inv_b)
         y[b][L.P:L.P + 3] -= d * u * inv_b / (inv_a + inv_b)
         self.separations += 1
-
-
-def _deflections(prm: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, a: np.ndarray,
-                 b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Bounds (m/s) on the change of velocity one impact between moving bodies a[k] and b[k] (parameter rows prm)
-    can give each, from the step's start Y0 or its free end Y1: the law conserves momentum and adds no energy, so
-    the relative velocity after is at most √(2 K_rel / μ) (K_rel: the pair's kinetic energy in its centre of
-    mass' frame, spins included; μ the reduced mass), its change at most that plus |v_a − v_b| before; a's share
-    m_b / (m_a + m_b), b's m_a / (m_a + m_b)."""
-    mass_a, mass_b = prm[a, L.MASS], prm[b, L.MASS]
-    reduced = mass_a * mass_b / (mass_a + mass_b)
-    change = np.zeros(len(a))
-    for Y in (Y0, Y1):
-        dv = Y[a, L.V:L.V + 3] - Y[b, L.V:L.V + 3]
-        relative = np.einsum("ij,ij->i", dv, dv)  # squared
-        spin = (prm[:, L.INERTIA:L.INERTIA + 3] * Y[:, L.W:L.W + 3] ** 2).sum(axis=1)  # 2 × each spin's energy
-        change = np.maximum(change, np.sqrt(relative) + np.sqrt(relative + (spin[a] + spin[b]) / reduced))
-    return change * mass_b / (mass_a + mass_b), change * mass_a / (mass_a + mass_b)
 
 
 def _spanning(points: np.ndarray) -> np.ndarray:

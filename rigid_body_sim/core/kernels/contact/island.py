@@ -2022,7 +2022,7 @@ def island_pass(Y0, Y1, prm, wr, bare, modes, saved, shapes, grounds, gmu, membe
     columns), ``rwork`` (per row, 3 columns), ``bwork`` (per body, 13 columns, the last zero between calls),
     ``blist`` (per body), ``lhead`` (per body), ``lnext`` (2 per row of nlist), ``found`` (per broad phase
     member) and ``lifts`` (per body) are scratch. ``deflect`` (per body, m/s): the change of velocity a hit in the
-    step may give it (the broad phase's bound, body_pairs._deflections; 0 where within its skin), added to its
+    step may give it (the broad phase's bound, swept.deflections; 0 where within its skin), added to its
     reach before the velocity step: a pair a hit may bring together within the step has its points there."""
     n = members.shape[0]
     for k in range(OUT_WIDTH):

@@ -17,7 +17,8 @@ shapes, any size) are tested against every movable box: S × N tests for S of th
 :func:`spheres_may_meet` keeps of these the pairs whose bounding spheres can meet over the step
 (boxes overlap where spheres do not: every diagonal neighbour of a lattice), a body that a half-space
 may stop within the step taken anywhere on its chord (the ground's pass, after this one, changes its
-path). :func:`left_pairs` looks again after the step's passes: the bodies an event sent out of their
+path). :func:`deflections` bounds what a hit between two candidates may change each one's velocity by, and
+the broad phase is taken again with each sphere grown by h × that. :func:`left_pairs` looks again after the step's passes: the bodies an event sent out of their
 free step's box, and each pair such a body may have met on the grid. :func:`screen_pairs` then gives
 each candidate its bound on how fast its distance changes and, unless it is provably apart over the
 whole step, its signed distances at the step's two ends (two batched narrow-phase
@@ -32,13 +33,14 @@ import math
 from numba import njit
 
 from ..jit import INLINE, JIT
-from ..layout import P, Q, V, W
+from ..layout import INERTIA, MASS, P, Q, V, W
 from ..rotation import qmul
 from .layout import NORMAL, OFFSET
 from .pairs import apart_bounds, pair_contacts
 
 __all__ = ["GROWTH", "growth", "chords_apart", "chords_near", "rebound", "paths_may_meet", "swept_bounds",
-           "grid_swept_pairs", "boxes_meet", "grid_overlaps", "spheres_may_meet", "left_pairs", "screen_pairs"]
+           "grid_swept_pairs", "boxes_meet", "grid_overlaps", "spheres_may_meet", "deflection_bound", "deflections",
+           "left_pairs", "screen_pairs"]
 
 
 #: A body's box and sphere over the step are grown by this × |v₁ − v₀| h (m): module docstring.
@@ -302,6 +304,54 @@ def _spheres_meet(Y0, Y1, members, reach, h, m, n):
     a, b = members[m], members[n]
     grow = growth(Y0, Y1, a, h) + growth(Y0, Y1, b, h)
     return chords_apart(Y0, Y1, a, b) <= (reach[m] + reach[n]) * (1.0 + 1e-6) + grow
+
+
+@njit(**INLINE)
+def _spin_energy_twice(Y, prm, i):
+    """Σ I_j ω_j² of body i (principal axes, J): twice its spin's kinetic energy."""
+    return (prm[i, INERTIA] * Y[i, W] * Y[i, W] + prm[i, INERTIA + 1] * Y[i, W + 1] * Y[i, W + 1]
+            + prm[i, INERTIA + 2] * Y[i, W + 2] * Y[i, W + 2])
+
+
+@njit(**JIT)
+def deflection_bound(Y, prm, a, b):
+    """A bound (m/s) on how much one impact between moving bodies a and b at state rows Y can change their relative
+    velocity: the law conserves momentum and adds no energy, so the relative velocity after is at most
+    √(|v_a − v_b|² + Σ I ω² / μ) (the pair's kinetic energy in its centre of mass' frame, spins included, all in
+    it; μ the reduced mass), the change at most that plus |v_a − v_b|. a's velocity changes by m_b / (m_a + m_b)
+    of it, b's by m_a / (m_a + m_b); a head-on elastic impact without spin attains it."""
+    dx, dy, dz = Y[a, V] - Y[b, V], Y[a, V + 1] - Y[b, V + 1], Y[a, V + 2] - Y[b, V + 2]
+    relative = dx * dx + dy * dy + dz * dz
+    ma, mb = prm[a, MASS], prm[b, MASS]
+    spins = _spin_energy_twice(Y, prm, a) + _spin_energy_twice(Y, prm, b)
+    return math.sqrt(relative) + math.sqrt(relative + spins * (ma + mb) / (ma * mb))
+
+
+@njit(**JIT)
+def deflections(Y0, Y1, prm, members, movable, pairs, found, h, skin, grow, deflect):
+    """grow (M,) ← for each member, h × the largest change of velocity (m/s) a hit with one of its candidates may
+    give it (deflection_bound at the step's start Y0 or free end Y1, its share; over pairs[:found], rows of
+    members, both movable), 0 where that is within its ``skin`` (M,; m); deflect (per body) ← grow / h (m/s) for
+    each member. Returns whether any member grew."""
+    for m in range(members.shape[0]):
+        grow[m] = 0.0
+    for k in range(found):
+        ma, mb = pairs[k, 0], pairs[k, 1]
+        if not (movable[ma] and movable[mb]):
+            continue
+        a, b = members[ma], members[mb]
+        change = max(deflection_bound(Y0, prm, a, b), deflection_bound(Y1, prm, a, b)) * h
+        share = prm[b, MASS] / (prm[a, MASS] + prm[b, MASS])
+        grow[ma] = max(grow[ma], change * share)
+        grow[mb] = max(grow[mb], change * (1.0 - share))
+    grew = False
+    for m in range(members.shape[0]):
+        if grow[m] <= skin[m]:
+            grow[m] = 0.0
+        else:
+            grew = True
+        deflect[members[m]] = grow[m] / h
+    return grew
 
 
 @njit(**JIT)
