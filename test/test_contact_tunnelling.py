@@ -22,6 +22,9 @@ import numpy as np
 import pytest
 
 from rigid_body_sim.core import Simulator, load_scene
+from rigid_body_sim.core.kernels.contact.layout import GROUND_WIDTH
+
+NO_HALF_SPACES = np.zeros((0, GROUND_WIDTH))  # spheres_may_meet's half-space rows: none
 
 R, V, DT, E = 0.005, 100.0, 10e-3, 0.5
 WALL_X, HALF_T = 0.5, 0.005  # the wall's centre (m) and half thickness (m)
@@ -180,7 +183,7 @@ def test_bodies_out_of_their_free_box_are_paired_with_every_body_they_may_have_m
 
         def may_meet(m, k):
             one[0] = m, k
-            return spheres_may_meet(Y0, stepped, members, reach, h, np.zeros((0, 7)), one, 1) == 1
+            return spheres_may_meet(Y0, stepped, members, reach, h, NO_HALF_SPACES, one, 1) == 1
 
         brute = set()
         for m in np.flatnonzero(outside).tolist():
@@ -233,7 +236,7 @@ def test_swept_spheres_keep_every_pair_that_meets():
     Y0[:, P:P + 3], Y0[:, V:V + 3] = p0, v0
     Y1[:, P:P + 3], Y1[:, V:V + 3] = p0 + v0 * h + 0.5 * a * h * h, v0 + a * h
     pairs = np.array([(i, j) for i in range(n) for j in range(i + 1, n)], dtype=np.int64)
-    kept = spheres_may_meet(Y0, Y1, np.arange(n, dtype=np.int64), radius, h, np.zeros((0, 7)), pairs, len(pairs))
+    kept = spheres_may_meet(Y0, Y1, np.arange(n, dtype=np.int64), radius, h, NO_HALF_SPACES, pairs, len(pairs))
     kept_set = {tuple(q) for q in pairs[:kept].tolist()}
     t = np.linspace(0.0, h, 1001)[:, None, None]
     path = p0 + v0 * t + 0.5 * a * t * t  # (instants, bodies, 3)
@@ -279,7 +282,7 @@ def test_swept_spheres_keep_every_pair_a_ground_may_bring_together():
         return {tuple(q) for q in rows[:spheres_may_meet(Y0, Y1, np.arange(n, dtype=np.int64), radius, h, grounds,
                                                          rows, len(rows))].tolist()}
 
-    kept, free = screened(ground), screened(np.zeros((0, 7)))
+    kept, free = screened(ground), screened(NO_HALF_SPACES)
     meeting = missed_free = 0
     for i, j in pairs.tolist():
         gap = np.min(np.linalg.norm(path[:, j] - path[:, i], axis=1)) - radius[i] - radius[j]
