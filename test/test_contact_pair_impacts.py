@@ -125,18 +125,25 @@ def test_two_spheres_match_the_closed_form(mu, oblique):
         assert (0 < slid < ran) if mu == 0.2 else (slid == (ran if mu == 0.0 else 0))
 
 
+def random_pair(rng):
+    """Two random bodies (masses, inertias, poses, velocities up to ~3 m/s, spins up to ~10 rad/s), 1–MAX_POINTS
+    points about their midpoint and a random normal: (ya, pa, yb, pb, points, n)."""
+    ya, pa = body(rng.uniform(0.1, 5), rng.uniform(0.01, 1, 3), rng.normal(size=3), random_quat(rng),
+                  rng.normal(size=3) * 3, rng.normal(size=3) * 10)
+    yb, pb = body(rng.uniform(0.1, 5), rng.uniform(0.01, 1, 3), rng.normal(size=3), random_quat(rng),
+                  rng.normal(size=3) * 3, rng.normal(size=3) * 10)
+    n = rng.normal(size=3)
+    n /= np.linalg.norm(n)
+    count = int(rng.integers(1, MAX_POINTS + 1))
+    points = 0.5 * (ya[P:P + 3] + yb[P:P + 3]) + 0.3 * rng.normal(size=(count, 3))
+    return ya, pa, yb, pb, points, n
+
+
 def test_energy_never_rises_over_random_pairs():
     rng = np.random.default_rng(8)
     checked = 0
     for _ in range(400):
-        ya, pa = body(rng.uniform(0.1, 5), rng.uniform(0.01, 1, 3), rng.normal(size=3), random_quat(rng),
-                      rng.normal(size=3) * 3, rng.normal(size=3) * 10)
-        yb, pb = body(rng.uniform(0.1, 5), rng.uniform(0.01, 1, 3), rng.normal(size=3), random_quat(rng),
-                      rng.normal(size=3) * 3, rng.normal(size=3) * 10)
-        n = rng.normal(size=3)
-        n /= np.linalg.norm(n)
-        count = int(rng.integers(1, MAX_POINTS + 1))
-        points = 0.5 * (ya[P:P + 3] + yb[P:P + 3]) + 0.3 * rng.normal(size=(count, 3))
+        ya, pa, yb, pb, points, n = random_pair(rng)
         e, mu = rng.uniform(0, 1), rng.uniform(0, 2)
         ya1, yb1, before, after = run(ya, pa, yb, pb, points, n, e, mu)
         assert np.all(np.isfinite(ya1)) and np.all(np.isfinite(yb1))
@@ -205,14 +212,7 @@ def test_a_pair_impact_changes_no_velocity_beyond_the_broad_phases_deflection_bo
 
     rng = np.random.default_rng(26)
     for _ in range(400):
-        ya, pa = body(rng.uniform(0.1, 5), rng.uniform(0.01, 1, 3), rng.normal(size=3), random_quat(rng),
-                      rng.normal(size=3) * 3, rng.normal(size=3) * 10)
-        yb, pb = body(rng.uniform(0.1, 5), rng.uniform(0.01, 1, 3), rng.normal(size=3), random_quat(rng),
-                      rng.normal(size=3) * 3, rng.normal(size=3) * 10)
-        n = rng.normal(size=3)
-        n /= np.linalg.norm(n)
-        count = int(rng.integers(1, MAX_POINTS + 1))
-        points = 0.5 * (ya[P:P + 3] + yb[P:P + 3]) + 0.3 * rng.normal(size=(count, 3))
+        ya, pa, yb, pb, points, n = random_pair(rng)
         ya1, yb1, _, _ = run(ya, pa, yb, pb, points, n, rng.uniform(0, 1), rng.uniform(0, 2))
         da, db = bounds(ya, pa, yb, pb)
         assert np.linalg.norm(ya1[V:V + 3] - ya[V:V + 3]) <= da * (1 + 1e-12)
