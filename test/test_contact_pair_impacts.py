@@ -204,10 +204,10 @@ def test_a_pair_impact_changes_no_velocity_beyond_the_broad_phases_deflection_bo
 
     def bounds(ya, pa, yb, pb):
         """Each body's bound (m/s): deflections over the one pair, h = 1, no skin."""
-        grow, deflect = np.zeros(2), np.zeros(2)
+        grown, deflect = np.zeros(2), np.zeros(2)
         Y, prm = np.stack((ya, yb)), np.stack((pa, pb))
         deflections(Y, Y, prm, np.array([0, 1]), np.ones(2, dtype=np.bool_), np.array([[0, 1]]), 1, 1.0,
-                    np.zeros(2), grow, deflect)
+                    np.zeros(2), np.zeros(2), grown, deflect)
         return deflect
 
     rng = np.random.default_rng(26)

@@ -166,7 +166,7 @@ class BodyPairs:
         self.spin_reach = np.where(shapes[:, KIND] == SHAPE_SPHERE, 0.0, radius)
         self.size = shapes[:, DIMS:DIMS + 3].max(axis=1)
         self._skin = ADVANCE_SKIN * self.size[self.members]  # per member (m): a deflection within it is left out
-        self._grow, self._grown = np.zeros(m), np.zeros(m)  # per member: h × its deflection, and the reach grown by it
+        self._grown = np.zeros(m)  # per member: its reach grown by h × its deflection (_candidates)
         #: Per body: the change of velocity (m/s) a hit in this step may give it (_candidates; 0 within its skin).
         self.deflection = np.zeros(len(shapes))
         self.is_static = np.zeros(len(shapes), dtype=bool)
@@ -368,9 +368,8 @@ class BodyPairs:
         if last is not None and lo == last[0] and hi == last[1]:
             return last[2]
         found = self._swept_pairs(Y0, Y1, self.reach, h)
-        if deflections(Y0, Y1, prm, self.members, self.movable, self._pairs, found, h, self._skin, self._grow,
-                       self.deflection):
-            np.add(self.reach, self._grow, out=self._grown)
+        if deflections(Y0, Y1, prm, self.members, self.movable, self._pairs, found, h, self._skin, self.reach,
+                       self._grown, self.deflection):
             swept_bounds(Y0, Y1, self.members, self._grown, h, self._lo, self._hi)
             found = self._swept_pairs(Y0, Y1, self._grown, h)
         pairs = self.members[self._pairs[:found]]

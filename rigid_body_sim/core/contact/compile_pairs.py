@@ -20,7 +20,8 @@ from ..kernels.contact.layout import (DIMS, GROUND_WIDTH, KIND, SHAPE_BOX, SHAPE
                                      SHAPE_WIDTH)
 from ..kernels.contact.pair_impacts import PAIR_JACOBIAN_SHAPE, normal_speed, pair_impact
 from ..kernels.contact.pairs import MAX_PAIR_POINTS, apart_bounds, pair_contacts
-from ..kernels.contact.swept import grid_swept_pairs, left_pairs, screen_pairs, spheres_may_meet, swept_bounds
+from ..kernels.contact.swept import (deflections, grid_swept_pairs, left_pairs, screen_pairs, spheres_may_meet,
+                                     swept_bounds)
 from ..kernels.layout import INERTIA, INV_INERTIA, INV_MASS, MASS, PRM_WIDTH, P, Q, STATE_WIDTH, V
 
 __all__ = ["PAIR_ENTRY_POINTS", "compile_pair_kernels"]
@@ -61,6 +62,9 @@ def compile_pair_kernels() -> None:
     movable = np.ones(n, dtype=np.bool_)
     found = grid_swept_pairs(lo, hi, movable, cells, heads, chain, swept)
     spheres_may_meet(Ys[0], Ys[1], members, np.full(n, 0.1), 1e-3, np.zeros((1, GROUND_WIDTH)), swept, found)
+    prm_rows = np.ones((n, PRM_WIDTH))
+    deflections(Ys[0], Ys[1], prm_rows, members, movable, swept, found, 1e-3, np.zeros(n), np.full(n, 0.1),
+                np.empty(n), np.zeros(n))
     left_pairs(Ys[0], Ys[1], members, np.full(n, 0.1), 1e-3, lo, hi, movable, np.zeros(0, dtype=np.int64),
                np.zeros(n, dtype=np.bool_), cells, heads, chain, np.empty((n, 3)), np.empty((n, 3)),
                np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64), swept)

@@ -328,29 +328,29 @@ def deflection_bound(Y, prm, a, b):
 
 
 @njit(**JIT)
-def deflections(Y0, Y1, prm, members, movable, pairs, found, h, skin, grow, deflect):
-    """grow (M,) ← for each member, h × the largest change of velocity (m/s) a hit with one of its candidates may
-    give it (deflection_bound at the step's start Y0 or free end Y1, its share; over pairs[:found], rows of
-    members, both movable), 0 where that is within its ``skin`` (M,; m); deflect (per body) ← grow / h (m/s) for
-    each member. Returns whether any member grew."""
+def deflections(Y0, Y1, prm, members, movable, pairs, found, h, skin, reach, grown, deflect):
+    """deflect (per body, m/s) ← for each member, the largest change of velocity a hit with one of its candidates
+    may give it (deflection_bound at the step's start Y0 or free end Y1, its share; over pairs[:found], rows of
+    members, both movable), 0 where h × that is within its ``skin`` (M,; m); grown (M,) ← ``reach`` (M,; m) + h ×
+    that. Returns whether any member grew."""
     for m in range(members.shape[0]):
-        grow[m] = 0.0
+        deflect[members[m]] = 0.0
     for k in range(found):
         ma, mb = pairs[k, 0], pairs[k, 1]
         if not (movable[ma] and movable[mb]):
             continue
         a, b = members[ma], members[mb]
-        change = max(deflection_bound(Y0, prm, a, b), deflection_bound(Y1, prm, a, b)) * h
+        change = max(deflection_bound(Y0, prm, a, b), deflection_bound(Y1, prm, a, b))
         share = prm[b, MASS] / (prm[a, MASS] + prm[b, MASS])
-        grow[ma] = max(grow[ma], change * share)
-        grow[mb] = max(grow[mb], change * (1.0 - share))
+        deflect[a] = max(deflect[a], change * share)
+        deflect[b] = max(deflect[b], change * (1.0 - share))
     grew = False
     for m in range(members.shape[0]):
-        if grow[m] <= skin[m]:
-            grow[m] = 0.0
-        else:
-            grew = True
-        deflect[members[m]] = grow[m] / h
+        i = members[m]
+        if h * deflect[i] <= skin[m]:
+            deflect[i] = 0.0
+        grew = grew or deflect[i] > 0.0
+        grown[m] = reach[m] + h * deflect[i]
     return grew
 
 
