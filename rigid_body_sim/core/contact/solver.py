@@ -665,11 +665,11 @@ class ContactSolver:
         """Add the holding force of body i at y into the wrench row w; False (and flight) if it lifts off.
 
         With ``stages`` and an integrator that evaluates dynamics.derivative at every stage, a body
-        on one half-space or a static box's face (an exact plane) stepped by it gets instead its contact in the
-        row, found at every stage (kernels/contact/stage.py; the row with the force found here kept in
-        ``_held_rows``)."""
+        on one or two exact planes (half-spaces, static boxes' faces: :meth:`on_exact_plane`) stepped by it gets
+        instead its contact in the row, found at every stage (kernels/contact/stage.py; the row with the force
+        found here kept in ``_held_rows``)."""
         if self.other_ground[i] >= 0 and not self.other_projected[i]:
-            return two_grounds.hold(self, sim, y, i, w, t, LIFT_OFF_SPEED, TOUCHING_GAP, SLIP_TOLERANCE)
+            return two_grounds.hold(self, sim, y, i, w, t, LIFT_OFF_SPEED, TOUCHING_GAP, SLIP_TOLERANCE, stages)
         j = int(self.ground_of[i])
         count = held_points(y, sim._prm[i], w, self.shapes[i], self.grounds[j], int(self.tracked[i]), self._points,
                             self._gaps, self._owners, self._d, True)  # a can on its end: turned toward the load
@@ -689,14 +689,18 @@ class ContactSolver:
         self.pressed[i] = int(sum(1 << int(self._owners[c]) for c in range(count) if lam[c] > 0.0))
         self._bare_rows[i] = w
         add_contact_wrench(w, y, sim._prm[i], count, self._points, self._anchors, self._work)
-        on_plane = j < len(self.half_spaces) or not self.statics.is_tangent(j)  # a half-space or a static box's face
-        if (stages and sim._method.derivative_stages and on_plane and self.other_ground[i] < 0
+        if (stages and sim._method.derivative_stages and self.on_exact_plane(j) and self.other_ground[i] < 0
                 and stepped_by_integrator(sim._prm[i])):
             self._held_rows[i] = w
             hold_in_row(w, self._bare_rows[i], y, sim._prm[i], self.shapes[i], self.grounds[j], int(self.tracked[i]),
                         mu, mode, sx, sy, SLIP_TOLERANCE)
             self._staged[i] = 1
         return True
+
+    def on_exact_plane(self, j: int) -> bool:
+        """Whether ground row j is an exact plane: a half-space or a static box's face (not the tangent plane of a
+        static shape's curved side, which holds to first order only)."""
+        return j < len(self.half_spaces) or not self.statics.is_tangent(j)
 
     def _holding_force(self, sim, y: np.ndarray, i: int, count: int, w: np.ndarray, mu: float):
         """(lowest normal speed, mode, ŝ1, ŝ2) of body i at y held on the ``count`` points of its tracked features

@@ -39,11 +39,13 @@ import math
 import numpy as np
 
 from ..kernels import layout as L
-from ..kernels.contact.impacts import _A, _ANG, _B, _LAM, _LIN, _row_velocity, kinetic_energy_row, pgs
+from ..kernels.contact.impacts import (_A, _ANG, _B, _LAM, _LIN, _row_velocity, build_rows_normals,
+                                      kinetic_energy_row, pgs)
 from ..kernels.contact.layout import MAX_POINTS, NORMAL, PERSISTENT
-from ..kernels.contact.persistent import (START_SLIDE_ACCELERATION, accelerations, add_contact_wrench, normal_bias,
-                                          project)
+from ..kernels.contact.persistent import (SLIDE, START_SLIDE_ACCELERATION, STICK, accelerations, add_contact_wrench,
+                                          normal_bias, project)
 from ..kernels.contact.shapes import MAX_FEATURES, feature_gaps, feature_points
+from ..kernels.contact.stage import hold_on_two_planes_in_row, stepped_by_integrator
 from ..quaternion import cross3, quat_from_rotation_vector, quat_multiply, quat_rotate
 from .events import ContactEvent
 
@@ -130,27 +132,6 @@ def _points(solver, sim, y: np.ndarray, i: int):
     return points, bias, rdot, anchors, normals, which, gaps, total
 
 
-def _build_rows(y: np.ndarray, prm: np.ndarray, points: np.ndarray, normals: np.ndarray, t1: np.ndarray,
-                work: np.ndarray) -> int:
-    """impacts.build_rows with a normal per point and t1 common to all (the crease): the rows' directions,
-    their angular parts in principal axes, A = J M⁻¹ Jᵀ and b = J u (velocities). Returns the rows."""
-    count = len(normals)
-    rows = 3 * count
-    directions = np.empty((rows, 3))
-    for c in range(count):
-        n = normals[c]
-        directions[3 * c] = n
-        directions[3 * c + 1] = t1
-        directions[3 * c + 2] = cross3(n, t1)
-    J = _jacobian(y, np.repeat(points[:count], 3, axis=0), directions)
-    work[:rows, _LIN:_LIN + 3] = directions
-    work[:rows, _ANG:_ANG + 3] = J[:, 3:]
-    inverse = _inverse_mass(prm)
-    work[:rows, _A:_A + rows] = (J * inverse) @ J.T
-    work[:rows, _B] = J @ np.concatenate((y[L.V:L.V + 3], y[L.W:L.W + 3]))
-    return rows
-
-
 def _jacobian(y: np.ndarray, points: np.ndarray, directions: np.ndarray) -> np.ndarray:
     """(k, 6) rows of body state y: each row's direction (world) and its angular part r × direction in principal
     axes, r from the centre of mass to its point ``points`` (k, 3, world)."""
@@ -170,12 +151,16 @@ def _tangential_acceleration(work: np.ndarray, rows: int, count: int) -> float:
 
 
 def hold(solver, sim, y: np.ndarray, i: int, w: np.ndarray, t: float, lift_off_speed: float,
-         touching_gap: float, slip_tolerance: float) -> bool:
+         touching_gap: float, slip_tolerance: float, stages: bool = True) -> bool:
     """Add the force holding body i on both its half-spaces into the wrench row w (in place).
 
     A half-space it no longer presses on (all its normal forces zero, or its points moving away
     or lifted) is let go: the one-ground hold takes over (:meth:`ContactSolver._hold`). Returns
-    False if the body leaves both (lift-off: flight).
+    False if the body leaves both (lift-off: flight). With ``stages``, a body stepped by a method
+    whose stages evaluate the right-hand side (rk4, euler, reference) on two exact planes (half-spaces
+    or a static box's faces) gets instead its contact in the row, found at every stage by this same law
+    (kernels/contact/stage.py; the row with the force found here kept in ``ContactSolver._held_rows``),
+    as on one plane.
     """
 
     prm = sim._prm[i]
@@ -184,17 +169,17 @@ def hold(solver, sim, y: np.ndarray, i: int, w: np.ndarray, t: float, lift_off_s
     if found is None:  # more points than the rows hold: held on ground_of, projected onto both (counted)
         solver.counts["two_ground_overflow"] += 1
         solver.other_projected[i] = True
-        return solver._hold(sim, y, i, w, t)
+        return solver._hold(sim, y, i, w, t, stages=stages)
     points, bias, rdot, anchors, normals, which, gaps, count = found
     j_b = int(solver.other_ground[i])
     if j_b >= len(solver.half_spaces) and not solver.statics.within_face(j_b, points[:count][which == j_b]):
         # off the static box's face it was held on (past its edge): let go, its contact with that box found afresh
         solver.events.append(ContactEvent(t, name, j_b, "lift-off", 0.0, 0.0))
         solver.other_ground[i] = -1
-        return solver._hold(sim, y, i, w, t)
+        return solver._hold(sim, y, i, w, t, stages=stages)
     t1 = crease(solver, i)
     work, d = solver._work, solver._d
-    rows = _build_rows(y, prm, points, normals, t1, work)
+    rows = build_rows_normals(y, prm, count, points, normals, t1[0], t1[1], t1[2], work)
     slip = sum(work[3 * c + 1, _B] for c in range(count)) / count  # along the crease
     velocities = work[0:rows:3, _B].copy()  # normal velocities of the points
     accelerations(y, prm, w, count, rows, points, bias, rdot, work, d)
@@ -232,12 +217,19 @@ def hold(solver, sim, y: np.ndarray, i: int, w: np.ndarray, t: float, lift_off_s
             elif j >= len(solver.half_spaces):  # a static box's face: not looked at again in this step (as pressed)
                 solver._static_skipped[i] = int(solver.statics.row_owner[j])
             solver.other_ground[i] = -1
-            return solver._hold(sim, y, i, w, t)
+            return solver._hold(sim, y, i, w, t, stages=stages)
     solver.sliding[i] = sliding
     solver.slide_direction[i] = sx, 0.0
     solver.pressed[i] = int(solver.tracked[i])
     solver._bare_rows[i] = w
     add_contact_wrench(w, y, prm, count, points, anchors, work)
+    if stages and sim._method.derivative_stages and stepped_by_integrator(prm) and solver.on_exact_plane(j_a) \
+            and solver.on_exact_plane(j_b):
+        solver._held_rows[i] = w
+        hold_on_two_planes_in_row(w, solver._bare_rows[i], solver.shapes[i], solver.grounds[j_a],
+                                  int(solver.tracked[i]), solver.grounds[j_b], int(solver.other_tracked[i]), mu,
+                                  SLIDE if sliding else STICK, sx)
+        solver._staged[i] = 1
     return True
 
 

@@ -31,7 +31,10 @@ Wrench row (``WRENCH_WIDTH`` floats per body)
                                (kind, 3 dims: contact/layout.py's shape row), ``HELD_GROUND``
                                the plane (normal, offset), ``HELD_FEATURES`` the tracked
                                features (bits), ``HELD_MU`` the friction, ``HELD_SLIDE`` each
-                               contact point's slip direction (t1, t2) at the step's start.
+                               contact point's slip direction (t1, t2) at the step's start;
+                               ``HELD_OTHER`` a second plane held on at the same time (normal,
+                               offset; zero: none) and ``HELD_OTHER_FEATURES`` its features
+                               (a body in a corner, contact/two_grounds.py).
     ``ACTIVE``                 non-zero if anything was added to the row (the last column).
 
 Parameter row (``PRM_WIDTH`` floats per body, ``core/stepping.pack_parameters``)
@@ -50,7 +53,7 @@ from __future__ import annotations
 __all__ = [
     "P", "Q", "V", "W", "STATE_WIDTH", "BOUND", "ROW_WIDTH",
     "F_WORLD", "T_WORLD", "F_COM_W", "T_COM_W", "F_COM_P", "T_COM_P", "SITE_MOMENT", "HELD", "HELD_SHAPE", "HELD_GROUND",
-    "HELD_FEATURES", "HELD_MU", "HELD_SLIDE", "ACTIVE", "WRENCH_WIDTH",
+    "HELD_FEATURES", "HELD_MU", "HELD_SLIDE", "HELD_OTHER", "HELD_OTHER_FEATURES", "ACTIVE", "WRENCH_WIDTH",
     "FRAME_WORLD", "FRAME_BODY", "FRAME_WORLD_ALIGNED", "FRAME_SITE_BODY_AXES", "FRAME_SITE_WORLD_AXES",
 ]
 
@@ -74,8 +77,10 @@ HELD_GROUND = 32  # 4 columns: the plane's unit normal (world axes) and offset (
 HELD_FEATURES = 36  # the tracked features (shapes.feature_points' mask), as bits
 HELD_MU = 37  # Coulomb friction coefficient
 HELD_SLIDE = 38  # 2 × 4 columns (contact/layout.MAX_POINTS): each contact's slip direction (t1, t2), step start
-ACTIVE = 46
-WRENCH_WIDTH = 47
+HELD_OTHER = 46  # 4 columns: a second plane held on at once (normal, offset); all zero: none
+HELD_OTHER_FEATURES = 50  # the tracked features on the second plane, as bits
+ACTIVE = 51
+WRENCH_WIDTH = 52
 
 #: How a frame's origin and axes relate to its body (core/frames.parse_frame; forces.add_wrench).
 FRAME_WORLD = 0  # world origin, world axes

@@ -40,7 +40,7 @@ from ..layout import GRAVITY, INERTIA, INV_INERTIA, INV_MASS, MASS, P, Q, V, W
 from ..rotation import rotate_back
 from .layout import MAX_POINTS
 
-__all__ = ["IMPACT_WORK_SHAPE", "restitution", "PGS_MAX_SWEEPS", "PGS_TOLERANCE", "tangents", "build_rows", "pgs", "pgs_each",
+__all__ = ["IMPACT_WORK_SHAPE", "restitution", "PGS_MAX_SWEEPS", "PGS_TOLERANCE", "tangents", "build_rows", "build_rows_normals", "pgs", "pgs_each",
            "kinetic_energy_row", "potential_energy_row", "apply_impulses", "frictionless_after_short", "impact",
            "summed_wrench"]
 
@@ -106,21 +106,43 @@ def build_rows(y, p, count, points, nx, ny, nz, work):
     (d/m, ang/I). Returns the number of rows.
     """
     t1x, t1y, t1z, t2x, t2y, t2z = tangents(nx, ny, nz)
-    qw, qx, qy, qz = y[Q], y[Q + 1], y[Q + 2], y[Q + 3]
-    rows = 3 * count
     for c in range(count):
-        rx, ry, rz = points[c, 0] - y[P], points[c, 1] - y[P + 1], points[c, 2] - y[P + 2]
-        for k in range(3):
-            if k == 0:
-                dx, dy, dz = nx, ny, nz
-            elif k == 1:
-                dx, dy, dz = t1x, t1y, t1z
-            else:
-                dx, dy, dz = t2x, t2y, t2z
-            row = 3 * c + k
-            work[row, _LIN], work[row, _LIN + 1], work[row, _LIN + 2] = dx, dy, dz
-            a = rotate_back(qw, qx, qy, qz, ry * dz - rz * dy, rz * dx - rx * dz, rx * dy - ry * dx)
-            work[row, _ANG], work[row, _ANG + 1], work[row, _ANG + 2] = a[0], a[1], a[2]
+        _contact_rows(y, points, c, nx, ny, nz, t1x, t1y, t1z, t2x, t2y, t2z, work)
+    return _mass_rows(y, p, 3 * count, work)
+
+
+@njit(**_OPTS)
+def build_rows_normals(y, p, count, points, normals, t1x, t1y, t1z, work):
+    """:func:`build_rows` with a normal per contact (``normals`` (count, 3), world) and one t1 for all of them
+    (unit, across every normal: the crease of two planes, two_grounds.py); each contact's t2 = n × t1."""
+    for c in range(count):
+        nx, ny, nz = normals[c, 0], normals[c, 1], normals[c, 2]
+        _contact_rows(y, points, c, nx, ny, nz, t1x, t1y, t1z, ny * t1z - nz * t1y, nz * t1x - nx * t1z,
+                      nx * t1y - ny * t1x, work)
+    return _mass_rows(y, p, 3 * count, work)
+
+
+@njit(**_OPTS)
+def _contact_rows(y, points, c, nx, ny, nz, t1x, t1y, t1z, t2x, t2y, t2z, work):
+    """Contact c's three rows (n, t1, t2) of ``work``: each direction (world) and its r × d in principal axes."""
+    qw, qx, qy, qz = y[Q], y[Q + 1], y[Q + 2], y[Q + 3]
+    rx, ry, rz = points[c, 0] - y[P], points[c, 1] - y[P + 1], points[c, 2] - y[P + 2]
+    for k in range(3):
+        if k == 0:
+            dx, dy, dz = nx, ny, nz
+        elif k == 1:
+            dx, dy, dz = t1x, t1y, t1z
+        else:
+            dx, dy, dz = t2x, t2y, t2z
+        row = 3 * c + k
+        work[row, _LIN], work[row, _LIN + 1], work[row, _LIN + 2] = dx, dy, dz
+        a = rotate_back(qw, qx, qy, qz, ry * dz - rz * dy, rz * dx - rx * dz, rx * dy - ry * dx)
+        work[row, _ANG], work[row, _ANG + 1], work[row, _ANG + 2] = a[0], a[1], a[2]
+
+
+@njit(**_OPTS)
+def _mass_rows(y, p, rows, work):
+    """b = J u and A = J M⁻¹ Jᵀ of the first ``rows`` rows of ``work`` (their directions filled); returns rows."""
     inv_m = p[INV_MASS]
     for a in range(rows):
         work[a, _B] = (work[a, _LIN] * y[V] + work[a, _LIN + 1] * y[V + 1] + work[a, _LIN + 2] * y[V + 2]

@@ -39,17 +39,18 @@ from numba import njit
 
 from ..dynamics import derivative
 from ..forces import project
-from ..layout import (ACTIVE, HELD, HELD_FEATURES, HELD_GROUND, HELD_MU, HELD_SHAPE, HELD_SLIDE, INV_INERTIA,
-                      INV_MASS, MODEL, MODEL_FULL, MODEL_ISOTROPIC, MODEL_SYMMETRIC, NORMAL as PLANE_NORMAL, P,
+from ..layout import (ACTIVE, HELD, HELD_FEATURES, HELD_GROUND, HELD_MU, HELD_OTHER, HELD_OTHER_FEATURES, HELD_SHAPE,
+                      HELD_SLIDE, INV_INERTIA, INV_MASS, MODEL, MODEL_FULL, MODEL_ISOTROPIC, MODEL_SYMMETRIC, NORMAL as PLANE_NORMAL, P,
                       PROJECT, PROJECT_NONE, Q, STATE_WIDTH, V, W)
 from ..rotation import rotate, rotate_back
-from .impacts import _B, IMPACT_WORK_SHAPE, build_rows, pgs_each, summed_wrench
+from .impacts import _B, IMPACT_WORK_SHAPE, build_rows, build_rows_normals, pgs_each, summed_wrench
 from .layout import DIMS, KIND, MAX_POINTS, NORMAL, OFFSET
 from .materials import material
 from .persistent import SLIDE, STICK, accelerations_from, held_points, normal_bias
+from .shapes import feature_points
 
 __all__ = ["held_derivative", "held_derivatives", "held_accelerations", "held_acceleration", "hold_in_row",
-           "stage_rows", "stepped_by_integrator"]
+           "hold_on_two_planes_in_row", "on_two_planes", "two_plane_rows", "stage_rows", "stepped_by_integrator"]
 
 _OPTS = {"cache": True, "nogil": True, "error_model": "numpy"}
 
@@ -81,6 +82,9 @@ def held_accelerations(y, p, w, d):
     projected onto the body's motion like any wrench (forces.project). A stage at which no
     tracked feature has a contact point, or the normal forces come out zero, adds nothing.
     """
+    if on_two_planes(w):
+        _two_plane_accelerations(y, p, w, d)
+        return
     shape = w[HELD_SHAPE:HELD_SHAPE + 4]  # KIND, DIMS: the columns of a shape row
     ground = w[HELD_GROUND:HELD_GROUND + 4]  # NORMAL, OFFSET: the columns of a ground row
     mask = np.int64(w[HELD_FEATURES])
@@ -108,20 +112,97 @@ def held_accelerations(y, p, w, d):
                 directions[c, 0], directions[c, 1] = ux, uy  # reversed since the start: on along the start's
         accelerations_from(y, count, rdot, bias, work, d)
         pgs_each(work, count, mu, directions)
-        fx, fy, fz, hx, hy, hz = summed_wrench(work, rows)  # moment about the centre of mass, principal axes
-        if p[PROJECT] != PROJECT_NONE:  # onto the body's motion, in world axes, as forces.body_wrench does
-            qw, qx, qy, qz = y[Q], y[Q + 1], y[Q + 2], y[Q + 3]
-            tx, ty, tz = rotate(qw, qx, qy, qz, hx, hy, hz)
-            fx, fy, fz, tx, ty, tz = project(p[PROJECT], p[PLANE_NORMAL], p[PLANE_NORMAL + 1],
-                                             p[PLANE_NORMAL + 2], fx, fy, fz, tx, ty, tz)
-            hx, hy, hz = rotate_back(qw, qx, qy, qz, tx, ty, tz)
-        inv_m = p[INV_MASS]
-        d[V] += fx * inv_m
-        d[V + 1] += fy * inv_m
-        d[V + 2] += fz * inv_m
-        d[W] += hx * p[INV_INERTIA]
-        d[W + 1] += hy * p[INV_INERTIA + 1]
-        d[W + 2] += hz * p[INV_INERTIA + 2]
+        _add_accelerations(y, p, work, rows, d)
+    _pin = y[P], p[0], w[0], d[0]
+
+
+@njit(**_OPTS)
+def _add_accelerations(y, p, work, rows, d):
+    """d[V:V+3], d[W:W+3] += the accelerations of the force the multipliers in ``work`` give (its first ``rows``
+    rows), projected onto the body's motion like any wrench (forces.project)."""
+    fx, fy, fz, hx, hy, hz = summed_wrench(work, rows)  # moment about the centre of mass, principal axes
+    if p[PROJECT] != PROJECT_NONE:  # onto the body's motion, in world axes, as forces.body_wrench does
+        qw, qx, qy, qz = y[Q], y[Q + 1], y[Q + 2], y[Q + 3]
+        tx, ty, tz = rotate(qw, qx, qy, qz, hx, hy, hz)
+        fx, fy, fz, tx, ty, tz = project(p[PROJECT], p[PLANE_NORMAL], p[PLANE_NORMAL + 1],
+                                         p[PLANE_NORMAL + 2], fx, fy, fz, tx, ty, tz)
+        hx, hy, hz = rotate_back(qw, qx, qy, qz, tx, ty, tz)
+    inv_m = p[INV_MASS]
+    d[V] += fx * inv_m
+    d[V + 1] += fy * inv_m
+    d[V + 2] += fz * inv_m
+    d[W] += hx * p[INV_INERTIA]
+    d[W + 1] += hy * p[INV_INERTIA + 1]
+    d[W + 2] += hz * p[INV_INERTIA + 2]
+
+
+@njit(**_OPTS)
+def on_two_planes(w):
+    """Whether wrench row ``w`` carries a second plane (layout.HELD_OTHER: its normal not zero)."""
+    return w[HELD_OTHER] != 0.0 or w[HELD_OTHER + 1] != 0.0 or w[HELD_OTHER + 2] != 0.0
+
+
+@njit(**_OPTS)
+def two_plane_rows(y, p, shape, plane_a, mask_a, plane_b, mask_b, points, bias, rdot, anchors, normals, work):
+    """The contact rows of a body held on two planes at once (two_grounds.py), for state ``y``: the points of the
+    features ``mask_a`` on ``plane_a`` then of ``mask_b`` on ``plane_b`` (ground rows: normal, offset), each
+    row with its own plane's normal, t1 along the crease n_A × n_B for all (impacts.build_rows_normals). Fills
+    ``points``, ``bias``, ``rdot``, ``anchors`` (persistent.normal_bias), ``normals`` (MAX_POINTS × 3) and
+    ``work``'s rows, A and b (the contact velocities). Returns the count, or −1 where the two planes' points are
+    more than MAX_POINTS (nothing filled then)."""
+    more = np.empty((MAX_POINTS, 3))
+    gaps = np.empty(MAX_POINTS)
+    owners = np.zeros(MAX_POINTS, dtype=np.int64)
+    n_a = feature_points(y, p, shape, plane_a, mask_a, points, gaps, owners)
+    normal_bias(y, p, shape, plane_a, mask_a, n_a, points, owners, bias, rdot, anchors)
+    n_b = feature_points(y, p, shape, plane_b, mask_b, more, gaps, owners)
+    if n_a + n_b > MAX_POINTS:
+        return -1
+    b_bias = np.empty(MAX_POINTS)
+    b_rdot = np.empty((MAX_POINTS, 3))
+    b_anchors = np.empty((MAX_POINTS, 3))
+    normal_bias(y, p, shape, plane_b, mask_b, n_b, more, owners, b_bias, b_rdot, b_anchors)
+    for c in range(n_a + n_b):
+        plane = plane_a if c < n_a else plane_b
+        for k in range(3):
+            normals[c, k] = plane[NORMAL + k]
+        if c >= n_a:
+            bias[c] = b_bias[c - n_a]
+            for k in range(3):
+                points[c, k] = more[c - n_a, k]
+                rdot[c, k] = b_rdot[c - n_a, k]
+                anchors[c, k] = b_anchors[c - n_a, k]
+    ax, ay, az = plane_a[NORMAL], plane_a[NORMAL + 1], plane_a[NORMAL + 2]
+    bx, by, bz = plane_b[NORMAL], plane_b[NORMAL + 1], plane_b[NORMAL + 2]
+    tx, ty, tz = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
+    size = math.sqrt(tx * tx + ty * ty + tz * tz)
+    build_rows_normals(y, p, n_a + n_b, points, normals, tx / size, ty / size, tz / size, work)
+    return n_a + n_b
+
+
+@njit(**_OPTS)
+def _two_plane_accelerations(y, p, w, d):
+    """:func:`held_accelerations` for a body held on two planes at once (the row's ``HELD_GROUND`` and
+    ``HELD_OTHER``): the law two_grounds.hold solves at the step's start, at this stage's state — the points of
+    both planes' tracked features (:func:`two_plane_rows`), one μ, sliding along the crease (``HELD_SLIDE``'s
+    first direction, (±1, 0) for every point) or sticking inside the cone."""
+    points = np.empty((MAX_POINTS, 3))
+    bias = np.empty(MAX_POINTS)
+    rdot = np.empty((MAX_POINTS, 3))
+    anchors = np.empty((MAX_POINTS, 3))
+    normals = np.empty((MAX_POINTS, 3))
+    work = np.zeros(IMPACT_WORK_SHAPE)
+    count = two_plane_rows(y, p, w[HELD_SHAPE:HELD_SHAPE + 4], w[HELD_GROUND:HELD_GROUND + 4],
+                           np.int64(w[HELD_FEATURES]), w[HELD_OTHER:HELD_OTHER + 4], np.int64(w[HELD_OTHER_FEATURES]),
+                           points, bias, rdot, anchors, normals, work)
+    if count > 0:
+        directions = np.zeros((MAX_POINTS, 2))
+        if w[HELD] == SLIDE:
+            for c in range(count):
+                directions[c, 0], directions[c, 1] = w[HELD_SLIDE], w[HELD_SLIDE + 1]
+        accelerations_from(y, count, rdot, bias, work, d)
+        pgs_each(work, count, w[HELD_MU], directions)
+        _add_accelerations(y, p, work, 3 * count, d)
     _pin = y[P], p[0], w[0], d[0]
 
 
@@ -135,16 +216,7 @@ def hold_in_row(w, bare, y, p, shape, ground, mask, mu, mode, sx, sy, slip_toler
     along (t1, t2) (persistent.holding_wrench). Each contact point's slip direction at y goes in
     ``HELD_SLIDE`` (while sliding; (sx, sy) for a point slipping slower than ``slip_tolerance``).
     """
-    for k in range(w.shape[0]):
-        w[k] = bare[k]
-    w[HELD] = mode
-    w[HELD_SHAPE] = shape[KIND]
-    for k in range(3):
-        w[HELD_SHAPE + 1 + k] = shape[DIMS + k]
-        w[HELD_GROUND + k] = ground[NORMAL + k]
-    w[HELD_GROUND + 3] = ground[OFFSET]
-    w[HELD_FEATURES] = mask
-    w[HELD_MU] = mu
+    _held_row(w, bare, shape, ground, mask, mu, mode)
     if mode == SLIDE:
         points = np.empty((MAX_POINTS, 3))
         gaps = np.empty(MAX_POINTS)
@@ -161,6 +233,38 @@ def hold_in_row(w, bare, y, p, shape, ground, mask, mu, mode, sx, sy, slip_toler
                     ux, uy = vx / slip, vy / slip
             w[HELD_SLIDE + 2 * c], w[HELD_SLIDE + 2 * c + 1] = ux, uy
     w[ACTIVE] = 1.0  # so that the row is cleared before the next step (stepping.clear_wrenches)
+
+
+@njit(**_OPTS)
+def hold_on_two_planes_in_row(w, bare, shape, plane_a, mask_a, plane_b, mask_b, mu, mode, sx):
+    """Wrench row ``w`` ← ``bare`` carrying a hold on two planes at once (two_grounds.hold's), to be found at every
+    stage: the features ``mask_a`` on ``plane_a`` and ``mask_b`` on ``plane_b`` (ground rows), one μ, ``mode``
+    persistent.STICK or SLIDE, and while sliding ``sx`` = ±1, the slip's sense along the crease n_A × n_B."""
+    _held_row(w, bare, shape, plane_a, mask_a, mu, mode)
+    for k in range(4):
+        w[HELD_OTHER + k] = plane_b[NORMAL + k]
+    w[HELD_OTHER_FEATURES] = mask_b
+    for c in range(MAX_POINTS):
+        w[HELD_SLIDE + 2 * c], w[HELD_SLIDE + 2 * c + 1] = sx, 0.0
+    w[ACTIVE] = 1.0
+
+
+@njit(**_OPTS)
+def _held_row(w, bare, shape, ground, mask, mu, mode):
+    """``w`` ← ``bare`` with the columns HELD … HELD_MU set (the body's shape row, the plane's ground row), and no
+    second plane."""
+    for k in range(w.shape[0]):
+        w[k] = bare[k]
+    w[HELD] = mode
+    w[HELD_SHAPE] = shape[KIND]
+    for k in range(3):
+        w[HELD_SHAPE + 1 + k] = shape[DIMS + k]
+        w[HELD_GROUND + k] = ground[NORMAL + k]
+    w[HELD_GROUND + 3] = ground[OFFSET]
+    w[HELD_FEATURES] = mask
+    w[HELD_MU] = mu
+    for k in range(5):
+        w[HELD_OTHER + k] = 0.0
 
 
 @njit(**_OPTS)
