@@ -45,7 +45,7 @@ from ..kernels.contact.layout import MAX_POINTS, NORMAL, PERSISTENT
 from ..kernels.contact.persistent import (SLIDE, START_SLIDE_ACCELERATION, STICK, accelerations, add_contact_wrench,
                                           normal_bias, project)
 from ..kernels.contact.shapes import MAX_FEATURES, feature_gaps, feature_points
-from ..kernels.contact.stage import hold_on_two_planes_in_row, stepped_by_integrator
+from ..kernels.contact.stage import hold_on_two_planes_in_row
 from ..quaternion import cross3, quat_from_rotation_vector, quat_multiply, quat_rotate
 from .events import ContactEvent
 
@@ -160,7 +160,8 @@ def hold(solver, sim, y: np.ndarray, i: int, w: np.ndarray, t: float, lift_off_s
     whose stages evaluate the right-hand side (rk4, euler, reference) on two exact planes (half-spaces
     or a static box's faces) gets instead its contact in the row, found at every stage by this same law
     (kernels/contact/stage.py; the row with the force found here kept in ``ContactSolver._held_rows``),
-    as on one plane.
+    as on one plane; not a cylinder whose rim point on a plane may swing round the rim within the step
+    (``ContactSolver.stages_on_two_planes``).
     """
 
     prm = sim._prm[i]
@@ -223,8 +224,7 @@ def hold(solver, sim, y: np.ndarray, i: int, w: np.ndarray, t: float, lift_off_s
     solver.pressed[i] = int(solver.tracked[i])
     solver._bare_rows[i] = w
     add_contact_wrench(w, y, prm, count, points, anchors, work)
-    if stages and sim._method.derivative_stages and stepped_by_integrator(prm) and solver.on_exact_plane(j_a) \
-            and solver.on_exact_plane(j_b):
+    if stages and solver.stages_on_two_planes(sim, y, i):
         solver._held_rows[i] = w
         hold_on_two_planes_in_row(w, solver._bare_rows[i], solver.shapes[i], solver.grounds[j_a],
                                   int(solver.tracked[i]), solver.grounds[j_b], int(solver.other_tracked[i]), mu,
