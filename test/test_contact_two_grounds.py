@@ -321,7 +321,8 @@ def can_in_a_corner(dt: float) -> Simulator:
                                     0.24617850702379446]},
            "twist": {"linear": [-0.043934293617658306, -0.02782124468696822, -0.01407713787206939],
                      "angular": [0.24907312720046493, -1.8441600604823507, 2.8673425485166737]}}
-    wall = {"motion": "static", "mass": 1.0, "inertia": {"box": [1.15, 0.1, 1.0]}, "collision": {"box": [1.15, 0.1, 1.0]},
+    box = {"box": [1.15, 0.1, 1.0]}
+    wall = {"motion": "static", "mass": 1.0, "inertia": box, "collision": box,
             "material": {"restitution": 0.0, "friction": 0.5}, "pose": {"position": [0.0, -0.525, 0.5]}}
     scene = {"gravity": [0.0, 0.0, -G], "bodies": {"can": can, "wall": wall},
              "ground": [{"normal": [0, 0, 1], "material": {"restitution": 0.0, "friction": 0.6}}]}

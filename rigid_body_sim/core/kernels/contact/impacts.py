@@ -40,7 +40,8 @@ from ..layout import GRAVITY, INERTIA, INV_INERTIA, INV_MASS, MASS, P, Q, V, W
 from ..rotation import rotate_back
 from .layout import MAX_POINTS
 
-__all__ = ["IMPACT_WORK_SHAPE", "restitution", "PGS_MAX_SWEEPS", "PGS_TOLERANCE", "tangents", "build_rows", "build_rows_normals", "pgs", "pgs_each",
+__all__ = ["IMPACT_WORK_SHAPE", "restitution", "PGS_MAX_SWEEPS", "PGS_TOLERANCE", "tangents", "build_rows",
+           "build_rows_normals", "pgs", "pgs_each",
            "kinetic_energy_row", "potential_energy_row", "apply_impulses", "frictionless_after_short", "impact",
            "summed_wrench"]
 

@@ -40,8 +40,8 @@ from numba import njit
 from ..dynamics import derivative
 from ..forces import project
 from ..layout import (ACTIVE, HELD, HELD_FEATURES, HELD_GROUND, HELD_MU, HELD_OTHER, HELD_OTHER_FEATURES, HELD_SHAPE,
-                      HELD_SLIDE, INV_INERTIA, INV_MASS, MODEL, MODEL_FULL, MODEL_ISOTROPIC, MODEL_SYMMETRIC, NORMAL as PLANE_NORMAL, P,
-                      PROJECT, PROJECT_NONE, Q, STATE_WIDTH, V, W)
+                      HELD_SLIDE, INV_INERTIA, INV_MASS, MODEL, MODEL_FULL, MODEL_ISOTROPIC, MODEL_SYMMETRIC,
+                      NORMAL as PLANE_NORMAL, P, PROJECT, PROJECT_NONE, Q, STATE_WIDTH, V, W)
 from ..rotation import rotate, rotate_back
 from .impacts import _B, IMPACT_WORK_SHAPE, build_rows, build_rows_normals, pgs_each, summed_wrench
 from .layout import DIMS, KIND, MAX_POINTS, NORMAL, OFFSET
@@ -263,8 +263,9 @@ def _held_row(w, bare, shape, ground, mask, mu, mode):
     w[HELD_GROUND + 3] = ground[OFFSET]
     w[HELD_FEATURES] = mask
     w[HELD_MU] = mu
-    for k in range(5):
+    for k in range(4):
         w[HELD_OTHER + k] = 0.0
+    w[HELD_OTHER_FEATURES] = 0.0
 
 
 @njit(**_OPTS)
