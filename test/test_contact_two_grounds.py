@@ -20,6 +20,11 @@ slides along the crease at 0.3 m/s for ever, held by both.
 A capsule slid into a static wall while just lifting off the floor, one end raised: held on the wall and the
 floor, its raised end comes down onto the floor and stays on it (never below it, K + U never rising); it comes
 to rest lying level in the crease, r from both.
+
+A thin can rolling without slipping on its rim in the corner of the floor and a wall, held on both: no force does
+work, so K + U is constant; with its holding force found at every rk4 stage, each step's error in it is rk4's. A
+can lying with its end face on a wall (its rim point there swinging round the rim as it turns) keeps the force of
+the step's start and is never left below the floor.
 """
 
 from __future__ import annotations
