@@ -1258,6 +1258,8 @@ class ContactSolver:
                     self.sliding[i] = False
                 else:
                     stop = self.step_map(sim, i, y0, s * h, held)
+                    if s > 0.0 and self._thrown(sim, i, y0, stop, self._bare(i, held)):  # located on a throw
+                        return self._instead_of_throw(sim, i, y0, self._bare(i, held), t, h)[0]
                     # a feature that came down before the stop and is not down at the step's end (a can's face,
                     # the can going through upright and on): the landing, first
                     if (before := self._reaching(sim, i, y0, stop, held, s * h)) is not None:
@@ -1279,6 +1281,8 @@ class ContactSolver:
                 return self._persistent_end(sim, i, y0, end, held, t, h)
             s = 0.0 if s is None else s
             hit = self.step_map(sim, i, y0, s * h, held) if s > 0.0 else y0.copy()
+            if s > 0.0 and self._thrown(sim, i, y0, hit, self._bare(i, held)):  # located on a throw
+                return self._instead_of_throw(sim, i, y0, self._bare(i, held), t, h)[0]
             if not self._strike_side(sim, i, hit, held, t + s * h):  # pressed on them (from wall to wall)
                 return self._persistent_end(sim, i, y0, end, held, t, h)
             return self._persistent_span(sim, i, hit, self._bare(i, held), t + s * h, h - s * h) if s < 1.0 else hit
