@@ -39,13 +39,12 @@ import math
 import numpy as np
 
 from ..kernels import layout as L
-from ..kernels.contact.impacts import (_A, _ANG, _B, _LAM, _LIN, _row_velocity, build_rows_normals,
-                                      kinetic_energy_row, pgs)
+from ..kernels.contact.impacts import _B, _LAM, _row_velocity, kinetic_energy_row, pgs
 from ..kernels.contact.layout import MAX_POINTS, NORMAL, PERSISTENT
 from ..kernels.contact.persistent import (SLIDE, START_SLIDE_ACCELERATION, STICK, accelerations, add_contact_wrench,
-                                          normal_bias, project)
+                                          project)
 from ..kernels.contact.shapes import MAX_FEATURES, feature_gaps, feature_points
-from ..kernels.contact.stage import hold_on_two_planes_in_row
+from ..kernels.contact.stage import hold_on_two_planes_in_row, two_plane_rows
 from ..quaternion import cross3, quat_from_rotation_vector, quat_multiply, quat_rotate
 from .events import ContactEvent
 
@@ -105,33 +104,6 @@ def _point_velocities(sim, y: np.ndarray, i: int, points: np.ndarray) -> np.ndar
     return y[L.V:L.V + 3] + cross3(w_W, points - y[L.P:L.P + 3])
 
 
-def _points(solver, sim, y: np.ndarray, i: int):
-    """Contact points of both half-spaces: (points (MAX_POINTS, 3), gaps, owners, normals (k, 3), ground of
-    each, k); k = -1 when they are more than MAX_POINTS (the rows have room for MAX_POINTS)."""
-    prm, shape = sim._prm[i], solver.shapes[i]
-    out = []
-    for j, mask in ((int(solver.ground_of[i]), int(solver.tracked[i])),
-                    (int(solver.other_ground[i]), int(solver.other_tracked[i]))):
-        points, gaps, owners = np.empty((MAX_POINTS, 3)), np.empty(MAX_POINTS), np.zeros(MAX_POINTS, dtype=np.int64)
-        n = feature_points(y, prm, shape, solver.grounds[j], mask, points, gaps, owners)
-        bias, rdot, anchors = np.zeros(MAX_POINTS), np.zeros((MAX_POINTS, 3)), np.zeros((MAX_POINTS, 3))
-        normal_bias(y, prm, shape, solver.grounds[j], mask, n, points, owners, bias, rdot, anchors)
-        out.append((j, n, points, gaps, bias, rdot, anchors))
-    total = out[0][1] + out[1][1]
-    if total > MAX_POINTS:
-        return None
-    points, bias, rdot, anchors = (np.zeros((MAX_POINTS, 3)), np.zeros(MAX_POINTS), np.zeros((MAX_POINTS, 3)),
-                                   np.zeros((MAX_POINTS, 3)))
-    normals, which, gaps = np.zeros((total, 3)), np.zeros(total, dtype=np.int64), np.zeros(total)
-    k = 0
-    for j, n, p, g, b, r, a in out:
-        points[k:k + n], bias[k:k + n], rdot[k:k + n], anchors[k:k + n] = p[:n], b[:n], r[:n], a[:n]
-        normals[k:k + n] = solver.grounds[j, NORMAL:NORMAL + 3]
-        which[k:k + n], gaps[k:k + n] = j, g[:n]
-        k += n
-    return points, bias, rdot, anchors, normals, which, gaps, total
-
-
 def _jacobian(y: np.ndarray, points: np.ndarray, directions: np.ndarray) -> np.ndarray:
     """(k, 6) rows of body state y: each row's direction (world) and its angular part r × direction in principal
     axes, r from the centre of mass to its point ``points`` (k, 3, world)."""
@@ -166,25 +138,28 @@ def hold(solver, sim, y: np.ndarray, i: int, w: np.ndarray, t: float, lift_off_s
 
     prm = sim._prm[i]
     name = solver.names[i]
-    found = _points(solver, sim, y, i)
-    if found is None:  # more points than the rows hold: held on ground_of, projected onto both (counted)
+    j_a, j_b = int(solver.ground_of[i]), int(solver.other_ground[i])
+    points, gaps, on_b = np.empty((MAX_POINTS, 3)), np.empty(MAX_POINTS), np.empty(MAX_POINTS, dtype=np.int64)
+    bias, rdot, anchors = np.empty(MAX_POINTS), np.empty((MAX_POINTS, 3)), np.empty((MAX_POINTS, 3))
+    work, d = solver._work, solver._d
+    count = two_plane_rows(y, prm, solver.shapes[i], solver.grounds[j_a], int(solver.tracked[i]), solver.grounds[j_b],
+                           int(solver.other_tracked[i]), points, gaps, on_b, bias, rdot, anchors,
+                           np.empty((MAX_POINTS, 3)), work)  # the same rows as at every stage (stage.py)
+    if count < 0:  # more points than the rows hold: held on ground_of, projected onto both (counted)
         solver.counts["two_ground_overflow"] += 1
         solver.other_projected[i] = True
         return solver._hold(sim, y, i, w, t, stages=stages)
-    points, bias, rdot, anchors, normals, which, gaps, count = found
-    j_b = int(solver.other_ground[i])
+    which = np.where(on_b[:count] == 1, j_b, j_a)  # the plane of each point
+    gaps = gaps[:count]
     if j_b >= len(solver.half_spaces) and not solver.statics.within_face(j_b, points[:count][which == j_b]):
         # off the static box's face it was held on (past its edge): let go, its contact with that box found afresh
         solver.events.append(ContactEvent(t, name, j_b, "lift-off", 0.0, 0.0))
         solver.other_ground[i] = -1
         return solver._hold(sim, y, i, w, t, stages=stages)
-    t1 = crease(solver, i)
-    work, d = solver._work, solver._d
-    rows = build_rows_normals(y, prm, count, points, normals, t1[0], t1[1], t1[2], work)
+    rows = 3 * count
     slip = sum(work[3 * c + 1, _B] for c in range(count)) / count  # along the crease
     velocities = work[0:rows:3, _B].copy()  # normal velocities of the points
     accelerations(y, prm, w, count, rows, points, bias, rdot, work, d)
-    j_a, j_b = int(solver.ground_of[i]), int(solver.other_ground[i])
     mu = min(solver.friction_of(i, j_a), solver.friction_of(i, j_b))
     work[:rows, _LAM] = 0.0
     sx = 0.0

@@ -41,7 +41,7 @@ from ..rotation import rotate_back
 from .layout import MAX_POINTS
 
 __all__ = ["IMPACT_WORK_SHAPE", "restitution", "PGS_MAX_SWEEPS", "PGS_TOLERANCE", "tangents", "build_rows",
-           "build_rows_normals", "pgs", "pgs_each",
+           "build_rows_normals", "row_direction", "pgs", "pgs_each",
            "kinetic_energy_row", "potential_energy_row", "apply_impulses", "frictionless_after_short", "impact",
            "summed_wrench"]
 
@@ -123,18 +123,23 @@ def build_rows_normals(y, p, count, points, normals, t1x, t1y, t1z, work):
     return _mass_rows(y, p, 3 * count, work)
 
 
+@njit(**_OPTS, inline="always")
+def row_direction(k, nx, ny, nz, t1x, t1y, t1z, t2x, t2y, t2z):
+    """The direction (world) of a contact's row k: 0 its normal n, 1 its t1, 2 its t2."""
+    if k == 0:
+        return nx, ny, nz
+    if k == 1:
+        return t1x, t1y, t1z
+    return t2x, t2y, t2z
+
+
 @njit(**_OPTS)
 def _contact_rows(y, points, c, nx, ny, nz, t1x, t1y, t1z, t2x, t2y, t2z, work):
     """Contact c's three rows (n, t1, t2) of ``work``: each direction (world) and its r × d in principal axes."""
     qw, qx, qy, qz = y[Q], y[Q + 1], y[Q + 2], y[Q + 3]
     rx, ry, rz = points[c, 0] - y[P], points[c, 1] - y[P + 1], points[c, 2] - y[P + 2]
     for k in range(3):
-        if k == 0:
-            dx, dy, dz = nx, ny, nz
-        elif k == 1:
-            dx, dy, dz = t1x, t1y, t1z
-        else:
-            dx, dy, dz = t2x, t2y, t2z
+        dx, dy, dz = row_direction(k, nx, ny, nz, t1x, t1y, t1z, t2x, t2y, t2z)
         row = 3 * c + k
         work[row, _LIN], work[row, _LIN + 1], work[row, _LIN + 2] = dx, dy, dz
         a = rotate_back(qw, qx, qy, qz, ry * dz - rz * dy, rz * dx - rx * dz, rx * dy - ry * dx)

@@ -70,7 +70,7 @@ from ..rotation import exp_map, matrix, normalise, qmul, rotate, rotate_back
 from .layout import (DIMS, FRICTION, HAS_MATERIAL, KIND, NORMAL, OFFSET, RESTITUTION, SHAPE_BOX, SHAPE_CAPSULE,
                      SHAPE_CYLINDER, SHAPE_SPHERE)
 from .convex import POSE_WIDTH
-from .impacts import kinetic_energy_row, potential_energy_row
+from .impacts import kinetic_energy_row, potential_energy_row, row_direction
 from .pair_impacts import normal_speed
 from .pairs import MAX_PAIR_POINTS, RIM_ACROSS, ball_contact, boxes_apart_turned, face_patch, pair_contacts, set_pose
 from .shapes import MAX_FEATURES, feature_gaps, feature_points
@@ -607,12 +607,7 @@ def _rows(Y, prm, n_contacts, cint, cflt, iw, normal_only, h, size, rj, rw, rdia
         bias = cflt[c, C_GAP] / h if cflt[c, C_GAP] > TOUCH_GAP * size[body] else 0.0  # else touching
         for k in range(per):
             r = per * c + k
-            if k == 0:
-                dx, dy, dz = nx, ny, nz
-            elif k == 1:
-                dx, dy, dz = t1x, t1y, t1z
-            else:
-                dx, dy, dz = t2x, t2y, t2z
+            dx, dy, dz = row_direction(k, nx, ny, nz, t1x, t1y, t1z, t2x, t2y, t2z)
             diag = 0.0
             for side in range(2):
                 i = cint[c, side]

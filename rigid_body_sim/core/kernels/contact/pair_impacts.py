@@ -22,7 +22,7 @@ from ..jit import INLINE, JIT
 from ..layout import INV_INERTIA, INV_MASS, P, Q, V, W
 from ..rotation import rotate, rotate_back
 from .impacts import (_A, _B, _LAM, _SAVED, APPROACH_LEFT, frictionless_after_short, kinetic_energy_row, pgs,
-                      restitution, tangents)
+                      restitution, row_direction, tangents)
 from .layout import MAX_POINTS
 
 __all__ = ["PAIR_JACOBIAN_SHAPE", "normal_speed", "pair_rows", "pair_impact"]
@@ -53,12 +53,7 @@ def pair_rows(ya, pa, yb, pb, count, points, nx, ny, nz, jac, work):
         rax, ray, raz = points[c, 0] - ya[P], points[c, 1] - ya[P + 1], points[c, 2] - ya[P + 2]
         rbx, rby, rbz = points[c, 0] - yb[P], points[c, 1] - yb[P + 1], points[c, 2] - yb[P + 2]
         for k in range(3):
-            if k == 0:
-                dx, dy, dz = nx, ny, nz
-            elif k == 1:
-                dx, dy, dz = t1x, t1y, t1z
-            else:
-                dx, dy, dz = t2x, t2y, t2z
+            dx, dy, dz = row_direction(k, nx, ny, nz, t1x, t1y, t1z, t2x, t2y, t2z)
             row = 3 * c + k
             aa = rotate_back(ya[Q], ya[Q + 1], ya[Q + 2], ya[Q + 3],
                              ray * dz - raz * dy, raz * dx - rax * dz, rax * dy - ray * dx)

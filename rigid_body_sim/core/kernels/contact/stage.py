@@ -143,19 +143,20 @@ def on_two_planes(w):
 
 
 @njit(**_OPTS)
-def two_plane_rows(y, p, shape, plane_a, mask_a, plane_b, mask_b, points, bias, rdot, anchors, normals, work):
+def two_plane_rows(y, p, shape, plane_a, mask_a, plane_b, mask_b, points, gaps, on_b, bias, rdot, anchors, normals,
+                   work):
     """The contact rows of a body held on two planes at once (two_grounds.py), for state ``y``: the points of the
     features ``mask_a`` on ``plane_a`` then of ``mask_b`` on ``plane_b`` (ground rows: normal, offset), each
     row with its own plane's normal, t1 along the crease n_A × n_B for all (impacts.build_rows_normals). Fills
-    ``points``, ``bias``, ``rdot``, ``anchors`` (persistent.normal_bias), ``normals`` (MAX_POINTS × 3) and
-    ``work``'s rows, A and b (the contact velocities). Returns the count, or −1 where the two planes' points are
-    more than MAX_POINTS (nothing filled then)."""
+    ``points``, their ``gaps`` (m), ``on_b`` (1 for a point on plane_b, else 0), ``bias``, ``rdot``, ``anchors``
+    (persistent.normal_bias), ``normals`` (MAX_POINTS × 3) and ``work``'s rows, A and b (the contact velocities).
+    Returns the count, or −1 where the two planes' points are more than MAX_POINTS (nothing filled then)."""
     more = np.empty((MAX_POINTS, 3))
-    gaps = np.empty(MAX_POINTS)
+    b_gaps = np.empty(MAX_POINTS)
     owners = np.zeros(MAX_POINTS, dtype=np.int64)
     n_a = feature_points(y, p, shape, plane_a, mask_a, points, gaps, owners)
     normal_bias(y, p, shape, plane_a, mask_a, n_a, points, owners, bias, rdot, anchors)
-    n_b = feature_points(y, p, shape, plane_b, mask_b, more, gaps, owners)
+    n_b = feature_points(y, p, shape, plane_b, mask_b, more, b_gaps, owners)
     if n_a + n_b > MAX_POINTS:
         return -1
     b_bias = np.empty(MAX_POINTS)
@@ -164,9 +165,11 @@ def two_plane_rows(y, p, shape, plane_a, mask_a, plane_b, mask_b, points, bias, 
     normal_bias(y, p, shape, plane_b, mask_b, n_b, more, owners, b_bias, b_rdot, b_anchors)
     for c in range(n_a + n_b):
         plane = plane_a if c < n_a else plane_b
+        on_b[c] = 0 if c < n_a else 1
         for k in range(3):
             normals[c, k] = plane[NORMAL + k]
         if c >= n_a:
+            gaps[c] = b_gaps[c - n_a]
             bias[c] = b_bias[c - n_a]
             for k in range(3):
                 points[c, k] = more[c - n_a, k]
@@ -187,6 +190,8 @@ def _two_plane_accelerations(y, p, w, d):
     both planes' tracked features (:func:`two_plane_rows`), one μ, sliding along the crease (``HELD_SLIDE``'s
     first direction, (±1, 0) for every point) or sticking inside the cone."""
     points = np.empty((MAX_POINTS, 3))
+    gaps = np.empty(MAX_POINTS)
+    on_b = np.empty(MAX_POINTS, dtype=np.int64)
     bias = np.empty(MAX_POINTS)
     rdot = np.empty((MAX_POINTS, 3))
     anchors = np.empty((MAX_POINTS, 3))
@@ -194,7 +199,7 @@ def _two_plane_accelerations(y, p, w, d):
     work = np.zeros(IMPACT_WORK_SHAPE)
     count = two_plane_rows(y, p, w[HELD_SHAPE:HELD_SHAPE + 4], w[HELD_GROUND:HELD_GROUND + 4],
                            np.int64(w[HELD_FEATURES]), w[HELD_OTHER:HELD_OTHER + 4], np.int64(w[HELD_OTHER_FEATURES]),
-                           points, bias, rdot, anchors, normals, work)
+                           points, gaps, on_b, bias, rdot, anchors, normals, work)
     if count > 0:
         directions = np.zeros((MAX_POINTS, 2))
         if w[HELD] == SLIDE:
