@@ -252,27 +252,29 @@ def rebound(Y0, Y1, grounds, i, r):
     for g in range(grounds.shape[0]):
         reaches = reaches or grounds[g, NORMAL] * x + grounds[g, NORMAL + 1] * y + grounds[g, NORMAL + 2] * z \
             - grounds[g, OFFSET] < r
-    if not reaches:
-        return -1.0
     dx, dy, dz = x - Y0[i, P], y - Y0[i, P + 1], z - Y0[i, P + 2]
-    return math.sqrt(dx * dx + dy * dy + dz * dz)
+    return math.sqrt(dx * dx + dy * dy + dz * dz) if reaches else -1.0
 
 
-@njit(**INLINE)
+@njit(**JIT)
 def paths_may_meet(Y0, Y1, grounds, a, b, ra, rb, grow, free_a, free_b):
     """Whether the bounding spheres (radii ra, rb; their growths summed, ``grow``) of bodies a and b can meet over
     the step: on their chords at the same rate (chords_apart), or, where one on its free step (free_a, free_b) may
     be stopped by a half-space of ``grounds`` (rebound), each anywhere on its chord (chords_near) within the radii,
     the growths and the rebounds. A ball on the ground moving down, whose free chord goes on into the ground, is
-    stopped by its ground pass: a can coming down beside it meets it though their free chords keep apart."""
+    stopped by its ground pass: a can coming down beside it meets it though their free chords keep apart.
+
+    Compiled on its own, with one exit and its arrays read at the end (_pin), not inlined: inlined, its branches
+    left an atomic reference-count increment and decrement of three arrays in its callers' loops, per pair."""
     limit = (ra + rb) * (1.0 + 1e-6) + grow
-    if chords_apart(Y0, Y1, a, b) <= limit:
-        return True
-    back_a = rebound(Y0, Y1, grounds, a, ra) if free_a else -1.0
-    back_b = rebound(Y0, Y1, grounds, b, rb) if free_b else -1.0
-    if back_a < 0.0 and back_b < 0.0:
-        return False
-    return chords_near(Y0, Y1, a, b) <= limit + max(back_a, 0.0) + max(back_b, 0.0)
+    meet = chords_apart(Y0, Y1, a, b) <= limit
+    if not meet:
+        back_a = rebound(Y0, Y1, grounds, a, ra) if free_a else -1.0
+        back_b = rebound(Y0, Y1, grounds, b, rb) if free_b else -1.0
+        meet = (back_a >= 0.0 or back_b >= 0.0) and \
+            chords_near(Y0, Y1, a, b) <= limit + max(back_a, 0.0) + max(back_b, 0.0)
+    _pin = Y0[0, 0], Y1[0, 0], grounds.shape[0]
+    return meet
 
 
 @njit(**JIT)
