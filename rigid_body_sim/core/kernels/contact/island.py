@@ -817,12 +817,35 @@ def _equalities(m, A, rhs, first, on, L, lam, res, x0):
     eps = TIKHONOV_EPS * top
     ok = top > 0.0
     for x in range(x0, m):
-        for y in range(first[x], x + 1):
+        fx = first[x]
+        y = fx
+        while y <= x:
+            if y + 1 < x and on[x] and on[y] and on[y + 1]:
+                # two entries of row x at once: two independent sums (each in its own order, k ascending, as
+                # one at a time: the same roundings), one pass over row x
+                k0, k1 = max(fx, first[y]), max(fx, first[y + 1])
+                both = min(max(k0, k1), y)
+                s0, s1 = A[x, y], A[x, y + 1]
+                for k in range(k0, both):
+                    s0 -= L[x, k] * L[y, k]
+                for k in range(k1, both):
+                    s1 -= L[x, k] * L[y + 1, k]
+                for k in range(both, y):
+                    lk = L[x, k]
+                    s0 -= lk * L[y, k]
+                    s1 -= lk * L[y + 1, k]
+                L[x, y] = s0 / L[y, y]
+                if k1 <= y:
+                    s1 -= L[x, y] * L[y + 1, y]
+                L[x, y + 1] = s1 / L[y + 1, y + 1]
+                y += 2
+                continue
             if not on[x] or not on[y]:
                 L[x, y] = 1.0 if x == y else 0.0
+                y += 1
                 continue
             s = A[x, y] + (eps if x == y else 0.0)
-            for k in range(max(first[x], first[y]), y):
+            for k in range(max(fx, first[y]), y):
                 s -= L[x, k] * L[y, k]
             if x == y:
                 if s <= 0.0:
@@ -831,6 +854,7 @@ def _equalities(m, A, rhs, first, on, L, lam, res, x0):
                 L[x, x] = math.sqrt(s)
             else:
                 L[x, y] = s / L[y, y]
+            y += 1
     scale = 0.0
     for x in range(m):
         lam[x] = 0.0
@@ -970,8 +994,8 @@ def _held(vel, rj, rw, rbody, rbias, rlam, cflt, cint, size, depth_tol, h, order
     fits = True
     for c in range(start, stop):
         r = 3 * order[c]
-        for k in range(3):
-            fastest = max(fastest, abs(_row_speed(vel, rj, rbody, r + k) + rbias[r + k]))
+        u0, u1, u2 = _speeds3(vel, rj, rbody, r)
+        fastest = max(fastest, abs(u0 + rbias[r]), abs(u1 + rbias[r + 1]), abs(u2 + rbias[r + 2]))
         ln, l1, l2 = rlam[r], rlam[r + 1], rlam[r + 2]
         biggest = max(biggest, abs(ln))
         if ln < 0.0 or (ln == 0.0 and (l1 != 0.0 or l2 != 0.0)):
@@ -997,13 +1021,12 @@ def _held(vel, rj, rw, rbody, rbias, rlam, cflt, cint, size, depth_tol, h, order
             body = cint[q, I_B] if cint[q, I_B] >= 0 else cint[q, I_A]
             reach = _depth_tol(size, body, depth_tol)
             close = min(slack, HELD_TOL * reach / h)
-            un = _row_speed(vel, rj, rbody, r)
+            un, u1, u2 = _speeds3(vel, rj, rbody, r)
             if cflt[q, C_GAP] + h * un < -reach:
                 fits = False
             if rlam[r] > 0.0:
-                for k in range(3):
-                    if abs(_row_speed(vel, rj, rbody, r + k) + rbias[r + k]) > close:
-                        fits = False
+                if max(abs(un + rbias[r]), abs(u1 + rbias[r + 1]), abs(u2 + rbias[r + 2])) > close:
+                    fits = False
             elif un + rbias[r] < -close:
                 fits = False
         if not fits:
