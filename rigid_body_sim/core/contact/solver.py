@@ -1258,8 +1258,8 @@ class ContactSolver:
                     self.sliding[i] = False
                 else:
                     stop = self.step_map(sim, i, y0, s * h, held)
-                    if s > 0.0 and self._thrown(sim, i, y0, stop, self._bare(i, held)):  # located on a throw
-                        return self._instead_of_throw(sim, i, y0, self._bare(i, held), t, h)[0]
+                    if (instead := self._unless_thrown(sim, i, y0, stop, held, t, h, s)) is not None:
+                        return instead
                     # a feature that came down before the stop and is not down at the step's end (a can's face,
                     # the can going through upright and on): the landing, first
                     if (before := self._reaching(sim, i, y0, stop, held, s * h)) is not None:
@@ -1281,8 +1281,8 @@ class ContactSolver:
                 return self._persistent_end(sim, i, y0, end, held, t, h)
             s = 0.0 if s is None else s
             hit = self.step_map(sim, i, y0, s * h, held) if s > 0.0 else y0.copy()
-            if s > 0.0 and self._thrown(sim, i, y0, hit, self._bare(i, held)):  # located on a throw
-                return self._instead_of_throw(sim, i, y0, self._bare(i, held), t, h)[0]
+            if (instead := self._unless_thrown(sim, i, y0, hit, held, t, h, s)) is not None:
+                return instead
             if not self._strike_side(sim, i, hit, held, t + s * h):  # pressed on them (from wall to wall)
                 return self._persistent_end(sim, i, y0, end, held, t, h)
             return self._persistent_span(sim, i, hit, self._bare(i, held), t + s * h, h - s * h) if s < 1.0 else hit
@@ -1314,10 +1314,20 @@ class ContactSolver:
         a can's rim force, held over it) is taken as in :meth:`_held_span`: a can on its rim lands its end face at
         y0, any other body stays at rest there for the step."""
         hit = self.step_map(sim, i, y0, s * h, held) if s > 0.0 else y0.copy()
+        if (instead := self._unless_thrown(sim, i, y0, hit, held, t, h, s)) is not None:
+            return instead
+        return self._landing(sim, i, hit, self._bare(i, held), t + s * h, h - s * h,
+                             self.landing_face(sim, i, y0, hit))
+
+    def _unless_thrown(self, sim, i: int, y0: np.ndarray, at: np.ndarray, held: np.ndarray, t: float, h: float,
+                       s: float) -> np.ndarray | None:
+        """None, or, where the held step of body i from y0 to ``at`` (its state at the fraction s of its step over h
+        under ``held``, where an event was located: a stop, a side's hit, a landing) threw it (:meth:`_thrown`), its
+        state instead (:meth:`_instead_of_throw`): an event is not taken from a thrown step."""
         bare = self._bare(i, held)
-        if s > 0.0 and self._thrown(sim, i, y0, hit, bare):
+        if s > 0.0 and self._thrown(sim, i, y0, at, bare):
             return self._instead_of_throw(sim, i, y0, bare, t, h)[0]
-        return self._landing(sim, i, hit, bare, t + s * h, h - s * h, self.landing_face(sim, i, y0, hit))
+        return None
 
     def landing_face(self, sim, i: int, y0: np.ndarray, hit: np.ndarray) -> int:
         """The features of a can's end face come down flat from y0 to ``hit`` (it lands as a whole), else 0."""

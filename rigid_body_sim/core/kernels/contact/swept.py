@@ -265,7 +265,8 @@ def paths_may_meet(Y0, Y1, grounds, a, b, ra, rb, grow, free_a, free_b):
     stopped by its ground pass: a can coming down beside it meets it though their free chords keep apart.
 
     Compiled on its own, with one exit and its arrays read at the end (_pin), not inlined: inlined, its branches
-    left an atomic reference-count increment and decrement of three arrays in its callers' loops, per pair."""
+    left an atomic reference-count increment and decrement of three arrays in its callers' loops, per pair. The
+    rebound inlined here has one exit too (with an early return, each call of this kept its arrays' counts)."""
     limit = (ra + rb) * (1.0 + 1e-6) + grow
     meet = chords_apart(Y0, Y1, a, b) <= limit
     if not meet:
