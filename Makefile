@@ -142,8 +142,12 @@ TEST_WORKERS ?= $(shell echo $$(( $$(nproc) + 1 )))
 # worker rewrites the asserts of all test modules again (about 7 s of CPU each) and every node process
 # compiles the package from source. The .pyc files go to __pycache__/ (git-ignored; make clean removes them).
 test test-slow: export PYTHONDONTWRITEBYTECODE :=
+# A test blocked in C code with the GIL held leaves its stacks in RIGID_BODY_SIM_STUCK_DIR (test/conftest.py): printed.
 test: $(STAMP) $(FOXGLOVE_STAMP) browser-deps
-	timeout --foreground -s INT -k 60 $(TEST_TIMEOUT_S) $(VENV_PY) -m pytest -n $(TEST_WORKERS) --dist loadfile $(PYTEST_ARGS)
+	@rc=0; stuck=$$(mktemp -d)
+	RIGID_BODY_SIM_STUCK_DIR=$$stuck timeout --foreground -s INT -k 60 $(TEST_TIMEOUT_S) $(VENV_PY) -m pytest -n $(TEST_WORKERS) --dist loadfile --max-worker-restart 0 $(PYTEST_ARGS) || rc=$$?
+	cat "$$stuck"/* 2>/dev/null || true; rm -rf "$$stuck"
+	exit "$$rc"
 
 # The slow run also runs the whole suite from a colcon workspace (test_workspace.py): the same readers and browser.
 test-slow: $(STAMP) $(FOXGLOVE_STAMP) browser-deps

@@ -23,8 +23,15 @@ Time limits (no plugin; the two methods of pytest-timeout in a few lines)
     session goes on. A test blocked inside C (``executor.spin()`` or
     ``spin_until_future_complete`` without a timeout, a wait set with no timeout) never sees
     the signal, so a watchdog thread, ``WATCHDOG_GRACE_S`` later, prints every thread's stack
-    and ends the session with exit code 1. The Makefile wraps the whole run in ``timeout``
-    as the last resort. Rule for ROS tests: always spin with a timeout.
+    and ends the session with exit code 1. A test blocked in C code that holds the GIL stops
+    that thread too (a DDS participant's deletion inside rclpy's ``destroy_node`` was seen to
+    block for ever with the watchdog silent): faulthandler's own thread, which needs no GIL,
+    writes every thread's stack ``2 × WATCHDOG_GRACE_S`` after the limit to
+    ``rigid_body_sim_stuck_<pid>.txt`` in ``RIGID_BODY_SIM_STUCK_DIR`` (default: the temporary
+    directory) and ends the process with exit code 1 (under xdist: that worker, reported as
+    crashed in that test; ``make test`` does not restart it, which would run the test again,
+    and prints the file). The Makefile wraps the whole run in ``timeout`` as the last resort.
+    Rule for ROS tests: always spin with a timeout.
 """
 
 from __future__ import annotations
@@ -34,6 +41,7 @@ import fcntl
 import os
 import signal
 import sys
+import tempfile
 import threading
 from collections.abc import Iterator
 from typing import IO
@@ -48,7 +56,9 @@ _LOCK_PATTERN = "rigid_body_sim_ros_domain_{}.lock"
 
 DEFAULT_TEST_TIMEOUT_S = 120.0  # s, per test not marked slow
 SLOW_TEST_TIMEOUT_S = 1800.0  # s, per test marked slow
-WATCHDOG_GRACE_S = 15.0  # s after the limit before a test stuck in C code ends the session
+WATCHDOG_GRACE_S = float(os.environ.get("RIGID_BODY_SIM_WATCHDOG_GRACE_S", "15"))  # s after the limit before a
+# test stuck in C code ends the session (twice that with the GIL held); the variable is for the test of this
+STUCK_DIR = os.environ.get("RIGID_BODY_SIM_STUCK_DIR", tempfile.gettempdir())
 
 
 def _claim_domain_id() -> tuple[int, IO[str]]:
@@ -191,9 +201,20 @@ def pytest_runtest_call(item: pytest.Item) -> Iterator[None]:
     watchdog = threading.Timer(limit_s + WATCHDOG_GRACE_S, _kill_session, (item, limit_s))
     watchdog.daemon = True
     watchdog.start()
+    # The GIL held by the blocked call: neither the alarm nor the watchdog runs, faulthandler's C thread does.
+    stuck_path = os.path.join(STUCK_DIR, f"rigid_body_sim_stuck_{os.getpid()}.txt")
+    stuck = open(stuck_path, "w")
+    stuck.write(f"!!! {item.nodeid} is still running {2 * WATCHDOG_GRACE_S:g} s after its {limit_s:g} s limit, "
+                "blocked in C code holding the GIL (neither the alarm nor the watchdog thread could run). "
+                "Stacks of all threads; the process ends with exit code 1:\n")
+    stuck.flush()
+    faulthandler.dump_traceback_later(limit_s + 2 * WATCHDOG_GRACE_S, exit=True, file=stuck)
     try:
         yield
     finally:
+        faulthandler.cancel_dump_traceback_later()
+        stuck.close()
+        os.unlink(stuck_path)
         watchdog.cancel()
         signal.setitimer(signal.ITIMER_REAL, 0)
         signal.signal(signal.SIGALRM, previous)
