@@ -160,8 +160,15 @@ def _timeout_for(item: pytest.Item) -> float:
     return DEFAULT_TEST_TIMEOUT_S
 
 
+def _stuck_path() -> str:
+    """Where faulthandler writes this process's stacks if its test blocks with the GIL held."""
+    return os.path.join(STUCK_DIR, f"rigid_body_sim_stuck_{os.getpid()}.txt")
+
+
 def _kill_session(item: pytest.Item, limit_s: float) -> None:
-    """Watchdog thread: the test is stuck outside Python; report where, then exit."""
+    """Watchdog thread: the test is stuck outside Python; report where, then exit (the stack file faulthandler
+    holds ready is removed: these stacks are printed here)."""
+    os.unlink(_stuck_path())
     capman = item.config.pluginmanager.getplugin("capturemanager")
     if capman is not None:
         capman.suspend_global_capture(in_=True)
@@ -202,7 +209,7 @@ def pytest_runtest_call(item: pytest.Item) -> Iterator[None]:
     watchdog.daemon = True
     watchdog.start()
     # The GIL held by the blocked call: neither the alarm nor the watchdog runs, faulthandler's C thread does.
-    stuck_path = os.path.join(STUCK_DIR, f"rigid_body_sim_stuck_{os.getpid()}.txt")
+    stuck_path = _stuck_path()
     stuck = open(stuck_path, "w")
     stuck.write(f"!!! {item.nodeid} is still running {2 * WATCHDOG_GRACE_S:g} s after its {limit_s:g} s limit, "
                 "blocked in C code holding the GIL (neither the alarm nor the watchdog thread could run). "
