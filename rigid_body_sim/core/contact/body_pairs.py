@@ -101,13 +101,13 @@ from ..kernels.contact.pair_impacts import PAIR_JACOBIAN_SHAPE, normal_speed, pa
 from ..kernels.contact.pairs import MAX_PAIR_POINTS, pair_contacts
 from ..kernels.contact.persistent import normal_speeds
 from ..kernels.contact.shapes import body_points
-from ..kernels.contact.swept import (deflections, grid_swept_pairs, left_pairs, screen_pairs, spheres_may_meet,
-                                     swept_bounds)
+from ..kernels.contact.swept import deflections, left_pairs, screen_pairs, swept_bounds
 from ..quaternion import quat_multiply, quat_rotate
 from .events import ContactEvent
 from .island import Islands
 from .materials import pair_material
 from .static_geometry import bounding_radius
+from .swept_pairs import SweptPairs
 from .two_grounds import crease
 
 __all__ = ["BodyPairs", "ADVANCE_SKIN", "MAX_ADVANCE"]
@@ -174,7 +174,8 @@ class BodyPairs:
         self._lo, self._hi = np.empty((m, 3)), np.empty((m, 3))
         self._cells, self._chain = np.empty((m, 3), dtype=np.int64), np.empty(m, dtype=np.int64)
         self._heads = np.empty(1 << max(4, int(2 * m - 1).bit_length()), dtype=np.int64)  # ≥ 2 M buckets
-        self._pairs = np.empty((max(4 * m, 16), 2), dtype=np.int64)
+        grid = (self.members, self.movable, self._lo, self._hi, self._cells, self._heads, self._chain)
+        self._swept, self._swept_grown = SweptPairs(*grid), SweptPairs(*grid)  # the spheres; grown (_candidates)
         self._last_swept = None  # (lo, hi as bytes, candidate pairs) of the last broad phase: reused while the boxes are
         # bitwise equal (a bytes comparison: a fraction of np.array_equal's cost on a few bodies' boxes)
         self._q_PB = sim._prm[:, L.Q_PB:L.Q_PB + 4].copy()
@@ -362,29 +363,20 @@ class BodyPairs:
         radius grown by that (the largest over its pairs; not within its skin), and those pairs too are
         candidates. One hit each: a chain of hits inside one step can send a body farther (look_again looks at the
         ends as stepped, of bodies outside the islands only). The same boxes as the last step's (a scene asleep or
-        stopped) give the same pairs: they are not searched again."""
+        stopped) give the same pairs: they are not searched again; nor are those of the bodies whose paths and
+        neighbours' paths did not change (SweptPairs)."""
         swept_bounds(Y0, Y1, self.members, self.reach, h, self._lo, self._hi)
         last, lo, hi = self._last_swept, self._lo.tobytes(), self._hi.tobytes()
         if last is not None and lo == last[0] and hi == last[1]:
             return last[2]
-        found = self._swept_pairs(Y0, Y1, self.reach, h)
-        if deflections(Y0, Y1, prm, self.members, self.movable, self._pairs, found, h, self._skin, self.reach,
+        grounds = self.solver.half_spaces
+        found, swept = self._swept.find(Y0, Y1, self.reach, h, grounds), self._swept
+        if deflections(Y0, Y1, prm, self.members, self.movable, swept.pairs, found, h, self._skin, self.reach,
                        self._grown, self.deflection):
-            swept_bounds(Y0, Y1, self.members, self._grown, h, self._lo, self._hi)
-            found = self._swept_pairs(Y0, Y1, self._grown, h)
-        pairs = self.members[self._pairs[:found]]
+            found, swept = self._swept_grown.find(Y0, Y1, self._grown, h, grounds), self._swept_grown
+        pairs = self.members[swept.pairs[:found]]
         self._last_swept = (lo, hi, pairs)
         return pairs
-
-    def _swept_pairs(self, Y0: np.ndarray, Y1: np.ndarray, reach: np.ndarray, h: float) -> int:
-        """The grid's pairs of the boxes in _lo, _hi whose spheres (radii ``reach``, per member) may meet on their
-        chords (spheres_may_meet), into _pairs; how many."""
-        found = grid_swept_pairs(self._lo, self._hi, self.movable, self._cells, self._heads, self._chain, self._pairs)
-        if found > len(self._pairs):
-            self._pairs = np.empty((2 * found, 2), dtype=np.int64)
-            found = grid_swept_pairs(self._lo, self._hi, self.movable, self._cells, self._heads, self._chain,
-                                     self._pairs)
-        return spheres_may_meet(Y0, Y1, self.members, reach, h, self.solver.half_spaces, self._pairs, found)
 
     def broad_phase(self) -> tuple:
         """The last broad phase's boxes and grid, as island_pass takes them (kernels/contact/island._late_pairs):

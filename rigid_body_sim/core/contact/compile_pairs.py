@@ -16,6 +16,7 @@ import numpy as np
 
 from ..kernels.contact.broadphase import grid_pairs, shape_aabbs, sweep_pairs
 from ..kernels.contact.impacts import IMPACT_WORK_SHAPE
+from ..kernels.contact.kept_pairs import kept_swept_pairs
 from ..kernels.contact.layout import (DIMS, GROUND_WIDTH, KIND, SHAPE_BOX, SHAPE_CAPSULE, SHAPE_CYLINDER, SHAPE_SPHERE,
                                      SHAPE_WIDTH)
 from ..kernels.contact.pair_impacts import PAIR_JACOBIAN_SHAPE, normal_speed, pair_impact
@@ -23,12 +24,13 @@ from ..kernels.contact.pairs import MAX_PAIR_POINTS, apart_bounds, pair_contacts
 from ..kernels.contact.swept import (deflections, grid_swept_pairs, left_pairs, screen_pairs, spheres_may_meet,
                                      swept_bounds)
 from ..kernels.layout import INERTIA, INV_INERTIA, INV_MASS, MASS, PRM_WIDTH, P, Q, STATE_WIDTH, V
+from .swept_pairs import SweptPairs
 
 __all__ = ["PAIR_ENTRY_POINTS", "compile_pair_kernels"]
 
 #: The body–body contact kernels called from Python.
 PAIR_ENTRY_POINTS = (shape_aabbs, grid_pairs, sweep_pairs, pair_contacts, apart_bounds, pair_impact, normal_speed,
-                     swept_bounds, grid_swept_pairs, spheres_may_meet, left_pairs, screen_pairs)
+                     swept_bounds, grid_swept_pairs, spheres_may_meet, kept_swept_pairs, left_pairs, screen_pairs)
 
 
 def compile_pair_kernels() -> None:
@@ -62,6 +64,8 @@ def compile_pair_kernels() -> None:
     movable = np.ones(n, dtype=np.bool_)
     found = grid_swept_pairs(lo, hi, movable, cells, heads, chain, swept)
     spheres_may_meet(Ys[0], Ys[1], members, np.full(n, 0.1), 1e-3, np.zeros((1, GROUND_WIDTH)), swept, found)
+    SweptPairs(members, movable, lo, hi, cells, heads, chain).find(Ys[0], Ys[1], np.full(n, 0.1), 1e-3,
+                                                                   np.zeros((1, GROUND_WIDTH)))
     prm_rows = np.ones((n, PRM_WIDTH))
     deflections(Ys[0], Ys[1], prm_rows, members, movable, swept, found, 1e-3, np.zeros(n), np.full(n, 0.1),
                 np.empty(n), np.zeros(n))

@@ -39,8 +39,8 @@ from .layout import NORMAL, OFFSET
 from .pairs import apart_bounds, pair_contacts
 
 __all__ = ["GROWTH", "growth", "chords_apart", "chords_near", "rebound", "paths_may_meet", "swept_bounds",
-           "grid_swept_pairs", "boxes_meet", "grid_overlaps", "spheres_may_meet", "deflection_bound", "deflections",
-           "left_pairs", "screen_pairs"]
+           "CELL_STEPS", "cell_key", "grid_cell", "file_grid", "forward_cell", "box_pairs", "grid_swept_pairs", "boxes_meet",
+           "grid_overlaps", "spheres_may_meet", "deflection_bound", "deflections", "left_pairs", "screen_pairs"]
 
 
 #: A body's box and sphere over the step are grown by this × |v₁ − v₀| h (m): module docstring.
@@ -64,19 +64,34 @@ def swept_bounds(Y0, Y1, members, reach, h, lo, hi):
 
 
 @njit(**INLINE)
-def _cell_key(cx, cy, cz, mask):
+def cell_key(cx, cy, cz, mask):
     return ((cx * 73856093) ^ (cy * 19349663) ^ (cz * 83492791)) & mask
+
+
+#: The grid's cell edge is the largest movable box's extent rounded up to a power of 2^(1 / CELL_STEPS) m: the same
+#: edge step after step while that box changes a little (kept_pairs.py keeps the pairs of an unchanged grid).
+CELL_STEPS = 16
 
 
 @njit(**INLINE)
 def grid_cell(lo, hi, movable):
-    """The grid's cell edge (m): the largest extent of a movable box (lo, hi (M, 3)), 1 if none has one."""
+    """The grid's cell edge (m): the largest extent of a movable box (lo, hi (M, 3)) rounded up to a power of
+    2^(1 / CELL_STEPS), 1 if none has one."""
     cell = 0.0
     for i in range(lo.shape[0]):
         if movable[i]:
             for k in range(3):
                 cell = max(cell, hi[i, k] - lo[i, k])
-    return cell if cell > 0.0 else 1.0
+    edge = 1.0
+    if cell > 0.0 and cell < math.inf:
+        k = math.ceil(CELL_STEPS * math.log2(cell))
+        edge = 2.0 ** (k / CELL_STEPS)
+        if edge < cell:  # (the rounding of log2 and of the power)
+            edge = 2.0 ** ((k + 1) / CELL_STEPS)
+    elif cell > 0.0:
+        edge = cell
+    _pin = lo[0, 0], hi[0, 0], movable[0]  # (jit.py's rule)
+    return edge
 
 
 @njit(**INLINE)
@@ -117,7 +132,7 @@ def grid_overlaps(qlo, qhi, slack, lo, hi, movable, fixed, cells, heads, chain, 
         for cx in range(x0, x1 + 1):
             for cy in range(y0, y1 + 1):
                 for cz in range(z0, z1 + 1):
-                    i = heads[_cell_key(cx, cy, cz, mask)]
+                    i = heads[cell_key(cx, cy, cz, mask)]
                     while i >= 0:
                         if (cells[i, 0] == cx and cells[i, 1] == cy and cells[i, 2] == cz
                                 and boxes_meet(qlo, qhi, lo[i], hi[i], slack)):
@@ -135,6 +150,67 @@ def grid_overlaps(qlo, qhi, slack, lo, hi, movable, fixed, cells, heads, chain, 
     return count
 
 
+@njit(**INLINE)
+def file_grid(lo, hi, movable, cells, heads, chain):
+    """Files each movable box (lo, hi (M, 3)) under the cell of its centre in the hashed grid (cells (M, 3), heads
+    (2^p,), chain (M,): grid_swept_pairs'); returns the cell's edge (m). A cell's chain lists its members by index,
+    highest first (colliding cells' members among them)."""
+    cell = grid_cell(lo, hi, movable)
+    mask = heads.shape[0] - 1
+    for b in range(heads.shape[0]):
+        heads[b] = -1
+    for i in range(lo.shape[0]):
+        if movable[i]:
+            for k in range(3):
+                cells[i, k] = int(math.floor(0.5 * (lo[i, k] + hi[i, k]) / cell))
+            key = cell_key(cells[i, 0], cells[i, 1], cells[i, 2], mask)
+            chain[i] = heads[key]
+            heads[key] = i
+    _pin = lo[0, 0], hi[0, 0], movable[0], cells[0, 0], heads[0], chain[0]  # (jit.py's rule)
+    return cell
+
+
+@njit(**INLINE)
+def forward_cell(nb):
+    """The offset (dx, dy, dz) of the nb-th cell (0 … 13) a movable box's pairs are looked for in: its own cell,
+    then the 13 neighbours "after" it (each pair of neighbouring cells once)."""
+    code = nb + 13 if nb > 0 else 13  # 14 … 26: the offsets (dx, dy, dz) ∈ {−1, 0, 1}³ after 13 = (0, 0, 0)
+    return code % 3 - 1, (code // 3) % 3 - 1, code // 9 - 1
+
+
+@njit(**INLINE)
+def box_pairs(i, lo, hi, movable, cells, heads, chain, pairs, count):
+    """Member i's overlapping pairs into pairs from row ``count`` (rows (m, k), m < k; beyond its capacity only
+    counted), as grid_swept_pairs writes them; returns the count after them. A movable i: the members of its own
+    cell after it and those of its 13 forward cells (forward_cell), in chain order; a fixed one: every movable box,
+    by index. One exit (as paths_may_meet's docstring says: inlined, an early return keeps reference counts)."""
+    n = lo.shape[0]
+    mask = heads.shape[0] - 1
+    capacity = pairs.shape[0]
+    if not movable[i]:  # a fixed box: against every movable one
+        for j in range(n):
+            if (movable[j] and lo[j, 0] <= hi[i, 0] and lo[i, 0] <= hi[j, 0] and lo[j, 1] <= hi[i, 1]
+                    and lo[i, 1] <= hi[j, 1] and lo[j, 2] <= hi[i, 2] and lo[i, 2] <= hi[j, 2]):
+                if count < capacity:
+                    pairs[count, 0], pairs[count, 1] = min(i, j), max(i, j)
+                count += 1
+    else:
+        for nb in range(14):
+            dx, dy, dz = forward_cell(nb)
+            cx, cy, cz = cells[i, 0] + dx, cells[i, 1] + dy, cells[i, 2] + dz
+            j = heads[cell_key(cx, cy, cz, mask)]
+            while j >= 0:
+                if ((nb > 0 or j > i) and cells[j, 0] == cx and cells[j, 1] == cy and cells[j, 2] == cz
+                        and lo[j, 0] <= hi[i, 0] and lo[i, 0] <= hi[j, 0] and lo[j, 1] <= hi[i, 1]
+                        and lo[i, 1] <= hi[j, 1] and lo[j, 2] <= hi[i, 2] and lo[i, 2] <= hi[j, 2]):
+                    if count < capacity:
+                        pairs[count, 0], pairs[count, 1] = min(i, j), max(i, j)
+                    count += 1
+                j = chain[j]
+    _pin = lo[0, 0], hi[0, 0], movable[0], cells[0, 0], heads[0], chain[0], pairs[0, 0]
+    return count
+
+
 @njit(**JIT)
 def grid_swept_pairs(lo, hi, movable, cells, heads, chain, pairs):
     """Overlapping boxes (lo, hi (M, 3)) into pairs (capacity, 2) as rows (m, k), m < k, from a hashed grid.
@@ -145,46 +221,13 @@ def grid_swept_pairs(lo, hi, movable, cells, heads, chain, pairs):
     Scratch owned by the caller: cells (M, 3) int64, heads (2^p ≥ M,) int64 (the hash table),
     chain (M,) int64. Only movable members are filed in the grid; each one that is not is
     tested against every movable one (a pair of two fixed members is never written). Returns
-    the number found (beyond the capacity only the first ``capacity`` are written).
+    the number found (beyond the capacity only the first ``capacity`` are written): member by member, each
+    one's pairs as box_pairs lists them.
     """
-    n = lo.shape[0]
-    cell = grid_cell(lo, hi, movable)
-    mask = heads.shape[0] - 1
-    for b in range(heads.shape[0]):
-        heads[b] = -1
-    for i in range(n):
-        if movable[i]:
-            for k in range(3):
-                cells[i, k] = int(math.floor(0.5 * (lo[i, k] + hi[i, k]) / cell))
-            key = _cell_key(cells[i, 0], cells[i, 1], cells[i, 2], mask)
-            chain[i] = heads[key]
-            heads[key] = i
+    file_grid(lo, hi, movable, cells, heads, chain)
     count = 0
-    capacity = pairs.shape[0]
-    for i in range(n):
-        if not movable[i]:  # a fixed box: against every movable one
-            for j in range(n):
-                if (movable[j] and lo[j, 0] <= hi[i, 0] and lo[i, 0] <= hi[j, 0] and lo[j, 1] <= hi[i, 1]
-                        and lo[i, 1] <= hi[j, 1] and lo[j, 2] <= hi[i, 2] and lo[i, 2] <= hi[j, 2]):
-                    if count < capacity:
-                        pairs[count, 0], pairs[count, 1] = min(i, j), max(i, j)
-                    count += 1
-            continue
-        for nb in range(14):  # its own cell, then the 13 neighbours "after" it (each neighbour pair once)
-            dx, dy, dz = 0, 0, 0
-            if nb > 0:
-                code = nb + 13  # 14 … 26: the offsets (dx, dy, dz) ∈ {−1, 0, 1}³ after (0, 0, 0) in base 3
-                dx, dy, dz = code % 3 - 1, (code // 3) % 3 - 1, code // 9 - 1
-            cx, cy, cz = cells[i, 0] + dx, cells[i, 1] + dy, cells[i, 2] + dz
-            j = heads[_cell_key(cx, cy, cz, mask)]
-            while j >= 0:
-                if ((nb > 0 or j > i) and cells[j, 0] == cx and cells[j, 1] == cy and cells[j, 2] == cz
-                        and lo[j, 0] <= hi[i, 0] and lo[i, 0] <= hi[j, 0] and lo[j, 1] <= hi[i, 1]
-                        and lo[i, 1] <= hi[j, 1] and lo[j, 2] <= hi[i, 2] and lo[i, 2] <= hi[j, 2]):
-                    if count < capacity:
-                        pairs[count, 0], pairs[count, 1] = min(i, j), max(i, j)
-                    count += 1
-                j = chain[j]
+    for i in range(lo.shape[0]):
+        count = box_pairs(i, lo, hi, movable, cells, heads, chain, pairs, count)
     _pin = lo[0, 0], hi[0, 0], movable[0], cells[0, 0], heads[0], chain[0], pairs[0, 0]
     return count
 
