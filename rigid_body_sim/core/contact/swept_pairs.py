@@ -32,6 +32,7 @@ class SweptPairs:
                  cells: np.ndarray, heads: np.ndarray, chain: np.ndarray) -> None:
         m = len(members)
         self.members, self.movable = members, movable
+        self._fixed = np.flatnonzero(~movable).astype(np.int64)
         self._grid = (lo, hi, cells, heads, chain)
         #: (capacity, 2) int: the last call's pairs in its first rows (rows of members).
         self.pairs = np.empty((max(4 * m, 16), 2), dtype=np.int64)
@@ -59,9 +60,10 @@ class SweptPairs:
             self._grounds = here
         lo, hi, cells, heads, chain = self._grid
         while True:
-            found = kept_swept_pairs(Y0, Y1, self.members, radius, h, grounds, self.movable, lo, hi, cells, heads,
-                                     chain, self.pairs, self._state, self._keys, self._last_lo, self._last_hi,
-                                     self._last_cells, self._blocks, self._last, self._starts, self._marks)
+            found = kept_swept_pairs(Y0, Y1, self.members, radius, h, grounds, self.movable, self._fixed, lo, hi,
+                                     cells, heads, chain, self.pairs, self._state, self._keys, self._last_lo,
+                                     self._last_hi, self._last_cells, self._blocks, self._last, self._starts,
+                                     self._marks)
             if found >= 0:
                 return found
             self.pairs = np.empty((2 * -found, 2), dtype=np.int64)

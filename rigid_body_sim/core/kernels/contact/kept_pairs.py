@@ -21,6 +21,9 @@ from .swept import cell_key, box_pairs, file_grid, forward_cell, growth, paths_m
 
 __all__ = ["KEY_WIDTH", "kept_swept_pairs"]
 
+#: Every member is listed again, without marking, when more than 1 / CHANGED_MOST of them changed.
+CHANGED_MOST = 8
+
 #: A member's key: its position and velocity at the step's start and end (m, m/s; world), its radius (m).
 KEY_WIDTH = 13
 
@@ -58,7 +61,7 @@ def _mark_met(d, cx, cy, cz, lo, hi, last_lo, last_hi, cells, heads, chain, mark
         while j >= 0:
             if (cells[j, 0] == ox and cells[j, 1] == oy and cells[j, 2] == oz and marks[j] == 0
                     and (_meets(lo, hi, j, lo, hi, d) or _meets(lo, hi, j, last_lo, last_hi, d))):
-                marks[j] = 1
+                marks[j] = 2
                 marked += 1
             j = chain[j]
     _pin = lo[0, 0], hi[0, 0], last_lo[0, 0], last_hi[0, 0], cells[0, 0], heads[0], chain[0], marks[0]
@@ -66,11 +69,11 @@ def _mark_met(d, cx, cy, cz, lo, hi, last_lo, last_hi, cells, heads, chain, mark
 
 
 @njit(**JIT)
-def kept_swept_pairs(Y0, Y1, members, radius, h, grounds, movable, lo, hi, cells, heads, chain, pairs, state,
+def kept_swept_pairs(Y0, Y1, members, radius, h, grounds, movable, fixed, lo, hi, cells, heads, chain, pairs, state,
                      keys, last_lo, last_hi, last_cells, blocks, last_pairs, starts, marks):
     """The pairs (rows m < k of members) grid_swept_pairs then spheres_may_meet would keep for the boxes
     swept_bounds gives (Y0, Y1, members, radius (M,; m), h (s), into lo, hi), the half-spaces ``grounds``, into
-    pairs (capacity, 2); returns how many. The grid (cells, heads, chain) is left as grid_swept_pairs leaves it.
+    pairs (capacity, 2); returns how many. ``fixed``: the rows of the members not ``movable``. The grid (cells, heads, chain) is left as grid_swept_pairs leaves it.
 
     Kept between calls (owned by the caller, the same arrays each call): state (4,): 1 once a call succeeded, the
     grid's cell edge (m) and h then, and how many members it listed again; keys (M, KEY_WIDTH); last_lo, last_hi
@@ -78,30 +81,37 @@ def kept_swept_pairs(Y0, Y1, members, radius, h, grounds, movable, lo, hi, cells
     pairs began in last_pairs (capacity, 2), the pairs then. Scratch: starts (M + 1,),
     marks (M,) int64. Every member is listed again when there was no successful call, when the cell edge or h
     changed, or when more than half of them would be. When pairs is too short, returns −(a length that is enough)
-    and keeps nothing: call again with pairs and last_pairs that long (the kept ones lost: state[0] = 0)."""
+    and keeps nothing: call again with pairs and last_pairs that long (the kept ones lost: state[0] = 0). Every
+    member is listed again, too, when more than 1 / CHANGED_MOST of them changed."""
     n = members.shape[0]
     swept_bounds(Y0, Y1, members, radius, h, lo, hi)
     cell = file_grid(lo, hi, movable, cells, heads, chain)
     fresh = state[0] != 1.0 or state[1] != cell or state[2] != h
     for m in range(n):
         marks[m] = 0
+    changed = 0
     if not fresh:
-        marked = 0
         for d in range(n):
             if _key_changed(Y0, Y1, members, radius, keys, d):
-                if marks[d] == 0:
-                    marks[d] = 1
-                    marked += 1
-                if movable[d]:
+                marks[d] = 1
+                changed += 1
+        fresh = CHANGED_MOST * changed > n  # (a pile awake: listing them all costs less than marking)
+    if not fresh:
+        marked = changed
+        for d in range(n):
+            if marks[d] == 1 and movable[d]:  # changed (those it marks get 2)
+                same = (last_cells[d, 0] == cells[d, 0] and last_cells[d, 1] == cells[d, 1]
+                        and last_cells[d, 2] == cells[d, 2])
+                if not same:
                     marked += _mark_met(d, last_cells[d, 0], last_cells[d, 1], last_cells[d, 2], lo, hi, last_lo,
                                         last_hi, cells, heads, chain, marks)
-                    marked += _mark_met(d, cells[d, 0], cells[d, 1], cells[d, 2], lo, hi, last_lo, last_hi, cells,
-                                        heads, chain, marks)
-                    for f in range(n):  # a fixed member lists its pairs with every movable one
-                        if (not movable[f] and marks[f] == 0
-                                and (_meets(lo, hi, f, lo, hi, d) or _meets(lo, hi, f, last_lo, last_hi, d))):
-                            marks[f] = 1
-                            marked += 1
+                marked += _mark_met(d, cells[d, 0], cells[d, 1], cells[d, 2], lo, hi, last_lo, last_hi, cells,
+                                    heads, chain, marks)
+                for k in range(fixed.shape[0]):  # a fixed member lists its pairs with every movable one
+                    f = fixed[k]
+                    if marks[f] == 0 and (_meets(lo, hi, f, lo, hi, d) or _meets(lo, hi, f, last_lo, last_hi, d)):
+                        marks[f] = 2
+                        marked += 1
             if 2 * marked > n:  # listing them all costs less
                 break
         fresh = 2 * marked > n
@@ -149,6 +159,6 @@ def kept_swept_pairs(Y0, Y1, members, radius, h, grounds, movable, lo, hi, cells
         state[0], state[1], state[2], state[3] = 1.0, cell, h, listed
     _pin = Y0[0, 0], Y1[0, 0], members[0], radius[0], grounds.shape[0], movable[0], lo[0, 0], hi[0, 0], cells[0, 0]
     _pin2 = heads[0], chain[0], pairs[0, 0], state[0], keys[0, 0], last_cells[0, 0], blocks[0], last_pairs[0, 0]
-    _pin4 = last_lo[0, 0], last_hi[0, 0]
+    _pin4 = last_lo[0, 0], last_hi[0, 0], fixed[:1]
     _pin3 = starts[0], marks[0]
     return -count if over else count
