@@ -81,6 +81,7 @@ def test_kept_pairs_are_the_grids_pairs_in_its_order_step_after_step():
                 Y1[i, P:P + 3] += h * Y1[i, V:V + 3]
             if kind == 3:
                 radius[rng.choice(np.flatnonzero(movable)[1:])] *= 0.9  # not the largest: the same cell
+        swept_bounds(Y0, Y1, members, radius, h, lo, hi)
         found = kept.find(Y0, Y1, radius, h, grounds)
         pairs, ref_cells, ref_heads, ref_chain = grid_then_spheres(Y0, Y1, members, movable, radius, h, grounds)
         assert np.array_equal(kept.pairs[:found], pairs), step

@@ -373,6 +373,7 @@ class BodyPairs:
         found, swept = self._swept.find(Y0, Y1, self.reach, h, grounds), self._swept
         if deflections(Y0, Y1, prm, self.members, self.movable, swept.pairs, found, h, self._skin, self.reach,
                        self._grown, self.deflection):
+            swept_bounds(Y0, Y1, self.members, self._grown, h, self._lo, self._hi)
             found, swept = self._swept_grown.find(Y0, Y1, self._grown, h, grounds), self._swept_grown
         pairs = self.members[swept.pairs[:found]]
         self._last_swept = (lo, hi, pairs)

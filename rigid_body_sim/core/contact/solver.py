@@ -1120,23 +1120,17 @@ class ContactSolver:
     def _persistent_span(self, sim, i: int, y: np.ndarray, w: np.ndarray, t: float, h: float) -> np.ndarray:
         """Body i from y over h in persistent contact starting mid-step: holding force, step, projection; in
         pieces while it rolls on a cylinder rim whose lowest point turns fast (:meth:`_rim_piece`). A piece that
-        threw it (:meth:`_thrown`) is taken from its start: the capped one's as a landing of its end face, another
-        as :meth:`_instead_of_throw` has it (a can dropped on near its rim, whose piece gained 1.6 J, went on from
-        there)."""
+        threw it (:meth:`_thrown`), the smallest or not (a can dropped on near its rim gained 1.6 J in a larger
+        one), is taken from its start as :meth:`_instead_of_throw` has a thrown held step."""
         while (piece := self._rim_piece(sim, i, y, h)) < h:
             self.counts["rim_pieces"] += 1
-            capped = piece == sim.dt / MAX_RIM_PIECES
-            self.counts["rim_capped"] += capped
+            self.counts["rim_capped"] += piece == sim.dt / MAX_RIM_PIECES
             start, end = y, held_rim(self.shapes[i], int(self.tracked[i]))
             y = self._held_span(sim, i, y, w, t, piece, thrown_at_rest=False)  # a throw is a landing (below)
             if end >= 0 and self._thrown(sim, i, start, y, w):
-                if capped:
-                    # within a hair of upright, its rim turning faster than the most pieces follow, the rim's force
-                    # found at every stage (growing as 1/sin³ θ) threw the can: its end face comes down instead, a
-                    # landing at the piece's start
-                    self.counts["face_landed"] += 1
-                    return self._landing(sim, i, start, w, t, h, 4 << end)
-                return self._instead_of_throw(sim, i, start.copy(), w, t, h)[0]  # a piece not capped threw it
+                # near upright the rim's force found at every stage (growing as 1/sin³ θ) threw the can: taken from
+                # the piece's start as a thrown held step is (its end face lands there)
+                return self._instead_of_throw(sim, i, start.copy(), w, t, h)[0]
             t, h = t + piece, h - piece
             if self.modes[i] != PERSISTENT:
                 return self._with_events(sim, i, y, w, t, h)

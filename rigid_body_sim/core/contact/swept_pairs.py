@@ -23,7 +23,7 @@ class SweptPairs:
         The broad phase's members (body indices), the movable ones first.
     movable : ndarray of bool (M,)
     lo, hi : ndarray (M, 3)
-        The boxes (m, world), written by each call.
+        The boxes (m, world) over the step of the spheres of each call (swept_bounds'), which its caller writes.
     cells, heads, chain : ndarray of int
         The hashed grid (swept.grid_swept_pairs' scratch), left filed over the boxes by each call.
     """
@@ -53,7 +53,8 @@ class SweptPairs:
 
     def find(self, Y0: np.ndarray, Y1: np.ndarray, radius: np.ndarray, h: float, grounds: np.ndarray) -> int:
         """How many pairs the step from Y0 to Y1 (state rows, h s) has, of members whose spheres (radius (M,), m)
-        may meet over it, a half-space of ``grounds`` stopping one anywhere on its chord; they are self.pairs[:k]."""
+        may meet over it, a half-space of ``grounds`` stopping one anywhere on its chord; they are self.pairs[:k].
+        The boxes lo, hi hold swept_bounds' for this step and these radii."""
         here = grounds.tobytes()
         if here != self._grounds:  # other half-spaces: nothing kept holds
             self._state[0] = 0.0

@@ -17,7 +17,7 @@ from numba import njit
 
 from ..jit import INLINE, JIT
 from ..layout import P, V
-from .swept import cell_key, box_pairs, file_grid, forward_cell, growth, paths_may_meet, swept_bounds
+from .swept import box_pairs, cell_key, file_grid, forward_cell, growth, paths_may_meet
 
 __all__ = ["KEY_WIDTH", "kept_swept_pairs"]
 
@@ -71,9 +71,10 @@ def _mark_met(d, cx, cy, cz, lo, hi, last_lo, last_hi, cells, heads, chain, mark
 @njit(**JIT)
 def kept_swept_pairs(Y0, Y1, members, radius, h, grounds, movable, fixed, lo, hi, cells, heads, chain, pairs, state,
                      keys, last_lo, last_hi, last_cells, blocks, last_pairs, starts, marks):
-    """The pairs (rows m < k of members) grid_swept_pairs then spheres_may_meet would keep for the boxes
-    swept_bounds gives (Y0, Y1, members, radius (M,; m), h (s), into lo, hi), the half-spaces ``grounds``, into
-    pairs (capacity, 2); returns how many. ``fixed``: the rows of the members not ``movable``. The grid (cells, heads, chain) is left as grid_swept_pairs leaves it.
+    """The pairs (rows m < k of members) grid_swept_pairs then spheres_may_meet would keep for the boxes lo, hi
+    (M, 3; swept_bounds' of Y0, Y1, members, radius (M,; m), h (s), which the caller wrote), the half-spaces
+    ``grounds``, into pairs (capacity, 2); returns how many. ``fixed``: the rows of the members not ``movable``.
+    The grid (cells, heads, chain) is left as grid_swept_pairs leaves it.
 
     Kept between calls (owned by the caller, the same arrays each call): state (4,): 1 once a call succeeded, the
     grid's cell edge (m) and h then, and how many members it listed again; keys (M, KEY_WIDTH); last_lo, last_hi
@@ -84,7 +85,6 @@ def kept_swept_pairs(Y0, Y1, members, radius, h, grounds, movable, fixed, lo, hi
     and keeps nothing: call again with pairs and last_pairs that long (the kept ones lost: state[0] = 0). Every
     member is listed again, too, when more than 1 / CHANGED_MOST of them changed."""
     n = members.shape[0]
-    swept_bounds(Y0, Y1, members, radius, h, lo, hi)
     cell = file_grid(lo, hi, movable, cells, heads, chain)
     fresh = state[0] != 1.0 or state[1] != cell or state[2] != h
     for m in range(n):
