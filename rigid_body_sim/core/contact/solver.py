@@ -808,6 +808,7 @@ class ContactSolver:
         if self._any_cylinder:
             resting = self._fast_rims(sim, resting, Y0, Y1, t0, h)
         resting = self._refine_gains(sim, resting, Y0, Y1, t0, h)
+        two = self._refine_two(sim, two, Y0, Y1, t0, h)
         if len(resting) < len(settled) and len(two):  # a step taken again whole is done, near a static shape too
             two = two[~np.isin(two, np.setdiff1d(settled, resting))]
         # only the bodies with an event in the step are looked at in Python
@@ -952,6 +953,24 @@ class ContactSolver:
         # gravity alone (an empty bare row): the energy must not rise
         rose = gravity_gains(Y0, Y1, sim._prm, resting, self._status, self._bare_rows, self._rose)
         return self._retake_all(sim, self._rose[:rose], resting, Y0, Y1, t0, h, 2)
+
+    def _refine_two(self, sim, two: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, t0: float, h: float) -> np.ndarray:
+        """:meth:`_refine_gains` for the bodies held on two half-spaces or beside a static shape (``two``): the step
+        of each under gravity alone whose energy it raised (its holding force held over the step: a can on its side
+        against a wall, held up by the wall until its other rim lands within the step) taken again in 2, 4, ...
+        MAX_REFINEMENT pieces. Returns ``two`` without them (done)."""
+        if not two.size:
+            return two
+        prm = sim._prm
+        rose = [i for i in two.tolist() if self._bare_rows[i, L.ACTIVE] == 0.0 and not sim._stopped[i]
+                and (kinetic_energy_row(Y1[i], prm[i]) + potential_energy_row(Y1[i], prm[i])
+                     > (e0 := kinetic_energy_row(Y0[i], prm[i]) + potential_energy_row(Y0[i], prm[i]))
+                     + 1e-12 * abs(e0) + 1e-300)]
+        if not rose:
+            return two
+        for i in rose:
+            Y1[i, :L.STATE_WIDTH] = self._retaken(sim, i, Y0[i], t0, h, 2)
+        return two[~np.isin(two, rose)]
 
     # ----------------------------------------------------------------- flight: impacts
 
