@@ -235,8 +235,10 @@ def end_of_step(solver, sim, i: int, end: np.ndarray, t: float, h: float, lift_o
 
 def _third(solver, sim, i: int, y: np.ndarray) -> tuple[int, int, float, int] | None:
     """A half-space or static shape other than body i's two (``ContactSolver._other_gap``; one it was pressed on
-    earlier in the step too) that it reached at y, moving into it: (its plane row, the features below it as bits,
-    their lowest normal speed, m/s, < 0, their contact points), or None."""
+    earlier in the step too) that it reached at y: (its plane row, the features below it as bits, their lowest
+    normal speed, m/s, their contact points), or None. Also where those features move out of it (a capsule
+    sliding away from a wall along the crease of the floor and another wall, its raised end swinging down into the
+    first one): it is taken out of it all the same."""
     gap, which = solver._other_gap(sim, y, i, pressed=True)
     if gap >= 0.0 or which < 0:
         return None
@@ -244,7 +246,7 @@ def _third(solver, sim, i: int, y: np.ndarray) -> tuple[int, int, float, int] | 
     count = feature_gaps(y, sim._prm[i], solver.shapes[i], solver.grounds[which], gaps)
     mask = sum(1 << k for k in range(count) if gaps[k] <= 0.0)
     speed, points = _lowest_speed(solver, sim, y, i, solver.grounds[which], mask) if mask else (0.0, 0)
-    return (which, mask, speed, points) if speed < 0.0 else None
+    return (which, mask, speed, points) if mask else None
 
 
 def _lowest_speed(solver, sim, y: np.ndarray, i: int, plane: np.ndarray, mask: int) -> tuple[float, int]:
