@@ -52,6 +52,7 @@ from hypothesis import strategies as st
 
 from rigid_body_sim.core import Simulator, load_scene
 from rigid_body_sim.core.contact.body_pairs import ADVANCE_SKIN, BodyPairs
+from rigid_body_sim.core.contact.query import overlapping_bodies
 from rigid_body_sim.core.quaternion import quat_rotate
 from rigid_body_sim.exact.sphere_impact import two_sphere_impact
 
@@ -536,8 +537,6 @@ def test_a_capsule_rolling_into_a_wall_struck_from_above_ends_no_step_inside_eit
     wall it touches: that wall's impact is the group's, at once, and the wall stays in view for the rest of the
     step. Over 3 steps no shape ends deeper in another than the pair pass's skin (ADVANCE_SKIN × the larger size),
     and K + U never rises above its start (1e-12 of it)."""
-    from rigid_body_sim.core.contact.query import overlapping_bodies
-
     wall = {"box": [1.65, 0.1, 1.0]}
     scene = {"gravity": [0.0, 0.0, -9.81],
              "ground": [{"normal": [0, 0, 1], "offset": 0.0, "material": {"restitution": 0.0, "friction": 0.6}}],
@@ -824,3 +823,51 @@ def test_one_moving_body_has_no_body_body_pass():
     sim = Simulator(load_scene({"gravity": [0.0, 0.0, -9.81], "ground": [{"normal": [0, 0, 1]}], "bodies": bodies}),
                     "rk4", 1e-3)
     assert isinstance(sim.contact.pairs, BodyPairs)
+
+
+def test_two_held_bodies_slid_apart_do_not_slide_one_into_a_wall() -> None:
+    """A frictionless can (r = 97 mm, 96 mm tall) standing in the corner of a bin (walls' inner faces at x = 0.6 m
+    and y = −0.6 m), touching both walls and spinning about its axis, and a frictionless capsule lying on the floor
+    sliding into it at 0.63 m/s (a state a mixed pile left them in; semi-implicit Euler, dt = 5 ms, tolerance 10 µm).
+    The group's step ends with the two overlapping, both held: each is slid out within its ground's plane, the can
+    along the crease of the floor and the wall it is held on. That slid it 65.5 µm into the other wall. Now a body
+    the slide would put into a wall stays and the other takes the whole move: over 5 steps the can is never inside
+    a wall by more than the tolerance (from its axis and radius), nor the two bodies inside each other by more."""
+    def placed(shape, mass, inertia, position, orientation, linear, angular):
+        return {"mass": mass, "inertia": inertia, "collision": shape, "material": {"restitution": 0.0, "friction": 0.0},
+                "pose": {"position": position, "orientation": orientation},
+                "twist": {"linear": linear, "angular": angular}}
+    capsule = placed({"capsule": [0.05458480832431028, 0.09755841457634706]}, 2.4561102221421134,
+                     {"cylinder": [0.05458480832431028, 0.20672803122496763]},
+                     [0.39638173382582276, -0.3945931269039142, 0.05458480832431028],
+                     [-0.6807936159639284, -0.1911022042331254, 0.6213721355788531, -0.3374858058143714],
+                     [0.6206878551833082, 0.1075183561561409, 0.0], [0.7968158577167985, 0.7745289236720758,
+                                                                      -6.732984652844952])
+    radius, length = 0.0965962542208107, 0.09552274987602226
+    can = placed({"cylinder": [radius, length]}, 2.110461964921587, {"cylinder": [radius, length]},
+                 [0.503403745757994, -0.5034037457791843, 0.04776137493801113],
+                 [1.5559111401044215e-17, -1.19142127331741e-19, 0.8885082053413005, 0.4588607294606737],
+                 [-3.5784437990016286e-11, 3.798948141406175e-14, 0.0], [0.0, 0.0, 2.2848632292392095])
+    walls = {name: {"motion": "static", "mass": 1.0, "inertia": {"box": size}, "collision": {"box": size},
+                    "material": {"restitution": 0.0, "friction": 0.5}, "pose": {"position": position}}
+             for name, size, position in (("wall_xp", [0.1, 1.4, 1.0], [0.65, 0.0, 0.5]),
+                                          ("wall_xm", [0.1, 1.4, 1.0], [-0.65, 0.0, 0.5]),
+                                          ("wall_yp", [1.4, 0.1, 1.0], [0.0, 0.65, 0.5]),
+                                          ("wall_ym", [1.4, 0.1, 1.0], [0.0, -0.65, 0.5]))}
+    scene = {"gravity": [0.0, 0.0, -9.81], "bodies": {"capsule": capsule, "can": can, **walls},
+             "ground": [{"normal": [0, 0, 1], "material": {"restitution": 0.0, "friction": 0.6}}]}
+    tolerance = 1e-5
+    sim = Simulator(load_scene(scene), "semi_implicit_euler", 5e-3, threads=1)
+    sim.contact.penetration_tolerance = tolerance
+    sim.contact.sleeping = True
+    moving = np.array([True, True, False, False, False, False])
+    for _ in range(5):
+        sim.step()
+        axis = quat_rotate(np.roll(sim.orientations_xyzw()[1], 1), np.array([0.0, 0.0, 1.0]))
+        centre = sim.positions_world()[1]  # the can's deepest reach into each wall: its rim's, tilted
+        assert centre[0] + abs(axis[0]) * length / 2 + radius * math.hypot(axis[1], axis[2]) - 0.6 <= tolerance + 1e-9
+        assert -0.6 - (centre[1] - abs(axis[1]) * length / 2 - radius * math.hypot(axis[0], axis[2])) <= tolerance + 1e-9
+        for a, b, depth in overlapping_bodies(sim.positions_world(), sim.orientations_xyzw()[:, [3, 0, 1, 2]],
+                                              sim.contact.shapes, moving):
+            assert depth <= tolerance + 1e-9, (a, b, depth)
+    assert sim.contact.pairs.separations >= 1

@@ -921,9 +921,12 @@ class BodyPairs:
         normal's part u in its ground's plane (along the crease of its two grounds where it is held on two), by
         −d × its inverse mass / Σ m⁻¹ |u|² (the least move in the mass metric that closes the depth to first
         order); not where that sum is below PART_SHARE × Σ m⁻¹, mostly across their grounds (one body above the
-        other: the moves would be large beside the depth). True when moved (counted in :attr:`separations`)."""
+        other: the moves would be large beside the depth). A body that move would take into another half-space or
+        static shape (deeper than it was: a can standing in a bin's corner, held on the floor and one wall, slid
+        along their crease into the other) stays, and the other takes the whole move, or neither moves. True when
+        moved (counted in :attr:`separations`)."""
         solver = self.solver
-        moves, total, inv = {}, 0.0, 0.0
+        moves, inverse = {}, {}
         for i in (a, b):
             if solver.other_ground[i] >= 0:  # along the crease
                 e = crease(solver, i)
@@ -932,12 +935,25 @@ class BodyPairs:
                 g = solver.grounds[int(solver.ground_of[i]), NORMAL:NORMAL + 3]
                 u = n - (n @ g) * g
             moves[i] = u
-            total += sim._prm[i, L.INV_MASS] * (u @ u)
-            inv += sim._prm[i, L.INV_MASS]
-        if total < PART_SHARE * inv:
+            inverse[i] = sim._prm[i, L.INV_MASS]
+        for _ in range(2):  # the shares, then again without a body the first shares would put into a wall
+            total = sum(inverse[i] * (moves[i] @ moves[i]) for i in (a, b))
+            if total < PART_SHARE * (sim._prm[a, L.INV_MASS] + sim._prm[b, L.INV_MASS]):
+                return False
+            ends = {i: y[i].copy() for i in (a, b)}
+            ends[a][L.P:L.P + 3] += d * inverse[a] / total * moves[a]
+            ends[b][L.P:L.P + 3] -= d * inverse[b] / total * moves[b]
+            walled = [i for i in (a, b) if inverse[i] > 0.0
+                      and solver._other_gap(sim, ends[i], i, pressed=True)[0]
+                      < min(0.0, solver._other_gap(sim, y[i], i, pressed=True)[0])]
+            if not walled:
+                break
+            for i in walled:
+                inverse[i] = 0.0
+        else:
             return False
-        y[a][L.P:L.P + 3] += d * sim._prm[a, L.INV_MASS] / total * moves[a]
-        y[b][L.P:L.P + 3] -= d * sim._prm[b, L.INV_MASS] / total * moves[b]
+        for i in (a, b):
+            y[i][L.P:L.P + 3] = ends[i][L.P:L.P + 3]
         self.separations += 1
         return True
 
