@@ -47,6 +47,7 @@ import math
 
 import numpy as np
 import pytest
+from contact_support import bin_walls
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
@@ -848,13 +849,7 @@ def test_two_held_bodies_slid_apart_do_not_slide_one_into_a_wall() -> None:
                  [0.503403745757994, -0.5034037457791843, 0.04776137493801113],
                  [1.5559111401044215e-17, -1.19142127331741e-19, 0.8885082053413005, 0.4588607294606737],
                  [-3.5784437990016286e-11, 3.798948141406175e-14, 0.0], [0.0, 0.0, 2.2848632292392095])
-    walls = {name: {"motion": "static", "mass": 1.0, "inertia": {"box": size}, "collision": {"box": size},
-                    "material": {"restitution": 0.0, "friction": 0.5}, "pose": {"position": position}}
-             for name, size, position in (("wall_xp", [0.1, 1.4, 1.0], [0.65, 0.0, 0.5]),
-                                          ("wall_xm", [0.1, 1.4, 1.0], [-0.65, 0.0, 0.5]),
-                                          ("wall_yp", [1.4, 0.1, 1.0], [0.0, 0.65, 0.5]),
-                                          ("wall_ym", [1.4, 0.1, 1.0], [0.0, -0.65, 0.5]))}
-    scene = {"gravity": [0.0, 0.0, -9.81], "bodies": {"capsule": capsule, "can": can, **walls},
+    scene = {"gravity": [0.0, 0.0, -9.81], "bodies": {"capsule": capsule, "can": can, **bin_walls(1.2)},
              "ground": [{"normal": [0, 0, 1], "material": {"restitution": 0.0, "friction": 0.6}}]}
     tolerance = 1e-5
     sim = Simulator(load_scene(scene), "semi_implicit_euler", 5e-3, threads=1)

@@ -33,6 +33,7 @@ import math
 
 import numpy as np
 import pytest
+from contact_support import bin_walls
 from helpers import ORDER, loglog_slope
 
 from rigid_body_sim.core import Simulator
@@ -431,13 +432,7 @@ def test_a_capsule_held_on_the_floor_and_a_wall_is_taken_out_of_the_next_wall_it
                                         0.7433543034707386]},
                "twist": {"linear": [-0.18030163381938535, 1.28528371789652, -3.531011796733501],
                          "angular": [-1.4859995790574185, -5.788152822287173, -2.728235866528224]}}
-    walls = {name: {"motion": "static", "mass": 1.0, "inertia": {"box": size}, "collision": {"box": size},
-                    "material": {"restitution": 0.0, "friction": 0.5}, "pose": {"position": position}}
-             for name, size, position in (("wall_xp", [0.1, 1.65, 1.0], [0.775, 0.0, 0.5]),
-                                          ("wall_xm", [0.1, 1.65, 1.0], [-0.775, 0.0, 0.5]),
-                                          ("wall_yp", [1.65, 0.1, 1.0], [0.0, 0.775, 0.5]),
-                                          ("wall_ym", [1.65, 0.1, 1.0], [0.0, -0.775, 0.5]))}
-    scene = {"gravity": [0.0, 0.0, -G], "bodies": {"capsule": capsule, **walls},
+    scene = {"gravity": [0.0, 0.0, -G], "bodies": {"capsule": capsule, **bin_walls(1.45)},
              "ground": [{"normal": [0, 0, 1], "material": {"restitution": 0.0, "friction": 0.6}}]}
     tolerance = 1e-5
     sim = Simulator(load_scene(scene), "semi_implicit_euler", 1e-2, threads=1)
