@@ -17,7 +17,7 @@ from numba import njit
 
 from ..jit import INLINE, JIT
 from ..layout import P, V
-from .swept import box_pairs, cell_key, file_grid, forward_cell, growth, paths_may_meet
+from .swept import box_pairs, cell_key, file_grid, forward_cell, keep_meeting
 
 __all__ = ["KEY_WIDTH", "kept_swept_pairs"]
 
@@ -128,15 +128,7 @@ def kept_swept_pairs(Y0, Y1, members, radius, h, grounds, movable, fixed, lo, hi
             if over:
                 count = top
             else:  # spheres_may_meet's test, in place
-                kept = count
-                for k in range(count, top):
-                    a_m, b_m = pairs[k, 0], pairs[k, 1]
-                    a, b = members[a_m], members[b_m]
-                    if paths_may_meet(Y0, Y1, grounds, a, b, radius[a_m], radius[b_m],
-                                      growth(Y0, Y1, a, h) + growth(Y0, Y1, b, h), True, True):
-                        pairs[kept, 0], pairs[kept, 1] = a_m, b_m
-                        kept += 1
-                count = kept
+                count = keep_meeting(Y0, Y1, members, radius, h, grounds, pairs, count, top)
         else:
             for k in range(blocks[m], blocks[m + 1]):
                 if count < capacity:

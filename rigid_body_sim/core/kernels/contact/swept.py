@@ -40,7 +40,7 @@ from .pairs import apart_bounds, pair_contacts
 
 __all__ = ["GROWTH", "growth", "chords_apart", "chords_near", "rebound", "paths_may_meet", "swept_bounds",
            "CELL_STEPS", "cell_key", "grid_cell", "file_grid", "forward_cell", "box_pairs", "grid_swept_pairs", "boxes_meet",
-           "grid_overlaps", "spheres_may_meet", "deflection_bound", "deflections", "left_pairs", "screen_pairs"]
+           "grid_overlaps", "spheres_may_meet", "keep_meeting", "deflection_bound", "deflections", "left_pairs", "screen_pairs"]
 
 
 #: A body's box and sphere over the step are grown by this × |v₁ − v₀| h (m): module docstring.
@@ -331,15 +331,24 @@ def spheres_may_meet(Y0, Y1, members, reach, h, grounds, pairs, found):
     chords' difference; and, where one of them may be stopped by a half-space of ``grounds`` (the ground's pass
     after this one changes its path: paths_may_meet), when the chords themselves stay that far apart, the
     rebounds added. Y0, Y1, members, reach, h as for swept_bounds."""
-    kept = 0
-    for k in range(found):
+    kept = keep_meeting(Y0, Y1, members, reach, h, grounds, pairs, 0, found)
+    _pin = Y0[0, 0], Y1[0, 0], members[0], reach[0], grounds.shape[0], pairs[0, 0]
+    return kept
+
+
+@njit(**INLINE)
+def keep_meeting(Y0, Y1, members, reach, h, grounds, pairs, start, stop):
+    """spheres_may_meet's test on pairs[start:stop]: those kept moved to the front of that range, in their order;
+    returns where they end (kept_pairs.py tests each member's pairs as it lists them)."""
+    kept = start
+    for k in range(start, stop):
         m, n = pairs[k, 0], pairs[k, 1]
         a, b = members[m], members[n]
         if paths_may_meet(Y0, Y1, grounds, a, b, reach[m], reach[n], growth(Y0, Y1, a, h) + growth(Y0, Y1, b, h),
                           True, True):
             pairs[kept, 0], pairs[kept, 1] = m, n
             kept += 1
-    _pin = Y0[0, 0], Y1[0, 0], members[0], reach[0], grounds.shape[0], pairs[0, 0]
+    _pin = Y0[0, 0], Y1[0, 0], members[0], reach[0], grounds.shape[0], pairs[0, 0]  # (jit.py's rule)
     return kept
 
 
