@@ -1207,10 +1207,22 @@ def test_two_bodies_held_on_the_ground_struck_together_across_a_steep_normal_are
     sleeping off, tolerance 0; its state at 0.345 s, ``test/data/mixed_pile_348_rows_at_0.345s.npy``) meet within
     a step and end it 79 µm inside each other once each is projected onto the ground, their normal 45° from the
     ground's plane. Two members held on one ground are parted in its plane when the normal's part in it, squared,
-    is at least PART_SHARE (the move at most twice the depth). After that step and the next, no two bodies
+    is at least PART_SHARE (the move at most three times the depth). After that step and the next, no two bodies
     overlap by more than 0.01 mm."""
     sim = pile_from_rows(64, 348, 5e-3, "mixed_pile_348_rows_at_0.345s.npy", sleeping=False, tolerance=0.0)
     two_steps_no_deeper_than(sim, 1e-5)
+
+
+def test_a_can_held_with_its_rim_over_a_held_ball_is_parted_from_it_in_the_ground_plane():
+    """A mixed pile (``mixed_pile(64, 156, 0)``, semi-implicit Euler, dt = 5 ms, sleeping on, tolerance 0; its
+    state at 0.245 s, ``test/data/mixed_pile_156_rows_at_0.245s.npy``): a can (body 1) and a ball (body 5), both
+    held on the ground, strike each other several times within a step, the can's rim over the ball, their normal
+    63° from the ground's plane (its part in the plane 0.46 of it). The group's step ends them 27 µm inside each
+    other; parting them in the plane takes a move of 2.2 times the depth (within PART_SHARE's bound). After that step and the next, no two bodies overlap by more than 1e-9 m."""
+    sim = pile_from_rows(64, 156, 5e-3, "mixed_pile_156_rows_at_0.245s.npy", sleeping=True, tolerance=0.0,
+                         integrator="semi_implicit_euler")
+    assert sim.contact.shapes[1, 0] == SHAPE_CYLINDER and sim.contact.shapes[5, 0] == SHAPE_SPHERE
+    two_steps_no_deeper_than(sim, 1e-9)
 
 
 def test_a_box_held_on_the_ground_and_struck_in_a_group_ends_its_step_outside_the_body_that_struck_it():

@@ -132,8 +132,8 @@ _RESTORED = ("modes", "tracked", "sliding", "slide_direction", "pressed", "groun
 MAX_ROUNDS = 10
 #: Two held members are moved apart each in its ground's plane (BodyPairs._slide_apart) when the normal's parts in
 #: those planes, squared and weighted by inverse mass, are at least this share of Σ m⁻¹: on one ground, the move is
-#: then at most twice the depth.
-PART_SHARE = 0.25
+#: then at most three times the depth.
+PART_SHARE = 1.0 / 9.0
 #: A pair whose signed distance is below this × its size (m per m) touches.
 TOUCHING = 1e-12
 #: A resting body whose contact points move away from its ground faster than this (m/s) lifts off.
