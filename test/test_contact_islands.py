@@ -1213,6 +1213,22 @@ def test_two_bodies_held_on_the_ground_struck_together_across_a_steep_normal_are
     two_steps_no_deeper_than(sim, 1e-5)
 
 
+def test_two_flying_bodies_grazed_again_and_again_end_their_step_no_deeper_than_the_skin():
+    """A mixed pile (``mixed_pile(125, 162, 0.5)``, semi-implicit Euler, dt = 10 ms, sleeping on, tolerance 0; its
+    state at 0.13 s, ``test/data/mixed_pile_162_rows_at_0.13s.npy``): a spinning capsule (body 78) and box (body
+    103) in flight strike each other within the step. After the impact their states' velocities part them, while
+    their paths sink (relative normal acceleration about −7.5 m/s²): the pair is grazed again and again, each time
+    followed a skin (1e-4 × its size) deeper, and ended the step 21 µm inside. Two flying ones deeper than the skin
+    at the group's end are moved apart. After that step and the next, no two bodies overlap by more than the
+    pair's skin."""
+    from rigid_body_sim.core.contact.body_pairs import ADVANCE_SKIN
+
+    sim = pile_from_rows(125, 162, 1e-2, "mixed_pile_162_rows_at_0.13s.npy", sleeping=True, tolerance=0.0,
+                         restitution=0.5, integrator="semi_implicit_euler")
+    assert sim.contact.shapes[78, 0] == SHAPE_CAPSULE and sim.contact.shapes[103, 0] == SHAPE_BOX
+    two_steps_no_deeper_than(sim, ADVANCE_SKIN * max(sim.contact.pairs.size[78], sim.contact.pairs.size[103]))
+
+
 def test_a_can_held_with_its_rim_over_a_held_ball_is_parted_from_it_in_the_ground_plane():
     """A mixed pile (``mixed_pile(64, 156, 0)``, semi-implicit Euler, dt = 5 ms, sleeping on, tolerance 0; its
     state at 0.245 s, ``test/data/mixed_pile_156_rows_at_0.245s.npy``): a can (body 1) and a ball (body 5), both

@@ -742,11 +742,14 @@ class BodyPairs:
         with the other; a box held flat on it, tipped a little by a partner's pushes over the group's pieces). Moved
         apart by the depth, their velocities kept (counted in :attr:`separations`; at the next step the two have
         their impacts or form an island; :meth:`_separate`): two held ones each within its ground's plane, a held
-        one and a flying one along the normal, the held one staying."""
+        one and a flying one along the normal, the held one staying. Two flying ones, followed on their own maps
+        to a skin deeper than they were (item 3), end deeper than the skin only where that was repeated (a pair
+        grazed again and again: its path sinks while its states' velocities part it, as a semi-implicit Euler
+        step map's rate differs from its state's velocity by the time into the piece × the acceleration): moved
+        apart along the normal by their inverse masses."""
         held = {i for i in (a, b) if self.solver.modes[i] == PERSISTENT}
-        if not held:  # two flying ones: on their own maps, followed to a skin deeper at most (item 3)
-            return
-        self._separate(sim, a, b, y, held, -TOUCHING * max(self.size[a], self.size[b]))
+        size = max(self.size[a], self.size[b])
+        self._separate(sim, a, b, y, held, -(TOUCHING if held else ADVANCE_SKIN) * size)
 
     def _strike_wall(self, sim, i: int, y: dict, w: dict, held: set, t: float) -> None:
         """Held member i at y[i] meets another half-space or a static shape (a wall) at t: its impact there
