@@ -1229,6 +1229,19 @@ def test_two_flying_bodies_grazed_again_and_again_end_their_step_no_deeper_than_
     two_steps_no_deeper_than(sim, ADVANCE_SKIN * max(sim.contact.pairs.size[78], sim.contact.pairs.size[103]))
 
 
+def test_a_ball_parted_from_a_held_can_is_not_moved_into_the_wall_beside_it():
+    """A mixed pile (``mixed_pile(27, 23, 0.5)``, semi-implicit Euler, dt = 10 ms, sleeping on, tolerance 0; its
+    state at 0.49 s, ``test/data/mixed_pile_23_rows_at_0.49s.npy``): a ball (body 15) rolls along the floor touching
+    a bin's wall, and a can held on the floor (body 6) strikes it again and again within the step, lifting it off
+    the floor. At the group's end the two overlap; moving the flying ball out along their normal, which points
+    into the wall, took it 5.5 µm into the wall. It is moved along the wall's plane instead. After that step and
+    the next, nothing overlaps."""
+    sim = pile_from_rows(27, 23, 1e-2, "mixed_pile_23_rows_at_0.49s.npy", sleeping=True, tolerance=0.0,
+                         restitution=0.5, integrator="semi_implicit_euler")
+    assert sim.contact.shapes[15, 0] == SHAPE_SPHERE and sim.contact.shapes[6, 0] == SHAPE_CYLINDER
+    two_steps_no_deeper_than(sim, 1e-9)
+
+
 def test_a_can_held_with_its_rim_over_a_held_ball_is_parted_from_it_in_the_ground_plane():
     """A mixed pile (``mixed_pile(64, 156, 0)``, semi-implicit Euler, dt = 5 ms, sleeping on, tolerance 0; its
     state at 0.245 s, ``test/data/mixed_pile_156_rows_at_0.245s.npy``): a can (body 1) and a ball (body 5), both

@@ -914,10 +914,29 @@ class BodyPairs:
         n = self._normal1[0]
         if a in held and b in held:
             return -d if self._slide_apart(sim, a, b, y, d, n) else 0.0
-        inv_a = 0.0 if a in held else sim._prm[a, L.INV_MASS]
-        inv_b = 0.0 if b in held else sim._prm[b, L.INV_MASS]
-        self._move_apart(a, b, y, d, n, inv_a, inv_b)
+        if len(held) == 1:
+            self._move_beside_wall(sim, b if a in held else a, y, (d if b in held else -d) * n)
+            self.separations += 1
+            return -d
+        self._move_apart(a, b, y, d, n, sim._prm[a, L.INV_MASS], sim._prm[b, L.INV_MASS])
         return -d
+
+    def _move_beside_wall(self, sim, i: int, y: dict, move: np.ndarray) -> None:
+        """Body i at y[i] (in place) moved by ``move`` (m, world), its partner held; where that would take it deeper
+        into a half-space or static shape (a ball pushed off the floor by a partner, into the wall beside it), by
+        the least move along that one's plane with the same part along ``move`` instead, when that plane keeps at
+        least PART_SHARE of it squared (the move at most three times as long), else by ``move``."""
+        solver = self.solver
+        end = y[i].copy()
+        end[L.P:L.P + 3] += move
+        gap, j = solver._gap(sim, end, i)
+        if gap < min(0.0, solver._gap(sim, y[i], i)[0]):
+            g = solver.grounds[j, NORMAL:NORMAL + 3]
+            along = move - (move @ g) * g
+            share = (along @ along) / (move @ move)
+            if share >= PART_SHARE:
+                end[L.P:L.P + 3] = y[i][L.P:L.P + 3] + along / share
+        y[i][L.P:L.P + 3] = end[L.P:L.P + 3]
 
     def _slide_apart(self, sim, a: int, b: int, y: dict, d: float, n: np.ndarray) -> bool:
         """Bodies a and b, both held, at y (in place) d < 0 into each other along n (a → b): each moved along the
