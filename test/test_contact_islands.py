@@ -1242,6 +1242,27 @@ def test_a_ball_parted_from_a_held_can_is_not_moved_into_the_wall_beside_it():
     two_steps_no_deeper_than(sim, 1e-9)
 
 
+def test_two_flying_bodies_moved_apart_are_not_moved_into_a_wall():
+    """A mixed pile (``mixed_pile(125, 162, 0.5)``, semi-implicit Euler, dt = 10 ms, sleeping on, tolerance 0; its
+    state at 0.19 s, ``test/data/mixed_pile_162_rows_at_0.19s.npy``): a box (body 97) falls at 2.8 m/s along a bin's
+    wall, struck again and again by a flying neighbour (body 72). At the group's end the two overlap deeper than
+    the pair pass's skin; moving each out along their normal by its share took the box 4.9 µm into the wall. It is
+    moved along the wall's plane instead. After that step and the next, nothing is inside a wall (1e-9 m) and no
+    two bodies overlap by more than their skin."""
+    from rigid_body_sim.core.contact.body_pairs import ADVANCE_SKIN
+
+    sim = pile_from_rows(125, 162, 1e-2, "mixed_pile_162_rows_at_0.19s.npy", sleeping=True, tolerance=0.0,
+                         restitution=0.5, integrator="semi_implicit_euler")
+    moving = np.array([m != "static" for m in sim.model.motions])
+    assert not moving[127] and sim.contact.shapes[97, 0] == SHAPE_BOX
+    for _ in range(2):
+        for a, b, depth in step_and_overlaps(sim):
+            if moving[a] and moving[b]:
+                assert depth <= ADVANCE_SKIN * max(sim.contact.pairs.size[a], sim.contact.pairs.size[b]), (a, b, depth)
+            else:
+                assert depth <= 1e-9, (a, b, depth)
+
+
 def test_a_can_held_with_its_rim_over_a_held_ball_is_parted_from_it_in_the_ground_plane():
     """A mixed pile (``mixed_pile(64, 156, 0)``, semi-implicit Euler, dt = 5 ms, sleeping on, tolerance 0; its
     state at 0.245 s, ``test/data/mixed_pile_156_rows_at_0.245s.npy``): a can (body 1) and a ball (body 5), both

@@ -914,18 +914,19 @@ class BodyPairs:
         n = self._normal1[0]
         if a in held and b in held:
             return -d if self._slide_apart(sim, a, b, y, d, n) else 0.0
-        if len(held) == 1:
-            self._move_beside_wall(sim, b if a in held else a, y, (d if b in held else -d) * n)
-            self.separations += 1
-            return -d
-        self._move_apart(a, b, y, d, n, sim._prm[a, L.INV_MASS], sim._prm[b, L.INV_MASS])
+        inverse = {i: 0.0 if i in held else sim._prm[i, L.INV_MASS] for i in (a, b)}
+        total = inverse[a] + inverse[b]
+        for i, sign in ((a, 1.0), (b, -1.0)):
+            if inverse[i] > 0.0:
+                self._move_beside_wall(sim, i, y, sign * d * inverse[i] / total * n)
+        self.separations += 1
         return -d
 
     def _move_beside_wall(self, sim, i: int, y: dict, move: np.ndarray) -> None:
-        """Body i at y[i] (in place) moved by ``move`` (m, world), its partner held; where that would take it deeper
-        into a half-space or static shape (a ball pushed off the floor by a partner, into the wall beside it), by
-        the least move along that one's plane with the same part along ``move`` instead, when that plane keeps at
-        least PART_SHARE of it squared (the move at most three times as long), else by ``move``."""
+        """Flying body i at y[i] (in place) moved by ``move`` (m, world: its share of a separation); where that would
+        take it deeper into a half-space or static shape (a ball pushed off the floor by a partner, into the wall
+        beside it), by the least move along that one's plane with the same part along ``move`` instead, when that
+        plane keeps at least PART_SHARE of it squared (the move at most three times as long), else by ``move``."""
         solver = self.solver
         end = y[i].copy()
         end[L.P:L.P + 3] += move
@@ -978,13 +979,6 @@ class BodyPairs:
             y[i][L.P:L.P + 3] = ends[i][L.P:L.P + 3]
         self.separations += 1
         return True
-
-    def _move_apart(self, a: int, b: int, y: dict, d: float, u: np.ndarray, inv_a: float, inv_b: float) -> None:
-        """Bodies a and b at y (in place) moved apart by d u in all (d < 0: b away from a along u), each by its share
-        of the inverse masses ``inv_a``, ``inv_b`` (0: that one stays); counted in :attr:`separations`."""
-        y[a][L.P:L.P + 3] += d * u * inv_a / (inv_a + inv_b)
-        y[b][L.P:L.P + 3] -= d * u * inv_b / (inv_a + inv_b)
-        self.separations += 1
 
 
 def _spanning(points: np.ndarray) -> np.ndarray:
