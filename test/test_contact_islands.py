@@ -1263,6 +1263,23 @@ def test_two_flying_bodies_moved_apart_are_not_moved_into_a_wall():
                 assert depth <= 1e-9, (a, b, depth)
 
 
+def test_a_box_coming_to_rest_flat_on_the_floor_in_a_bins_corner_rests_on_the_floor():
+    """A mixed pile (``mixed_pile(64, 8, 0.5)``, rk4, dt = 10 ms, sleeping off, tolerance 0; its state at 0.48 s,
+    ``test/data/mixed_pile_8_rows_at_0.48s.npy``): a small box (body 51) bounces in a bin's corner, off the floor and
+    both walls, and 1.8 ms before its second step's end its rebound is too small to resolve: it comes to rest lying flat
+    on the floor, 7.8 µm inside a wall. Put to rest on its lowest plane, the wall, alone, it fell 16 µm into the
+    floor over the rest of the step. A body at rest there is put on the half-space it touches that faces most
+    against gravity. Over three steps no body is inside the ground (1e-9 m)."""
+    from rigid_body_sim.core.contact.query import lowest_gaps
+
+    sim = pile_from_rows(64, 8, 1e-2, "mixed_pile_8_rows_at_0.48s.npy", sleeping=False, tolerance=0.0,
+                         restitution=0.5)
+    assert sim.contact.shapes[51, 0] == SHAPE_BOX
+    for _ in range(3):
+        sim.step()
+        assert lowest_gaps(sim).min() >= -1e-9, lowest_gaps(sim).min()
+
+
 def test_a_can_held_with_its_rim_over_a_held_ball_is_parted_from_it_in_the_ground_plane():
     """A mixed pile (``mixed_pile(64, 156, 0)``, semi-implicit Euler, dt = 5 ms, sleeping on, tolerance 0; its
     state at 0.245 s, ``test/data/mixed_pile_156_rows_at_0.245s.npy``): a can (body 1) and a ball (body 5), both

@@ -991,13 +991,29 @@ class ContactSolver:
             s = self._locate(lambda s: self._gap(sim, self.step_map(sim, i, y, s * h, w), i)[0],
                              0.0 if after_impact else self._gap(sim, y, i)[0], hint)
             if s is None:  # a rebound too small to resolve: rest here
-                self._rest(sim, i, y, int(self._gap(sim, y, i)[1]), t, 0.0, 0.0)
+                self._rest(sim, i, y, self._resting_ground(sim, y, i), t, 0.0, 0.0)
                 continue
             y = self.step_map(sim, i, y, s * h, w) if s > 0.0 else y
             t, h = t + s * h, h - s * h
             hint = self._impact(sim, i, y, w, t, h)
             after_impact = True
         raise RuntimeError(f"{self.names[i]!r}: more than {MAX_EVENTS_PER_STEP} contact events in one step at t = {t}")
+
+    def _resting_ground(self, sim, y: np.ndarray, i: int) -> int:
+        """The ground body i at y comes to rest on where a rebound is too small to resolve: its lowest plane (a
+        half-space, or a static shape's plane), or a half-space it touches too (within its feature band or inside)
+        that faces more against gravity (a box lying flat on the floor in a bin's corner, a little inside a wall:
+        held on the wall alone, it fell into the floor)."""
+        gap, j = self._gap(sim, y, i)
+        down = sim._prm[i, L.GRAVITY:L.GRAVITY + 3]
+        best = -float(self.grounds[j, NORMAL:NORMAL + 3] @ down)
+        for jj in range(len(self.half_spaces)):
+            facing = -float(self.grounds[jj, NORMAL:NORMAL + 3] @ down)
+            if jj != j and facing > best:
+                count = body_points(y, sim._prm[i], self.shapes[i], self.grounds[jj], self._points, self._gaps)
+                if count and self._gaps[:count].min() <= self._band[i]:
+                    j, best = jj, facing
+        return int(j)
 
     def _locate(self, gap, g0: float, hint: float) -> float | None:
         """The first root s in [0, 1] of gap(s) (gap(1) < 0), to round-off: bracket, then Illinois.
