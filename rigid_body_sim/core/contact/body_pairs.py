@@ -744,9 +744,8 @@ class BodyPairs:
         their impacts or form an island; :meth:`_separate`): two held ones each within its ground's plane, a held
         one and a flying one along the normal, the held one staying. Two flying ones, followed on their own maps
         to a skin deeper than they were (item 3), end deeper than the skin only where that was repeated (a pair
-        grazed again and again: its path sinks while its states' velocities part it, as a semi-implicit Euler
-        step map's rate differs from its state's velocity by the time into the piece × the acceleration): moved
-        apart along the normal by their inverse masses."""
+        grazed again and again: its path sinks, its relative normal acceleration pulling it in, while its states'
+        velocities at each graze part it): moved apart along the normal by their inverse masses."""
         held = {i for i in (a, b) if self.solver.modes[i] == PERSISTENT}
         size = max(self.size[a], self.size[b])
         self._separate(sim, a, b, y, held, -(TOUCHING if held else ADVANCE_SKIN) * size)

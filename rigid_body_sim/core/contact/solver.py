@@ -1004,7 +1004,7 @@ class ContactSolver:
         half-space, or a static shape's plane), or a half-space it touches too (within its feature band or inside)
         that faces more against gravity (a box lying flat on the floor in a bin's corner, a little inside a wall:
         held on the wall alone, it fell into the floor)."""
-        gap, j = self._gap(sim, y, i)
+        j = self._gap(sim, y, i)[1]
         down = sim._prm[i, L.GRAVITY:L.GRAVITY + 3]
         best = -float(self.grounds[j, NORMAL:NORMAL + 3] @ down)
         for jj in range(len(self.half_spaces)):
