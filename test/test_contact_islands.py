@@ -1263,6 +1263,42 @@ def test_two_flying_bodies_moved_apart_are_not_moved_into_a_wall():
                 assert depth <= 1e-9, (a, b, depth)
 
 
+def test_a_group_whose_every_pair_is_dropped_ends_each_members_step_on_its_own(monkeypatch):
+    """A mixed pile (``mixed_pile(64, 128, 0)``, semi-implicit Euler, dt = 5 ms, sleeping on, tolerance 1e-5 m; its
+    state at 0.24 s, ``test/data/mixed_pile_128_rows_at_0.24s.npy``): a capsule held on the floor (body 11) and a
+    can sliding down a bin's wall, held on it (body 31), strike each other twice within the step and then graze.
+    With MAX_GRAZES at 0 the pair is dropped at its first graze (the default limit was never reached in the 176
+    mixed-pile runs: this forces that path); neither flies, so the group's step ends there, 2.7 ms before the
+    step's end, and each member takes the rest of its step on its own. Each one's displacement over the step is
+    h (v0 + v1) / 2 within h |v1 − v0| (one left where the group stopped would be short by about v × 2.7 ms: 0.9
+    and 2.1 mm); after that step and the next no two bodies overlap by more than the tolerance."""
+    from rigid_body_sim.core.contact import body_pairs
+
+    tolerance, h = 1e-5, 5e-3
+    sim = pile_from_rows(64, 128, h, "mixed_pile_128_rows_at_0.24s.npy", sleeping=True, tolerance=tolerance,
+                         integrator="semi_implicit_euler")
+    assert sim.contact.shapes[11, 0] == SHAPE_CAPSULE and sim.contact.shapes[31, 0] == SHAPE_CYLINDER
+    monkeypatch.setattr(body_pairs, "MAX_GRAZES", 0)
+    finished = {}
+    finish = body_pairs.BodyPairs._finish
+
+    def spy(self, sim, i, y, w, t, left, held):
+        if left > 0.0:
+            finished[i] = left
+        return finish(self, sim, i, y, w, t, left, held)
+
+    monkeypatch.setattr(body_pairs.BodyPairs, "_finish", spy)
+    before = sim.state.rows()[[11, 31]].copy()
+    overlaps = step_and_overlaps(sim)
+    assert sorted(finished) == [11, 31] and all(2e-3 < left < 3e-3 for left in finished.values()), finished
+    after = sim.state.rows()[[11, 31]]
+    for (x0, v0), (x1, v1) in zip(((r[0:3], r[7:10]) for r in before), ((r[0:3], r[7:10]) for r in after)):
+        assert np.linalg.norm(x1 - x0 - 0.5 * h * (v0 + v1)) <= h * np.linalg.norm(v1 - v0)
+    assert all(d <= tolerance for *_, d in overlaps), overlaps[:3]
+    overlaps = step_and_overlaps(sim)
+    assert all(d <= tolerance for *_, d in overlaps), overlaps[:3]
+
+
 def test_a_box_coming_to_rest_flat_on_the_floor_in_a_bins_corner_rests_on_the_floor():
     """A mixed pile (``mixed_pile(64, 8, 0.5)``, rk4, dt = 10 ms, sleeping off, tolerance 0; its state at 0.48 s,
     ``test/data/mixed_pile_8_rows_at_0.48s.npy``): a small box (body 51) bounces in a bin's corner, off the floor and
