@@ -1321,7 +1321,8 @@ def test_a_can_held_with_its_rim_over_a_held_ball_is_parted_from_it_in_the_groun
     state at 0.245 s, ``test/data/mixed_pile_156_rows_at_0.245s.npy``): a can (body 1) and a ball (body 5), both
     held on the ground, strike each other several times within a step, the can's rim over the ball, their normal
     63° from the ground's plane (its part in the plane 0.46 of it). The group's step ends them 27 µm inside each
-    other; parting them in the plane takes a move of 2.2 times the depth (within PART_SHARE's bound). After that step and the next, no two bodies overlap by more than 1e-9 m."""
+    other; parting them in the plane takes a move of 2.2 times the depth (within PART_SHARE's bound). After that
+    step and the next, no two bodies overlap by more than 1e-9 m."""
     sim = pile_from_rows(64, 156, 5e-3, "mixed_pile_156_rows_at_0.245s.npy", sleeping=True, tolerance=0.0,
                          integrator="semi_implicit_euler")
     assert sim.contact.shapes[1, 0] == SHAPE_CYLINDER and sim.contact.shapes[5, 0] == SHAPE_SPHERE
