@@ -416,6 +416,33 @@ def test_a_sleeping_tower_wakes_when_hit():
     assert speeds(sim) == 0.0
 
 
+@pytest.mark.parametrize("sleeping", [False, True])
+def test_a_stopped_body_leaves_the_contact_and_the_cube_on_it_falls_through_it(sleeping):
+    """Simulator.stop_body on the middle cube of a 3-cube tower (dt = 10 ms, rk4; awake, or asleep): the stopped
+    cube does not change by a bit, and no contact or event names it from then on; the top cube (woken, when the
+    tower sleeps) falls freely through it, z = 0.5 − g t²/2 and v = −g t (rk4 is exact under constant gravity),
+    and lands on the bottom cube, on which it rests at z = 0.3."""
+    sim = asleep_tower() if sleeping else simulator(tower(3))
+    islands = sim.contact.pairs.islands
+    sim.step(5)
+    middle = sim.state.rows()[1].copy()
+    sim.stop_body("c0_0_1")
+    events = len(sim.contact.events)
+    for k in range(1, 16):
+        sim.step()
+        ints, _ = islands.contacts()
+        assert not (ints[:, :2] == 1).any()
+        assert not islands.asleep[2]
+        t = 0.01 * k
+        assert sim.state.p_WC_W[2] == pytest.approx([0.0, 0.0, 0.5 - 0.5 * G * t * t], abs=1e-12)
+        assert sim.state.v_WC_W[2] == pytest.approx([0.0, 0.0, -G * t], abs=1e-12)
+    sim.step(100)
+    assert np.array_equal(sim.state.rows()[1], middle)
+    assert all(event.body != "c0_0_1" for event in sim.contact.events[events:])
+    assert sim.state.p_WC_W[[0, 2], 2] == pytest.approx([0.1, 0.3], abs=1e-9)
+    assert speeds_of(sim, [0, 2]) <= 1e-9
+
+
 def test_a_tower_falls_asleep_beside_a_cube_still_sliding_in_its_island():
     """A 3-cube tower at rest and a frictionless cube sliding past it 1 cm away at 1 cm/s are one island (their
     swept boxes overlap) but no contact joins them: the tower, a component at rest, is locked in the first step

@@ -430,10 +430,13 @@ class Simulator:
             self.contact.reset(self)
 
     def stop_body(self, body: str) -> None:
-        """Freeze ``body`` at its current state; it is no longer integrated until :meth:`reset`."""
+        """Freeze ``body`` at its current state; it is no longer integrated until :meth:`reset`. With contact it
+        leaves the contact too: other bodies pass through it, and those asleep with it wake."""
         b = self._index(body)
         self._stopped[b] = True
         self._replan()
+        if self.contact is not None:
+            self.contact.body_stopped(b)
 
     @property
     def model_reduction(self) -> bool:

@@ -145,6 +145,13 @@ class Islands:
         self._roused[self.asleep != 0] = 1
         self.asleep[:] = 0
 
+    def wake_group(self, i: int) -> None:
+        """The bodies asleep with body i (fallen asleep in its component) awake, each solved from its rest."""
+        if self.asleep[i]:
+            woken = (self.asleep != 0) & (self._group == self._group[i])
+            self._roused[woken] = 1
+            self.asleep[woken] = 0
+
     def in_islands(self) -> np.ndarray:
         """Per body, whether the last step stepped it in an island or kept it asleep in one (a body asleep alone on
         its ground, still in persistent contact, is not)."""

@@ -374,6 +374,12 @@ class ContactSolver:
 
     # ----------------------------------------------------------------- modes
 
+    def body_stopped(self, i: int) -> None:
+        """Body i was stopped (Simulator.stop_body): every pass leaves its pairs out from the next step, so the
+        bodies asleep with it (its sleeping island, which it may have held) wake and move on without it."""
+        if self.pairs is not None:
+            self.pairs.islands.wake_group(i)
+
     def reset(self, sim) -> None:
         """Modes from the current state: touching and not moving away means persistent; the events cleared."""
         self.events.clear()
