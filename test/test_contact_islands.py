@@ -546,6 +546,24 @@ def test_a_cube_resting_alone_on_the_ground_sleeps_held_by_its_weight():
     assert solver.holding_impulses[0] - impulse == pytest.approx([0.0, 0.0, G * 10.0], abs=1e-9)
 
 
+@pytest.mark.parametrize("drop", [1e-7, 1e-4])
+def test_a_cube_that_lands_within_its_first_step_sleeps_held_by_its_weight(drop):
+    """A cube set 0.1 µm or 0.1 mm above the ground, at rest (dt = 10 ms: it lands within the first step, e = 0,
+    and ends it held, at rest): it falls asleep only after a step it began held, so that it is held asleep by its
+    weight (m g up; the holding impulse grows by m g × t), not by the nothing that held it as it landed."""
+    sim = simulator({"lone": cube((0.0, 0.0, 0.5 * EDGE + drop)), **tower(2, x=2.0)}, sleeping=True)
+    solver, islands = sim.contact, sim.contact.pairs.islands
+    sim.step(1)
+    assert solver.is_resting("lone") and not islands.asleep[0]
+    sim.step(1)
+    assert islands.asleep[0] and solver.holding_forces[0] == pytest.approx([0.0, 0.0, G], abs=1e-12)
+    impulse = solver.holding_impulses[0].copy()
+    sim.step(1000)
+    assert solver.is_resting("lone") and islands.asleep[0]
+    assert sim.state.p_WC_W[0] == pytest.approx([0.0, 0.0, 0.5 * EDGE], abs=1e-12)
+    assert solver.holding_impulses[0] - impulse == pytest.approx([0.0, 0.0, G * 10.0], abs=1e-9)
+
+
 @pytest.mark.parametrize("sleep_speed", [None, 1e-3])
 def test_a_cube_asleep_alone_wakes_on_a_push_and_slides_as_one_never_asleep(sleep_speed):
     """A push wakes a cube asleep alone on the ground: a force along x through the world origin (on the ground,

@@ -234,6 +234,11 @@ class BodyPairs:
 
     # ----------------------------------------------------------------- after the step
 
+    @property
+    def modes_at_start(self) -> np.ndarray:
+        """Per body, the solver's contact mode as the step began (after_step's copy; not to be written)."""
+        return self._start["modes"]
+
     def after_step(self, sim, wrenches: np.ndarray, Y0: np.ndarray, Y1: np.ndarray, t0: float,
                    h: float) -> np.ndarray | None:
         """Find and resolve the step's body–body events; the bodies done here as a bool mask (None: none)."""

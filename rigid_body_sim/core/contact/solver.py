@@ -656,9 +656,11 @@ class ContactSolver:
         """After the step: sleeping for the bodies held on one half-space alone (in persistent contact, not sliding,
         pushed by no wrench, in no island; not on a static shape), by the islands' rule (Islands.rest_alone). One
         that falls asleep keeps its mode and ground; the force and torque of its last hold hold it while it sleeps
-        (:attr:`holding_forces`, the impulses)."""
+        (:attr:`holding_forces`, the impulses). Only a body held as the step began: one that landed within it (from
+        rest, a drop under g h² / 2) had no hold yet to sleep with."""
         b = self.bodies
-        alone = b[(self.modes[b] == PERSISTENT) & (self.ground_of[b] < len(self.half_spaces))
+        alone = b[(self.modes[b] == PERSISTENT) & (self.pairs.modes_at_start[b] == PERSISTENT)
+                  & (self.ground_of[b] < len(self.half_spaces))
                   & (self.other_ground[b] < 0) & ~self.sliding[b] & ~sim._stopped[b]
                   & (self.pairs.islands.island[b] == 0) & (self._bare_rows[b, L.ACTIVE] == 0.0)]
         fell = self.pairs.islands.rest_alone(alone, Y0, Y1, sim.dt)
