@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rigid_body_sim.core import Simulator, load_scene
+from rigid_body_sim.core import NonFiniteStateError, Simulator, load_scene
 
 G, MU, M = 9.81, 0.5, 1.0
 
@@ -35,6 +35,35 @@ def test_resting_box_stays_exactly_put_held_by_m_g(integrator):
     assert np.array_equal(sim.state.q_WP, start.q_WP)
     assert not np.any(sim.state.v_WC_W) and not np.any(sim.state.w_WP_P)
     assert sim.contact.holding_forces[0] == pytest.approx([0.0, 0.0, M * G], rel=1e-12, abs=1e-12)
+
+
+@pytest.mark.parametrize("integrator", ["rk4", "semi_implicit_euler"])
+@pytest.mark.parametrize("asleep", [False, True])
+def test_a_step_that_fails_adds_nothing_to_the_holding_impulses(integrator, asleep):
+    """A step refused as non-finite (a rod spun by 1e307 N·m) is not applied: the resting crate's holding impulse
+    and angular impulse (torques tracked; held awake, or asleep on its ground) stay as they were, bit for bit. With
+    the rod stopped, the next step adds the crate's m g × dt once."""
+    rod = {"box": [1.0, 0.01, 0.01]}
+    scene = load_scene({"gravity": [0.0, 0.0, -G],
+                        "ground": [{"normal": [0, 0, 1], "material": {"restitution": 0.0, "friction": MU}}],
+                        "bodies": {"crate": {"mass": M, "inertia": {"box": [0.2, 0.2, 0.2]},
+                                             "pose": {"position": [0.0, 0.0, 0.1]}},
+                                   "rod": {"mass": 0.1, "inertia": rod, "collision": rod,
+                                           "pose": {"position": [0.0, 3.0, 2.0]}}}})
+    sim = Simulator(scene, integrator=integrator, dt=1e-3)
+    solver = sim.contact
+    solver.sleeping, solver.track_torques = asleep, True
+    sim.step(5)
+    assert bool(solver.pairs.islands.asleep[0]) == asleep and solver.is_resting("crate")
+    impulse, angular = solver.holding_impulses.copy(), solver.holding_angular_impulses.copy()
+    sim.apply_wrench("rod", torque=(0.0, 0.0, 1e307))
+    with pytest.raises(NonFiniteStateError):
+        sim.step()
+    assert np.array_equal(solver.holding_impulses, impulse)
+    assert np.array_equal(solver.holding_angular_impulses, angular)
+    sim.stop_body("rod")
+    sim.step()
+    assert solver.holding_impulses[0] - impulse[0] == pytest.approx([0.0, 0.0, M * G * 1e-3], rel=1e-12, abs=1e-15)
 
 
 def test_push_inside_the_friction_cone_leaves_it_at_rest():

@@ -10,7 +10,8 @@ old code. Per step:
    pull (or that moves away) lifts off. With ``euler``, ``rk4`` and ``reference``
    (Method.derivative_stages) a body on one half-space stepped by the integrator, unless
    locked, gets instead its contact in its row (stage.stage_rows, :meth:`_hold`): its force is
-   then found at every stage of its step (kernels/contact/stage.py).
+   then found at every stage of its step (kernels/contact/stage.py). The holding impulses are added
+   to their sums only once the step is applied (a step refused as non-finite adds nothing).
 2. The simulator steps every body with its integrator, as without contact; the rows carrying a
    contact are stepped again, at the start of :meth:`ContactSolver.after_step`, by the
    method's ``held`` step (the same tableau, the contact force at every stage).
@@ -238,6 +239,9 @@ class ContactSolver:
         #: Per body, Σ holding torque about the centre of mass × step (N·m·s, world axes, the torque at
         #: each step's start), while :attr:`track_torques`.
         self.holding_angular_impulses = np.zeros((n, 3))
+        # the holding impulses (and angular) of the step under way, added to the sums once it is applied (a step
+        # refused as non-finite adds nothing): add_holding_wrenches, then _count_holds
+        self._step_impulses, self._step_angular = np.zeros((n, 3)), np.zeros((n, 3))
         #: Counts of what /diagnostics reports (reset clears them): ``restitution_capped`` impacts whose
         #: restitution the energy cap lowered below e; ``multi_contact_elastic`` impacts of several
         #: contact points with e > 0 (the model-dependent case); ``refined_steps`` resting steps taken
@@ -603,11 +607,14 @@ class ContactSolver:
         _, n_one, n_two = split_bodies(self.bodies, self.modes, sim._stopped, asleep, self.other_ground,
                                        lists[0], lists[1], lists[2])
         self.holding_forces[:] = 0.0
+        self._step_impulses[:] = 0.0
+        if self.track_torques:
+            self._step_angular[:] = 0.0
         if sleepers.size:  # asleep on their ground: held by the force they fell asleep with, not looked at
             self.holding_forces[sleepers] = self._rest_force[sleepers]
-            self.holding_impulses[sleepers] += self._rest_force[sleepers] * sim.dt
+            self._step_impulses[sleepers] = self._rest_force[sleepers] * sim.dt
             if self.track_torques:
-                self.holding_angular_impulses[sleepers] += self._rest_torque[sleepers] * sim.dt
+                self._step_angular[sleepers] = self._rest_torque[sleepers] * sim.dt
         self._locked[:] = 0
         self._staged[:] = 0
         if not n_one + n_two:
@@ -631,13 +638,13 @@ class ContactSolver:
             rows = wrenches.copy()
             rows[staged] = self._held_rows[staged]
         for bodies in (held_one, held_two):  # the contact forces go in as world-axes forces (add_wrench)
-            record_holds(bodies, self.modes, rows, self._bare_rows, self.holding_forces, self.holding_impulses,
+            record_holds(bodies, self.modes, rows, self._bare_rows, self.holding_forces, self._step_impulses,
                          sim.dt)
         if self.track_torques:
             resting = np.concatenate((held_one, held_two))
             held = resting[self.modes[resting] == PERSISTENT]
             added = rows[held] - self._bare_rows[held]
-            self.holding_angular_impulses[held] += _torques_about_com(Y[held], added) * sim.dt
+            self._step_angular[held] = _torques_about_com(Y[held], added) * sim.dt
         if sim._method.derivative_stages:  # the force found at every stage instead (stage.py)
             one = one[self.modes[one] == PERSISTENT]
             stage_rows(wrenches, self._bare_rows, self._held_rows, Y, sim._prm, self.shapes, self.grounds, one,
@@ -768,9 +775,16 @@ class ContactSolver:
         return (self._sleeping and self.pairs is not None  # sleeping off: none asleep, no check
                 and self.pairs.islands.all_asleep(sim, wrenches, sim._Ys[sim._control[L.CUR]]))
 
+    def _count_holds(self) -> None:
+        """The step is applied: its holding impulses (add_holding_wrenches) added to the sums."""
+        self.holding_impulses += self._step_impulses
+        if self.track_torques:
+            self.holding_angular_impulses += self._step_angular
+
     def after_asleep_step(self, sim) -> None:
         """After a step in which no body moved (:meth:`all_asleep`): the locked islands' contacts listed and logged
         for it, as :meth:`after_step` would have."""
+        self._count_holds()
         cur = sim._control[L.CUR]
         self._static_skipped.clear()
         self._side_hits.clear()
@@ -779,6 +793,7 @@ class ContactSolver:
 
     def after_step(self, sim, wrenches: np.ndarray) -> None:
         """Events inside the step just taken (the simulator's buffers: start in 1 − CUR, end in CUR)."""
+        self._count_holds()
         cur = sim._control[L.CUR]
         Y0, Y1 = sim._Ys[1 - cur], sim._Ys[cur]
         h = sim.dt
