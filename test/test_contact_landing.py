@@ -19,7 +19,10 @@ from hypothesis import strategies as st
 
 from helpers import FIXED_STEP_INTEGRATORS, ORDER, loglog_slope
 from rigid_body_sim.core import INTEGRATORS, Simulator, load_scene
+from rigid_body_sim.core.contact.solver import ZENO_IMPACTS
+from rigid_body_sim.core.kernels.contact.layout import FLIGHT
 from rigid_body_sim.core.kernels.contact.shapes import MAX_FEATURES, feature_gaps
+from rigid_body_sim.core.model import State
 from rigid_body_sim.core.quaternion import quat_rotate, quat_wxyz_from_xyzw
 from rigid_body_sim.exact import contact as exact_contact
 
@@ -193,6 +196,46 @@ def test_a_can_spinning_on_its_rim_with_a_first_order_method_is_held_where_its_f
         count = feature_gaps(y, sim._prm[0], contact.shapes[0], contact.grounds[0], gaps)
         assert gaps[:count].min() >= -1e-12
     assert energy() < start
+
+
+#: A can (r 6 cm, 18 cm long, 1.131 kg, e = 0.3, μ = 0.2) spinning at 27 rad/s with its rim on a wall (the half-space
+#: x ≥ −0.9 m), from a random run: its state row (p, q (w, x, y, z), v, ω in its principal axes).
+CAN_ON_A_WALL = (-0.8352015062109367, 1.1108049953375643, 1.1036249344123688, -0.18349367222359106,
+                 0.06637367238817451, 0.4610819039759868, 0.8656373869545422, 0.021051062913181547,
+                 1.9638677111903953, -0.4764437015267661, 9.148777856653938, -3.4893557864173212, 25.401258187929493)
+
+
+@pytest.mark.parametrize("integrator", ["rk4", "semi_implicit_euler"])
+@pytest.mark.parametrize("dt", [1e-2, 1e-3])
+def test_a_can_spinning_with_its_rim_on_a_wall_ends_its_zeno_sequences_and_never_gains_energy(integrator, dt):
+    """The can's rim rolls on the wall while its contact points accelerate away from it, so no rebound's apex falls
+    below ZENO_APEX: its impacts came ever closer in time, and the step failed after MAX_EVENTS_PER_STEP events.
+    After ZENO_IMPACTS impacts in a step it rests where the last one left it. Over 0.3 s: no step has more,
+    K + U never rises above its lowest earlier value by more than 1e-12 of it, and the can ends in flight, off the
+    wall."""
+    can = {"cylinder": [0.06, 0.18]}
+    ground = {"restitution": 0.0, "friction": 0.5}
+    data = {"gravity": [0.0, 0.0, -G],
+            "ground": [{"normal": [0, 0, 1], "offset": 0.0, "material": ground},
+                       {"normal": [1, 0, 0], "offset": -0.9, "material": ground}],
+            "bodies": {"can": {"mass": 1.13100645468989, "inertia": can, "collision": can,
+                               "material": {"restitution": 0.3, "friction": 0.2},
+                               "pose": {"position": [0.0, 0.0, 1.0]}}}}
+    sim = Simulator(load_scene(data), integrator=integrator, dt=dt)
+    rows = sim.state.rows().copy()
+    rows[0, :13] = CAN_ON_A_WALL
+    sim.state = State.of_rows(rows)
+    sim.contact.reset(sim)
+    events = sim.contact.events
+    lowest = float(sim.kinetic_energy()[0] + sim.potential_energy()[0])
+    for _ in range(int(round(0.3 / dt))):
+        seen = len(events)
+        sim.step()
+        assert sum(event.kind == "impact" for event in events[seen:]) <= ZENO_IMPACTS
+        energy = float(sim.kinetic_energy()[0] + sim.potential_energy()[0])
+        assert energy <= lowest + 1e-12 * abs(lowest)
+        lowest = min(lowest, energy)
+    assert sim.contact.modes[0] == FLIGHT and sim.state.p_WC_W[0, 0] > -0.9 + 0.1
 
 
 def test_gap_accelerations_match_finite_differences_of_the_gap_functions():

@@ -128,6 +128,10 @@ TOUCHING_GAP = 1e-12
 LIFT_OFF_SPEED = 1e-9
 #: Most events one body may have in one step (more is reported as an error, not looped on).
 MAX_EVENTS_PER_STEP = 10_000
+#: Impacts of a body in flight within one step after which the sequence is taken as Zeno's and the body rests where
+#: the last one left it: a can spinning with its rim on a wall rolls on it while its contact points accelerate away
+#: from it, so that no rebound's apex falls below ZENO_APEX, and its impacts came ever closer in time.
+ZENO_IMPACTS = 100
 #: Most impacts of a body resting on the ground against other half-spaces or static shapes in one step (each taken
 #: a call deeper); past them it stays pressed on them for the rest of the step (counted in ``side_pressed``).
 MAX_SIDE_IMPACTS = 64
@@ -1003,6 +1007,7 @@ class ContactSolver:
         y = y0.copy()
         after_impact = False
         hint = -1.0
+        impacts = 0
         for _ in range(MAX_EVENTS_PER_STEP):
             if h <= 0.0:
                 return y
@@ -1013,13 +1018,14 @@ class ContactSolver:
                 return end
             s = self._locate(lambda s: self._gap(sim, self.step_map(sim, i, y, s * h, w), i)[0],
                              0.0 if after_impact else self._gap(sim, y, i)[0], hint)
-            if s is None:  # a rebound too small to resolve: rest here
+            if s is None or impacts >= ZENO_IMPACTS:  # a rebound too small to resolve, or a Zeno sequence: rest here
                 self._rest(sim, i, y, self._resting_ground(sim, y, i), t, 0.0, 0.0)
                 continue
             y = self.step_map(sim, i, y, s * h, w) if s > 0.0 else y
             t, h = t + s * h, h - s * h
             hint = self._impact(sim, i, y, w, t, h)
             after_impact = True
+            impacts += 1
         raise RuntimeError(f"{self.names[i]!r}: more than {MAX_EVENTS_PER_STEP} contact events in one step at t = {t}")
 
     def _resting_ground(self, sim, y: np.ndarray, i: int) -> int:
