@@ -243,9 +243,9 @@ class ContactSolver:
         #: Per body, Σ holding torque about the centre of mass × step (N·m·s, world axes, the torque at
         #: each step's start), while :attr:`track_torques`.
         self.holding_angular_impulses = np.zeros((n, 3))
-        # the holding impulses (and angular) of the step under way, added to the sums once it is applied (a step
-        # refused as non-finite adds nothing): add_holding_wrenches, then _count_holds
-        self._step_impulses, self._step_angular = np.zeros((n, 3)), np.zeros((n, 3))
+        # the holding angular impulses of the step under way (torque × step), added to the sum once it is applied
+        # with holding_forces × step (a step refused as non-finite adds nothing): add_holding_wrenches, _count_holds
+        self._step_angular = np.zeros((n, 3))
         #: Counts of what /diagnostics reports (reset clears them): ``restitution_capped`` impacts whose
         #: restitution the energy cap lowered below e; ``multi_contact_elastic`` impacts of several
         #: contact points with e > 0 (the model-dependent case); ``refined_steps`` resting steps taken
@@ -611,12 +611,10 @@ class ContactSolver:
         _, n_one, n_two = split_bodies(self.bodies, self.modes, sim._stopped, asleep, self.other_ground,
                                        lists[0], lists[1], lists[2])
         self.holding_forces[:] = 0.0
-        self._step_impulses[:] = 0.0
         if self.track_torques:
             self._step_angular[:] = 0.0
         if sleepers.size:  # asleep on their ground: held by the force they fell asleep with, not looked at
             self.holding_forces[sleepers] = self._rest_force[sleepers]
-            self._step_impulses[sleepers] = self._rest_force[sleepers] * sim.dt
             if self.track_torques:
                 self._step_angular[sleepers] = self._rest_torque[sleepers] * sim.dt
         self._locked[:] = 0
@@ -642,8 +640,7 @@ class ContactSolver:
             rows = wrenches.copy()
             rows[staged] = self._held_rows[staged]
         for bodies in (held_one, held_two):  # the contact forces go in as world-axes forces (add_wrench)
-            record_holds(bodies, self.modes, rows, self._bare_rows, self.holding_forces, self._step_impulses,
-                         sim.dt)
+            record_holds(bodies, self.modes, rows, self._bare_rows, self.holding_forces)
         if self.track_torques:
             resting = np.concatenate((held_one, held_two))
             held = resting[self.modes[resting] == PERSISTENT]
@@ -779,16 +776,16 @@ class ContactSolver:
         return (self._sleeping and self.pairs is not None  # sleeping off: none asleep, no check
                 and self.pairs.islands.all_asleep(sim, wrenches, sim._Ys[sim._control[L.CUR]]))
 
-    def _count_holds(self) -> None:
-        """The step is applied: its holding impulses (add_holding_wrenches) added to the sums."""
-        self.holding_impulses += self._step_impulses
+    def _count_holds(self, dt: float) -> None:
+        """The step (dt) is applied: its holding forces and torques (add_holding_wrenches) × dt added to the sums."""
+        self.holding_impulses += self.holding_forces * dt
         if self.track_torques:
             self.holding_angular_impulses += self._step_angular
 
     def after_asleep_step(self, sim) -> None:
         """After a step in which no body moved (:meth:`all_asleep`): the locked islands' contacts listed and logged
         for it, as :meth:`after_step` would have."""
-        self._count_holds()
+        self._count_holds(sim.dt)
         cur = sim._control[L.CUR]
         self._static_skipped.clear()
         self._side_hits.clear()
@@ -797,7 +794,7 @@ class ContactSolver:
 
     def after_step(self, sim, wrenches: np.ndarray) -> None:
         """Events inside the step just taken (the simulator's buffers: start in 1 − CUR, end in CUR)."""
-        self._count_holds()
+        self._count_holds(sim.dt)
         cur = sim._control[L.CUR]
         Y0, Y1 = sim._Ys[1 - cur], sim._Ys[cur]
         h = sim.dt
@@ -1016,9 +1013,10 @@ class ContactSolver:
             end = self.step_map(sim, i, y, h, w)
             if self._gap(sim, end, i)[0] >= 0.0:
                 return end
-            s = self._locate(lambda s: self._gap(sim, self.step_map(sim, i, y, s * h, w), i)[0],
-                             0.0 if after_impact else self._gap(sim, y, i)[0], hint)
-            if s is None or impacts >= ZENO_IMPACTS:  # a rebound too small to resolve, or a Zeno sequence: rest here
+            s = None if impacts >= ZENO_IMPACTS else self._locate(
+                lambda s: self._gap(sim, self.step_map(sim, i, y, s * h, w), i)[0],
+                0.0 if after_impact else self._gap(sim, y, i)[0], hint)
+            if s is None:  # a rebound too small to resolve, or a Zeno sequence (ZENO_IMPACTS): rest here
                 self._rest(sim, i, y, self._resting_ground(sim, y, i), t, 0.0, 0.0)
                 continue
             y = self.step_map(sim, i, y, s * h, w) if s > 0.0 else y

@@ -265,17 +265,16 @@ def split_bodies(bodies, modes, stopped, done, other_ground, flying, one, two):
 
 
 @njit(**_OPTS)
-def record_holds(bodies, modes, wrenches, bare, holding_forces, holding_impulses, dt):
+def record_holds(bodies, modes, wrenches, bare, holding_forces):
     """For each of ``bodies`` still in persistent contact: its contact force, world axes (its wrench row's forces
-    less the ``bare`` row's), into ``holding_forces``, and that times ``dt`` added to ``holding_impulses``."""
+    less the ``bare`` row's), into ``holding_forces``."""
     for m in range(bodies.shape[0]):
         i = bodies[m]
         if modes[i] != PERSISTENT:
             continue
         for k in range(3):
-            f = (wrenches[i, F_WORLD + k] - bare[i, F_WORLD + k]) + (wrenches[i, F_COM_W + k] - bare[i, F_COM_W + k])
-            holding_forces[i, k] = f
-            holding_impulses[i, k] += f * dt
+            holding_forces[i, k] = ((wrenches[i, F_WORLD + k] - bare[i, F_WORLD + k])
+                                    + (wrenches[i, F_COM_W + k] - bare[i, F_COM_W + k]))
 
 
 @njit(**_OPTS)
