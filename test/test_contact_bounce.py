@@ -147,6 +147,44 @@ def test_stays_at_rest_for_100_s_and_an_imu_reads_g_up():
     assert len(sim.contact.events_of("ball", "lift-off")) == 0
 
 
+@pytest.mark.parametrize("asleep", [False, True])
+@pytest.mark.parametrize("how", ["impulse", "set_body_state"])
+@pytest.mark.parametrize("integrator", ["rk4", "semi_implicit_euler"])
+def test_a_resting_ball_struck_into_the_ground_bounces_by_its_restitution(integrator, how, asleep):
+    """A ball (and, 1 m away, another) at rest on the ground, struck down at 2 m/s (an impulse of 2 N·s, or its
+    velocity set): the ground's impact law acts at once, e = 0.5: it leaves at 1 m/s, then flies (closed form)."""
+    dt, v0 = 1e-2, 2.0
+    bodies = {name: {"mass": 1.0, "inertia": {"sphere": R}, "material": {"restitution": E, "friction": 0.3},
+                     "pose": {"position": [x, 0.0, R]}} for name, x in (("ball", 0.0), ("other", 1.0))}
+    sim = Simulator(load_scene({"gravity": [0.0, 0.0, -G], "bodies": bodies,
+                                "ground": [{"normal": [0, 0, 1], "offset": 0.0,
+                                            "material": {"restitution": E, "friction": 0.3}}]}),
+                    integrator=integrator, dt=dt)
+    sim.contact.sleeping = asleep
+    sim.step(3)
+    assert sim.contact.is_resting("ball") and sim.contact.pairs.islands.asleep[0] == asleep
+    if how == "impulse":
+        sim.apply_impulse("ball", linear=[0.0, 0.0, -v0])
+    else:
+        sim.set_body_state("ball", linear_velocity_world=[0.0, 0.0, -v0])
+    t0 = sim.time
+    sim.step()
+    impacts = sim.contact.events_of("ball", "impact")
+    assert len(impacts) == 1
+    assert impacts[0].time == t0
+    assert impacts[0].normal_speed_before == pytest.approx(-v0, rel=1e-12)
+    assert impacts[0].normal_speed_after == pytest.approx(E * v0, rel=1e-12)
+    assert impacts[0].energy_after == pytest.approx(E**2 * impacts[0].energy_before, rel=1e-12)
+    v, z = sim.state.v_WC_W[0], sim.state.p_WC_W[0, 2]
+    assert v[2] == pytest.approx(E * v0 - G * dt, rel=1e-12)  # exact for a constant force, either method
+    assert v[0] == v[1] == 0.0
+    if integrator == "rk4":  # the parabola, exactly; semi-implicit Euler's own position step is first order
+        assert z == pytest.approx(R + E * v0 * dt - 0.5 * G * dt * dt, rel=1e-12)
+    assert z > R
+    assert not sim.contact.is_resting("ball")
+    assert sim.state.p_WC_W[1, 2] == R and not sim.contact.events_of("other", "impact")
+
+
 def test_tilted_frictionless_ground_bounces_along_its_normal_and_rests_sliding():
     theta = math.radians(20.0)
     n = (0.0, -math.sin(theta), math.cos(theta))

@@ -124,7 +124,9 @@ ZENO_APEX = 1e-10
 SLIP_TOLERANCE = 1e-12
 #: A body this close to the ground (m) and not moving away starts in persistent contact.
 TOUCHING_GAP = 1e-12
-#: A body in persistent contact whose contact points move away faster than this (m/s) lifts off.
+#: A body in persistent contact whose contact points move away faster than this (m/s) lifts off; one whose points
+#: move into its ground faster than this (an impulse, a state set, a body thrown out of its island) is struck there
+#: (the impact law, restitution and all) before its step goes on.
 LIFT_OFF_SPEED = 1e-9
 #: Most events one body may have in one step (more is reported as an error, not looped on).
 MAX_EVENTS_PER_STEP = 10_000
@@ -412,12 +414,13 @@ class ContactSolver:
             self.classify(sim, Y, i)
 
     def classify(self, sim, Y: np.ndarray, i: int) -> None:
-        """Body i (in flight) at state rows Y: persistent contact if it touches its ground and does not move away."""
+        """Body i (in flight) at state rows Y: persistent contact if it touches its ground and its contact points move
+        neither away from it nor into it (faster than LIFT_OFF_SPEED)."""
         gap, j = self._gap(sim, Y[i], i)
         if gap <= TOUCHING_GAP:
             count = self._contact_points(sim, Y[i], i, j)
             speed, _, vx, vy = self._normal_motion(sim, Y[i], i, j, count, np.zeros(L.WRENCH_WIDTH))
-            if speed <= LIFT_OFF_SPEED:
+            if -LIFT_OFF_SPEED <= speed <= LIFT_OFF_SPEED:  # moving into it: in flight, struck in its step
                 self.modes[i] = PERSISTENT
                 self.ground_of[i] = j
                 # sliding if its points slip (as holding_wrench: frictionless, it slides along no direction)
@@ -678,7 +681,9 @@ class ContactSolver:
 
     def _hold(self, sim, y: np.ndarray, i: int, w: np.ndarray, t: float, stages: bool = True,
               keep: bool = False) -> bool:
-        """Add the holding force of body i at y into the wrench row w; False (and flight) if it lifts off.
+        """Add the holding force of body i at y into the wrench row w; False (and flight) if it lifts off, or if its
+        contact points move into the ground faster than LIFT_OFF_SPEED (an impulse, a state set): it is then struck
+        there at the start of its step (:meth:`_with_events`).
 
         With ``stages`` and an integrator that evaluates dynamics.derivative at every stage, a body
         on one or two exact planes (half-spaces, static boxes' faces: :meth:`on_exact_plane`) stepped by it gets
@@ -694,6 +699,10 @@ class ContactSolver:
         speed, mode, sx, sy = self._holding_force(sim, y, i, count, w, mu)
         if count and self._painleve(count, mu, sx, sy):
             self.counts["painleve"] += 1
+        if count and lowest <= TOUCHING_GAP and speed < -LIFT_OFF_SPEED:  # driven into its ground: struck there
+            self.modes[i] = FLIGHT  # (_with_events, at the step's start)
+            self.sliding[i] = False
+            return False
         if count == 0 or (mode == LIFT_OFF and not keep) or speed > LIFT_OFF_SPEED or lowest > TOUCHING_GAP:
             self.modes[i] = FLIGHT
             self.sliding[i] = False
@@ -1010,6 +1019,11 @@ class ContactSolver:
                 return y
             if self.modes[i] == PERSISTENT:
                 return self._persistent_span(sim, i, y, w, t, h)
+            if not after_impact and self._driven_in(sim, y, i, w):  # touching and moving into it: struck at once
+                hint = self._impact(sim, i, y, w, t, h)
+                after_impact = True
+                impacts += 1
+                continue
             end = self.step_map(sim, i, y, h, w)
             if self._gap(sim, end, i)[0] >= 0.0:
                 return end
@@ -1025,6 +1039,16 @@ class ContactSolver:
             after_impact = True
             impacts += 1
         raise RuntimeError(f"{self.names[i]!r}: more than {MAX_EVENTS_PER_STEP} contact events in one step at t = {t}")
+
+    def _driven_in(self, sim, y: np.ndarray, i: int, w: np.ndarray) -> bool:
+        """Whether body i at y touches its nearest ground (within TOUCHING_GAP) with a contact point moving into it
+        faster than LIFT_OFF_SPEED: a resting body given an impulse or a velocity into it, which no root of the gap
+        inside the step marks (it starts at zero)."""
+        gap, j = self._gap(sim, y, i)
+        if gap > TOUCHING_GAP:
+            return False
+        count = self._contact_points(sim, y, i, j)
+        return count > 0 and self._normal_motion(sim, y, i, j, count, w)[0] < -LIFT_OFF_SPEED
 
     def _resting_ground(self, sim, y: np.ndarray, i: int) -> int:
         """The ground body i at y comes to rest on where a rebound is too small to resolve: its lowest plane (a

@@ -3,7 +3,7 @@
 :func:`hold_all` and :func:`settle_all` do, in one compiled loop, what
 solver.ContactSolver does body by body in Python for the rare cases (persistent.py holds the
 physics): a resting, sliding or rolling body costs no Python call per step. A body whose step
-needs an event (it lifts off, its slide stops, another feature reaches the ground, a feature is
+needs an event (it lifts off, it is driven into the ground, its slide stops, another feature reaches the ground, a feature is
 let go) is flagged in ``status`` and left to the solver.
 
 **Locked bodies.** A body that starts a step exactly at rest (v = ω = 0), sticking, and whose
@@ -96,7 +96,8 @@ def _cache_hit(cache, i, y, p, w, j, tracked):
 def hold_all(Y, prm, wrenches, shapes, grounds, bodies, ground_of, tracked, friction, tangent_friction,
              first_tangent, slip_tolerance, lift_off_speed, touching_gap, bare, pressed, sliding, slide_direction,
              status, locked, cache):
-    """Add each body's holding force (persistent.holding_wrench) to its wrench row; flag the ones that lift off.
+    """Add each body's holding force (persistent.holding_wrench) to its wrench row; flag the ones that lift off, and
+    those whose contact points move into the ground faster than ``lift_off_speed`` (struck there: the solver's).
 
     Body i's μ on plane row j is ``materials.material(friction, tangent_friction, first_tangent, i, j)``:
     ``friction`` (n, first_tangent) over the half-spaces and static box faces, ``tangent_friction`` (n,)
@@ -144,7 +145,7 @@ def hold_all(Y, prm, wrenches, shapes, grounds, bodies, ground_of, tracked, fric
         mode, _, sx, sy = holding_wrench(y, p, w, count, points, nx, ny, nz,
                                          material(friction, tangent_friction, first_tangent, i, j), slip_tolerance,
                                          bias, rdot, work, d, force)
-        if mode == LIFT_OFF or speed > lift_off_speed or lowest > touching_gap:
+        if mode == LIFT_OFF or abs(speed) > lift_off_speed or lowest > touching_gap:  # lifting off, or driven in
             status[i] = TO_SOLVER
             continue
         sliding[i] = mode == SLIDE
