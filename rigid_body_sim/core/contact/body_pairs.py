@@ -105,6 +105,7 @@ from ..kernels.contact.swept import deflections, left_pairs, screen_pairs, swept
 from ..quaternion import quat_multiply, quat_rotate
 from .events import ContactEvent
 from .island import Islands
+from .solver import ZENO_IMPACTS
 from .materials import pair_material
 from .static_geometry import bounding_radius
 from .swept_pairs import SweptPairs
@@ -506,6 +507,7 @@ class BodyPairs:
         dropped: set = set()  # grazed more than MAX_GRAZES times: not looked at again in the step
         hints: dict[int, float] = {}  # a flying member just struck: its apex hint, its gap 0 (solver._with_events)
         struck: set = set()
+        env_impacts: dict[int, int] = {}  # impacts of each flying member on its ground or static shapes (ZENO_IMPACTS)
         struck_walls: set = set()  # (held member, instant) struck against a wall it touched at a piece's start
         rested: dict[int, np.ndarray] = {}  # held members a held step threw, left at rest: their state while at rest
         sunk: dict[int, int] = {}  # held members whose untracked feature, touching, was met at its floor: how often
@@ -724,11 +726,12 @@ class BodyPairs:
             # a flying member meets its ground or a static shape: its impact (or its rest), and it stays in the
             # group (its pairs still followed); at rest, it is held with its holding force (else, lifted off at
             # once, it flies on, its ground looked at again, as the ground pass does)
-            if rests:
+            if rests or env_impacts.get(i, 0) >= ZENO_IMPACTS:  # a rebound too small, or a Zeno sequence: rests
                 solver._rest(sim, i, y[i], int(solver._gap(sim, y[i], i)[1]), t, 0.0, 0.0)
             else:
                 hints[i] = solver._impact(sim, i, y[i], w[i], t, h)
                 struck.add(i)
+                env_impacts[i] = env_impacts.get(i, 0) + 1
             self._hold_again(sim, i, y[i], w, w[i], held, t, True)  # w[i]: its bare row (flying)
         else:
             names = ", ".join(repr(solver.names[i]) for i in members)
