@@ -7,7 +7,8 @@ at its closed-form time (straight lines, no gravity: the root of a linear gap), 
 relative, with Newton's rebound −e v along the normal (frictionless).
 
 * against a static box 1 cm thick (static_geometry.py), face on and at a slant (a glancing hit
-  on its face);
+  on its face), and sliding on the ground into it, from apart or touching it (held on the ground: the ground pass
+  looks along its step);
 * two such spheres flying at each other (relative speed 200 m/s): equal masses, e = 0.5, the
   textbook v_a' = ((m_a − e m_b) v_a + (1 + e) m_b v_b)/(m_a + m_b);
 * one sphere flying past the wall's edge with a 1 mm gap: no impact (the broad phase looks, the
@@ -61,6 +62,35 @@ def test_a_fast_small_sphere_does_not_pass_through_a_thin_static_box(angle_deg):
     assert sim.state.p_WC_W[1, 0] < WALL_X - HALF_T - R  # still on its side
     x = start + v * t_hit + v_after * (sim.time - t_hit)
     np.testing.assert_allclose(sim.state.p_WC_W[1], x, rtol=0.0, atol=1e-9)
+
+
+@pytest.mark.parametrize("x0", [0.0, WALL_X - HALF_T - R])
+@pytest.mark.parametrize("integrator", ["rk4", "semi_implicit_euler"])
+def test_a_fast_small_sphere_sliding_on_the_ground_does_not_pass_through_a_thin_static_box(integrator, x0):
+    """The sphere at rest on frictionless ground (held on it, g = 9.81), apart from the wall or touching it, then
+    set moving at 100 m/s along the ground toward it: apart from it at both ends of the step, it strikes it inside
+    the step (it passed through before), at the closed-form time (at once when touching), and rebounds at −e v
+    along the ground, still on it."""
+    ground = {"restitution": 0.0, "friction": 0.0}
+    start = np.array([x0, 0.0, R])
+    scene = load_scene({"gravity": [0.0, 0.0, -9.81], "ground": [{"normal": [0, 0, 1], "offset": 0.0,
+                                                                   "material": ground}],
+                        "bodies": {"wall": _wall({"restitution": E, "friction": 0.0}),
+                                   "ball": _sphere(start, [0.0, 0.0, 0.0])}})
+    sim = Simulator(scene, integrator, DT)
+    sim.step(2)
+    assert sim.contact.is_resting("ball")
+    sim.set_body_state("ball", linear_velocity_world=[V, 0.0, 0.0])
+    t0 = sim.time
+    sim.step(1)
+    impacts = sim.contact.events_of("ball", "impact")
+    assert len(impacts) == 1 and sim.contact.static_body_of(impacts[0].ground) == "wall"
+    t_hit = (WALL_X - HALF_T - R - x0) / V
+    assert impacts[0].time - t0 == pytest.approx(t_hit, rel=1e-9, abs=1e-15)
+    np.testing.assert_allclose(sim.state.v_WC_W[1], [-E * V, 0.0, 0.0], rtol=0.0, atol=1e-9 * V)
+    x = WALL_X - HALF_T - R - E * V * (DT - t_hit)
+    np.testing.assert_allclose(sim.state.p_WC_W[1], [x, 0.0, R], rtol=0.0, atol=1e-9)
+    assert sim.contact.is_resting("ball")
 
 
 def test_two_fast_small_spheres_meet_inside_one_step():

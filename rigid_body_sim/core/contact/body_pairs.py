@@ -414,8 +414,15 @@ class BodyPairs:
         static = self.is_static[pairs[:, 1]]
         resting = solver.modes[pairs[:, 0]] == PERSISTENT
         ends = ~static & ((d1 < 0.0) | (d0 < 0.0))
-        inside = (d0 >= 0.0) & (d1 >= 0.0) & ~(static & resting)
-        inside &= d0 + d1 <= reach
+        inside = (d0 >= 0.0) & (d1 >= 0.0) & (d0 + d1 <= reach)
+        # a body held on one half-space alone that may pass through a static shape apart from it at both ends (a
+        # pebble slid into a wall): the ground pass looks for its side impact along the step (solver._persistent_end)
+        first = pairs[:, 0]
+        alone = (solver.ground_of[first] < len(solver.half_spaces)) & (solver.other_ground[first] < 0)
+        passing = inside & static & resting & alone & (reach > 0.0)
+        if passing.any():
+            solver.may_pass.update(first[passing].tolist())
+        inside &= ~(static & resting)
         hits = []
         for k in np.flatnonzero(ends | inside):
             a, b = int(pairs[k, 0]), int(pairs[k, 1])
@@ -466,6 +473,28 @@ class BodyPairs:
             if d < 0.0:
                 return True
         return False
+
+    def advance_alone(self, sim, i: int, y0: np.ndarray, end: np.ndarray, w: np.ndarray, h: float, gap,
+                      touching: float) -> float | None:
+        """The first fraction s of body i's step from y0 over h under the wrench row w (its end: ``end``) at which
+        gap(state) (m: a signed distance to fixed geometry) is below 0, or, touching at y0 (gap ≤ ``touching``), a
+        skin deeper than it was there (sliding along a wall is not a meeting), by conservative advancement on the
+        body's surface bound (_body_bound) to a skin (ADVANCE_SKIN × its size) below that; None if none is found."""
+        bound = self._body_bound(y0, end, i) * h
+        if bound <= 0.0:
+            return None
+        skin = ADVANCE_SKIN * self.size[i]
+        d = gap(y0)
+        floor = min(d, 0.0) - skin if d <= touching else 0.0
+        s = 0.0
+        for _ in range(MAX_ADVANCE):
+            s += (max(d - floor, 0.0) + skin) / bound
+            if s >= 1.0:
+                return None
+            d = gap(self.solver.step_map(sim, i, y0, s * h, w))
+            if d < floor:
+                return s
+        return None
 
     def _wrench_of(self, sim, i: int) -> np.ndarray:
         """The wrench row body i's step ran with (static shapes: none)."""
@@ -539,7 +568,8 @@ class BodyPairs:
             band = solver._band
             walled = [i for i in sorted(active & held) if (i, t) not in struck_walls and solver._may_strike_side(i)
                       and solver._other_gap(sim, y[i], i)[0] <= band[i]
-                      and solver._other_gap(sim, solver.step_map(sim, i, y[i], h, w[i]), i)[0] < 0.0]
+                      and (solver._other_gap(sim, solver.step_map(sim, i, y[i], h, w[i]), i)[0] < 0.0
+                           or solver._driven_into_side(sim, y[i], i, w[i]))]  # (or through a static shape)
             if walled:
                 for i in walled:
                     struck_walls.add((i, t))

@@ -284,6 +284,9 @@ class ContactSolver:
         #: side impacts of each body in this step; PRESSED: not looked at for them for the rest of the step
         self._side_hits: dict[int, int] = {}
         self._face_landings: dict[int, int] = {}  # end-face landings of each can in this step (_held_span)
+        #: bodies held on one half-space whose path in this step may pass through a static shape they are apart
+        #: from at both its ends (body_pairs._hits): their side impacts are looked for along the step too
+        self.may_pass: set[int] = set()
         self.counts = dict.fromkeys(("restitution_capped", "multi_contact_elastic", "refined_steps",
                                      "second_half_space", "two_ground_overflow", "painleve",
                                      "static_tangent", "static_pressed", "island_body_steps", "rim_pieces",
@@ -799,6 +802,7 @@ class ContactSolver:
         self._static_skipped.clear()
         self._side_hits.clear()
         self._face_landings.clear()
+        self.may_pass.clear()
         self.pairs.islands.asleep_step(sim._Ys[1 - cur], sim._Ys[cur], sim.dt)
 
     def after_step(self, sim, wrenches: np.ndarray) -> None:
@@ -813,6 +817,7 @@ class ContactSolver:
         self._static_skipped.clear()
         self._side_hits.clear()
         self._face_landings.clear()
+        self.may_pass.clear()
         # body–body events first (body_pairs.py): the bodies it stepped are done
         done = self.pairs.after_step(sim, wrenches, Y0, Y1, t0, h) if self.pairs is not None else None
         if self.pairs is not None and len(self.pairs.islands.left):
@@ -1049,6 +1054,16 @@ class ContactSolver:
             return False
         count = self._contact_points(sim, y, i, j)
         return count > 0 and self._normal_motion(sim, y, i, j, count, w)[0] < -LIFT_OFF_SPEED
+
+    def _driven_into_side(self, sim, y: np.ndarray, i: int, w: np.ndarray) -> bool:
+        """Whether body i at y, in persistent contact, touches another half-space or a static shape (within its
+        feature band) with a contact point moving into it faster than LIFT_OFF_SPEED: its step may go through a
+        static shape and end beyond it."""
+        gap, jj = self._other_gap(sim, y, i)
+        if jj < 0 or gap > self._band[i]:
+            return False
+        count = self._contact_points(sim, y, i, jj)
+        return count > 0 and self._normal_motion(sim, y, i, jj, count, w)[0] < -LIFT_OFF_SPEED
 
     def _resting_ground(self, sim, y: np.ndarray, i: int) -> int:
         """The ground body i at y comes to rest on where a rebound is too small to resolve: its lowest plane (a
@@ -1356,16 +1371,23 @@ class ContactSolver:
                     if s < 1.0:  # the rest of the step sticking, with the holding force found at the stop
                         return self._persistent_span(sim, i, stop, self._bare(i, held), t + s * h, h - s * h)
                     return stop
-        if self._other_gap(sim, end, i)[0] < 0.0 and self._side_hits.get(i, 0) != PRESSED:
+        upto = 1.0  # the fraction of the span by which another half-space or static shape is reached
+        if self._side_hits.get(i, 0) != PRESSED and self._other_gap(sim, end, i)[0] >= 0.0:
+            upto = None
+            if i in self.may_pass or self._driven_into_side(sim, y0, i, held):  # apart at its end, but its path
+                # may have gone through a static shape (a pebble slid or thrown through a wall)
+                upto = self.pairs.advance_alone(sim, i, y0, end, held, h, lambda y: self._other_gap(sim, y, i)[0],
+                                                self._band[i])
+        if upto is not None and self._side_hits.get(i, 0) != PRESSED:
             # another half-space or static shape reached: an impact against it alone
             g0, jj = self._other_gap(sim, y0, i)
             again = self._side_impact_at(i, jj, t)  # just struck at y0: its gap opens first, the hit is later
-            gap = lambda s: self._other_gap(sim, self.step_map(sim, i, y0, s * h, held), i)[0]  # noqa: E731
+            gap = lambda s: self._other_gap(sim, self.step_map(sim, i, y0, s * upto * h, held), i)[0]  # noqa: E731
             s = 0.0 if g0 <= 0.0 and not again else self._locate(gap, min(g0, 0.0) if again else g0, -1.0)
             if again and not s:  # it does not open: it stays pressed on them for the rest of the step
                 self._press_aside(i)
                 return self._persistent_end(sim, i, y0, end, held, t, h)
-            s = 0.0 if s is None else s
+            s = (0.0 if s is None else s) * upto
             hit = self.step_map(sim, i, y0, s * h, held) if s > 0.0 else y0.copy()
             if (instead := self._unless_thrown(sim, i, y0, hit, held, t, h, s)) is not None:
                 return instead
@@ -1504,8 +1526,8 @@ class ContactSolver:
         """After the step: ``_lowest`` (the half-spaces' lowest gaps of the bodies in flight, else inf) lowered, in
         place, to the signed distances to the static shapes of the bodies ``moving`` (a mask over :attr:`bodies`: not stopped, not stepped by the islands, whose own rows
         hold the static shapes); returns the resting bodies the solver looks at in Python: those on a static
-        shape's plane, and those on a half-space that reached a static shape (an impact against it, located on
-        the step map)."""
+        shape's plane, and those on a half-space that reached a static shape or may have passed through one
+        (:attr:`may_pass`; an impact against it, located on the step map)."""
         g = len(self.half_spaces)
         looked = ((self.modes[self.bodies] == FLIGHT) | (self.ground_of[self.bodies] < g)) & moving  # not on a static
         static_gaps = np.full(int(looked.sum()), math.inf)
@@ -1513,6 +1535,7 @@ class ContactSolver:
         self._lowest[looked] = np.minimum(self._lowest[looked], static_gaps)
         reached = np.zeros(len(self.modes), dtype=bool)
         reached[self.bodies[looked]] = static_gaps < 0.0
+        reached[list(self.may_pass)] = True  # or may have passed through one (body_pairs._hits)
         return np.concatenate((resting[self.ground_of[resting] >= g],
                                resting[(self.ground_of[resting] < g) & reached[resting]]))
 
