@@ -7,8 +7,8 @@ at its closed-form time (straight lines, no gravity: the root of a linear gap), 
 relative, with Newton's rebound −e v along the normal (frictionless).
 
 * against a static box 1 cm thick (static_geometry.py), face on and at a slant (a glancing hit
-  on its face), and sliding on the ground into it, from apart or touching it (held on the ground: the ground pass
-  looks along its step);
+  on its face), sliding on the ground into it, from apart or touching it (held on the ground: the ground pass
+  looks along its step), and flying along the face of another static box into it;
 * two such spheres flying at each other (relative speed 200 m/s): equal masses, e = 0.5, the
   textbook v_a' = ((m_a − e m_b) v_a + (1 + e) m_b v_b)/(m_a + m_b);
 * one sphere flying past the wall's edge with a 1 mm gap: no impact (the broad phase looks, the
@@ -91,6 +91,27 @@ def test_a_fast_small_sphere_sliding_on_the_ground_does_not_pass_through_a_thin_
     x = WALL_X - HALF_T - R - E * V * (DT - t_hit)
     np.testing.assert_allclose(sim.state.p_WC_W[1], [x, 0.0, R], rtol=0.0, atol=1e-9)
     assert sim.contact.is_resting("ball")
+
+
+@pytest.mark.parametrize("integrator", ["rk4", "semi_implicit_euler"])
+def test_a_fast_small_sphere_flying_along_one_wall_does_not_pass_through_another(integrator):
+    """The sphere flies at 100 m/s touching the face of a first wall (no gravity), along it into the thin one across
+    its path: touching one static shape, its path is still followed against the others (it passed through before),
+    and it strikes the second at the closed-form time, rebounding at −e v."""
+    first = {"mass": 1.0, "inertia": {"box": [0.79, 0.01, 1.0]}, "motion": "static",
+             "pose": {"position": [0.095, -0.005, 0.0]}, "material": {"restitution": E, "friction": 0.0}}
+    scene = load_scene({"gravity": [0.0, 0.0, 0.0], "ground": [],
+                        "bodies": {"first": first, "wall": _wall({"restitution": E, "friction": 0.0}),
+                                   "ball": _sphere([0.0, R, 0.0], [V, 0.0, 0.0])}})
+    sim = Simulator(scene, integrator, DT)
+    sim.step(1)
+    impacts = sim.contact.events_of("ball", "impact")
+    assert len(impacts) == 1 and sim.contact.static_body_of(impacts[0].ground) == "wall"
+    t_hit = (WALL_X - HALF_T - R) / V
+    assert impacts[0].time == pytest.approx(t_hit, rel=1e-9)
+    np.testing.assert_allclose(sim.state.v_WC_W[2], [-E * V, 0.0, 0.0], rtol=0.0, atol=1e-9 * V)
+    x = WALL_X - HALF_T - R - E * V * (DT - t_hit)
+    np.testing.assert_allclose(sim.state.p_WC_W[2], [x, R, 0.0], rtol=0.0, atol=1e-9)
 
 
 def test_two_fast_small_spheres_meet_inside_one_step():

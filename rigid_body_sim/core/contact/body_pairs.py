@@ -587,6 +587,11 @@ class BodyPairs:
             # locates it (solver._with_events); the others' gaps are followed with the pairs'
             on_it = [i for i in flying if i in struck or solver._gap(sim, y[i], i)[0] <= band[i]]
             watched = [i for i in flying if i not in on_it]
+            # a member on_it may yet pass through a thin static shape it is apart from at the piece's start (a
+            # pebble sliding along one wall into another): its distance to those shapes is followed as a watched gap
+            apart = {} if solver.statics is None else {
+                i: solver.statics.distances(y[i], i, solver.shapes[i]) > band[i] for i in on_it}
+            apart = {i: among for i, among in apart.items() if among.any()}
             # a held member's gap to the other half-spaces and static shapes (a wall it slides into), while apart
             # (touching one, it is the ground pass's, solver._persistent_end); touching a wall it was struck against
             # at this instant (a partner presses it there), followed to a floor a skin deeper than it was, as a pair
@@ -631,6 +636,8 @@ class BodyPairs:
                 values += [(self.contact(states[a], a, states[b], b) - floors[(a, b)], ("pair", a, b))
                            for a, b in floors]
                 values += [(solver._gap(sim, states[i], i)[0], ("env", i)) for i in watched]
+                values += [(solver.statics.nearest_among(states[i], i, solver.shapes[i], among), ("env", i))
+                           for i, among in apart.items()]
                 values += [(solver._other_gap(sim, states[i], i)[0] - side_floors.get(i, 0.0), ("side", i))
                            for i in sides]
                 values += [(solver._untracked_gap(sim, states[i], i, y[i]) - land_floors.get(i, 0.0), ("land", i))
@@ -651,7 +658,7 @@ class BodyPairs:
             for a, b in live:
                 bounds[("pair", a, b)] = self._pair_bound((y[a], end[a]), (y[b], end[b]), a, b) * span
                 skins[("pair", a, b)] = ADVANCE_SKIN * max(self.size[a], self.size[b])
-            for kind, group in (("env", watched), ("side", sides), ("land", lands)):
+            for kind, group in (("env", watched + list(apart)), ("side", sides), ("land", lands)):
                 for i in group:
                     bounds[(kind, i)] = self._body_bound(y[i], end[i], i) * span
                     skins[(kind, i)] = ADVANCE_SKIN * self.size[i]

@@ -234,6 +234,17 @@ class StaticGeometry:
                 best, which = float(self._dist[s]), s
         return best, which
 
+    def distances(self, y: np.ndarray, i: int, shape: np.ndarray) -> np.ndarray:
+        """Signed distances (m; per static shape, in order) of body i at state row y to every static shape."""
+        self.nearest(y, i, shape)
+        return self._dist.copy()
+
+    def nearest_among(self, y: np.ndarray, i: int, shape: np.ndarray, among: np.ndarray) -> float:
+        """Signed distance (m) of body i at state row y to its nearest static shape of those ``among`` marks (a bool
+        per static shape); inf if it marks none."""
+        self.nearest(y, i, shape)
+        return float(self._dist[among].min()) if among.any() else math.inf
+
     def lower_gaps(self, Y: np.ndarray, shapes: np.ndarray, bodies: np.ndarray, out: np.ndarray) -> None:
         """out[m] ← min(out[m], signed distance of body bodies[m] to the static shapes), in place.
 
