@@ -353,5 +353,7 @@ class ContactPublisher:
             _kv("of them at the most pieces, the rim turning faster (total)", solver.counts["rim_capped"]),
             _kv("of those, throwing the can: its end face landed instead (total)", solver.counts["face_landed"]),
             _kv("cylinders held on a rim projected onto their end face (total)", solver.counts["face_down"]),
+            _kv("projections that turned a feature into the ground, taken again with it held (total)",
+                solver.counts["projected_down"]),
         ]
         return status

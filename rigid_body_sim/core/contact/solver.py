@@ -265,6 +265,8 @@ class ContactSolver:
         #: those, the ones that threw the can (:meth:`_thrown`), taken instead as its end face landing;
         #: ``face_down``
         #: projections of a cylinder held on a rim that went through upright onto its end face (:meth:`_project`);
+        #: ``projected_down`` projections that turned a feature not tracked into the ground, taken again with it
+        #: tracked (:meth:`_project`; the compiled pass hands such a body to the solver);
         #: ``side_pressed`` spans of a resting body just struck against another half-space or static shape whose gap
         #: there never opens within the span (a corner swinging in as the struck point leaves): not struck again
         #: at the same instant, it stays pressed on it for the rest of the step (:meth:`_persistent_end`), or struck
@@ -290,7 +292,8 @@ class ContactSolver:
         self.counts = dict.fromkeys(("restitution_capped", "multi_contact_elastic", "refined_steps",
                                      "second_half_space", "two_ground_overflow", "painleve",
                                      "static_tangent", "static_pressed", "island_body_steps", "rim_pieces",
-                                     "rim_capped", "face_landed", "face_down", "side_pressed", "held_thrown",
+                                     "rim_capped", "face_landed", "face_down", "projected_down", "side_pressed",
+                                     "held_thrown",
                                      "island_late_pairs", "island_late_joined", "pairs_looked_again", "third_half_space",
                                      "static_taken_out"), 0)
         #: Per body, a second half-space it is held on besides ``ground_of`` (two_grounds.py), or -1.
@@ -529,21 +532,36 @@ class ContactSolver:
         A cylinder held on a rim within a hair of upright has a kink in its lowest point's gap (the
         point jumps across the rim as the tilt goes through zero): a projection that went through
         upright leaves the rim below the ground and the end face flat on it. That face is then
-        down: it is tracked too and the body projected onto it (counted in ``face_down``)."""
+        down: it is tracked too and the body projected onto it (counted in ``face_down``). Likewise any feature
+        not tracked that the projection turned into the ground (pulling a tracked feature the holding force
+        pressed on back down after a held step in which the body turned fast: a box spun up by a blow about a
+        corner): it is tracked too, and the body projected again (``projected_down``), when it is held on this
+        plane alone."""
         j = int(self.ground_of[i])
         mask = int(self.tracked[i])
         project(y, sim._prm[i], self.shapes[i], self.grounds[j], mask, sticking, self._points, self._gaps,
                 self._owners, self._work)
-        end = held_rim(self.shapes[i], mask)
-        if end < 0:
-            return
-        feature_gaps(y, sim._prm[i], self.shapes[i], self.grounds[j], self._features)
         band = self._band[i]
-        if self._features[end] < -band and self._features[2 + end] <= band:  # the face is down, not a rim point
-            self.tracked[i] = mask | (4 << end)
+        count = feature_gaps(y, sim._prm[i], self.shapes[i], self.grounds[j], self._features)
+        end = held_rim(self.shapes[i], mask)
+        if end >= 0 and self._features[end] < -band and self._features[2 + end] <= band:  # the face is down, not a
+            self.tracked[i] = mask | (4 << end)  # rim point
             self.counts["face_down"] += 1
             project(y, sim._prm[i], self.shapes[i], self.grounds[j], int(self.tracked[i]), sticking, self._points,
                     self._gaps, self._owners, self._work)
+            return
+        if self.other_ground[i] >= 0:  # held on two planes: projected onto the second after (two_grounds.py)
+            return
+        for _ in range(count):  # a feature not tracked that the projection turned into the ground: tracked too
+            mask = int(self.tracked[i])
+            sunk = sum(1 << k for k in range(count) if not mask >> k & 1 and self._features[k] < -band)
+            if not sunk:
+                return
+            self.tracked[i] = mask | sunk
+            self.counts["projected_down"] += 1
+            project(y, sim._prm[i], self.shapes[i], self.grounds[j], mask | sunk, sticking, self._points, self._gaps,
+                    self._owners, self._work)
+            feature_gaps(y, sim._prm[i], self.shapes[i], self.grounds[j], self._features)
 
     def _normal_motion(self, sim, y: np.ndarray, i: int, j: int, count: int, w: np.ndarray, mask: int | None = None):
         """(lowest normal speed, its free normal acceleration, mean slip) of the points in self._points.

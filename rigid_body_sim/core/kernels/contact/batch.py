@@ -192,13 +192,15 @@ def settle_all(Y0, Y, prm, shapes, grounds, bodies, ground_of, tracked, pressed,
 
     Flagged for the solver instead: a slide whose slip reversed in the step, another ground
     reached, a feature not tracked that is now below the ground (or a can's end face come down:
-    shapes.opposite_rim_gap), a tracked feature the holding force did not push on that moved off.
+    shapes.opposite_rim_gap), a tracked feature the holding force did not push on that moved off, and (its end
+    row as it was) a body whose projection turned a feature not tracked into the ground.
     """
     points = np.empty((MAX_POINTS, 3))
     gaps = np.empty(MAX_POINTS)
     owners = np.zeros(MAX_POINTS, dtype=np.int64)
     features = np.empty(MAX_FEATURES)
     work = np.zeros(IMPACT_WORK_SHAPE)
+    before = np.empty(STATE_WIDTH)
     for m in range(bodies.shape[0]):
         i = bodies[m]
         if locked[i]:
@@ -235,7 +237,16 @@ def settle_all(Y0, Y, prm, shapes, grounds, bodies, ground_of, tracked, pressed,
         if opposite_rim_gap(Y0[i], y, p, shapes[i], ground, tracked[i], band[i]) < 0.0:  # a can's end face came down
             status[i] = TO_SOLVER
         if status[i] == OK:
+            for k in range(STATE_WIDTH):
+                before[k] = y[k]
             project(y, p, shapes[i], ground, tracked[i], not sliding[i], points, gaps, owners, work)
+            count = feature_gaps(y, p, shapes[i], ground, features)
+            for k in range(count):  # a feature not tracked that the projection turned into the ground: the solver's
+                if not tracked[i] & (1 << k) and features[k] < -band[i]:
+                    status[i] = TO_SOLVER
+            if status[i] != OK:
+                for k in range(STATE_WIDTH):
+                    y[k] = before[k]
 
 
 # ----------------------------------------------------------------- the bookkeeping around the passes
