@@ -41,6 +41,8 @@
 * A scene with one moving body and no static shape has no body–body pass at all.
 * A capsule spinning against a wall, struck there by a spinning box: its Zeno sequence on the wall inside the
   group's step ends after ZENO_IMPACTS impacts, as on the ground pass.
+* A crate asleep on the ground, set moving into it as a ball strikes it within the step: struck by the ground at
+  the step's start (e = 0 and 0.5), then by the ball; never below the ground.
 """
 
 from __future__ import annotations
@@ -924,3 +926,37 @@ def test_a_capsule_spinning_against_a_wall_in_a_group_step_ends_its_zeno_sequenc
         assert integrator != "rk4" or energy() <= lowest + 1e-9 * abs(lowest)
         lowest = min(lowest, energy())
     assert sim.contact.events_of("pill", "rest")
+
+
+@pytest.mark.parametrize("e", [0.0, 0.5])
+@pytest.mark.parametrize("integrator", ["rk4", "semi_implicit_euler"])
+def test_a_crate_asleep_set_moving_into_the_ground_as_a_ball_strikes_it_is_struck_by_the_ground(integrator, e):
+    """A crate (1 kg) asleep on the ground, its velocity set to 2 m/s into it as a ball (0.5 kg, 3 m/s) strikes it
+    within the step: the ground's impact law acts at the step's start (e on both), then the pair's. It was held by
+    the force it fell asleep with, not struck, and sank 1.4 cm (e = 0); woken in the group's step, touching, it
+    rested there without an impact (its restitution lost). Over 5 steps no point of it is below the ground by more
+    than 1e-12 m."""
+    box = {"box": [0.2, 0.15, 0.1]}
+    material = {"restitution": e, "friction": 0.5}
+    sim = Simulator(load_scene({"gravity": [0.0, 0.0, -9.81], "bodies": {
+        "crate": {"mass": 1.0, "inertia": box, "material": material, "pose": {"position": [0.0, 0.0, 0.05]}},
+        "ball": _ball(0.05, 0.5, [0.5, 0.0, 0.05], [0.0, 0.0, 0.0])},
+        "ground": [{"normal": [0, 0, 1], "offset": 0.0, "material": material}]}), integrator=integrator, dt=1e-2)
+    sim.contact.sleeping = True
+    sim.step(3)
+    assert sim.contact.pairs.islands.asleep[:2].all()
+    sim.set_body_state("ball", position_world=[0.17, 0.0, 0.05], linear_velocity_world=[-3.0, 0.0, 0.0])
+    sim.set_body_state("crate", linear_velocity_world=[0.0, 0.0, -2.0])
+    t0 = sim.time
+    contact = sim.contact
+    sim.step()
+    struck = [event for event in contact.events_of("crate", "impact") if not event.other]
+    assert struck and struck[0].time == t0
+    assert struck[0].normal_speed_before == pytest.approx(-2.0, rel=1e-12)
+    assert struck[0].normal_speed_after == pytest.approx(2.0 * e, abs=1e-12)
+    assert contact.events_of("crate", "impact")[1].other == "ball"
+    for _ in range(5):
+        corners = [quat_rotate(sim.state.q_WP[0], np.array([sx * 0.1, sy * 0.075, sz * 0.05]))
+                   for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]
+        assert sim.state.p_WC_W[0, 2] + min(c[2] for c in corners) >= -1e-12
+        sim.step()

@@ -631,7 +631,7 @@ class ContactSolver:
         """Add to ``wrenches`` (the step's rows, in place) the force holding each body in persistent contact."""
         Y = sim._Ys[sim._control[L.CUR]]
         lists = self._hold_lists
-        sleepers, asleep = self._asleep_on_ground()
+        sleepers, asleep = self._asleep_on_ground(Y, wrenches)
         _, n_one, n_two = split_bodies(self.bodies, self.modes, sim._stopped, asleep, self.other_ground,
                                        lists[0], lists[1], lists[2])
         self.holding_forces[:] = 0.0
@@ -676,11 +676,18 @@ class ContactSolver:
                        self.ground_of, self.tracked, self.friction, self.tangent_friction, self.first_tangent,
                        self.sliding, self.slide_direction, SLIP_TOLERANCE, self._locked, self._staged)
 
-    def _asleep_on_ground(self) -> tuple[np.ndarray, np.ndarray]:
-        """(the bodies asleep on their ground alone (:meth:`_rest_alone`), a mask over all bodies of them)."""
+    def _asleep_on_ground(self, Y: np.ndarray, wrenches: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(the bodies asleep on their ground alone (:meth:`_rest_alone`), a mask over all bodies of them) at the
+        step's start (state rows Y, wrench rows ``wrenches``). One pushed, or whose state was set (an impulse,
+        set_body_state: thrown into the ground, say), wakes in this step (the islands' pass) and is held as an awake
+        one is, not by the force it fell asleep with."""
         if not self._sleeping or self.pairs is None:
             return self._no_bodies, self._not_done
-        asleep = (self.pairs.islands.asleep != 0) & (self.modes == PERSISTENT)
+        islands = self.pairs.islands
+        asleep = (islands.asleep != 0) & (self.modes == PERSISTENT)
+        if asleep.any():
+            woken = (wrenches[:, L.ACTIVE] != 0.0) | (Y[:, :L.STATE_WIDTH] != islands.saved).any(axis=1)
+            asleep &= ~woken
         sleepers = np.flatnonzero(asleep)
         return (sleepers, asleep) if sleepers.size else (self._no_bodies, self._not_done)
 
