@@ -103,9 +103,8 @@ from ..kernels.contact.persistent import normal_speeds
 from ..kernels.contact.shapes import body_points
 from ..kernels.contact.swept import deflections, left_pairs, screen_pairs, swept_bounds
 from ..quaternion import quat_multiply, quat_rotate
-from .events import ContactEvent
+from .events import ZENO_IMPACTS, ContactEvent
 from .island import Islands
-from .solver import ZENO_IMPACTS
 from .materials import pair_material
 from .static_geometry import bounding_radius
 from .swept_pairs import SweptPairs

@@ -1,10 +1,16 @@
-"""A contact event, as the solver records it (:attr:`ContactSolver.events`)."""
+"""A contact event, as the solver records it (:attr:`ContactSolver.events`), and the limit on a Zeno sequence of them
+(the ground pass, solver.py, and a group's step between bodies, body_pairs.py)."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["ContactEvent"]
+__all__ = ["ContactEvent", "ZENO_IMPACTS"]
+
+#: Impacts of a body in flight within one step after which the sequence is taken as Zeno's and the body rests where
+#: the last one left it: a can spinning with its rim on a wall rolls on it while its contact points accelerate away
+#: from it, so that no rebound's apex falls below ZENO_APEX (solver.py), and its impacts came ever closer in time.
+ZENO_IMPACTS = 100
 
 
 @dataclass(frozen=True)

@@ -81,7 +81,7 @@ import numpy as np
 from ..kernels import layout as L
 from ..quaternion import quat_rotate, quat_to_matrix
 from . import static_geometry, two_grounds
-from .events import ContactEvent
+from .events import ZENO_IMPACTS, ContactEvent
 from ..kernels.stepping import advance, step_reduced
 from ..kernels.contact.batch import (CACHE_WIDTH, OK, TO_SOLVER, busy_bodies, fast_rims, gravity_gains, hold_all,
                                      record_holds, settle_all, split_bodies)
@@ -130,10 +130,6 @@ TOUCHING_GAP = 1e-12
 LIFT_OFF_SPEED = 1e-9
 #: Most events one body may have in one step (more is reported as an error, not looped on).
 MAX_EVENTS_PER_STEP = 10_000
-#: Impacts of a body in flight within one step after which the sequence is taken as Zeno's and the body rests where
-#: the last one left it: a can spinning with its rim on a wall rolls on it while its contact points accelerate away
-#: from it, so that no rebound's apex falls below ZENO_APEX, and its impacts came ever closer in time.
-ZENO_IMPACTS = 100
 #: Most impacts of a body resting on the ground against other half-spaces or static shapes in one step (each taken
 #: a call deeper); past them it stays pressed on them for the rest of the step (counted in ``side_pressed``).
 MAX_SIDE_IMPACTS = 64
