@@ -163,3 +163,31 @@ def test_a_can_pushed_at_its_top_rests_below_the_tipping_push_in_every_direction
     assert push_at_the_top(sim, 1.01, heading, 500) > 1e-2
     c = sim.state.p_WC_W[0]
     assert np.arctan2(c[1], c[0]) == pytest.approx(heading if heading <= np.pi else heading - 2 * np.pi, abs=1e-6)
+
+
+@pytest.mark.parametrize("how", ["set_body_state", "with_scene"])
+@pytest.mark.parametrize("integrator", ["rk4", "semi_implicit_euler"])
+def test_a_crate_at_rest_placed_on_its_side_rests_there(integrator, how):
+    """A crate (0.2 × 0.15 × 0.1 m) at rest flat on the ground, placed standing on a side (set_body_state, or a body
+    spawned after with with_scene, which takes the crate's pose from the old simulator): it was held by the corners
+    it lay on, and its projection onto them turned it over 10 cm into the ground at the next step. Now its contact
+    is taken anew from the pose: over 10 steps it stays exactly there, held by m g."""
+    box = {"box": [0.2, 0.15, 0.1]}
+    bodies = {"crate": {"mass": M, "inertia": box, "pose": {"position": [0.0, 0.0, 0.05]}},
+              "other": {"mass": M, "inertia": box, "pose": {"position": [1.0, 0.0, 0.05]}}}
+    ground = [{"normal": [0, 0, 1], "material": {"restitution": 0.0, "friction": MU}}]
+    sim = Simulator(load_scene({"gravity": [0.0, 0.0, -G], "ground": ground, "bodies": bodies}), integrator, 1e-2)
+    sim.step(3)
+    assert sim.contact.is_resting("crate")
+    side = [np.sqrt(0.5), 0.0, 0.0, np.sqrt(0.5)]  # (x, y, z, w): 90° about x, its 0.15 m side down
+    sim.set_body_state("crate", position_world=[0.0, 0.0, 0.075], orientation_xyzw=side)
+    if how == "with_scene":
+        bodies["ball"] = {"mass": M, "inertia": {"sphere": 0.05}, "pose": {"position": [0.0, 2.0, 0.5]}}
+        sim = sim.with_scene(load_scene({"gravity": [0.0, 0.0, -G], "ground": ground, "bodies": bodies}))
+    pose = sim.state.p_WC_W[0].copy(), sim.state.q_WP[0].copy()
+    for _ in range(10):
+        sim.step()
+        np.testing.assert_allclose(sim.state.p_WC_W[0], pose[0], rtol=0.0, atol=1e-12)
+        np.testing.assert_allclose(sim.state.q_WP[0], pose[1], rtol=0.0, atol=1e-12)
+    assert sim.contact.is_resting("crate")
+    np.testing.assert_allclose(sim.contact.holding_forces[0], [0.0, 0.0, M * G], rtol=1e-12, atol=1e-12)

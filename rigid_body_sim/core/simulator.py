@@ -708,6 +708,8 @@ class Simulator:
         self._replan()
         if self.contact is not None and self.model.motions[b] == "static":
             self.contact.reset(self)  # contact: the static geometry moved; modes anew from the state, as at a reset
+        elif self.contact is not None and (position_world is not None or orientation_xyzw is not None):
+            self.contact.pose_set(self, b)  # its contact mode anew from its new pose
 
     def _constrain(self, b: int, state: State) -> None:
         """Keep body b's motion in ``state`` (in place): velocities projected as wrenches are (a
@@ -729,7 +731,8 @@ class Simulator:
         every body in both scenes (by name) keeps its current pose and twist (in its own frame
         B and world axes, so a redefined body keeps where it is), its energy bound and whether
         it is stopped; bodies new to ``scene`` start at their initial state; bodies not in it
-        are gone. The applied wrenches do not carry over. This simulator is unchanged.
+        are gone; each body's contact mode is derived anew from that state, as at a reset. The applied wrenches do
+        not carry over. This simulator is unchanged.
         """
         options = self._reference_options
         new = Simulator(scene, self.integrator, self.dt, reference_rtol=options["rtol"], reference_atol=options["atol"],
@@ -754,6 +757,8 @@ class Simulator:
             new._constrain(b, state)
             new._stopped[b] = self._stopped[a]
         new.state = state
+        if new.contact is not None:  # its contact modes anew from the state carried over, not the scene's poses
+            new.contact.reset(new)
         bound = np.sqrt(kinetic_energy(new.model, state))
         for b, name in enumerate(scene.body_names):
             if name in self.scene.sites:

@@ -201,6 +201,8 @@ class ContactSolver:
                                                                self.statics.tangent_friction)
         n = model.count
         self.bodies = np.array(spec.bodies, dtype=np.int64)  # free bodies with a collision shape
+        self.is_contact_body = np.zeros(model.count, dtype=bool)
+        self.is_contact_body[self.bodies] = True
         #: The body–body pass (body_pairs.py), or None: a scene with fewer than two moving bodies with a
         #: shape and no static shape has no pair that can meet, and runs without it.
         self.pairs = None
@@ -414,6 +416,20 @@ class ContactSolver:
             self.pairs.islands.reset()
         for i in self.bodies:
             self.classify(sim, Y, i)
+
+    def pose_set(self, sim, i: int) -> None:
+        """Body i was placed anew (Simulator.set_body_state with a position or orientation): its contact mode is
+        derived from its new pose as at a reset (the features it was held on by are not those that touch now: a
+        box set standing on a side was held by its old bottom face's corners, and its projection turned it over
+        into the ground)."""
+        if not self.is_contact_body[i]:
+            return
+        self.modes[i] = FLIGHT
+        self.ground_of[i] = -1
+        self.other_ground[i] = -1
+        self.other_projected[i] = False
+        self.sliding[i] = False
+        self.classify(sim, sim._Ys[sim._control[L.CUR]], i)
 
     def classify(self, sim, Y: np.ndarray, i: int) -> None:
         """Body i (in flight) at state rows Y: persistent contact if it touches its ground and its contact points move
