@@ -1086,6 +1086,8 @@ class ContactSolver:
         """Whether body i at y touches its nearest ground (within TOUCHING_GAP) with a contact point moving into it
         faster than LIFT_OFF_SPEED: a resting body given an impulse or a velocity into it, which no root of the gap
         inside the step marks (it starts at zero)."""
+        if not y[L.V:L.W + 3].any():  # at rest
+            return False
         gap, j = self._gap(sim, y, i)
         if gap > TOUCHING_GAP:
             return False
@@ -1096,6 +1098,8 @@ class ContactSolver:
         """Whether body i at y, in persistent contact, touches another half-space or a static shape (within its
         feature band) with a contact point moving into it faster than LIFT_OFF_SPEED: its step may go through a
         static shape and end beyond it."""
+        if not y[L.V:L.W + 3].any():  # at rest
+            return False
         gap, jj = self._other_gap(sim, y, i)
         if jj < 0 or gap > self._band[i]:
             return False
