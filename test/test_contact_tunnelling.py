@@ -8,7 +8,8 @@ relative, with Newton's rebound −e v along the normal (frictionless).
 
 * against a static box 1 cm thick (static_geometry.py), face on and at a slant (a glancing hit
   on its face), sliding on the ground into it, from apart or touching it (held on the ground: the ground pass
-  looks along its step), and flying along the face of another static box into it;
+  looks along its step), flying along the face of another static box into it, and thrown through it from rest
+  against it;
 * two such spheres flying at each other (relative speed 200 m/s): equal masses, e = 0.5, the
   textbook v_a' = ((m_a − e m_b) v_a + (1 + e) m_b v_b)/(m_a + m_b);
 * one sphere flying past the wall's edge with a 1 mm gap: no impact (the broad phase looks, the
@@ -112,6 +113,32 @@ def test_a_fast_small_sphere_flying_along_one_wall_does_not_pass_through_another
     np.testing.assert_allclose(sim.state.v_WC_W[2], [-E * V, 0.0, 0.0], rtol=0.0, atol=1e-9 * V)
     x = WALL_X - HALF_T - R - E * V * (DT - t_hit)
     np.testing.assert_allclose(sim.state.p_WC_W[2], [x, R, 0.0], rtol=0.0, atol=1e-9)
+
+
+@pytest.mark.parametrize("integrator", ["rk4", "semi_implicit_euler"])
+def test_a_small_sphere_at_rest_against_a_thin_static_box_thrown_through_it_strikes_it(integrator):
+    """The sphere at rest on the ground (g = 9.81) touching the wall's face, set moving at 100 m/s into it and 10 m/s
+    up: it lifts off the ground, and is struck by the wall at once (its lowest plane is the ground, which it leaves;
+    it moves into the wall it touches as well), rebounding at −e v; it went through before."""
+    ground = {"restitution": 0.0, "friction": 0.0}
+    x0 = WALL_X - HALF_T - R
+    scene = load_scene({"gravity": [0.0, 0.0, -9.81], "ground": [{"normal": [0, 0, 1], "offset": 0.0,
+                                                                   "material": ground}],
+                        "bodies": {"wall": _wall({"restitution": E, "friction": 0.0}),
+                                   "ball": _sphere([x0, 0.0, R], [0.0, 0.0, 0.0])}})
+    sim = Simulator(scene, integrator, DT)
+    sim.step(2)
+    assert sim.contact.is_resting("ball")
+    up = 10.0
+    sim.set_body_state("ball", linear_velocity_world=[V, 0.0, up])
+    t0 = sim.time
+    sim.step(1)
+    impacts = sim.contact.events_of("ball", "impact")
+    assert len(impacts) == 1 and sim.contact.static_body_of(impacts[0].ground) == "wall"
+    assert impacts[0].time == pytest.approx(t0, abs=1e-15)
+    v_z = up - 9.81 * DT  # exact for a constant force, either method
+    np.testing.assert_allclose(sim.state.v_WC_W[1], [-E * V, 0.0, v_z], rtol=0.0, atol=1e-9 * V)
+    assert sim.state.p_WC_W[1, 0] == pytest.approx(x0 - E * V * DT, abs=1e-9)
 
 
 def test_two_fast_small_spheres_meet_inside_one_step():

@@ -646,12 +646,12 @@ class BodyPairs:
             end = at(1.0)
             s_env, first, rests = 1.0, None, False  # the first meeting of a member on_it: the piece ends there
             for i in sorted(on_it):
-                if solver._gap(sim, end[i], i)[0] >= 0.0:
-                    continue
-                g0 = 0.0 if i in struck else solver._gap(sim, y[i], i)[0]
                 if i not in struck and solver._driven_in(sim, y[i], i, w[i]):  # touching, driven in: struck at once
-                    s = 0.0
+                    s = 0.0  # (its step may end beyond a thin static shape)
+                elif solver._gap(sim, end[i], i)[0] >= 0.0:
+                    continue
                 else:
+                    g0 = 0.0 if i in struck else solver._gap(sim, y[i], i)[0]
                     s = solver._locate(lambda u, i=i: solver._gap(sim, solver.step_map(sim, i, y[i], u * span, w[i]),
                                                                   i)[0], g0, hints.get(i, -1.0))
                 if first is None or (0.0 if s is None else s) < s_env:  # None: a rebound too small: it rests

@@ -1084,15 +1084,22 @@ class ContactSolver:
 
     def _driven_in(self, sim, y: np.ndarray, i: int, w: np.ndarray) -> bool:
         """Whether body i at y touches its nearest ground (within TOUCHING_GAP) with a contact point moving into it
-        faster than LIFT_OFF_SPEED: a resting body given an impulse or a velocity into it, which no root of the gap
-        inside the step marks (it starts at zero)."""
+        faster than LIFT_OFF_SPEED, or a static shape it touches too (:meth:`_approached_static`): a resting body
+        given an impulse or a velocity into it, which no root of the gap inside the step marks (it starts at
+        zero)."""
         if not y[L.V:L.W + 3].any():  # at rest
             return False
         gap, j = self._gap(sim, y, i)
         if gap > TOUCHING_GAP:
             return False
         count = self._contact_points(sim, y, i, j)
-        return count > 0 and self._normal_motion(sim, y, i, j, count, w)[0] < -LIFT_OFF_SPEED
+        speed = self._normal_motion(sim, y, i, j, count, w)[0] if count else 0.0
+        if count and speed < -LIFT_OFF_SPEED:
+            return True
+        # not into its lowest plane: into a static shape it touches as well (a pebble in a bin's corner thrown into
+        # one wall; _impact strikes it there)
+        other = self._approached_static(sim, y.copy(), i, gap, j, w) if speed >= 0.0 else None
+        return other is not None and other[3] < -LIFT_OFF_SPEED
 
     def _driven_into_side(self, sim, y: np.ndarray, i: int, w: np.ndarray) -> bool:
         """Whether body i at y, in persistent contact, touches another half-space or a static shape (within its
