@@ -182,12 +182,14 @@ def _patch_impact(seed):
     return speeds(ya, yb), speeds(ya1, yb1), before, after, scale
 
 
-def test_nothing_approaches_after_a_pair_impact_on_a_patch_with_high_friction():
+@pytest.mark.parametrize("seeds", [pytest.param([826, 832, 2536, 16638, *range(300)], id="4 found + 300"),
+                                   pytest.param(range(300, 3000), id="2700 more", marks=pytest.mark.slow)])
+def test_nothing_approaches_after_a_pair_impact_on_a_patch_with_high_friction(seeds):
     # Gauss–Seidel can stop short on the second compression with friction (μ near 2, spin, coupled points): a
     # frictionless compression then follows, so no point is left approaching faster than APPROACH_LEFT × the
-    # approach.
+    # approach. (The first four seeds: approaching at 0.33–27 m/s without it; the sweep's rest is behind slow.)
     worst = 0.0
-    for seed in [826, 832, 2536, 16638, *range(3000)]:  # the first four: approaching at 0.33–27 m/s without it
+    for seed in seeds:
         approach, left, before, after, scale = _patch_impact(seed)
         assert approach.max() < 0.0
         assert after <= before * (1.0 + 1e-12)
