@@ -462,16 +462,12 @@ class BodyPairs:
         if bound <= 0.0:
             return False
         skin = ADVANCE_SKIN * max(self.size[a], self.size[b])
-        s, d = 0.0, self.contact(ya, a, yb, b)
-        for _ in range(MAX_ADVANCE):
-            s += (d + skin) / bound
-            if s >= 1.0:
-                return False
+
+        def distance(s):
             at = states(s)
-            d = self.contact(at[0], a, at[1], b)
-            if d < 0.0:
-                return True
-        return False
+            return self.contact(at[0], a, at[1], b)
+
+        return _advance(self.contact(ya, a, yb, b), 0.0, skin, bound, distance) is not None
 
     def advance_alone(self, sim, i: int, y0: np.ndarray, end: np.ndarray, w: np.ndarray, h: float, gap,
                       touching: float) -> float | None:
@@ -485,15 +481,7 @@ class BodyPairs:
         skin = ADVANCE_SKIN * self.size[i]
         d = gap(y0)
         floor = min(d, 0.0) - skin if d <= touching else 0.0
-        s = 0.0
-        for _ in range(MAX_ADVANCE):
-            s += (max(d - floor, 0.0) + skin) / bound
-            if s >= 1.0:
-                return None
-            d = gap(self.solver.step_map(sim, i, y0, s * h, w))
-            if d < floor:
-                return s
-        return None
+        return _advance(d, floor, skin, bound, lambda s: gap(self.solver.step_map(sim, i, y0, s * h, w)))
 
     def _wrench_of(self, sim, i: int) -> np.ndarray:
         """The wrench row body i's step ran with (static shapes: none)."""
@@ -1039,6 +1027,21 @@ def _spanning(points: np.ndarray) -> np.ndarray:
         kept.append(k)
         far = np.minimum(far, np.linalg.norm(points - points[k], axis=1))
     return points[sorted(kept)]
+
+
+def _advance(d: float, floor: float, skin: float, bound: float, distance) -> float | None:
+    """Conservative advancement over a step: from a distance d (m) at its start, the first fraction s of it at which
+    distance(s) < floor, each sample a skin below it at the rate ``bound`` (m per step, > 0: |d'| at most); None if
+    none is found within MAX_ADVANCE samples."""
+    s = 0.0
+    for _ in range(MAX_ADVANCE):
+        s += (max(d - floor, 0.0) + skin) / bound
+        if s >= 1.0:
+            return None
+        d = distance(s)
+        if d < floor:
+            return s
+    return None
 
 
 def _groups(hits: list[tuple[int, int]], is_static: np.ndarray) -> list[set[int]]:

@@ -404,24 +404,18 @@ class ContactSolver:
         self.holding_angular_impulses[:] = 0.0
         for key in self.counts:
             self.counts[key] = 0
-        self.modes[:] = FLIGHT
-        self.ground_of[:] = -1
-        self.other_ground[:] = -1
-        self.other_projected[:] = False
-        self.sliding[:] = False
-        Y = sim._Ys[sim._control[L.CUR]]
         if self.statics is not None:
             self.statics.place(sim)
         if self.pairs is not None:
             self.pairs.islands.reset()
         for i in self.bodies:
-            self.classify(sim, Y, i)
+            self.pose_set(sim, i)
 
     def pose_set(self, sim, i: int) -> None:
-        """Body i was placed anew (Simulator.set_body_state with a position or orientation): its contact mode is
-        derived from its new pose as at a reset (the features it was held on by are not those that touch now: a
-        box set standing on a side was held by its old bottom face's corners, and its projection turned it over
-        into the ground)."""
+        """Body i's contact mode derived anew from its state, as at a reset: it was placed anew
+        (Simulator.set_body_state with a position or orientation; the features it was held on by are not those that
+        touch now: a box set standing on a side was held by its old bottom face's corners, and its projection turned
+        it over into the ground)."""
         if not self.is_contact_body[i]:
             return
         self.modes[i] = FLIGHT
@@ -697,10 +691,13 @@ class ContactSolver:
             return self._no_bodies, self._not_done
         islands = self.pairs.islands
         asleep = (islands.asleep != 0) & (self.modes == PERSISTENT)
-        if asleep.any():
-            woken = (wrenches[:, L.ACTIVE] != 0.0) | (Y[:, :L.STATE_WIDTH] != islands.saved).any(axis=1)
-            asleep &= ~woken
         sleepers = np.flatnonzero(asleep)
+        if sleepers.size:  # the islands' wake rule (island._wakes), on the sleepers' rows alone
+            woken = ((wrenches[sleepers, L.ACTIVE] != 0.0)
+                     | (Y[sleepers, :L.STATE_WIDTH] != islands.saved[sleepers]).any(axis=1))
+            if woken.any():
+                asleep[sleepers[woken]] = False
+                sleepers = sleepers[~woken]
         return (sleepers, asleep) if sleepers.size else (self._no_bodies, self._not_done)
 
     def _rest_alone(self, sim, wrenches: np.ndarray, Y0: np.ndarray, Y1: np.ndarray) -> None:
@@ -1092,9 +1089,8 @@ class ContactSolver:
         gap, j = self._gap(sim, y, i)
         if gap > TOUCHING_GAP:
             return False
-        count = self._contact_points(sim, y, i, j)
-        speed = self._normal_motion(sim, y, i, j, count, w)[0] if count else 0.0
-        if count and speed < -LIFT_OFF_SPEED:
+        speed = self._speed_into(sim, y, i, j, w)
+        if speed < -LIFT_OFF_SPEED:
             return True
         # not into its lowest plane: into a static shape it touches as well (a pebble in a bin's corner thrown into
         # one wall; _impact strikes it there)
@@ -1108,10 +1104,13 @@ class ContactSolver:
         if not y[L.V:L.W + 3].any():  # at rest
             return False
         gap, jj = self._other_gap(sim, y, i)
-        if jj < 0 or gap > self._band[i]:
-            return False
-        count = self._contact_points(sim, y, i, jj)
-        return count > 0 and self._normal_motion(sim, y, i, jj, count, w)[0] < -LIFT_OFF_SPEED
+        return jj >= 0 and gap <= self._band[i] and self._speed_into(sim, y, i, jj, w) < -LIFT_OFF_SPEED
+
+    def _speed_into(self, sim, y: np.ndarray, i: int, j: int, w: np.ndarray) -> float:
+        """The lowest normal speed (m/s, positive away) of body i's contact points at y on plane row j; 0 without
+        any."""
+        count = self._contact_points(sim, y, i, j)
+        return self._normal_motion(sim, y, i, j, count, w)[0] if count else 0.0
 
     def _resting_ground(self, sim, y: np.ndarray, i: int) -> int:
         """The ground body i at y comes to rest on where a rebound is too small to resolve: its lowest plane (a
