@@ -988,6 +988,32 @@ def test_columns_sunk_within_the_penetration_tolerance_are_left_and_deeper_are_m
     assert speeds_of(sim, list(range(40))) <= 1e-9
 
 
+def test_a_penetration_tolerance_lowered_under_a_sleeping_island_applies_from_its_waking():
+    """Four columns of ten 0.1 m cubes, each set 1e-6 m into the one below, asleep at a penetration_tolerance of
+    1e-5 m: the tolerance set to 0 (exact) leaves the sleeping columns as they are, overlaps and all (asleep, an
+    island is not stepped), and a column woken by a wrench (20 N up on its top cube) has its overlaps projected
+    out at its first step awake (to PROJECT_TOL × the size, 1e-13 m); the others keep theirs."""
+    sim = sunk_columns(1e-6, 1e-5)
+    sim.contact.sleeping = True
+    sim.step(20)
+    assert np.all(sim.contact.pairs.islands.asleep != 0)
+    set_at = sim.positions_world().copy()
+    sim.contact.penetration_tolerance = 0.0
+    sim.step(5)
+    assert np.array_equal(sim.positions_world(), set_at)
+    sim.apply_force_at_point("c0_9", [0.0, 0.0, 20.0], [0.0, 0.0, 0.0])
+    sim.step(1)
+    rows, pairs = sim.state.rows(), sim.contact.pairs
+    for column in range(4):
+        gaps = [pairs.contact(rows[10 * column + k], 10 * column + k, rows[10 * column + k + 1], 10 * column + k + 1)
+                for k in range(9)]
+        if column == 0:
+            assert min(gaps) >= -1e-13
+        else:
+            assert min(gaps) == pytest.approx(-1e-6, rel=1e-6)
+    assert np.array_equal(sim.positions_world()[10:], set_at[10:])
+
+
 @pytest.mark.parametrize("depth", [-1e-9, 0.0101, float("nan"), float("inf")])
 def test_a_penetration_tolerance_below_0_above_a_centimetre_or_not_finite_is_refused(depth):
     sim = simulator(tower(2))
