@@ -55,7 +55,7 @@ from contact_support import bin_walls
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-from rigid_body_sim.core import Simulator, load_scene
+from rigid_body_sim.core import DivergenceError, Simulator, load_scene
 from rigid_body_sim.core.contact.body_pairs import ADVANCE_SKIN, BodyPairs
 from rigid_body_sim.core.contact.solver import ZENO_IMPACTS
 from rigid_body_sim.core.contact.query import overlapping_bodies
@@ -349,6 +349,34 @@ def test_a_ball_dropped_off_centre_onto_a_ball_resting_on_the_ground_moves_it_wi
         sim.step()
         assert energy() <= start + 1e-12
     assert np.linalg.norm(sim.state.v_WC_W[0]) > 0.01  # the lower ball was set moving
+
+
+def test_a_pebble_whose_held_step_blows_up_on_the_ground_is_a_blow_up_at_the_next_step():
+    """A 1 cm pebble (32.6 g) landing on the ground beside a crate at rest far away, twisted by 1.9 N applied 6 cm
+    off its centre (0.11 N·m, rk4 at dt = 5 ms): its held step, rolling at every stage, is unstable at that
+    |ω| h and spins it up ×3700 in one step. The ground never passes energy on, so its blow-up bound is not raised
+    to its kinetic energy as a body's that met another body's is: the next step raises DivergenceError, the state
+    left where the spin was 3e7 rad/s. (Raised, the bound hid it: the step after took the pebble to 9e35 rad/s and
+    the next to |ω| beyond what a float's square holds.)"""
+    ball, box = {"sphere": 0.005}, {"box": [0.2, 0.2, 0.2]}
+    bodies = {"pebble": {"mass": 0.032640323883172444, "inertia": ball, "collision": ball,
+                         "material": {"restitution": 0.0, "friction": 1.002683059800329},
+                         "pose": {"position": [0.3208277433460176, -0.06787100551692293, 0.010464924562450384]},
+                         "twist": {"linear": [0.0, 0.0, -2.2563]}},
+              "crate": {"mass": 1.0, "inertia": box, "collision": box, "pose": {"position": [2.0, 0.0, 0.1]}}}
+    sim = Simulator(load_scene({"gravity": [0.0, 0.0, -9.81], "bodies": bodies,
+                                "ground": [{"normal": [0, 0, 1], "material": {"restitution": 0.0, "friction": 0.5}}]}),
+                    "rk4", 5e-3, threads=1)
+    sim.contact.sleeping = True
+    force = [0.9908623985266142, 1.1103709094333032, -1.1035896001435768]
+    at = [0.34185340771079636, -0.05489283257231995, -0.06015413621113839]
+    with pytest.raises(DivergenceError, match="pebble"):
+        for _ in range(8):
+            sim.apply_force_at_point("pebble", force, at)
+            sim.step()
+            assert np.abs(sim.angular_velocities_world()[0]).max() < 1e9
+    assert np.abs(sim.angular_velocities_world()[0]).max() < 1e9
+    assert np.array_equal(sim.positions_world()[1], [2.0, 0.0, 0.1])
 
 
 def _on_the_ground(bodies: dict, material: dict) -> Simulator:

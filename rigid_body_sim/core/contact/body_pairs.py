@@ -205,6 +205,9 @@ class BodyPairs:
         self._found, self._left_pairs = np.empty(max(m, 16), dtype=np.int64), np.empty((64, 2), dtype=np.int64)
         #: Bodies resting on bodies, stepped together (island.py).
         self.islands = Islands(solver, sim, self)
+        #: per body: whether it met another moving body in the last step (an island's or a group's step): contact
+        #: passed energy to it from another body, which its blow-up bound does not count (ContactSolver)
+        self.exchanged = np.zeros(len(shapes), dtype=bool)
 
     # ----------------------------------------------------------------- geometry
 
@@ -243,6 +246,7 @@ class BodyPairs:
                    h: float) -> np.ndarray | None:
         """Find and resolve the step's body–body events; the bodies done here as a bool mask (None: none)."""
         solver = self.solver
+        self.exchanged.fill(False)
         for name in _RESTORED:  # as the step began, for look_again
             np.copyto(self._start[name], getattr(solver, name))
         self._look = {"events": len(solver.events), "pairs": np.zeros((0, 2), dtype=np.int64), "hits": [],
@@ -258,6 +262,7 @@ class BodyPairs:
         in_island = None
         if found or held:  # islands first (island.py)
             in_island = islands.step(sim, wrenches, Y0, Y1, pairs, h)
+            self.exchanged |= in_island
             self._look["kept"] = self._look["kept"] | in_island
             if in_island[self.solver.bodies].all():  # every pair has a moving body first: none is left
                 pairs = pairs[:0]
@@ -512,6 +517,7 @@ class BodyPairs:
                     wrenches: np.ndarray, t: float, h: float) -> None:
         """Step the bodies of one group together from Y0 over h, event after event; results into Y1."""
         solver = self.solver
+        self.exchanged[members] = True
         y = {i: Y0[i].copy() for i in members}
         w = {i: wrenches[i].copy() for i in members}
         pairs = [(a, b) for a, b in links if not self.is_static[b]]

@@ -899,11 +899,16 @@ class ContactSolver:
             self._bound_energy(sim, Y1)
 
     def _bound_energy(self, sim, Y1: np.ndarray) -> None:
-        """Each contact body's blow-up bound (√J, simulator.DivergenceError) raised to at least √K at the step's end:
-        contact passes energy from body to body (an impact, an island's step) and never adds it, so what a body
-        took from another is not a blow-up (a ball resting on the ground, locked, hit by a falling one). A body in
-        flight has √K within its bound already: unchanged."""
-        b = self.bodies
+        """The blow-up bound (√J, simulator.DivergenceError) of each body that met another moving body in the step
+        (an impact, an island's step) raised to at least √K at the step's end: contact passes energy from body to
+        body and never adds it, so what a body took from another is not a blow-up (a ball resting on the ground,
+        locked, hit by a falling one). Any other body's is left as its step set it: the ground and static shapes
+        only take energy, so one that gained more than its wrenches and gravity could give it (a held step far
+        beyond its integrator's |ω| h limit) blew up, and the next step's check says so. A body in flight has √K
+        within its bound already."""
+        b = self.bodies[self.pairs.exchanged[self.bodies]]
+        if not len(b):
+            return
         p, rows = sim._prm[b], Y1[b]
         v, w = rows[:, L.V:L.V + 3], rows[:, L.W:L.W + 3]
         spin = np.einsum("ij,ij,ij->i", p[:, L.INERTIA:L.INERTIA + 3], w, w)
