@@ -243,8 +243,11 @@ def test_a_can_at_rest_on_its_side_set_tumbling_into_the_ground_never_sinks_nor_
     """A can (r 6 cm, 18 cm long, 1.76 kg, e = 0, μ = 0.6) at rest on its side, its velocity set to 1.6 m/s with
     1.2 m/s into the ground and a tumble of 62 rad/s (from a random run): it is struck at once, not held on its
     side line (which sank it 3.9 mm in the step, rk4, and 6.5 mm with semi-implicit Euler, below the features it
-    tracked). Over 0.3 s at dt = 10 ms: no point below the ground by more than 1e-12 m, and K + U never above its
-    lowest earlier value by more than 1e-12 of it."""
+    tracked). With rk4 it rolls on: its slide stops within the next step, located, with 4.8 J of kinetic energy left
+    (held to the step's end at the friction of its start, the slide overshot the stop, and the can was left at rest
+    there as thrown); with semi-implicit Euler, whose explicit spin raises its K + U by 6 % over that held step, it
+    is left at rest (the guard: held_thrown). Over 0.3 s at dt = 10 ms: no point below the ground by more than 1e-12 m, and K + U never above its
+    lowest earlier value by more than 1e-10 of it (rk4's own error on the held roll: 1.7e-11 of it seen)."""
     dt = 1e-2
     can = {"cylinder": [0.06, 0.18]}
     side = [-0.65190630120796755, 0.27389445858824291, -0.022967957217305823, 0.70673366478558530]  # (x, y, z, w)
@@ -271,9 +274,11 @@ def test_a_can_at_rest_on_its_side_set_tumbling_into_the_ground_never_sinks_nor_
         y = sim.state.rows()[0]
         count = feature_gaps(y, sim._prm[0], contact.shapes[0], contact.grounds[0], gaps)
         assert gaps[:count].min() >= -1e-12
-        assert energy() <= lowest + 1e-12 * abs(lowest)
+        assert energy() <= lowest + 1e-10 * abs(lowest)
         lowest = min(lowest, energy())
     assert contact.events_of("can", "impact")[0].time == 3 * dt
+    if integrator == "rk4":
+        assert contact.counts["held_thrown"] == 0 and float(sim.kinetic_energy()[0]) > 4.0
 
 
 #: A box (0.2 × 0.15 × 0.1 m, 1.33 kg, e = 0.3, μ = 1.2) held on one corner, sliding and turning at 4.6 rad/s, from a

@@ -103,6 +103,27 @@ def test_ball_slides_then_rolls_at_the_closed_form_time_and_speed(integrator, re
     assert sim.state.p_WC_W[0, 2] == pytest.approx(r, abs=1e-12)
 
 
+@pytest.mark.parametrize("integrator", ["rk4", "semi_implicit_euler"])
+@pytest.mark.parametrize("r, v0, dt", [(0.005, 0.05, 5e-3), (0.005, 0.01, 1e-2), (0.05, 0.01, 5e-3), (0.05, 0.05, 1e-2)])
+def test_a_slow_ball_whose_slide_stops_within_a_step_rolls_on_at_the_closed_form_speed(integrator, r, v0, dt):
+    """The closed forms above for a slide that stops within the step it starts in (1 cm and 10 cm balls at 1 and
+    5 cm/s, μ = 0.3): the stop located at t = k² v0/((1 + k²) μ g), then rolling at v0/(1 + k²). Held to the step's
+    end at the friction of its start, the slide overshoots the stop and slips back, raising K + U past the held
+    step's throw guard, which left the ball at rest where it was."""
+    mu, k2 = 0.3, 0.4
+    data = {"gravity": [0.0, 0.0, -G],
+            "ground": [{"normal": [0, 0, 1], "material": {"restitution": 0.0, "friction": mu}}],
+            "bodies": {"ball": {"mass": 0.03, "inertia": {"sphere": r}, "pose": {"position": [0.0, 0.0, r]},
+                                "twist": {"linear": [v0, 0.0, 0.0]}}}}
+    sim = Simulator(load_scene(data), integrator=integrator, dt=dt)
+    sim.step(3)
+    t_roll, v_roll = k2 * v0 / ((1.0 + k2) * mu * G), v0 / (1.0 + k2)
+    assert sim.contact.events_of("ball", "stick")[0].time == pytest.approx(t_roll, rel=1e-9)
+    assert sim.state.v_WC_W[0] == pytest.approx([v_roll, 0.0, 0.0], rel=1e-12, abs=1e-12)
+    assert sim.angular_velocities_world()[0] == pytest.approx([0.0, v_roll / r, 0.0], rel=1e-12, abs=1e-12)
+    assert sim.contact.counts["held_thrown"] == 0
+
+
 def test_box_at_rest_on_an_incline_inside_the_friction_cone_does_not_move():
     """20° incline, μ = 0.5 > tan 20°: no motion at all (peers creep 1e-7 to 1e-3 m/s)."""
     theta = math.radians(20.0)
