@@ -141,6 +141,31 @@ def test_a_small_sphere_at_rest_against_a_thin_static_box_thrown_through_it_stri
     assert sim.state.p_WC_W[1, 0] == pytest.approx(x0 - E * V * DT, abs=1e-9)
 
 
+@pytest.mark.parametrize("integrator", ["rk4", "semi_implicit_euler"])
+def test_a_small_sphere_at_rest_against_a_thin_static_box_thrown_down_through_it_strikes_both(integrator):
+    """The sphere at rest on the ground (g = 9.81, e = 0.5) touching the wall's face, set moving at 100 m/s into the
+    wall and 10 m/s down: struck by the ground first (its lowest plane, which it moves into), then, at the same
+    instant, by the wall it still touches and moves into: (−e V, 0, e·10 − g h) after the step (frictionless). Once
+    struck by the ground it was not looked at against the wall and went through it."""
+    mat = {"restitution": E, "friction": 0.0}
+    x0 = WALL_X - HALF_T - R
+    scene = load_scene({"gravity": [0.0, 0.0, -9.81], "ground": [{"normal": [0, 0, 1], "offset": 0.0,
+                                                                   "material": mat}],
+                        "bodies": {"wall": _wall(mat), "ball": _sphere([x0, 0.0, R], [0.0, 0.0, 0.0])}})
+    sim = Simulator(scene, integrator, DT)
+    sim.step(2)
+    assert sim.contact.is_resting("ball")
+    down = 10.0
+    sim.set_body_state("ball", linear_velocity_world=[V, 0.0, -down])
+    t0 = sim.time
+    sim.step(1)
+    impacts = sim.contact.events_of("ball", "impact")
+    assert [sim.contact.static_body_of(e.ground) for e in impacts] == [None, "wall"]
+    assert [e.time for e in impacts] == pytest.approx([t0, t0], abs=1e-15)
+    np.testing.assert_allclose(sim.state.v_WC_W[1], [-E * V, 0.0, E * down - 9.81 * DT], rtol=0.0, atol=1e-9 * V)
+    assert sim.state.p_WC_W[1, 0] == pytest.approx(x0 - E * V * DT, abs=1e-9)
+
+
 def test_two_fast_small_spheres_meet_inside_one_step():
     scene = load_scene({"gravity": [0.0, 0.0, 0.0], "ground": [],
                         "bodies": {"a": _sphere([0.0, 0.0, 0.0], [V, 0.0, 0.0]),

@@ -640,7 +640,8 @@ class BodyPairs:
             end = at(1.0)
             s_env, first, rests = 1.0, None, False  # the first meeting of a member on_it: the piece ends there
             for i in sorted(on_it):
-                if i not in struck and solver._driven_in(sim, y[i], i, w[i]):  # touching, driven in: struck at once
+                if env_impacts.get(i, 0) < ZENO_IMPACTS and solver._driven_in(sim, y[i], i, w[i], i in struck):
+                    # touching, driven in: struck at once (just struck: by a static shape it touches as well)
                     s = 0.0  # (its step may end beyond a thin static shape)
                 elif solver._gap(sim, end[i], i)[0] >= 0.0:
                     continue

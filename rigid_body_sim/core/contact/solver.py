@@ -1063,7 +1063,9 @@ class ContactSolver:
                 return y
             if self.modes[i] == PERSISTENT:
                 return self._persistent_span(sim, i, y, w, t, h)
-            if not after_impact and self._driven_in(sim, y, i, w):  # touching and moving into it: struck at once
+            # touching and moving into it: struck at once; just struck, only by a static shape it touches as well
+            # and moves into (its step may end beyond a thin wall: a pebble in a bin's corner struck off the ground)
+            if impacts < ZENO_IMPACTS and self._driven_in(sim, y, i, w, after_impact):
                 hint = self._impact(sim, i, y, w, t, h)
                 after_impact = True
                 impacts += 1
@@ -1084,22 +1086,25 @@ class ContactSolver:
             impacts += 1
         raise RuntimeError(f"{self.names[i]!r}: more than {MAX_EVENTS_PER_STEP} contact events in one step at t = {t}")
 
-    def _driven_in(self, sim, y: np.ndarray, i: int, w: np.ndarray) -> bool:
+    def _driven_in(self, sim, y: np.ndarray, i: int, w: np.ndarray, just_struck: bool = False) -> bool:
         """Whether body i at y touches its nearest ground (within TOUCHING_GAP) with a contact point moving into it
         faster than LIFT_OFF_SPEED, or a static shape it touches too (:meth:`_approached_static`): a resting body
         given an impulse or a velocity into it, which no root of the gap inside the step marks (it starts at
-        zero)."""
+        zero). ``just_struck``: body i was struck at y against its lowest plane, which it leaves (its speed into
+        it within LIFT_OFF_SPEED of zero is round-off, not a new impact): only a static shape it touches as well
+        and moves into counts (a pebble in a bin's corner struck off the ground into a wall: its step went through
+        the wall)."""
         if not y[L.V:L.W + 3].any():  # at rest
             return False
         gap, j = self._gap(sim, y, i)
         if gap > TOUCHING_GAP:
             return False
         speed = self._speed_into(sim, y, i, j, w)
-        if speed < -LIFT_OFF_SPEED:
+        if speed < -LIFT_OFF_SPEED and not just_struck:
             return True
         # not into its lowest plane: into a static shape it touches as well (a pebble in a bin's corner thrown into
         # one wall; _impact strikes it there)
-        other = self._approached_static(sim, y.copy(), i, gap, j, w) if speed >= 0.0 else None
+        other = self._approached_static(sim, y.copy(), i, gap, j, w) if speed >= -LIFT_OFF_SPEED else None
         return other is not None and other[3] < -LIFT_OFF_SPEED
 
     def _driven_into_side(self, sim, y: np.ndarray, i: int, w: np.ndarray) -> bool:
