@@ -364,6 +364,36 @@ def test_a_body_spinning_against_a_bin_s_wall_steps_on(name, body, inner, integr
     steps_on_never_gaining(in_a_bin(name, body, inner, integrator, dt, row), body["mass"], 0.2)
 
 
+def test_a_pebble_sliding_into_a_wall_with_a_half_space_behind_it_is_stepped_once_and_stops_at_the_wall():
+    """A pebble (r = 5 mm, e = 0, μ = 0) sliding on the ground at 25 m/s into a bin's wall (e = 0), a second
+    half-space's face on the wall's back face, dt = 10 ms (its state in a random scene): its free step ends beyond
+    both, so the compiled pass and the static shapes' check both handed it to the solver, and its step was taken
+    twice, the second time with the wall it had been struck against at that instant not struck again: it went
+    through the wall, struck the half-space and ended 1 cm below the ground. Taken once: it stops at the wall's
+    face (e = 0), slides on along it at its speed (frictionless), on the ground. A crate at rest elsewhere leaves room
+    in the solver's list of busy bodies, as long as the bodies, for the pebble's second entry (alone, that entry
+    was written past the list's end and not read back)."""
+    pebble = {"mass": 0.04, "inertia": {"sphere": 0.005}, "material": {"restitution": 0.0, "friction": 0.0},
+              "pose": {"position": [0.0, 0.0, 0.5]}}
+    crate = {"mass": 1.0, "inertia": {"box": [0.1, 0.1, 0.1]}, "material": {"restitution": 0.0, "friction": 0.5},
+             "pose": {"position": [0.5, 0.5, 0.05]}}
+    grounds = [{"normal": [0, 0, 1], "offset": 0.0, "material": {"restitution": 0.0, "friction": 0.5}},
+               {"normal": [1, 0, 0], "offset": -0.9, "material": {"restitution": 0.8, "friction": 0.3}}]
+    sim = Simulator(load_scene({"gravity": [0.0, 0.0, -G], "bodies": {"pebble": pebble, "crate": crate, **bin_walls(1.6)},
+                                "ground": grounds}), "semi_implicit_euler", 0.01)
+    p, v = [-0.7286364119448812, -0.40060534155722594, 0.005], [-25.380176101429353, 16.44706799884602, 0.0]
+    q_WB = np.array([0.9706284492644083, -0.056240492415934346, 0.03727993358093998, 0.23092775286566103])
+    w_B = np.array([0.16797777138780523, -18.777945180308773, 0.9556481573190572])
+    sim.set_body_state("pebble", p, q_WB[[1, 2, 3, 0]], v, quat_rotate(q_WB, w_B))
+    assert sim.contact.is_resting("pebble")
+    sim.step()
+    impacts = sim.contact.events_of("pebble", "impact")
+    assert [sim.contact.static_body_of(e.ground) for e in impacts] == ["wall_xm"]
+    assert impacts[0].time == pytest.approx((-0.795 - p[0]) / v[0], rel=1e-9)
+    np.testing.assert_allclose(sim.state.p_WC_W[0], [-0.795, p[1] + 0.01 * v[1], 0.005], rtol=0.0, atol=1e-9)
+    np.testing.assert_allclose(sim.state.v_WC_W[0], [0.0, v[1], 0.0], rtol=0.0, atol=1e-9)
+
+
 def test_a_can_sliding_into_a_corner_of_two_walls_steps_on_pressed_on_them():
     """A can (e = 0.11, μ = 0.64) lying on the ground in a corner of a bin, turning slowly: from its state in a
     mixed pile it slides, stops, strikes one wall, then the other, again and again within one step (each event
