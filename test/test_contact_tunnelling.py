@@ -166,6 +166,31 @@ def test_a_small_sphere_at_rest_against_a_thin_static_box_thrown_down_through_it
     assert sim.state.p_WC_W[1, 0] == pytest.approx(x0 - E * V * DT, abs=1e-9)
 
 
+@pytest.mark.parametrize("integrator", ["rk4", "semi_implicit_euler"])
+def test_a_box_at_rest_thrown_down_and_at_a_thin_static_box_strikes_it(integrator):
+    """A cube (0.1 m) at rest on frictionless ground (e = 0), 1 mm from the wall (e = 0, 1 cm thick), set moving at
+    20 m/s toward it and 5 m/s down: struck onto the ground at once (it rests there), then it slides 1 mm into the
+    wall, struck at t0 + 1 mm / 20 m/s, and stays at its face. Struck onto its ground in the step of the group its
+    screen against the wall made (the wall no member of it), it slid on through the wall."""
+    half, gap, speed = 0.05, 1e-3, 20.0
+    x0 = WALL_X - HALF_T - half - gap
+    mat = {"restitution": 0.0, "friction": 0.0}
+    cube = {"mass": 1.0, "inertia": {"box": [2 * half] * 3}, "material": mat, "pose": {"position": [x0, 0.0, half]}}
+    scene = load_scene({"gravity": [0.0, 0.0, -9.81], "ground": [{"normal": [0, 0, 1], "offset": 0.0, "material": mat}],
+                        "bodies": {"wall": _wall(mat), "cube": cube}})
+    sim = Simulator(scene, integrator, DT)
+    sim.step(2)
+    assert sim.contact.is_resting("cube")
+    sim.set_body_state("cube", linear_velocity_world=[speed, 0.0, -5.0])
+    t0 = sim.time
+    sim.step(1)
+    impacts = sim.contact.events_of("cube", "impact")
+    assert [sim.contact.static_body_of(e.ground) for e in impacts] == [None, "wall"]
+    assert impacts[1].time == pytest.approx(t0 + gap / speed, rel=1e-9)
+    np.testing.assert_allclose(sim.state.p_WC_W[1], [x0 + gap, 0.0, half], rtol=0.0, atol=1e-9)
+    np.testing.assert_allclose(sim.state.v_WC_W[1], [0.0, 0.0, 0.0], rtol=0.0, atol=1e-9)
+
+
 def test_two_fast_small_spheres_meet_inside_one_step():
     scene = load_scene({"gravity": [0.0, 0.0, 0.0], "ground": [],
                         "bodies": {"a": _sphere([0.0, 0.0, 0.0], [V, 0.0, 0.0]),

@@ -282,6 +282,11 @@ class BodyPairs:
         if not hits:
             return in_island
         done = np.zeros(len(sim._stopped), dtype=bool) if in_island is None else in_island.copy()
+        # a body whose path may pass through a static shape (the shape is no member of its group): once held on its
+        # ground in the group's step, its rest of the step on the ground pass looks along its path for the shape
+        # (solver._persistent_end), as for one screened so while held (a box thrown from rest at a wall, struck onto
+        # its ground at the step's start, slid on through the wall)
+        self.solver.may_pass.update(a for a, b in hits if self.is_static[b])
         for group in _groups(hits, self.is_static):
             links = [p for p in map(tuple, pairs.tolist()) if p[0] in group and p[1] in group]
             members = sorted(group)
