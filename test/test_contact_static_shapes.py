@@ -394,6 +394,32 @@ def test_a_pebble_sliding_into_a_wall_with_a_half_space_behind_it_is_stepped_onc
     np.testing.assert_allclose(sim.state.v_WC_W[0], [0.0, v[1], 0.0], rtol=0.0, atol=1e-9)
 
 
+@pytest.mark.parametrize("integrator", ["rk4", "semi_implicit_euler"])
+def test_a_ball_sliding_along_a_wall_into_the_next_wall_stops_at_its_face(integrator):
+    """A ball (r = 4 cm, e = 0, μ = 0) held on the floor and a bin's wall (gravity tilted into both), set sliding
+    along their crease at 15 m/s into the next wall (10 cm thick), dt = 10 ms: it meets the wall's face at
+    t0 + (0.8 − r − x0)/V (no force along the crease) and stops there (e = 0). Its end lay beyond the wall's middle,
+    and the end's take-in pushed it out through the wall's back face."""
+    r, x0, speed = 0.04, 0.74, 15.0
+    mat = {"restitution": 0.0, "friction": 0.0}
+    ball = {"mass": 1.0, "inertia": {"sphere": r}, "material": mat, "pose": {"position": [x0, -0.8 + r, r]}}
+    walls = bin_walls(1.6)
+    for wall in walls.values():
+        wall["material"] = mat
+    sim = Simulator(load_scene({"gravity": [0.0, -G, -G], "bodies": {"ball": ball, **walls},
+                                "ground": [{"normal": [0, 0, 1], "material": mat}]}), integrator, 0.01)
+    sim.step(2)
+    assert sim.contact.is_resting("ball") and sim.contact.other_ground[0] >= 0
+    sim.set_body_state("ball", linear_velocity_world=[speed, 0.0, 0.0])
+    t0 = sim.time
+    sim.step()
+    impacts = [e for e in sim.contact.events_of("ball", "impact") if e.time >= t0]
+    assert [sim.contact.static_body_of(e.ground) for e in impacts] == ["wall_xp"]
+    assert impacts[0].time == pytest.approx(t0 + (0.8 - r - x0) / speed, rel=1e-9)
+    np.testing.assert_allclose(sim.state.p_WC_W[0], [0.8 - r, -0.8 + r, r], rtol=0.0, atol=1e-9)
+    np.testing.assert_allclose(sim.state.v_WC_W[0], [0.0, 0.0, 0.0], rtol=0.0, atol=1e-9)
+
+
 def test_a_can_sliding_into_a_corner_of_two_walls_steps_on_pressed_on_them():
     """A can (e = 0.11, μ = 0.64) lying on the ground in a corner of a bin, turning slowly: from its state in a
     mixed pile it slides, stops, strikes one wall, then the other, again and again within one step (each event
