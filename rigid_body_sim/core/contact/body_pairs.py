@@ -424,11 +424,12 @@ class BodyPairs:
         resting = solver.modes[pairs[:, 0]] == PERSISTENT
         ends = ~static & ((d1 < 0.0) | (d0 < 0.0))
         inside = (d0 >= 0.0) & (d1 >= 0.0) & (d0 + d1 <= reach)
-        # a body held on one half-space alone that may pass through a static shape apart from it at both ends (a
-        # pebble slid into a wall): the ground pass looks for its side impact along the step (solver._persistent_end)
+        # a body held on a half-space that may pass through a static shape apart from it at both ends (a pebble slid
+        # into a wall; along the crease of the floor and a wall, held on both, into the next wall): the ground pass
+        # looks for its side impact along the step (solver._persistent_end, solver._third_met)
         first = pairs[:, 0]
-        alone = (solver.ground_of[first] < len(solver.half_spaces)) & (solver.other_ground[first] < 0)
-        passing = inside & static & resting & alone & (reach > 0.0)
+        on_half_space = solver.ground_of[first] < len(solver.half_spaces)
+        passing = inside & static & resting & on_half_space & (reach > 0.0)
         if passing.any():
             solver.may_pass.update(first[passing].tolist())
         inside &= ~(static & resting)
