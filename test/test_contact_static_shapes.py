@@ -422,6 +422,32 @@ def test_a_ball_sliding_along_a_wall_into_the_next_wall_stops_at_its_face(integr
     np.testing.assert_allclose(sim.state.v_WC_W[0], [0.0, 0.0, 0.0], rtol=0.0, atol=1e-9)
 
 
+@pytest.mark.parametrize("integrator", ["rk4", "semi_implicit_euler"])
+def test_a_pebble_sliding_along_one_wall_into_the_next_stops_at_its_face(integrator):
+    """A pebble (r = 5 mm, e = 0, μ = 0) on the floor, touching a bin's wall (not pressed on it), set sliding along it
+    at 16 m/s into the next wall, dt = 10 ms (its step ends beyond that wall): it meets the wall's face at
+    t0 + (0.8 − r − y0)/V and stops there (e = 0). The advancement on its least gap stayed a skin below the wall it
+    touched, ran out of samples and trusted the step's end: it went through the next wall."""
+    r, y0, speed = 0.005, 0.75, 16.0
+    mat = {"restitution": 0.0, "friction": 0.0}
+    pebble = {"mass": 0.04, "inertia": {"sphere": r}, "material": mat, "pose": {"position": [-0.8 + r, y0, r]}}
+    walls = bin_walls(1.6)
+    for wall in walls.values():
+        wall["material"] = mat
+    sim = Simulator(load_scene({"gravity": [0.0, 0.0, -G], "bodies": {"pebble": pebble, **walls},
+                                "ground": [{"normal": [0, 0, 1], "material": mat}]}), integrator, 0.01)
+    sim.step(2)
+    assert sim.contact.is_resting("pebble") and sim.contact.other_ground[0] < 0
+    sim.set_body_state("pebble", linear_velocity_world=[0.0, speed, 0.0])
+    t0 = sim.time
+    sim.step()
+    impacts = [e for e in sim.contact.events_of("pebble", "impact") if e.time >= t0]
+    assert [sim.contact.static_body_of(e.ground) for e in impacts] == ["wall_yp"]
+    assert impacts[0].time == pytest.approx(t0 + (0.8 - r - y0) / speed, rel=1e-9)
+    np.testing.assert_allclose(sim.state.p_WC_W[0], [-0.8 + r, 0.8 - r, r], rtol=0.0, atol=1e-9)
+    np.testing.assert_allclose(sim.state.v_WC_W[0], [0.0, 0.0, 0.0], rtol=0.0, atol=1e-9)
+
+
 def test_a_can_sliding_into_a_corner_of_two_walls_steps_on_pressed_on_them():
     """A can (e = 0.11, μ = 0.64) lying on the ground in a corner of a bin, turning slowly: from its state in a
     mixed pile it slides, stops, strikes one wall, then the other, again and again within one step (each event
