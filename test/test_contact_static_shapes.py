@@ -379,8 +379,9 @@ def test_a_pebble_sliding_into_a_wall_with_a_half_space_behind_it_is_stepped_onc
              "pose": {"position": [0.5, 0.5, 0.05]}}
     grounds = [{"normal": [0, 0, 1], "offset": 0.0, "material": {"restitution": 0.0, "friction": 0.5}},
                {"normal": [1, 0, 0], "offset": -0.9, "material": {"restitution": 0.8, "friction": 0.3}}]
-    sim = Simulator(load_scene({"gravity": [0.0, 0.0, -G], "bodies": {"pebble": pebble, "crate": crate, **bin_walls(1.6)},
-                                "ground": grounds}), "semi_implicit_euler", 0.01)
+    bodies = {"pebble": pebble, "crate": crate, **bin_walls(1.6)}
+    sim = Simulator(load_scene({"gravity": [0.0, 0.0, -G], "bodies": bodies, "ground": grounds}),
+                    "semi_implicit_euler", 0.01)
     p, v = [-0.7286364119448812, -0.40060534155722594, 0.005], [-25.380176101429353, 16.44706799884602, 0.0]
     q_WB = np.array([0.9706284492644083, -0.056240492415934346, 0.03727993358093998, 0.23092775286566103])
     w_B = np.array([0.16797777138780523, -18.777945180308773, 0.9556481573190572])

@@ -1544,7 +1544,9 @@ class ContactSolver:
         meet = self.step_map(sim, i, y0, s * h, held)
         if gap_end < 0.0 and self._other_gap(sim, meet, i, pressed=True)[1] == row_end:
             return None
-        gap = lambda u: self._other_gap(sim, self.step_map(sim, i, y0, u * s * h, held), i, pressed=True)[0]  # noqa: E731
+        def gap(u: float) -> float:
+            return self._other_gap(sim, self.step_map(sim, i, y0, u * s * h, held), i, pressed=True)[0]
+
         g0 = gap(0.0)
         if g0 > 0.0 and (u := self._locate(gap, g0, -1.0)) is not None:  # the root, to round-off
             s *= u
