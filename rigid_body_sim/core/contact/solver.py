@@ -1514,14 +1514,11 @@ class ContactSolver:
         among = self.statics.distances(y0, i, self.shapes[i]) > self._band[i]
         if not among.any():
             return None
-        gap = lambda y: self.statics.nearest_among(y, i, self.shapes[i], among)  # noqa: E731
-        s = self.pairs.advance_alone(sim, i, y0, end, held, h, gap, self._band[i])
-        if s is None or not 0.0 < s <= 1.0:
-            return None
-        u = self._locate(lambda u: gap(self.step_map(sim, i, y0, u * s * h, held)), gap(y0), -1.0)
-        s *= 1.0 if u is None else u
-        self._static_skipped[i] = touched
-        return s, self.step_map(sim, i, y0, s * h, held)
+        met = self._met_on_path(sim, i, y0, end, held, h,
+                                lambda y: self.statics.nearest_among(y, i, self.shapes[i], among))
+        if met is not None:
+            self._static_skipped[i] = touched
+        return met
 
     def _third_met(self, sim, i: int, y0: np.ndarray, end: np.ndarray, held: np.ndarray,
                    h: float) -> tuple[float, np.ndarray] | None:
@@ -1537,21 +1534,24 @@ class ContactSolver:
         gap_end, row_end = self._other_gap(sim, end, i, pressed=True)
         if gap_end >= 0.0 and i not in self.may_pass:
             return None
-        s = self.pairs.advance_alone(sim, i, y0, end, held, h, lambda y: self._other_gap(sim, y, i, pressed=True)[0],
-                                     self._band[i])
-        if s is None or not 0.0 < s < 1.0:
+        met = self._met_on_path(sim, i, y0, end, held, h, lambda y: self._other_gap(sim, y, i, pressed=True)[0])
+        if met is None or (gap_end < 0.0 and self._other_gap(sim, met[1], i, pressed=True)[1] == row_end):
             return None
-        meet = self.step_map(sim, i, y0, s * h, held)
-        if gap_end < 0.0 and self._other_gap(sim, meet, i, pressed=True)[1] == row_end:
-            return None
-        def gap(u: float) -> float:
-            return self._other_gap(sim, self.step_map(sim, i, y0, u * s * h, held), i, pressed=True)[0]
+        return met
 
-        g0 = gap(0.0)
-        if g0 > 0.0 and (u := self._locate(gap, g0, -1.0)) is not None:  # the root, to round-off
+    def _met_on_path(self, sim, i: int, y0: np.ndarray, end: np.ndarray, held: np.ndarray, h: float,
+                     gap) -> tuple[float, np.ndarray] | None:
+        """Where gap(state) (m: a signed distance to fixed geometry) first goes below 0 on body i's held path from y0
+        over h under ``held`` (its end: ``end``): (the fraction s of the span, the state there), found by conservative
+        advancement (BodyPairs.advance_alone) and, apart at y0, the root located to round-off; None if not met."""
+        s = self.pairs.advance_alone(sim, i, y0, end, held, h, gap, self._band[i])
+        if s is None:
+            return None
+        g0 = gap(y0)
+        if g0 > 0.0 and (u := self._locate(lambda u: gap(self.step_map(sim, i, y0, u * s * h, held)), g0,
+                                           -1.0)) is not None:
             s *= u
-            meet = self.step_map(sim, i, y0, s * h, held)
-        return s, meet
+        return s, self.step_map(sim, i, y0, s * h, held)
 
     def _land(self, sim, i: int, y0: np.ndarray, held: np.ndarray, t: float, h: float, s: float) -> np.ndarray:
         """The landing (:meth:`_landing`) of a feature of body i at the fraction s of its step from y0 over h
